@@ -1,0 +1,146 @@
+//! Sensor models of the rig (MODEL.md §1 and §7): optical encoder, pressure
+//! transducers through a 12-bit ADC, spool position and load cell.
+
+use serde::{Deserialize, Serialize};
+
+use crate::rng::Rng;
+
+/// Sensor characteristics of the simulated rig.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SensorParams {
+    /// Encoder resolution (one count), m.
+    pub encoder_resolution_m: f64,
+    /// Full scale of the pressure channels (0 to this), Pa.
+    pub pressure_full_scale_pa: f64,
+    /// ADC resolution of every analogue channel, bits.
+    pub adc_bits: u32,
+    /// Standard deviation of the pressure transducer noise, Pa.
+    pub pressure_noise_pa: f64,
+    /// Full scale of the spool position channel (±), m.
+    pub spool_full_scale_m: f64,
+    /// Standard deviation of the spool position noise, m.
+    pub spool_noise_m: f64,
+    /// Full scale of the load cell (±), N.
+    pub load_cell_full_scale_n: f64,
+    /// Standard deviation of the load cell noise, N.
+    pub load_cell_noise_n: f64,
+    /// Whether to add noise and quantisation at all (false gives the true states).
+    pub enabled: bool,
+}
+
+impl Default for SensorParams {
+    fn default() -> Self {
+        SensorParams {
+            encoder_resolution_m: 3.0e-5,
+            pressure_full_scale_pa: 20.7e6,
+            adc_bits: 12,
+            pressure_noise_pa: 5.0e3,
+            spool_full_scale_m: 3.5e-4,
+            spool_noise_m: 2.0e-7,
+            load_cell_full_scale_n: 22.0e3,
+            load_cell_noise_n: 5.0,
+            enabled: true,
+        }
+    }
+}
+
+impl SensorParams {
+    /// Ideal sensors: measurements equal the true states.
+    pub fn ideal() -> Self {
+        SensorParams {
+            enabled: false,
+            ..SensorParams::default()
+        }
+    }
+
+    /// One ADC step of the pressure channels, Pa.
+    pub fn pressure_lsb_pa(&self) -> f64 {
+        self.pressure_full_scale_pa / ((1u64 << self.adc_bits) - 1) as f64
+    }
+
+    /// The standard deviation of the pressure measurement error (noise plus
+    /// quantisation, LSB/√12), Pa.
+    pub fn pressure_sigma_pa(&self) -> f64 {
+        let q = self.pressure_lsb_pa();
+        (self.pressure_noise_pa.powi(2) + q * q / 12.0).sqrt()
+    }
+
+    /// The standard deviation of the encoder quantisation error (count/√12), m.
+    pub fn position_sigma_m(&self) -> f64 {
+        self.encoder_resolution_m / 12f64.sqrt()
+    }
+
+    /// Encoder reading of true position `x_m`, m.
+    #[inline]
+    pub fn encoder(&self, x_m: f64) -> f64 {
+        if !self.enabled {
+            return x_m;
+        }
+        (x_m / self.encoder_resolution_m).round() * self.encoder_resolution_m
+    }
+
+    /// Quantises `value` over [lo, hi] with this ADC.
+    #[inline]
+    fn adc(&self, value: f64, lo: f64, hi: f64) -> f64 {
+        let levels = ((1u64 << self.adc_bits) - 1) as f64;
+        let code = ((value - lo) / (hi - lo) * levels).round().clamp(0.0, levels);
+        lo + code / levels * (hi - lo)
+    }
+
+    /// Pressure reading of true pressure `p_pa`, Pa.
+    #[inline]
+    pub fn pressure(&self, p_pa: f64, rng: &mut Rng) -> f64 {
+        if !self.enabled {
+            return p_pa;
+        }
+        self.adc(
+            p_pa + self.pressure_noise_pa * rng.normal(),
+            0.0,
+            self.pressure_full_scale_pa,
+        )
+    }
+
+    /// Spool position reading, m.
+    #[inline]
+    pub fn spool(&self, x_sp_m: f64, rng: &mut Rng) -> f64 {
+        if !self.enabled {
+            return x_sp_m;
+        }
+        let fs = self.spool_full_scale_m;
+        self.adc(x_sp_m + self.spool_noise_m * rng.normal(), -fs, fs)
+    }
+
+    /// Load cell reading of true load `f_n`, N.
+    #[inline]
+    pub fn load_cell(&self, f_n: f64, rng: &mut Rng) -> f64 {
+        if !self.enabled {
+            return f_n;
+        }
+        let fs = self.load_cell_full_scale_n;
+        self.adc(f_n + self.load_cell_noise_n * rng.normal(), -fs, fs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantisation_steps() {
+        let s = SensorParams::default();
+        assert!((s.encoder(0.300_014) - 0.30).abs() < 1e-12);
+        assert!((s.encoder(0.300_016) - 0.30003).abs() < 1e-12);
+        assert!((s.pressure_lsb_pa() - 5054.9).abs() < 0.1);
+        let mut rng = Rng::new(1);
+        let quiet = SensorParams {
+            pressure_noise_pa: 0.0,
+            ..s
+        };
+        let p = quiet.pressure(6.9e6, &mut rng);
+        assert!((p - 6.9e6).abs() <= 0.5 * s.pressure_lsb_pa() + 1e-6);
+        assert_eq!(quiet.pressure(-1e6, &mut rng), 0.0);
+        assert_eq!(quiet.pressure(30e6, &mut rng), 20.7e6);
+        assert_eq!(SensorParams::ideal().pressure(1.234e6, &mut rng), 1.234e6);
+    }
+}

@@ -1,0 +1,228 @@
+//! The simulated rig (MODEL.md §7): the continuous model integrated with RK4
+//! sub-steps, sampled at 1 kHz through the sensor models, driven by a
+//! scenario, with a fault schedule. It is deliberately not the estimator's
+//! forward-Euler model.
+
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::{derivative, rk4_step, state_at_rest, Forces, LeakSet, State, I_X};
+use crate::fault::FaultSchedule;
+use crate::leakage::LeakFlows;
+use crate::params::{ActuatorParams, InvalidParam};
+use crate::rng::Rng;
+use crate::sample::Sample;
+use crate::scenario::Scenario;
+use crate::sensors::SensorParams;
+use crate::units::m3_s_to_lpm;
+
+/// Integration settings of the simulator.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimSettings {
+    /// Sample period of the DAQ, s.
+    pub sample_period_s: f64,
+    /// RK4 sub-steps per sample period (40 gives 25 µs steps).
+    pub substeps_per_sample: u32,
+}
+
+impl Default for SimSettings {
+    fn default() -> Self {
+        SimSettings {
+            sample_period_s: 1.0e-3,
+            substeps_per_sample: 40,
+        }
+    }
+}
+
+/// What the simulator knows that the sensors don't, at one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Truth {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// True state `[x_sp, p1, p2, x, v, v_sp]`.
+    pub state: State,
+    /// Forces and flows at that instant.
+    pub forces: Forces,
+    /// Leak flows along the three paths, m³/s.
+    pub leaks: LeakFlows,
+}
+
+/// Advances `state` by `dt_s` under constant command `u_v` with `substeps` RK4 steps.
+#[inline]
+pub fn advance(
+    p: &ActuatorParams,
+    state: &State,
+    u_v: f64,
+    leaks: &LeakSet,
+    dt_s: f64,
+    substeps: u32,
+) -> State {
+    let h = dt_s / substeps as f64;
+    let mut s = *state;
+    for _ in 0..substeps {
+        s = rk4_step(&s, h, |y| derivative(p, y, u_v, leaks).0);
+    }
+    s
+}
+
+/// The simulated rig.
+#[derive(Debug, Clone)]
+pub struct Simulator {
+    rig: ActuatorParams,
+    sensors: SensorParams,
+    settings: SimSettings,
+    scenario: Scenario,
+    faults: FaultSchedule,
+    base_leaks: LeakSet,
+    rng: Rng,
+    state: State,
+    k: u64,
+    truth: Truth,
+}
+
+impl Simulator {
+    /// A rig with parameters `rig` (whose load is replaced by the scenario's
+    /// spring), sensors, settings, scenario, faults and noise seed, at rest at
+    /// the scenario's initial position with both chambers at the mean pressure.
+    pub fn new(
+        mut rig: ActuatorParams,
+        sensors: SensorParams,
+        settings: SimSettings,
+        scenario: Scenario,
+        faults: FaultSchedule,
+        seed: u64,
+    ) -> Result<Simulator, InvalidParam> {
+        if scenario.spring.stiffness_n_per_m > 0.0 {
+            rig.load = scenario.spring;
+        }
+        rig.validate()?;
+        if !(settings.sample_period_s > 0.0 && settings.sample_period_s.is_finite()) {
+            return Err(InvalidParam {
+                field: "sim.sample_period_s".into(),
+                value: settings.sample_period_s,
+                expected: "a finite value > 0",
+            });
+        }
+        if settings.substeps_per_sample == 0 {
+            return Err(InvalidParam {
+                field: "sim.substeps_per_sample".into(),
+                value: 0.0,
+                expected: "at least 1",
+            });
+        }
+        let state = state_at_rest(scenario.initial_position_m, rig.nominal_chamber_pressure_pa());
+        let base_leaks = LeakSet::from_params(&rig);
+        Ok(Simulator {
+            rig,
+            sensors,
+            settings,
+            scenario,
+            faults,
+            base_leaks,
+            rng: Rng::new(seed),
+            state,
+            k: 0,
+            truth: Truth {
+                t_s: 0.0,
+                state,
+                forces: Forces::default(),
+                leaks: LeakFlows::default(),
+            },
+        })
+    }
+
+    /// The rig's parameters (may be changed between samples, e.g. to model drift).
+    pub fn rig_mut(&mut self) -> &mut ActuatorParams {
+        &mut self.rig
+    }
+
+    /// The rig's parameters.
+    pub fn rig(&self) -> &ActuatorParams {
+        &self.rig
+    }
+
+    /// The scenario.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The sample period, s.
+    pub fn sample_period_s(&self) -> f64 {
+        self.settings.sample_period_s
+    }
+
+    /// The current true state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The truth at the last sample returned by [`Simulator::step`].
+    pub fn truth(&self) -> &Truth {
+        &self.truth
+    }
+
+    fn leaks_at(&self, t_s: f64) -> LeakSet {
+        let mut l = self.base_leaks;
+        self.faults.add_to(t_s, &mut l);
+        l
+    }
+
+    /// Samples the rig at the current time, computes the command, and
+    /// integrates to the next sample. Returns the sample (time, command applied
+    /// over the coming period, measurements, reference and true leak flow).
+    pub fn step(&mut self) -> Sample {
+        let dt = self.settings.sample_period_s;
+        let t = self.k as f64 * dt;
+        let leaks = self.leaks_at(t);
+        let s = self.state;
+        let x_meas = self.sensors.encoder(s[I_X]);
+        let p1_meas = self.sensors.pressure(s[1], &mut self.rng);
+        let p2_meas = self.sensors.pressure(s[2], &mut self.rng);
+        let x_sp_meas = self.sensors.spool(s[0], &mut self.rng);
+        let u = self.scenario.command_v(t, x_meas);
+        let (_, forces) = derivative(&self.rig, &s, u, &leaks);
+        let load_meas = self.sensors.load_cell(forces.load_n, &mut self.rng);
+        let lq = forces.leaks;
+        self.truth = Truth {
+            t_s: t,
+            state: s,
+            forces,
+            leaks: lq,
+        };
+        let mut fault_flow = LeakSet::NONE;
+        self.faults.add_to(t, &mut fault_flow);
+        let fq = fault_flow.flows(s[1], s[2], self.rig.return_pressure_pa);
+        let sample = Sample {
+            t_s: t,
+            u_v: u,
+            x_m: x_meas,
+            p1_pa: p1_meas,
+            p2_pa: p2_meas,
+            x_sp_m: x_sp_meas,
+            f_load_n: load_meas,
+            ref_m: self.scenario.reference_m(t),
+            q_leak_lpm: m3_s_to_lpm(fq.ext1_m3_s + fq.ext2_m3_s + fq.int_m3_s),
+        };
+        // integrate to the next sample; leak coefficients follow ramps per sub-step
+        let n = self.settings.substeps_per_sample;
+        let h = dt / n as f64;
+        let mut y = s;
+        for j in 0..n {
+            let lj = if self.faults.faults.is_empty() {
+                leaks
+            } else {
+                self.leaks_at(t + j as f64 * h)
+            };
+            y = rk4_step(&y, h, |z| derivative(&self.rig, z, u, &lj).0);
+        }
+        self.state = y;
+        self.k += 1;
+        sample
+    }
+
+    /// Runs `seconds` of the scenario and returns every sample.
+    pub fn run(&mut self, seconds: f64) -> Vec<Sample> {
+        let n = (seconds / self.settings.sample_period_s).round() as usize;
+        (0..n).map(|_| self.step()).collect()
+    }
+}

@@ -1,0 +1,364 @@
+//! Physics of the rig simulator asserted against references (MODEL.md §3, §8).
+
+use model::dynamics::{derivative, rk4_step, state_at_rest, LeakSet, I_P1, I_P2, I_V, I_X};
+use model::fault::{Fault, FaultSchedule};
+use model::leakage::{LeakLaw, LeakPath};
+use model::params::{ActuatorParams, FrictionPreset};
+use model::scenario::Scenario;
+use model::sensors::SensorParams;
+use model::sim::{advance, SimSettings, Simulator};
+use model::units::m3_s_to_lpm;
+
+fn sim(
+    name: &str,
+    rig: ActuatorParams,
+    faults: Vec<Fault>,
+    sensors: SensorParams,
+    settings: SimSettings,
+) -> Simulator {
+    let sc = Scenario::by_name(name, 1, 60.0).unwrap();
+    Simulator::new(rig, sensors, settings, sc, FaultSchedule { faults }, 1).unwrap()
+}
+
+/// Runs and returns the true states after each sample.
+fn run_truth(s: &mut Simulator, seconds: f64) -> Vec<[f64; 6]> {
+    let n = (seconds * 1000.0).round() as usize;
+    (0..n)
+        .map(|_| {
+            s.step();
+            s.truth().state
+        })
+        .collect()
+}
+
+#[test]
+fn centred_valve_holds_pressures_and_position() {
+    let p = ActuatorParams::default();
+    let mut s = state_at_rest(0.25, 6.9e6);
+    for _ in 0..2000 {
+        s = advance(&p, &s, 0.0, &LeakSet::NONE, 1e-3, 40);
+    }
+    assert_eq!(s, state_at_rest(0.25, 6.9e6));
+    // unequal pressures whose force is below stiction: sealed chambers, rod held
+    let mut s = [0.0, 8.4e6, 5.4e6, 0.25, 0.0, 0.0]; // A·Δp = 1899 N < 2400 N
+    for _ in 0..1000 {
+        s = advance(&p, &s, 0.0, &LeakSet::NONE, 1e-3, 40);
+    }
+    assert!((s[I_X] - 0.25).abs() < 1e-9, "rod moved {} m", s[I_X] - 0.25);
+    assert!((s[I_P1] - 8.4e6).abs() < 1.0 && (s[I_P2] - 5.4e6).abs() < 1.0);
+}
+
+#[test]
+fn friction_holds_below_stiction_and_breaks_away_above() {
+    let p = ActuatorParams::default();
+    // valve open a little: drive ramps slowly; rod stays put until A·Δp reaches f_st
+    let mut s = state_at_rest(0.3, 6.9e6);
+    let mut moved_at_force = None;
+    for k in 0..3000 {
+        s = advance(&p, &s, 0.02, &LeakSet::NONE, 1e-3, 40);
+        let force = p.piston_area_m2 * (s[I_P1] - s[I_P2]);
+        if (s[I_X] - 0.3).abs() > 1e-6 && moved_at_force.is_none() {
+            moved_at_force = Some((k, force));
+        }
+        if moved_at_force.is_none() {
+            assert!(force < 2400.0 + 50.0, "held at {force} N");
+        }
+    }
+    let (_, f) = moved_at_force.expect("the rod never broke away");
+    assert!(
+        (f - 2400.0).abs() < 150.0,
+        "broke away at {f} N, expected about f_st = 2400 N"
+    );
+}
+
+#[test]
+fn mass_balance_over_a_run() {
+    // Integrate, alongside the state, the reference-density oil volume that flowed
+    // into each chamber: d/dt(V·e^{(p−p0)/β}) = e^{(p−p0)/β}·Q_net exactly for this model.
+    let mut p = ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth);
+    p.leaks.push(model::params::BuiltInLeak {
+        path: LeakPath::Internal,
+        law: LeakLaw::SquareRoot,
+        coefficient: 3e-9,
+    });
+    p.leaks.push(model::params::BuiltInLeak {
+        path: LeakPath::External1,
+        law: LeakLaw::Linear,
+        coefficient: 1e-12,
+    });
+    let leaks = LeakSet::from_params(&p);
+    let beta = p.bulk_modulus_pa;
+    let p0 = 6.9e6;
+    let mass = |s: &[f64; 8]| {
+        let (v1, v2) = p.chamber_volumes_m3(s[I_X]);
+        (
+            v1 * ((s[I_P1] - p0) / beta).exp(),
+            v2 * ((s[I_P2] - p0) / beta).exp(),
+        )
+    };
+    let mut y = [0.0; 8];
+    y[..6].copy_from_slice(&state_at_rest(0.3, p0));
+    let (m1_0, m2_0) = mass(&y);
+    let h = 25e-6;
+    let mut inflow = (0.0f64, 0.0f64);
+    for k in 0..(2.0 / h) as usize {
+        let u = 3.0 * (2.0 * std::f64::consts::PI * (k as f64 * h) + 0.1).sin();
+        y = rk4_step(&y, h, |z| {
+            let s: [f64; 6] = z[..6].try_into().unwrap();
+            let (d, f) = derivative(&p, &s, u, &leaks);
+            let q1 = f.valve.q1_m3_s - f.leaks.int_m3_s - f.leaks.ext1_m3_s;
+            let q2 = -f.valve.q2_m3_s + f.leaks.int_m3_s - f.leaks.ext2_m3_s;
+            let mut out = [0.0; 8];
+            out[..6].copy_from_slice(&d);
+            out[6] = ((z[I_P1] - p0) / beta).exp() * q1;
+            out[7] = ((z[I_P2] - p0) / beta).exp() * q2;
+            out
+        });
+        inflow.0 = inflow.0.max(y[6].abs());
+        inflow.1 = inflow.1.max(y[7].abs());
+    }
+    let (m1, m2) = mass(&y);
+    // relative to the largest volume that flowed in or out during the run
+    let e1 = ((m1 - m1_0) - y[6]).abs() / inflow.0;
+    let e2 = ((m2 - m2_0) - y[7]).abs() / inflow.1;
+    assert!(inflow.0 > 1e-5, "the run moved oil: {} m³", inflow.0);
+    assert!(e1 < 1e-6 && e2 < 1e-6, "mass balance errors {e1:e}, {e2:e}");
+}
+
+/// Reference figures of MODEL.md §8 for the open-loop sine from x = 0.3 m.
+#[test]
+fn open_loop_sine_matches_reference_figures() {
+    let mut s = sim(
+        "open-loop-sine",
+        ActuatorParams::default(),
+        vec![],
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let (mut xmin, mut xmax, mut p1, mut p2, mut n, mut qmax, mut vmax, mut stuck) =
+        (f64::MAX, f64::MIN, 0.0, 0.0, 0.0, 0.0f64, 0.0f64, 0.0);
+    for k in 0..10_000 {
+        s.step();
+        let tr = *s.truth();
+        if k >= 2000 {
+            xmin = xmin.min(tr.state[I_X]);
+            xmax = xmax.max(tr.state[I_X]);
+            p1 += tr.state[I_P1];
+            p2 += tr.state[I_P2];
+            n += 1.0;
+            qmax = qmax.max(tr.forces.valve.q1_m3_s.abs());
+            vmax = vmax.max(tr.state[I_V].abs());
+            stuck += f64::from(tr.state[I_V].abs() <= 1e-3);
+        }
+    }
+    let amp_mm = (xmax - xmin) / 2.0 * 1e3;
+    assert!(
+        (amp_mm - 30.6).abs() < 1.0,
+        "rod amplitude {amp_mm} mm (reference 30.6)"
+    );
+    assert!((p1 / n - 6.93e6).abs() < 0.05e6, "mean p1 {}", p1 / n);
+    assert!((p2 / n - 6.93e6).abs() < 0.05e6, "mean p2 {}", p2 / n);
+    let q = m3_s_to_lpm(qmax);
+    assert!((q - 8.2).abs() < 0.5, "peak valve flow {q} L/min (reference 8.2)");
+    assert!((vmax - 0.5).abs() < 0.05, "peak speed {vmax} m/s (reference 0.5)");
+    let stuck_frac = stuck / n;
+    assert!(
+        (0.35..0.65).contains(&stuck_frac),
+        "stuck {stuck_frac} of the time (reference: about half)"
+    );
+}
+
+#[test]
+fn smooth_rig_has_no_stick_slip_but_same_stroke() {
+    let rig = ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth);
+    let mut s = sim(
+        "open-loop-sine",
+        rig,
+        vec![],
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let states = run_truth(&mut s, 10.0);
+    let tail = &states[2000..];
+    let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
+    let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
+    let vmax = tail.iter().map(|s| s[I_V].abs()).fold(0.0, f64::max);
+    let stuck = tail.iter().filter(|s| s[I_V].abs() <= 1e-3).count() as f64 / tail.len() as f64;
+    assert!(((xmax - xmin) / 2.0 * 1e3 - 30.8).abs() < 1.0);
+    assert!(vmax < 0.25, "smooth peak speed {vmax} m/s");
+    assert!(stuck < 0.15, "stuck {stuck}");
+}
+
+fn mean_position(name: &str, faults: Vec<Fault>, seconds: f64, from_s: f64) -> (f64, f64) {
+    let mut s = sim(
+        name,
+        ActuatorParams::default(),
+        faults,
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let states = run_truth(&mut s, seconds);
+    let tail = &states[(from_s * 1000.0) as usize..];
+    let mean = tail.iter().map(|s| s[I_X]).sum::<f64>() / tail.len() as f64;
+    let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
+    let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
+    (mean, (xmax - xmin) / 2.0)
+}
+
+#[test]
+fn external_leaks_drift_the_rod_towards_the_leaking_chamber() {
+    let p = ActuatorParams::default();
+    let leak = |path| vec![Fault::from_lpm(path, LeakLaw::SquareRoot, 0.5, 1.0, &p)];
+    let (healthy, _) = mean_position("open-loop-sine", vec![], 5.0, 3.0);
+    let (ext1, _) = mean_position("open-loop-sine", leak(LeakPath::External1), 5.0, 3.0);
+    let (ext2, _) = mean_position("open-loop-sine", leak(LeakPath::External2), 5.0, 3.0);
+    // chamber 1 is on the retracted side: losing oil there retracts the rod
+    assert!(ext1 < healthy - 5e-3, "ext1 {ext1} vs healthy {healthy}");
+    assert!(ext2 > healthy + 5e-3, "ext2 {ext2} vs healthy {healthy}");
+}
+
+#[test]
+fn internal_leak_shrinks_the_stroke() {
+    let p = ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth);
+    let mk = |faults| {
+        let mut s = sim(
+            "open-loop-sine",
+            p.clone(),
+            faults,
+            SensorParams::ideal(),
+            SimSettings::default(),
+        );
+        let st = run_truth(&mut s, 6.0);
+        let tail = &st[3000..];
+        let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
+        let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
+        (xmax - xmin) / 2.0
+    };
+    let healthy = mk(vec![]);
+    let leaky = mk(vec![Fault::from_lpm(
+        LeakPath::Internal,
+        LeakLaw::SquareRoot,
+        2.0,
+        0.0,
+        &p,
+    )]);
+    assert!(
+        leaky < 0.97 * healthy,
+        "internal leak amplitude {leaky} vs healthy {healthy}"
+    );
+}
+
+#[test]
+fn closed_loop_sine_tracks_the_reference() {
+    let mut s = sim(
+        "closed-loop-sine",
+        ActuatorParams::default(),
+        vec![],
+        SensorParams::default(),
+        SimSettings::default(),
+    );
+    let samples = s.run(10.0);
+    let tail = &samples[2000..];
+    let rms = (tail.iter().map(|s| (s.ref_m - s.x_m).powi(2)).sum::<f64>() / tail.len() as f64).sqrt();
+    let max = tail.iter().map(|s| (s.ref_m - s.x_m).abs()).fold(0.0, f64::max);
+    // The loop is first order with gain K = K_p·k_v, k_v = C_d·w·k_sp·sqrt((p_s/2)/ρ)/A
+    // ≈ 0.0495 m/s/V, so K ≈ 2.48 1/s: a 0.5 Hz reference (ω = π) is tracked with an
+    // error amplitude of 0.2·ω/sqrt(ω² + K²) ≈ 0.157 m, i.e. an RMS of ≈ 0.111 m.
+    let p = ActuatorParams::default();
+    let kv = p.discharge_coefficient
+        * p.area_gradient_m2_per_m
+        * p.spool_gain_m_per_v
+        * (0.5 * p.supply_pressure_pa / p.oil_density_kg_m3).sqrt()
+        / p.piston_area_m2;
+    let k = 50.0 * kv;
+    let w = std::f64::consts::PI;
+    let predicted_rms = 0.2 * w / (w * w + k * k).sqrt() / 2f64.sqrt();
+    assert!((predicted_rms - 0.111).abs() < 0.005, "{predicted_rms}");
+    assert!(
+        (rms - predicted_rms).abs() < 0.2 * predicted_rms,
+        "tracking error rms {rms} m vs first-order prediction {predicted_rms} m (max {max} m)"
+    );
+}
+
+#[test]
+fn halving_the_step_changes_a_10s_run_little() {
+    for preset in [FrictionPreset::Smooth, FrictionPreset::Thesis] {
+        let rig = ActuatorParams::default().with_friction_preset(preset);
+        let run = |n| {
+            let settings = SimSettings {
+                substeps_per_sample: n,
+                ..SimSettings::default()
+            };
+            let mut s = sim(
+                "closed-loop-sine",
+                rig.clone(),
+                vec![],
+                SensorParams::ideal(),
+                settings,
+            );
+            run_truth(&mut s, 10.0)
+        };
+        let a = run(40);
+        let b = run(80);
+        let dx = a
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a[I_X] - b[I_X]).abs())
+            .fold(0.0, f64::max);
+        let dp = a
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a[I_P1] - b[I_P1]).abs().max((a[I_P2] - b[I_P2]).abs()))
+            .fold(0.0, f64::max);
+        eprintln!("{preset:?}: max |Δx| {dx:e} m, max |Δp| {dp:e} Pa");
+        let (tol_x, tol_p) = match preset {
+            FrictionPreset::Smooth => (1e-8, 20.0),
+            FrictionPreset::Thesis => (1e-4, 1e5),
+        };
+        assert!(dx < tol_x && dp < tol_p, "{preset:?}: Δx {dx} m, Δp {dp} Pa");
+    }
+}
+
+#[test]
+fn loaded_scenario_engages_the_spring_and_reports_its_force() {
+    let mut s = sim(
+        "loaded-sine",
+        ActuatorParams::default(),
+        vec![],
+        SensorParams::default(),
+        SimSettings::default(),
+    );
+    let samples = s.run(6.0);
+    let engaged: Vec<_> = samples.iter().filter(|s| s.x_m > 0.23).collect();
+    assert!(!engaged.is_empty());
+    for smp in engaged {
+        let expect = 2e4 * (smp.x_m - 0.22);
+        assert!(
+            (smp.f_load_n - expect).abs() < 40.0,
+            "{} vs {expect}",
+            smp.f_load_n
+        );
+    }
+}
+
+#[test]
+fn leak_flow_column_reports_the_delivered_flow() {
+    let p = ActuatorParams::default();
+    let f = Fault::from_lpm(LeakPath::External1, LeakLaw::SquareRoot, 0.5, 1.0, &p);
+    let mut s = sim(
+        "closed-loop-sine",
+        p,
+        vec![f],
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let samples = s.run(3.0);
+    assert!(samples[..1000].iter().all(|s| s.q_leak_lpm == 0.0));
+    for smp in &samples[1000..] {
+        let expect = m3_s_to_lpm(f.coefficient * smp.p1_pa.sqrt());
+        assert!((smp.q_leak_lpm - expect).abs() < 1e-9);
+    }
+    // delivered flow is within MODEL.md §8's 0.56..1.25 of the nominal 0.5 L/min
+    let mean = samples[1000..].iter().map(|s| s.q_leak_lpm).sum::<f64>() / 2000.0;
+    assert!((0.28..0.63).contains(&mean), "{mean}");
+}
