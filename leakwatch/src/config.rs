@@ -25,13 +25,14 @@ pub struct Config {
 impl Config {
     /// Loads and validates a config file; the error names the file and the problem.
     pub fn load(path: &Path) -> Result<Config, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
         Self::parse(&text).map_err(|e| format!("config {}: {e}", path.display()))
     }
 
     /// Parses and validates config text.
     pub fn parse(text: &str) -> Result<Config, String> {
-        let cfg: Config = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
+        let cfg: Config = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
         cfg.model.validate().map_err(|e| format!("[model] {e}"))?;
         if let Some(rig) = &cfg.rig {
             rig.validate().map_err(|e| format!("[rig] {e}"))?;
@@ -85,5 +86,20 @@ mod tests {
         let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
         assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
+    }
+}
+
+/// One line describing a TOML error: line, column and the parser's message.
+pub fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().replace('\n', "; ");
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+            let src = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!("line {line}, column {col} (`{src}`): {msg}")
+        }
+        None => msg,
     }
 }

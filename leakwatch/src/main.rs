@@ -13,7 +13,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 use config::Config;
 
 #[derive(Parser)]
-#[command(name = "leakwatch", version, about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz")]
+#[command(
+    name = "leakwatch",
+    version,
+    about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -45,7 +49,7 @@ enum Command {
         #[arg(long)]
         scenario: String,
         /// Run length in seconds (default: the scenario's own, 40 or 60 s).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seconds: Option<f64>,
         /// Noise and reference seed.
         #[arg(long, default_value_t = 1)]

@@ -30,7 +30,9 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
     let scenario = Scenario::by_name(&req.scenario, req.seed, seconds_max).map_err(|e| e.to_string())?;
     let seconds = req.seconds.unwrap_or(scenario.default_seconds);
     if !(seconds > 0.0 && seconds.is_finite()) {
-        return Err(format!("--seconds {seconds} must be a positive number of seconds"));
+        return Err(format!(
+            "--seconds {seconds} must be a positive number of seconds"
+        ));
     }
     let mut rig = cfg.rig_params();
     if let Some(v) = req.rig_variant {
@@ -38,9 +40,12 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
     }
     let mut schedule = FaultSchedule::default();
     for spec in &req.faults {
-        schedule.faults.push(Fault::parse(spec, &rig).map_err(|e| e.to_string())?);
+        schedule
+            .faults
+            .push(Fault::parse(spec, &rig).map_err(|e| e.to_string())?);
     }
-    let sim = Simulator::new(rig, cfg.sensors, cfg.sim, scenario, schedule, req.seed).map_err(|e| e.to_string())?;
+    let sim =
+        Simulator::new(rig, cfg.sensors, cfg.sim, scenario, schedule, req.seed).map_err(|e| e.to_string())?;
     Ok((sim, seconds))
 }
 

@@ -1,0 +1,144 @@
+//! The command line as a user meets it: real runs of the built binary.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn leakwatch(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(args)
+        .output()
+        .expect("the leakwatch binary runs")
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("leakwatch-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+#[test]
+fn simulate_writes_the_documented_csv() {
+    let d = tmpdir("sim");
+    let out = d.join("run.csv");
+    let args = [
+        "simulate",
+        "--scenario",
+        "loaded-sine",
+        "--seconds",
+        "2",
+        "--fault",
+        "ext1:0.3lpm@1s",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = leakwatch(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().next(), Some("t,u,x,p1,p2,x_sp,f_load,ref,q_leak"));
+    assert_eq!(text.lines().count(), 2001);
+    let ds = dataset::read_csv(&out, dataset::Limits::default()).unwrap();
+    assert_eq!(ds.samples.len(), 2000);
+    assert!(ds.samples[999].q_leak_lpm == 0.0 && ds.samples[1500].q_leak_lpm > 0.1);
+    // same seed, same file
+    let again = d.join("again.csv");
+    let mut args2 = args;
+    args2[8] = again.to_str().unwrap();
+    assert!(leakwatch(&args2).status.success());
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+}
+
+#[test]
+fn bad_input_gets_one_clear_error_and_nonzero_exit() {
+    let d = tmpdir("bad");
+    let out = d.join("x.csv");
+    let out = out.to_str().unwrap();
+    let cfg_bad_field = d.join("bad_field.toml");
+    std::fs::write(&cfg_bad_field, "[model]\nsupply_pressure_psi = 2000\n").unwrap();
+    let cfg_bad_unit = d.join("bad_unit.toml");
+    std::fs::write(&cfg_bad_unit, "[model]\nsupply_pressure_pa = \"13.8 MPa\"\n").unwrap();
+    let bad_field = cfg_bad_field.to_str().unwrap();
+    let bad_unit = cfg_bad_unit.to_str().unwrap();
+    let sim = ["simulate", "--scenario", "open-loop-sine"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["simulate", "--scenario", "nope", "--out", out],
+            "unknown scenario `nope`",
+        ),
+        (
+            [&sim[..], &["--fault", "ext1:0.3@2s", "--out", out]].concat(),
+            "needs a unit",
+        ),
+        (
+            [&sim[..], &["--fault", "ext1:-0.3lpm@2s", "--out", out]].concat(),
+            "must be >= 0",
+        ),
+        (
+            [&sim[..], &["--config", bad_field, "--out", out]].concat(),
+            "supply_pressure_psi",
+        ),
+        (
+            [&sim[..], &["--config", bad_unit, "--out", out]].concat(),
+            "supply_pressure_pa",
+        ),
+        (
+            [&sim[..], &["--out", "/nonexistent-dir/x.csv"]].concat(),
+            "/nonexistent-dir/x.csv",
+        ),
+        (
+            [&sim[..], &["--seconds", "-1", "--out", out]].concat(),
+            "--seconds",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = leakwatch(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(e.contains(needle), "{args:?}: expected `{needle}` in: {e}");
+        assert_eq!(e.trim().lines().count(), 1, "one clear error line, got: {e}");
+    }
+}
+
+#[test]
+fn config_print_default_is_loadable() {
+    let o = leakwatch(&["config", "--print-default"]);
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("piston_area_m2 = 0.000633"), "{text}");
+    let d = tmpdir("cfg");
+    let p = d.join("default.toml");
+    std::fs::write(&p, &text).unwrap();
+    let o = leakwatch(&["config", "--check", p.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn plot_draws_a_png() {
+    let d = tmpdir("plot");
+    let csv = d.join("r.csv");
+    let png = d.join("r.png");
+    let (csv_s, png_s) = (csv.to_str().unwrap(), png.to_str().unwrap());
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "open-loop-sine",
+        "--seconds",
+        "3",
+        "--fault",
+        "ext2:0.5lpm@1s",
+        "--out",
+        csv_s,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = leakwatch(&["plot", csv_s, "--out", png_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let missing = d.join("missing.csv");
+    let o = leakwatch(&["plot", missing.to_str().unwrap(), "--out", png_s]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("missing.csv"));
+}
