@@ -67,6 +67,21 @@ impl Config {
     }
 }
 
+/// One line describing a TOML error: line, column and the parser's message.
+pub fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().replace('\n', "; ");
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+            let src = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!("line {line}, column {col} (`{src}`): {msg}")
+        }
+        None => msg,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,20 +101,5 @@ mod tests {
         let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
         assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
-    }
-}
-
-/// One line describing a TOML error: line, column and the parser's message.
-pub fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
-    let msg = e.message().trim().replace('\n', "; ");
-    match e.span() {
-        Some(span) => {
-            let before = &text[..span.start.min(text.len())];
-            let line = before.matches('\n').count() + 1;
-            let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
-            let src = text.lines().nth(line - 1).unwrap_or("").trim();
-            format!("line {line}, column {col} (`{src}`): {msg}")
-        }
-        None => msg,
     }
 }
