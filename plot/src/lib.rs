@@ -671,13 +671,16 @@ mod tests {
 
     #[test]
     fn ticks_are_round_and_cover_the_range() {
+        let t = nice_ticks(0.0, 1.0, 5);
+        let want = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0];
+        assert_eq!(t.len(), want.len());
+        assert!(t.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12), "{t:?}");
+        // 50.3 / 10 = 5.03 per tick rounds up to a step of 10.
+        assert_eq!(nice_ticks(-3.3, 47.0, 10), vec![0.0, 10.0, 20.0, 30.0, 40.0]);
         assert_eq!(
-            nice_ticks(0.0, 1.0, 5),
-            vec![0.0, 0.2, 0.4, 0.6000000000000001, 0.8, 1.0]
+            nice_ticks(-3.3, 47.0, 20),
+            vec![0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0]
         );
-        let t = nice_ticks(-3.3, 47.0, 10);
-        assert_eq!(t.first().copied(), Some(0.0));
-        assert_eq!(t.last().copied(), Some(45.0));
         assert!(nice_ticks(1.0, 1.0, 5).is_empty());
         assert!(nice_ticks(f64::NAN, 1.0, 5).is_empty());
     }
