@@ -10,6 +10,7 @@ pub mod fault;
 pub mod friction;
 pub mod leakage;
 pub mod params;
+pub mod process;
 pub mod rng;
 pub mod sample;
 pub mod scenario;

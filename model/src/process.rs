@@ -1,0 +1,471 @@
+//! The EKF's process models (MODEL.md §4): the healthy actuator integrated
+//! with forward Euler at the sample period, with analytic Jacobians on every
+//! branch (valve sign, stick band, spring contact).
+//!
+//! Three layouts share one right-hand side, selected by the state count `N`:
+//!
+//! | N | states (SI) |
+//! |---|---|
+//! | 6 | x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s (friction and spring from the parameters) |
+//! | 7 | the 6 plus F_e N, the whole effective load (friction + environment) as a random walk |
+//! | 9 | the 7 plus w1, w2 m³/s: unexplained outflows from chamber 1 and chamber 2 (random walks) |
+//!
+//! The 9-state "leak-flow" layout is leakwatch's own: a leak is a flow the
+//! healthy model lacks, so the filter estimates it directly. An external leak
+//! at chamber 1 shows as (w1, w2) = (q, 0), at chamber 2 as (0, q), and an
+//! internal leak as (q, −q).
+//!
+//! Measurements are y = [x, p1, p2] (m, Pa, Pa).
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::dynamics::{effective_bulk_modulus_pa, valve_flows, LeakSet};
+use crate::friction::{friction_dv, friction_force_n};
+use crate::params::ActuatorParams;
+
+/// Index of the effective load F_e (N) in the 7- and 9-state layouts.
+pub const I_FE: usize = 6;
+/// Index of w1, the unexplained outflow from chamber 1 (m³/s), in the 9-state layout.
+pub const I_W1: usize = 7;
+/// Index of w2, the unexplained outflow from chamber 2 (m³/s), in the 9-state layout.
+pub const I_W2: usize = 8;
+/// Number of measurements: rod position (m) and the two chamber pressures (Pa).
+pub const N_MEAS: usize = 3;
+
+/// Smallest |Δp| used for the slope of a square-root flow law, Pa: below it the
+/// slope 1/(2√|Δp|) is held at its value here, so the Jacobian stays finite
+/// when a land's pressure drop crosses zero.
+pub const MIN_SLOPE_DROP_PA: f64 = 1.0e3;
+
+/// What the prediction had to do to keep the state physical.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Guard {
+    /// A pressure was pulled back into [min, max] of [`PressureRange`].
+    pub pressure_clamped: bool,
+    /// The rod position was pulled back into the stroke (± the end-stop margin).
+    pub position_clamped: bool,
+}
+
+impl Guard {
+    /// Whether anything was clamped.
+    pub fn any(&self) -> bool {
+        self.pressure_clamped || self.position_clamped
+    }
+}
+
+/// The discrete process model x(k+1) = x(k) + T·f(x(k), u(k)) of the healthy actuator.
+#[derive(Debug, Clone)]
+pub struct ProcessModel {
+    /// Physical parameters of the model (not of the rig).
+    pub params: ActuatorParams,
+    /// Sample period T, s.
+    pub dt_s: f64,
+    /// Euler sub-steps per sample (1 = the thesis' plain forward Euler).
+    pub substeps: u32,
+    /// Leaks that are part of the model itself (from `params.leaks`).
+    pub leaks: LeakSet,
+    /// Lowest pressure a prediction may hold, Pa (vacuum, gauge).
+    pub p_min_pa: f64,
+    /// Highest pressure a prediction may hold, Pa.
+    pub p_max_pa: f64,
+}
+
+/// The continuous right-hand side and its Jacobian at one state.
+#[derive(Debug, Clone, Copy)]
+pub struct Linearisation<const N: usize> {
+    /// dx/dt.
+    pub f: SVector<f64, N>,
+    /// ∂f/∂x.
+    pub a: SMatrix<f64, N, N>,
+}
+
+/// d/dΔp of sgn(Δp)·√|Δp|, held finite near zero.
+#[inline]
+fn sqrt_slope(dp_pa: f64) -> f64 {
+    0.5 / dp_pa.abs().max(MIN_SLOPE_DROP_PA).sqrt()
+}
+
+impl ProcessModel {
+    /// The model for parameters `params` at sample period `dt_s` (s).
+    pub fn new(params: ActuatorParams, dt_s: f64) -> Self {
+        let leaks = LeakSet::from_params(&params);
+        let p_max_pa = 1.5 * params.supply_pressure_pa;
+        ProcessModel { params, dt_s, substeps: 1, leaks, p_min_pa: -1.0e5, p_max_pa }
+    }
+
+    /// The continuous dynamics f(x, u) and ∂f/∂x for a layout of `N` states
+    /// (6, 7 or 9), command `u_v` in V.
+    pub fn linearise<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> Linearisation<N> {
+        assert!(N == 6 || N == 7 || N == 9, "process layouts have 6, 7 or 9 states");
+        let p = &self.params;
+        let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
+        let mut f = SVector::<f64, N>::zeros();
+        let mut a = SMatrix::<f64, N, N>::zeros();
+
+        // Spool: second order.
+        let wn = p.spool_natural_freq_rad_s;
+        f[0] = v_sp;
+        a[(0, 5)] = 1.0;
+        f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - p.spool_null_bias_m)
+            + p.spool_gain_m_per_v * wn * wn * u_v;
+        a[(5, 0)] = -wn * wn;
+        a[(5, 5)] = -2.0 * p.spool_damping_ratio * wn;
+
+        // Valve flows and their slopes.
+        let flows = valve_flows(p, x_sp, p1, p2);
+        let (dq1, dq2) = self.valve_partials(x_sp, p1, p2);
+        // Leaks built into the model.
+        let lq = self.leaks.flows(p1, p2, p.return_pressure_pa);
+        let dl = self.leak_partials(p1, p2);
+
+        // Chambers.
+        let area = p.piston_area_m2;
+        let (v1, v2) = p.chamber_volumes_m3(x);
+        let b1 = effective_bulk_modulus_pa(p, p1);
+        let b2 = effective_bulk_modulus_pa(p, p2);
+        let db1 = bulk_slope(p, p1, b1);
+        let db2 = bulk_slope(p, p2, b2);
+        let (w1, w2) = if N == 9 { (s[I_W1], s[I_W2]) } else { (0.0, 0.0) };
+        let net1 = flows.q1_m3_s - area * v - lq.int_m3_s - lq.ext1_m3_s - w1;
+        let net2 = area * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - w2;
+        f[1] = b1 / v1 * net1;
+        f[2] = b2 / v2 * net2;
+        // ∂/∂x_sp, ∂/∂p1, ∂/∂p2
+        a[(1, 0)] = b1 / v1 * dq1[0];
+        a[(1, 1)] = b1 / v1 * (dq1[1] - dl.int[0] - dl.ext1) + db1 / v1 * net1;
+        a[(1, 2)] = b1 / v1 * (dq1[2] - dl.int[1]);
+        a[(2, 0)] = -b2 / v2 * dq2[0];
+        a[(2, 1)] = b2 / v2 * (-dq2[1] + dl.int[0]);
+        a[(2, 2)] = b2 / v2 * (-dq2[2] + dl.int[1] - dl.ext2) + db2 / v2 * net2;
+        // ∂/∂x through the volumes: V1 = V10 + A(x − x_min), V2 = V20 + A(x_max − x).
+        a[(1, 3)] = -b1 * net1 * area / (v1 * v1);
+        a[(2, 3)] = b2 * net2 * area / (v2 * v2);
+        // ∂/∂v
+        a[(1, 4)] = -b1 / v1 * area;
+        a[(2, 4)] = b2 / v2 * area;
+        if N == 9 {
+            a[(1, I_W1)] = -b1 / v1;
+            a[(2, I_W2)] = -b2 / v2;
+        }
+
+        // Rod.
+        f[3] = v;
+        a[(3, 4)] = 1.0;
+        let m = p.mass_kg;
+        if N >= 7 {
+            f[4] = (area * (p1 - p2) - s[I_FE]) / m;
+            a[(4, 1)] = area / m;
+            a[(4, 2)] = -area / m;
+            a[(4, I_FE)] = -1.0 / m;
+        } else {
+            let load = p.load.force_n(x, v);
+            let (dload_dx, dload_dv) = if p.load.stiffness_n_per_m != 0.0 || p.load.preload_n != 0.0 {
+                if x > p.load.contact_m {
+                    (p.load.stiffness_n_per_m, p.load.damping_n_s_per_m)
+                } else {
+                    (0.0, 0.0)
+                }
+            } else {
+                (0.0, 0.0)
+            };
+            let drive = area * (p1 - p2) - load;
+            let friction = friction_force_n(&p.friction, v, drive);
+            f[4] = (drive - friction) / m;
+            if v.abs() > p.friction.zero_velocity_m_s {
+                // sliding: Stribeck + viscous
+                a[(4, 1)] = area / m;
+                a[(4, 2)] = -area / m;
+                a[(4, 3)] = -dload_dx / m;
+                a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
+            } else if friction != drive {
+                // breaking away: friction saturated at ±f_st
+                a[(4, 1)] = area / m;
+                a[(4, 2)] = -area / m;
+                a[(4, 3)] = -dload_dx / m;
+                a[(4, 4)] = -dload_dv / m;
+            }
+            // stuck: friction balances the drive, dv/dt = 0 and its row is zero
+        }
+        Linearisation { f, a }
+    }
+
+    /// Partials of (Q1, Q2) with respect to (x_sp, p1, p2); no supply sag
+    /// (with sag, central differences of [`valve_flows`]).
+    fn valve_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
+        let p = &self.params;
+        if p.supply_sag_pa_per_m3_s != 0.0 {
+            let q = |xs: f64, a: f64, b: f64| {
+                let f = valve_flows(p, xs, a, b);
+                (f.q1_m3_s, f.q2_m3_s)
+            };
+            let (hx, hp) = (1e-9_f64.max(1e-6 * x_sp.abs()), 1.0_f64.max(1e-6 * p1.abs().max(p2.abs())));
+            let d = |plus: (f64, f64), minus: (f64, f64), h: f64| {
+                ((plus.0 - minus.0) / (2.0 * h), (plus.1 - minus.1) / (2.0 * h))
+            };
+            let dx = d(q(x_sp + hx, p1, p2), q(x_sp - hx, p1, p2), hx);
+            let d1 = d(q(x_sp, p1 + hp, p2), q(x_sp, p1 - hp, p2), hp);
+            let d2 = d(q(x_sp, p1, p2 + hp), q(x_sp, p1, p2 - hp), hp);
+            return ([dx.0, d1.0, d2.0], [dx.1, d1.1, d2.1]);
+        }
+        let g = p.discharge_coefficient * p.area_gradient_m2_per_m * (2.0 / p.oil_density_kg_m3).sqrt();
+        let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
+        let ss = crate::units::signed_sqrt;
+        if x_sp >= 0.0 {
+            // Q1 = g x_sp ssqrt(ps − p1), Q2 = g x_sp ssqrt(p2 − pr)
+            (
+                [g * ss(ps - p1), -g * x_sp * sqrt_slope(ps - p1), 0.0],
+                [g * ss(p2 - pr), 0.0, g * x_sp * sqrt_slope(p2 - pr)],
+            )
+        } else {
+            // Q1 = g x_sp ssqrt(p1 − pr), Q2 = g x_sp ssqrt(ps − p2)
+            (
+                [g * ss(p1 - pr), g * x_sp * sqrt_slope(p1 - pr), 0.0],
+                [g * ss(ps - p2), 0.0, -g * x_sp * sqrt_slope(ps - p2)],
+            )
+        }
+    }
+
+    /// Partials of the model's own leak flows: internal w.r.t. (p1, p2), ext1 w.r.t. p1, ext2 w.r.t. p2.
+    fn leak_partials(&self, p1: f64, p2: f64) -> LeakPartials {
+        let l = &self.leaks;
+        let pr = self.params.return_pressure_pa;
+        // index order of LeakSet: ext1, ext2, int
+        let d_ext1 = l.linear_m3_s_pa[0] + l.sqrt_m3_s_sqrt_pa[0] * sqrt_slope(p1 - pr);
+        let d_ext2 = l.linear_m3_s_pa[1] + l.sqrt_m3_s_sqrt_pa[1] * sqrt_slope(p2 - pr);
+        let d_int = l.linear_m3_s_pa[2] + l.sqrt_m3_s_sqrt_pa[2] * sqrt_slope(p1 - p2);
+        LeakPartials { ext1: d_ext1, ext2: d_ext2, int: [d_int, -d_int] }
+    }
+
+    /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
+    /// (forward Euler in `substeps` sub-steps), with the state kept physical.
+    pub fn step<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+    ) -> (SVector<f64, N>, SMatrix<f64, N, N>, Guard) {
+        let n = self.substeps.max(1);
+        let h = self.dt_s / n as f64;
+        let mut x = *s;
+        let mut jac = SMatrix::<f64, N, N>::identity();
+        for i in 0..n {
+            let lin = self.linearise(&x, u_v);
+            let step_jac = SMatrix::<f64, N, N>::identity() + lin.a * h;
+            jac = if i == 0 { step_jac } else { step_jac * jac };
+            x += lin.f * h;
+        }
+        let guard = self.keep_physical(&mut x);
+        (x, jac, guard)
+    }
+
+    /// Clamps pressures into [p_min, p_max] and the rod into its stroke plus
+    /// 1 cm; reports what was done.
+    pub fn keep_physical<const N: usize>(&self, x: &mut SVector<f64, N>) -> Guard {
+        let mut g = Guard::default();
+        for i in [1, 2] {
+            let c = x[i].clamp(self.p_min_pa, self.p_max_pa);
+            if c != x[i] || !x[i].is_finite() {
+                g.pressure_clamped = true;
+                x[i] = if x[i].is_finite() { c } else { self.params.nominal_chamber_pressure_pa() };
+            }
+        }
+        let (lo, hi) = (self.params.x_min_m - 0.01, self.params.x_max_m + 0.01);
+        if x[3] < lo || x[3] > hi {
+            g.position_clamped = true;
+            x[3] = x[3].clamp(lo, hi);
+        }
+        g
+    }
+
+    /// The measurement y = [x, p1, p2] of a state, m, Pa, Pa.
+    #[inline]
+    pub fn measure<const N: usize>(s: &SVector<f64, N>) -> SVector<f64, N_MEAS> {
+        SVector::<f64, N_MEAS>::new(s[3], s[1], s[2])
+    }
+
+    /// The measurement matrix H (selects x, p1, p2).
+    pub fn measurement_matrix<const N: usize>() -> SMatrix<f64, N_MEAS, N> {
+        let mut h = SMatrix::<f64, N_MEAS, N>::zeros();
+        h[(0, 3)] = 1.0;
+        h[(1, 1)] = 1.0;
+        h[(2, 2)] = 1.0;
+        h
+    }
+}
+
+struct LeakPartials {
+    ext1: f64,
+    ext2: f64,
+    int: [f64; 2],
+}
+
+/// dβ_eff/dp at pressure `p_pa`, Pa/Pa, for the entrained-air law of [`effective_bulk_modulus_pa`].
+fn bulk_slope(p: &ActuatorParams, p_pa: f64, beta_eff: f64) -> f64 {
+    if p.entrained_air_fraction == 0.0 {
+        return 0.0;
+    }
+    const P_ATM: f64 = 101_325.0;
+    let p_abs = p_pa + P_ATM;
+    if p_abs <= 0.2 * P_ATM {
+        return 0.0;
+    }
+    beta_eff * beta_eff * 2.0 * p.entrained_air_fraction * P_ATM / (p_abs * p_abs * p_abs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leakage::{LeakLaw, LeakPath};
+    use crate::params::BuiltInLeak;
+    use crate::rng::Rng;
+
+    /// Central-difference Jacobian of f.
+    fn fd_jacobian<const N: usize>(m: &ProcessModel, s: &SVector<f64, N>, u: f64) -> SMatrix<f64, N, N> {
+        let mut j = SMatrix::<f64, N, N>::zeros();
+        let scale = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5];
+        for c in 0..N {
+            let h = 1e-6 * scale[c];
+            let mut sp = *s;
+            let mut sm = *s;
+            sp[c] += h;
+            sm[c] -= h;
+            let col = (m.linearise(&sp, u).f - m.linearise(&sm, u).f) / (2.0 * h);
+            j.set_column(c, &col);
+        }
+        j
+    }
+
+    fn random_state<const N: usize>(rng: &mut Rng, p: &ActuatorParams, band: Band) -> SVector<f64, N> {
+        let mut s = SVector::<f64, N>::zeros();
+        s[0] = rng.uniform_in(-8e-5, 8e-5);
+        s[1] = rng.uniform_in(0.5e6, 13.0e6);
+        s[2] = rng.uniform_in(0.5e6, 13.0e6);
+        s[3] = rng.uniform_in(0.05, 0.55);
+        s[4] = match band {
+            Band::Sliding => {
+                let v = rng.uniform_in(0.002, 0.5);
+                if rng.uniform() < 0.5 {
+                    -v
+                } else {
+                    v
+                }
+            }
+            Band::Stick => rng.uniform_in(-0.0009, 0.0009),
+        };
+        s[5] = rng.uniform_in(-0.05, 0.05);
+        if N >= 7 {
+            s[I_FE] = rng.uniform_in(-3e3, 3e3);
+        }
+        if N == 9 {
+            s[I_W1] = rng.uniform_in(-2e-5, 2e-5);
+            s[I_W2] = rng.uniform_in(-2e-5, 2e-5);
+        }
+        let _ = p;
+        s
+    }
+
+    #[derive(Clone, Copy)]
+    enum Band {
+        Sliding,
+        Stick,
+    }
+
+    fn check_jacobian<const N: usize>(m: &ProcessModel, band: Band, seed: u64) -> usize {
+        let mut rng = Rng::new(seed);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let s: SVector<f64, N> = random_state(&mut rng, &m.params, band);
+            let u = rng.uniform_in(-10.0, 10.0);
+            // Skip states within a finite-difference step of a branch switch.
+            if s[0].abs() < 1e-10 || (s[1] - m.params.supply_pressure_pa).abs() < 2e3 {
+                continue;
+            }
+            if N == 6 {
+                let drive = m.params.piston_area_m2 * (s[1] - s[2]) - m.params.load.force_n(s[3], s[4]);
+                if (drive.abs() - m.params.friction.static_n).abs() < 50.0
+                    || (s[3] - m.params.load.contact_m).abs() < 1e-5
+                {
+                    continue;
+                }
+            }
+            let an = m.linearise(&s, u).a;
+            let fd = fd_jacobian(m, &s, u);
+            for r in 0..N {
+                for c in 0..N {
+                    // compare relative to the row's largest entry (rows mix units)
+                    let row_scale = (0..N).map(|k| an[(r, k)].abs() * 1e-3).fold(1e-300, f64::max);
+                    let err = (an[(r, c)] - fd[(r, c)]).abs();
+                    let rel = err / an[(r, c)].abs().max(row_scale);
+                    assert!(
+                        rel < 1e-5,
+                        "N={N} row {r} col {c}: analytic {:e} vs fd {:e} at {s:?}, u {u}",
+                        an[(r, c)],
+                        fd[(r, c)]
+                    );
+                }
+            }
+            checked += 1;
+        }
+        checked
+    }
+
+    #[test]
+    fn jacobians_match_central_differences_on_every_branch() {
+        let mut p = ActuatorParams::default();
+        p.load = crate::params::SpringLoad::thesis_simulation();
+        let m = ProcessModel::new(p.clone(), 1e-3);
+        assert!(check_jacobian::<6>(&m, Band::Sliding, 1) > 250);
+        assert!(check_jacobian::<6>(&m, Band::Stick, 2) > 250);
+        assert!(check_jacobian::<7>(&m, Band::Sliding, 3) > 250);
+        assert!(check_jacobian::<9>(&m, Band::Sliding, 4) > 250);
+        // With entrained air, a pressure-dependent bulk modulus, built-in leaks of both laws.
+        let mut p2 = p;
+        p2.entrained_air_fraction = 0.01;
+        p2.leaks = vec![
+            BuiltInLeak { path: LeakPath::External1, law: LeakLaw::SquareRoot, coefficient: 5e-9 },
+            BuiltInLeak { path: LeakPath::Internal, law: LeakLaw::Linear, coefficient: 2e-12 },
+            BuiltInLeak { path: LeakPath::External2, law: LeakLaw::SquareRoot, coefficient: 3e-9 },
+        ];
+        let m2 = ProcessModel::new(p2, 1e-3);
+        assert!(check_jacobian::<7>(&m2, Band::Sliding, 5) > 250);
+        assert!(check_jacobian::<6>(&m2, Band::Stick, 6) > 250);
+    }
+
+    #[test]
+    fn centred_valve_is_an_equilibrium_and_stick_band_rows_vanish() {
+        let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
+        let p0 = m.params.nominal_chamber_pressure_pa();
+        let s = SVector::<f64, 6>::from([0.0, p0, p0, 0.3, 0.0, 0.0]);
+        let lin = m.linearise(&s, 0.0);
+        assert!(lin.f.iter().all(|d| d.abs() < 1e-12), "{:?}", lin.f);
+        // stuck: the velocity row is zero
+        assert!(lin.a.row(4).iter().all(|d| *d == 0.0));
+        let (next, jac, guard) = m.step(&s, 0.0);
+        assert_eq!(next, s);
+        assert!(!guard.any());
+        assert_eq!(jac, SMatrix::<f64, 6, 6>::identity() + lin.a * 1e-3);
+    }
+
+    #[test]
+    fn leak_flow_states_enter_the_continuity_equations() {
+        let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
+        let p0 = m.params.nominal_chamber_pressure_pa();
+        let q = crate::units::lpm_to_m3_s(0.5);
+        let s = SVector::<f64, 9>::from([0.0, p0, p0, 0.3, 0.0, 0.0, 0.0, q, -q]);
+        let f = m.linearise(&s, 0.0).f;
+        let (v1, v2) = m.params.chamber_volumes_m3(0.3);
+        let beta = m.params.bulk_modulus_pa;
+        assert!((f[1] + beta / v1 * q).abs() < 1e-9 * beta / v1 * q);
+        assert!((f[2] - beta / v2 * q).abs() < 1e-9 * beta / v2 * q);
+    }
+
+    #[test]
+    fn guard_clamps_unphysical_pressures() {
+        let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
+        let mut s = SVector::<f64, 7>::from([0.0, 30e6, f64::NAN, 0.7, 0.0, 0.0, 0.0]);
+        let g = m.keep_physical(&mut s);
+        assert!(g.pressure_clamped && g.position_clamped);
+        assert_eq!(s[1], 1.5 * 13.8e6);
+        assert_eq!(s[2], m.params.nominal_chamber_pressure_pa());
+        assert!((s[3] - (m.params.x_max_m + 0.01)).abs() < 1e-12);
+    }
+}
