@@ -8,12 +8,12 @@
 //! |---|---|
 //! | 6 | x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s (friction and spring from the parameters) |
 //! | 7 | the 6 plus F_e N, the whole effective load (friction + environment) as a random walk |
-//! | 9 | the 7 plus w1, w2 m³/s: unexplained outflows from chamber 1 and chamber 2 (random walks) |
+//! | 10 | the 7 plus q_e1, q_e2, q_i m³/s: the three leak sizes (random walks) |
 //!
-//! The 9-state "leak-flow" layout is leakwatch's own: a leak is a flow the
-//! healthy model lacks, so the filter estimates it directly. An external leak
-//! at chamber 1 shows as (w1, w2) = (q, 0), at chamber 2 as (0, q), and an
-//! internal leak as (q, −q).
+//! The 10-state "leak" layout is leakwatch's own: a leak is a flow the healthy
+//! model lacks, so the filter estimates the three leaks directly, each as its
+//! size at the nominal pressure drop Δp_n = p_s/2 under the square-root law:
+//! q = q_n · sgn(Δp)·√(|Δp| / Δp_n), with Δp = p1 − p_r, p2 − p_r and p1 − p2.
 //!
 //! Measurements are y = [x, p1, p2] (m, Pa, Pa).
 
@@ -25,10 +25,12 @@ use crate::params::ActuatorParams;
 
 /// Index of the effective load F_e (N) in the 7- and 9-state layouts.
 pub const I_FE: usize = 6;
-/// Index of w1, the unexplained outflow from chamber 1 (m³/s), in the 9-state layout.
-pub const I_W1: usize = 7;
-/// Index of w2, the unexplained outflow from chamber 2 (m³/s), in the 9-state layout.
-pub const I_W2: usize = 8;
+/// Index of q_e1, the chamber-1 external leak at nominal drop (m³/s), in the 10-state layout.
+pub const I_QE1: usize = 7;
+/// Index of q_e2, the chamber-2 external leak at nominal drop (m³/s), in the 10-state layout.
+pub const I_QE2: usize = 8;
+/// Index of q_i, the internal leak at nominal drop (m³/s), in the 10-state layout.
+pub const I_QI: usize = 9;
 /// Number of measurements: rod position (m) and the two chamber pressures (Pa).
 pub const N_MEAS: usize = 3;
 
@@ -90,13 +92,28 @@ impl ProcessModel {
     pub fn new(params: ActuatorParams, dt_s: f64) -> Self {
         let leaks = LeakSet::from_params(&params);
         let p_max_pa = 1.5 * params.supply_pressure_pa;
-        ProcessModel { params, dt_s, substeps: 1, leaks, p_min_pa: -1.0e5, p_max_pa }
+        ProcessModel {
+            params,
+            dt_s,
+            substeps: 1,
+            leaks,
+            p_min_pa: -1.0e5,
+            p_max_pa,
+        }
+    }
+
+    /// The nominal pressure drop at which the 10-state layout's leak sizes are given, Pa (p_s/2).
+    pub fn nominal_drop_pa(&self) -> f64 {
+        0.5 * (self.params.supply_pressure_pa - self.params.return_pressure_pa)
     }
 
     /// The continuous dynamics f(x, u) and ∂f/∂x for a layout of `N` states
-    /// (6, 7 or 9), command `u_v` in V.
+    /// (6, 7 or 10), command `u_v` in V.
     pub fn linearise<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> Linearisation<N> {
-        assert!(N == 6 || N == 7 || N == 9, "process layouts have 6, 7 or 9 states");
+        assert!(
+            N == 6 || N == 7 || N == 10,
+            "process layouts have 6, 7 or 10 states"
+        );
         let p = &self.params;
         let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
         let mut f = SVector::<f64, N>::zeros();
@@ -125,9 +142,22 @@ impl ProcessModel {
         let b2 = effective_bulk_modulus_pa(p, p2);
         let db1 = bulk_slope(p, p1, b1);
         let db2 = bulk_slope(p, p2, b2);
-        let (w1, w2) = if N == 9 { (s[I_W1], s[I_W2]) } else { (0.0, 0.0) };
-        let net1 = flows.q1_m3_s - area * v - lq.int_m3_s - lq.ext1_m3_s - w1;
-        let net2 = area * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - w2;
+        // Estimated leaks (10 states): q = q_n·ssqrt(Δp)/√Δp_n.
+        let pr = p.return_pressure_pa;
+        let inv_sqrt_n = 1.0 / self.nominal_drop_pa().sqrt();
+        let ss = crate::units::signed_sqrt;
+        let (g1, g2, gi) = (
+            ss(p1 - pr) * inv_sqrt_n,
+            ss(p2 - pr) * inv_sqrt_n,
+            ss(p1 - p2) * inv_sqrt_n,
+        );
+        let (qe1, qe2, qi) = if N == 10 {
+            (s[I_QE1], s[I_QE2], s[I_QI])
+        } else {
+            (0.0, 0.0, 0.0)
+        };
+        let net1 = flows.q1_m3_s - area * v - lq.int_m3_s - lq.ext1_m3_s - qe1 * g1 - qi * gi;
+        let net2 = area * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
         f[1] = b1 / v1 * net1;
         f[2] = b2 / v2 * net2;
         // ∂/∂x_sp, ∂/∂p1, ∂/∂p2
@@ -143,9 +173,20 @@ impl ProcessModel {
         // ∂/∂v
         a[(1, 4)] = -b1 / v1 * area;
         a[(2, 4)] = b2 / v2 * area;
-        if N == 9 {
-            a[(1, I_W1)] = -b1 / v1;
-            a[(2, I_W2)] = -b2 / v2;
+        if N == 10 {
+            a[(1, I_QE1)] = -b1 / v1 * g1;
+            a[(1, I_QI)] = -b1 / v1 * gi;
+            a[(2, I_QE2)] = -b2 / v2 * g2;
+            a[(2, I_QI)] = b2 / v2 * gi;
+            let (s1, s2, si) = (
+                sqrt_slope(p1 - pr) * inv_sqrt_n,
+                sqrt_slope(p2 - pr) * inv_sqrt_n,
+                sqrt_slope(p1 - p2) * inv_sqrt_n,
+            );
+            a[(1, 1)] -= b1 / v1 * (qe1 * s1 + qi * si);
+            a[(1, 2)] += b1 / v1 * qi * si;
+            a[(2, 1)] += b2 / v2 * qi * si;
+            a[(2, 2)] -= b2 / v2 * (qe2 * s2 + qi * si);
         }
 
         // Rod.
@@ -198,7 +239,10 @@ impl ProcessModel {
                 let f = valve_flows(p, xs, a, b);
                 (f.q1_m3_s, f.q2_m3_s)
             };
-            let (hx, hp) = (1e-9_f64.max(1e-6 * x_sp.abs()), 1.0_f64.max(1e-6 * p1.abs().max(p2.abs())));
+            let (hx, hp) = (
+                1e-9_f64.max(1e-6 * x_sp.abs()),
+                1.0_f64.max(1e-6 * p1.abs().max(p2.abs())),
+            );
             let d = |plus: (f64, f64), minus: (f64, f64), h: f64| {
                 ((plus.0 - minus.0) / (2.0 * h), (plus.1 - minus.1) / (2.0 * h))
             };
@@ -233,7 +277,11 @@ impl ProcessModel {
         let d_ext1 = l.linear_m3_s_pa[0] + l.sqrt_m3_s_sqrt_pa[0] * sqrt_slope(p1 - pr);
         let d_ext2 = l.linear_m3_s_pa[1] + l.sqrt_m3_s_sqrt_pa[1] * sqrt_slope(p2 - pr);
         let d_int = l.linear_m3_s_pa[2] + l.sqrt_m3_s_sqrt_pa[2] * sqrt_slope(p1 - p2);
-        LeakPartials { ext1: d_ext1, ext2: d_ext2, int: [d_int, -d_int] }
+        LeakPartials {
+            ext1: d_ext1,
+            ext2: d_ext2,
+            int: [d_int, -d_int],
+        }
     }
 
     /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
@@ -265,7 +313,11 @@ impl ProcessModel {
             let c = x[i].clamp(self.p_min_pa, self.p_max_pa);
             if c != x[i] || !x[i].is_finite() {
                 g.pressure_clamped = true;
-                x[i] = if x[i].is_finite() { c } else { self.params.nominal_chamber_pressure_pa() };
+                x[i] = if x[i].is_finite() {
+                    c
+                } else {
+                    self.params.nominal_chamber_pressure_pa()
+                };
             }
         }
         let (lo, hi) = (self.params.x_min_m - 0.01, self.params.x_max_m + 0.01);
@@ -321,7 +373,7 @@ mod tests {
     /// Central-difference Jacobian of f.
     fn fd_jacobian<const N: usize>(m: &ProcessModel, s: &SVector<f64, N>, u: f64) -> SMatrix<f64, N, N> {
         let mut j = SMatrix::<f64, N, N>::zeros();
-        let scale = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5];
+        let scale = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5, 1e-5];
         for c in 0..N {
             let h = 1e-6 * scale[c];
             let mut sp = *s;
@@ -355,9 +407,10 @@ mod tests {
         if N >= 7 {
             s[I_FE] = rng.uniform_in(-3e3, 3e3);
         }
-        if N == 9 {
-            s[I_W1] = rng.uniform_in(-2e-5, 2e-5);
-            s[I_W2] = rng.uniform_in(-2e-5, 2e-5);
+        if N == 10 {
+            for i in [I_QE1, I_QE2, I_QI] {
+                s[i] = rng.uniform_in(0.0, 2e-5);
+            }
         }
         let _ = p;
         s
@@ -376,7 +429,10 @@ mod tests {
             let s: SVector<f64, N> = random_state(&mut rng, &m.params, band);
             let u = rng.uniform_in(-10.0, 10.0);
             // Skip states within a finite-difference step of a branch switch.
-            if s[0].abs() < 1e-10 || (s[1] - m.params.supply_pressure_pa).abs() < 2e3 {
+            if s[0].abs() < 1e-10
+                || (s[1] - m.params.supply_pressure_pa).abs() < 2e3
+                || (s[1] - s[2]).abs() < 2e3
+            {
                 continue;
             }
             if N == 6 {
@@ -410,20 +466,34 @@ mod tests {
 
     #[test]
     fn jacobians_match_central_differences_on_every_branch() {
-        let mut p = ActuatorParams::default();
-        p.load = crate::params::SpringLoad::thesis_simulation();
+        let p = ActuatorParams {
+            load: crate::params::SpringLoad::thesis_simulation(),
+            ..Default::default()
+        };
         let m = ProcessModel::new(p.clone(), 1e-3);
         assert!(check_jacobian::<6>(&m, Band::Sliding, 1) > 250);
         assert!(check_jacobian::<6>(&m, Band::Stick, 2) > 250);
         assert!(check_jacobian::<7>(&m, Band::Sliding, 3) > 250);
-        assert!(check_jacobian::<9>(&m, Band::Sliding, 4) > 250);
+        assert!(check_jacobian::<10>(&m, Band::Sliding, 4) > 250);
         // With entrained air, a pressure-dependent bulk modulus, built-in leaks of both laws.
         let mut p2 = p;
         p2.entrained_air_fraction = 0.01;
         p2.leaks = vec![
-            BuiltInLeak { path: LeakPath::External1, law: LeakLaw::SquareRoot, coefficient: 5e-9 },
-            BuiltInLeak { path: LeakPath::Internal, law: LeakLaw::Linear, coefficient: 2e-12 },
-            BuiltInLeak { path: LeakPath::External2, law: LeakLaw::SquareRoot, coefficient: 3e-9 },
+            BuiltInLeak {
+                path: LeakPath::External1,
+                law: LeakLaw::SquareRoot,
+                coefficient: 5e-9,
+            },
+            BuiltInLeak {
+                path: LeakPath::Internal,
+                law: LeakLaw::Linear,
+                coefficient: 2e-12,
+            },
+            BuiltInLeak {
+                path: LeakPath::External2,
+                law: LeakLaw::SquareRoot,
+                coefficient: 3e-9,
+            },
         ];
         let m2 = ProcessModel::new(p2, 1e-3);
         assert!(check_jacobian::<7>(&m2, Band::Sliding, 5) > 250);
@@ -446,16 +516,28 @@ mod tests {
     }
 
     #[test]
-    fn leak_flow_states_enter_the_continuity_equations() {
+    fn leak_states_enter_the_continuity_equations() {
         let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
-        let p0 = m.params.nominal_chamber_pressure_pa();
+        let pn = m.nominal_drop_pa();
         let q = crate::units::lpm_to_m3_s(0.5);
-        let s = SVector::<f64, 9>::from([0.0, p0, p0, 0.3, 0.0, 0.0, 0.0, q, -q]);
-        let f = m.linearise(&s, 0.0).f;
         let (v1, v2) = m.params.chamber_volumes_m3(0.3);
         let beta = m.params.bulk_modulus_pa;
+        // At the nominal drop an external leak of size q takes exactly q from its chamber.
+        let s = SVector::<f64, 10>::from([0.0, pn, pn, 0.3, 0.0, 0.0, 0.0, q, 0.0, 0.0]);
+        let f = m.linearise(&s, 0.0).f;
         assert!((f[1] + beta / v1 * q).abs() < 1e-9 * beta / v1 * q);
-        assert!((f[2] - beta / v2 * q).abs() < 1e-9 * beta / v2 * q);
+        assert!(f[2].abs() < 1e-9);
+        // An internal leak at a drop of pn/4 carries half its nominal size from 1 to 2.
+        let s = SVector::<f64, 10>::from([0.0, pn, 0.75 * pn, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0, q]);
+        let f = m.linearise(&s, 0.0).f;
+        let f_ref = m
+            .linearise(
+                &SVector::<f64, 10>::from([0.0, pn, 0.75 * pn, 0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+                0.0,
+            )
+            .f;
+        assert!((f[1] - f_ref[1] + beta / v1 * 0.5 * q).abs() < 1e-6 * beta / v1 * q);
+        assert!((f[2] - f_ref[2] - beta / v2 * 0.5 * q).abs() < 1e-6 * beta / v2 * q);
     }
 
     #[test]

@@ -1,0 +1,340 @@
+//! A generic square-root extended Kalman filter over static sizes.
+//!
+//! The covariance is carried as a factor S with P = S·Sᵀ, so it is symmetric
+//! positive semi-definite by construction and never loses definiteness to
+//! rounding, whatever the units (the thesis' P0 = 1e4·I mixes m² and Pa² over
+//! twenty orders of magnitude; a Joseph-form update loses definiteness on it,
+//! MODEL.md §8). On top of that, all covariance algebra runs in scaled units
+//! z = x / scale, so that every state is O(1).
+//!
+//! - Predict: S⁻ = triangular factor of [F·S, Q^½], by Householder reflections.
+//! - Update: Potter's square-root update, one measurement at a time (R diagonal).
+//!
+//! Nothing here allocates: all matrices are nalgebra static sizes.
+
+use nalgebra::{SMatrix, SVector};
+
+/// What one measurement update saw.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation<const M: usize> {
+    /// Innovation ν = y − h(x⁻), measurement units.
+    pub nu: SVector<f64, M>,
+    /// Standard deviation of each innovation, √diag(H P⁻ Hᵀ + R), measurement units.
+    pub sigma: SVector<f64, M>,
+    /// Normalised innovation squared νᵀ (H P⁻ Hᵀ + R)⁻¹ ν (χ² with M degrees of freedom when consistent).
+    pub nis: f64,
+}
+
+/// Why the filter refused a step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EkfError {
+    /// The state or its covariance factor holds a NaN or an infinity.
+    NotFinite,
+    /// The innovation covariance could not be factorised.
+    SingularInnovation,
+}
+
+/// A square-root EKF with `N` states and `M` measurements.
+#[derive(Debug, Clone)]
+pub struct Ekf<const N: usize, const M: usize> {
+    /// State estimate, SI units.
+    x: SVector<f64, N>,
+    /// Covariance factor in scaled units: P_z = S·Sᵀ.
+    s: SMatrix<f64, N, N>,
+    /// Typical magnitude of each state (its unit of scaling), SI.
+    x_scale: SVector<f64, N>,
+    /// Process noise standard deviations per step, scaled.
+    q_sqrt: SVector<f64, N>,
+    /// Measurement noise variances, SI.
+    r: SVector<f64, M>,
+}
+
+impl<const N: usize, const M: usize> Ekf<N, M> {
+    /// A filter starting at `x0` (SI) with covariance diag(`p0_diag`), process noise
+    /// diag(`q_diag`) per step and measurement noise diag(`r_diag`), all in SI squared
+    /// units; `x_scale` gives each state's typical magnitude for the internal scaling.
+    pub fn new(
+        x0: SVector<f64, N>,
+        p0_diag: &SVector<f64, N>,
+        q_diag: &SVector<f64, N>,
+        r_diag: SVector<f64, M>,
+        x_scale: SVector<f64, N>,
+    ) -> Self {
+        let mut f = Ekf {
+            x: x0,
+            s: SMatrix::zeros(),
+            x_scale,
+            q_sqrt: SVector::zeros(),
+            r: r_diag,
+        };
+        for i in 0..N {
+            f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
+        }
+        f.reset(x0, p0_diag);
+        f
+    }
+
+    /// Restarts the filter at `x0` with covariance diag(`p0_diag`) (SI).
+    pub fn reset(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>) {
+        self.x = x0;
+        self.s = SMatrix::zeros();
+        for i in 0..N {
+            self.s[(i, i)] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
+        }
+    }
+
+    /// The state estimate, SI.
+    pub fn state(&self) -> &SVector<f64, N> {
+        &self.x
+    }
+
+    /// Overwrites the state estimate (for guards that keep it physical), SI.
+    pub fn set_state(&mut self, x: SVector<f64, N>) {
+        self.x = x;
+    }
+
+    /// The covariance P in SI units (computed from the factor).
+    pub fn covariance(&self) -> SMatrix<f64, N, N> {
+        let pz = self.s * self.s.transpose();
+        let mut p = pz;
+        for i in 0..N {
+            for j in 0..N {
+                p[(i, j)] = pz[(i, j)] * self.x_scale[i] * self.x_scale[j];
+            }
+        }
+        p
+    }
+
+    /// The covariance in scaled units, P_z = S·Sᵀ.
+    pub fn scaled_covariance(&self) -> SMatrix<f64, N, N> {
+        self.s * self.s.transpose()
+    }
+
+    /// Standard deviation of each state, SI.
+    pub fn sigma(&self) -> SVector<f64, N> {
+        let mut out = SVector::<f64, N>::zeros();
+        for i in 0..N {
+            out[i] = self.s.row(i).norm() * self.x_scale[i];
+        }
+        out
+    }
+
+    /// Whether the state and the factor are finite.
+    pub fn is_finite(&self) -> bool {
+        self.x.iter().all(|v| v.is_finite()) && self.s.iter().all(|v| v.is_finite())
+    }
+
+    /// Time update: the caller has propagated the state to `x_pred` (SI) with
+    /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
+    pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
+        // Scaled Jacobian F_z = D⁻¹ F D.
+        let mut fz = *f_jac;
+        for i in 0..N {
+            for j in 0..N {
+                fz[(i, j)] *= self.x_scale[j] / self.x_scale[i];
+            }
+        }
+        let mut w1 = fz * self.s;
+        let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
+        lower_triangularise(&mut w1, &mut w2);
+        self.s = w1;
+        self.x = x_pred;
+        if self.is_finite() {
+            Ok(())
+        } else {
+            Err(EkfError::NotFinite)
+        }
+    }
+
+    /// Measurement update with measurement `y`, predicted measurement `h_pred` = h(x⁻)
+    /// and Jacobian `h_jac` = ∂h/∂x (SI); measurements whose `use_channel` flag is false
+    /// are left out. Returns the innovation of the whole vector.
+    pub fn update(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        h_jac: &SMatrix<f64, M, N>,
+        use_channel: [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
+        // Scaled measurement Jacobian H_z = H D (measurement units per scaled state).
+        let mut hz = *h_jac;
+        for i in 0..M {
+            for j in 0..N {
+                hz[(i, j)] *= self.x_scale[j];
+            }
+        }
+        // Innovation statistics from the prior: C = H_z S Sᵀ H_zᵀ + R.
+        let nu = y - h_pred;
+        let hs = hz * self.s;
+        let mut c = hs * hs.transpose();
+        for i in 0..M {
+            c[(i, i)] += self.r[i];
+        }
+        let mut sigma = SVector::<f64, M>::zeros();
+        for i in 0..M {
+            sigma[i] = c[(i, i)].max(0.0).sqrt();
+        }
+        // NIS over the channels in use (others replaced by unit rows).
+        let mut cu = c;
+        let mut nu_u = nu;
+        for i in 0..M {
+            if !use_channel[i] {
+                nu_u[i] = 0.0;
+                for j in 0..M {
+                    cu[(i, j)] = 0.0;
+                    cu[(j, i)] = 0.0;
+                }
+                cu[(i, i)] = 1.0;
+            }
+        }
+        let chol = cu.cholesky().ok_or(EkfError::SingularInnovation)?;
+        let nis = nu_u.dot(&chol.solve(&nu_u));
+
+        // Potter's update, one scalar measurement at a time.
+        let mut dz = SVector::<f64, N>::zeros(); // scaled state correction so far
+        for i in 0..M {
+            if !use_channel[i] {
+                continue;
+            }
+            let h = hz.row(i).transpose();
+            let phi = self.s.transpose() * h;
+            let denom = phi.dot(&phi) + self.r[i];
+            if denom <= 0.0 || !denom.is_finite() {
+                return Err(EkfError::SingularInnovation);
+            }
+            let a = 1.0 / denom;
+            let gamma = 1.0 / (1.0 + (a * self.r[i]).sqrt());
+            let k = self.s * phi * a;
+            let resid = nu[i] - h.dot(&dz);
+            dz += k * resid;
+            self.s -= k * phi.transpose() * gamma;
+        }
+        for j in 0..N {
+            self.x[j] += dz[j] * self.x_scale[j];
+        }
+        if !self.is_finite() {
+            return Err(EkfError::NotFinite);
+        }
+        Ok(Innovation { nu, sigma, nis })
+    }
+}
+
+/// Replaces the N×2N matrix [w1 | w2] by [L | 0] with L lower triangular and
+/// L·Lᵀ = w1·w1ᵀ + w2·w2ᵀ (Householder reflections applied from the right).
+pub fn lower_triangularise<const N: usize>(w1: &mut SMatrix<f64, N, N>, w2: &mut SMatrix<f64, N, N>) {
+    for i in 0..N {
+        // The reflector acts on columns i..N of w1 and all columns of w2, along row i.
+        let mut norm2 = 0.0;
+        for j in i..N {
+            norm2 += w1[(i, j)] * w1[(i, j)];
+        }
+        for j in 0..N {
+            norm2 += w2[(i, j)] * w2[(i, j)];
+        }
+        let norm = norm2.sqrt();
+        if norm == 0.0 {
+            continue;
+        }
+        let x0 = w1[(i, i)];
+        let alpha = if x0 > 0.0 { -norm } else { norm };
+        // v = x − α e_i; vᵀv = 2 (norm² − α x0)
+        let v0 = x0 - alpha;
+        let vtv = 2.0 * (norm2 - alpha * x0);
+        if vtv == 0.0 {
+            continue;
+        }
+        for r in i..N {
+            // dot of row r with v
+            let mut d = w1[(r, i)] * v0;
+            for j in i + 1..N {
+                d += w1[(r, j)] * w1[(i, j)];
+            }
+            for j in 0..N {
+                d += w2[(r, j)] * w2[(i, j)];
+            }
+            let g = 2.0 * d / vtv;
+            if r == i {
+                continue; // row i is set below
+            }
+            w1[(r, i)] -= g * v0;
+            for j in i + 1..N {
+                w1[(r, j)] -= g * w1[(i, j)];
+            }
+            for j in 0..N {
+                w2[(r, j)] -= g * w2[(i, j)];
+            }
+        }
+        w1[(i, i)] = alpha;
+        for j in i + 1..N {
+            w1[(i, j)] = 0.0;
+        }
+        for j in 0..N {
+            w2[(i, j)] = 0.0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use model::rng::Rng;
+
+    #[test]
+    fn triangularisation_preserves_the_product() {
+        let mut rng = Rng::new(7);
+        for _ in 0..50 {
+            let mut a = SMatrix::<f64, 5, 5>::zeros();
+            let mut b = SMatrix::<f64, 5, 5>::zeros();
+            for v in a.iter_mut().chain(b.iter_mut()) {
+                *v = rng.normal() * 10f64.powi((rng.uniform() * 6.0) as i32 - 3);
+            }
+            let want = a * a.transpose() + b * b.transpose();
+            lower_triangularise(&mut a, &mut b);
+            let got = a * a.transpose();
+            for i in 0..5 {
+                for j in 0..5 {
+                    assert!(
+                        (got[(i, j)] - want[(i, j)]).abs() <= 1e-10 * want.abs().max(),
+                        "{i},{j}"
+                    );
+                    if j > i {
+                        assert_eq!(a[(i, j)], 0.0);
+                    }
+                }
+            }
+            assert_eq!(b, SMatrix::<f64, 5, 5>::zeros());
+        }
+    }
+
+    /// The square-root filter agrees with the textbook covariance-form EKF on a
+    /// linear system.
+    #[test]
+    fn matches_the_covariance_form_on_a_linear_system() {
+        let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
+        let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let q = SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3);
+        let r = SVector::<f64, 2>::new(1e-2, 4e-2);
+        let p0 = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
+        let x0 = SVector::<f64, 3>::new(0.1, -0.2, 0.3);
+        let scale = SVector::<f64, 3>::new(1.0, 10.0, 0.1);
+        let mut ekf = Ekf::<3, 2>::new(x0, &p0, &q, r, scale);
+        let mut x = x0;
+        let mut p = SMatrix::<f64, 3, 3>::from_diagonal(&p0);
+        let mut rng = Rng::new(3);
+        for _ in 0..200 {
+            x = f * x;
+            p = f * p * f.transpose() + SMatrix::from_diagonal(&q);
+            ekf.predict(f * ekf.state(), &f).unwrap();
+            let y = SVector::<f64, 2>::new(rng.normal(), rng.normal());
+            let nu = y - h * x;
+            let s = h * p * h.transpose() + SMatrix::from_diagonal(&r);
+            let k = p * h.transpose() * s.try_inverse().unwrap();
+            x += k * nu;
+            p = (SMatrix::identity() - k * h) * p;
+            let inn = ekf.update(&y, &(h * ekf.state()), &h, [true, true]).unwrap();
+            assert!((inn.nis - nu.dot(&(s.try_inverse().unwrap() * nu))).abs() < 1e-9 * (1.0 + inn.nis));
+            assert!((ekf.state() - x).norm() < 1e-9 * (1.0 + x.norm()));
+            assert!((ekf.covariance() - p).norm() < 1e-9 * p.norm());
+        }
+    }
+}

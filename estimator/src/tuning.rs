@@ -1,0 +1,241 @@
+//! Filter settings: the thesis' tuning (the default) and one derived from the
+//! sensors, in the TOML config under `[estimator]`.
+
+use nalgebra::SVector;
+use serde::{Deserialize, Serialize};
+
+/// How the filter's initial state is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Init {
+    /// The thesis' x0: everything zero but both pressures at `init_pressure_pa`.
+    Thesis,
+    /// Position and pressures from the first usable sample, F_e from the pressure difference.
+    Measured,
+}
+
+/// Everything the estimator needs besides the physical parameters.
+///
+/// Q is the process noise added per sample (variance per step), R the
+/// measurement noise variance and P0 the initial covariance, each in the
+/// square of its state's SI unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Tuning {
+    /// Number of states: 6 (friction and load from the parameters), 7 (plus the
+    /// effective load F_e) or 10 (plus the three leak sizes q_e1, q_e2, q_i).
+    pub states: u32,
+    /// Sample period T, s.
+    pub sample_period_s: f64,
+    /// Forward-Euler sub-steps per sample (1 = the thesis).
+    pub substeps: u32,
+    /// Initial state.
+    pub init: Init,
+    /// Initial chamber pressures for `init = "thesis"`, Pa.
+    pub init_pressure_pa: f64,
+    /// Q of the spool position, m².
+    pub q_x_sp_m2: f64,
+    /// Q of each chamber pressure, Pa².
+    pub q_p_pa2: f64,
+    /// Q of the rod position, m².
+    pub q_x_m2: f64,
+    /// Q of the rod velocity, m²/s².
+    pub q_v_m2_s2: f64,
+    /// Q of the spool velocity, m²/s².
+    pub q_v_sp_m2_s2: f64,
+    /// Q of the effective load F_e (its random walk), N².
+    pub q_f_e_n2: f64,
+    /// Q of each leak size q_e1, q_e2, q_i (their random walk), m⁶/s².
+    pub q_leak_m6_s2: f64,
+    /// R of the rod position, m².
+    pub r_x_m2: f64,
+    /// R of each chamber pressure, Pa².
+    pub r_p_pa2: f64,
+    /// P0 of the spool position, m².
+    pub p0_x_sp_m2: f64,
+    /// P0 of each chamber pressure, Pa².
+    pub p0_p_pa2: f64,
+    /// P0 of the rod position, m².
+    pub p0_x_m2: f64,
+    /// P0 of the rod velocity, m²/s².
+    pub p0_v_m2_s2: f64,
+    /// P0 of the spool velocity, m²/s².
+    pub p0_v_sp_m2_s2: f64,
+    /// P0 of F_e, N².
+    pub p0_f_e_n2: f64,
+    /// P0 of each leak size, m⁶/s².
+    pub p0_leak_m6_s2: f64,
+    /// Window of the moving average of |residual| (the thesis' MAE), samples.
+    pub mae_window_samples: usize,
+    /// Longest run of missing samples bridged by prediction; longer gaps reset the filter.
+    pub max_bridged_gap_samples: u32,
+    /// Time after a (re)start during which estimates are flagged as converging, s.
+    pub convergence_time_s: f64,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Tuning::thesis()
+    }
+}
+
+impl Tuning {
+    /// The thesis' tuning (MODEL.md §4): Q = diag(1e-10, 1e4, 1e4, 1e-6, 1e-4, 1e-20, 1e2),
+    /// R = diag(1e-4, 1e6, 1e6), x0 with pressures at 6.8 MPa, P0 = 1e4·I, 7 states.
+    pub fn thesis() -> Self {
+        Tuning {
+            states: 7,
+            sample_period_s: 1e-3,
+            substeps: 1,
+            init: Init::Thesis,
+            init_pressure_pa: 6.8e6,
+            q_x_sp_m2: 1e-10,
+            q_p_pa2: 1e4,
+            q_x_m2: 1e-6,
+            q_v_m2_s2: 1e-4,
+            q_v_sp_m2_s2: 1e-20,
+            q_f_e_n2: 1e2,
+            q_leak_m6_s2: 1e-16,
+            r_x_m2: 1e-4,
+            r_p_pa2: 1e6,
+            p0_x_sp_m2: 1e4,
+            p0_p_pa2: 1e4,
+            p0_x_m2: 1e4,
+            p0_v_m2_s2: 1e4,
+            p0_v_sp_m2_s2: 1e4,
+            p0_f_e_n2: 1e4,
+            p0_leak_m6_s2: 1e4,
+            mae_window_samples: 4000,
+            max_bridged_gap_samples: 50,
+            convergence_time_s: 2.0,
+        }
+    }
+
+    /// A tuning derived from the sensors and the model's known errors:
+    /// R from the encoder quantum (3e-5 m) and the pressure channel (12-bit ADC
+    /// over 20.7 MPa plus 5 kPa noise, about 5.2 kPa RMS); Q from the flow and
+    /// force errors the healthy model makes; 10 states (leak model);
+    /// initial state from the first sample.
+    pub fn sensor_derived() -> Self {
+        Tuning {
+            states: 10,
+            init: Init::Measured,
+            q_x_sp_m2: 1e-14,
+            q_p_pa2: 1e6,
+            q_x_m2: 1e-12,
+            q_v_m2_s2: 1e-6,
+            q_v_sp_m2_s2: 1e-8,
+            q_f_e_n2: 1e4,
+            q_leak_m6_s2: 1e-17,
+            r_x_m2: 1e-10,
+            r_p_pa2: 2.7e7,
+            p0_x_sp_m2: 1e-10,
+            p0_p_pa2: 1e11,
+            p0_x_m2: 1e-8,
+            p0_v_m2_s2: 1e-2,
+            p0_v_sp_m2_s2: 1e-4,
+            p0_f_e_n2: 1e6,
+            p0_leak_m6_s2: 1e-10,
+            ..Tuning::thesis()
+        }
+    }
+
+    /// A preset by name: `thesis` or `sensor`.
+    pub fn preset(name: &str) -> Option<Tuning> {
+        match name {
+            "thesis" => Some(Tuning::thesis()),
+            "sensor" => Some(Tuning::sensor_derived()),
+            _ => None,
+        }
+    }
+
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        if ![6, 7, 10].contains(&self.states) {
+            return Err(format!(
+                "[estimator] states = {}: must be 6, 7 or 10",
+                self.states
+            ));
+        }
+        let positive = [
+            ("sample_period_s", self.sample_period_s),
+            ("r_x_m2", self.r_x_m2),
+            ("r_p_pa2", self.r_p_pa2),
+            ("init_pressure_pa", self.init_pressure_pa + 1.0),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("[estimator] {name} = {v}: must be a positive number"));
+            }
+        }
+        let non_negative = [
+            ("q_x_sp_m2", self.q_x_sp_m2),
+            ("q_p_pa2", self.q_p_pa2),
+            ("q_x_m2", self.q_x_m2),
+            ("q_v_m2_s2", self.q_v_m2_s2),
+            ("q_v_sp_m2_s2", self.q_v_sp_m2_s2),
+            ("q_f_e_n2", self.q_f_e_n2),
+            ("q_leak_m6_s2", self.q_leak_m6_s2),
+            ("p0_x_sp_m2", self.p0_x_sp_m2),
+            ("p0_p_pa2", self.p0_p_pa2),
+            ("p0_x_m2", self.p0_x_m2),
+            ("p0_v_m2_s2", self.p0_v_m2_s2),
+            ("p0_v_sp_m2_s2", self.p0_v_sp_m2_s2),
+            ("p0_f_e_n2", self.p0_f_e_n2),
+            ("p0_leak_m6_s2", self.p0_leak_m6_s2),
+            ("convergence_time_s", self.convergence_time_s),
+        ];
+        for (name, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("[estimator] {name} = {v}: must be a finite number ≥ 0"));
+            }
+        }
+        if self.substeps == 0 || self.substeps > 100 {
+            return Err(format!(
+                "[estimator] substeps = {}: must be 1 to 100",
+                self.substeps
+            ));
+        }
+        if self.mae_window_samples == 0 {
+            return Err("[estimator] mae_window_samples = 0: must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    fn per_state(v: [f64; 7]) -> [f64; 10] {
+        [v[0], v[1], v[1], v[2], v[3], v[4], v[5], v[6], v[6], v[6]]
+    }
+
+    /// diag(Q) for an `N`-state layout, SI squared units.
+    pub fn q_diag<const N: usize>(&self) -> SVector<f64, N> {
+        let all = Self::per_state([
+            self.q_x_sp_m2,
+            self.q_p_pa2,
+            self.q_x_m2,
+            self.q_v_m2_s2,
+            self.q_v_sp_m2_s2,
+            self.q_f_e_n2,
+            self.q_leak_m6_s2,
+        ]);
+        SVector::<f64, N>::from_fn(|i, _| all[i])
+    }
+
+    /// diag(P0) for an `N`-state layout, SI squared units.
+    pub fn p0_diag<const N: usize>(&self) -> SVector<f64, N> {
+        let all = Self::per_state([
+            self.p0_x_sp_m2,
+            self.p0_p_pa2,
+            self.p0_x_m2,
+            self.p0_v_m2_s2,
+            self.p0_v_sp_m2_s2,
+            self.p0_f_e_n2,
+            self.p0_leak_m6_s2,
+        ]);
+        SVector::<f64, N>::from_fn(|i, _| all[i])
+    }
+
+    /// diag(R): rod position m², pressures Pa².
+    pub fn r_diag(&self) -> SVector<f64, 3> {
+        SVector::<f64, 3>::new(self.r_x_m2, self.r_p_pa2, self.r_p_pa2)
+    }
+}
