@@ -1,1 +1,846 @@
-//! classifier (placeholder).
+//! The classifier stage: turns the estimator's output into leak events.
+//!
+//! Two detectors read the same [`estimator::Estimate`] stream:
+//!
+//! - [`LeakSizeDetector`] (leakwatch's own): the 10-state filter estimates the
+//!   three leak sizes q_e1, q_e2, q_i directly (m³/s at the nominal drop). After
+//!   a healthy warm-up has learned each estimate's offset and spread (a healthy
+//!   rig that differs from the model, e.g. a spool null bias, leaves a steady
+//!   offset), a leak is declared when one size rises above
+//!   max(`threshold_sigma`·spread, `min_size_lpm`) and stays there for
+//!   `confirm_s`. Isolation: the kind whose rise is largest relative to its
+//!   threshold. Size: the estimate itself, with the filter's σ. Onset: the last
+//!   time the estimate was below a quarter of the threshold.
+//! - [`MaeDetector`] (the thesis' baseline, MODEL.md §5): the moving averages of
+//!   |residual| of p1 and p2; thresholds = `margin` × the largest healthy MAE
+//!   seen in the warm-up; p1 only → ext1, p2 only → ext2, both → internal. It
+//!   cannot size a leak.
+//!
+//! Both debounce: one leak gives one `raised` event, then `updated` events as
+//! the size estimate moves, and `cleared` when it goes away. Sensor checks
+//! raise `sensor-stuck`, `sensor-saturated` and `sensor-dead` events, and a
+//! filter reset raises `estimator-reset` (and restarts the warm-up).
+
+// The detectors walk parallel per-kind arrays by index; iterators would hide that.
+#![allow(clippy::needless_range_loop)]
+
+use estimator::{Estimate, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use serde::{Deserialize, Serialize};
+
+/// Cubic metres per second in one litre per minute.
+const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
+
+/// What an event is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EventKind {
+    /// External leak, chamber 1 to tank.
+    Ext1,
+    /// External leak, chamber 2 to tank.
+    Ext2,
+    /// Internal (cross-piston) leak.
+    Int,
+    /// The estimator had to restart its filter.
+    EstimatorReset,
+    /// A sensor's value did not change for too long.
+    SensorStuck,
+    /// A sensor sat at the end of its range.
+    SensorSaturated,
+    /// A sensor delivered no usable value for too long.
+    SensorDead,
+    /// The warm-up was too short (or too disturbed) to learn thresholds: detection is not armed.
+    NotArmed,
+}
+
+impl EventKind {
+    /// The leak kinds, in state order (q_e1, q_e2, q_i).
+    pub const LEAKS: [EventKind; 3] = [EventKind::Ext1, EventKind::Ext2, EventKind::Int];
+
+    /// The name used in events.json: `ext1`, `ext2`, `int`, `estimator-reset`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Ext1 => "ext1",
+            EventKind::Ext2 => "ext2",
+            EventKind::Int => "int",
+            EventKind::EstimatorReset => "estimator-reset",
+            EventKind::SensorStuck => "sensor-stuck",
+            EventKind::SensorSaturated => "sensor-saturated",
+            EventKind::SensorDead => "sensor-dead",
+            EventKind::NotArmed => "not-armed",
+        }
+    }
+
+    /// Whether this is a leak kind.
+    pub fn is_leak(self) -> bool {
+        matches!(self, EventKind::Ext1 | EventKind::Ext2 | EventKind::Int)
+    }
+}
+
+/// The life of an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Phase {
+    /// First report.
+    Raised,
+    /// A better size estimate for an event already raised.
+    Updated,
+    /// The condition went away.
+    Cleared,
+}
+
+/// One event, as written to events.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LeakEvent {
+    /// What it is about.
+    pub kind: EventKind,
+    /// Raised, updated or cleared.
+    pub phase: Phase,
+    /// Which detector (`leak-size`, `thesis-mae`, `sensors`).
+    pub detector: String,
+    /// Identifier shared by all phases of one event.
+    pub event_id: u64,
+    /// Time of this decision, s (sample time).
+    pub t_detect_s: f64,
+    /// Estimated onset time, s (NaN if unknown).
+    pub t_onset_s: f64,
+    /// Leak size at the nominal pressure drop p_s/2, L/min (NaN if not sized).
+    pub size_lpm: f64,
+    /// One standard deviation of `size_lpm`, L/min.
+    pub size_lpm_sigma: f64,
+    /// Confidence in [0, 1] that the kind is right and the leak is real.
+    pub confidence: f64,
+    /// For sensor events: which channel (`x`, `p1`, `p2`); empty otherwise.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub channel: String,
+    /// Human-readable detail.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub detail: String,
+}
+
+/// Settings of the detectors, `[classifier]` in the TOML config.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ClassifierConfig {
+    /// Healthy warm-up after the filter has converged, used to learn thresholds, s.
+    pub warmup_s: f64,
+    /// Shortest warm-up that can give thresholds, s.
+    pub min_warmup_s: f64,
+    /// Leak-size detector: threshold in spreads of the healthy estimate.
+    pub threshold_sigma: f64,
+    /// Leak-size detector: smallest leak ever declared, L/min (at nominal drop).
+    pub min_size_lpm: f64,
+    /// Leak-size detector: time above threshold before a leak is declared, s.
+    pub confirm_s: f64,
+    /// Time below half the threshold before a leak is cleared, s.
+    pub clear_s: f64,
+    /// Relative change of the size that gives an `updated` event.
+    pub update_relative: f64,
+    /// Shortest time between two `updated` events of one leak, s.
+    pub update_interval_s: f64,
+    /// Thesis detector: threshold as a multiple of the largest healthy MAE.
+    pub mae_margin: f64,
+    /// Thesis detector: time above threshold before a decision, s.
+    pub mae_confirm_s: f64,
+    /// Samples with the same exact value before a sensor is called stuck.
+    pub stuck_samples: u32,
+    /// Samples at the end of the range before a sensor is called saturated.
+    pub saturated_samples: u32,
+    /// Samples without a usable value before a sensor is called dead.
+    pub dead_samples: u32,
+    /// Full-scale range of the pressure transducers, Pa.
+    pub pressure_full_scale_pa: f64,
+}
+
+impl Default for ClassifierConfig {
+    fn default() -> Self {
+        ClassifierConfig {
+            warmup_s: 8.0,
+            min_warmup_s: 3.0,
+            threshold_sigma: 5.0,
+            min_size_lpm: 0.05,
+            confirm_s: 0.25,
+            clear_s: 2.0,
+            update_relative: 0.1,
+            update_interval_s: 1.0,
+            mae_margin: 1.3,
+            mae_confirm_s: 0.5,
+            stuck_samples: 2000,
+            saturated_samples: 200,
+            dead_samples: 200,
+            pressure_full_scale_pa: 20.7e6,
+        }
+    }
+}
+
+impl ClassifierConfig {
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        let fields = [
+            ("warmup_s", self.warmup_s),
+            ("min_warmup_s", self.min_warmup_s),
+            ("threshold_sigma", self.threshold_sigma),
+            ("min_size_lpm", self.min_size_lpm),
+            ("confirm_s", self.confirm_s),
+            ("clear_s", self.clear_s),
+            ("update_relative", self.update_relative),
+            ("update_interval_s", self.update_interval_s),
+            ("mae_margin", self.mae_margin),
+            ("mae_confirm_s", self.mae_confirm_s),
+            ("pressure_full_scale_pa", self.pressure_full_scale_pa),
+        ];
+        for (name, v) in fields {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("[classifier] {name} = {v}: must be a finite number ≥ 0"));
+            }
+        }
+        if self.min_warmup_s > self.warmup_s {
+            return Err(format!(
+                "[classifier] min_warmup_s = {} exceeds warmup_s = {}",
+                self.min_warmup_s, self.warmup_s
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Running mean and spread (Welford).
+#[derive(Debug, Clone, Copy, Default)]
+struct Stats {
+    n: f64,
+    mean: f64,
+    m2: f64,
+    max: f64,
+}
+
+impl Stats {
+    fn push(&mut self, v: f64) {
+        self.n += 1.0;
+        let d = v - self.mean;
+        self.mean += d / self.n;
+        self.m2 += d * (v - self.mean);
+        if self.n == 1.0 || v > self.max {
+            self.max = v;
+        }
+    }
+    fn std(&self) -> f64 {
+        if self.n > 1.0 {
+            (self.m2 / (self.n - 1.0)).sqrt()
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Where a detector is in its life.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Arming {
+    /// Waiting for the filter to converge.
+    Converging,
+    /// Learning the healthy statistics since this time, s.
+    Learning(f64),
+    /// Thresholds learned.
+    Armed,
+}
+
+/// An event being tracked by a detector.
+#[derive(Debug, Clone, Copy)]
+struct Active {
+    kind: EventKind,
+    id: u64,
+    t_onset_s: f64,
+    last_size_lpm: f64,
+    last_update_s: f64,
+    below_since_s: Option<f64>,
+}
+
+/// leakwatch's detector: thresholds on the estimated leak sizes.
+#[derive(Debug, Clone)]
+pub struct LeakSizeDetector {
+    cfg: ClassifierConfig,
+    arming: Arming,
+    stats: [Stats; 3],
+    threshold_lpm: [f64; 3],
+    above_since_s: [Option<f64>; 3],
+    last_low_s: [f64; 3],
+    active: Option<Active>,
+    next_id: u64,
+}
+
+/// The thesis' detector: thresholds on the MAE of the pressure residuals.
+#[derive(Debug, Clone)]
+pub struct MaeDetector {
+    cfg: ClassifierConfig,
+    arming: Arming,
+    stats: [Stats; 2],
+    threshold_pa: [f64; 2],
+    pattern_since: Option<(EventKind, f64)>,
+    active: Option<Active>,
+    next_id: u64,
+}
+
+fn arm_step(arming: &mut Arming, cfg: &ClassifierConfig, e: &Estimate) -> Option<bool> {
+    // Returns Some(true) when the warm-up just ended, Some(false) while learning, None otherwise.
+    match *arming {
+        Arming::Converging => {
+            if e.flags & FLAG_CONVERGING == 0 && e.flags & FLAG_SKIPPED == 0 {
+                *arming = Arming::Learning(e.t_s);
+                Some(false)
+            } else {
+                None
+            }
+        }
+        Arming::Learning(t0) => {
+            if e.t_s - t0 >= cfg.warmup_s {
+                *arming = Arming::Armed;
+                Some(true)
+            } else {
+                Some(false)
+            }
+        }
+        Arming::Armed => None,
+    }
+}
+
+impl LeakSizeDetector {
+    /// A detector with settings `cfg`.
+    pub fn new(cfg: ClassifierConfig) -> Self {
+        LeakSizeDetector {
+            cfg,
+            arming: Arming::Converging,
+            stats: [Stats::default(); 3],
+            threshold_lpm: [f64::NAN; 3],
+            above_since_s: [None; 3],
+            last_low_s: [0.0; 3],
+            active: None,
+            next_id: 1,
+        }
+    }
+
+    /// Whether the thresholds have been learned.
+    pub fn is_armed(&self) -> bool {
+        self.arming == Arming::Armed
+    }
+
+    /// The learned thresholds on the rise of the ext1, ext2 and int sizes, L/min (NaN before arming).
+    pub fn thresholds_lpm(&self) -> [f64; 3] {
+        self.threshold_lpm
+    }
+
+    /// The healthy offsets of the three hypothesis sizes learned in the warm-up, L/min.
+    pub fn offsets_lpm(&self) -> [f64; 3] {
+        [self.stats[0].mean, self.stats[1].mean, self.stats[2].mean]
+    }
+
+    /// Current rise of each hypothesis' size (ext1, ext2, int; [`signatures_lpm`])
+    /// above its healthy offset, L/min (NaN if unknown).
+    pub fn rise_lpm(&self, e: &Estimate) -> [f64; 3] {
+        let mut r = [f64::NAN; 3];
+        if e.n_states >= 10 {
+            let raw = Self::raw_sizes(e);
+            for (k, v) in r.iter_mut().enumerate() {
+                *v = raw[k] - self.stats[k].mean;
+            }
+        }
+        r
+    }
+
+    /// Restarts the warm-up (after a filter reset).
+    pub fn restart(&mut self) {
+        let cfg = self.cfg.clone();
+        let id = self.next_id;
+        *self = LeakSizeDetector::new(cfg);
+        self.next_id = id;
+    }
+
+    /// The three single-leak sizes that explain the estimated leak flows, L/min
+    /// (before the healthy offsets are removed): see [`signatures_lpm`].
+    fn raw_sizes(e: &Estimate) -> [f64; 3] {
+        signatures_lpm([
+            e.state[7] / M3_S_PER_LPM,
+            e.state[8] / M3_S_PER_LPM,
+            e.state[9] / M3_S_PER_LPM,
+        ])
+    }
+
+    /// Reads one estimate; pushes any event into `out` (at most one per call).
+    pub fn on_estimate(&mut self, e: &Estimate, out: &mut Option<LeakEvent>) {
+        if e.n_states < 10 || e.flags & FLAG_SKIPPED != 0 {
+            return;
+        }
+        let raw = Self::raw_sizes(e);
+        match arm_step(&mut self.arming, &self.cfg, e) {
+            Some(false) => {
+                for k in 0..3 {
+                    self.stats[k].push(raw[k]);
+                }
+                return;
+            }
+            Some(true) => {
+                for k in 0..3 {
+                    self.threshold_lpm[k] =
+                        (self.cfg.threshold_sigma * self.stats[k].std()).max(self.cfg.min_size_lpm);
+                    self.last_low_s[k] = e.t_s;
+                }
+                return;
+            }
+            None if !self.is_armed() => return,
+            None => {}
+        }
+        // Rise of each hypothesis' size above its healthy offset, and how badly the
+        // hypothesis fits (the part of the flow mismatch it leaves unexplained).
+        let rise = [
+            raw[0] - self.stats[0].mean,
+            raw[1] - self.stats[1].mean,
+            raw[2] - self.stats[2].mean,
+        ];
+        let w1 = rise[0];
+        let w2 = rise[1];
+        let misfit = [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2];
+        let sigma_q = [
+            e.sigma[7] / M3_S_PER_LPM,
+            e.sigma[8] / M3_S_PER_LPM,
+            e.sigma[9] / M3_S_PER_LPM,
+        ];
+        // σ of each hypothesis' size: the filter's marginal σ (correlations ignored)
+        // combined with the spread the healthy estimate showed in the warm-up (the
+        // filter alone is overconfident about model error).
+        let sigma_filter = [
+            sigma_q[0].hypot(sigma_q[2]),
+            sigma_q[1].hypot(sigma_q[2]),
+            0.5 * (sigma_q[0].powi(2) + sigma_q[1].powi(2) + 4.0 * sigma_q[2].powi(2)).sqrt(),
+        ];
+        let sigma_lpm: [f64; 3] = std::array::from_fn(|k| sigma_filter[k].hypot(self.stats[k].std()));
+        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / self.threshold_lpm[k]);
+        let (lead, best) = (0..3)
+            .map(|k| (k, score[k]))
+            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+        let second = (0..3)
+            .filter(|k| *k != lead)
+            .map(|k| score[k])
+            .fold(f64::NEG_INFINITY, f64::max);
+        for k in 0..3 {
+            let thr = self.threshold_lpm[k];
+            if rise[k] < 0.25 * thr {
+                self.last_low_s[k] = e.t_s;
+            }
+            if k == lead && rise[k] > thr && best > 0.5 {
+                self.above_since_s[k].get_or_insert(e.t_s);
+            } else {
+                self.above_since_s[k] = None;
+            }
+        }
+        match self.active {
+            None => {
+                if let Some(t0) = self.above_since_s[lead] {
+                    if e.t_s - t0 >= self.cfg.confirm_s {
+                        let id = self.next_id;
+                        self.next_id += 1;
+                        let kind = EventKind::LEAKS[lead];
+                        self.active = Some(Active {
+                            kind,
+                            id,
+                            t_onset_s: self.last_low_s[lead],
+                            last_size_lpm: rise[lead],
+                            last_update_s: e.t_s,
+                            below_since_s: None,
+                        });
+                        *out = Some(self.event(
+                            kind,
+                            Phase::Raised,
+                            id,
+                            e.t_s,
+                            rise[lead],
+                            sigma_lpm[lead],
+                            best,
+                            second,
+                        ));
+                    }
+                }
+            }
+            Some(mut a) => {
+                let k = EventKind::LEAKS.iter().position(|x| *x == a.kind).unwrap_or(0);
+                let size = rise[k];
+                if size < 0.5 * self.threshold_lpm[k] || (lead != k && second > 1.0 && score[k] < 0.0) {
+                    let since = *a.below_since_s.get_or_insert(e.t_s);
+                    if e.t_s - since >= self.cfg.clear_s {
+                        self.active = None;
+                        *out = Some(self.event(
+                            a.kind,
+                            Phase::Cleared,
+                            a.id,
+                            e.t_s,
+                            size,
+                            sigma_lpm[k],
+                            0.0,
+                            0.0,
+                        ));
+                        return;
+                    }
+                } else {
+                    a.below_since_s = None;
+                }
+                if e.t_s - a.last_update_s >= self.cfg.update_interval_s
+                    && (size - a.last_size_lpm).abs()
+                        > self.cfg.update_relative * a.last_size_lpm.abs().max(1e-3)
+                {
+                    a.last_size_lpm = size;
+                    a.last_update_s = e.t_s;
+                    let others = (0..3)
+                        .filter(|j| *j != k)
+                        .map(|j| score[j])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    let mut ev = self.event(
+                        a.kind,
+                        Phase::Updated,
+                        a.id,
+                        e.t_s,
+                        size,
+                        sigma_lpm[k],
+                        score[k],
+                        others,
+                    );
+                    ev.t_onset_s = a.t_onset_s;
+                    *out = Some(ev);
+                }
+                self.active = Some(a);
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn event(
+        &self,
+        kind: EventKind,
+        phase: Phase,
+        id: u64,
+        t_s: f64,
+        size_lpm: f64,
+        sigma_lpm: f64,
+        score: f64,
+        second: f64,
+    ) -> LeakEvent {
+        // Confidence: how clearly the leading kind beats the others, and the threshold.
+        let margin = (score - second.max(0.0)).max(0.0);
+        let confidence = if phase == Phase::Cleared {
+            0.0
+        } else {
+            1.0 - (-margin).exp()
+        };
+        LeakEvent {
+            kind,
+            phase,
+            detector: "leak-size".into(),
+            event_id: id,
+            t_detect_s: t_s,
+            t_onset_s: self.active.map(|a| a.t_onset_s).unwrap_or(f64::NAN),
+            size_lpm,
+            size_lpm_sigma: sigma_lpm,
+            confidence,
+            channel: String::new(),
+            detail: String::new(),
+        }
+    }
+}
+
+impl MaeDetector {
+    /// A detector with settings `cfg`.
+    pub fn new(cfg: ClassifierConfig) -> Self {
+        MaeDetector {
+            cfg,
+            arming: Arming::Converging,
+            stats: [Stats::default(); 2],
+            threshold_pa: [f64::NAN; 2],
+            pattern_since: None,
+            active: None,
+            next_id: 1,
+        }
+    }
+
+    /// Whether the thresholds have been learned.
+    pub fn is_armed(&self) -> bool {
+        self.arming == Arming::Armed
+    }
+
+    /// The learned MAE thresholds of p1 and p2, Pa.
+    pub fn thresholds_pa(&self) -> [f64; 2] {
+        self.threshold_pa
+    }
+
+    /// Restarts the warm-up (after a filter reset).
+    pub fn restart(&mut self) {
+        let cfg = self.cfg.clone();
+        let id = self.next_id;
+        *self = MaeDetector::new(cfg);
+        self.next_id = id;
+    }
+
+    /// Reads one estimate; pushes any event into `out`.
+    pub fn on_estimate(&mut self, e: &Estimate, out: &mut Option<LeakEvent>) {
+        if e.flags & FLAG_SKIPPED != 0 || !e.mae_pa.iter().all(|m| m.is_finite()) {
+            return;
+        }
+        match arm_step(&mut self.arming, &self.cfg, e) {
+            Some(false) => {
+                self.stats[0].push(e.mae_pa[0]);
+                self.stats[1].push(e.mae_pa[1]);
+                return;
+            }
+            Some(true) => {
+                for k in 0..2 {
+                    self.threshold_pa[k] = self.cfg.mae_margin * self.stats[k].max;
+                }
+                return;
+            }
+            None if !self.is_armed() => return,
+            None => {}
+        }
+        let high = [
+            e.mae_pa[0] > self.threshold_pa[0],
+            e.mae_pa[1] > self.threshold_pa[1],
+        ];
+        let kind = match high {
+            [true, false] => Some(EventKind::Ext1),
+            [false, true] => Some(EventKind::Ext2),
+            [true, true] => Some(EventKind::Int),
+            [false, false] => None,
+        };
+        match (kind, self.pattern_since) {
+            (Some(k), Some((pk, _))) if k == pk => {}
+            (Some(k), _) => self.pattern_since = Some((k, e.t_s)),
+            (None, _) => self.pattern_since = None,
+        }
+        let ratio = [
+            e.mae_pa[0] / self.threshold_pa[0],
+            e.mae_pa[1] / self.threshold_pa[1],
+        ];
+        match self.active {
+            None => {
+                if let Some((k, t0)) = self.pattern_since {
+                    if e.t_s - t0 >= self.cfg.mae_confirm_s {
+                        let id = self.next_id;
+                        self.next_id += 1;
+                        // The MAE window delays the rise: place the onset half a window back is not
+                        // possible without the window; report the start of the pattern.
+                        self.active = Some(Active {
+                            kind: k,
+                            id,
+                            t_onset_s: t0,
+                            last_size_lpm: f64::NAN,
+                            last_update_s: e.t_s,
+                            below_since_s: None,
+                        });
+                        let margin = (ratio[0].max(ratio[1]) - 1.0).max(0.0);
+                        *out = Some(LeakEvent {
+                            kind: k,
+                            phase: Phase::Raised,
+                            detector: "thesis-mae".into(),
+                            event_id: id,
+                            t_detect_s: e.t_s,
+                            t_onset_s: t0,
+                            size_lpm: f64::NAN,
+                            size_lpm_sigma: f64::NAN,
+                            confidence: 1.0 - (-4.0 * margin).exp(),
+                            channel: String::new(),
+                            detail: format!("MAE p1 {:.0} Pa, p2 {:.0} Pa", e.mae_pa[0], e.mae_pa[1]),
+                        });
+                    }
+                }
+            }
+            Some(mut a) => {
+                if kind.is_none() {
+                    let since = *a.below_since_s.get_or_insert(e.t_s);
+                    if e.t_s - since >= self.cfg.clear_s {
+                        self.active = None;
+                        *out = Some(LeakEvent {
+                            kind: a.kind,
+                            phase: Phase::Cleared,
+                            detector: "thesis-mae".into(),
+                            event_id: a.id,
+                            t_detect_s: e.t_s,
+                            t_onset_s: a.t_onset_s,
+                            size_lpm: f64::NAN,
+                            size_lpm_sigma: f64::NAN,
+                            confidence: 0.0,
+                            channel: String::new(),
+                            detail: String::new(),
+                        });
+                        return;
+                    }
+                } else {
+                    a.below_since_s = None;
+                }
+                self.active = Some(a);
+            }
+        }
+    }
+}
+
+/// Per-channel sensor watch: stuck, saturated, dead.
+#[derive(Debug, Clone, Copy, Default)]
+struct ChannelWatch {
+    last: f64,
+    same: u32,
+    saturated: u32,
+    dead: u32,
+    raised: Option<(EventKind, u64)>,
+}
+
+/// The classifier stage: both detectors plus sensor and filter-health checks.
+#[derive(Debug, Clone)]
+pub struct Classifier {
+    cfg: ClassifierConfig,
+    /// leakwatch's detector.
+    pub leak_size: LeakSizeDetector,
+    /// The thesis' detector.
+    pub thesis: MaeDetector,
+    channels: [ChannelWatch; 3],
+    next_id: u64,
+    not_armed_reported: bool,
+    learning_since_s: Option<f64>,
+}
+
+/// The size of each single-leak hypothesis that best explains estimated leak
+/// sizes `q_lpm` = [q_e1, q_e2, q_i] (L/min at nominal drop), judged by the
+/// flows they take from each chamber: w1 = q_e1 + q_i out of chamber 1 and
+/// w2 = q_e2 − q_i out of chamber 2. An external leak at chamber 1 is
+/// (w1, w2) = (q, 0), at chamber 2 (0, q), an internal leak (q, −q); so the
+/// sizes are [w1, w2, (w1 − w2)/2]. (The three estimates are strongly
+/// correlated, e.g. ext2 ≈ ext1 + a negative internal leak while the filter
+/// settles; the chamber flows are what the data pins down.)
+pub fn signatures_lpm(q_lpm: [f64; 3]) -> [f64; 3] {
+    let w1 = q_lpm[0] + q_lpm[2];
+    let w2 = q_lpm[1] - q_lpm[2];
+    [w1, w2, 0.5 * (w1 - w2)]
+}
+
+/// Names of the measured channels, in measurement order.
+pub const CHANNELS: [&str; 3] = ["x", "p1", "p2"];
+
+impl Classifier {
+    /// A classifier with settings `cfg`.
+    pub fn new(cfg: ClassifierConfig) -> Result<Self, String> {
+        cfg.validate()?;
+        Ok(Classifier {
+            leak_size: LeakSizeDetector::new(cfg.clone()),
+            thesis: MaeDetector::new(cfg.clone()),
+            cfg,
+            channels: [ChannelWatch::default(); 3],
+            next_id: 1_000_000,
+            not_armed_reported: false,
+            learning_since_s: None,
+        })
+    }
+
+    /// Reads one estimate and calls `emit` for each event it gives (usually none).
+    pub fn on_estimate(&mut self, e: &Estimate, mut emit: impl FnMut(LeakEvent)) {
+        if e.flags & FLAG_RESET != 0 {
+            self.leak_size.restart();
+            self.thesis.restart();
+            emit(self.plain(
+                EventKind::EstimatorReset,
+                e.t_s,
+                "",
+                "the filter restarted; warm-up begins again",
+            ));
+        }
+        self.check_sensors(e, &mut emit);
+        if self.learning_since_s.is_none() && e.flags & FLAG_CONVERGING == 0 {
+            self.learning_since_s = Some(e.t_s);
+        }
+        let mut ev = None;
+        self.leak_size.on_estimate(e, &mut ev);
+        if let Some(ev) = ev.take() {
+            emit(ev);
+        }
+        self.thesis.on_estimate(e, &mut ev);
+        if let Some(ev) = ev {
+            emit(ev);
+        }
+    }
+
+    /// Ends the stream: reports a warm-up that never completed (thresholds not learned).
+    pub fn finish(&mut self, t_s: f64, mut emit: impl FnMut(LeakEvent)) {
+        if !self.leak_size.is_armed() && !self.thesis.is_armed() && !self.not_armed_reported {
+            self.not_armed_reported = true;
+            let seen = self.learning_since_s.map(|t0| t_s - t0).unwrap_or(0.0);
+            emit(self.plain(
+                EventKind::NotArmed,
+                t_s,
+                "",
+                &format!(
+                    "warm-up too short to learn thresholds: {seen:.2} s of converged healthy data, {} s needed",
+                    self.cfg.warmup_s
+                ),
+            ));
+        }
+    }
+
+    fn plain(&mut self, kind: EventKind, t_s: f64, channel: &str, detail: &str) -> LeakEvent {
+        let id = self.next_id;
+        self.next_id += 1;
+        LeakEvent {
+            kind,
+            phase: Phase::Raised,
+            detector: "sensors".into(),
+            event_id: id,
+            t_detect_s: t_s,
+            t_onset_s: t_s,
+            size_lpm: f64::NAN,
+            size_lpm_sigma: f64::NAN,
+            confidence: 1.0,
+            channel: channel.into(),
+            detail: detail.into(),
+        }
+    }
+
+    fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
+        for c in 0..3 {
+            let v = e.measured[c];
+            let mut w = self.channels[c];
+            if v.is_finite() {
+                w.dead = 0;
+                w.same = if v == w.last { w.same + 1 } else { 0 };
+                w.last = v;
+                let sat = c > 0 && (v <= 0.0 || v >= self.cfg.pressure_full_scale_pa);
+                w.saturated = if sat { w.saturated + 1 } else { 0 };
+            } else {
+                w.dead += 1;
+                w.same = 0;
+                w.saturated = 0;
+            }
+            // The rod may legitimately rest (stiction): only pressures can be stuck.
+            let now = if w.dead >= self.cfg.dead_samples {
+                Some(EventKind::SensorDead)
+            } else if w.saturated >= self.cfg.saturated_samples {
+                Some(EventKind::SensorSaturated)
+            } else if c > 0 && w.same >= self.cfg.stuck_samples {
+                Some(EventKind::SensorStuck)
+            } else {
+                None
+            };
+            match (now, w.raised) {
+                (Some(k), None) => {
+                    let detail = match k {
+                        EventKind::SensorDead => {
+                            format!("no usable {} value for {} samples", CHANNELS[c], w.dead)
+                        }
+                        EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
+                        _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
+                    };
+                    let ev = self.plain(k, e.t_s, CHANNELS[c], &detail);
+                    w.raised = Some((k, ev.event_id));
+                    emit(ev);
+                }
+                (None, Some((k, id))) => {
+                    let mut ev = self.plain(k, e.t_s, CHANNELS[c], "the channel is back");
+                    ev.phase = Phase::Cleared;
+                    ev.event_id = id;
+                    w.raised = None;
+                    emit(ev);
+                }
+                _ => {}
+            }
+            self.channels[c] = w;
+        }
+    }
+}

@@ -18,8 +18,8 @@ pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
 pub use tuning::{Init, Tuning};
 
-/// Largest number of states any layout has (the 10-state leak model).
-pub const MAX_STATES: usize = 10;
+/// Largest number of states any layout has (the 11-state leak model with spool bias).
+pub const MAX_STATES: usize = 11;
 
 /// Flag bit: the filter was reset at this sample (see [`Estimate::flags`]).
 pub const FLAG_RESET: u32 = 1;
@@ -40,11 +40,15 @@ pub struct Estimate {
     /// Bit set of `FLAG_*`.
     pub flags: u32,
     /// A-posteriori state: x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s, F_e N, and the leak
-    /// sizes at nominal drop q_e1, q_e2, q_i m³/s
+    /// sizes at nominal drop q_e1, q_e2, q_i m³/s, and the spool null bias b m
     /// (entries past `n_states` are NaN).
     pub state: [f64; MAX_STATES],
     /// Standard deviation of each state, same units (NaN past `n_states`).
     pub sigma: [f64; MAX_STATES],
+    /// The measurement y = [x m, p1 Pa, p2 Pa] as received (NaN where absent).
+    pub measured: [f64; N_MEAS],
+    /// Valve command u, V (as received).
+    pub u_v: f64,
     /// A-posteriori residual y − H x̂⁺: m, Pa, Pa (NaN where the channel was not used).
     pub residual: [f64; N_MEAS],
     /// Innovation y − H x̂⁻: m, Pa, Pa.
@@ -63,6 +67,8 @@ impl Estimate {
             t_s,
             n_states,
             flags: 0,
+            measured: [f64::NAN; N_MEAS],
+            u_v: f64::NAN,
             state: [f64::NAN; MAX_STATES],
             sigma: [f64::NAN; MAX_STATES],
             residual: [f64::NAN; N_MEAS],
@@ -98,6 +104,7 @@ enum Filter {
     S6(Ekf<6, 3>),
     S7(Ekf<7, 3>),
     S10(Ekf<10, 3>),
+    S11(Ekf<11, 3>),
 }
 
 /// The estimator stage.
@@ -115,7 +122,7 @@ pub struct Estimator {
 }
 
 /// Typical magnitudes used to scale the filter's internal algebra.
-const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6];
+const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
 
 /// A position residual beyond this, m, held for [`DIVERGED_SAMPLES`] samples, resets the filter.
 pub const DIVERGED_POSITION_M: f64 = 0.02;
@@ -132,7 +139,8 @@ impl Estimator {
         let filter = match tuning.states {
             6 => Filter::S6(make_filter::<6>(&tuning, &model, None)),
             7 => Filter::S7(make_filter::<7>(&tuning, &model, None)),
-            _ => Filter::S10(make_filter::<10>(&tuning, &model, None)),
+            10 => Filter::S10(make_filter::<10>(&tuning, &model, None)),
+            _ => Filter::S11(make_filter::<11>(&tuning, &model, None)),
         };
         let w = tuning.mae_window_samples;
         Ok(Estimator {
@@ -181,6 +189,7 @@ impl Estimator {
             Filter::S6(e) => copy(e, out),
             Filter::S7(e) => copy(e, out),
             Filter::S10(e) => copy(e, out),
+            Filter::S11(e) => copy(e, out),
         }
     }
 
@@ -190,6 +199,7 @@ impl Estimator {
             Filter::S6(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
             Filter::S7(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
             Filter::S10(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+            Filter::S11(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
         }
     }
 
@@ -210,6 +220,7 @@ impl Estimator {
                 Filter::S6(e) => predict_only(e, &self.model, u),
                 Filter::S7(e) => predict_only(e, &self.model, u),
                 Filter::S10(e) => predict_only(e, &self.model, u),
+                Filter::S11(e) => predict_only(e, &self.model, u),
             };
             if !ok {
                 self.started = false;
@@ -222,6 +233,13 @@ impl Estimator {
 
     /// Processes one sensor sample (one sample period after the previous one).
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
+        let mut e = self.on_sample_inner(s);
+        e.measured = [s.x_m, s.p1_pa, s.p2_pa];
+        e.u_v = s.u_v;
+        e
+    }
+
+    fn on_sample_inner(&mut self, s: &Sample) -> Estimate {
         self.counters.samples += 1;
         let mut flags = 0;
         let limits = (self.model.p_min_pa, self.model.p_max_pa);
@@ -244,6 +262,7 @@ impl Estimator {
                 Filter::S6(e) => *e = make_filter::<6>(tuning, &self.model, Some(measured)),
                 Filter::S7(e) => *e = make_filter::<7>(tuning, &self.model, Some(measured)),
                 Filter::S10(e) => *e = make_filter::<10>(tuning, &self.model, Some(measured)),
+                Filter::S11(e) => *e = make_filter::<11>(tuning, &self.model, Some(measured)),
             }
             if self.counters.samples > 1 {
                 flags |= FLAG_RESET;
@@ -266,6 +285,7 @@ impl Estimator {
             Filter::S6(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
             Filter::S7(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
             Filter::S10(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S11(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
         };
         match step {
             Ok(clamped) => {

@@ -23,7 +23,8 @@ pub enum Init {
 #[serde(default, deny_unknown_fields)]
 pub struct Tuning {
     /// Number of states: 6 (friction and load from the parameters), 7 (plus the
-    /// effective load F_e) or 10 (plus the three leak sizes q_e1, q_e2, q_i).
+    /// effective load F_e), 10 (plus the three leak sizes q_e1, q_e2, q_i) or 11
+    /// (plus the spool null bias b).
     pub states: u32,
     /// Sample period T, s.
     pub sample_period_s: f64,
@@ -47,6 +48,8 @@ pub struct Tuning {
     pub q_f_e_n2: f64,
     /// Q of each leak size q_e1, q_e2, q_i (their random walk), m⁶/s².
     pub q_leak_m6_s2: f64,
+    /// Q of the spool null bias (its random walk), m².
+    pub q_bias_m2: f64,
     /// R of the rod position, m².
     pub r_x_m2: f64,
     /// R of each chamber pressure, Pa².
@@ -65,6 +68,8 @@ pub struct Tuning {
     pub p0_f_e_n2: f64,
     /// P0 of each leak size, m⁶/s².
     pub p0_leak_m6_s2: f64,
+    /// P0 of the spool null bias, m².
+    pub p0_bias_m2: f64,
     /// Window of the moving average of |residual| (the thesis' MAE), samples.
     pub mae_window_samples: usize,
     /// Longest run of missing samples bridged by prediction; longer gaps reset the filter.
@@ -96,6 +101,7 @@ impl Tuning {
             q_v_sp_m2_s2: 1e-20,
             q_f_e_n2: 1e2,
             q_leak_m6_s2: 1e-16,
+            q_bias_m2: 1e-20,
             r_x_m2: 1e-4,
             r_p_pa2: 1e6,
             p0_x_sp_m2: 1e4,
@@ -105,6 +111,7 @@ impl Tuning {
             p0_v_sp_m2_s2: 1e4,
             p0_f_e_n2: 1e4,
             p0_leak_m6_s2: 1e4,
+            p0_bias_m2: 1e4,
             mae_window_samples: 4000,
             max_bridged_gap_samples: 50,
             convergence_time_s: 2.0,
@@ -118,7 +125,7 @@ impl Tuning {
     /// initial state from the first sample.
     pub fn sensor_derived() -> Self {
         Tuning {
-            states: 10,
+            states: 11,
             init: Init::Measured,
             q_x_sp_m2: 1e-14,
             q_p_pa2: 1e6,
@@ -126,7 +133,7 @@ impl Tuning {
             q_v_m2_s2: 1e-6,
             q_v_sp_m2_s2: 1e-8,
             q_f_e_n2: 1e4,
-            q_leak_m6_s2: 1e-17,
+            q_leak_m6_s2: 1e-18,
             r_x_m2: 1e-10,
             r_p_pa2: 2.7e7,
             p0_x_sp_m2: 1e-10,
@@ -136,6 +143,8 @@ impl Tuning {
             p0_v_sp_m2_s2: 1e-4,
             p0_f_e_n2: 1e6,
             p0_leak_m6_s2: 1e-10,
+            q_bias_m2: 1e-20,
+            p0_bias_m2: 1e-11,
             ..Tuning::thesis()
         }
     }
@@ -151,9 +160,9 @@ impl Tuning {
 
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
-        if ![6, 7, 10].contains(&self.states) {
+        if ![6, 7, 10, 11].contains(&self.states) {
             return Err(format!(
-                "[estimator] states = {}: must be 6, 7 or 10",
+                "[estimator] states = {}: must be 6, 7, 10 or 11",
                 self.states
             ));
         }
@@ -183,6 +192,8 @@ impl Tuning {
             ("p0_v_sp_m2_s2", self.p0_v_sp_m2_s2),
             ("p0_f_e_n2", self.p0_f_e_n2),
             ("p0_leak_m6_s2", self.p0_leak_m6_s2),
+            ("q_bias_m2", self.q_bias_m2),
+            ("p0_bias_m2", self.p0_bias_m2),
             ("convergence_time_s", self.convergence_time_s),
         ];
         for (name, v) in non_negative {
@@ -202,8 +213,8 @@ impl Tuning {
         Ok(())
     }
 
-    fn per_state(v: [f64; 7]) -> [f64; 10] {
-        [v[0], v[1], v[1], v[2], v[3], v[4], v[5], v[6], v[6], v[6]]
+    fn per_state(v: [f64; 8]) -> [f64; 11] {
+        [v[0], v[1], v[1], v[2], v[3], v[4], v[5], v[6], v[6], v[6], v[7]]
     }
 
     /// diag(Q) for an `N`-state layout, SI squared units.
@@ -216,6 +227,7 @@ impl Tuning {
             self.q_v_sp_m2_s2,
             self.q_f_e_n2,
             self.q_leak_m6_s2,
+            self.q_bias_m2,
         ]);
         SVector::<f64, N>::from_fn(|i, _| all[i])
     }
@@ -230,6 +242,7 @@ impl Tuning {
             self.p0_v_sp_m2_s2,
             self.p0_f_e_n2,
             self.p0_leak_m6_s2,
+            self.p0_bias_m2,
         ]);
         SVector::<f64, N>::from_fn(|i, _| all[i])
     }

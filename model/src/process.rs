@@ -9,6 +9,7 @@
 //! | 6 | x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s (friction and spring from the parameters) |
 //! | 7 | the 6 plus F_e N, the whole effective load (friction + environment) as a random walk |
 //! | 10 | the 7 plus q_e1, q_e2, q_i m³/s: the three leak sizes (random walks) |
+//! | 11 | the 10 plus b m: the spool's null bias (a random walk) |
 //!
 //! The 10-state "leak" layout is leakwatch's own: a leak is a flow the healthy
 //! model lacks, so the filter estimates the three leaks directly, each as its
@@ -31,6 +32,8 @@ pub const I_QE1: usize = 7;
 pub const I_QE2: usize = 8;
 /// Index of q_i, the internal leak at nominal drop (m³/s), in the 10-state layout.
 pub const I_QI: usize = 9;
+/// Index of the spool null bias b (m) in the 11-state layout.
+pub const I_BIAS: usize = 10;
 /// Number of measurements: rod position (m) and the two chamber pressures (Pa).
 pub const N_MEAS: usize = 3;
 
@@ -108,11 +111,11 @@ impl ProcessModel {
     }
 
     /// The continuous dynamics f(x, u) and ∂f/∂x for a layout of `N` states
-    /// (6, 7 or 10), command `u_v` in V.
+    /// (6, 7, 10 or 11), command `u_v` in V.
     pub fn linearise<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> Linearisation<N> {
         assert!(
-            N == 6 || N == 7 || N == 10,
-            "process layouts have 6, 7 or 10 states"
+            N == 6 || N == 7 || N == 10 || N == 11,
+            "process layouts have 6, 7, 10 or 11 states"
         );
         let p = &self.params;
         let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
@@ -123,8 +126,12 @@ impl ProcessModel {
         let wn = p.spool_natural_freq_rad_s;
         f[0] = v_sp;
         a[(0, 5)] = 1.0;
-        f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - p.spool_null_bias_m)
+        let bias = p.spool_null_bias_m + if N == 11 { s[I_BIAS] } else { 0.0 };
+        f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - bias)
             + p.spool_gain_m_per_v * wn * wn * u_v;
+        if N == 11 {
+            a[(5, I_BIAS)] = wn * wn;
+        }
         a[(5, 0)] = -wn * wn;
         a[(5, 5)] = -2.0 * p.spool_damping_ratio * wn;
 
@@ -151,7 +158,7 @@ impl ProcessModel {
             ss(p2 - pr) * inv_sqrt_n,
             ss(p1 - p2) * inv_sqrt_n,
         );
-        let (qe1, qe2, qi) = if N == 10 {
+        let (qe1, qe2, qi) = if N >= 10 {
             (s[I_QE1], s[I_QE2], s[I_QI])
         } else {
             (0.0, 0.0, 0.0)
@@ -173,7 +180,7 @@ impl ProcessModel {
         // ∂/∂v
         a[(1, 4)] = -b1 / v1 * area;
         a[(2, 4)] = b2 / v2 * area;
-        if N == 10 {
+        if N >= 10 {
             a[(1, I_QE1)] = -b1 / v1 * g1;
             a[(1, I_QI)] = -b1 / v1 * gi;
             a[(2, I_QE2)] = -b2 / v2 * g2;
@@ -373,7 +380,7 @@ mod tests {
     /// Central-difference Jacobian of f.
     fn fd_jacobian<const N: usize>(m: &ProcessModel, s: &SVector<f64, N>, u: f64) -> SMatrix<f64, N, N> {
         let mut j = SMatrix::<f64, N, N>::zeros();
-        let scale = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5, 1e-5];
+        let scale = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5, 1e-5, 1e-6];
         for c in 0..N {
             let h = 1e-6 * scale[c];
             let mut sp = *s;
@@ -407,10 +414,13 @@ mod tests {
         if N >= 7 {
             s[I_FE] = rng.uniform_in(-3e3, 3e3);
         }
-        if N == 10 {
+        if N >= 10 {
             for i in [I_QE1, I_QE2, I_QI] {
                 s[i] = rng.uniform_in(0.0, 2e-5);
             }
+        }
+        if N == 11 {
+            s[I_BIAS] = rng.uniform_in(-1e-5, 1e-5);
         }
         let _ = p;
         s
@@ -475,6 +485,7 @@ mod tests {
         assert!(check_jacobian::<6>(&m, Band::Stick, 2) > 250);
         assert!(check_jacobian::<7>(&m, Band::Sliding, 3) > 250);
         assert!(check_jacobian::<10>(&m, Band::Sliding, 4) > 250);
+        assert!(check_jacobian::<11>(&m, Band::Sliding, 7) > 250);
         // With entrained air, a pressure-dependent bulk modulus, built-in leaks of both laws.
         let mut p2 = p;
         p2.entrained_air_fraction = 0.01;
