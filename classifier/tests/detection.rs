@@ -64,9 +64,9 @@ fn raised(events: &[LeakEvent], detector: &str) -> Vec<LeakEvent> {
 fn last_size(events: &[LeakEvent], id: u64) -> f64 {
     events
         .iter()
-        .filter(|e| e.event_id == id && e.detector == "leak-size")
+        .rev()
+        .find(|e| e.event_id == id && e.detector == "leak-size")
         .map(|e| e.size_lpm)
-        .last()
         .unwrap()
 }
 
