@@ -47,6 +47,8 @@ pub struct Ekf<const N: usize, const M: usize> {
     q_sqrt: SVector<f64, N>,
     /// Measurement noise variances, SI.
     r: SVector<f64, M>,
+    /// x_scale[j] / x_scale[i], precomputed for scaling Jacobians.
+    ratio: SMatrix<f64, N, N>,
 }
 
 impl<const N: usize, const M: usize> Ekf<N, M> {
@@ -60,13 +62,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         r_diag: SVector<f64, M>,
         x_scale: SVector<f64, N>,
     ) -> Self {
-        let mut f = Ekf {
-            x: x0,
-            s: SMatrix::zeros(),
-            x_scale,
-            q_sqrt: SVector::zeros(),
-            r: r_diag,
-        };
+        let ratio = SMatrix::<f64, N, N>::from_fn(|i, j| x_scale[j] / x_scale[i]);
+        let mut f = Ekf { x: x0, s: SMatrix::zeros(), x_scale, q_sqrt: SVector::zeros(), r: r_diag, ratio };
         for i in 0..N {
             f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
         }
@@ -127,14 +124,20 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// Time update: the caller has propagated the state to `x_pred` (SI) with
     /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
     pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        // Scaled Jacobian F_z = D⁻¹ F D.
-        let mut fz = *f_jac;
-        for i in 0..N {
-            for j in 0..N {
-                fz[(i, j)] *= self.x_scale[j] / self.x_scale[i];
+        // F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse (the process
+        // couples each state to a few others), so multiply by its non-zeros only.
+        let mut w1 = SMatrix::<f64, N, N>::zeros();
+        for j in 0..N {
+            for i in 0..N {
+                let fij = f_jac[(i, j)];
+                if fij != 0.0 {
+                    let fz = fij * self.ratio[(i, j)];
+                    for c in 0..N {
+                        w1[(i, c)] += fz * self.s[(j, c)];
+                    }
+                }
             }
         }
-        let mut w1 = fz * self.s;
         let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
         lower_triangularise(&mut w1, &mut w2);
         self.s = w1;
