@@ -731,9 +731,21 @@ impl Classifier {
         })
     }
 
-    /// Reads one estimate and calls `emit` for each event it gives (usually none).
+    /// Reads one output of the estimator stage (the leak filter's and the thesis
+    /// filter's estimates) and calls `emit` for each event it gives (usually none).
+    pub fn on_stage(&mut self, s: &estimator::StageEstimate, mut emit: impl FnMut(LeakEvent)) {
+        self.on_estimates(&s.leak, &s.thesis, &mut emit);
+    }
+
+    /// Reads one estimate of a single filter (both detectors read it) and calls
+    /// `emit` for each event.
     pub fn on_estimate(&mut self, e: &Estimate, mut emit: impl FnMut(LeakEvent)) {
-        if e.flags & FLAG_RESET != 0 {
+        self.on_estimates(e, e, &mut emit);
+    }
+
+    /// Reads the leak filter's estimate `e` and the thesis filter's `thesis`.
+    pub fn on_estimates(&mut self, e: &Estimate, thesis: &Estimate, mut emit: impl FnMut(LeakEvent)) {
+        if e.flags & FLAG_RESET != 0 || thesis.flags & FLAG_RESET != 0 {
             self.leak_size.restart();
             self.thesis.restart();
             emit(self.plain(
@@ -752,7 +764,7 @@ impl Classifier {
         if let Some(ev) = ev.take() {
             emit(ev);
         }
-        self.thesis.on_estimate(e, &mut ev);
+        self.thesis.on_estimate(thesis, &mut ev);
         if let Some(ev) = ev {
             emit(ev);
         }

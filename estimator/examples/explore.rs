@@ -18,9 +18,19 @@ fn main() {
         rig = rig.with_friction_preset(FrictionPreset::Smooth);
     }
     let envf = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
-    if let Some(v) = envf("RIG_BETA") { rig.bulk_modulus_pa *= v; }
-    if let Some(v) = envf("RIG_BIAS") { rig.spool_null_bias_m = v; }
-    if let Some(v) = envf("RIG_FRIC") { let mut e = rig.friction.extend(); e.static_n *= v; e.slip_n *= v; e.viscous_n_s_per_m *= v; rig.friction.set_extend(e); }
+    if let Some(v) = envf("RIG_BETA") {
+        rig.bulk_modulus_pa *= v;
+    }
+    if let Some(v) = envf("RIG_BIAS") {
+        rig.spool_null_bias_m = v;
+    }
+    if let Some(v) = envf("RIG_FRIC") {
+        let mut e = rig.friction.extend();
+        e.static_n *= v;
+        e.slip_n *= v;
+        e.viscous_n_s_per_m *= v;
+        rig.friction.set_extend(e);
+    }
     let scenario = Scenario::by_name(scen, 1, 1e9).unwrap();
     let secs = scenario.default_seconds;
     let mut sched = FaultSchedule::default();

@@ -63,7 +63,14 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         x_scale: SVector<f64, N>,
     ) -> Self {
         let ratio = SMatrix::<f64, N, N>::from_fn(|i, j| x_scale[j] / x_scale[i]);
-        let mut f = Ekf { x: x0, s: SMatrix::zeros(), x_scale, q_sqrt: SVector::zeros(), r: r_diag, ratio };
+        let mut f = Ekf {
+            x: x0,
+            s: SMatrix::zeros(),
+            x_scale,
+            q_sqrt: SVector::zeros(),
+            r: r_diag,
+            ratio,
+        };
         for i in 0..N {
             f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
         }

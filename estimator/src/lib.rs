@@ -8,6 +8,7 @@
 
 pub mod ekf;
 pub mod mae;
+pub mod stage;
 pub mod tuning;
 
 use model::process::{ProcessModel, I_FE, N_MEAS};
@@ -16,6 +17,7 @@ use nalgebra::{SMatrix, SVector};
 
 pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
+pub use stage::{EstimatorStage, StageEstimate};
 pub use tuning::{Init, Tuning};
 
 /// Largest number of states any layout has (the 11-state leak model with spool bias).

@@ -3,13 +3,15 @@
 
 use std::path::Path;
 
+use classifier::ClassifierConfig;
+use estimator::Tuning;
 use model::params::ActuatorParams;
 use model::sensors::SensorParams;
 use model::sim::SimSettings;
 use serde::{Deserialize, Serialize};
 
 /// The whole configuration.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Config {
     /// The actuator model the estimator and calibration believe in.
@@ -20,6 +22,26 @@ pub struct Config {
     pub sensors: SensorParams,
     /// Integration settings of the simulated rig.
     pub sim: SimSettings,
+    /// The thesis filter (baseline detector): by default the thesis' 7-state tuning (MODEL.md §4).
+    pub estimator: Tuning,
+    /// The leak filter (leakwatch's detector): by default 11 states, tuning from the sensors.
+    pub leak_filter: Tuning,
+    /// The detectors.
+    pub classifier: ClassifierConfig,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            model: ActuatorParams::default(),
+            rig: None,
+            sensors: SensorParams::default(),
+            sim: SimSettings::default(),
+            estimator: Tuning::thesis(),
+            leak_filter: Tuning::sensor_derived(),
+            classifier: ClassifierConfig::default(),
+        }
+    }
 }
 
 impl Config {
@@ -37,6 +59,11 @@ impl Config {
         if let Some(rig) = &cfg.rig {
             rig.validate().map_err(|e| format!("[rig] {e}"))?;
         }
+        cfg.estimator.validate()?;
+        cfg.leak_filter
+            .validate()
+            .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
+        cfg.classifier.validate()?;
         Ok(cfg)
     }
 
@@ -62,7 +89,9 @@ impl Config {
              # [model]: the actuator as the estimator believes it (MODEL.md §2).\n\
              # [rig]: optional, the simulated rig's own parameters (same fields as [model]);\n\
              #        when absent the simulated rig equals [model].\n\
-             # [sensors]: the simulated rig's sensors; [sim]: its integrator.\n\n{body}"
+             # [sensors]: the simulated rig's sensors; [sim]: its integrator.\n\
+             # [estimator]: the thesis filter (Q, R, P0 in SI squared units per step; see README).\n\
+             # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\n{body}"
         )
     }
 }

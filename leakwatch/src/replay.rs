@@ -1,0 +1,347 @@
+//! `leakwatch replay`: file -> estimator -> classifier in one process, faster
+//! than real time, as stages connected by crossbeam channels (or in one
+//! thread; both give the same output bit for bit).
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use classifier::{Classifier, LeakEvent};
+use dataset::{CsvReader, Limits, Row};
+use estimator::{EstimatorStage, StageEstimate};
+use model::Sample;
+use serde::Serialize;
+
+use crate::config::Config;
+
+/// How the stages are connected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wiring {
+    /// Reader, estimator and classifier in three threads over bounded crossbeam channels.
+    Channels,
+    /// Everything in the calling thread.
+    SingleThread,
+}
+
+/// What to replay and where to write.
+#[derive(Debug, Clone)]
+pub struct ReplayRequest {
+    /// The input: a CSV in the dataset format.
+    pub input: PathBuf,
+    /// Output directory (created if missing).
+    pub out_dir: PathBuf,
+    /// The configuration.
+    pub config: Config,
+    /// How the stages are connected.
+    pub wiring: Wiring,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+}
+
+/// Residual statistics of one filter.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ResidualRms {
+    /// RMS of the a-posteriori position residual, m.
+    pub x_m: f64,
+    /// RMS of the a-posteriori p1 residual, Pa.
+    pub p1_pa: f64,
+    /// RMS of the a-posteriori p2 residual, Pa.
+    pub p2_pa: f64,
+    /// RMS of the p1 innovation, Pa.
+    pub innovation_p1_pa: f64,
+    /// RMS of the p2 innovation, Pa.
+    pub innovation_p2_pa: f64,
+    /// Mean normalised innovation squared (3 when consistent).
+    pub mean_nis: f64,
+    /// Filter resets.
+    pub resets: u64,
+}
+
+/// What `summary.json` holds.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Summary {
+    /// The input file.
+    pub input: String,
+    /// Samples processed.
+    pub samples: u64,
+    /// Rows of the input that could not be used (skipped, each reported).
+    pub rows_skipped: u64,
+    /// Samples missing from the time stamps (gaps), bridged or causing resets.
+    pub samples_missing: u64,
+    /// Input problems, with line and column (the first 100).
+    pub issues: Vec<String>,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Samples per second of wall time.
+    pub samples_per_s: f64,
+    /// The leak filter's residuals.
+    pub leak_filter: ResidualRms,
+    /// The thesis filter's residuals.
+    pub thesis_filter: ResidualRms,
+    /// Number of events written to events.json.
+    pub events: usize,
+    /// How the stages were connected.
+    pub wiring: String,
+}
+
+#[derive(Default)]
+struct Acc {
+    n: f64,
+    sq: [f64; 5],
+    nis: f64,
+}
+
+impl Acc {
+    fn push(&mut self, e: &estimator::Estimate) {
+        if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
+            return;
+        }
+        self.n += 1.0;
+        self.sq[0] += e.residual[0].powi(2);
+        self.sq[1] += e.residual[1].powi(2);
+        self.sq[2] += e.residual[2].powi(2);
+        self.sq[3] += e.innovation[1].powi(2);
+        self.sq[4] += e.innovation[2].powi(2);
+        self.nis += e.nis;
+    }
+    fn finish(&self, resets: u64) -> ResidualRms {
+        let n = self.n.max(1.0);
+        let r = |k: usize| (self.sq[k] / n).sqrt();
+        ResidualRms {
+            x_m: r(0),
+            p1_pa: r(1),
+            p2_pa: r(2),
+            innovation_p1_pa: r(3),
+            innovation_p2_pa: r(4),
+            mean_nis: self.nis / n,
+            resets,
+        }
+    }
+}
+
+/// Header of estimates.csv.
+pub const ESTIMATES_HEADER: &str =
+    "t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm,q_e2_lpm,q_i_lpm,\
+spool_bias,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
+th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
+
+/// Writes one estimates.csv row (floats in shortest round-trip form).
+pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Result<()> {
+    let e = &s.leak;
+    let t = &s.thesis;
+    let lpm = |v: f64| v * 6.0e4;
+    write!(
+        w,
+        "{:?},{:?},{:?},{:?},{:?}",
+        e.t_s, e.u_v, e.measured[0], e.measured[1], e.measured[2]
+    )?;
+    for i in 0..7 {
+        write!(w, ",{:?}", e.state[i])?;
+    }
+    write!(
+        w,
+        ",{:?},{:?},{:?},{:?}",
+        lpm(e.state[7]),
+        lpm(e.state[8]),
+        lpm(e.state[9]),
+        e.state[10]
+    )?;
+    for v in e.residual.iter().chain(e.innovation.iter()) {
+        write!(w, ",{v:?}")?;
+    }
+    write!(w, ",{:?},{}", e.nis, e.flags)?;
+    write!(
+        w,
+        ",{:?},{:?},{:?},{:?},{:?}",
+        t.state[3], t.state[1], t.state[2], t.state[4], t.state[6]
+    )?;
+    for v in t.residual.iter() {
+        write!(w, ",{v:?}")?;
+    }
+    writeln!(
+        w,
+        ",{:?},{:?},{:?},{:?},{:?},{}",
+        t.innovation[1], t.innovation[2], t.mae_pa[0], t.mae_pa[1], t.nis, t.flags
+    )
+}
+
+/// Writes events as a JSON array (NaN becomes null).
+pub fn write_events(path: &Path, events: &[LeakEvent]) -> Result<(), String> {
+    let text = serde_json::to_string_pretty(events).map_err(|e| format!("events: {e}"))?;
+    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+enum Batch {
+    Samples(Vec<Sample>),
+    Issue(String, bool),
+}
+
+const BATCH: usize = 2048;
+
+/// Runs a replay and writes estimates.csv, events.json and summary.json into the output directory.
+pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
+    std::fs::create_dir_all(&req.out_dir)
+        .map_err(|e| format!("cannot create output directory {}: {e}", req.out_dir.display()))?;
+    let cfg = &req.config;
+    let limits = Limits::for_supply(cfg.model.supply_pressure_pa);
+    let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
+    let est_path = req.out_dir.join("estimates.csv");
+    let file = File::create(&est_path).map_err(|e| format!("cannot write {}: {e}", est_path.display()))?;
+    let mut out = BufWriter::with_capacity(1 << 20, file);
+    writeln!(out, "{ESTIMATES_HEADER}").map_err(|e| format!("{}: {e}", est_path.display()))?;
+
+    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
+    let mut cls = Classifier::new(cfg.classifier.clone())?;
+    let mut events: Vec<LeakEvent> = Vec::new();
+    let mut summary = Summary {
+        input: req.input.display().to_string(),
+        wiring: match req.wiring {
+            Wiring::Channels => "channels".into(),
+            Wiring::SingleThread => "single-thread".into(),
+        },
+        ..Summary::default()
+    };
+    let mut acc = (Acc::default(), Acc::default());
+    let mut last_t = 0.0;
+    let bar = progress_bar(req.progress);
+    let started = Instant::now();
+
+    // The sink: classifier, accumulation and file writing.
+    let mut write_err: Option<String> = None;
+    let mut sink = |s: &StageEstimate, summary: &mut Summary| {
+        summary.samples += 1;
+        last_t = s.leak.t_s;
+        acc.0.push(&s.leak);
+        acc.1.push(&s.thesis);
+        cls.on_stage(s, |ev| events.push(ev));
+        if write_err.is_none() {
+            if let Err(e) = write_estimate_row(&mut out, s) {
+                write_err = Some(format!("{}: {e}", est_path.display()));
+            }
+        }
+    };
+    let on_issue = |msg: String, skipped: bool, summary: &mut Summary| {
+        if skipped {
+            summary.rows_skipped += 1;
+        }
+        if summary.issues.len() < 100 {
+            summary.issues.push(msg);
+        }
+    };
+
+    match req.wiring {
+        Wiring::SingleThread => {
+            while let Some(row) = reader.next_row() {
+                let sample = match row {
+                    Row::Sample(s) => s,
+                    Row::AfterGap(s, issue) => {
+                        on_issue(issue.to_string(), false, &mut summary);
+                        s
+                    }
+                    Row::Skipped(issue) => {
+                        on_issue(issue.to_string(), true, &mut summary);
+                        continue;
+                    }
+                };
+                let e = stage.on_sample(&sample);
+                sink(&e, &mut summary);
+                if summary.samples.is_multiple_of(65536) {
+                    bar.set_position(summary.samples);
+                }
+            }
+        }
+        Wiring::Channels => {
+            let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(8);
+            let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<(String, bool)>)>(8);
+            std::thread::scope(|scope| {
+                scope.spawn(move || {
+                    let mut batch = Vec::with_capacity(BATCH);
+                    while let Some(row) = reader.next_row() {
+                        match row {
+                            Row::Sample(s) => batch.push(s),
+                            Row::AfterGap(s, issue) => {
+                                batch.push(s);
+                                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                                if tx_in.send(Batch::Samples(full)).is_err()
+                                    || tx_in.send(Batch::Issue(issue.to_string(), false)).is_err()
+                                {
+                                    return;
+                                }
+                            }
+                            Row::Skipped(issue) => {
+                                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                                if tx_in.send(Batch::Samples(full)).is_err()
+                                    || tx_in.send(Batch::Issue(issue.to_string(), true)).is_err()
+                                {
+                                    return;
+                                }
+                            }
+                        }
+                        if batch.len() == BATCH {
+                            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                            if tx_in.send(Batch::Samples(full)).is_err() {
+                                return;
+                            }
+                        }
+                    }
+                    let _ = tx_in.send(Batch::Samples(batch));
+                });
+                let stage = &mut stage;
+                scope.spawn(move || {
+                    for b in rx_in {
+                        let msg = match b {
+                            Batch::Samples(v) => (v.iter().map(|s| stage.on_sample(s)).collect(), Vec::new()),
+                            Batch::Issue(m, skipped) => (Vec::new(), vec![(m, skipped)]),
+                        };
+                        if tx_out.send(msg).is_err() {
+                            return;
+                        }
+                    }
+                });
+                for (ests, issues) in rx_out {
+                    for e in &ests {
+                        sink(e, &mut summary);
+                    }
+                    for (m, skipped) in issues {
+                        on_issue(m, skipped, &mut summary);
+                    }
+                    bar.set_position(summary.samples);
+                }
+            });
+        }
+    }
+    cls.finish(last_t, |ev| events.push(ev));
+    bar.finish_and_clear();
+    if let Some(e) = write_err {
+        return Err(e);
+    }
+    out.flush().map_err(|e| format!("{}: {e}", est_path.display()))?;
+    summary.wall_s = started.elapsed().as_secs_f64();
+    summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
+    summary.samples_missing = stage.missing_samples();
+    summary.leak_filter = acc.0.finish(stage.leak().counters().resets);
+    summary.thesis_filter = acc.1.finish(stage.thesis().counters().resets);
+    summary.events = events.len();
+    if summary.samples == 0 {
+        return Err(format!("{}: no usable samples", req.input.display()));
+    }
+    write_events(&req.out_dir.join("events.json"), &events)?;
+    let path = req.out_dir.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    std::fs::write(&path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(summary)
+}
+
+fn progress_bar(enabled: bool) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !enabled || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {pos} samples  {per_sec}  {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar
+}
