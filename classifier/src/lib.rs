@@ -745,15 +745,28 @@ impl Classifier {
 
     /// Reads the leak filter's estimate `e` and the thesis filter's `thesis`.
     pub fn on_estimates(&mut self, e: &Estimate, thesis: &Estimate, mut emit: impl FnMut(LeakEvent)) {
-        if e.flags & FLAG_RESET != 0 || thesis.flags & FLAG_RESET != 0 {
+        if e.flags & FLAG_RESET != 0 {
             self.leak_size.restart();
-            self.thesis.restart();
-            emit(self.plain(
+            if std::ptr::eq(e, thesis) {
+                self.thesis.restart();
+            }
+            let ev = self.plain(
                 EventKind::EstimatorReset,
                 e.t_s,
                 "",
-                "the filter restarted; warm-up begins again",
-            ));
+                "the leak filter restarted; warm-up begins again",
+            );
+            emit(ev);
+        }
+        if thesis.flags & FLAG_RESET != 0 && !std::ptr::eq(e, thesis) {
+            self.thesis.restart();
+            let ev = self.plain(
+                EventKind::EstimatorReset,
+                e.t_s,
+                "",
+                "the thesis filter restarted; its warm-up begins again",
+            );
+            emit(ev);
         }
         self.check_sensors(e, &mut emit);
         if self.learning_since_s.is_none() && e.flags & FLAG_CONVERGING == 0 {

@@ -126,7 +126,8 @@ pub struct Estimator {
 /// Typical magnitudes used to scale the filter's internal algebra.
 const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
 
-/// A position residual beyond this, m, held for [`DIVERGED_SAMPLES`] samples, resets the filter.
+/// A position innovation beyond this, m (or beyond 20 of its standard deviations, if
+/// larger), held for [`DIVERGED_SAMPLES`] samples, resets the filter.
 pub const DIVERGED_POSITION_M: f64 = 0.02;
 /// Samples of persistent divergence before a reset.
 pub const DIVERGED_SAMPLES: u32 = 200;
@@ -316,7 +317,8 @@ impl Estimator {
                 self.mae[k].mean()
             };
         }
-        if use_channel[0] && out.residual[0].abs() > DIVERGED_POSITION_M {
+        let diverged_limit = DIVERGED_POSITION_M.max(20.0 * out.innovation_sigma[0]);
+        if use_channel[0] && out.innovation[0].abs() > diverged_limit {
             self.diverged_samples += 1;
             if self.diverged_samples >= DIVERGED_SAMPLES {
                 self.started = false;
