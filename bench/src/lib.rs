@@ -1,1 +1,5 @@
-//! bench (placeholder).
+//! Benchmark harnesses run from `leakwatch bench ...` (BENCHMARKS.md). They
+//! print tables and return JSON-ready results; they are never timed assertions.
+
+pub mod detection;
+pub mod speed;

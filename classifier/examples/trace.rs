@@ -20,7 +20,7 @@ fn main() {
         rig.spool_null_bias_m = 0.04 * 8.4e-5;
     }
     let seed: u64 = a[3].parse().unwrap();
-    let scenario = Scenario::by_name(&a[1], seed, 1e9).unwrap();
+    let scenario = Scenario::by_name(&a[1], seed, 600.0).unwrap();
     let secs = scenario.default_seconds;
     let mut sched = FaultSchedule::default();
     if a[2] != "none" {

@@ -24,7 +24,7 @@ fn off_nominal_rig() -> ActuatorParams {
 }
 
 fn run(scenario: &str, seconds: f64, fault: Option<&str>, seed: u64, rig: ActuatorParams) -> Vec<LeakEvent> {
-    let scenario = Scenario::by_name(scenario, seed, 1e9).unwrap();
+    let scenario = Scenario::by_name(scenario, seed, seconds).unwrap();
     let mut sched = FaultSchedule::default();
     if let Some(f) = fault {
         sched.faults.push(Fault::parse(f, &rig).unwrap());
@@ -134,7 +134,7 @@ fn a_spring_engaging_mid_run_raises_no_leak() {
         contact_m: 0.45,
         ..Default::default()
     };
-    let scenario = Scenario::by_name("closed-loop-sine", 41, 1e9).unwrap();
+    let scenario = Scenario::by_name("closed-loop-sine", 41, 40.0).unwrap();
     let mut sim = Simulator::new(
         rig,
         SensorParams::default(),

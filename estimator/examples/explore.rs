@@ -31,7 +31,7 @@ fn main() {
         e.viscous_n_s_per_m *= v;
         rig.friction.set_extend(e);
     }
-    let scenario = Scenario::by_name(scen, 1, 1e9).unwrap();
+    let scenario = Scenario::by_name(scen, 1, 600.0).unwrap();
     let secs = scenario.default_seconds;
     let mut sched = FaultSchedule::default();
     let mut onset = f64::INFINITY;

@@ -2,7 +2,7 @@
 use estimator::{Estimator, Tuning};
 use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 fn main() {
-    let sc = Scenario::by_name("loaded-sine", 1, 1e9).unwrap();
+    let sc = Scenario::by_name("loaded-sine", 1, 60.0).unwrap();
     let mut sim = Simulator::new(
         ActuatorParams::default(),
         SensorParams::default(),

@@ -110,7 +110,7 @@ fn healthy_run(scenario: &str, tuning: Tuning, smooth: bool, seconds: f64, pos_t
         rig = rig.with_friction_preset(FrictionPreset::Smooth);
         model = model.with_friction_preset(FrictionPreset::Smooth);
     }
-    let sc = Scenario::by_name(scenario, 3, 1e9).unwrap();
+    let sc = Scenario::by_name(scenario, 3, seconds).unwrap();
     let mut sim = Simulator::new(
         rig,
         SensorParams::default(),

@@ -39,7 +39,7 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
             .faults
             .push(Fault::parse(s, &rig).map_err(|e| e.to_string())?);
     }
-    let sc = Scenario::by_name(scenario, seed, 1e9).map_err(|e| e.to_string())?;
+    let sc = Scenario::by_name(scenario, seed, seconds).map_err(|e| e.to_string())?;
     println!(
         "leakwatch demo: scenario {scenario}, {seconds} s, rig off-nominal (friction ±, air, spool bias)"
     );

@@ -1,6 +1,7 @@
 //! `leakwatch`: watch a hydraulic actuator for leaks. One command line for
 //! simulation, offline replay, the live pipeline, calibration and benchmarks.
 
+mod benches;
 mod config;
 mod demo;
 mod plots;
@@ -140,6 +141,33 @@ enum BenchCommand {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// EKF step time (median, p99 ns per predict + update) and in-process chain throughput.
+    Ekf {
+        /// Steps timed per filter (≥ 1e6 for the figures of BENCHMARKS.md).
+        #[arg(long, default_value_t = 1_000_000)]
+        steps: u64,
+        /// Output directory for ekf.json.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
+    Detection {
+        /// Runs per leak kind and size.
+        #[arg(long, default_value_t = 20)]
+        runs: usize,
+        /// Simulated healthy hours for the false-alarm rate.
+        #[arg(long, default_value_t = 10.0)]
+        hours: f64,
+        /// Suite seed.
+        #[arg(long, default_value_t = 2026)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output directory: detection.json, detection.md, detection.png.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -248,6 +276,10 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Bench { which } => match which {
             BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out),
+            BenchCommand::Ekf { steps, out } => benches::ekf(steps, out),
+            BenchCommand::Detection { runs, hours, seed, threads, out } => {
+                benches::detection(runs, hours, seed, threads, &out)
+            }
         },
     }
 }

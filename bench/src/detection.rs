@@ -1,0 +1,440 @@
+//! The seeded detection suite of BENCHMARKS.md §2: both detectors side by
+//! side on the same simulated runs, in parallel over the cores.
+//!
+//! Each run draws (from its own seed) a scenario, a rig that differs from the
+//! model (friction ±20 % and asymmetric, bulk modulus −30..0 %, spool null bias
+//! up to 10 % of the spool amplitude), and a fault: a leak of a given kind and
+//! size (L/min at the nominal drop p_s/2), as a step or a ramp of up to 5 s, at
+//! a random time in [15, 25] s. Healthy runs measure false alarms per hour.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use classifier::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
+use estimator::{EstimatorStage, Tuning};
+use model::rng::Rng;
+use model::{ActuatorParams, Fault, FaultSchedule, LeakPath, Scenario, SensorParams, SimSettings, Simulator};
+use serde::Serialize;
+
+/// Leak sizes of the suite, L/min at the nominal drop.
+pub const SIZES_LPM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.5, 1.0];
+/// Scenarios drawn by the suite.
+pub const SCENARIOS: [&str; 4] = ["open-loop-sine", "closed-loop-sine", "closed-loop-random", "loaded-sine"];
+/// The two detectors, as named in events.
+pub const DETECTORS: [&str; 2] = ["leak-size", "thesis-mae"];
+/// Seconds simulated after the onset of a leak.
+pub const AFTER_ONSET_S: f64 = 10.0;
+/// Length of one healthy run, s.
+pub const HEALTHY_RUN_S: f64 = 300.0;
+
+/// One simulated run of the suite.
+#[derive(Debug, Clone, Serialize)]
+pub struct Case {
+    /// Seed of everything random in the run.
+    pub seed: u64,
+    /// Scenario name.
+    pub scenario: String,
+    /// Leak kind (`ext1`, `ext2`, `int`) or `none`.
+    pub kind: String,
+    /// Leak size at nominal drop, L/min (0 when healthy).
+    pub size_lpm: f64,
+    /// Onset, s (NaN when healthy).
+    pub onset_s: f64,
+    /// Ramp duration, s (0 = step).
+    pub ramp_s: f64,
+    /// Simulated length, s.
+    pub seconds: f64,
+}
+
+/// What one detector did in one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    /// Detector name.
+    pub detector: String,
+    /// A leak event was raised at or after the onset.
+    pub detected: bool,
+    /// The first such event named the right kind.
+    pub isolated: bool,
+    /// Detection delay from onset, s (NaN if not detected).
+    pub delay_s: f64,
+    /// Last reported size, L/min (NaN if none).
+    pub size_lpm: f64,
+    /// Leak events raised before the onset (or at all, in a healthy run): false alarms.
+    pub false_alarms: u32,
+}
+
+/// A run and both detectors' outcomes.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunResult {
+    /// The run.
+    pub case: Case,
+    /// One outcome per detector, in [`DETECTORS`] order.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// Figures of one detector for one leak kind and size.
+#[derive(Debug, Clone, Serialize)]
+pub struct Cell {
+    /// Detector name.
+    pub detector: String,
+    /// Leak kind.
+    pub kind: String,
+    /// Leak size, L/min.
+    pub size_lpm: f64,
+    /// Runs.
+    pub runs: usize,
+    /// Fraction of runs with a detection.
+    pub p_detect: f64,
+    /// Fraction of runs whose first detection named the right kind.
+    pub p_isolate: f64,
+    /// Median delay, s.
+    pub delay_median_s: f64,
+    /// 95th-percentile delay, s.
+    pub delay_p95_s: f64,
+    /// Median of |size error| / size over correctly isolated runs (NaN if the detector does not size).
+    pub size_error_median: f64,
+    /// 95th percentile of |size error| / size.
+    pub size_error_p95: f64,
+}
+
+/// The whole suite's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct SuiteResult {
+    /// Per detector, kind and size.
+    pub cells: Vec<Cell>,
+    /// Healthy hours simulated.
+    pub healthy_hours: f64,
+    /// False alarms per hour over the healthy runs, per detector.
+    pub false_alarms_per_hour: Vec<(String, f64)>,
+    /// Every run.
+    pub runs: Vec<RunResult>,
+    /// Wall time of the suite, s.
+    pub wall_s: f64,
+}
+
+/// Draws the rig of a run: the model with friction ±20 % and asymmetric,
+/// bulk modulus −30..0 %, spool null bias up to ±10 % of the spool amplitude.
+pub fn draw_rig(rng: &mut Rng) -> ActuatorParams {
+    let mut rig = ActuatorParams::default();
+    let mut ext = rig.friction.extend();
+    let mut ret = ext;
+    let fe = rng.uniform_in(0.8, 1.2);
+    let fr = rng.uniform_in(0.8, 1.2);
+    ext.static_n *= fe;
+    ext.slip_n *= fe;
+    ext.viscous_n_s_per_m *= fe;
+    ret.static_n *= fr;
+    ret.slip_n *= fr;
+    ret.viscous_n_s_per_m *= fr;
+    rig.friction.set_extend(ext);
+    rig.friction.retract = Some(ret);
+    rig.bulk_modulus_pa *= rng.uniform_in(0.7, 1.0);
+    let spool_amplitude_m = rig.spool_gain_m_per_v * 3.0;
+    rig.spool_null_bias_m = rng.uniform_in(-0.1, 0.1) * spool_amplitude_m;
+    rig
+}
+
+/// The cases of a suite: `runs` per kind and size, and enough healthy runs for `hours`.
+pub fn cases(runs: usize, hours: f64, seed: u64) -> Vec<Case> {
+    let mut out = Vec::new();
+    let mut rng = Rng::new(seed);
+    for kind in ["ext1", "ext2", "int"] {
+        for size in SIZES_LPM {
+            for _ in 0..runs {
+                let scenario = SCENARIOS[(rng.uniform() * SCENARIOS.len() as f64) as usize % SCENARIOS.len()];
+                let onset = rng.uniform_in(15.0, 25.0);
+                let ramp = if rng.uniform() < 0.5 { 0.0 } else { rng.uniform_in(0.5, 5.0) };
+                out.push(Case {
+                    seed: rng.next_u64(),
+                    scenario: scenario.into(),
+                    kind: kind.into(),
+                    size_lpm: size,
+                    onset_s: onset,
+                    ramp_s: ramp,
+                    seconds: onset + ramp + AFTER_ONSET_S,
+                });
+            }
+        }
+    }
+    let healthy = (hours * 3600.0 / HEALTHY_RUN_S).ceil() as usize;
+    for i in 0..healthy {
+        out.push(Case {
+            seed: rng.next_u64(),
+            scenario: SCENARIOS[i % SCENARIOS.len()].into(),
+            kind: "none".into(),
+            size_lpm: 0.0,
+            onset_s: f64::NAN,
+            ramp_s: 0.0,
+            seconds: HEALTHY_RUN_S,
+        });
+    }
+    out
+}
+
+/// Runs one case through the rig, the estimator stage and the classifier.
+pub fn run_case(case: &Case) -> Result<RunResult, String> {
+    let mut rng = Rng::new(case.seed);
+    let rig = draw_rig(&mut rng);
+    let mut faults = FaultSchedule::default();
+    if let Some(path) = LeakPath::from_name(&case.kind) {
+        let spec = format!("{}:{}lpm@{}s,ramp={}", path.name(), case.size_lpm, case.onset_s, case.ramp_s);
+        faults.faults.push(Fault::parse(&spec, &rig).map_err(|e| e.to_string())?);
+    }
+    let scenario = Scenario::by_name(&case.scenario, case.seed, case.seconds).map_err(|e| e.to_string())?;
+    let mut sim = Simulator::new(rig, SensorParams::default(), SimSettings::default(), scenario, faults, case.seed)
+        .map_err(|e| e.to_string())?;
+    let mut stage = EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())?;
+    let mut cls = Classifier::new(ClassifierConfig::default())?;
+    let mut events: Vec<LeakEvent> = Vec::new();
+    let n = (case.seconds / sim.sample_period_s()).round() as u64;
+    for _ in 0..n {
+        let s = sim.step();
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| {
+            if ev.kind.is_leak() {
+                events.push(ev)
+            }
+        });
+    }
+    if std::env::var("LEAKWATCH_DEBUG_EVENTS").is_ok() {
+        eprintln!("{} events; first {:?}", events.len(), events.iter().take(3).collect::<Vec<_>>());
+    }
+    let outcomes = DETECTORS.iter().map(|d| score(case, d, &events)).collect();
+    Ok(RunResult { case: case.clone(), outcomes })
+}
+
+fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
+    let mine: Vec<&LeakEvent> = events.iter().filter(|e| e.detector == detector).collect();
+    let healthy = case.kind == "none";
+    let false_alarms = mine
+        .iter()
+        .filter(|e| e.phase == Phase::Raised && (healthy || e.t_detect_s < case.onset_s))
+        .count() as u32;
+    let first = if healthy {
+        None
+    } else {
+        mine.iter().find(|e| e.phase == Phase::Raised && e.t_detect_s >= case.onset_s).copied()
+    };
+    let (detected, isolated, delay, size) = match first {
+        Some(ev) => {
+            let size = mine
+                .iter()
+                .rev()
+                .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared)
+                .map(|e| e.size_lpm)
+                .unwrap_or(f64::NAN);
+            (true, ev.kind.name() == case.kind, ev.t_detect_s - case.onset_s, size)
+        }
+        None => (false, false, f64::NAN, f64::NAN),
+    };
+    Outcome { detector: detector.into(), detected, isolated, delay_s: delay, size_lpm: size, false_alarms }
+}
+
+fn quantile(v: &mut [f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() as f64 - 1.0) * p).round() as usize]
+}
+
+/// Runs the suite on `threads` threads; `progress` is called after each run with (done, total).
+pub fn run_suite(cases: &[Case], threads: usize, progress: impl Fn(usize, usize) + Sync) -> SuiteResult {
+    let t0 = std::time::Instant::now();
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<RunResult>>> = Mutex::new(vec![None; cases.len()]);
+    let done = AtomicUsize::new(0);
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= cases.len() {
+                    break;
+                }
+                let r = run_case(&cases[i]).ok();
+                if let Ok(mut all) = results.lock() {
+                    all[i] = r;
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cases.len());
+            });
+        }
+    });
+    let runs: Vec<RunResult> = results.into_inner().unwrap_or_default().into_iter().flatten().collect();
+    summarise(runs, t0.elapsed().as_secs_f64())
+}
+
+/// Turns runs into the per-cell figures.
+pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
+    let mut cells = Vec::new();
+    for (di, det) in DETECTORS.iter().enumerate() {
+        for kind in ["ext1", "ext2", "int"] {
+            for size in SIZES_LPM {
+                let these: Vec<&RunResult> =
+                    runs.iter().filter(|r| r.case.kind == kind && r.case.size_lpm == size).collect();
+                if these.is_empty() {
+                    continue;
+                }
+                let n = these.len();
+                let det_runs: Vec<&Outcome> = these.iter().map(|r| &r.outcomes[di]).collect();
+                let mut delays: Vec<f64> = det_runs.iter().filter(|o| o.detected).map(|o| o.delay_s).collect();
+                let mut errs: Vec<f64> = det_runs
+                    .iter()
+                    .filter(|o| o.isolated && o.size_lpm.is_finite())
+                    .map(|o| (o.size_lpm - size).abs() / size)
+                    .collect();
+                cells.push(Cell {
+                    detector: det.to_string(),
+                    kind: kind.into(),
+                    size_lpm: size,
+                    runs: n,
+                    p_detect: det_runs.iter().filter(|o| o.detected).count() as f64 / n as f64,
+                    p_isolate: det_runs.iter().filter(|o| o.isolated).count() as f64 / n as f64,
+                    delay_median_s: quantile(&mut delays, 0.5),
+                    delay_p95_s: quantile(&mut delays, 0.95),
+                    size_error_median: quantile(&mut errs, 0.5),
+                    size_error_p95: quantile(&mut errs, 0.95),
+                });
+            }
+        }
+    }
+    let healthy: Vec<&RunResult> = runs.iter().filter(|r| r.case.kind == "none").collect();
+    let hours = healthy.iter().map(|r| r.case.seconds).sum::<f64>() / 3600.0;
+    let false_alarms_per_hour = DETECTORS
+        .iter()
+        .enumerate()
+        .map(|(di, d)| {
+            let n: u32 = healthy.iter().map(|r| r.outcomes[di].false_alarms).sum();
+            (d.to_string(), if hours > 0.0 { n as f64 / hours } else { f64::NAN })
+        })
+        .collect();
+    SuiteResult { cells, healthy_hours: hours, false_alarms_per_hour, runs, wall_s }
+}
+
+/// The suite's tables in Markdown: one per leak kind, both detectors side by side.
+pub fn markdown(r: &SuiteResult) -> String {
+    let mut s = String::new();
+    let f = |v: f64, digits: usize| if v.is_finite() { format!("{v:.digits$}") } else { "–".into() };
+    for kind in ["ext1", "ext2", "int"] {
+        s.push_str(&format!("\n### {kind}\n\n"));
+        s.push_str(
+            "| size L/min | detector | runs | P(detect) | P(isolate) | delay median s | delay p95 s | size error median | size error p95 |\n",
+        );
+        s.push_str("|---|---|---|---|---|---|---|---|---|\n");
+        for size in SIZES_LPM {
+            for det in DETECTORS {
+                if let Some(c) = r.cells.iter().find(|c| c.kind == kind && c.size_lpm == size && c.detector == det) {
+                    s.push_str(&format!(
+                        "| {size} | {det} | {} | {:.2} | {:.2} | {} | {} | {} | {} |\n",
+                        c.runs,
+                        c.p_detect,
+                        c.p_isolate,
+                        f(c.delay_median_s, 2),
+                        f(c.delay_p95_s, 2),
+                        f(c.size_error_median * 100.0, 0) + if c.size_error_median.is_finite() { " %" } else { "" },
+                        f(c.size_error_p95 * 100.0, 0) + if c.size_error_p95.is_finite() { " %" } else { "" },
+                    ));
+                }
+            }
+        }
+    }
+    s.push_str(&format!("\nHealthy runs: {:.2} simulated hours.\n\n| detector | false alarms per hour |\n|---|---|\n", r.healthy_hours));
+    for (d, fa) in &r.false_alarms_per_hour {
+        s.push_str(&format!("| {d} | {} |\n", f(*fa, 3)));
+    }
+    s
+}
+
+/// Plots of detection probability against leak size, both detectors, one panel per kind.
+pub fn probability_figure(r: &SuiteResult) -> plot::Figure {
+    let mut fig = plot::Figure::new("Detection probability against leak size", "leak size [L/min at p_s/2]");
+    for kind in ["ext1", "ext2", "int"] {
+        let mut panel = plot::Panel::new(&format!("{kind}: P(detect) and P(isolate)"), "probability [-]");
+        for det in DETECTORS {
+            let cells: Vec<&Cell> = r.cells.iter().filter(|c| c.kind == kind && c.detector == det).collect();
+            let x: Vec<f64> = cells.iter().map(|c| c.size_lpm).collect();
+            let pd: Vec<f64> = cells.iter().map(|c| c.p_detect).collect();
+            let pi: Vec<f64> = cells.iter().map(|c| c.p_isolate).collect();
+            panel = panel
+                .with_series(plot::Series::line(&format!("{det} detect"), &x, &pd))
+                .with_series(plot::Series::line(&format!("{det} isolate"), &x, &pi).styled(plot::Style::Dashed));
+        }
+        fig.panels.push(panel);
+    }
+    fig
+}
+
+/// The event kinds a leak run may raise, for documentation.
+pub fn leak_kinds() -> [EventKind; 3] {
+    EventKind::LEAKS
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cases_cover_every_kind_and_size_and_the_healthy_hours() {
+        let c = cases(2, 0.25, 1);
+        assert_eq!(c.iter().filter(|c| c.kind != "none").count(), 3 * 6 * 2);
+        let healthy: f64 = c.iter().filter(|c| c.kind == "none").map(|c| c.seconds).sum();
+        assert!(healthy >= 0.25 * 3600.0);
+        assert!(c.iter().filter(|c| c.kind != "none").all(|c| (15.0..=25.0).contains(&c.onset_s)));
+        // Seeded: the same suite twice.
+        assert_eq!(format!("{:?}", cases(2, 0.25, 1)), format!("{c:?}"));
+    }
+
+    #[test]
+    fn scoring_counts_false_alarms_delay_and_isolation() {
+        let case = Case {
+            seed: 1,
+            scenario: "closed-loop-sine".into(),
+            kind: "ext2".into(),
+            size_lpm: 0.5,
+            onset_s: 20.0,
+            ramp_s: 0.0,
+            seconds: 30.0,
+        };
+        let ev = |kind, phase, t: f64, id, size| LeakEvent {
+            kind,
+            phase,
+            detector: "leak-size".into(),
+            event_id: id,
+            t_detect_s: t,
+            t_onset_s: t,
+            size_lpm: size,
+            size_lpm_sigma: 0.01,
+            confidence: 1.0,
+            channel: String::new(),
+            detail: String::new(),
+        };
+        let events = vec![
+            ev(EventKind::Ext1, Phase::Raised, 12.0, 1, 0.1),
+            ev(EventKind::Ext1, Phase::Cleared, 13.0, 1, 0.0),
+            ev(EventKind::Ext2, Phase::Raised, 20.4, 2, 0.3),
+            ev(EventKind::Ext2, Phase::Updated, 21.4, 2, 0.45),
+        ];
+        let o = score(&case, "leak-size", &events);
+        assert_eq!(o.false_alarms, 1);
+        assert!(o.detected && o.isolated);
+        assert!((o.delay_s - 0.4).abs() < 1e-9);
+        assert_eq!(o.size_lpm, 0.45);
+        let none = score(&case, "thesis-mae", &events);
+        assert!(!none.detected && none.delay_s.is_nan());
+    }
+
+    #[test]
+    fn one_real_run_is_detected() {
+        let case = Case {
+            seed: 3,
+            scenario: "closed-loop-sine".into(),
+            kind: "ext1".into(),
+            size_lpm: 0.5,
+            onset_s: 15.0,
+            ramp_s: 0.0,
+            seconds: 22.0,
+        };
+        let r = run_case(&case).unwrap();
+        eprintln!("{r:?}");
+        assert!(r.outcomes[0].detected && r.outcomes[0].isolated, "{r:?}");
+    }
+}
