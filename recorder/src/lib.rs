@@ -1,1 +1,127 @@
-//! recorder (placeholder).
+//! The leakwatch log: one MCAP file per run with a channel per topic
+//! (`frames`, `estimates`, `events`, `health`, `stats`) plus `gaps`, JSON
+//! messages described by JSON Schemas, so Foxglove and the official Python
+//! `mcap` reader open it without leakwatch.
+//!
+//! - [`LogWriter`]: a writer thread fed through a bounded channel; chunked,
+//!   zstd-compressed, flushed at least once a second, so a killed recorder
+//!   leaves a file readable up to its last complete chunk.
+//! - [`LogReader`]: every channel back into the frame types, bit for bit;
+//!   a truncated file yields everything up to its last complete chunk.
+//! - [`export_csv`]: one CSV per channel, and the frames again in the
+//!   dataset format (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak`) that
+//!   `leakwatch replay` reads.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+
+mod export;
+mod reader;
+pub mod record;
+mod writer;
+
+pub use export::export_csv;
+pub use reader::{Log, LogReader};
+pub use record::Record;
+pub use writer::{LogWriter, WriterOptions, WriterSummary};
+
+/// The MCAP channel of [`GapRecord`]s.
+pub const GAPS_CHANNEL: &str = "gaps";
+/// The schema name of [`GapRecord`]s.
+pub const GAP_SCHEMA_NAME: &str = "leakwatch.Gap.v1";
+
+/// One item for the log, with the recorder's receive time
+/// (`CLOCK_MONOTONIC`, ns) where it has one.
+#[derive(Debug, Clone, Copy)]
+pub enum Entry {
+    /// A sensor frame and its receive time, ns.
+    Frame(SensorFrame, u64),
+    /// An estimate and its receive time, ns.
+    Estimate(EstimateFrame, u64),
+    /// A leak event and its receive time, ns.
+    Event(LeakEventFrame, u64),
+    /// A health frame and its receive time, ns.
+    Health(HealthFrame, u64),
+    /// A stats frame and its receive time, ns.
+    Stats(StatsFrame, u64),
+    /// Frames missing from a sequence.
+    Gap(GapRecord),
+}
+
+impl Entry {
+    /// When the recorder received it, `CLOCK_MONOTONIC` ns.
+    pub fn recv_mono_ns(&self) -> u64 {
+        match self {
+            Entry::Frame(_, t)
+            | Entry::Estimate(_, t)
+            | Entry::Event(_, t)
+            | Entry::Health(_, t)
+            | Entry::Stats(_, t) => *t,
+            Entry::Gap(g) => g.recv_mono_ns,
+        }
+    }
+}
+
+/// Frames missing from one topic's sequence, as the recorder saw it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GapRecord {
+    /// The topic.
+    pub topic: Topic,
+    /// The sequence number that was expected.
+    pub expected_seq: u64,
+    /// The sequence number that came.
+    pub got_seq: u64,
+    /// Frames missing (`got_seq − expected_seq`).
+    pub missing: u64,
+    /// When the frame after the gap was received, `CLOCK_MONOTONIC` ns.
+    pub recv_mono_ns: u64,
+}
+
+/// An error of the log, naming the file.
+#[derive(Debug)]
+pub enum RecorderError {
+    /// An I/O error on this file.
+    Io(PathBuf, std::io::Error),
+    /// The MCAP library refused this file.
+    Mcap(PathBuf, String),
+    /// A message in this file, on this channel, could not be decoded.
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// The channel topic.
+        channel: String,
+        /// The MCAP message sequence number.
+        sequence: u32,
+        /// What was wrong.
+        problem: String,
+    },
+    /// The writer thread has stopped (its error comes from `finish`).
+    WriterStopped,
+    /// The writer thread could not start or failed.
+    Thread(String),
+}
+
+impl fmt::Display for RecorderError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RecorderError::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            RecorderError::Mcap(p, e) => write!(f, "{}: MCAP: {e}", p.display()),
+            RecorderError::Decode {
+                path,
+                channel,
+                sequence,
+                problem,
+            } => write!(
+                f,
+                "{}: channel {channel}, message {sequence}: {problem}",
+                path.display()
+            ),
+            RecorderError::WriterStopped => write!(f, "the log writer has stopped"),
+            RecorderError::Thread(e) => write!(f, "log writer thread: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for RecorderError {}

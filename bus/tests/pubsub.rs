@@ -1,0 +1,178 @@
+//! Real iceoryx2 services, two threads of one process, each with its own node.
+
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use bus::{run_stage, Bus, BusConfig, StageOptions, StopReason, WaitMode};
+use frames::{sensor_flags, EstimateFrame, SensorFrame, StatsFrame};
+
+fn config(tag: &str) -> BusConfig {
+    BusConfig {
+        iox_prefix: Some(format!("t{}_{tag}", std::process::id())),
+        ..BusConfig::default()
+    }
+}
+
+fn frame(seq: u64) -> SensorFrame {
+    SensorFrame {
+        seq,
+        acq_mono_ns: bus::monotonic_ns(),
+        t_s: seq as f64 * 1e-3,
+        p1_pa: 1e6 + seq as f64,
+        ..SensorFrame::default()
+    }
+}
+
+/// Publishes `n` frames at 1 kHz (paced) after a subscriber appears; the last one ends the stream.
+fn publish(cfg: BusConfig, n: u64, skip: &'static [u64]) -> std::thread::JoinHandle<()> {
+    std::thread::spawn(move || {
+        let bus = Bus::open("rig1", cfg).unwrap();
+        let mut tx = bus.publisher::<SensorFrame>().unwrap();
+        assert!(tx.wait_for_subscribers(1, Duration::from_secs(5), &AtomicBool::new(false)));
+        let mut pacer = bus::Pacer::new(1_000_000, 0);
+        for seq in 0..n {
+            pacer.wait();
+            if skip.contains(&seq) {
+                continue;
+            }
+            let mut f = frame(seq);
+            if seq + 1 == n {
+                f.flags |= sensor_flags::END_OF_STREAM;
+            }
+            tx.send(&f).unwrap();
+        }
+        // stay alive until the subscriber had its chance to read everything
+        std::thread::sleep(Duration::from_millis(200));
+    })
+}
+
+fn receive_all(mode: WaitMode, tag: &str, skip: &'static [u64]) -> (Vec<SensorFrame>, u64, Vec<u64>) {
+    let cfg = config(tag);
+    let bus = Bus::open("rig1", cfg.clone()).unwrap();
+    let mut rx = bus.subscriber::<SensorFrame>(mode).unwrap();
+    let publisher = publish(cfg, 400, skip);
+    let stop = AtomicBool::new(false);
+    let mut got = Vec::new();
+    let mut lat = Vec::new();
+    while let Some(r) = rx.wait(Duration::from_secs(5), &stop).unwrap() {
+        lat.push(r.recv_mono_ns - r.acq_mono_ns);
+        got.push(r.frame);
+        if r.flags & sensor_flags::END_OF_STREAM != 0 {
+            break;
+        }
+    }
+    publisher.join().unwrap();
+    let gaps = rx.seq_gaps();
+    drop((rx, bus));
+    config(tag).remove_isolated_files().unwrap();
+    lat.sort_unstable();
+    (got, gaps, lat)
+}
+
+#[test]
+fn round_trip_in_every_wait_mode() {
+    for (i, mode) in [WaitMode::Event, WaitMode::LOW_LATENCY, WaitMode::BusyPoll]
+        .into_iter()
+        .enumerate()
+    {
+        let (got, gaps, lat) = receive_all(mode, &format!("rt{i}"), &[]);
+        assert_eq!(got.len(), 400, "{mode:?}");
+        assert_eq!(gaps, 0);
+        assert!(got
+            .iter()
+            .enumerate()
+            .all(|(k, f)| f.seq == k as u64 && f.p1_pa == 1e6 + k as f64));
+        eprintln!(
+            "{mode:?}: one hop p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
+            lat[lat.len() / 2] as f64 / 1e3,
+            lat[lat.len() * 99 / 100] as f64 / 1e3,
+            lat[lat.len() - 1] as f64 / 1e3
+        );
+    }
+}
+
+#[test]
+fn sequence_gaps_are_counted() {
+    let (got, gaps, _) = receive_all(WaitMode::Event, "gaps", &[10, 11, 12, 100]);
+    assert_eq!(got.len(), 396);
+    assert_eq!(gaps, 4);
+}
+
+#[test]
+fn run_stage_passes_frames_and_the_end_of_stream() {
+    let cfg = config("stage");
+    let bus = Bus::open("rig1", cfg.clone()).unwrap();
+    let mut est_rx = bus.subscriber::<EstimateFrame>(WaitMode::Event).unwrap();
+    let mut stats_rx = bus.subscriber::<StatsFrame>(WaitMode::Event).unwrap();
+    let stage_cfg = cfg.clone();
+    let stage = std::thread::spawn(move || {
+        let bus = Bus::open("rig1", stage_cfg).unwrap();
+        let mut opts = StageOptions::new(frames::stage::ESTIMATOR, WaitMode::Event);
+        opts.exit_on_end_of_stream = true;
+        opts.stats_period = Duration::from_millis(100);
+        run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, &AtomicBool::new(false), |input, out| {
+            out.seq = input.seq;
+            out.acq_mono_ns = input.acq_mono_ns;
+            out.est_recv_mono_ns = input.recv_mono_ns;
+            out.t_s = input.t_s;
+            out.state[1] = input.p1_pa;
+            input.seq % 2 == 0 || input.is_last()
+        })
+        .unwrap()
+    });
+    // the estimate subscriber exists; wait until the stage subscribed to frames too
+    let publisher = {
+        let cfg = cfg.clone();
+        std::thread::spawn(move || {
+            let bus = Bus::open("rig1", cfg).unwrap();
+            let tx = bus.publisher::<SensorFrame>().unwrap();
+            assert!(tx.wait_for_subscribers(1, Duration::from_secs(5), &AtomicBool::new(false)));
+            drop(tx);
+        })
+    };
+    publisher.join().unwrap();
+    let publisher = publish(cfg, 301, &[]);
+    let stop = AtomicBool::new(false);
+    let mut got = Vec::new();
+    let mut stats = Vec::new();
+    // read the stats while their publisher lives: a subscriber connects to a
+    // publisher only while both exist
+    while let Some(r) = est_rx.wait(Duration::from_secs(5), &stop).unwrap() {
+        got.push(r.frame);
+        while let Some(s) = stats_rx.try_receive().unwrap() {
+            stats.push(s.frame);
+        }
+        if r.flags & frames::estimate_flags::END_OF_STREAM != 0 {
+            break;
+        }
+    }
+    while let Some(s) = stats_rx.wait(Duration::from_millis(300), &stop).unwrap() {
+        stats.push(s.frame);
+    }
+    publisher.join().unwrap();
+    let report = stage.join().unwrap();
+    assert_eq!(report.stopped_by, StopReason::EndOfStream);
+    assert_eq!(report.frames_in, 301);
+    assert_eq!(report.frames_out, 151);
+    assert_eq!(got.len(), 151);
+    assert!(got
+        .iter()
+        .all(|e| e.seq % 2 == 0 && e.state[1] == 1e6 + e.seq as f64));
+    assert!(!stats.is_empty());
+    let last = stats.last().unwrap();
+    assert_eq!(last.stage, frames::stage::ESTIMATOR);
+    assert_eq!(last.frames_in, 301);
+    assert!(last.rss_bytes > 0);
+    eprintln!("{report}");
+    drop((est_rx, stats_rx, bus));
+    config("stage").remove_isolated_files().unwrap();
+}
+
+trait Last {
+    fn is_last(&self) -> bool;
+}
+impl Last for SensorFrame {
+    fn is_last(&self) -> bool {
+        self.flags & sensor_flags::END_OF_STREAM != 0
+    }
+}

@@ -1,0 +1,82 @@
+//! CSV export of a log.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use model::Sample;
+
+use crate::record::Record;
+use crate::{GapRecord, Log, RecorderError};
+
+fn write_channel<R: Record>(dir: &Path, name: &str, items: &[R]) -> Result<PathBuf, RecorderError> {
+    let path = dir.join(format!("{name}.csv"));
+    let io = |e| RecorderError::Io(path.clone(), e);
+    let mut w = BufWriter::new(File::create(&path).map_err(io)?);
+    writeln!(w, "{}", R::csv_header().join(",")).map_err(io)?;
+    let mut line = String::with_capacity(1024);
+    for item in items {
+        line.clear();
+        item.csv_row(&mut line);
+        line.push('\n');
+        w.write_all(line.as_bytes()).map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    Ok(path)
+}
+
+fn write_gaps(dir: &Path, gaps: &[GapRecord]) -> Result<PathBuf, RecorderError> {
+    let path = dir.join("gaps.csv");
+    let io = |e| RecorderError::Io(path.clone(), e);
+    let mut w = BufWriter::new(File::create(&path).map_err(io)?);
+    writeln!(w, "topic,expected_seq,got_seq,missing,recv_mono_ns").map_err(io)?;
+    for g in gaps {
+        writeln!(
+            w,
+            "{},{},{},{},{}",
+            g.topic, g.expected_seq, g.got_seq, g.missing, g.recv_mono_ns
+        )
+        .map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    Ok(path)
+}
+
+/// Writes `frames.csv`, `estimates.csv`, `events.csv`, `health.csv`,
+/// `stats.csv` and `gaps.csv` (every field; arrays as `name_0..name_N`;
+/// floats in shortest round-trip form, NaN as `NaN`) into `dir` (created if
+/// needed), and `dataset.csv`: the frames in the dataset format
+/// `t,u,x,p1,p2,x_sp,f_load,ref,q_leak` that `leakwatch replay` reads.
+/// Returns the files written.
+pub fn export_csv(log: &Log, dir: &Path) -> Result<Vec<PathBuf>, RecorderError> {
+    std::fs::create_dir_all(dir).map_err(|e| RecorderError::Io(dir.to_path_buf(), e))?;
+    let mut out = vec![
+        write_channel(dir, "frames", &log.frames)?,
+        write_channel(dir, "estimates", &log.estimates)?,
+        write_channel(dir, "events", &log.events)?,
+        write_channel(dir, "health", &log.health)?,
+        write_channel(dir, "stats", &log.stats)?,
+        write_gaps(dir, &log.gaps)?,
+    ];
+    let path = dir.join("dataset.csv");
+    let io = |e| RecorderError::Io(path.clone(), e);
+    let mut w = BufWriter::new(File::create(&path).map_err(io)?);
+    dataset::write_header(&mut w).map_err(io)?;
+    for f in &log.frames {
+        let s = Sample {
+            t_s: f.t_s,
+            u_v: f.u_v,
+            x_m: f.x_m,
+            p1_pa: f.p1_pa,
+            p2_pa: f.p2_pa,
+            x_sp_m: f.x_sp_m,
+            f_load_n: f.f_load_n,
+            ref_m: f.ref_m,
+            q_leak_lpm: f.q_leak_lpm,
+        };
+        dataset::write_row(&mut w, &s).map_err(io)?;
+    }
+    w.flush().map_err(io)?;
+    out.push(path);
+    Ok(out)
+}

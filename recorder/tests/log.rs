@@ -1,0 +1,253 @@
+//! The log file on its own: round trip, truncation, CSV export.
+
+use std::path::PathBuf;
+
+use frames::{detector_bytes, EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use recorder::{export_csv, Entry, GapRecord, LogReader, LogWriter, WriterOptions};
+
+fn dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("recorder-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn sensor(i: u64) -> SensorFrame {
+    SensorFrame {
+        seq: i,
+        acq_mono_ns: 1_000_000_000 + i * 1_000_000,
+        t_s: i as f64 * 1e-3,
+        u_v: (i as f64 * 0.37).sin() * 10.0,
+        x_m: 0.1 + 1e-17 * i as f64,
+        p1_pa: 6.9e6 + std::f64::consts::PI * i as f64,
+        p2_pa: 5e-324, // the smallest subnormal
+        x_sp_m: f64::NAN,
+        f_load_n: if i & 1 == 0 {
+            f64::INFINITY
+        } else {
+            f64::NEG_INFINITY
+        },
+        ref_m: -0.0,
+        q_leak_lpm: 0.1 + 0.2,
+        flags: (i % 4) as u32,
+        _pad: 0,
+    }
+}
+
+fn estimate(i: u64) -> EstimateFrame {
+    let mut e = EstimateFrame {
+        seq: i,
+        acq_mono_ns: u64::MAX - i,
+        est_recv_mono_ns: 3,
+        est_done_mono_ns: 4,
+        t_s: 1.0 / 3.0,
+        n_states: 7,
+        flags: 5,
+        ..EstimateFrame::default()
+    };
+    for k in 0..7 {
+        e.state[k] = (k as f64 + i as f64).exp();
+        e.state_sigma[k] = 1.0 / (k as f64 + 1.0);
+    }
+    e.residual = [1e-300, -1e300, 0.5];
+    e.innovation = [f64::MIN_POSITIVE, f64::MAX, f64::EPSILON];
+    e.mae_pa = [12.5, 13.75];
+    e.nis = 2.0f64.sqrt();
+    e
+}
+
+fn bits<T: Copy>(v: &T) -> Vec<u8> {
+    // SAFETY: the frames are repr(C) with explicit padding only: every byte is initialised
+    unsafe { std::slice::from_raw_parts(v as *const T as *const u8, std::mem::size_of::<T>()).to_vec() }
+}
+
+fn write_sample_log(path: &std::path::Path, n: u64, options: WriterOptions) -> Vec<Entry> {
+    let mut entries = Vec::new();
+    for i in 0..n {
+        entries.push(Entry::Frame(sensor(i), 10 + i));
+        entries.push(Entry::Estimate(estimate(i), 11 + i));
+        if i % 100 == 0 {
+            entries.push(Entry::Health(
+                HealthFrame {
+                    seq: i / 100,
+                    mono_ns: i,
+                    t_s: i as f64 * 1e-3,
+                    status: 1,
+                    active_events: 0,
+                    leak_flow_lpm: [0.1, f64::NAN, -0.2],
+                    leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+                },
+                12 + i,
+            ));
+        }
+    }
+    entries.push(Entry::Event(
+        LeakEventFrame {
+            seq: 7,
+            acq_mono_ns: 8,
+            cls_done_mono_ns: 9,
+            event_id: 1,
+            kind: frames::event_kind::EXT1,
+            phase: frames::event_phase::RAISED,
+            t_detect_s: 1.25,
+            t_onset_s: 1.0,
+            size_lpm: 0.25,
+            size_lpm_sigma: 0.03,
+            confidence: 0.999,
+            detector: detector_bytes("sprt"),
+        },
+        20,
+    ));
+    entries.push(Entry::Stats(
+        StatsFrame {
+            mono_ns: 1,
+            pid: 42,
+            stage: 1,
+            frames_in: 2,
+            frames_out: 3,
+            seq_gaps: 4,
+            deadline_misses: 5,
+            proc_ns_p50: 6,
+            proc_ns_p99: 7,
+            proc_ns_max: 8,
+            lat_ns_p50: 9,
+            lat_ns_p99: 10,
+            lat_ns_max: 11,
+            cpu_fraction: 0.031,
+            rss_bytes: 12,
+        },
+        21,
+    ));
+    entries.push(Entry::Gap(GapRecord {
+        topic: Topic::Estimates,
+        expected_seq: 5,
+        got_seq: 9,
+        missing: 4,
+        recv_mono_ns: 22,
+    }));
+    let mut w = LogWriter::create(path, options).unwrap();
+    for e in &entries {
+        assert!(w.write(*e).unwrap());
+    }
+    let summary = w.finish().unwrap();
+    assert_eq!(summary.messages["frames"], n);
+    entries
+}
+
+#[test]
+fn round_trip_is_bit_identical() {
+    let d = dir("rt");
+    let path = d.join("rt.mcap");
+    let entries = write_sample_log(&path, 500, WriterOptions::default());
+    let log = LogReader::open(&path).unwrap().read().unwrap();
+    assert!(log.truncated.is_none(), "{:?}", log.truncated);
+    let (mut f, mut e, mut h, mut ev, mut s, mut g) = (0, 0, 0, 0, 0, 0);
+    for entry in &entries {
+        match entry {
+            Entry::Frame(x, _) => {
+                assert_eq!(bits(x), bits(&log.frames[f]), "frame {f}");
+                f += 1;
+            }
+            Entry::Estimate(x, _) => {
+                assert_eq!(bits(x), bits(&log.estimates[e]), "estimate {e}");
+                e += 1;
+            }
+            Entry::Health(x, _) => {
+                assert_eq!(bits(x), bits(&log.health[h]));
+                h += 1;
+            }
+            Entry::Event(x, _) => {
+                assert_eq!(bits(x), bits(&log.events[ev]));
+                ev += 1;
+            }
+            Entry::Stats(x, _) => {
+                assert_eq!(bits(x), bits(&log.stats[s]));
+                s += 1;
+            }
+            Entry::Gap(x) => {
+                assert_eq!(*x, log.gaps[g]);
+                g += 1;
+            }
+        }
+    }
+    assert_eq!(
+        (f, e, h, ev, s, g),
+        (
+            log.frames.len(),
+            log.estimates.len(),
+            log.health.len(),
+            log.events.len(),
+            log.stats.len(),
+            log.gaps.len()
+        )
+    );
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn a_truncated_file_reads_up_to_its_last_complete_chunk() {
+    let d = dir("trunc");
+    let path = d.join("full.mcap");
+    let options = WriterOptions {
+        chunk_size: 32 * 1024,
+        ..WriterOptions::default()
+    };
+    write_sample_log(&path, 3000, options);
+    let bytes = std::fs::read(&path).unwrap();
+    let full = LogReader::open(&path).unwrap().read().unwrap();
+    let mut seen_counts = Vec::new();
+    for frac in [0.3, 0.55, 0.8] {
+        let cut = (bytes.len() as f64 * frac) as usize;
+        let p = d.join(format!("cut{cut}.mcap"));
+        std::fs::write(&p, &bytes[..cut]).unwrap();
+        let log = LogReader::open(&p).unwrap().read().unwrap();
+        assert!(log.truncated.is_some());
+        assert!(!log.frames.is_empty() && log.frames.len() < full.frames.len());
+        // a prefix of the full log, bit for bit
+        for (a, b) in log.frames.iter().zip(&full.frames) {
+            assert_eq!(bits(a), bits(b));
+        }
+        seen_counts.push(log.frames.len());
+    }
+    assert!(seen_counts.windows(2).all(|w| w[0] < w[1]), "{seen_counts:?}");
+    // not an MCAP file at all: an error naming the file
+    let p = d.join("junk.mcap");
+    std::fs::write(&p, b"hello, this is not a log").unwrap();
+    let e = LogReader::open(&p).unwrap().read().unwrap_err().to_string();
+    assert!(e.contains("junk.mcap"), "{e}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn csv_export_round_trips_and_the_dataset_file_reads_back() {
+    let d = dir("csv");
+    let path = d.join("x.mcap");
+    write_sample_log(&path, 50, WriterOptions::default());
+    let log = LogReader::open(&path).unwrap().read().unwrap();
+    let out = d.join("csv");
+    let files = export_csv(&log, &out).unwrap();
+    assert_eq!(files.len(), 7);
+    let frames_csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = frames_csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "seq,acq_mono_ns,t_s,u_v,x_m,p1_pa,p2_pa,x_sp_m,f_load_n,ref_m,q_leak_lpm,flags"
+    );
+    let first: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(first[6], "5e-324");
+    assert_eq!(first[7], "NaN");
+    let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    assert!(est.lines().next().unwrap().contains("state_8,state_sigma_0"));
+    // every float of the frames table parses back to the same bits
+    for (line, f) in frames_csv.lines().skip(1).zip(&log.frames) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[5].parse::<f64>().unwrap().to_bits(), f.p1_pa.to_bits());
+        assert_eq!(cells[3].parse::<f64>().unwrap().to_bits(), f.u_v.to_bits());
+    }
+    let dataset_csv = std::fs::read_to_string(out.join("dataset.csv")).unwrap();
+    assert_eq!(
+        dataset_csv.lines().next().unwrap(),
+        "t,u,x,p1,p2,x_sp,f_load,ref,q_leak"
+    );
+    assert_eq!(dataset_csv.lines().count(), 51);
+    std::fs::remove_dir_all(&d).ok();
+}
