@@ -19,7 +19,12 @@ use serde::Serialize;
 /// Leak sizes of the suite, L/min at the nominal drop.
 pub const SIZES_LPM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.5, 1.0];
 /// Scenarios drawn by the suite.
-pub const SCENARIOS: [&str; 4] = ["open-loop-sine", "closed-loop-sine", "closed-loop-random", "loaded-sine"];
+pub const SCENARIOS: [&str; 4] = [
+    "open-loop-sine",
+    "closed-loop-sine",
+    "closed-loop-random",
+    "loaded-sine",
+];
 /// The two detectors, as named in events.
 pub const DETECTORS: [&str; 2] = ["leak-size", "thesis-mae"];
 /// Seconds simulated after the onset of a leak.
@@ -53,7 +58,7 @@ pub struct Outcome {
     pub detector: String,
     /// A leak event was raised at or after the onset.
     pub detected: bool,
-    /// The first such event named the right kind.
+    /// That event (after its updates, which may re-isolate it) named the right kind.
     pub isolated: bool,
     /// Detection delay from onset, s (NaN if not detected).
     pub delay_s: f64,
@@ -85,7 +90,7 @@ pub struct Cell {
     pub runs: usize,
     /// Fraction of runs with a detection.
     pub p_detect: f64,
-    /// Fraction of runs whose first detection named the right kind.
+    /// Fraction of runs whose detection (after its updates) named the right kind.
     pub p_isolate: f64,
     /// Median delay, s.
     pub delay_median_s: f64,
@@ -143,7 +148,11 @@ pub fn cases(runs: usize, hours: f64, seed: u64) -> Vec<Case> {
             for _ in 0..runs {
                 let scenario = SCENARIOS[(rng.uniform() * SCENARIOS.len() as f64) as usize % SCENARIOS.len()];
                 let onset = rng.uniform_in(15.0, 25.0);
-                let ramp = if rng.uniform() < 0.5 { 0.0 } else { rng.uniform_in(0.5, 5.0) };
+                let ramp = if rng.uniform() < 0.5 {
+                    0.0
+                } else {
+                    rng.uniform_in(0.5, 5.0)
+                };
                 out.push(Case {
                     seed: rng.next_u64(),
                     scenario: scenario.into(),
@@ -177,13 +186,32 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
     let rig = draw_rig(&mut rng);
     let mut faults = FaultSchedule::default();
     if let Some(path) = LeakPath::from_name(&case.kind) {
-        let spec = format!("{}:{}lpm@{}s,ramp={}", path.name(), case.size_lpm, case.onset_s, case.ramp_s);
-        faults.faults.push(Fault::parse(&spec, &rig).map_err(|e| e.to_string())?);
+        let spec = format!(
+            "{}:{}lpm@{}s,ramp={}",
+            path.name(),
+            case.size_lpm,
+            case.onset_s,
+            case.ramp_s
+        );
+        faults
+            .faults
+            .push(Fault::parse(&spec, &rig).map_err(|e| e.to_string())?);
     }
     let scenario = Scenario::by_name(&case.scenario, case.seed, case.seconds).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(rig, SensorParams::default(), SimSettings::default(), scenario, faults, case.seed)
-        .map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())?;
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        faults,
+        case.seed,
+    )
+    .map_err(|e| e.to_string())?;
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )?;
     let mut cls = Classifier::new(ClassifierConfig::default())?;
     let mut events: Vec<LeakEvent> = Vec::new();
     let n = (case.seconds / sim.sample_period_s()).round() as u64;
@@ -197,10 +225,17 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
         });
     }
     if std::env::var("LEAKWATCH_DEBUG_EVENTS").is_ok() {
-        eprintln!("{} events; first {:?}", events.len(), events.iter().take(3).collect::<Vec<_>>());
+        eprintln!(
+            "{} events; first {:?}",
+            events.len(),
+            events.iter().take(3).collect::<Vec<_>>()
+        );
     }
     let outcomes = DETECTORS.iter().map(|d| score(case, d, &events)).collect();
-    Ok(RunResult { case: case.clone(), outcomes })
+    Ok(RunResult {
+        case: case.clone(),
+        outcomes,
+    })
 }
 
 fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
@@ -213,21 +248,31 @@ fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
     let first = if healthy {
         None
     } else {
-        mine.iter().find(|e| e.phase == Phase::Raised && e.t_detect_s >= case.onset_s).copied()
+        mine.iter()
+            .find(|e| e.phase == Phase::Raised && e.t_detect_s >= case.onset_s)
+            .copied()
     };
     let (detected, isolated, delay, size) = match first {
         Some(ev) => {
-            let size = mine
+            // The event's final word (updates may re-isolate and refine the size).
+            let last = mine
                 .iter()
                 .rev()
-                .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared)
-                .map(|e| e.size_lpm)
-                .unwrap_or(f64::NAN);
-            (true, ev.kind.name() == case.kind, ev.t_detect_s - case.onset_s, size)
+                .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared);
+            let size = last.map(|e| e.size_lpm).unwrap_or(f64::NAN);
+            let kind = last.map(|e| e.kind).unwrap_or(ev.kind);
+            (true, kind.name() == case.kind, ev.t_detect_s - case.onset_s, size)
         }
         None => (false, false, f64::NAN, f64::NAN),
     };
-    Outcome { detector: detector.into(), detected, isolated, delay_s: delay, size_lpm: size, false_alarms }
+    Outcome {
+        detector: detector.into(),
+        detected,
+        isolated,
+        delay_s: delay,
+        size_lpm: size,
+        false_alarms,
+    }
 }
 
 fn quantile(v: &mut [f64], p: f64) -> f64 {
@@ -259,7 +304,12 @@ pub fn run_suite(cases: &[Case], threads: usize, progress: impl Fn(usize, usize)
             });
         }
     });
-    let runs: Vec<RunResult> = results.into_inner().unwrap_or_default().into_iter().flatten().collect();
+    let runs: Vec<RunResult> = results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+        .collect();
     summarise(runs, t0.elapsed().as_secs_f64())
 }
 
@@ -269,14 +319,20 @@ pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
     for (di, det) in DETECTORS.iter().enumerate() {
         for kind in ["ext1", "ext2", "int"] {
             for size in SIZES_LPM {
-                let these: Vec<&RunResult> =
-                    runs.iter().filter(|r| r.case.kind == kind && r.case.size_lpm == size).collect();
+                let these: Vec<&RunResult> = runs
+                    .iter()
+                    .filter(|r| r.case.kind == kind && r.case.size_lpm == size)
+                    .collect();
                 if these.is_empty() {
                     continue;
                 }
                 let n = these.len();
                 let det_runs: Vec<&Outcome> = these.iter().map(|r| &r.outcomes[di]).collect();
-                let mut delays: Vec<f64> = det_runs.iter().filter(|o| o.detected).map(|o| o.delay_s).collect();
+                let mut delays: Vec<f64> = det_runs
+                    .iter()
+                    .filter(|o| o.detected)
+                    .map(|o| o.delay_s)
+                    .collect();
                 let mut errs: Vec<f64> = det_runs
                     .iter()
                     .filter(|o| o.isolated && o.size_lpm.is_finite())
@@ -304,16 +360,31 @@ pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
         .enumerate()
         .map(|(di, d)| {
             let n: u32 = healthy.iter().map(|r| r.outcomes[di].false_alarms).sum();
-            (d.to_string(), if hours > 0.0 { n as f64 / hours } else { f64::NAN })
+            (
+                d.to_string(),
+                if hours > 0.0 { n as f64 / hours } else { f64::NAN },
+            )
         })
         .collect();
-    SuiteResult { cells, healthy_hours: hours, false_alarms_per_hour, runs, wall_s }
+    SuiteResult {
+        cells,
+        healthy_hours: hours,
+        false_alarms_per_hour,
+        runs,
+        wall_s,
+    }
 }
 
 /// The suite's tables in Markdown: one per leak kind, both detectors side by side.
 pub fn markdown(r: &SuiteResult) -> String {
     let mut s = String::new();
-    let f = |v: f64, digits: usize| if v.is_finite() { format!("{v:.digits$}") } else { "–".into() };
+    let f = |v: f64, digits: usize| {
+        if v.is_finite() {
+            format!("{v:.digits$}")
+        } else {
+            "–".into()
+        }
+    };
     for kind in ["ext1", "ext2", "int"] {
         s.push_str(&format!("\n### {kind}\n\n"));
         s.push_str(
@@ -322,7 +393,11 @@ pub fn markdown(r: &SuiteResult) -> String {
         s.push_str("|---|---|---|---|---|---|---|---|---|\n");
         for size in SIZES_LPM {
             for det in DETECTORS {
-                if let Some(c) = r.cells.iter().find(|c| c.kind == kind && c.size_lpm == size && c.detector == det) {
+                if let Some(c) = r
+                    .cells
+                    .iter()
+                    .find(|c| c.kind == kind && c.size_lpm == size && c.detector == det)
+                {
                     s.push_str(&format!(
                         "| {size} | {det} | {} | {:.2} | {:.2} | {} | {} | {} | {} |\n",
                         c.runs,
@@ -330,14 +405,18 @@ pub fn markdown(r: &SuiteResult) -> String {
                         c.p_isolate,
                         f(c.delay_median_s, 2),
                         f(c.delay_p95_s, 2),
-                        f(c.size_error_median * 100.0, 0) + if c.size_error_median.is_finite() { " %" } else { "" },
+                        f(c.size_error_median * 100.0, 0)
+                            + if c.size_error_median.is_finite() { " %" } else { "" },
                         f(c.size_error_p95 * 100.0, 0) + if c.size_error_p95.is_finite() { " %" } else { "" },
                     ));
                 }
             }
         }
     }
-    s.push_str(&format!("\nHealthy runs: {:.2} simulated hours.\n\n| detector | false alarms per hour |\n|---|---|\n", r.healthy_hours));
+    s.push_str(&format!(
+        "\nHealthy runs: {:.2} simulated hours.\n\n| detector | false alarms per hour |\n|---|---|\n",
+        r.healthy_hours
+    ));
     for (d, fa) in &r.false_alarms_per_hour {
         s.push_str(&format!("| {d} | {} |\n", f(*fa, 3)));
     }
@@ -346,17 +425,26 @@ pub fn markdown(r: &SuiteResult) -> String {
 
 /// Plots of detection probability against leak size, both detectors, one panel per kind.
 pub fn probability_figure(r: &SuiteResult) -> plot::Figure {
-    let mut fig = plot::Figure::new("Detection probability against leak size", "leak size [L/min at p_s/2]");
+    let mut fig = plot::Figure::new(
+        "Detection probability against leak size",
+        "leak size [L/min at p_s/2]",
+    );
     for kind in ["ext1", "ext2", "int"] {
         let mut panel = plot::Panel::new(&format!("{kind}: P(detect) and P(isolate)"), "probability [-]");
         for det in DETECTORS {
-            let cells: Vec<&Cell> = r.cells.iter().filter(|c| c.kind == kind && c.detector == det).collect();
+            let cells: Vec<&Cell> = r
+                .cells
+                .iter()
+                .filter(|c| c.kind == kind && c.detector == det)
+                .collect();
             let x: Vec<f64> = cells.iter().map(|c| c.size_lpm).collect();
             let pd: Vec<f64> = cells.iter().map(|c| c.p_detect).collect();
             let pi: Vec<f64> = cells.iter().map(|c| c.p_isolate).collect();
             panel = panel
                 .with_series(plot::Series::line(&format!("{det} detect"), &x, &pd))
-                .with_series(plot::Series::line(&format!("{det} isolate"), &x, &pi).styled(plot::Style::Dashed));
+                .with_series(
+                    plot::Series::line(&format!("{det} isolate"), &x, &pi).styled(plot::Style::Dashed),
+                );
         }
         fig.panels.push(panel);
     }
@@ -378,7 +466,10 @@ mod tests {
         assert_eq!(c.iter().filter(|c| c.kind != "none").count(), 3 * 6 * 2);
         let healthy: f64 = c.iter().filter(|c| c.kind == "none").map(|c| c.seconds).sum();
         assert!(healthy >= 0.25 * 3600.0);
-        assert!(c.iter().filter(|c| c.kind != "none").all(|c| (15.0..=25.0).contains(&c.onset_s)));
+        assert!(c
+            .iter()
+            .filter(|c| c.kind != "none")
+            .all(|c| (15.0..=25.0).contains(&c.onset_s)));
         // Seeded: the same suite twice.
         assert_eq!(format!("{:?}", cases(2, 0.25, 1)), format!("{c:?}"));
     }

@@ -48,7 +48,14 @@ pub fn recorded_samples(seconds: f64) -> Vec<Sample> {
         Ok(s) => s,
         Err(_) => return Vec::new(),
     };
-    match Simulator::new(rig, SensorParams::default(), SimSettings::default(), sc, faults, 1) {
+    match Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        faults,
+        1,
+    ) {
         Ok(mut sim) => sim.run(seconds),
         Err(_) => Vec::new(),
     }
@@ -77,7 +84,12 @@ pub fn step_time(name: &str, tuning: &Tuning, samples: &[Sample], min_steps: u64
     std::hint::black_box(sink);
     let mean = blocks.iter().sum::<f64>() / blocks.len().max(1) as f64;
     blocks.sort_by(f64::total_cmp);
-    let q = |p: f64| blocks.get(((blocks.len() as f64 - 1.0) * p).round() as usize).copied().unwrap_or(f64::NAN);
+    let q = |p: f64| {
+        blocks
+            .get(((blocks.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
     StepTime {
         filter: name.to_string(),
         states: tuning.states,
@@ -94,7 +106,11 @@ pub fn chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
     let mut events = 0usize;
     let t0 = Instant::now();
     for _ in 0..repeat.max(1) {
-        let mut stage = match EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis()) {
+        let mut stage = match EstimatorStage::new(
+            ActuatorParams::default(),
+            Tuning::sensor_derived(),
+            Tuning::thesis(),
+        ) {
             Ok(s) => s,
             Err(_) => break,
         };

@@ -135,6 +135,8 @@ pub struct ClassifierConfig {
     pub clear_s: f64,
     /// Relative change of the size that gives an `updated` event.
     pub update_relative: f64,
+    /// Time another kind must explain the data clearly better before an event is re-isolated, s.
+    pub reisolate_s: f64,
     /// Shortest time between two `updated` events of one leak, s.
     pub update_interval_s: f64,
     /// Thesis detector: threshold as a multiple of the largest healthy MAE.
@@ -161,6 +163,7 @@ impl Default for ClassifierConfig {
             confirm_s: 0.25,
             clear_s: 2.0,
             update_relative: 0.1,
+            reisolate_s: 0.5,
             update_interval_s: 1.0,
             mae_margin: 1.3,
             mae_confirm_s: 0.5,
@@ -183,6 +186,7 @@ impl ClassifierConfig {
             ("confirm_s", self.confirm_s),
             ("clear_s", self.clear_s),
             ("update_relative", self.update_relative),
+            ("reisolate_s", self.reisolate_s),
             ("update_interval_s", self.update_interval_s),
             ("mae_margin", self.mae_margin),
             ("mae_confirm_s", self.mae_confirm_s),
@@ -251,6 +255,8 @@ struct Active {
     last_size_lpm: f64,
     last_update_s: f64,
     below_since_s: Option<f64>,
+    /// Since when another kind has explained the data clearly better, s.
+    other_since_s: Option<(usize, f64)>,
 }
 
 /// leakwatch's detector: thresholds on the estimated leak sizes.
@@ -443,6 +449,7 @@ impl LeakSizeDetector {
                             last_size_lpm: rise[lead],
                             last_update_s: e.t_s,
                             below_since_s: None,
+                            other_since_s: None,
                         });
                         *out = Some(self.event(
                             kind,
@@ -458,9 +465,45 @@ impl LeakSizeDetector {
                 }
             }
             Some(mut a) => {
-                let k = EventKind::LEAKS.iter().position(|x| *x == a.kind).unwrap_or(0);
+                let mut k = EventKind::LEAKS.iter().position(|x| *x == a.kind).unwrap_or(0);
+                // Re-isolation: while the filter settles after an onset the three leak
+                // sizes trade places; when another kind explains the data clearly
+                // better for `reisolate_s`, the same event is updated with that kind.
+                if lead != k && best > 1.0 && best - score[k] > 1.0 {
+                    match a.other_since_s {
+                        Some((j, t0)) if j == lead => {
+                            if e.t_s - t0 >= self.cfg.reisolate_s {
+                                let from = a.kind;
+                                a.kind = EventKind::LEAKS[lead];
+                                a.other_since_s = None;
+                                a.below_since_s = None;
+                                a.last_size_lpm = rise[lead];
+                                a.last_update_s = e.t_s;
+                                k = lead;
+                                let mut ev = self.event(
+                                    a.kind,
+                                    Phase::Updated,
+                                    a.id,
+                                    e.t_s,
+                                    rise[k],
+                                    sigma_lpm[k],
+                                    best,
+                                    score[k],
+                                );
+                                ev.t_onset_s = a.t_onset_s;
+                                ev.detail = format!("re-isolated: was {}", from.name());
+                                self.active = Some(a);
+                                *out = Some(ev);
+                                return;
+                            }
+                        }
+                        _ => a.other_since_s = Some((lead, e.t_s)),
+                    }
+                } else {
+                    a.other_since_s = None;
+                }
                 let size = rise[k];
-                if size < 0.5 * self.threshold_lpm[k] || (lead != k && second > 1.0 && score[k] < 0.0) {
+                if size < 0.5 * self.threshold_lpm[k] {
                     let since = *a.below_since_s.get_or_insert(e.t_s);
                     if e.t_s - since >= self.cfg.clear_s {
                         self.active = None;
@@ -628,6 +671,7 @@ impl MaeDetector {
                             last_size_lpm: f64::NAN,
                             last_update_s: e.t_s,
                             below_since_s: None,
+                            other_since_s: None,
                         });
                         let margin = (ratio[0].max(ratio[1]) - 1.0).max(0.0);
                         *out = Some(LeakEvent {

@@ -126,10 +126,7 @@ pub struct Estimator {
 /// Typical magnitudes used to scale the filter's internal algebra.
 const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
 
-/// A position innovation beyond this, m (or beyond 20 of its standard deviations, if
-/// larger), held for [`DIVERGED_SAMPLES`] samples, resets the filter.
-pub const DIVERGED_POSITION_M: f64 = 0.02;
-/// Samples of persistent divergence before a reset.
+/// Samples of persistent divergence before a reset (see [`Tuning::divergence_reset_m`]).
 pub const DIVERGED_SAMPLES: u32 = 200;
 
 impl Estimator {
@@ -317,8 +314,9 @@ impl Estimator {
                 self.mae[k].mean()
             };
         }
-        let diverged_limit = DIVERGED_POSITION_M.max(20.0 * out.innovation_sigma[0]);
-        if use_channel[0] && out.innovation[0].abs() > diverged_limit {
+        let diverged_limit = self.tuning.divergence_reset_m.max(20.0 * out.innovation_sigma[0]);
+        if self.tuning.divergence_reset_m > 0.0 && use_channel[0] && out.innovation[0].abs() > diverged_limit
+        {
             self.diverged_samples += 1;
             if self.diverged_samples >= DIVERGED_SAMPLES {
                 self.started = false;

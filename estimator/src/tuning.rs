@@ -74,6 +74,10 @@ pub struct Tuning {
     pub mae_window_samples: usize,
     /// Longest run of missing samples bridged by prediction; longer gaps reset the filter.
     pub max_bridged_gap_samples: u32,
+    /// A position innovation beyond this, m (or beyond 20 of its standard deviations,
+    /// if larger), held for 200 samples, resets the filter; 0 = never (the thesis'
+    /// filter, whose R_x trusts the encoder to 1 cm only, drifts by centimetres).
+    pub divergence_reset_m: f64,
     /// Time after a (re)start during which estimates are flagged as converging, s.
     pub convergence_time_s: f64,
 }
@@ -115,6 +119,7 @@ impl Tuning {
             mae_window_samples: 4000,
             max_bridged_gap_samples: 50,
             convergence_time_s: 2.0,
+            divergence_reset_m: 0.0,
         }
     }
 
@@ -145,6 +150,7 @@ impl Tuning {
             p0_leak_m6_s2: 1e-10,
             q_bias_m2: 1e-20,
             p0_bias_m2: 1e-11,
+            divergence_reset_m: 0.02,
             ..Tuning::thesis()
         }
     }
@@ -195,6 +201,7 @@ impl Tuning {
             ("q_bias_m2", self.q_bias_m2),
             ("p0_bias_m2", self.p0_bias_m2),
             ("convergence_time_s", self.convergence_time_s),
+            ("divergence_reset_m", self.divergence_reset_m),
         ];
         for (name, v) in non_negative {
             if !(v.is_finite() && v >= 0.0) {

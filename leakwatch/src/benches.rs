@@ -28,7 +28,12 @@ pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
         speed::step_time("thesis filter, thesis tuning", &Tuning::thesis(), &samples, steps),
         speed::step_time("thesis filter, 6 states", &thesis6, &samples, steps),
         speed::step_time("leak filter without spool bias", &leak10, &samples, steps),
-        speed::step_time("leak filter (default)", &Tuning::sensor_derived(), &samples, steps),
+        speed::step_time(
+            "leak filter (default)",
+            &Tuning::sensor_derived(),
+            &samples,
+            steps,
+        ),
     ];
     println!("| filter | states | steps | median ns | p99 ns | mean ns |");
     println!("|---|---|---|---|---|---|");
@@ -40,7 +45,10 @@ pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
     }
     let tp = speed::chain_throughput(&samples, 5);
     println!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
-    println!("| {} | {} | {:.3} | {:.0} |", tp.chain, tp.samples, tp.wall_s, tp.samples_per_s);
+    println!(
+        "| {} | {} | {:.3} | {:.0} |",
+        tp.chain, tp.samples, tp.wall_s, tp.samples_per_s
+    );
     let json = serde_json::json!({ "step_time": rows, "throughput": tp });
     match out {
         Some(dir) => write_json(&dir, "ekf.json", &json),
@@ -52,15 +60,26 @@ pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
 }
 
 /// The detection suite.
-pub fn detection(runs: usize, hours: f64, seed: u64, threads: Option<usize>, out: &Path) -> Result<(), String> {
+pub fn detection(
+    runs: usize,
+    hours: f64,
+    seed: u64,
+    threads: Option<usize>,
+    out: &Path,
+) -> Result<(), String> {
     if runs == 0 && hours <= 0.0 {
         return Err("nothing to run: --runs and --hours are both zero".into());
     }
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
     let cases = detection::cases(runs, hours, seed);
     let simulated: f64 = cases.iter().map(|c| c.seconds).sum();
-    eprintln!("detection suite: {} runs, {:.1} simulated hours, {threads} threads", cases.len(), simulated / 3600.0);
+    eprintln!(
+        "detection suite: {} runs, {:.1} simulated hours, {threads} threads",
+        cases.len(),
+        simulated / 3600.0
+    );
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
     let r = detection::run_suite(&cases, threads, |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
@@ -69,7 +88,8 @@ pub fn detection(runs: usize, hours: f64, seed: u64, threads: Option<usize>, out
     println!("suite wall time {:.0} s", r.wall_s);
     std::fs::write(out.join("detection.md"), format!("# Detection suite\n{md}"))
         .map_err(|e| format!("cannot write detection.md: {e}"))?;
-    plot::render_png(&detection::probability_figure(&r), &out.join("detection.png")).map_err(|e| e.to_string())?;
+    plot::render_png(&detection::probability_figure(&r), &out.join("detection.png"))
+        .map_err(|e| e.to_string())?;
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     write_json(out, "detection.json", &json)
 }

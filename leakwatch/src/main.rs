@@ -277,9 +277,13 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Bench { which } => match which {
             BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out),
             BenchCommand::Ekf { steps, out } => benches::ekf(steps, out),
-            BenchCommand::Detection { runs, hours, seed, threads, out } => {
-                benches::detection(runs, hours, seed, threads, &out)
-            }
+            BenchCommand::Detection {
+                runs,
+                hours,
+                seed,
+                threads,
+                out,
+            } => benches::detection(runs, hours, seed, threads, &out),
         },
     }
 }

@@ -1,0 +1,91 @@
+//! Debug one detection-suite case: cargo run --release -p bench --example case -- SCENARIO KIND SIZE ONSET RAMP SEED
+use bench::detection::{draw_rig, Case};
+use classifier::{Classifier, ClassifierConfig};
+use estimator::{EstimatorStage, Tuning};
+use model::rng::Rng;
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let case = Case {
+        scenario: a[1].clone(),
+        kind: a[2].clone(),
+        size_lpm: a[3].parse().unwrap(),
+        onset_s: a[4].parse().unwrap(),
+        ramp_s: a[5].parse().unwrap(),
+        seed: a[6].parse().unwrap(),
+        seconds: 0.0,
+    };
+    let seconds = case.onset_s + case.ramp_s + 10.0;
+    let mut rng = Rng::new(case.seed);
+    let rig = draw_rig(&mut rng);
+    println!(
+        "rig bias {:e} beta {:e} fric ext {:?} ret {:?}",
+        rig.spool_null_bias_m,
+        rig.bulk_modulus_pa,
+        rig.friction.extend().static_n,
+        rig.friction.retract.map(|r| r.static_n)
+    );
+    let mut faults = FaultSchedule::default();
+    if case.kind != "none" {
+        faults.faults.push(
+            Fault::parse(
+                &format!(
+                    "{}:{}lpm@{}s,ramp={}",
+                    case.kind, case.size_lpm, case.onset_s, case.ramp_s
+                ),
+                &rig,
+            )
+            .unwrap(),
+        );
+    }
+    let sc = Scenario::by_name(&case.scenario, case.seed, seconds).unwrap();
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        faults,
+        case.seed,
+    )
+    .unwrap();
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
+    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    for k in 0..(seconds * 1000.0) as usize {
+        let s = sim.step();
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| {
+            println!(
+                "EVENT t {:.3} {} {:?} {} size {:.3}",
+                ev.t_detect_s,
+                ev.detector,
+                ev.phase,
+                ev.kind.name(),
+                ev.size_lpm
+            )
+        });
+        if k % 250 == 0 && s.t_s > case.onset_s - 3.0 {
+            let r = cls.leak_size.rise_lpm(&e.leak);
+            println!(
+                "t {:6.2} q {:7.3} {:7.3} {:7.3} rise {:7.3} {:7.3} {:7.3} thr {:?} bias {:.2e} leak {:.3}",
+                s.t_s,
+                e.leak.state[7] * 6e4,
+                e.leak.state[8] * 6e4,
+                e.leak.state[9] * 6e4,
+                r[0],
+                r[1],
+                r[2],
+                cls.leak_size
+                    .thresholds_lpm()
+                    .map(|v| (v * 1000.0).round() / 1000.0),
+                e.leak.state[10],
+                s.q_leak_lpm
+            );
+        }
+    }
+}
