@@ -121,7 +121,10 @@ pub struct LeakEvent {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ClassifierConfig {
-    /// Healthy warm-up after the filter has converged, used to learn thresholds, s.
+    /// Time after the filter has converged before learning starts (the leak and
+    /// bias estimates settle), s.
+    pub settle_s: f64,
+    /// Healthy warm-up after settling, used to learn thresholds, s.
     pub warmup_s: f64,
     /// Shortest warm-up that can give thresholds, s.
     pub min_warmup_s: f64,
@@ -156,7 +159,8 @@ pub struct ClassifierConfig {
 impl Default for ClassifierConfig {
     fn default() -> Self {
         ClassifierConfig {
-            warmup_s: 8.0,
+            settle_s: 4.0,
+            warmup_s: 6.0,
             min_warmup_s: 3.0,
             threshold_sigma: 5.0,
             min_size_lpm: 0.05,
@@ -179,6 +183,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         let fields = [
+            ("settle_s", self.settle_s),
             ("warmup_s", self.warmup_s),
             ("min_warmup_s", self.min_warmup_s),
             ("threshold_sigma", self.threshold_sigma),
@@ -240,6 +245,8 @@ impl Stats {
 enum Arming {
     /// Waiting for the filter to converge.
     Converging,
+    /// Converged since this time, s; waiting `settle_s` for the slow states to settle.
+    Settling(f64),
     /// Learning the healthy statistics since this time, s.
     Learning(f64),
     /// Thresholds learned.
@@ -289,6 +296,12 @@ fn arm_step(arming: &mut Arming, cfg: &ClassifierConfig, e: &Estimate) -> Option
     match *arming {
         Arming::Converging => {
             if e.flags & FLAG_CONVERGING == 0 && e.flags & FLAG_SKIPPED == 0 {
+                *arming = Arming::Settling(e.t_s);
+            }
+            None
+        }
+        Arming::Settling(t0) => {
+            if e.t_s - t0 >= cfg.settle_s {
                 *arming = Arming::Learning(e.t_s);
                 Some(false)
             } else {
@@ -837,7 +850,10 @@ impl Classifier {
                 t_s,
                 "",
                 &format!(
-                    "warm-up too short to learn thresholds: {seen:.2} s of converged healthy data, {} s needed",
+                    "warm-up too short to learn thresholds: {seen:.2} s of converged healthy data, {} s needed \
+                     ({} s to settle + {} s to learn)",
+                    self.cfg.settle_s + self.cfg.warmup_s,
+                    self.cfg.settle_s,
                     self.cfg.warmup_s
                 ),
             ));
