@@ -3,3 +3,4 @@
 
 pub mod detection;
 pub mod speed;
+pub mod thesis;
