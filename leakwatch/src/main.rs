@@ -105,7 +105,7 @@ enum Command {
     },
     /// Draw a run (a simulate or measured CSV) as a PNG.
     Plot {
-        /// Input CSV.
+        /// Input: a CSV in the dataset format, or a replay output directory (estimates.csv, events.json).
         input: PathBuf,
         /// Output PNG.
         #[arg(long)]
@@ -258,7 +258,11 @@ fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Plot { input, out } => {
-            plots::plot_run_csv(&input, &out)?;
+            if input.is_dir() {
+                plots::plot_replay(&input, &out)?;
+            } else {
+                plots::plot_run_csv(&input, &out)?;
+            }
             eprintln!("wrote {}", out.display());
             Ok(())
         }

@@ -40,3 +40,101 @@ pub fn plot_run_csv(input: &Path, out: &Path) -> Result<(), String> {
     fig.panels = panels;
     plot::render_png(&fig, out).map_err(|e| e.to_string())
 }
+
+/// Reads a CSV with a header into named columns (non-numbers become NaN).
+fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .ok_or_else(|| format!("{}: empty file", path.display()))?
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut cols = vec![Vec::new(); header.len()];
+    for line in lines {
+        for (i, cell) in line.split(',').enumerate().take(header.len()) {
+            cols[i].push(cell.trim().parse::<f64>().unwrap_or(f64::NAN));
+        }
+    }
+    Ok((header, cols))
+}
+
+/// Draws a replay directory (estimates.csv, events.json): measured against
+/// estimated position and pressures, the thesis filter's residuals and MAE, and
+/// the leak filter's leak sizes, with detections and onsets marked.
+pub fn plot_replay(dir: &Path, out: &Path) -> Result<(), String> {
+    let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
+    let col = |name: &str| -> Result<&Vec<f64>, String> {
+        header
+            .iter()
+            .position(|h| h == name)
+            .map(|i| &cols[i])
+            .ok_or_else(|| format!("{}: no column `{name}`", dir.join("estimates.csv").display()))
+    };
+    let scaled =
+        |name: &str, k: f64| -> Result<Vec<f64>, String> { Ok(col(name)?.iter().map(|v| v * k).collect()) };
+    let t = col("t")?.clone();
+    let mut markers = Vec::new();
+    if let Ok(text) = std::fs::read_to_string(dir.join("events.json")) {
+        if let Ok(events) = serde_json::from_str::<Vec<serde_json::Value>>(&text) {
+            for e in events.iter().filter(|e| e["phase"] == "raised") {
+                let kind = e["kind"].as_str().unwrap_or("?");
+                if !matches!(kind, "ext1" | "ext2" | "int") {
+                    continue;
+                }
+                let det = e["detector"].as_str().unwrap_or("");
+                if let Some(td) = e["t_detect_s"].as_f64() {
+                    markers.push(plot::Marker::Vertical {
+                        x: td,
+                        label: format!("{kind} detected ({det})"),
+                    });
+                }
+                if det == "leak-size" {
+                    if let Some(to) = e["t_onset_s"].as_f64() {
+                        markers.push(plot::Marker::Vertical {
+                            x: to,
+                            label: "estimated onset".into(),
+                        });
+                    }
+                }
+            }
+        }
+    }
+    let with_markers = |mut p: Panel| {
+        for m in &markers {
+            p = p.with_marker(m.clone());
+        }
+        p
+    };
+    let pos = Panel::new("Rod position: measured and estimated", "x [mm]")
+        .with_series(series("thesis filter", &t, scaled("th_x", 1e3)?))
+        .with_series(series("leak filter", &t, scaled("x", 1e3)?))
+        .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
+    let pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
+        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
+        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?))
+        .with_series(series("p1 thesis filter", &t, scaled("th_p1", 1e-6)?))
+        .with_series(series("p2 thesis filter", &t, scaled("th_p2", 1e-6)?));
+    let resid = Panel::new("Thesis filter: a-posteriori pressure residuals", "e [kPa]")
+        .with_series(series("e p1", &t, scaled("th_r_p1", 1e-3)?))
+        .with_series(series("e p2", &t, scaled("th_r_p2", 1e-3)?));
+    let mae = with_markers(
+        Panel::new(
+            "Thesis filter: MAE of the pressure residuals (4000 samples)",
+            "MAE [kPa]",
+        )
+        .with_series(series("MAE p1", &t, scaled("th_mae_p1", 1e-3)?))
+        .with_series(series("MAE p2", &t, scaled("th_mae_p2", 1e-3)?)),
+    );
+    let leaks = with_markers(
+        Panel::new("Leak filter: estimated leak sizes at nominal drop", "q [L/min]")
+            .with_series(series("q_e1", &t, scaled("q_e1_lpm", 1.0)?))
+            .with_series(series("q_e2", &t, scaled("q_e2_lpm", 1.0)?))
+            .with_series(series("q_i", &t, scaled("q_i_lpm", 1.0)?)),
+    );
+    let title = format!("replay {}", dir.display());
+    let mut fig = Figure::new(&title, "t [s]");
+    fig.panels = vec![pos, pres, resid, mae, leaks];
+    plot::render_png(&fig, out).map_err(|e| e.to_string())
+}

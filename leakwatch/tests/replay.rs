@@ -182,3 +182,21 @@ fn a_missing_column_is_an_error_naming_it() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("`p2`") && err.trim().lines().count() == 1, "{err}");
 }
+
+#[test]
+fn plot_draws_a_replay_directory() {
+    let d = tmpdir("plot");
+    let input = simulate(&d, "closed-loop-sine", "12", "int:0.5lpm@8s");
+    let out = d.join("out");
+    assert!(replay(&input, &out, &[]).status.success());
+    let png = d.join("replay.png");
+    let o = leakwatch(&["plot", out.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    assert!(
+        bytes.len() > 20_000,
+        "a figure with five panels: {} bytes",
+        bytes.len()
+    );
+}

@@ -528,7 +528,8 @@ pub fn render(fig: &Figure) -> Result<Image, PlotError> {
             img.line(a, z, BLACK, 1, frame, None);
         }
         // Markers.
-        for m in &panel.markers {
+        for (mi, m) in panel.markers.iter().enumerate() {
+            let label_dy = 12 * (mi as i64 % 4);
             let mut dash = 0u32;
             match m {
                 Marker::Vertical { x, label } => {
@@ -541,7 +542,7 @@ pub fn render(fig: &Figure) -> Result<Image, PlotError> {
                         area,
                         Some(&mut dash),
                     );
-                    img.text(px + 4, area.y + 4, label, MARKER, 1);
+                    img.text(px + 4, area.y + 4 + label_dy, label, MARKER, 1);
                 }
                 Marker::Horizontal { y, label } => {
                     let py = to_py(*y).round() as i64;
