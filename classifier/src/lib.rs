@@ -825,7 +825,18 @@ impl Classifier {
             );
             emit(ev);
         }
+        let faulty_before = self.channels.iter().any(|c| c.raised.is_some());
         self.check_sensors(e, &mut emit);
+        let faulty = self.channels.iter().any(|c| c.raised.is_some());
+        if faulty {
+            // A sensor fault corrupts what the filters estimate: no leak decision
+            // while it lasts, and the thresholds are learned again after it.
+            return;
+        }
+        if faulty_before {
+            self.leak_size.restart();
+            self.thesis.restart();
+        }
         if self.learning_since_s.is_none() && e.flags & FLAG_CONVERGING == 0 {
             self.learning_since_s = Some(e.t_s);
         }

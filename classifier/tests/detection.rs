@@ -165,3 +165,99 @@ fn too_short_a_warm_up_is_reported_not_guessed() {
     assert_eq!(na.len(), 1, "{events:#?}");
     assert!(na[0].detail.contains("warm-up too short"), "{:?}", na[0]);
 }
+
+/// Gaps, NaN samples and a restarted estimator on a healthy run: no leak event,
+/// the restart reported as such.
+#[test]
+fn gaps_nan_and_a_restart_raise_no_false_leak() {
+    let scenario = Scenario::by_name("closed-loop-sine", 51, 40.0).unwrap();
+    let mut sim = Simulator::new(
+        off_nominal_rig(),
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        51,
+    )
+    .unwrap();
+    let mut stage = estimator::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
+    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let mut events = Vec::new();
+    for k in 0..40_000 {
+        let mut s = sim.step();
+        match k {
+            // NaN pressures for 50 samples
+            15_000..=15_049 => s.p1_pa = f64::NAN,
+            // an infinite position
+            16_000 => s.x_m = f64::INFINITY,
+            // a gap of 30 samples (bridged) and one of 600 (restart)
+            18_000..=18_029 | 25_000..=25_599 => continue,
+            _ => {}
+        }
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| events.push(ev));
+    }
+    assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+    let resets: Vec<_> = events
+        .iter()
+        .filter(|e| e.kind == EventKind::EstimatorReset)
+        .collect();
+    assert!(
+        !resets.is_empty() && resets.iter().all(|e| (25.5..25.7).contains(&e.t_detect_s)),
+        "{resets:#?}"
+    );
+    assert_eq!(stage.missing_samples(), 630);
+}
+
+/// A pressure channel that goes dead (NaN) and one that freezes are reported,
+/// and cleared when they come back; neither raises a leak.
+#[test]
+fn dead_and_stuck_sensors_are_reported() {
+    let scenario = Scenario::by_name("closed-loop-sine", 61, 30.0).unwrap();
+    let mut sim = Simulator::new(
+        ActuatorParams::default(),
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        61,
+    )
+    .unwrap();
+    let mut stage = estimator::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
+    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let mut events = Vec::new();
+    let mut frozen = 0.0;
+    for k in 0..30_000 {
+        let mut s = sim.step();
+        if (14_000..14_500).contains(&k) {
+            s.p2_pa = f64::NAN;
+        }
+        if k == 20_000 {
+            frozen = s.p1_pa;
+        }
+        if (20_000..23_000).contains(&k) {
+            s.p1_pa = frozen;
+        }
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| events.push(ev));
+    }
+    let find = |kind: EventKind, phase: Phase| events.iter().find(|e| e.kind == kind && e.phase == phase);
+    let dead = find(EventKind::SensorDead, Phase::Raised).expect("dead p2 reported");
+    assert_eq!(dead.channel, "p2");
+    assert!((14.19..14.21).contains(&dead.t_detect_s), "{dead:?}");
+    assert!(find(EventKind::SensorDead, Phase::Cleared).is_some());
+    let stuck = find(EventKind::SensorStuck, Phase::Raised).expect("stuck p1 reported");
+    assert_eq!(stuck.channel, "p1");
+    assert!(find(EventKind::SensorStuck, Phase::Cleared).is_some());
+    assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+}
