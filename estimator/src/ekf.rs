@@ -7,7 +7,8 @@
 //! MODEL.md §8). On top of that, all covariance algebra runs in scaled units
 //! z = x / scale, so that every state is O(1).
 //!
-//! - Predict: S⁻ = triangular factor of [F·S, Q^½], by Householder reflections.
+//! - Predict: S⁻ = triangular factor of [F·S, Q^½]: the Cholesky factor of
+//!   (F·S)(F·S)ᵀ + Q, or, should that fail to rounding, Householder reflections.
 //! - Update: Potter's square-root update, one measurement at a time (R diagonal).
 //!
 //! Nothing here allocates: all matrices are nalgebra static sizes.
@@ -145,9 +146,22 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 }
             }
         }
-        let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
-        lower_triangularise(&mut w1, &mut w2);
-        self.s = w1;
+        // Fast path: P⁻ = W Wᵀ + Q is a sum of positive semi-definite terms; its
+        // Cholesky factor is S⁻. Should rounding make it fail (a state with
+        // almost no variance), triangularise [W, Q^½] by Householder reflections,
+        // which cannot fail.
+        let mut p = w1 * w1.transpose();
+        for i in 0..N {
+            p[(i, i)] += self.q_sqrt[i] * self.q_sqrt[i];
+        }
+        match p.cholesky() {
+            Some(c) => self.s = c.unpack(),
+            None => {
+                let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
+                lower_triangularise(&mut w1, &mut w2);
+                self.s = w1;
+            }
+        }
         self.x = x_pred;
         if self.is_finite() {
             Ok(())
