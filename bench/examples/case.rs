@@ -16,7 +16,7 @@ fn main() {
         seed: a[6].parse().unwrap(),
         seconds: 0.0,
     };
-    let seconds = case.onset_s + case.ramp_s + 10.0;
+    let seconds = if case.kind == "none" { 300.0 } else { case.onset_s + case.ramp_s + 10.0 };
     let mut rng = Rng::new(case.seed);
     let rig = draw_rig(&mut rng);
     println!(
@@ -49,12 +49,11 @@ fn main() {
         case.seed,
     )
     .unwrap();
-    let mut stage = EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .unwrap();
+    let mut lt = Tuning::sensor_derived();
+    if let Ok(v) = std::env::var("SUBSTEPS") {
+        lt.substeps = v.parse().unwrap();
+    }
+    let mut stage = EstimatorStage::new(ActuatorParams::default(), lt, Tuning::thesis()).unwrap();
     let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
     for k in 0..(seconds * 1000.0) as usize {
         let s = sim.step();
@@ -69,7 +68,7 @@ fn main() {
                 ev.size_lpm
             )
         });
-        if k % 250 == 0 && s.t_s > case.onset_s - 3.0 {
+        if k % 2000 == 0 && s.t_s > case.onset_s.min(10.0) - 3.0 {
             let r = cls.leak_size.rise_lpm(&e.leak);
             println!(
                 "t {:6.2} q {:7.3} {:7.3} {:7.3} rise {:7.3} {:7.3} {:7.3} thr {:?} bias {:.2e} leak {:.3}",
