@@ -1,1 +1,915 @@
-//! calibrate (placeholder).
+//! The calibration workflow (issue 6): find where the simulated actuator and
+//! the measured one disagree, name the physical effect the model lacks, fit
+//! it, add it, and show the gap shrink on held-out data.
+//!
+//! # API
+//!
+//! ```text
+//! calibrate::run(measured: &[Sample], model: &ActuatorParams, opts: &CalibrateOptions)
+//!     -> Result<Calibration, CalibrateError>
+//! calibrate::write_outputs(cal: &Calibration, out_dir: &Path) -> Result<OutputFiles, CalibrateError>
+//!     // DIR/calibration.json, DIR/model.toml ([model] table), DIR/report.md + DIR/*.png
+//! calibrate::fit_effect(measured, model, effect_name: &str, opts) -> Result<EffectFit, CalibrateError>
+//!     // one named effect; Err(NotIdentifiable) when the data does not excite it
+//! calibrate::load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError>   // dataset CSV
+//! calibrate::load_model(path: &Path) -> Result<ActuatorParams, CalibrateError>    // [model] of a config TOML
+//! calibrate::model_toml(params: &ActuatorParams) -> Result<String, CalibrateError>
+//! calibrate::suite::bench(opts: &CalibrateOptions) -> BenchReport                 // BENCHMARKS.md §3, 16 cases
+//! calibrate::suite::bench_matrix(opts) -> BenchReport        // every effect under every input, 41 cases
+//!     // BenchReport::markdown(), ::to_json(), ::write(dir) -> [calibration_bench.md, .json];
+//!     // suite::cases(), suite::matrix_cases(), suite::run_case(), suite::bench_cases(list, opts, threads)
+//!
+//! The suite's nominal model is the thesis' with the smooth friction preset
+//! (`suite::nominal_model()`). With the thesis' stick-slip friction the
+//! re-anchored windows diverge within tens of ms (the chatter is chaotic),
+//! the gap floor is 30-100x higher and effects are mostly missed (nothing is
+//! falsely claimed): calibrate with the smooth variant, or short windows.
+//! ```
+//!
+//! `leakwatch calibrate MEASURED.csv [--config FILE] --out DIR` is
+//! `load_measured` + (`load_model` or the default model) + `run` + `write_outputs`;
+//! `leakwatch bench calibration` prints `suite::bench(&CalibrateOptions::default()).markdown()`.
+//!
+//! # Method
+//!
+//! 1. **Compare** by multiple shooting: the record is cut into windows
+//!    ([`CalibrateOptions::window_s`], 0.25 s); each is simulated from the
+//!    measured state at its start (x, p1, p2; velocity from a local quadratic
+//!    fit of the positions; spool from the model's spool driven by the command
+//!    over the whole record) with RK4 sub-steps of `model::dynamics`. In every
+//!    block of 10 windows the first 70 % fit and the rest validate
+//!    ([`CalibrateOptions::split_block_windows`], `fit_fraction`), so both
+//!    parts see every regime of the record.
+//!    Residuals (model − measured) are normalised by `scale_x_m` and
+//!    `scale_p_pa`; the gap is their RMS (also given per channel in SI).
+//! 2. **Localise**: the validation residuals broken down by direction of
+//!    motion, spool sign, stroke position, velocity, pressure level,
+//!    frequency band and time ([`RegimeBin`]).
+//! 3. **Name**: every candidate of the library ([`Effect`]) is fitted on the
+//!    fitting windows by Levenberg–Marquardt (finite-difference Jacobian in
+//!    resolution-scaled units); after one screening iteration only the best
+//!    `screen_keep` go on to a full fit. Candidates are ranked by the
+//!    reduction of the validation gap. One is accepted only if it is
+//!    identifiable (each parameter moves the residuals by at least
+//!    `min_sensitivity` per resolution step), reduces the validation gap by at
+//!    least `min_gap_reduction` (relative) and `min_gap_reduction_normalised`
+//!    (absolute), moves some parameter by at least
+//!    `min_size_steps` resolution steps, and lowers the BIC on the fitting part.
+//! 4. **Add and repeat** (greedy forward selection) while something is
+//!    accepted, up to `max_effects`.
+//!
+//! All quantities are SI (m, s, Pa, m³/s, N, V).
+
+pub mod effects;
+pub mod fit;
+pub mod output;
+pub mod regime;
+pub mod shoot;
+pub mod suite;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use model::params::ActuatorParams;
+use model::Sample;
+use serde::{Deserialize, Serialize};
+
+pub use effects::Effect;
+pub use output::{model_toml, write_outputs, OutputFiles};
+pub use regime::RegimeBin;
+pub use suite::{bench, BenchReport};
+
+use fit::Problem;
+use shoot::{gap_of, residuals, Prepared, ShootSettings};
+
+/// Message given when the data does not excite an effect.
+pub const NOT_IDENTIFIABLE: &str = "not identifiable from this data";
+
+/// Options of the workflow; every field has a default.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrateOptions {
+    /// Length of one shooting window, s.
+    pub window_s: f64,
+    /// Fraction of the windows used for fitting; the rest validate.
+    pub fit_fraction: f64,
+    /// Split in blocks of this many windows: in each, the first
+    /// `fit_fraction` fit and the rest validate, so both parts see every
+    /// regime of the record. 0: the first `fit_fraction` of the record fits,
+    /// the tail validates.
+    pub split_block_windows: usize,
+    /// RK4 sub-steps per sample period in the shooting simulations.
+    pub substeps_per_sample: u32,
+    /// Compare every n-th sample of a window.
+    pub compare_stride: usize,
+    /// Position error that counts as much as `scale_p_pa` of pressure error, m.
+    pub scale_x_m: f64,
+    /// Pressure error scale, Pa.
+    pub scale_p_pa: f64,
+    /// Use at most this much of the record (from its start), s; longer data only slows the fit.
+    pub max_seconds: f64,
+    /// Least record length accepted, s.
+    pub min_seconds: f64,
+    /// Effect names to consider (empty: the whole library).
+    pub candidates: Vec<String>,
+    /// At most this many effects are added.
+    pub max_effects: usize,
+    /// Least relative reduction of the validation gap for an effect to be accepted.
+    pub min_gap_reduction: f64,
+    /// Least RMS change of the normalised residuals per resolution step of
+    /// each parameter for the effect to count as identifiable.
+    pub min_sensitivity: f64,
+    /// Least absolute reduction of the normalised validation gap for an
+    /// effect to be accepted (0.03 ≈ 3 kPa of pressure or 30 µm of position
+    /// RMS at the default scales): what is left near the sensor-noise floor is
+    /// not claimed.
+    pub min_gap_reduction_normalised: f64,
+    /// Least change of some parameter from the current model, in resolution
+    /// steps ([`Effect::resolution`], about 10 % of a typical value), for an
+    /// effect to be claimed: smaller ones are below what the method resolves
+    /// and are usually other small mismatches (e.g. mass) in disguise.
+    pub min_size_steps: f64,
+    /// Levenberg–Marquardt iterations of a full fit.
+    pub max_iterations: usize,
+    /// Candidates kept for a full fit after the screening iteration.
+    pub screen_keep: usize,
+    /// Keep the re-anchored traces in the result for plots.
+    pub keep_traces: bool,
+    /// Half-width of the local quadratic fit of positions that estimates the
+    /// velocity at each window start, samples.
+    pub velocity_half_width: usize,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            window_s: 0.25,
+            fit_fraction: 0.7,
+            split_block_windows: 10,
+            substeps_per_sample: 4,
+            compare_stride: 5,
+            scale_x_m: 1.0e-3,
+            scale_p_pa: 1.0e5,
+            max_seconds: 20.0,
+            min_seconds: 3.0,
+            candidates: Vec::new(),
+            max_effects: 3,
+            min_gap_reduction: 0.2,
+            min_sensitivity: 0.01,
+            min_size_steps: 1.0,
+            min_gap_reduction_normalised: 0.03,
+            max_iterations: 10,
+            screen_keep: 3,
+            keep_traces: true,
+            velocity_half_width: 3,
+        }
+    }
+}
+
+/// Why calibration could not run.
+#[derive(Debug)]
+pub enum CalibrateError {
+    /// The record is too short to fit and validate.
+    TooLittleData {
+        /// Usable samples found.
+        samples: usize,
+        /// Their time span, s.
+        seconds: f64,
+        /// Least span needed, s.
+        needed_seconds: f64,
+    },
+    /// A required value is not finite.
+    NonFinite {
+        /// Index of the sample.
+        index: usize,
+        /// The column.
+        column: &'static str,
+    },
+    /// Time does not increase steadily (no sample period can be found).
+    BadSampling(String),
+    /// The measured file could not be read (missing columns, no usable rows, I/O).
+    Dataset(dataset::DatasetError),
+    /// The model file could not be loaded or is not a valid actuator.
+    ModelFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The model (given directly) is not a valid actuator.
+    InvalidModel(model::params::InvalidParam),
+    /// The effect name is not in the library.
+    UnknownEffect(String),
+    /// The data does not excite the effect enough to fit it.
+    NotIdentifiable {
+        /// The effect.
+        effect: String,
+        /// Which parameter and how weakly the data sees it.
+        reason: String,
+    },
+    /// Outputs could not be written.
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A plot could not be drawn or written.
+    Plot(String),
+    /// Serialising an output failed.
+    Serialize(String),
+}
+
+impl std::fmt::Display for CalibrateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CalibrateError::TooLittleData {
+                samples,
+                seconds,
+                needed_seconds,
+            } => write!(
+                f,
+                "too little data: {samples} samples over {seconds:.3} s; calibration needs at least \
+                 {needed_seconds} s (a fitting and a validation part), 10-20 s recommended"
+            ),
+            CalibrateError::NonFinite { index, column } => {
+                write!(f, "sample {index}: column `{column}` is not a finite number")
+            }
+            CalibrateError::BadSampling(m) => write!(f, "bad sampling: {m}"),
+            CalibrateError::Dataset(e) => write!(f, "measured data: {e}"),
+            CalibrateError::ModelFile { path, message } => {
+                write!(f, "model file {}: {message}", path.display())
+            }
+            CalibrateError::InvalidModel(e) => write!(f, "model: {e}"),
+            CalibrateError::UnknownEffect(n) => write!(
+                f,
+                "unknown effect `{n}`: expected one of {}",
+                Effect::NAMES.join(", ")
+            ),
+            CalibrateError::NotIdentifiable { effect, reason } => {
+                write!(f, "{effect}: {NOT_IDENTIFIABLE} ({reason})")
+            }
+            CalibrateError::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            CalibrateError::Plot(m) => write!(f, "plot: {m}"),
+            CalibrateError::Serialize(m) => write!(f, "serialise: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for CalibrateError {}
+
+impl From<dataset::DatasetError> for CalibrateError {
+    fn from(e: dataset::DatasetError) -> Self {
+        CalibrateError::Dataset(e)
+    }
+}
+
+/// RMS simulation-vs-measurement error on the validation windows.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Gap {
+    /// Rod position, m.
+    pub x_m: f64,
+    /// Chamber-1 pressure, Pa.
+    pub p1_pa: f64,
+    /// Chamber-2 pressure, Pa.
+    pub p2_pa: f64,
+    /// All three normalised by `scale_x_m` / `scale_p_pa`, combined RMS (dimensionless).
+    pub normalised: f64,
+}
+
+/// One effect added to the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoundEffect {
+    /// Effect name (`friction-asymmetry`, `spool-bias`, ...).
+    pub name: String,
+    /// Which form of it was fitted.
+    pub form: String,
+    /// Fitted parameters by dotted field name, SI.
+    pub parameters: BTreeMap<String, f64>,
+    /// Approximate standard deviation of each parameter, SI.
+    pub parameter_std: BTreeMap<String, f64>,
+    /// Relative reduction of the normalised validation gap when this effect was added
+    /// (1 − gap after / gap before this step).
+    pub gap_reduction: f64,
+    /// Relative reduction of the validation gap of the nominal model, up to and including this effect.
+    pub cumulative_gap_reduction: f64,
+    /// The validation gap after adding it.
+    pub gap_after: Gap,
+    /// The residual signature of this effect.
+    pub signature: String,
+}
+
+/// How one candidate fared in one round of the selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    /// Effect name.
+    pub name: String,
+    /// Its form.
+    pub form: String,
+    /// Fitted parameters, SI.
+    pub parameters: BTreeMap<String, f64>,
+    /// Relative reduction of the validation gap (negative: worse).
+    pub gap_reduction: f64,
+    /// Change of the BIC on the fitting part (negative favours the effect).
+    pub delta_bic: f64,
+    /// Whether every parameter is seen by the data.
+    pub identifiable: bool,
+    /// Verdict: `added`, `explains too little`, `not identifiable from this data`, `screened out`, ...
+    pub status: String,
+}
+
+/// One round of the greedy forward selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Round {
+    /// Normalised validation gap at the start of the round.
+    pub gap_before: f64,
+    /// Every candidate, best first.
+    pub candidates: Vec<CandidateScore>,
+}
+
+/// Facts about the data used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DataSummary {
+    /// Samples used.
+    pub samples: usize,
+    /// Span used, s.
+    pub seconds: f64,
+    /// Sample period, s.
+    pub sample_period_s: f64,
+    /// Shooting window length, s.
+    pub window_s: f64,
+    /// Windows in the fitting part.
+    pub fit_windows: usize,
+    /// Windows in the validation part.
+    pub validation_windows: usize,
+    /// Time at which validation starts, s.
+    pub validation_start_s: f64,
+    /// How the windows were split into fitting and validation.
+    pub split: String,
+}
+
+/// Re-anchored traces over the validation part, for plots.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Traces {
+    /// Time, s (NaN between windows to break lines).
+    pub t_s: Vec<f64>,
+    /// Measured [x m, p1 Pa, p2 Pa].
+    pub measured: Vec<[f64; 3]>,
+    /// Nominal model.
+    pub before: Vec<[f64; 3]>,
+    /// Calibrated model.
+    pub after: Vec<[f64; 3]>,
+}
+
+/// The result of the workflow.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// Effects added, in order.
+    pub effects: Vec<FoundEffect>,
+    /// Validation gap of the model given.
+    pub gap_before: Gap,
+    /// Validation gap of the calibrated model.
+    pub gap_after: Gap,
+    /// Overall relative reduction of the normalised validation gap.
+    pub gap_reduction: f64,
+    /// Every round of the selection with every candidate's score.
+    pub rounds: Vec<Round>,
+    /// Residual breakdown of the model given (validation part).
+    pub breakdown_before: Vec<RegimeBin>,
+    /// Residual breakdown of the calibrated model (validation part).
+    pub breakdown_after: Vec<RegimeBin>,
+    /// RMS of measured spool minus model spool, before and after, m (when x_sp is measured).
+    pub spool_rms_m: Option<[f64; 2]>,
+    /// Data used.
+    pub data: DataSummary,
+    /// The options used.
+    pub options: CalibrateOptions,
+    /// The model given.
+    pub model_before: ActuatorParams,
+    /// The calibrated model.
+    pub model_after: ActuatorParams,
+    /// Traces for plots (empty unless `keep_traces`).
+    #[serde(skip)]
+    pub traces: Traces,
+    /// Wall time, s.
+    pub elapsed_s: f64,
+}
+
+impl Calibration {
+    /// Names of the effects found, in order.
+    pub fn names(&self) -> Vec<String> {
+        self.effects.iter().map(|e| e.name.clone()).collect()
+    }
+}
+
+/// One effect fitted on its own ([`fit_effect`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectFit {
+    /// The effect.
+    pub name: String,
+    /// Its form.
+    pub form: String,
+    /// Fitted parameters, SI.
+    pub parameters: BTreeMap<String, f64>,
+    /// Approximate standard deviations, SI.
+    pub parameter_std: BTreeMap<String, f64>,
+    /// Validation gap without the effect.
+    pub gap_before: Gap,
+    /// Validation gap with it.
+    pub gap_after: Gap,
+    /// 1 − gap after / gap before (normalised).
+    pub gap_reduction: f64,
+}
+
+/// Reads a measured CSV (dataset format); missing columns and unusable files are errors.
+pub fn load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError> {
+    let ds = dataset::read_csv(path, dataset::Limits::default())?;
+    Ok(ds.samples)
+}
+
+/// Reads the `[model]` table of a leakwatch config file (other sections are
+/// ignored here); a missing table gives the default model. The model is validated.
+pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
+    let err = |message: String| CalibrateError::ModelFile {
+        path: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let table: toml::Table = toml::from_str(&text).map_err(|e| err(format!("not valid TOML: {e}")))?;
+    let params = match table.get("model") {
+        Some(v) => {
+            let t = toml::to_string(v).map_err(|e| err(e.to_string()))?;
+            toml::from_str::<ActuatorParams>(&t).map_err(|e| err(format!("[model]: {e}")))?
+        }
+        None => ActuatorParams::default(),
+    };
+    params.validate().map_err(|e| err(format!("[model] {e}")))?;
+    Ok(params)
+}
+
+/// Prepared inputs of a calibration.
+struct Setup {
+    data: Prepared,
+    set: ShootSettings,
+    seconds: f64,
+}
+
+fn setup(
+    measured: &[Sample],
+    model: &ActuatorParams,
+    opts: &CalibrateOptions,
+) -> Result<Setup, CalibrateError> {
+    model.validate().map_err(CalibrateError::InvalidModel)?;
+    for (i, s) in measured.iter().enumerate() {
+        for (v, c) in [
+            (s.t_s, "t"),
+            (s.u_v, "u"),
+            (s.x_m, "x"),
+            (s.p1_pa, "p1"),
+            (s.p2_pa, "p2"),
+        ] {
+            if !v.is_finite() {
+                return Err(CalibrateError::NonFinite { index: i, column: c });
+            }
+        }
+    }
+    let n = measured.len();
+    let span = if n >= 2 {
+        measured[n - 1].t_s - measured[0].t_s
+    } else {
+        0.0
+    };
+    if n < 10 || span < opts.min_seconds {
+        return Err(CalibrateError::TooLittleData {
+            samples: n,
+            seconds: span.max(0.0),
+            needed_seconds: opts.min_seconds,
+        });
+    }
+    let mut diffs: Vec<f64> = measured.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    diffs.sort_by(|a, b| a.total_cmp(b));
+    let dt = diffs[diffs.len() / 2];
+    if dt <= 0.0 || !dt.is_finite() {
+        return Err(CalibrateError::BadSampling(
+            "time does not increase from one sample to the next".into(),
+        ));
+    }
+    // Use the leading stretch without gaps, at most max_seconds.
+    let mut end = 1;
+    while end < n
+        && measured[end].t_s - measured[end - 1].t_s < 1.5 * dt
+        && (end as f64) * dt < opts.max_seconds
+    {
+        end += 1;
+    }
+    let used = &measured[..end];
+    let seconds = end as f64 * dt;
+    if seconds < opts.min_seconds {
+        return Err(CalibrateError::TooLittleData {
+            samples: end,
+            seconds,
+            needed_seconds: opts.min_seconds,
+        });
+    }
+    let w = ((opts.window_s / dt).round() as usize).max(10);
+    let data = Prepared::new(
+        used,
+        dt,
+        w,
+        opts.fit_fraction.clamp(0.1, 0.95),
+        opts.split_block_windows,
+        opts.velocity_half_width,
+    );
+    if data.fit_windows().len() < 2 || data.val_windows().is_empty() {
+        return Err(CalibrateError::TooLittleData {
+            samples: end,
+            seconds,
+            needed_seconds: opts.min_seconds,
+        });
+    }
+    let set = ShootSettings {
+        substeps: opts.substeps_per_sample.max(1),
+        stride: opts.compare_stride.max(1),
+        scale_x_m: opts.scale_x_m,
+        scale_p_pa: opts.scale_p_pa,
+    };
+    Ok(Setup { data, set, seconds })
+}
+
+fn gap_on(p: &ActuatorParams, d: &Prepared, windows: &[(usize, usize)], set: &ShootSettings) -> Gap {
+    let (r, _) = residuals(p, d, windows, set);
+    let (ch, j) = gap_of(&r, set);
+    Gap {
+        x_m: ch[0],
+        p1_pa: ch[1],
+        p2_pa: ch[2],
+        normalised: j,
+    }
+}
+
+fn mean_sq(r: &[f64]) -> f64 {
+    if r.is_empty() {
+        0.0
+    } else {
+        r.iter().map(|a| a * a).sum::<f64>() / r.len() as f64
+    }
+}
+
+fn named(effect: Effect, v: &[f64]) -> BTreeMap<String, f64> {
+    effect
+        .parameter_names()
+        .iter()
+        .zip(v)
+        .map(|(n, x)| (n.to_string(), *x))
+        .collect()
+}
+
+/// A fitted candidate with its scores.
+#[derive(Clone)]
+struct Scored {
+    effect: Effect,
+    theta: Vec<f64>,
+    std: Vec<f64>,
+    fit_cost: f64,
+    val: Gap,
+    identifiable: bool,
+    weakest: (usize, f64),
+    screened_out: bool,
+    /// Largest parameter change from the current model, in resolution steps.
+    size_steps: f64,
+}
+
+/// Effective number of independent residuals of the fitting part for the
+/// BIC: a few per window and channel (residuals inside a window are strongly
+/// correlated).
+fn n_eff(d: &Prepared) -> f64 {
+    (d.fit_windows().len() * 3 * 5) as f64
+}
+
+fn screen_and_fit(
+    effects: &[Effect],
+    base: &ActuatorParams,
+    s: &Setup,
+    opts: &CalibrateOptions,
+    keep: usize,
+) -> Vec<Scored> {
+    let d = &s.data;
+    // Screening: a short fit (2 iterations) from each starting point.
+    let mut first: Vec<(Effect, fit::FitOutcome)> = Vec::new();
+    for &e in effects {
+        let prob = Problem {
+            base,
+            data: d,
+            windows: d.fit_windows(),
+            set: s.set,
+            effect: e,
+        };
+        let starts = e.starting_points(base, d.x_range_m());
+        let per_start = if starts.len() > 1 { 1 } else { 2 };
+        let mut best: Option<fit::FitOutcome> = None;
+        for start in starts.iter() {
+            let o = prob.lm(start, per_start);
+            if best.as_ref().is_none_or(|b| o.cost < b.cost) {
+                best = Some(o);
+            }
+        }
+        if let Some(b) = best {
+            let b = if per_start == 1 {
+                let more = prob.lm(&b.theta, 1);
+                if more.cost <= b.cost {
+                    fit::FitOutcome {
+                        evaluations: more.evaluations + b.evaluations,
+                        ..more
+                    }
+                } else {
+                    b
+                }
+            } else {
+                b
+            };
+            first.push((e, b));
+        }
+    }
+    first.sort_by(|a, b| a.1.cost.total_cmp(&b.1.cost));
+    let mut out = Vec::new();
+    for (rank, (e, o)) in first.into_iter().enumerate() {
+        let screened_out = rank >= keep;
+        let o = if screened_out {
+            o
+        } else {
+            let prob = Problem {
+                base,
+                data: d,
+                windows: d.fit_windows(),
+                set: s.set,
+                effect: e,
+            };
+            let full = prob.lm(&o.theta, opts.max_iterations);
+            if full.cost <= o.cost {
+                full
+            } else {
+                o
+            }
+        };
+        let weakest = o
+            .sensitivity
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, f64::INFINITY), |a, (i, v)| if v < a.1 { (i, v) } else { a });
+        let identifiable = weakest.1 >= opts.min_sensitivity;
+        let p = e.apply(base, &o.theta);
+        let val = gap_on(&p, d, d.val_windows(), &s.set);
+        let size_steps = e
+            .read(base)
+            .iter()
+            .zip(&o.theta)
+            .zip(e.resolution(base))
+            .map(|((a, b), r)| (b - a).abs() / r)
+            .fold(0.0, f64::max);
+        out.push(Scored {
+            effect: e,
+            theta: o.theta,
+            std: o.std,
+            fit_cost: o.cost,
+            val,
+            identifiable,
+            weakest,
+            screened_out,
+            size_steps,
+        });
+    }
+    out
+}
+
+/// Runs the whole workflow on `measured` samples with `model` as the starting model.
+pub fn run(
+    measured: &[Sample],
+    model: &ActuatorParams,
+    opts: &CalibrateOptions,
+) -> Result<Calibration, CalibrateError> {
+    let t0 = Instant::now();
+    let s = setup(measured, model, opts)?;
+    let d = &s.data;
+    let mut pool: Vec<Effect> = if opts.candidates.is_empty() {
+        Effect::ALL.to_vec()
+    } else {
+        let mut v = Vec::new();
+        for n in &opts.candidates {
+            let e = Effect::by_name(n);
+            if e.is_empty() {
+                return Err(CalibrateError::UnknownEffect(n.clone()));
+            }
+            v.extend(e);
+        }
+        v
+    };
+    let mut current = model.clone();
+    let gap_before = gap_on(&current, d, d.val_windows(), &s.set);
+    let breakdown_before = regime::breakdown(&current, d, d.val_windows(), &s.set);
+    let mut gap_cur = gap_before;
+    let mut fit_cost_cur = mean_sq(&residuals(&current, d, d.fit_windows(), &s.set).0);
+    let mut effects = Vec::new();
+    let mut rounds = Vec::new();
+    let ne = n_eff(d);
+    while effects.len() < opts.max_effects && !pool.is_empty() {
+        let mut scored = screen_and_fit(&pool, &current, &s, opts, opts.screen_keep.max(1));
+        let red = |x: &Scored| 1.0 - x.val.normalised / gap_cur.normalised.max(1e-300);
+        scored.sort_by(|a, b| red(b).total_cmp(&red(a)));
+        let mut chosen: Option<usize> = None;
+        let mut cands = Vec::new();
+        for (i, c) in scored.iter().enumerate() {
+            let k = c.theta.len() as f64;
+            let dbic = ne * (c.fit_cost.max(1e-300) / fit_cost_cur.max(1e-300)).ln() + k * ne.ln();
+            let r = red(c);
+            let status = if c.screened_out {
+                "screened out (explains less on the fitting part)".to_string()
+            } else if !c.identifiable {
+                format!(
+                    "{NOT_IDENTIFIABLE} (`{}` moves the residuals by {:.2e} per step of {:.3e})",
+                    c.effect.parameter_names()[c.weakest.0],
+                    c.weakest.1,
+                    c.effect.resolution(&current)[c.weakest.0]
+                )
+            } else if c.size_steps < opts.min_size_steps {
+                format!(
+                    "too small to claim (parameters moved {:.2} resolution steps; needs {})",
+                    c.size_steps, opts.min_size_steps
+                )
+            } else if r < opts.min_gap_reduction
+                || gap_cur.normalised - c.val.normalised < opts.min_gap_reduction_normalised
+            {
+                format!("explains too little ({:.0} % of the gap)", 100.0 * r)
+            } else if dbic >= 0.0 {
+                "not significant (BIC)".to_string()
+            } else if chosen.is_none() {
+                chosen = Some(i);
+                "added".to_string()
+            } else {
+                "significant, but a better candidate was added".to_string()
+            };
+            cands.push(CandidateScore {
+                name: c.effect.name().to_string(),
+                form: c.effect.form().to_string(),
+                parameters: named(c.effect, &c.theta),
+                gap_reduction: r,
+                delta_bic: dbic,
+                identifiable: c.identifiable,
+                status,
+            });
+        }
+        rounds.push(Round {
+            gap_before: gap_cur.normalised,
+            candidates: cands,
+        });
+        let Some(i) = chosen else { break };
+        let c = &scored[i];
+        let r = red(c);
+        current = c.effect.apply(&current, &c.theta);
+        fit_cost_cur = c.fit_cost;
+        gap_cur = c.val;
+        effects.push(FoundEffect {
+            name: c.effect.name().to_string(),
+            form: c.effect.form().to_string(),
+            parameters: named(c.effect, &c.theta),
+            parameter_std: named(c.effect, &c.std),
+            gap_reduction: r,
+            cumulative_gap_reduction: 1.0 - gap_cur.normalised / gap_before.normalised.max(1e-300),
+            gap_after: gap_cur,
+            signature: c.effect.signature().to_string(),
+        });
+        let name = c.effect.name();
+        pool.retain(|e| e.name() != name);
+    }
+    let breakdown_after = regime::breakdown(&current, d, d.val_windows(), &s.set);
+    let traces = if opts.keep_traces {
+        make_traces(model, &current, d, &s.set)
+    } else {
+        Traces::default()
+    };
+    let spool_rms_m = spool_rms(model, &current, d, &s.set);
+    let vs = d.val_windows().first().map(|w| d.t_s[w.0]).unwrap_or(0.0);
+    Ok(Calibration {
+        effects,
+        gap_before,
+        gap_after: gap_cur,
+        gap_reduction: 1.0 - gap_cur.normalised / gap_before.normalised.max(1e-300),
+        rounds,
+        breakdown_before,
+        breakdown_after,
+        spool_rms_m,
+        data: DataSummary {
+            samples: d.t_s.len(),
+            seconds: s.seconds,
+            sample_period_s: d.dt_s,
+            window_s: (d.windows.first().map(|w| w.1 - w.0).unwrap_or(0)) as f64 * d.dt_s,
+            fit_windows: d.fit_windows().len(),
+            validation_windows: d.val_windows().len(),
+            validation_start_s: vs,
+            split: if opts.split_block_windows == 0 {
+                format!("first {:.0} % fit, the tail validates", 100.0 * opts.fit_fraction)
+            } else {
+                format!(
+                    "in every block of {} windows, the first {:.0} % fit and the rest validate",
+                    opts.split_block_windows,
+                    100.0 * opts.fit_fraction
+                )
+            },
+        },
+        options: opts.clone(),
+        model_before: model.clone(),
+        model_after: current,
+        traces,
+        elapsed_s: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn make_traces(before: &ActuatorParams, after: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Traces {
+    let w = d.val_windows();
+    let tb = regime::traces(before, d, w, set);
+    let ta = regime::traces(after, d, w, set);
+    let mut tr = Traces::default();
+    let nan = [f64::NAN; 3];
+    for (k, ((i, b), (_, a))) in tb.iter().zip(&ta).enumerate() {
+        if k > 0 && *i != tb[k - 1].0 + 1 {
+            tr.t_s.push(f64::NAN);
+            tr.measured.push(nan);
+            tr.before.push(nan);
+            tr.after.push(nan);
+        }
+        tr.t_s.push(d.t_s[*i]);
+        tr.measured.push([d.x_m[*i], d.p1_pa[*i], d.p2_pa[*i]]);
+        tr.before.push(*b);
+        tr.after.push(*a);
+    }
+    tr
+}
+
+fn spool_rms(
+    before: &ActuatorParams,
+    after: &ActuatorParams,
+    d: &Prepared,
+    set: &ShootSettings,
+) -> Option<[f64; 2]> {
+    if !d.x_sp_m.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let f = |p: &ActuatorParams| {
+        let sp = shoot::spool_trajectory(p, d, set.substeps);
+        let e: Vec<f64> = sp.iter().zip(&d.x_sp_m).map(|(a, b)| a[0] - b).collect();
+        shoot::rms(&e)
+    };
+    Some([f(before), f(after)])
+}
+
+/// Fits one named effect (both forms for `bulk-modulus`, the better kept)
+/// on the fitting part and scores it on the validation part. Fails with
+/// [`CalibrateError::NotIdentifiable`] when the data does not excite it.
+pub fn fit_effect(
+    measured: &[Sample],
+    model: &ActuatorParams,
+    effect_name: &str,
+    opts: &CalibrateOptions,
+) -> Result<EffectFit, CalibrateError> {
+    let s = setup(measured, model, opts)?;
+    let d = &s.data;
+    let effects = Effect::by_name(effect_name);
+    if effects.is_empty() {
+        return Err(CalibrateError::UnknownEffect(effect_name.to_string()));
+    }
+    let scored = screen_and_fit(&effects, model, &s, opts, effects.len());
+    let best = scored
+        .iter()
+        .filter(|c| c.identifiable)
+        .min_by(|a, b| a.val.normalised.total_cmp(&b.val.normalised));
+    let Some(c) = best else {
+        let reason = scored
+            .iter()
+            .map(|c| {
+                format!(
+                    "`{}` changes the normalised residuals by only {:.2e} per step of {:.3e} (needs {:.2e})",
+                    c.effect.parameter_names()[c.weakest.0],
+                    c.weakest.1,
+                    c.effect.resolution(model)[c.weakest.0],
+                    opts.min_sensitivity
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(CalibrateError::NotIdentifiable {
+            effect: effect_name.to_string(),
+            reason,
+        });
+    };
+    let gap_before = gap_on(model, d, d.val_windows(), &s.set);
+    Ok(EffectFit {
+        name: c.effect.name().to_string(),
+        form: c.effect.form().to_string(),
+        parameters: named(c.effect, &c.theta),
+        parameter_std: named(c.effect, &c.std),
+        gap_before,
+        gap_after: c.val,
+        gap_reduction: 1.0 - c.val.normalised / gap_before.normalised.max(1e-300),
+    })
+}

@@ -37,6 +37,8 @@ pub mod estimate_flags {
     /// The input frame was the last of its stream (mirrors
     /// [`super::sensor_flags::END_OF_STREAM`]).
     pub const END_OF_STREAM: u32 = 1 << 3;
+    /// The filter is inside its convergence time after a (re)start.
+    pub const CONVERGING: u32 = 1 << 4;
 }
 
 /// Values of [`LeakEventFrame::kind`].
@@ -126,12 +128,15 @@ pub struct SensorFrame {
 
 /// Number of states in [`EstimateFrame::state`]: x_sp m, p1 Pa, p2 Pa, x m,
 /// v m/s, v_sp m/s, F_e N, w1 m³/s, w2 m³/s.
-pub const MAX_STATES: usize = 9;
+pub const MAX_STATES: usize = 11;
+
+/// Number of states of the thesis filter carried in [`EstimateFrame::th_state`].
+pub const THESIS_STATES: usize = 7;
 
 /// The estimator's output for one sensor frame (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.EstimateFrame.v1")]
+#[type_name("leakwatch.EstimateFrame.v2")]
 pub struct EstimateFrame {
     /// Sequence number of the sensor frame this estimate is for.
     pub seq: u64,
@@ -147,19 +152,40 @@ pub struct EstimateFrame {
     pub n_states: u32,
     /// Bit set of [`estimate_flags`].
     pub flags: u32,
-    /// The a-posteriori state, order: x_sp m, p1 Pa, p2 Pa, x m, v m/s,
-    /// v_sp m/s, F_e N, w1 m³/s, w2 m³/s; unused entries NaN.
+    /// The leak filter's a-posteriori state, order: x_sp m, p1 Pa, p2 Pa, x m,
+    /// v m/s, v_sp m/s, F_e N, q_e1 m³/s, q_e2 m³/s, q_i m³/s (leak sizes at the
+    /// nominal drop), spool null bias m; unused entries NaN.
     pub state: [f64; MAX_STATES],
     /// One standard deviation of each state, same order and units as [`Self::state`].
     pub state_sigma: [f64; MAX_STATES],
-    /// A-posteriori residual y − Hx⁺: x m, p1 Pa, p2 Pa.
+    /// Leak filter: a-posteriori residual y − Hx⁺: x m, p1 Pa, p2 Pa.
     pub residual: [f64; 3],
-    /// Innovation y − Hx⁻: x m, p1 Pa, p2 Pa.
+    /// Leak filter: innovation y − Hx⁻: x m, p1 Pa, p2 Pa.
     pub innovation: [f64; 3],
-    /// Mean absolute residual of p1 and p2 over the MAE window, Pa.
-    pub mae_pa: [f64; 2],
-    /// Normalised innovation squared of this update (dimensionless).
+    /// Leak filter: standard deviation of each innovation: m, Pa, Pa.
+    pub innovation_sigma: [f64; 3],
+    /// The measurement as received: x m, p1 Pa, p2 Pa (NaN where absent).
+    pub measured: [f64; 3],
+    /// The valve command as received, V.
+    pub u_v: f64,
+    /// Leak filter: normalised innovation squared.
     pub nis: f64,
+    /// Leak filter: mean absolute residual of p1 and p2 over the MAE window, Pa.
+    pub mae_pa: [f64; 2],
+    /// Thesis filter: bit set of [`estimate_flags`].
+    pub th_flags: u32,
+    /// Explicit padding (zero).
+    pub _pad: u32,
+    /// Thesis filter: a-posteriori state x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s, F_e N.
+    pub th_state: [f64; THESIS_STATES],
+    /// Thesis filter: a-posteriori residual: x m, p1 Pa, p2 Pa.
+    pub th_residual: [f64; 3],
+    /// Thesis filter: innovation: x m, p1 Pa, p2 Pa.
+    pub th_innovation: [f64; 3],
+    /// Thesis filter: MAE of the p1 and p2 residuals (the thesis' figure), Pa.
+    pub th_mae_pa: [f64; 2],
+    /// Thesis filter: normalised innovation squared.
+    pub th_nis: f64,
 }
 
 /// Length of [`LeakEventFrame::detector`], bytes.
@@ -373,8 +399,18 @@ impl Default for EstimateFrame {
             state_sigma: [f64::NAN; MAX_STATES],
             residual: [f64::NAN; 3],
             innovation: [f64::NAN; 3],
-            mae_pa: [f64::NAN; 2],
+            innovation_sigma: [f64::NAN; 3],
+            measured: [f64::NAN; 3],
+            u_v: f64::NAN,
             nis: f64::NAN,
+            mae_pa: [f64::NAN; 2],
+            th_flags: 0,
+            _pad: 0,
+            th_state: [f64::NAN; THESIS_STATES],
+            th_residual: [f64::NAN; 3],
+            th_innovation: [f64::NAN; 3],
+            th_mae_pa: [f64::NAN; 2],
+            th_nis: f64::NAN,
         }
     }
 }
@@ -579,7 +615,7 @@ pub fn wake_service_name(rig: &RigId, topic: Topic) -> String {
 
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 96);
-const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 264);
+const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 488);
 const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 96);
 const _: () = assert!(core::mem::size_of::<HealthFrame>() == 80);
 const _: () = assert!(core::mem::size_of::<StatsFrame>() == 112);

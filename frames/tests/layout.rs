@@ -7,7 +7,7 @@ use iceoryx2::prelude::ZeroCopySend;
 #[test]
 fn sizes_and_alignment() {
     assert_eq!(size_of::<SensorFrame>(), 96);
-    assert_eq!(size_of::<EstimateFrame>(), 264);
+    assert_eq!(size_of::<EstimateFrame>(), 488);
     assert_eq!(size_of::<LeakEventFrame>(), 96);
     assert_eq!(size_of::<HealthFrame>(), 80);
     assert_eq!(size_of::<StatsFrame>(), 112);
@@ -49,10 +49,26 @@ fn field_offsets_match_the_readme_table() {
         offset_of!(EstimateFrame, state_sigma),
         offset_of!(EstimateFrame, residual),
         offset_of!(EstimateFrame, innovation),
-        offset_of!(EstimateFrame, mae_pa),
+        offset_of!(EstimateFrame, innovation_sigma),
+        offset_of!(EstimateFrame, measured),
+        offset_of!(EstimateFrame, u_v),
         offset_of!(EstimateFrame, nis),
+        offset_of!(EstimateFrame, mae_pa),
+        offset_of!(EstimateFrame, th_flags),
+        offset_of!(EstimateFrame, _pad),
+        offset_of!(EstimateFrame, th_state),
+        offset_of!(EstimateFrame, th_residual),
+        offset_of!(EstimateFrame, th_innovation),
+        offset_of!(EstimateFrame, th_mae_pa),
+        offset_of!(EstimateFrame, th_nis),
     ];
-    assert_eq!(e, [0, 8, 16, 24, 32, 40, 44, 48, 120, 192, 216, 240, 256]);
+    assert_eq!(
+        e,
+        [
+            0, 8, 16, 24, 32, 40, 44, 48, 136, 224, 248, 272, 296, 320, 328, 336, 352, 356, 360, 416, 440,
+            464, 480
+        ]
+    );
     let l = [
         offset_of!(LeakEventFrame, seq),
         offset_of!(LeakEventFrame, acq_mono_ns),
@@ -102,7 +118,7 @@ fn field_offsets_match_the_readme_table() {
 fn type_names_are_versioned() {
     unsafe {
         assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v1");
-        assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v1");
+        assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v2");
         assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v1");
         assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v1");
         assert_eq!(StatsFrame::type_name(), "leakwatch.StatsFrame.v1");

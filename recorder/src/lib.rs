@@ -34,6 +34,9 @@ pub const GAP_SCHEMA_NAME: &str = "leakwatch.Gap.v1";
 
 /// One item for the log, with the recorder's receive time
 /// (`CLOCK_MONOTONIC`, ns) where it has one.
+/// (Frames travel by value through a bounded channel to the writer thread; the
+/// size difference between variants is the frames', boxing would allocate per frame.)
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
 pub enum Entry {
     /// A sensor frame and its receive time, ns.

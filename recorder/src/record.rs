@@ -252,7 +252,7 @@ record!(
 );
 record!(
     EstimateFrame,
-    "leakwatch.EstimateFrame.v1",
+    "leakwatch.EstimateFrame.v2",
     [
         seq,
         acq_mono_ns,
@@ -265,8 +265,17 @@ record!(
         state_sigma,
         residual,
         innovation,
+        innovation_sigma,
+        measured,
+        u_v,
+        nis,
         mae_pa,
-        nis
+        th_flags,
+        th_state,
+        th_residual,
+        th_innovation,
+        th_mae_pa,
+        th_nis
     ]
 );
 record!(

@@ -236,7 +236,7 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     assert_eq!(first[6], "5e-324");
     assert_eq!(first[7], "NaN");
     let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
-    assert!(est.lines().next().unwrap().contains("state_8,state_sigma_0"));
+    assert!(est.lines().next().unwrap().contains("state_10,state_sigma_0"));
     // every float of the frames table parses back to the same bits
     for (line, f) in frames_csv.lines().skip(1).zip(&log.frames) {
         let cells: Vec<&str> = line.split(',').collect();

@@ -1,0 +1,199 @@
+//! Inputs that do not excite an effect get "not identifiable from this
+//! data"; bad inputs (too little data, missing columns, a model file that
+//! does not load, unknown effects, non-finite values) get clear messages.
+
+use calibrate::suite::{nominal_model, nuisance};
+use calibrate::{
+    fit_effect, load_measured, load_model, run, CalibrateError, CalibrateOptions, NOT_IDENTIFIABLE,
+};
+use model::scenario::Drive;
+use model::{FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
+
+/// 10 s of a rod held at 0.3 m by the position controller: nothing moves.
+fn held_rod() -> Vec<Sample> {
+    let mut sc = match Scenario::by_name("closed-loop-random", 1, 10.0) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    sc.drive = Drive::ClosedLoopSteps {
+        levels: vec![(0.0, 0.3)],
+    };
+    let mut sim = Simulator::new(
+        nuisance(&nominal_model()),
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        5,
+    )
+    .expect("valid rig");
+    sim.run(10.0)
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("calibrate-tests");
+    std::fs::create_dir_all(&d).expect("tmp dir");
+    d.join(name)
+}
+
+#[test]
+fn a_held_rod_does_not_excite_motion_effects() {
+    let data = held_rod();
+    let opts = CalibrateOptions::default();
+    for name in [
+        "friction-asymmetry",
+        "valve-bandwidth",
+        "supply-sag",
+        "bulk-modulus",
+    ] {
+        match fit_effect(&data, &nominal_model(), name, &opts) {
+            Err(e @ CalibrateError::NotIdentifiable { .. }) => {
+                let msg = e.to_string();
+                eprintln!("{msg}");
+                assert!(msg.contains(NOT_IDENTIFIABLE) && msg.contains(name), "{msg}");
+            }
+            other => panic!("{name}: expected not identifiable, got {other:?}"),
+        }
+    }
+    // the whole workflow names nothing and says why, candidate by candidate
+    let cal = run(&data, &nominal_model(), &opts).expect("runs");
+    assert!(cal.effects.is_empty(), "{:?}", cal.names());
+    let round = &cal.rounds[0];
+    let fr = round
+        .candidates
+        .iter()
+        .find(|c| c.name == "friction-asymmetry")
+        .expect("scored");
+    assert!(!fr.identifiable, "{fr:?}");
+}
+
+#[test]
+fn a_rod_that_only_extends_does_not_show_retracting_friction() {
+    // open loop, constant +0.4 V: the rod creeps out and never retracts
+    let mut sc = Scenario::by_name("open-loop-sine", 2, 8.0).expect("scenario");
+    sc.drive = Drive::OpenLoopSine {
+        amplitude_v: 0.4,
+        freq_hz: 0.0,
+        phase_rad: std::f64::consts::FRAC_PI_2,
+    };
+    let rig = calibrate::Effect::FrictionAsymmetry.apply(&nuisance(&nominal_model()), &[1600.0]);
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        6,
+    )
+    .expect("valid rig");
+    let data = sim.run(8.0);
+    assert!(
+        data.windows(2).all(|w| w[1].x_m >= w[0].x_m - 1e-4),
+        "the rod retracted"
+    );
+    let e = fit_effect(
+        &data,
+        &nominal_model(),
+        "friction-asymmetry",
+        &CalibrateOptions::default(),
+    )
+    .unwrap_err();
+    eprintln!("{e}");
+    assert!(e.to_string().contains(NOT_IDENTIFIABLE), "{e}");
+}
+
+#[test]
+fn an_exciting_input_is_identifiable() {
+    let c = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "friction-asymmetry")
+        .expect("case");
+    let data = calibrate::suite::generate(&c);
+    let fit = fit_effect(
+        &data,
+        &nominal_model(),
+        "friction-asymmetry",
+        &CalibrateOptions::default(),
+    )
+    .expect("identifiable");
+    let slip = fit.parameters["friction.retract.slip_n"];
+    assert!((slip - 1600.0).abs() < 160.0, "{slip}");
+    assert!(fit.gap_reduction > 0.7, "{fit:?}");
+    let e = fit_effect(&data, &nominal_model(), "mass", &CalibrateOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("unknown effect `mass`"), "{e}");
+}
+
+#[test]
+fn too_little_data_is_refused() {
+    let data: Vec<Sample> = held_rod().into_iter().take(1500).collect();
+    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, CalibrateError::TooLittleData { .. }), "{msg}");
+    assert!(
+        msg.contains("too little data") && msg.contains("1500 samples"),
+        "{msg}"
+    );
+    let e = run(&[], &nominal_model(), &CalibrateOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("too little data"), "{e}");
+}
+
+#[test]
+fn non_finite_values_and_bad_models_are_named() {
+    let mut data = held_rod();
+    data[100].p2_pa = f64::NAN;
+    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("sample 100: column `p2`"), "{e}");
+    let bad = model::ActuatorParams {
+        bulk_modulus_pa: -1.0,
+        ..nominal_model()
+    };
+    let e = run(&held_rod(), &bad, &CalibrateOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("bulk_modulus_pa"), "{e}");
+    let opts = CalibrateOptions {
+        candidates: vec!["friction".into()],
+        ..CalibrateOptions::default()
+    };
+    let e = run(&held_rod(), &nominal_model(), &opts).unwrap_err();
+    assert!(e.to_string().contains("unknown effect `friction`"), "{e}");
+}
+
+#[test]
+fn missing_columns_are_named() {
+    let p = tmp("missing_p2.csv");
+    std::fs::write(&p, "t,u,x,p1\n0,0,0.3,6.9e6\n0.001,0,0.3,6.9e6\n").expect("write");
+    let e = load_measured(&p).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("measured data") && msg.contains("`p2` is missing"),
+        "{msg}"
+    );
+    let e = load_measured(&tmp("does_not_exist.csv")).unwrap_err();
+    assert!(e.to_string().contains("does_not_exist.csv"), "{e}");
+}
+
+#[test]
+fn model_files_that_do_not_load_are_named() {
+    let cases = [
+        (
+            "unknown_field.toml",
+            "[model]\nsupply_pressure_psi = 2000.0\n",
+            "supply_pressure_psi",
+        ),
+        ("invalid_value.toml", "[model]\nmass_kg = -3.0\n", "mass_kg"),
+        ("not_toml.toml", "[model\nmass_kg = 3\n", "not valid TOML"),
+    ];
+    for (file, text, needle) in cases {
+        let p = tmp(file);
+        std::fs::write(&p, text).expect("write");
+        let e = load_model(&p).unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, CalibrateError::ModelFile { .. }), "{msg}");
+        assert!(msg.contains(file) && msg.contains(needle), "{msg}");
+    }
+    let e = load_model(&tmp("absent.toml")).unwrap_err();
+    assert!(e.to_string().contains("cannot read"), "{e}");
+    // other sections are left to their owners; a file without [model] gives the default
+    let p = tmp("other_sections.toml");
+    std::fs::write(&p, "[sim]\nsubsteps_per_sample = 20\n").expect("write");
+    assert_eq!(load_model(&p).expect("loads"), model::ActuatorParams::default());
+}
