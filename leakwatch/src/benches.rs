@@ -93,3 +93,22 @@ pub fn detection(
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     write_json(out, "detection.json", &json)
 }
+
+/// The calibration workflow's hidden-effect suite.
+pub fn calibration(matrix: bool, out: Option<PathBuf>) -> Result<(), String> {
+    let opts = calibrate::CalibrateOptions::default();
+    let report = if matrix {
+        calibrate::suite::bench_matrix(&opts)
+    } else {
+        calibrate::suite::bench(&opts)
+    };
+    println!("{}", report.markdown());
+    if let Some(dir) = out {
+        std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        let files = report.write(&dir).map_err(|e| e.to_string())?;
+        for f in files {
+            eprintln!("wrote {}", f.display());
+        }
+    }
+    Ok(())
+}

@@ -62,6 +62,17 @@ enum Command {
         #[arg(long, default_value_t = 7)]
         seed: u64,
     },
+    /// Find where the model and measured data disagree, name the missing effect, fit it, show the gap shrink.
+    Calibrate {
+        /// Measured data (CSV: t,u,x,p1,p2[,x_sp,f_load,...]); u drives the model.
+        input: PathBuf,
+        /// Configuration whose [model] is the starting model (default: the built-in model).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output directory: calibration.json, model.toml, report.md and plots.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time.
     Replay {
         /// Input CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]).
@@ -150,6 +161,15 @@ enum BenchCommand {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// The calibration workflow over its hidden-effect suite (BENCHMARKS.md §3).
+    Calibration {
+        /// Run the full matrix (every effect under every input, 41 cases) instead of the 16-case suite.
+        #[arg(long)]
+        matrix: bool,
+        /// Output directory for calibration_bench.md and .json.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.
@@ -189,6 +209,7 @@ fn run(cli: Cli) -> Result<(), String> {
             seconds,
             seed,
         } => demo::run(&scenario, seconds, seed, &faults),
+        Command::Calibrate { input, config, out } => calibrate_cmd(&input, config.as_deref(), &out),
         Command::Replay {
             input,
             config,
@@ -281,6 +302,7 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Bench { which } => match which {
             BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out),
             BenchCommand::Ekf { steps, out } => benches::ekf(steps, out),
+            BenchCommand::Calibration { matrix, out } => benches::calibration(matrix, out),
             BenchCommand::Detection {
                 runs,
                 hours,
@@ -335,5 +357,59 @@ fn bench_sim(seconds: f64, repeat: u32, out: Option<PathBuf>) -> Result<(), Stri
     } else {
         println!("{json}");
     }
+    Ok(())
+}
+
+fn calibrate_cmd(
+    input: &std::path::Path,
+    config: Option<&std::path::Path>,
+    out: &std::path::Path,
+) -> Result<(), String> {
+    let model = match config {
+        Some(p) => calibrate::load_model(p).map_err(|e| e.to_string())?,
+        None => model::ActuatorParams::default(),
+    };
+    let measured = calibrate::load_measured(input).map_err(|e| e.to_string())?;
+    let cal = calibrate::run(&measured, &model, &calibrate::CalibrateOptions::default())
+        .map_err(|e| e.to_string())?;
+    let files = calibrate::write_outputs(&cal, out).map_err(|e| e.to_string())?;
+    let g = |gap: &calibrate::Gap| {
+        format!(
+            "x {:.3} mm, p1 {:.1} kPa, p2 {:.1} kPa",
+            gap.x_m * 1e3,
+            gap.p1_pa / 1e3,
+            gap.p2_pa / 1e3
+        )
+    };
+    println!("gap before (validation RMS): {}", g(&cal.gap_before));
+    if cal.effects.is_empty() {
+        println!("no missing effect explains a significant part of the gap: the model stands as it is");
+    }
+    for (i, e) in cal.effects.iter().enumerate() {
+        let params: Vec<String> = e
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4e}"))
+            .collect();
+        println!(
+            "{}. {} ({}), explains {:.0} % of the gap: {}",
+            i + 1,
+            e.name,
+            e.form,
+            e.gap_reduction * 100.0,
+            params.join(", ")
+        );
+    }
+    println!(
+        "gap after: {} ({:.0} % smaller)",
+        g(&cal.gap_after),
+        cal.gap_reduction * 100.0
+    );
+    println!(
+        "wrote {}, {}, {}",
+        files.json.display(),
+        files.model_toml.display(),
+        files.report.display()
+    );
     Ok(())
 }

@@ -142,3 +142,60 @@ fn plot_draws_a_png() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("missing.csv"));
 }
+
+#[test]
+fn calibrate_names_a_hidden_leak_and_writes_a_loadable_model() {
+    let d = tmpdir("calibrate");
+    let measured = d.join("m.csv");
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "closed-loop-random",
+        "--rig-variant",
+        "smooth",
+        "--fault",
+        "ext1:0.3lpm@0s",
+        "--seconds",
+        "12",
+        "--out",
+        measured.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cfg = d.join("smooth.toml");
+    std::fs::write(&cfg, "[model.friction]\nstatic_n = 1100.0\n").unwrap();
+    let out = d.join("cal");
+    let o = leakwatch(&[
+        "calibrate",
+        measured.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(json["effects"][0]["name"], "leak-ext1", "{json:#}");
+    let k = json["effects"][0]["parameters"]["leaks.ext1.sqrt_m3_s_sqrt_pa"]
+        .as_f64()
+        .unwrap();
+    let truth = model::units::lpm_to_m3_s(0.3) / (13.8e6f64 / 2.0).sqrt();
+    assert!((k - truth).abs() < 0.1 * truth, "fitted {k:e}, truth {truth:e}");
+    // the extended model loads with --config everywhere
+    let o = leakwatch(&["config", "--check", out.join("model.toml").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // a model file that does not load is one clear error
+    let o = leakwatch(&[
+        "calibrate",
+        measured.to_str().unwrap(),
+        "--config",
+        "/nonexistent.toml",
+        "--out",
+        "x",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("/nonexistent.toml"),
+        "{}",
+        stderr(&o)
+    );
+}
