@@ -57,6 +57,8 @@ pub mod event_kind {
     pub const SENSOR_SATURATED: u32 = 12;
     /// A sensor is dead (no usable output).
     pub const SENSOR_DEAD: u32 = 13;
+    /// The warm-up was too short to learn thresholds: detection is not armed.
+    pub const NOT_ARMED: u32 = 14;
 }
 
 /// Values of [`LeakEventFrame::phase`].

@@ -6,6 +6,7 @@ mod config;
 mod demo;
 mod plots;
 mod replay;
+mod run;
 mod simulate;
 
 use std::path::PathBuf;
@@ -61,6 +62,32 @@ enum Command {
         /// Seed.
         #[arg(long, default_value_t = 7)]
         seed: u64,
+    },
+    /// Run the live pipeline: acquisition, estimator, classifier and recorder as processes over
+    /// iceoryx2. With no arguments: the loaded scenario on an off-nominal rig with a 0.5 L/min
+    /// chamber-1 leak at 20 s, events printed as they happen.
+    Run {
+        /// Simulated seconds (default 40).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Scenario (default loaded-sine).
+        #[arg(long)]
+        scenario: Option<String>,
+        /// Leak to inject, as in `simulate` (repeatable).
+        #[arg(long = "fault")]
+        faults: Vec<String>,
+        /// Rig id: names the services, so several rigs can run side by side.
+        #[arg(long, default_value = "rig1")]
+        rig: String,
+        /// Configuration file.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// How stages wait for input: event, low-latency or busy-poll.
+        #[arg(long, default_value = "event")]
+        mode: String,
+        /// Output directory (default ./leakwatch-run).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Find where the model and measured data disagree, name the missing effect, fit it, show the gap shrink.
     Calibrate {
@@ -209,6 +236,23 @@ fn run(cli: Cli) -> Result<(), String> {
             seconds,
             seed,
         } => demo::run(&scenario, seconds, seed, &faults),
+        Command::Run {
+            seconds,
+            scenario,
+            faults,
+            rig,
+            config,
+            mode,
+            out,
+        } => run::run(run::RunArgs {
+            seconds,
+            scenario,
+            faults,
+            rig,
+            config,
+            mode,
+            out,
+        }),
         Command::Calibrate { input, config, out } => calibrate_cmd(&input, config.as_deref(), &out),
         Command::Replay {
             input,

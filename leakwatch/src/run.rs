@@ -1,0 +1,555 @@
+//! `leakwatch run`: start the four stage processes over iceoryx2, supervise
+//! them, print events as they happen, and write events.json, latency.json and
+//! the log (run.mcap) at the end.
+//!
+//! The stage binaries (`acquisition`, `estimator`, `classifier`, `recorder`)
+//! are looked up next to the `leakwatch` binary; inside a Cargo workspace they
+//! are built on first use. Every run gets its own iceoryx2 prefix
+//! (`LEAKWATCH_IOX_PREFIX`), so runs and tests never see each other.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use bus::{Bus, BusConfig, WaitMode};
+use classifier::{EventKind, LeakEvent, Phase};
+use frames::{event_kind, event_phase, LeakEventFrame, StatsFrame};
+use serde::Serialize;
+
+use crate::config::Config;
+
+/// What `leakwatch run` was asked to do.
+#[derive(Debug, Clone)]
+pub struct RunArgs {
+    /// Simulated seconds (default 40).
+    pub seconds: Option<f64>,
+    /// Scenario (default loaded-sine).
+    pub scenario: Option<String>,
+    /// Faults (default: ext1:0.5lpm@20s when nothing else is given).
+    pub faults: Vec<String>,
+    /// Rig id.
+    pub rig: String,
+    /// Configuration file.
+    pub config: Option<PathBuf>,
+    /// Wait mode of the stages: event, low-latency or busy-poll.
+    pub mode: String,
+    /// Output directory (default ./leakwatch-run).
+    pub out: Option<PathBuf>,
+}
+
+/// The four stage binaries.
+pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
+
+/// Finds the stage binaries next to the running executable; inside a Cargo
+/// workspace (target/<profile>/), builds the missing ones with the same profile.
+pub fn stage_binaries() -> Result<BTreeMap<&'static str, PathBuf>, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot locate the leakwatch binary: {e}"))?;
+    let dir = exe.parent().map(Path::to_path_buf).unwrap_or_default();
+    let find = |name: &str| dir.join(name);
+    let missing: Vec<&str> = STAGES.iter().copied().filter(|n| !find(n).is_file()).collect();
+    if !missing.is_empty() {
+        // target/<profile>/leakwatch (or target/<profile>/deps/... for tests): build them.
+        let profile_dir = if dir.ends_with("deps") {
+            dir.parent().map(Path::to_path_buf)
+        } else {
+            Some(dir.clone())
+        };
+        let workspace = profile_dir
+            .as_ref()
+            .and_then(|p| p.parent())
+            .and_then(|t| t.parent());
+        let release = profile_dir.as_ref().is_some_and(|p| p.ends_with("release"));
+        match workspace.filter(|w| w.join("Cargo.toml").is_file()) {
+            Some(ws) => {
+                eprintln!(
+                    "leakwatch: building the stage processes ({}) once...",
+                    missing.join(", ")
+                );
+                let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+                cmd.current_dir(ws).args(["build", "-q"]);
+                if release {
+                    cmd.arg("--release");
+                }
+                for m in &missing {
+                    cmd.args(["-p", m, "--bin", m]);
+                }
+                if let Some(target) = profile_dir.as_ref().and_then(|p| p.parent()) {
+                    cmd.env("CARGO_TARGET_DIR", target);
+                }
+                let status = cmd
+                    .status()
+                    .map_err(|e| format!("cannot run cargo to build the stages: {e}"))?;
+                if !status.success() {
+                    return Err(format!("building the stage processes failed ({status})"));
+                }
+            }
+            None => {
+                return Err(format!(
+                    "stage binaries not found next to {}: {}; build them with `cargo build --release` \
+                     (it builds acquisition, estimator, classifier and recorder)",
+                    exe.display(),
+                    missing.join(", ")
+                ))
+            }
+        }
+    }
+    let dir = if dir.ends_with("deps") {
+        dir.parent().map(Path::to_path_buf).unwrap_or(dir)
+    } else {
+        dir
+    };
+    let mut out = BTreeMap::new();
+    for n in STAGES {
+        let p = dir.join(n);
+        if !p.is_file() {
+            return Err(format!("stage binary `{n}` not found at {}", p.display()));
+        }
+        out.insert(n, p);
+    }
+    Ok(out)
+}
+
+/// Turns an event frame back into the event it reports.
+pub fn event_of(f: &LeakEventFrame) -> LeakEvent {
+    let kind = match f.kind {
+        event_kind::EXT1 => EventKind::Ext1,
+        event_kind::EXT2 => EventKind::Ext2,
+        event_kind::INTERNAL => EventKind::Int,
+        event_kind::ESTIMATOR_RESET => EventKind::EstimatorReset,
+        event_kind::SENSOR_STUCK => EventKind::SensorStuck,
+        event_kind::SENSOR_SATURATED => EventKind::SensorSaturated,
+        event_kind::SENSOR_DEAD => EventKind::SensorDead,
+        _ => EventKind::NotArmed,
+    };
+    let phase = match f.phase {
+        event_phase::RAISED => Phase::Raised,
+        event_phase::UPDATED => Phase::Updated,
+        _ => Phase::Cleared,
+    };
+    LeakEvent {
+        kind,
+        phase,
+        detector: frames::detector_name(&f.detector).to_string(),
+        event_id: f.event_id,
+        t_detect_s: f.t_detect_s,
+        t_onset_s: f.t_onset_s,
+        size_lpm: f.size_lpm,
+        size_lpm_sigma: f.size_lpm_sigma,
+        confidence: f.confidence,
+        channel: String::new(),
+        detail: String::new(),
+    }
+}
+
+/// Latency and counts of one stage, from its stats frames.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct StageFigures {
+    /// Frames received.
+    pub frames_in: u64,
+    /// Frames published.
+    pub frames_out: u64,
+    /// Frames missing from the input sequence.
+    pub seq_gaps: u64,
+    /// Missed 1 kHz deadlines (acquisition).
+    pub deadline_misses: u64,
+    /// Latency since acquisition at this stage's input, µs: median of the 1 s p50s.
+    pub latency_p50_us: f64,
+    /// Largest 1 s p99 of that latency, µs.
+    pub latency_p99_us: f64,
+    /// Largest latency, µs.
+    pub latency_max_us: f64,
+    /// Processing time per frame: median of the 1 s p50s, µs.
+    pub proc_p50_us: f64,
+    /// Largest 1 s p99 of the processing time, µs.
+    pub proc_p99_us: f64,
+    /// Mean CPU use, fraction of a core.
+    pub cpu_fraction: f64,
+    /// Largest resident set size, MB.
+    pub rss_mb: f64,
+    /// Stats frames seen.
+    pub intervals: u64,
+}
+
+#[derive(Default)]
+struct StageAcc {
+    last: Option<StatsFrame>,
+    p50s: Vec<f64>,
+    proc_p50s: Vec<f64>,
+    fig: StageFigures,
+    cpu_sum: f64,
+}
+
+impl StageAcc {
+    fn push(&mut self, s: &StatsFrame) {
+        let f = &mut self.fig;
+        f.intervals += 1;
+        // counters run from the process start: keep the latest (a restart starts again: add up)
+        if let Some(prev) = self.last {
+            if s.pid != prev.pid {
+                f.frames_in += prev.frames_in;
+                f.frames_out += prev.frames_out;
+                f.seq_gaps += prev.seq_gaps;
+                f.deadline_misses += prev.deadline_misses;
+            }
+        }
+        self.last = Some(*s);
+        if s.lat_ns_p50 > 0 {
+            self.p50s.push(s.lat_ns_p50 as f64 / 1e3);
+            f.latency_p99_us = f.latency_p99_us.max(s.lat_ns_p99 as f64 / 1e3);
+            f.latency_max_us = f.latency_max_us.max(s.lat_ns_max as f64 / 1e3);
+        }
+        if s.proc_ns_p50 > 0 {
+            self.proc_p50s.push(s.proc_ns_p50 as f64 / 1e3);
+            f.proc_p99_us = f.proc_p99_us.max(s.proc_ns_p99 as f64 / 1e3);
+        }
+        self.cpu_sum += s.cpu_fraction;
+        f.rss_mb = f.rss_mb.max(s.rss_bytes as f64 / 1e6);
+    }
+    fn finish(mut self) -> StageFigures {
+        let med = |v: &mut Vec<f64>| {
+            if v.is_empty() {
+                return f64::NAN;
+            }
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        if let Some(l) = self.last {
+            self.fig.frames_in += l.frames_in;
+            self.fig.frames_out += l.frames_out;
+            self.fig.seq_gaps += l.seq_gaps;
+            self.fig.deadline_misses += l.deadline_misses;
+        }
+        self.fig.latency_p50_us = med(&mut self.p50s);
+        self.fig.proc_p50_us = med(&mut self.proc_p50s);
+        self.fig.cpu_fraction = self.cpu_sum / self.fig.intervals.max(1) as f64;
+        self.fig
+    }
+}
+
+/// What latency.json holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct LatencyReport {
+    /// Wait mode of the stages.
+    pub mode: String,
+    /// Per stage (acquisition, estimator, classifier, recorder).
+    pub stages: BTreeMap<String, StageFigures>,
+    /// Restarts of crashed stages.
+    pub restarts: BTreeMap<String, u32>,
+}
+
+const STAGE_NAMES: [&str; 4] = ["acquisition", "estimator", "classifier", "recorder"];
+
+/// The result of a run.
+#[derive(Debug)]
+pub struct RunOutcome {
+    /// Every event received.
+    pub events: Vec<LeakEvent>,
+    /// Latency and counts.
+    pub latency: LatencyReport,
+    /// The output directory.
+    pub out_dir: PathBuf,
+}
+
+fn spawn(bin: &Path, args: &[String], prefix: &str, log: &Path) -> Result<Child, String> {
+    let err = std::fs::File::create(log).map_err(|e| format!("cannot create {}: {e}", log.display()))?;
+    Command::new(bin)
+        .args(args)
+        .env(bus::PREFIX_ENV, prefix)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(err)
+        .spawn()
+        .map_err(|e| format!("cannot start {}: {e}", bin.display()))
+}
+
+fn terminate(child: &mut Child) {
+    // SAFETY-free: kill(2) via libc with SIGTERM for a clean stop.
+    let pid = child.id() as i32;
+    unsafe {
+        libc::kill(pid, libc::SIGTERM);
+    }
+}
+
+/// Runs the pipeline; prints events as they come; writes the outputs.
+pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
+    let bins = stage_binaries()?;
+    frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
+    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
+    std::fs::create_dir_all(&out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
+    let demo = args.scenario.is_none() && args.faults.is_empty() && args.config.is_none();
+    let scenario = args.scenario.clone().unwrap_or_else(|| "loaded-sine".into());
+    let seconds = args.seconds.unwrap_or(40.0);
+    let faults = if args.faults.is_empty() && args.scenario.is_none() {
+        vec!["ext1:0.5lpm@20s".to_string()]
+    } else {
+        args.faults.clone()
+    };
+    // One config for every stage: the user's, and for the demonstration an off-nominal rig.
+    let mut cfg = Config::load_or_default(args.config.as_deref())?;
+    if demo {
+        cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
+    }
+    let cfg_path = out_dir.join("config.toml");
+    std::fs::write(&cfg_path, toml::to_string(&cfg).map_err(|e| e.to_string())?)
+        .map_err(|e| format!("cannot write {}: {e}", cfg_path.display()))?;
+    WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
+    let prefix = format!("run{}", std::process::id());
+    let bus_cfg = BusConfig {
+        iox_prefix: Some(prefix.clone()),
+        ..BusConfig::default()
+    };
+    let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
+    let mut events_rx = bus
+        .subscriber::<LeakEventFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
+    let mut stats_rx = bus
+        .subscriber::<StatsFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
+    let stop = bus::stop_on_signals();
+
+    let s = |v: &str| v.to_string();
+    let cfg_arg = cfg_path.display().to_string();
+    let log = out_dir.join("run.mcap").display().to_string();
+    let stage_args = |name: &str| -> Vec<String> {
+        match name {
+            "recorder" => vec![
+                s("--rig"),
+                args.rig.clone(),
+                s("--out"),
+                log.clone(),
+                s("--grace-ms"),
+                s("1500"),
+            ],
+            "classifier" | "estimator" => {
+                vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--config"),
+                    cfg_arg.clone(),
+                    s("--mode"),
+                    args.mode.clone(),
+                ]
+            }
+            _ => {
+                let mut a = vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--scenario"),
+                    scenario.clone(),
+                    s("--seconds"),
+                    seconds.to_string(),
+                    s("--config"),
+                    cfg_arg.clone(),
+                    s("--wait-subscribers"),
+                    s("2"),
+                ];
+                for f in &faults {
+                    a.push(s("--fault"));
+                    a.push(f.clone());
+                }
+                a
+            }
+        }
+    };
+    if !quiet {
+        println!(
+            "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
+            args.rig,
+            faults.join(", "),
+            args.mode,
+            if demo { ", off-nominal rig (demonstration)" } else { "" },
+            out_dir.display()
+        );
+    }
+    let mut children: BTreeMap<&str, Child> = BTreeMap::new();
+    for name in STAGES {
+        let child = spawn(
+            &bins[name],
+            &stage_args(name),
+            &prefix,
+            &out_dir.join(format!("{name}.log")),
+        )?;
+        children.insert(name, child);
+        if name != "acquisition" {
+            std::thread::sleep(Duration::from_millis(150));
+        }
+    }
+    let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
+    let mut events = Vec::new();
+    let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
+    let started = Instant::now();
+    let mut ended_at: Option<Instant> = None;
+    let deadline = Duration::from_secs_f64(seconds + 30.0);
+    loop {
+        while let Ok(Some(f)) = events_rx.try_receive() {
+            let ev = event_of(&f.frame);
+            if !quiet {
+                print_event(&ev);
+            }
+            events.push(ev);
+        }
+        while let Ok(Some(st)) = stats_rx.try_receive() {
+            accs.entry(st.stage).or_default().push(&st.frame);
+        }
+        if stop.load(Ordering::Relaxed) {
+            eprintln!("leakwatch run: stopping (signal)");
+            break;
+        }
+        // Supervision.
+        let mut acquisition_done = false;
+        for name in STAGES {
+            let Some(child) = children.get_mut(name) else {
+                continue;
+            };
+            if let Ok(Some(status)) = child.try_wait() {
+                if name == "acquisition" {
+                    if !status.success() {
+                        return Err(format!(
+                            "acquisition failed ({status}); see {}",
+                            out_dir.join("acquisition.log").display()
+                        ));
+                    }
+                    acquisition_done = true;
+                } else if ended_at.is_none() || name != "recorder" {
+                    let n = restarts.entry(name.to_string()).or_default();
+                    *n += 1;
+                    eprintln!("leakwatch run: stage {name} exited ({status}); restarting it (restart {n})");
+                    if *n > 5 {
+                        return Err(format!(
+                            "stage {name} keeps failing; see {}",
+                            out_dir.join(format!("{name}.log")).display()
+                        ));
+                    }
+                    let mut a = stage_args(name);
+                    if name == "recorder" {
+                        a[3] = out_dir.join(format!("run-{n}.mcap")).display().to_string();
+                    }
+                    let c = spawn(&bins[name], &a, &prefix, &out_dir.join(format!("{name}-{n}.log")))?;
+                    children.insert(name, c);
+                }
+            }
+        }
+        if acquisition_done {
+            children.remove("acquisition");
+            ended_at.get_or_insert_with(Instant::now);
+        }
+        if let Some(t) = ended_at {
+            // let the last frames drain and the recorder finish its file
+            if t.elapsed() > Duration::from_millis(2500) {
+                break;
+            }
+        }
+        if started.elapsed() > deadline {
+            eprintln!("leakwatch run: the run did not end in time; stopping");
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    for (_, c) in children.iter_mut() {
+        terminate(c);
+    }
+    for (_, mut c) in children {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(5) {
+            if let Ok(Some(_)) = c.try_wait() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = c.kill();
+        let _ = c.wait();
+    }
+    while let Ok(Some(st)) = stats_rx.try_receive() {
+        accs.entry(st.stage).or_default().push(&st.frame);
+    }
+    while let Ok(Some(f)) = events_rx.try_receive() {
+        events.push(event_of(&f.frame));
+    }
+    let mut stages = BTreeMap::new();
+    for (code, acc) in accs {
+        let name = STAGE_NAMES.get(code as usize).copied().unwrap_or("unknown");
+        stages.insert(name.to_string(), acc.finish());
+    }
+    let latency = LatencyReport {
+        mode: args.mode.clone(),
+        stages,
+        restarts,
+    };
+    crate::replay::write_events(&out_dir.join("events.json"), &events)?;
+    let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())?;
+    std::fs::write(out_dir.join("latency.json"), text + "\n")
+        .map_err(|e| format!("cannot write latency.json: {e}"))?;
+    drop(events_rx);
+    drop(stats_rx);
+    drop(bus);
+    let _ = bus_cfg.remove_isolated_files();
+    Ok(RunOutcome {
+        events,
+        latency,
+        out_dir,
+    })
+}
+
+fn print_event(ev: &LeakEvent) {
+    let size = if ev.size_lpm.is_finite() {
+        format!(" size {:.3} ± {:.3} L/min", ev.size_lpm, ev.size_lpm_sigma)
+    } else {
+        String::new()
+    };
+    println!(
+        "  t = {:7.3} s  {:<10} {:<8} {:<16} onset {:.2} s{size}  confidence {:.2}",
+        ev.t_detect_s,
+        ev.detector,
+        format!("{:?}", ev.phase).to_lowercase(),
+        ev.kind.name(),
+        ev.t_onset_s,
+        ev.confidence
+    );
+}
+
+/// `leakwatch run`.
+pub fn run(args: RunArgs) -> Result<(), String> {
+    let o = run_pipeline(&args, false)?;
+    println!("\n| stage | frames in | frames out | missing | latency p50 µs | p99 µs | max µs | proc p50 µs | CPU % | RSS MB |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for (name, f) in &o.latency.stages {
+        println!(
+            "| {name} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+            f.frames_in,
+            f.frames_out,
+            f.seq_gaps,
+            f.latency_p50_us,
+            f.latency_p99_us,
+            f.latency_max_us,
+            f.proc_p50_us,
+            f.cpu_fraction * 100.0,
+            f.rss_mb
+        );
+    }
+    let leaks: Vec<&LeakEvent> = o
+        .events
+        .iter()
+        .filter(|e| e.kind.is_leak() && e.phase == Phase::Raised && e.detector == "leak-size")
+        .collect();
+    match leaks.first() {
+        Some(e) => println!(
+            "\ndetected: {} leak at t = {:.2} s (onset {:.2} s), {:.3} L/min",
+            e.kind.name(),
+            e.t_detect_s,
+            e.t_onset_s,
+            o.events
+                .iter()
+                .rev()
+                .find(|x| x.event_id == e.event_id && x.detector == e.detector)
+                .map_or(e.size_lpm, |x| x.size_lpm)
+        ),
+        None => println!("\nno leak detected"),
+    }
+    println!(
+        "wrote {}/events.json, latency.json, run.mcap",
+        o.out_dir.display()
+    );
+    Ok(())
+}
