@@ -1,0 +1,230 @@
+//! End-to-end runs of the live pipeline: real processes (acquisition,
+//! estimator, classifier, recorder) over real iceoryx2 shared memory, started
+//! and supervised by `leakwatch run`. Each run has its own isolation prefix.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The runs share two cores: one at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("leakwatch-pipeline-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A config whose classifier learns its thresholds in time for a leak at 10 s.
+fn short_warmup_config(dir: &Path) -> PathBuf {
+    let p = dir.join("cfg.toml");
+    std::fs::write(&p, "[classifier]\nsettle_s = 2.0\nwarmup_s = 3.0\n").unwrap();
+    p
+}
+
+fn start_run(rig: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Path) -> Child {
+    let mut args = vec![
+        "run".to_string(),
+        "--rig".into(),
+        rig.into(),
+        "--scenario".into(),
+        "loaded-sine".into(),
+        "--seconds".into(),
+        seconds.into(),
+        "--config".into(),
+        cfg.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+    ];
+    if let Some(f) = fault {
+        args.push("--fault".into());
+        args.push(f.into());
+    }
+    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(&args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("leakwatch runs")
+}
+
+fn finish(child: Child) -> Output {
+    let o = child.wait_with_output().unwrap();
+    assert!(
+        o.status.success(),
+        "leakwatch run failed:\n{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn raised_leaks(events: &serde_json::Value) -> Vec<serde_json::Value> {
+    events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["phase"] == "raised" && e["detector"] == "leak-size")
+        .filter(|e| matches!(e["kind"].as_str(), Some("ext1" | "ext2" | "int")))
+        .cloned()
+        .collect()
+}
+
+/// PIDs of processes whose command line contains every needle.
+fn pids_of(needles: &[&str]) -> Vec<i32> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(entry.path().join("cmdline")) else {
+            continue;
+        };
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if needles.iter().all(|n| cmd.contains(n)) {
+            out.push(pid);
+        }
+    }
+    out
+}
+
+#[test]
+fn a_leak_is_detected_and_every_frame_is_estimated_and_recorded() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("leak");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let o = finish(start_run("e2e-leak", "20", Some("ext1:0.5lpm@10s"), &out, &cfg));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("ext1"),
+        "events are printed as they happen:\n{stdout}"
+    );
+
+    let events = json(&out.join("events.json"));
+    let r = raised_leaks(&events);
+    assert_eq!(r.len(), 1, "{events:#}");
+    assert_eq!(r[0]["kind"], "ext1");
+    let t = r[0]["t_detect_s"].as_f64().unwrap();
+    assert!((10.0..13.0).contains(&t), "detected at {t} s");
+
+    // Every frame published was estimated and recorded.
+    let lat = json(&out.join("latency.json"));
+    let published = lat["stages"]["acquisition"]["frames_out"].as_u64().unwrap();
+    assert_eq!(published, 20_000, "{lat:#}");
+    assert_eq!(
+        lat["stages"]["estimator"]["frames_in"].as_u64().unwrap(),
+        published,
+        "{lat:#}"
+    );
+    assert_eq!(lat["stages"]["estimator"]["seq_gaps"].as_u64().unwrap(), 0);
+    for hop in ["estimator", "classifier"] {
+        assert!(
+            lat["stages"][hop]["latency_p50_us"].as_f64().unwrap() > 0.0,
+            "{lat:#}"
+        );
+    }
+    let log = recorder::LogReader::open(&out.join("run.mcap"))
+        .unwrap()
+        .read()
+        .unwrap();
+    assert!(log.truncated.is_none());
+    assert_eq!(log.frames.len(), 20_000);
+    assert_eq!(log.estimates.len(), 20_000);
+    assert!(
+        log.frames.windows(2).all(|w| w[1].seq == w[0].seq + 1),
+        "frame sequence continuous"
+    );
+    assert!(log.gaps.is_empty(), "{:?}", log.gaps);
+    // The log's estimates belong to its frames: same sequence numbers and sample times.
+    for (f, e) in log.frames.iter().zip(&log.estimates) {
+        assert_eq!((f.seq, f.t_s.to_bits()), (e.seq, e.t_s.to_bits()));
+        assert_eq!(e.measured[1].to_bits(), f.p1_pa.to_bits());
+    }
+    // The leak event is in the log too.
+    assert!(
+        log.events.iter().any(|e| e.kind == frames::event_kind::EXT1),
+        "{:?}",
+        log.events
+    );
+}
+
+#[test]
+fn a_killed_estimator_is_restarted_and_the_gap_is_recorded() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("kill");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let child = start_run("e2e-kill", "14", None, &out, &cfg);
+    // Wait until the estimator runs, let it work a few seconds, then SIGKILL it.
+    let t0 = Instant::now();
+    let pid = loop {
+        if let Some(p) = pids_of(&["estimator", "--rig", "e2e-kill"]).first() {
+            break *p;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(60), "estimator never started");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    std::thread::sleep(Duration::from_secs(5));
+    unsafe {
+        libc::kill(pid, libc::SIGKILL);
+    }
+    let o = finish(child);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("stage estimator exited"), "{stderr}");
+    let lat = json(&out.join("latency.json"));
+    assert_eq!(lat["restarts"]["estimator"], 1, "{lat:#}");
+    let log = recorder::LogReader::open(&out.join("run.mcap"))
+        .unwrap()
+        .read()
+        .unwrap();
+    assert_eq!(log.frames.len(), 14_000, "the recorder kept every frame");
+    // Estimates stop and resume: fewer than frames, with the gap recorded.
+    assert!(
+        log.estimates.len() < 14_000 && log.estimates.len() > 7_000,
+        "{}",
+        log.estimates.len()
+    );
+    let last = log.estimates.last().unwrap().seq;
+    assert!(
+        last >= 13_000,
+        "the restarted estimator carried on to the end: last seq {last}"
+    );
+    assert!(
+        log.gaps
+            .iter()
+            .any(|g| g.topic == frames::Topic::Estimates && g.missing > 0),
+        "gap recorded: {:?}",
+        log.gaps
+    );
+}
+
+#[test]
+fn two_rigs_side_by_side_do_not_see_each_other() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("two");
+    let cfg = short_warmup_config(&d);
+    let (out_a, out_b) = (d.join("a"), d.join("b"));
+    let a = start_run("rigA", "16", Some("ext2:0.5lpm@10s"), &out_a, &cfg);
+    let b = start_run("rigB", "16", None, &out_b, &cfg);
+    finish(a);
+    finish(b);
+    let ra = raised_leaks(&json(&out_a.join("events.json")));
+    let rb = raised_leaks(&json(&out_b.join("events.json")));
+    assert_eq!(ra.len(), 1, "{ra:?}");
+    assert_eq!(ra[0]["kind"], "ext2");
+    assert!(rb.is_empty(), "rig B is healthy: {rb:?}");
+    for out in [&out_a, &out_b] {
+        let log = recorder::LogReader::open(&out.join("run.mcap"))
+            .unwrap()
+            .read()
+            .unwrap();
+        assert_eq!(log.frames.len(), 16_000, "{}", out.display());
+    }
+}
