@@ -4,6 +4,7 @@
 mod benches;
 mod config;
 mod demo;
+mod latency;
 mod plots;
 mod replay;
 mod run;
@@ -197,6 +198,16 @@ enum BenchCommand {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Pipeline latency at 1 kHz: iceoryx2 processes (event and low-latency modes) beside the
+    /// same stages as threads over Unix sockets and over crossbeam channels.
+    Latency {
+        /// Seconds per transport.
+        #[arg(long, default_value_t = 20.0)]
+        seconds: f64,
+        /// Output directory for latency.json.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.
@@ -347,6 +358,7 @@ fn run(cli: Cli) -> Result<(), String> {
             BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out),
             BenchCommand::Ekf { steps, out } => benches::ekf(steps, out),
             BenchCommand::Calibration { matrix, out } => benches::calibration(matrix, out),
+            BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out),
             BenchCommand::Detection {
                 runs,
                 hours,
@@ -456,4 +468,9 @@ fn calibrate_cmd(
         files.report.display()
     );
     Ok(())
+}
+
+/// The loaded scenario's samples for benchmarks, `seconds` long.
+pub(crate) fn benches_samples(seconds: f64) -> Vec<model::Sample> {
+    bench::speed::recorded_samples(seconds)
 }

@@ -1,0 +1,239 @@
+//! `leakwatch bench latency`: the pipeline at 1 kHz over iceoryx2 (event and
+//! low-latency modes, real processes), and the same stages as threads over
+//! Unix domain sockets and over crossbeam channels, side by side in one run.
+
+use std::os::unix::net::UnixDatagram;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use classifier::{Classifier, ClassifierConfig};
+use estimator::{EstimatorStage, Tuning};
+use hdrhistogram::Histogram;
+use model::{ActuatorParams, Sample};
+use serde::Serialize;
+
+/// One transport's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    /// Transport and wait mode.
+    pub transport: String,
+    /// Acquisition → estimator input, µs: p50, p99, max.
+    pub hop_us: [f64; 3],
+    /// Acquisition → classifier decision, µs: p50, p99, p99.9, max.
+    pub end_to_end_us: [f64; 4],
+    /// Frames published and received by the classifier.
+    pub frames: [u64; 2],
+    /// CPU of the estimator stage, fraction of a core.
+    pub estimator_cpu: f64,
+}
+
+fn q(h: &Histogram<u64>, p: f64) -> f64 {
+    h.value_at_quantile(p) as f64 / 1e3
+}
+
+fn now_ns(t0: Instant) -> u64 {
+    t0.elapsed().as_nanos() as u64
+}
+
+/// The three stages as threads; `T` moves (acquisition time, sample) between them.
+fn threads_run<S: Send + 'static, R: Send + 'static>(
+    name: &str,
+    samples: Vec<Sample>,
+    mut make: impl FnMut() -> (S, R),
+    send: fn(&S, u64, &Sample) -> bool,
+    recv: fn(&R) -> Option<(u64, Sample)>,
+) -> Row {
+    let t0 = Instant::now();
+    let (s1, r1) = make();
+    let (s2, r2) = make();
+    let n = samples.len() as u64;
+    let acq = std::thread::spawn(move || {
+        let period = Duration::from_millis(1);
+        let start = Instant::now() + Duration::from_millis(50);
+        for (k, s) in samples.iter().enumerate() {
+            let due = start + period * k as u32;
+            let now = Instant::now();
+            if due > now {
+                std::thread::sleep(due - now);
+            }
+            if !send(&s1, now_ns(t0), s) {
+                break;
+            }
+        }
+        // end marker
+        let mut end = Sample::new(f64::NAN, 0.0, 0.0, 0.0, 0.0);
+        end.u_v = f64::NAN;
+        send(&s1, 0, &end);
+    });
+    let est = std::thread::spawn(move || {
+        let mut stage = EstimatorStage::new(
+            ActuatorParams::default(),
+            Tuning::sensor_derived(),
+            Tuning::thesis(),
+        )
+        .expect("default tuning is valid");
+        let mut hop = Histogram::<u64>::new_with_bounds(1, 60_000_000_000, 3).expect("histogram bounds");
+        let cpu0 = bus::stats::process_cpu_ns();
+        let w0 = Instant::now();
+        while let Some((stamp, s)) = recv(&r1) {
+            if s.t_s.is_nan() {
+                send(&s2, 0, &s);
+                break;
+            }
+            let _ = hop.record(now_ns(t0).saturating_sub(stamp).max(1));
+            let e = stage.on_sample(&s);
+            let mut out = s;
+            out.x_sp_m = e.leak.state[0];
+            send(&s2, stamp, &out);
+        }
+        let cpu = (bus::stats::process_cpu_ns() - cpu0) as f64 / w0.elapsed().as_nanos().max(1) as f64;
+        (hop, cpu)
+    });
+    let mut cls = Classifier::new(ClassifierConfig::default()).expect("default config is valid");
+    let mut e2e = Histogram::<u64>::new_with_bounds(1, 60_000_000_000, 3).expect("histogram bounds");
+    let mut got = 0;
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .expect("default tuning is valid");
+    while let Some((stamp, s)) = recv(&r2) {
+        if s.t_s.is_nan() {
+            break;
+        }
+        // The classifier's own work on an estimate (the estimate is recomputed here
+        // only to have one to classify; its cost is not part of the latency below).
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |_| {});
+        let _ = e2e.record(now_ns(t0).saturating_sub(stamp).max(1));
+        got += 1;
+    }
+    let _ = acq.join();
+    let (hop, cpu) = est
+        .join()
+        .unwrap_or_else(|_| (Histogram::new(3).expect("histogram"), f64::NAN));
+    Row {
+        transport: name.into(),
+        hop_us: [q(&hop, 0.5), q(&hop, 0.99), hop.max() as f64 / 1e3],
+        end_to_end_us: [
+            q(&e2e, 0.5),
+            q(&e2e, 0.99),
+            q(&e2e, 0.999),
+            e2e.max() as f64 / 1e3,
+        ],
+        frames: [n, got],
+        estimator_cpu: cpu / 2.0, // two threads in the process: report per stage roughly
+    }
+}
+
+const WIRE: usize = 8 + 5 * 8;
+
+fn encode(stamp: u64, s: &Sample) -> [u8; WIRE] {
+    let mut b = [0u8; WIRE];
+    b[..8].copy_from_slice(&stamp.to_le_bytes());
+    for (i, v) in [s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa].iter().enumerate() {
+        b[8 + 8 * i..16 + 8 * i].copy_from_slice(&v.to_le_bytes());
+    }
+    b
+}
+
+fn decode(b: &[u8; WIRE]) -> (u64, Sample) {
+    let f = |i: usize| f64::from_le_bytes(b[8 + 8 * i..16 + 8 * i].try_into().unwrap_or([0; 8]));
+    let stamp = u64::from_le_bytes(b[..8].try_into().unwrap_or([0; 8]));
+    (stamp, Sample::new(f(0), f(1), f(2), f(3), f(4)))
+}
+
+/// Runs the benchmark and prints the table; writes DIR/latency.json.
+pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
+    if !(seconds > 0.0 && seconds.is_finite()) {
+        return Err(format!("--seconds {seconds}: must be a positive number"));
+    }
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let mut rows = Vec::new();
+    for mode in ["event", "low-latency"] {
+        let args = crate::run::RunArgs {
+            seconds: Some(seconds),
+            scenario: Some("loaded-sine".into()),
+            faults: Vec::new(),
+            rig: format!("bench-{}", mode.replace('-', "")),
+            config: None,
+            mode: mode.into(),
+            out: Some(out.join(format!("run-{mode}"))),
+        };
+        eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
+        let o = crate::run::run_pipeline(&args, true)?;
+        let st = &o.latency.stages;
+        let get = |s: &str| st.get(s).cloned().unwrap_or_default();
+        let (e, c, a) = (get("estimator"), get("classifier"), get("acquisition"));
+        rows.push(Row {
+            transport: format!("iceoryx2 processes, {mode}"),
+            hop_us: [e.latency_p50_us, e.latency_p99_us, e.latency_max_us],
+            // classifier input latency + its processing: the decision time
+            end_to_end_us: [
+                c.latency_p50_us + c.proc_p50_us,
+                c.latency_p99_us,
+                f64::NAN,
+                c.latency_max_us,
+            ],
+            frames: [a.frames_out, c.frames_in],
+            estimator_cpu: e.cpu_fraction,
+        });
+    }
+    let samples = crate::benches_samples(seconds);
+    eprintln!("threads over Unix datagram sockets: {seconds} s ...");
+    rows.push(threads_run(
+        "threads, Unix datagram sockets",
+        samples.clone(),
+        || UnixDatagram::pair().expect("socketpair"),
+        |s, stamp, x| s.send(&encode(stamp, x)).is_ok(),
+        |r| {
+            let mut b = [0u8; WIRE];
+            match r.recv(&mut b) {
+                Ok(WIRE) => Some(decode(&b)),
+                _ => None,
+            }
+        },
+    ));
+    eprintln!("threads over crossbeam channels: {seconds} s ...");
+    rows.push(threads_run(
+        "threads, crossbeam channels",
+        samples,
+        || crossbeam_channel::bounded::<(u64, Sample)>(1024),
+        |s, stamp, x| s.send((stamp, *x)).is_ok(),
+        |r| r.recv().ok(),
+    ));
+    println!("| transport | hop p50 µs | hop p99 µs | hop max µs | end-to-end p50 µs | p99 µs | p99.9 µs | max µs | frames sent / classified | estimator CPU % |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let f = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.1}")
+        } else {
+            "–".into()
+        }
+    };
+    for r in &rows {
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} |",
+            r.transport,
+            f(r.hop_us[0]),
+            f(r.hop_us[1]),
+            f(r.hop_us[2]),
+            f(r.end_to_end_us[0]),
+            f(r.end_to_end_us[1]),
+            f(r.end_to_end_us[2]),
+            f(r.end_to_end_us[3]),
+            r.frames[0],
+            r.frames[1],
+            f(r.estimator_cpu * 100.0)
+        );
+    }
+    let p = out.join("latency.json");
+    std::fs::write(
+        &p,
+        serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n",
+    )
+    .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    eprintln!("wrote {}", p.display());
+    Ok(())
+}
