@@ -16,7 +16,11 @@ fn main() {
         seed: a[6].parse().unwrap(),
         seconds: 0.0,
     };
-    let seconds = if case.kind == "none" { 300.0 } else { case.onset_s + case.ramp_s + 10.0 };
+    let seconds = if case.kind == "none" {
+        300.0
+    } else {
+        case.onset_s + case.ramp_s + 10.0
+    };
     let mut rng = Rng::new(case.seed);
     let rig = draw_rig(&mut rng);
     println!(
