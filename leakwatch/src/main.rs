@@ -90,6 +90,14 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
+    Export {
+        /// The log file (run.mcap).
+        log: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        csv: PathBuf,
+    },
     /// Find where the model and measured data disagree, name the missing effect, fit it, show the gap shrink.
     Calibrate {
         /// Measured data (CSV: t,u,x,p1,p2[,x_sp,f_load,...]); u drives the model.
@@ -103,7 +111,7 @@ enum Command {
     },
     /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time.
     Replay {
-        /// Input CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]).
+        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) or a recorded log (.mcap).
         input: PathBuf,
         /// Configuration file (TOML; defaults for everything missing).
         #[arg(long)]
@@ -264,6 +272,13 @@ fn run(cli: Cli) -> Result<(), String> {
             mode,
             out,
         }),
+        Command::Export { log, csv } => {
+            let files = export_log(&log, &csv)?;
+            for f in files {
+                eprintln!("wrote {}", f.display());
+            }
+            Ok(())
+        }
         Command::Calibrate { input, config, out } => calibrate_cmd(&input, config.as_deref(), &out),
         Command::Replay {
             input,
@@ -279,6 +294,14 @@ fn run(cli: Cli) -> Result<(), String> {
                 }
                 cfg.estimator.states = m;
             }
+            // A recorded log is replayed through its frames, exported as dataset.csv.
+            let input = if input.extension().is_some_and(|e| e == "mcap") {
+                let dir = out.join("log-export");
+                export_log(&input, &dir)?;
+                dir.join("dataset.csv")
+            } else {
+                input
+            };
             let req = replay::ReplayRequest {
                 input,
                 out_dir: out.clone(),
@@ -473,4 +496,15 @@ fn calibrate_cmd(
 /// The loaded scenario's samples for benchmarks, `seconds` long.
 pub(crate) fn benches_samples(seconds: f64) -> Vec<model::Sample> {
     bench::speed::recorded_samples(seconds)
+}
+
+/// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv).
+fn export_log(log: &std::path::Path, dir: &std::path::Path) -> Result<Vec<PathBuf>, String> {
+    let l = recorder::LogReader::open(log)
+        .and_then(|r| r.read())
+        .map_err(|e| format!("{}: {e}", log.display()))?;
+    if let Some(why) = &l.truncated {
+        eprintln!("warning: {}: {why}; reading what is complete", log.display());
+    }
+    recorder::export_csv(&l, dir).map_err(|e| e.to_string())
 }
