@@ -295,7 +295,11 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     std::fs::write(&cfg_path, toml::to_string(&cfg).map_err(|e| e.to_string())?)
         .map_err(|e| format!("cannot write {}: {e}", cfg_path.display()))?;
     WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
-    let prefix = format!("run{}", std::process::id());
+    // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
+    let prefix = match std::env::var(bus::PREFIX_ENV) {
+        Ok(p) if !p.is_empty() => p,
+        _ => format!("run{}", std::process::id()),
+    };
     let bus_cfg = BusConfig {
         iox_prefix: Some(prefix.clone()),
         ..BusConfig::default()

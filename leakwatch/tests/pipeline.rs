@@ -228,3 +228,75 @@ fn two_rigs_side_by_side_do_not_see_each_other() {
         assert_eq!(log.frames.len(), 16_000, "{}", out.display());
     }
 }
+
+/// The Python example (official iceoryx2 bindings) subscribes to a live run and
+/// prints its events and estimates. CI installs the bindings (.ci/setup) and
+/// sets LEAKWATCH_REQUIRE_PYTHON=1; elsewhere the test says it was skipped.
+#[test]
+fn the_python_example_sees_live_events_and_estimates() {
+    let has_python = Command::new("python3")
+        .args(["-c", "import iceoryx2"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !has_python {
+        assert!(
+            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
+            "python3 with iceoryx2==0.10.0 is required (pip install iceoryx2==0.10.0)"
+        );
+        eprintln!("SKIPPED: python3 with the iceoryx2 bindings is not installed");
+        return;
+    }
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("python");
+    let cfg = short_warmup_config(&d);
+    let prefix = format!("py{}", std::process::id());
+    let mut args = vec![
+        "run",
+        "--rig",
+        "pyrig",
+        "--scenario",
+        "loaded-sine",
+        "--seconds",
+        "16",
+    ];
+    args.extend(["--fault", "ext1:0.5lpm@10s"]);
+    let cfg_s = cfg.display().to_string();
+    let out_s = d.join("out").display().to_string();
+    args.extend(["--config", cfg_s.as_str(), "--out", out_s.as_str()]);
+    let run = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(&args)
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/live_events.py");
+    let py = Command::new("python3")
+        .arg(&script)
+        .args(["--rig", "pyrig", "--prefix", &prefix, "--seconds", "19"])
+        .output()
+        .unwrap();
+    finish(run);
+    let stdout = String::from_utf8_lossy(&py.stdout);
+    assert!(
+        py.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("EVENT") && l.contains("raised ext1")),
+        "{stdout}"
+    );
+    let n: u64 = stdout
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("done: ")
+                .and_then(|r| r.split(' ').next())
+                .and_then(|v| v.parse().ok())
+        })
+        .unwrap_or(0);
+    assert!(n > 10_000, "estimates seen by Python: {n}\n{stdout}");
+}
