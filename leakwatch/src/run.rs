@@ -56,10 +56,17 @@ pub fn stage_binaries() -> Result<BTreeMap<&'static str, PathBuf>, String> {
         } else {
             Some(dir.clone())
         };
-        let workspace = profile_dir
+        // The workspace: beside target/ by default, else where this binary was built from.
+        let built_from = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .parent()
+            .map(Path::to_path_buf);
+        let beside = profile_dir
             .as_ref()
             .and_then(|p| p.parent())
-            .and_then(|t| t.parent());
+            .and_then(|t| t.parent())
+            .map(Path::to_path_buf);
+        let workspace = beside.filter(|w| w.join("Cargo.toml").is_file()).or(built_from);
+        let workspace = workspace.as_deref();
         let release = profile_dir.as_ref().is_some_and(|p| p.ends_with("release"));
         match workspace.filter(|w| w.join("Cargo.toml").is_file()) {
             Some(ws) => {
