@@ -154,11 +154,6 @@ pub struct ClassifierConfig {
     pub dead_samples: u32,
     /// Full-scale range of the pressure transducers, Pa.
     pub pressure_full_scale_pa: f64,
-    /// Supply pressure of the rig, Pa.
-    pub supply_pressure_pa: f64,
-    /// Leak-size detector: no evidence is gathered while a chamber pressure is within
-    /// this fraction of the supply pressure from tank or supply.
-    pub saturation_margin: f64,
 }
 
 impl Default for ClassifierConfig {
@@ -180,8 +175,6 @@ impl Default for ClassifierConfig {
             saturated_samples: 200,
             dead_samples: 200,
             pressure_full_scale_pa: 20.7e6,
-            supply_pressure_pa: 13.8e6,
-            saturation_margin: 0.05,
         }
     }
 }
@@ -203,8 +196,6 @@ impl ClassifierConfig {
             ("mae_margin", self.mae_margin),
             ("mae_confirm_s", self.mae_confirm_s),
             ("pressure_full_scale_pa", self.pressure_full_scale_pa),
-            ("supply_pressure_pa", self.supply_pressure_pa),
-            ("saturation_margin", self.saturation_margin),
         ];
         for (name, v) in fields {
             if !(v.is_finite() && v >= 0.0) {
@@ -446,20 +437,12 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
-        // Near tank or supply pressure a valve land passes almost nothing and its flow
-        // law is steepest: small pressure errors read as large flow errors. No
-        // evidence is accumulated there.
-        let (lo, hi) = (
-            self.cfg.saturation_margin * self.cfg.supply_pressure_pa,
-            (1.0 - self.cfg.saturation_margin) * self.cfg.supply_pressure_pa,
-        );
-        let observable = e.measured[1..].iter().all(|p| *p > lo && *p < hi);
         for k in 0..3 {
             let thr = self.threshold_lpm[k];
             if rise[k] < 0.25 * thr {
                 self.last_low_s[k] = e.t_s;
             }
-            if k == lead && rise[k] > thr && best > 0.5 && observable {
+            if k == lead && rise[k] > thr && best > 0.5 {
                 self.above_since_s[k].get_or_insert(e.t_s);
             } else {
                 self.above_since_s[k] = None;
