@@ -72,10 +72,10 @@ fn main() {
                 ev.size_lpm
             )
         });
-        if k % 2000 == 0 && s.t_s > case.onset_s.min(10.0) - 3.0 {
+        if k % 500 == 0 && s.t_s > case.onset_s.min(10.0) - 3.0 && s.t_s < 30.0 {
             let r = cls.leak_size.rise_lpm(&e.leak);
             println!(
-                "t {:6.2} q {:7.3} {:7.3} {:7.3} rise {:7.3} {:7.3} {:7.3} thr {:?} bias {:.2e} leak {:.3}",
+                "t {:6.2} q {:7.3} {:7.3} {:7.3} rise {:7.3} {:7.3} {:7.3} thr {:?} bias {:.2e} leak {:.3} x {:.3} p1 {:.2} p2 {:.2}",
                 s.t_s,
                 e.leak.state[7] * 6e4,
                 e.leak.state[8] * 6e4,
@@ -87,7 +87,10 @@ fn main() {
                     .thresholds_lpm()
                     .map(|v| (v * 1000.0).round() / 1000.0),
                 e.leak.state[10],
-                s.q_leak_lpm
+                s.q_leak_lpm,
+                s.x_m,
+                s.p1_pa / 1e6,
+                s.p2_pa / 1e6
             );
         }
     }
