@@ -200,3 +200,57 @@ fn plot_draws_a_replay_directory() {
         bytes.len()
     );
 }
+
+/// `--model 6` runs the thesis filter with 6 states (friction from the model, no
+/// F_e state): its F_e column is NaN throughout while the 7-state default fills it,
+/// and its pressure residuals stay small. `--model 8` is refused.
+#[test]
+fn model_6_replays_the_six_state_thesis_filter() {
+    let d = tmpdir("model6");
+    let input = simulate(&d, "open-loop-sine", "6", "ext1:0.5lpm@100s");
+    let six = d.join("six");
+    let seven = d.join("seven");
+    let o = replay(&input, &six, &["--model", "6", "--single-thread"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = replay(&input, &seven, &["--model", "7", "--single-thread"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(six.join("events.json").exists());
+
+    // The thesis filter's F_e estimate per row, from the column named th_f_e.
+    let th_f_e = |dir: &Path| -> Vec<f64> {
+        let text = std::fs::read_to_string(dir.join("estimates.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = header.iter().position(|h| *h == "th_f_e").expect("th_f_e column");
+        lines
+            .map(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap())
+            .collect()
+    };
+    let f6 = th_f_e(&six);
+    let f7 = th_f_e(&seven);
+    assert_eq!(f6.len(), 6000);
+    assert_eq!(f7.len(), 6000);
+    assert!(f6.iter().all(|f| f.is_nan()), "6 states has no F_e state");
+    assert!(
+        f7[1000..].iter().all(|f| f.is_finite() && f.abs() < 1e4),
+        "7 states estimates F_e"
+    );
+
+    let s6 = json(&six.join("summary.json"));
+    assert_eq!(s6["samples"], 6000);
+    assert_eq!(s6["thesis_filter"]["resets"], 0);
+    let th = &s6["thesis_filter"];
+    for key in ["p1_pa", "p2_pa"] {
+        let r = th[key].as_f64().unwrap();
+        // healthy, after the 2 s convergence flag: a few kPa (the sensor noise is 5.2 kPa RMS)
+        assert!(r > 0.0 && r < 2e4, "6-state residual RMS {key} {r} Pa");
+    }
+    // The leak filter does not depend on --model.
+    let s7 = json(&seven.join("summary.json"));
+    assert_eq!(s6["leak_filter"]["p1_pa"], s7["leak_filter"]["p1_pa"]);
+    assert_ne!(s6["thesis_filter"]["p1_pa"], s7["thesis_filter"]["p1_pa"]);
+
+    let o = replay(&input, &d.join("eight"), &["--model", "8"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--model 8"));
+}
