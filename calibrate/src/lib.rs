@@ -15,7 +15,7 @@
 //! calibrate::load_model(path: &Path) -> Result<ActuatorParams, CalibrateError>    // [model] of a config TOML
 //! calibrate::model_toml(params: &ActuatorParams) -> Result<String, CalibrateError>
 //! calibrate::suite::bench(opts: &CalibrateOptions) -> BenchReport                 // BENCHMARKS.md §3, 16 cases
-//! calibrate::suite::bench_matrix(opts) -> BenchReport        // every effect under every input, 41 cases
+//! calibrate::suite::bench_matrix(opts) -> BenchReport        // every effect under every input, 44 cases
 //!     // BenchReport::markdown(), ::to_json(), ::write(dir) -> [calibration_bench.md, .json];
 //!     // suite::cases(), suite::matrix_cases(), suite::run_case(), suite::bench_cases(list, opts, threads)
 //!
@@ -55,6 +55,12 @@
 //!    least `min_gap_reduction` (relative) and `min_gap_reduction_normalised`
 //!    (absolute), moves some parameter by at least
 //!    `min_size_steps` resolution steps, and lowers the BIC on the fitting part.
+//!    For `bulk-modulus`, whose two forms (lower constant β, entrained air)
+//!    look alike when the chamber pressures stay near one level, the chosen
+//!    form must also beat the other over every window (paired t ≥
+//!    `min_form_t`, or `min_form_gap_ratio` times less residual); otherwise
+//!    the effect is still named and added, with the caveat "form not
+//!    identifiable from this data" ([`FoundEffect::caveat`]).
 //! 4. **Add and repeat** (greedy forward selection) while something is
 //!    accepted, up to `max_effects`.
 //!
@@ -139,6 +145,14 @@ pub struct CalibrateOptions {
     /// Half-width of the local quadratic fit of positions that estimates the
     /// velocity at each window start, samples.
     pub velocity_half_width: usize,
+    /// For an effect with two forms (`bulk-modulus`): least paired t statistic,
+    /// over every window of the record, of the per-window mean squared
+    /// residual of the other form minus the chosen one, for the chosen form
+    /// to be claimed (see [`FoundEffect::caveat`]).
+    pub min_form_t: f64,
+    /// ... or least ratio of the other form's RMS residual over every window
+    /// to the chosen one's.
+    pub min_form_gap_ratio: f64,
 }
 
 impl Default for CalibrateOptions {
@@ -163,6 +177,8 @@ impl Default for CalibrateOptions {
             screen_keep: 3,
             keep_traces: true,
             velocity_half_width: 3,
+            min_form_t: 3.0,
+            min_form_gap_ratio: 2.0,
         }
     }
 }
@@ -298,6 +314,13 @@ pub struct FoundEffect {
     pub gap_after: Gap,
     /// The residual signature of this effect.
     pub signature: String,
+    /// What this data cannot tell about the effect, if anything (contains
+    /// [`NOT_IDENTIFIABLE`]): for `bulk-modulus`, whether β depends on
+    /// pressure, when the other form explains the record about as well (the
+    /// chamber pressures visited do not separate them). The fitted value then
+    /// holds near the pressures visited, not beyond.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub caveat: Option<String>,
 }
 
 /// How one candidate fared in one round of the selection.
@@ -723,15 +746,15 @@ pub fn run(
             let k = c.theta.len() as f64;
             let dbic = ne * (c.fit_cost.max(1e-300) / fit_cost_cur.max(1e-300)).ln() + k * ne.ln();
             let r = red(c);
-            let status = if c.screened_out {
-                "screened out (explains less on the fitting part)".to_string()
-            } else if !c.identifiable {
+            let status = if !c.identifiable {
                 format!(
                     "{NOT_IDENTIFIABLE} (`{}` moves the residuals by {:.2e} per step of {:.3e})",
                     c.effect.parameter_names()[c.weakest.0],
                     c.weakest.1,
                     c.effect.resolution(&current)[c.weakest.0]
                 )
+            } else if c.screened_out {
+                "screened out (explains less on the fitting part)".to_string()
             } else if c.size_steps < opts.min_size_steps {
                 format!(
                     "too small to claim (parameters moved {:.2} resolution steps; needs {})",
@@ -766,6 +789,7 @@ pub fn run(
         let Some(i) = chosen else { break };
         let c = &scored[i];
         let r = red(c);
+        let caveat = form_caveat(c, &scored, &current, d, &s.set, opts);
         current = c.effect.apply(&current, &c.theta);
         fit_cost_cur = c.fit_cost;
         gap_cur = c.val;
@@ -778,6 +802,7 @@ pub fn run(
             cumulative_gap_reduction: 1.0 - gap_cur.normalised / gap_before.normalised.max(1e-300),
             gap_after: gap_cur,
             signature: c.effect.signature().to_string(),
+            caveat,
         });
         let name = c.effect.name();
         pool.retain(|e| e.name() != name);
@@ -823,6 +848,73 @@ pub fn run(
         traces,
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Per-window mean squared normalised residual of model `p` over every window of the record.
+fn per_window_cost(p: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Vec<f64> {
+    let (r, idx) = residuals(p, d, &d.windows, set);
+    let mut out = vec![(0.0, 0usize); d.windows.len()];
+    let mut w = 0;
+    for (k, i) in idx.iter().enumerate() {
+        while w + 1 < d.windows.len() && *i >= d.windows[w].1 {
+            w += 1;
+        }
+        for v in &r[3 * k..3 * k + 3] {
+            out[w].0 += v * v;
+            out[w].1 += 1;
+        }
+    }
+    out.into_iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(s, n)| s / n as f64)
+        .collect()
+}
+
+/// Whether the data tell the chosen form of a multi-form effect from its
+/// other form: over every window, the other form's residual must be
+/// consistently larger (paired t ≥ `min_form_t`) or clearly larger (RMS
+/// ratio ≥ `min_form_gap_ratio`). Otherwise returns the caveat.
+fn form_caveat(
+    c: &Scored,
+    scored: &[Scored],
+    base: &ActuatorParams,
+    d: &Prepared,
+    set: &ShootSettings,
+    opts: &CalibrateOptions,
+) -> Option<String> {
+    let other = scored
+        .iter()
+        .find(|o| o.effect != c.effect && o.effect.name() == c.effect.name())?;
+    let a = per_window_cost(&c.effect.apply(base, &c.theta), d, set);
+    let b = per_window_cost(&other.effect.apply(base, &other.theta), d, set);
+    if a.len() != b.len() || a.len() < 3 {
+        return None;
+    }
+    let n = a.len() as f64;
+    let diff: Vec<f64> = b.iter().zip(&a).map(|(x, y)| x - y).collect();
+    let mean = diff.iter().sum::<f64>() / n;
+    let var = diff.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    let t = mean / (var / n).sqrt().max(1e-300);
+    let rms = |v: &[f64]| (v.iter().sum::<f64>() / n).sqrt();
+    let ratio = rms(&b) / rms(&a).max(1e-300);
+    if t >= opts.min_form_t || ratio >= opts.min_form_gap_ratio {
+        return None;
+    }
+    let pm = d.p1_pa.iter().chain(&d.p2_pa).sum::<f64>() / (2.0 * d.p1_pa.len().max(1) as f64);
+    Some(format!(
+        "form {NOT_IDENTIFIABLE}: `{}` explains the record about as well as `{}` (RMS residual over \
+         every window {:.3} vs {:.3}, paired t {:.1}; needs t ≥ {} or a ratio ≥ {}); the fitted \
+         value describes the effect near the pressures visited (mean chamber pressure {:.1} MPa), \
+         not its pressure dependence",
+        other.effect.form(),
+        c.effect.form(),
+        rms(&b),
+        rms(&a),
+        t,
+        opts.min_form_t,
+        opts.min_form_gap_ratio,
+        pm * 1e-6
+    ))
 }
 
 fn make_traces(before: &ActuatorParams, after: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Traces {

@@ -274,6 +274,11 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
             );
         }
         s.push('\n');
+        for e in &cal.effects {
+            if let Some(c) = &e.caveat {
+                let _ = writeln!(s, "**`{}`**: {c}.\n", e.name);
+            }
+        }
     }
     let _ = writeln!(s, "- Gap before: {}", fmt_gap(&cal.gap_before));
     let _ = writeln!(s, "- Gap after: {}", fmt_gap(&cal.gap_after));

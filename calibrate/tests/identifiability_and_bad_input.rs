@@ -102,6 +102,96 @@ fn a_rod_that_only_extends_does_not_show_retracting_friction() {
     assert!(e.to_string().contains(NOT_IDENTIFIABLE), "{e}");
 }
 
+/// Asserts that `fit_effect` refuses each of `names` on `data` with
+/// "not identifiable from this data", and that the whole workflow names
+/// nothing and marks those candidates as not identifiable.
+fn assert_not_identifiable(data: &[Sample], names: &[&str]) {
+    let opts = CalibrateOptions::default();
+    for name in names {
+        match fit_effect(data, &nominal_model(), name, &opts) {
+            Err(e @ CalibrateError::NotIdentifiable { .. }) => {
+                let msg = e.to_string();
+                eprintln!("{msg}");
+                assert!(msg.contains(NOT_IDENTIFIABLE) && msg.contains(name), "{msg}");
+            }
+            other => panic!("{name}: expected not identifiable, got {other:?}"),
+        }
+    }
+    let cal = run(data, &nominal_model(), &opts).expect("runs");
+    assert!(cal.effects.is_empty(), "{:?}", cal.names());
+    for name in names {
+        for c in cal.rounds[0].candidates.iter().filter(|c| c.name == *name) {
+            assert!(!c.identifiable, "{c:?}");
+            assert!(c.status.starts_with(NOT_IDENTIFIABLE), "{c:?}");
+        }
+    }
+}
+
+#[test]
+fn a_spring_the_rod_never_reaches_is_not_identifiable() {
+    // a spring touching at 0.40 m; the position controller steps the rod
+    // between 0.08 and 0.30 m, so the data never see it
+    let mut sc = Scenario::by_name("closed-loop-random", 3, 10.0).expect("scenario");
+    sc.drive = Drive::ClosedLoopSteps {
+        levels: vec![
+            (0.0, 0.15),
+            (1.5, 0.28),
+            (3.0, 0.08),
+            (4.5, 0.22),
+            (6.0, 0.12),
+            (7.5, 0.30),
+            (9.0, 0.18),
+        ],
+    };
+    sc.initial_position_m = 0.2;
+    let rig = calibrate::Effect::SpringLoad.apply(&nuisance(&nominal_model()), &[2.0e4, 0.40]);
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        7,
+    )
+    .expect("valid rig");
+    let data = sim.run(10.0);
+    let x_max = data.iter().map(|s| s.x_m).fold(f64::NEG_INFINITY, f64::max);
+    let x_min = data.iter().map(|s| s.x_m).fold(f64::INFINITY, f64::min);
+    assert!(x_max < 0.35 && x_max - x_min > 0.15, "stroke {x_min}..{x_max}");
+    assert_not_identifiable(&data, &["spring-load"]);
+}
+
+#[test]
+fn a_rod_on_its_end_stop_does_not_excite_leaks_or_spool_bias() {
+    // open loop, constant −2 V: the rod retracts onto its end stop and stays
+    // there with the valve open; chamber 1 sits at tank pressure (a chamber-1
+    // leak has nothing to drive it), chamber 2 at supply (the open valve makes
+    // up a chamber-2 leak without a measurable drop), and no flow goes
+    // anywhere (a spool null offset changes nothing measured). The record
+    // starts once the rod has settled.
+    let mut sc = Scenario::by_name("open-loop-sine", 4, 10.0).expect("scenario");
+    sc.drive = Drive::OpenLoopSine {
+        amplitude_v: -2.0,
+        freq_hz: 0.0,
+        phase_rad: std::f64::consts::FRAC_PI_2,
+    };
+    let mut sim = Simulator::new(
+        nuisance(&nominal_model()),
+        SensorParams::default(),
+        SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        8,
+    )
+    .expect("valid rig");
+    let data: Vec<Sample> = sim.run(10.0).into_iter().filter(|s| s.t_s >= 4.0).collect();
+    assert!(
+        data.iter().all(|s| s.x_m.abs() < 1e-3 && s.p1_pa < 0.2e6),
+        "the rod is not on its stop with chamber 1 at tank"
+    );
+    assert_not_identifiable(&data, &["leak-ext1", "leak-ext2", "spool-bias"]);
+}
+
 #[test]
 fn an_exciting_input_is_identifiable() {
     let c = calibrate::suite::cases()

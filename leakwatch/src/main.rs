@@ -199,7 +199,7 @@ enum BenchCommand {
     },
     /// The calibration workflow over its hidden-effect suite (BENCHMARKS.md §3).
     Calibration {
-        /// Run the full matrix (every effect under every input, 41 cases) instead of the 16-case suite.
+        /// Run the full matrix (every effect under every input, 44 cases) instead of the 16-case suite.
         #[arg(long)]
         matrix: bool,
         /// Output directory for calibration_bench.md and .json.
