@@ -8,9 +8,16 @@
 //!   rig that differs from the model, e.g. a spool null bias, leaves a steady
 //!   offset), a leak is declared when one size rises above
 //!   max(`threshold_sigma`·spread, `min_size_lpm`) and stays there for
-//!   `confirm_s`. Isolation: the kind whose rise is largest relative to its
-//!   threshold. Size: the estimate itself, with the filter's σ. Onset: the last
-//!   time the estimate was below a quarter of the threshold.
+//!   `confirm_s`. The rise is measured from a healthy baseline that follows
+//!   the estimate slowly (time constant `baseline_tau_s`, frozen while a leak
+//!   is reported): an off-nominal rig makes the healthy estimate wander with
+//!   the operating point over tens of seconds, a leak steps or ramps in
+//!   seconds. Whatever the baseline has absorbed since the warm-up is judged
+//!   against the larger `slow_leak_lpm`, so a leak that grows over minutes is
+//!   still reported (detail `slowly growing`). Isolation: the kind whose rise
+//!   is largest relative to its threshold. Size: the rise above the baseline,
+//!   with the filter's σ. Onset: the last time the rise was below a
+//!   quarter of the threshold.
 //! - [`MaeDetector`] (the thesis' baseline, MODEL.md §5): the moving averages of
 //!   |residual| of p1 and p2; thresholds = `margin` × the largest healthy MAE
 //!   seen in the warm-up; p1 only → ext1, p2 only → ext2, both → internal. It
@@ -134,6 +141,20 @@ pub struct ClassifierConfig {
     pub min_size_lpm: f64,
     /// Leak-size detector: time above threshold before a leak is declared, s.
     pub confirm_s: f64,
+    /// Leak-size detector: time constant of the healthy baseline that the rise is
+    /// measured from, s (0 = the warm-up offset, never adapted).
+    pub baseline_tau_s: f64,
+    /// Leak-size detector: drift of the baseline since the warm-up that is reported
+    /// as a slowly growing leak, L/min (at nominal drop).
+    pub slow_leak_lpm: f64,
+    /// Supply pressure of the rig, Pa.
+    pub supply_pressure_pa: f64,
+    /// Leak-size detector: a chamber pressure within this fraction of the supply
+    /// pressure from tank or supply is an excursion (the rod against a stop, a land
+    /// closed): no evidence is gathered and the baseline holds.
+    pub excursion_margin: f64,
+    /// Leak-size detector: time after an excursion before evidence is gathered again, s.
+    pub excursion_recovery_s: f64,
     /// Time below half the threshold before a leak is cleared, s.
     pub clear_s: f64,
     /// Relative change of the size that gives an `updated` event.
@@ -165,6 +186,11 @@ impl Default for ClassifierConfig {
             threshold_sigma: 5.0,
             min_size_lpm: 0.08,
             confirm_s: 0.5,
+            baseline_tau_s: 15.0,
+            slow_leak_lpm: 0.5,
+            supply_pressure_pa: 13.8e6,
+            excursion_margin: 0.05,
+            excursion_recovery_s: 1.0,
             clear_s: 2.0,
             update_relative: 0.1,
             reisolate_s: 0.5,
@@ -189,6 +215,11 @@ impl ClassifierConfig {
             ("threshold_sigma", self.threshold_sigma),
             ("min_size_lpm", self.min_size_lpm),
             ("confirm_s", self.confirm_s),
+            ("baseline_tau_s", self.baseline_tau_s),
+            ("slow_leak_lpm", self.slow_leak_lpm),
+            ("supply_pressure_pa", self.supply_pressure_pa),
+            ("excursion_margin", self.excursion_margin),
+            ("excursion_recovery_s", self.excursion_recovery_s),
             ("clear_s", self.clear_s),
             ("update_relative", self.update_relative),
             ("reisolate_s", self.reisolate_s),
@@ -273,7 +304,17 @@ pub struct LeakSizeDetector {
     arming: Arming,
     stats: [Stats; 3],
     threshold_lpm: [f64; 3],
+    /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
+    baseline_lpm: [f64; 3],
+    /// The baseline when each rise was last low (before a possible onset), L/min.
+    baseline_low_lpm: [f64; 3],
+    /// Time of the last estimate read, s (for the baseline's time step).
+    last_t_s: f64,
     above_since_s: [Option<f64>; 3],
+    /// Since when the baseline's drift has exceeded `slow_leak_lpm` (lead kind, time s).
+    slow_since_s: Option<(usize, f64)>,
+    /// No evidence is gathered before this time (an excursion and its recovery), s.
+    blind_until_s: f64,
     last_low_s: [f64; 3],
     active: Option<Active>,
     next_id: u64,
@@ -328,7 +369,12 @@ impl LeakSizeDetector {
             arming: Arming::Converging,
             stats: [Stats::default(); 3],
             threshold_lpm: [f64::NAN; 3],
+            baseline_lpm: [f64::NAN; 3],
+            baseline_low_lpm: [f64::NAN; 3],
+            last_t_s: f64::NAN,
             above_since_s: [None; 3],
+            slow_since_s: None,
+            blind_until_s: f64::NEG_INFINITY,
             last_low_s: [0.0; 3],
             active: None,
             next_id: 1,
@@ -351,16 +397,22 @@ impl LeakSizeDetector {
     }
 
     /// Current rise of each hypothesis' size (ext1, ext2, int; [`signatures_lpm`])
-    /// above its healthy offset, L/min (NaN if unknown).
+    /// above its healthy baseline, L/min (NaN if unknown or not armed).
     pub fn rise_lpm(&self, e: &Estimate) -> [f64; 3] {
         let mut r = [f64::NAN; 3];
         if e.n_states >= 10 {
             let raw = Self::raw_sizes(e);
             for (k, v) in r.iter_mut().enumerate() {
-                *v = raw[k] - self.stats[k].mean;
+                *v = raw[k] - self.baseline_lpm[k];
             }
         }
         r
+    }
+
+    /// The healthy baseline of each hypothesis' size that rises are measured from,
+    /// L/min (NaN before arming; equal to [`Self::offsets_lpm`] with `baseline_tau_s = 0`).
+    pub fn baseline_lpm(&self) -> [f64; 3] {
+        self.baseline_lpm
     }
 
     /// Restarts the warm-up (after a filter reset).
@@ -399,22 +451,43 @@ impl LeakSizeDetector {
                     self.threshold_lpm[k] =
                         (self.cfg.threshold_sigma * self.stats[k].std()).max(self.cfg.min_size_lpm);
                     self.last_low_s[k] = e.t_s;
+                    self.baseline_lpm[k] = self.stats[k].mean;
+                    self.baseline_low_lpm[k] = self.stats[k].mean;
                 }
+                self.last_t_s = e.t_s;
                 return;
             }
             None if !self.is_armed() => return,
             None => {}
         }
-        // Rise of each hypothesis' size above its healthy offset, and how badly the
+        // The healthy baseline follows the estimate slowly while no leak is reported;
+        // during an excursion to tank or supply pressure (where the healthy model is
+        // worst and its errors move the leak estimates for a while) and a recovery
+        // after it, the baseline holds and no evidence is gathered.
+        let dt_s = (e.t_s - self.last_t_s).max(0.0);
+        self.last_t_s = e.t_s;
+        let (lo, hi) = (
+            self.cfg.excursion_margin * self.cfg.supply_pressure_pa,
+            (1.0 - self.cfg.excursion_margin) * self.cfg.supply_pressure_pa,
+        );
+        if e.measured[1..].iter().any(|p| *p < lo || *p > hi) {
+            self.blind_until_s = e.t_s + self.cfg.excursion_recovery_s;
+        }
+        let blind = e.t_s < self.blind_until_s;
+        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
+            let a = if blind {
+                0.0
+            } else {
+                (dt_s / self.cfg.baseline_tau_s).min(1.0)
+            };
+            for k in 0..3 {
+                self.baseline_lpm[k] += a * (raw[k] - self.baseline_lpm[k]);
+            }
+        }
+        // Rise of each hypothesis' size above its healthy baseline, and how badly the
         // hypothesis fits (the part of the flow mismatch it leaves unexplained).
-        let rise = [
-            raw[0] - self.stats[0].mean,
-            raw[1] - self.stats[1].mean,
-            raw[2] - self.stats[2].mean,
-        ];
-        let w1 = rise[0];
-        let w2 = rise[1];
-        let misfit = [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2];
+        let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
+        let misfit = misfits(rise);
         let sigma_q = [
             e.sigma[7] / M3_S_PER_LPM,
             e.sigma[8] / M3_S_PER_LPM,
@@ -430,6 +503,20 @@ impl LeakSizeDetector {
         ];
         let sigma_lpm: [f64; 3] = std::array::from_fn(|k| sigma_filter[k].hypot(self.stats[k].std()));
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / self.threshold_lpm[k]);
+        // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
+        let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
+        let drift_misfit = misfits(drift);
+        let slow_lead = (0..3)
+            .map(|k| (k, (drift[k] - drift_misfit[k]) / self.cfg.slow_leak_lpm.max(1e-9)))
+            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 && slow_lead.1 > 1.0 {
+            match self.slow_since_s {
+                Some((j, _)) if j == slow_lead.0 => {}
+                _ => self.slow_since_s = Some((slow_lead.0, e.t_s)),
+            }
+        } else {
+            self.slow_since_s = None;
+        }
         let (lead, best) = (0..3)
             .map(|k| (k, score[k]))
             .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
@@ -441,8 +528,9 @@ impl LeakSizeDetector {
             let thr = self.threshold_lpm[k];
             if rise[k] < 0.25 * thr {
                 self.last_low_s[k] = e.t_s;
+                self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
-            if k == lead && rise[k] > thr && best > 0.5 {
+            if k == lead && rise[k] > thr && best > 0.5 && !blind {
                 self.above_since_s[k].get_or_insert(e.t_s);
             } else {
                 self.above_since_s[k] = None;
@@ -452,6 +540,10 @@ impl LeakSizeDetector {
             None => {
                 if let Some(t0) = self.above_since_s[lead] {
                     if e.t_s - t0 >= self.cfg.confirm_s {
+                        // Measure the leak from the baseline before its onset: what the
+                        // baseline absorbed while the leak rose is part of the leak.
+                        self.baseline_lpm = self.baseline_low_lpm;
+                        let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
                         let id = self.next_id;
                         self.next_id += 1;
                         let kind = EventKind::LEAKS[lead];
@@ -474,6 +566,43 @@ impl LeakSizeDetector {
                             best,
                             second,
                         ));
+                    }
+                } else if let Some((j, t0)) = self.slow_since_s {
+                    if e.t_s - t0 >= self.cfg.confirm_s {
+                        // A leak that grew too slowly for the rise: measure it from the
+                        // warm-up offset from now on (the baseline goes back there).
+                        self.slow_since_s = None;
+                        for k in 0..3 {
+                            self.baseline_lpm[k] = self.stats[k].mean;
+                            self.baseline_low_lpm[k] = self.stats[k].mean;
+                        }
+                        let size = raw[j] - self.stats[j].mean;
+                        let id = self.next_id;
+                        self.next_id += 1;
+                        let kind = EventKind::LEAKS[j];
+                        self.active = Some(Active {
+                            kind,
+                            id,
+                            t_onset_s: f64::NAN,
+                            last_size_lpm: size,
+                            last_update_s: e.t_s,
+                            below_since_s: None,
+                            other_since_s: None,
+                        });
+                        let mut ev = self.event(
+                            kind,
+                            Phase::Raised,
+                            id,
+                            e.t_s,
+                            size,
+                            sigma_lpm[j],
+                            slow_lead.1,
+                            0.0,
+                        );
+                        ev.detail = format!(
+                            "slowly growing: the healthy baseline drifted {size:.3} L/min since the warm-up"
+                        );
+                        *out = Some(ev);
                     }
                 }
             }
@@ -754,6 +883,15 @@ pub struct Classifier {
     next_id: u64,
     not_armed_reported: bool,
     learning_since_s: Option<f64>,
+}
+
+/// How badly each single-leak hypothesis (ext1, ext2, int) fits rises `r` =
+/// [w1, w2, (w1 − w2)/2] of the chamber flows, L/min: the part of the flow
+/// mismatch it leaves unexplained (ext1 leaves w2, ext2 leaves w1, an internal
+/// leak leaves the common part (w1 + w2)/√2).
+fn misfits(r: [f64; 3]) -> [f64; 3] {
+    let (w1, w2) = (r[0], r[1]);
+    [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2]
 }
 
 /// The size of each single-leak hypothesis that best explains estimated leak

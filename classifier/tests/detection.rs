@@ -261,3 +261,57 @@ fn dead_and_stuck_sensors_are_reported() {
     assert!(find(EventKind::SensorStuck, Phase::Cleared).is_some());
     assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
 }
+
+/// The rig of detection-suite seed 3176593409338201021: friction −6 % extending and
+/// −17 % retracting, bulk modulus −28 %, a spool null bias of 25 % of the spool
+/// amplitude at 3 V. Under the open-loop sine it drifts into the extended end stop
+/// within 18 s and then hits it once a cycle (chamber 2 empties to tank).
+fn drifting_rig() -> ActuatorParams {
+    let mut rig = ActuatorParams::default();
+    let mut ext = rig.friction.extend();
+    let mut ret = ext;
+    for (side, f) in [(&mut ext, 0.9406), (&mut ret, 0.8334)] {
+        side.static_n *= f;
+        side.slip_n *= f;
+        side.viscous_n_s_per_m *= f;
+    }
+    rig.friction.set_extend(ext);
+    rig.friction.retract = Some(ret);
+    rig.bulk_modulus_pa = 4.932e8;
+    rig.spool_null_bias_m = 6.199e-6;
+    rig
+}
+
+#[test]
+fn an_open_loop_drift_into_the_end_stop_raises_no_leak() {
+    // With thresholds on the offset learned in the warm-up, this run raised a false
+    // internal leak at 18.9 s: the healthy model's error while the rod is pressed
+    // into its stop moves the leak estimates. Excursions to tank or supply pressure
+    // hold the baseline and gather no evidence.
+    let events = run("open-loop-sine", 60.0, None, 7, drifting_rig());
+    let armed = events.iter().all(|e| e.kind != EventKind::NotArmed);
+    assert!(armed, "{events:#?}");
+    assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+}
+
+#[test]
+fn a_leak_growing_over_minutes_is_reported_as_slowly_growing() {
+    // 0.6 L/min reached over 300 s: too slow for the rise above the adapting
+    // baseline (τ = 15 s lags it by 0.03 L/min), caught by the baseline's drift
+    // since the warm-up once that passes `slow_leak_lpm` (0.5 L/min).
+    let (onset, ramp, size) = (20.0, 300.0, 0.6);
+    let spec = format!("ext1:{size}lpm@{onset}s,ramp={ramp}");
+    let events = run("closed-loop-sine", 330.0, Some(&spec), 31, off_nominal_rig());
+    let r = raised(&events, "leak-size");
+    assert_eq!(r.len(), 1, "{events:#?}");
+    let ev = &r[0];
+    assert_eq!(ev.kind, EventKind::Ext1, "{ev:?}");
+    assert!(ev.detail.contains("slowly growing"), "{ev:?}");
+    let scheduled = size * ((ev.t_detect_s - onset) / ramp).min(1.0);
+    assert!(
+        ev.size_lpm > 0.5 && (ev.size_lpm - scheduled).abs() <= 0.25 * scheduled,
+        "size {} L/min against {scheduled} scheduled at {} s",
+        ev.size_lpm,
+        ev.t_detect_s
+    );
+}
