@@ -155,6 +155,9 @@ pub struct ClassifierConfig {
     pub excursion_margin: f64,
     /// Leak-size detector: time after an excursion before evidence is gathered again, s.
     pub excursion_recovery_s: f64,
+    /// Leak-size detector: during an excursion, a rise above this many thresholds is
+    /// still evidence (a large leak itself drains the chambers towards tank).
+    pub excursion_override: f64,
     /// Time below half the threshold before a leak is cleared, s.
     pub clear_s: f64,
     /// Relative change of the size that gives an `updated` event.
@@ -191,6 +194,7 @@ impl Default for ClassifierConfig {
             supply_pressure_pa: 13.8e6,
             excursion_margin: 0.05,
             excursion_recovery_s: 1.0,
+            excursion_override: 4.0,
             clear_s: 2.0,
             update_relative: 0.1,
             reisolate_s: 0.5,
@@ -220,6 +224,7 @@ impl ClassifierConfig {
             ("supply_pressure_pa", self.supply_pressure_pa),
             ("excursion_margin", self.excursion_margin),
             ("excursion_recovery_s", self.excursion_recovery_s),
+            ("excursion_override", self.excursion_override),
             ("clear_s", self.clear_s),
             ("update_relative", self.update_relative),
             ("reisolate_s", self.reisolate_s),
@@ -530,7 +535,8 @@ impl LeakSizeDetector {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
-            if k == lead && rise[k] > thr && best > 0.5 && !blind {
+            let evidence = !blind || rise[k] > self.cfg.excursion_override * thr;
+            if k == lead && rise[k] > thr && best > 0.5 && evidence {
                 self.above_since_s[k].get_or_insert(e.t_s);
             } else {
                 self.above_since_s[k] = None;
