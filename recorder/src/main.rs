@@ -43,6 +43,12 @@ struct Args {
     /// Target uncompressed chunk size, KiB (a killed recorder loses at most one chunk).
     #[arg(long, default_value_t = 256)]
     chunk_kib: u64,
+    /// Time between two drains of every topic, ms. The recorder needs no low
+    /// latency: waking once per batch instead of once per frame keeps it off the
+    /// CPU at the instant the estimator wakes for the same frame. Must stay well
+    /// below the subscriber buffer (256 frames = 256 ms at 1 kHz).
+    #[arg(long, default_value_t = 10)]
+    batch_ms: u64,
 }
 
 /// One subscription and how its frames become log entries.
@@ -53,8 +59,7 @@ struct Topic<T: Frame> {
 
 impl<T: Frame> Topic<T> {
     fn new(bus: &Bus, entry: fn(T, u64) -> Entry) -> Result<Self, String> {
-        // the recorder polls every topic after each wake-up; the mode only
-        // matters for the frames topic it sleeps on
+        // the recorder drains every topic once per batch; it never waits on one
         Ok(Topic {
             rx: bus.subscriber::<T>(WaitMode::Event).map_err(|e| e.to_string())?,
             entry,
@@ -138,23 +143,18 @@ fn run(args: &Args) -> Result<(), String> {
     let mut ended_at: Option<u64> = None;
     let mut last_data = monotonic_ns();
     let grace_ns = args.grace_ms * 1_000_000;
-    let wake = Duration::from_millis(2);
+    if args.batch_ms == 0 || args.batch_ms > 100 {
+        return Err(format!("--batch-ms {}: must be 1 to 100 ms", args.batch_ms));
+    }
+    let batch = Duration::from_millis(args.batch_ms);
     let reason = loop {
         if stop.load(Ordering::Relaxed) {
             break "signal";
         }
-        // sleep until a frame comes (or 2 ms), then take everything buffered on every topic
+        // sleep one batch, then take everything buffered on every topic
+        std::thread::sleep(batch);
         let t0 = monotonic_ns();
-        let mut n = 0;
-        let mut eos = false;
-        if let Some(r) = frames_t.rx.wait(wake, stop).map_err(|e| e.to_string())? {
-            frames_t.log(&r, &mut writer, &mut stats)?;
-            eos |= r.is_end_of_stream();
-            n += 1;
-        }
-        let (k, e) = frames_t.drain(&mut writer, &mut stats)?;
-        n += k;
-        eos |= e;
+        let (mut n, eos) = frames_t.drain(&mut writer, &mut stats)?;
         n += estimates_t.drain(&mut writer, &mut stats)?.0;
         n += events_t.drain(&mut writer, &mut stats)?.0;
         n += health_t.drain(&mut writer, &mut stats)?.0;
