@@ -7,23 +7,6 @@ use estimator::{Estimator, EstimatorStage, Tuning};
 use model::{ActuatorParams, FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
 use serde::Serialize;
 
-/// Step-time figures of one filter layout.
-#[derive(Debug, Clone, Serialize)]
-pub struct StepTime {
-    /// Filter description.
-    pub filter: String,
-    /// Number of states.
-    pub states: u32,
-    /// Steps timed.
-    pub steps: u64,
-    /// Median time per predict + update, ns.
-    pub median_ns: f64,
-    /// 99th percentile, ns (over blocks of 64 steps, so the clock's own cost is amortised).
-    pub p99_ns: f64,
-    /// Mean, ns.
-    pub mean_ns: f64,
-}
-
 /// Throughput of the in-process chain.
 #[derive(Debug, Clone, Serialize)]
 pub struct Throughput {
@@ -61,42 +44,88 @@ pub fn recorded_samples(seconds: f64) -> Vec<Sample> {
     }
 }
 
-/// Times predict + update of a filter over at least `min_steps` steps of `samples`.
-pub fn step_time(name: &str, tuning: &Tuning, samples: &[Sample], min_steps: u64) -> StepTime {
-    const BLOCK: usize = 64;
-    let mut blocks: Vec<f64> = Vec::new();
-    let mut steps = 0u64;
+/// Step-time figures of one filter layout, every predict + update timed on its own.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepTime {
+    /// Filter description.
+    pub filter: String,
+    /// Number of states.
+    pub states: u32,
+    /// Steps timed (each one individually).
+    pub steps: u64,
+    /// Median time of one predict + update (one `Estimator::on_sample`), ns,
+    /// including the clock's own cost (`timer_overhead_ns`).
+    pub median_ns: f64,
+    /// 99th percentile of the per-step times, ns (including the clock's cost).
+    pub p99_ns: f64,
+    /// 99.9th percentile of the per-step times, ns (including the clock's cost).
+    pub p999_ns: f64,
+    /// Largest per-step time, ns (including the clock's cost; preemption shows here).
+    pub max_ns: f64,
+    /// Mean of the per-step times, ns (including the clock's cost).
+    pub mean_ns: f64,
+    /// Median time of an empty timed region (two back-to-back `Instant::now()`), ns:
+    /// the overhead included in every figure above.
+    pub timer_overhead_ns: f64,
+}
+
+/// Value at quantile `q` (0..=1) of sorted `v`, nearest rank; NaN if empty.
+fn quantile(v: &[u64], q: f64) -> f64 {
+    v.get(((v.len() as f64 - 1.0) * q).round() as usize)
+        .map(|x| *x as f64)
+        .unwrap_or(f64::NAN)
+}
+
+/// Median cost of timing an empty region with `Instant` over `n` tries, ns.
+pub fn timer_overhead_ns(n: usize) -> f64 {
+    let mut d: Vec<u64> = (0..n)
+        .map(|_| {
+            let t0 = Instant::now();
+            std::hint::black_box(());
+            t0.elapsed().as_nanos() as u64
+        })
+        .collect();
+    d.sort_unstable();
+    quantile(&d, 0.5)
+}
+
+/// Times every predict + update of a filter individually over at least
+/// `min_steps` steps of `samples` (restarting the filter at the end of the samples).
+pub fn step_time(
+    name: &str,
+    tuning: &Tuning,
+    samples: &[Sample],
+    min_steps: u64,
+    overhead_ns: f64,
+) -> StepTime {
+    let mut times: Vec<u64> = Vec::with_capacity(min_steps as usize + samples.len());
     let mut sink = 0.0;
-    while steps < min_steps {
+    while (times.len() as u64) < min_steps {
         let mut est = match Estimator::new(ActuatorParams::default(), tuning.clone()) {
             Ok(e) => e,
             Err(_) => break,
         };
-        for chunk in samples.chunks(BLOCK) {
+        for s in samples {
             let t0 = Instant::now();
-            for s in chunk {
-                sink += est.on_sample(s).nis;
-            }
-            blocks.push(t0.elapsed().as_nanos() as f64 / chunk.len() as f64);
-            steps += chunk.len() as u64;
+            let e = est.on_sample(std::hint::black_box(s));
+            let dt = t0.elapsed();
+            sink += e.nis;
+            times.push(dt.as_nanos() as u64);
         }
     }
     std::hint::black_box(sink);
-    let mean = blocks.iter().sum::<f64>() / blocks.len().max(1) as f64;
-    blocks.sort_by(f64::total_cmp);
-    let q = |p: f64| {
-        blocks
-            .get(((blocks.len() as f64 - 1.0) * p).round() as usize)
-            .copied()
-            .unwrap_or(f64::NAN)
-    };
+    let mean = times.iter().sum::<u64>() as f64 / times.len().max(1) as f64;
+    times.sort_unstable();
     StepTime {
         filter: name.to_string(),
         states: tuning.states,
-        steps,
-        median_ns: q(0.5),
-        p99_ns: q(0.99),
+        steps: times.len() as u64,
+        median_ns: quantile(&times, 0.5),
+        p99_ns: quantile(&times, 0.99),
+        p999_ns: quantile(&times, 0.999),
+        max_ns: times.last().map(|x| *x as f64).unwrap_or(f64::NAN),
         mean_ns: mean,
+        timer_overhead_ns: overhead_ns,
     }
 }
 

@@ -1,11 +1,10 @@
 //! `leakwatch bench ...`: thin shells over the `bench` crate that print tables and write JSON.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
+use bench::speed::{step_time, timer_overhead_ns};
 use bench::{detection, speed};
-use estimator::{Estimator, Tuning};
-use model::{ActuatorParams, Sample};
+use estimator::Tuning;
 
 fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
@@ -14,85 +13,6 @@ fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<(), S
     std::fs::write(&p, text + "\n").map_err(|e| format!("cannot write {}: {e}", p.display()))?;
     eprintln!("wrote {}", p.display());
     Ok(())
-}
-
-/// Step-time figures of one filter layout, every predict + update timed on its own.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct StepTime {
-    /// Filter description.
-    pub filter: String,
-    /// Number of states.
-    pub states: u32,
-    /// Steps timed (each one individually).
-    pub steps: u64,
-    /// Median time of one predict + update (one `Estimator::on_sample`), ns,
-    /// including the clock's own cost (`timer_overhead_ns`).
-    pub median_ns: f64,
-    /// 99th percentile of the per-step times, ns (including the clock's cost).
-    pub p99_ns: f64,
-    /// 99.9th percentile of the per-step times, ns (including the clock's cost).
-    pub p999_ns: f64,
-    /// Largest per-step time, ns (including the clock's cost; preemption shows here).
-    pub max_ns: f64,
-    /// Mean of the per-step times, ns (including the clock's cost).
-    pub mean_ns: f64,
-    /// Median time of an empty timed region (two back-to-back `Instant::now()`), ns:
-    /// the overhead included in every figure above.
-    pub timer_overhead_ns: f64,
-}
-
-/// Value at quantile `q` (0..=1) of sorted `v`, nearest rank; NaN if empty.
-fn quantile(v: &[u64], q: f64) -> f64 {
-    v.get(((v.len() as f64 - 1.0) * q).round() as usize)
-        .map(|x| *x as f64)
-        .unwrap_or(f64::NAN)
-}
-
-/// Median cost of timing an empty region with `Instant` over `n` tries, ns.
-fn timer_overhead_ns(n: usize) -> f64 {
-    let mut d: Vec<u64> = (0..n)
-        .map(|_| {
-            let t0 = Instant::now();
-            std::hint::black_box(());
-            t0.elapsed().as_nanos() as u64
-        })
-        .collect();
-    d.sort_unstable();
-    quantile(&d, 0.5)
-}
-
-/// Times every predict + update of a filter individually over at least
-/// `min_steps` steps of `samples` (restarting the filter at the end of the samples).
-fn step_time(name: &str, tuning: &Tuning, samples: &[Sample], min_steps: u64, overhead_ns: f64) -> StepTime {
-    let mut times: Vec<u64> = Vec::with_capacity(min_steps as usize + samples.len());
-    let mut sink = 0.0;
-    while (times.len() as u64) < min_steps {
-        let mut est = match Estimator::new(ActuatorParams::default(), tuning.clone()) {
-            Ok(e) => e,
-            Err(_) => break,
-        };
-        for s in samples {
-            let t0 = Instant::now();
-            let e = est.on_sample(std::hint::black_box(s));
-            let dt = t0.elapsed();
-            sink += e.nis;
-            times.push(dt.as_nanos() as u64);
-        }
-    }
-    std::hint::black_box(sink);
-    let mean = times.iter().sum::<u64>() as f64 / times.len().max(1) as f64;
-    times.sort_unstable();
-    StepTime {
-        filter: name.to_string(),
-        states: tuning.states,
-        steps: times.len() as u64,
-        median_ns: quantile(&times, 0.5),
-        p99_ns: quantile(&times, 0.99),
-        p999_ns: quantile(&times, 0.999),
-        max_ns: times.last().map(|x| *x as f64).unwrap_or(f64::NAN),
-        mean_ns: mean,
-        timer_overhead_ns: overhead_ns,
-    }
 }
 
 /// EKF step time per layout (every step timed individually) and the in-process chain's throughput.
