@@ -1,9 +1,8 @@
 //! Debug one detection-suite case: cargo run --release -p bench --example case -- SCENARIO KIND SIZE ONSET RAMP SEED
-use bench::detection::{draw_rig, Case};
+use bench::detection::{simulator_for, Case};
 use classifier::{Classifier, ClassifierConfig};
 use estimator::{EstimatorStage, Tuning};
-use model::rng::Rng;
-use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::ActuatorParams;
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -16,13 +15,15 @@ fn main() {
         seed: a[6].parse().unwrap(),
         seconds: 0.0,
     };
+    let mut case = case;
     let seconds = if case.kind == "none" {
         300.0
     } else {
         case.onset_s + case.ramp_s + 10.0
     };
-    let mut rng = Rng::new(case.seed);
-    let rig = draw_rig(&mut rng);
+    case.seconds = seconds;
+    let mut sim = simulator_for(&case).unwrap();
+    let rig = sim.rig().clone();
     println!(
         "rig bias {:e} beta {:e} fric ext {:?} ret {:?}",
         rig.spool_null_bias_m,
@@ -30,29 +31,6 @@ fn main() {
         rig.friction.extend().static_n,
         rig.friction.retract.map(|r| r.static_n)
     );
-    let mut faults = FaultSchedule::default();
-    if case.kind != "none" {
-        faults.faults.push(
-            Fault::parse(
-                &format!(
-                    "{}:{}lpm@{}s,ramp={}",
-                    case.kind, case.size_lpm, case.onset_s, case.ramp_s
-                ),
-                &rig,
-            )
-            .unwrap(),
-        );
-    }
-    let sc = Scenario::by_name(&case.scenario, case.seed, seconds).unwrap();
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        faults,
-        case.seed,
-    )
-    .unwrap();
     let mut lt = Tuning::sensor_derived();
     if let Ok(v) = std::env::var("SUBSTEPS") {
         lt.substeps = v.parse().unwrap();

@@ -1,10 +1,9 @@
 //! Debug a healthy detection-suite run: prints the 4 s leading up to each raised leak event.
 //! cargo run --release -p bench --example false_alarm -- SCENARIO SEED [SECONDS]
-use bench::detection::draw_rig;
+use bench::detection::{simulator_for, Case};
 use classifier::{Classifier, ClassifierConfig};
 use estimator::{EstimatorStage, Tuning};
-use model::rng::Rng;
-use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::ActuatorParams;
 use std::collections::VecDeque;
 
 fn main() {
@@ -12,8 +11,17 @@ fn main() {
     let scenario = a[1].clone();
     let seed: u64 = a[2].parse().expect("seed");
     let seconds: f64 = a.get(3).map(|s| s.parse().expect("seconds")).unwrap_or(300.0);
-    let mut rng = Rng::new(seed);
-    let rig = draw_rig(&mut rng);
+    let case = Case {
+        seed,
+        scenario,
+        kind: "none".into(),
+        size_lpm: 0.0,
+        onset_s: f64::NAN,
+        ramp_s: 0.0,
+        seconds,
+    };
+    let mut sim = simulator_for(&case).expect("sim");
+    let rig = sim.rig().clone();
     println!(
         "rig bias {:e} beta {:e} fric ext {:?} ret {:?}",
         rig.spool_null_bias_m,
@@ -21,16 +29,6 @@ fn main() {
         rig.friction.extend().static_n,
         rig.friction.retract.map(|r| r.static_n)
     );
-    let sc = Scenario::by_name(&scenario, seed, seconds).expect("scenario");
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        seed,
-    )
-    .expect("sim");
     let mut stage = EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),

@@ -3,25 +3,13 @@
 //! each hypothesis (ext1, ext2, int) above its learned offset once armed, raw and
 //! smoothed, plus the largest score (rise - misfit)/floor.
 //! cargo run --release -p bench --example healthy_rise -- [HOURS] [TAU_S]
-use bench::detection::{cases, draw_rig, Case};
-use classifier::{Classifier, ClassifierConfig};
+use bench::detection::{cases, simulator_for, Case};
+use classifier::{misfits, Classifier, ClassifierConfig};
 use estimator::{EstimatorStage, Tuning};
-use model::rng::Rng;
-use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::ActuatorParams;
 
 fn run(case: &Case, tau_s: f64) -> ([f64; 3], [f64; 3]) {
-    let mut rng = Rng::new(case.seed);
-    let rig = draw_rig(&mut rng);
-    let sc = Scenario::by_name(&case.scenario, case.seed, case.seconds).expect("scenario");
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        case.seed,
-    )
-    .expect("sim");
+    let mut sim = simulator_for(case).expect("sim");
     let mut stage = EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
@@ -39,9 +27,7 @@ fn run(case: &Case, tau_s: f64) -> ([f64; 3], [f64; 3]) {
         cls.on_stage(&e, |_| {});
         if cls.leak_size.is_armed() {
             let r = cls.leak_size.rise_lpm(&e.leak);
-            let w1 = r[0];
-            let w2 = r[1];
-            let misfit = [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2];
+            let misfit = misfits(r);
             for k in 0..3 {
                 let v = r[k] - misfit[k];
                 sm[k] += a * (v - sm[k]);

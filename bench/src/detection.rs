@@ -180,8 +180,9 @@ pub fn cases(runs: usize, hours: f64, seed: u64) -> Vec<Case> {
     out
 }
 
-/// Runs one case through the rig, the estimator stage and the classifier.
-pub fn run_case(case: &Case) -> Result<RunResult, String> {
+/// The simulated rig of a case: the rig drawn from its seed ([`draw_rig`]), its
+/// fault (if any) and its scenario over `case.seconds`.
+pub fn simulator_for(case: &Case) -> Result<Simulator, String> {
     let mut rng = Rng::new(case.seed);
     let rig = draw_rig(&mut rng);
     let mut faults = FaultSchedule::default();
@@ -198,7 +199,7 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
             .push(Fault::parse(&spec, &rig).map_err(|e| e.to_string())?);
     }
     let scenario = Scenario::by_name(&case.scenario, case.seed, case.seconds).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(
+    Simulator::new(
         rig,
         SensorParams::default(),
         SimSettings::default(),
@@ -206,7 +207,12 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
         faults,
         case.seed,
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| e.to_string())
+}
+
+/// Runs one case through the rig, the estimator stage and the classifier.
+pub fn run_case(case: &Case) -> Result<RunResult, String> {
+    let mut sim = simulator_for(case)?;
     let mut stage = EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),

@@ -895,7 +895,7 @@ pub struct Classifier {
 /// [w1, w2, (w1 − w2)/2] of the chamber flows, L/min: the part of the flow
 /// mismatch it leaves unexplained (ext1 leaves w2, ext2 leaves w1, an internal
 /// leak leaves the common part (w1 + w2)/√2).
-fn misfits(r: [f64; 3]) -> [f64; 3] {
+pub fn misfits(r: [f64; 3]) -> [f64; 3] {
     let (w1, w2) = (r[0], r[1]);
     [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2]
 }
