@@ -74,7 +74,7 @@ impl Source for SimSource {
 
 /// A CSV file (the format of the `dataset` crate) as a source, streamed.
 pub struct CsvSource {
-    reader: dataset::CsvReader<std::io::BufReader<std::fs::File>>,
+    reader: dataset::CsvReader<dataset::FileSource>,
     period_s: f64,
 }
 

@@ -2,5 +2,6 @@
 //! print tables and return JSON-ready results; they are never timed assertions.
 
 pub mod detection;
+pub mod detection_data;
 pub mod speed;
 pub mod thesis;

@@ -168,14 +168,24 @@ pub struct CsvReader<R: BufRead> {
     pub skipped: u64,
 }
 
-impl CsvReader<BufReader<File>> {
-    /// Opens `path` and reads its header.
+/// A buffered byte source: a plain file, or a gzip-compressed one decoded on the fly.
+pub type FileSource = Box<dyn BufRead + Send>;
+
+impl CsvReader<FileSource> {
+    /// Opens `path` and reads its header; a name ending in `.gz` is decompressed
+    /// on the fly (gzip), anything else is read as plain text.
     pub fn open(path: &Path, limits: Limits) -> Result<Self, DatasetError> {
         let file = File::open(path).map_err(|source| DatasetError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        CsvReader::new(BufReader::new(file), path, limits)
+        let gz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+        let source: FileSource = if gz {
+            Box::new(BufReader::new(flate2::read::MultiGzDecoder::new(file)))
+        } else {
+            Box::new(BufReader::new(file))
+        };
+        CsvReader::new(source, path, limits)
     }
 }
 

@@ -117,6 +117,42 @@ pub fn detection(
     write_json(out, "detection.json", &json)
 }
 
+/// Detection scored on recorded runs with truth (a directory like ../shared/data/leaks_dev).
+pub fn detection_data(
+    dir: &Path,
+    config: Option<&Path>,
+    threads: Option<usize>,
+    out: &Path,
+) -> Result<(), String> {
+    let cfg = crate::config::Config::load_or_default(config)?;
+    let set = bench::detection_data::ChainSettings {
+        model: cfg.model.clone(),
+        leak_filter: cfg.leak_filter.clone(),
+        thesis_filter: cfg.estimator.clone(),
+        classifier: cfg.classifier.clone(),
+    };
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    eprintln!("scoring the runs of {} on {threads} threads", dir.display());
+    let bar = indicatif::ProgressBar::new(0);
+    let r = bench::detection_data::score_dir(dir, &set, threads, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let md = bench::detection_data::data_markdown(&r);
+    println!("{md}");
+    println!("wall time {:.1} s", r.wall_s);
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    std::fs::write(
+        out.join("detection.md"),
+        format!("# Detection on {}\n\n{md}", dir.display()),
+    )
+    .map_err(|e| format!("cannot write detection.md: {e}"))?;
+    let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
+    write_json(out, "detection.json", &json)
+}
+
 /// The calibration workflow's hidden-effect suite.
 pub fn calibration(matrix: bool, out: Option<PathBuf>) -> Result<(), String> {
     let opts = calibrate::CalibrateOptions::default();

@@ -230,8 +230,15 @@ enum BenchCommand {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Output directory: detection.json, detection.md, detection.png.
+        /// Score recorded runs instead of simulating: a directory of run folders, each
+        /// with measured.csv[.gz] and truth.json (laid out like ../shared/data/leaks_dev).
         #[arg(long)]
+        data: Option<PathBuf>,
+        /// Configuration file (model, filters, classifier) for the chain, with --data.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output directory: detection.json, detection.md (and detection.png for the suite).
+        #[arg(long, default_value = "bench-detection")]
         out: PathBuf,
     },
 }
@@ -383,10 +390,19 @@ fn run(cli: Cli) -> Result<(), String> {
             BenchCommand::Calibration { matrix, out } => benches::calibration(matrix, out),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out),
             BenchCommand::Detection {
+                threads,
+                data: Some(data),
+                config,
+                out,
+                ..
+            } => benches::detection_data(&data, config.as_deref(), threads, &out),
+            BenchCommand::Detection {
                 runs,
                 hours,
                 seed,
                 threads,
+                data: None,
+                config: _,
                 out,
             } => benches::detection(runs, hours, seed, threads, &out),
         },

@@ -1,0 +1,450 @@
+//! Detection scored on recorded runs with their truth: any directory laid out
+//! like `../shared/data/leaks_dev` (`run_*/measured.csv[.gz]` and
+//! `run_*/truth.json`), the runs fed through the estimator stage and the
+//! classifier exactly as `leakwatch replay` feeds them.
+//!
+//! Per run: detected (a leak raised at or after the onset), the kind at the
+//! first alarm and after its updates, the delay from the onset, the size at
+//! the first alarm and the last one against the flow the rig really lost
+//! (`observed_mean_abs_flow_lpm_after_ramp`), and false alarms (leak events
+//! raised before the onset, or at all in a healthy run) over the clean time.
+//! The `q_leak`, `f_load` and `ref` columns are never shown to the detector.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use classifier::{Classifier, ClassifierConfig, LeakEvent, Phase};
+use estimator::{EstimatorStage, Tuning};
+use model::ActuatorParams;
+use serde::Serialize;
+
+/// What a run's truth says about its leak.
+#[derive(Debug, Clone, Serialize)]
+pub struct Truth {
+    /// Run name (the folder).
+    pub run: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// `ext1`, `ext2`, `int`, or `none`.
+    pub kind: String,
+    /// Nominal leak size, L/min (0 when healthy).
+    pub size_nominal_lpm: f64,
+    /// Leak onset, s (NaN when healthy).
+    pub t_on_s: f64,
+    /// Ramp duration, s.
+    pub ramp_s: f64,
+    /// Mean absolute leak flow the rig lost after the ramp, L/min (the size reference).
+    pub observed_flow_lpm: f64,
+}
+
+/// What the leak-size detector did on one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct DataOutcome {
+    /// The truth of the run.
+    pub truth: Truth,
+    /// A leak was raised at or after the onset.
+    pub detected: bool,
+    /// Kind named at the first alarm (empty if none).
+    pub kind_first: String,
+    /// Kind of that event after its updates (empty if none).
+    pub kind_final: String,
+    /// Delay of the first alarm from the onset, s (NaN if none).
+    pub delay_s: f64,
+    /// Size reported at the first alarm, L/min (NaN if none).
+    pub size_first_lpm: f64,
+    /// Last size reported for that event, L/min (NaN if none).
+    pub size_final_lpm: f64,
+    /// Leak events raised before the onset (or at all when healthy).
+    pub false_alarms: u32,
+    /// Time in which a false alarm could be raised (before the onset, or the whole run), s.
+    pub clean_s: f64,
+    /// Samples the run had.
+    pub samples: u64,
+}
+
+/// Totals over a directory.
+#[derive(Debug, Clone, Serialize)]
+pub struct DataSummary {
+    /// Size class (nominal L/min) and the fraction detected, right kind at the first alarm,
+    /// median delay s, median and p95 of |size error| relative to the real flow (last size).
+    pub by_size: Vec<SizeRow>,
+    /// False alarms in total.
+    pub false_alarms: u32,
+    /// Clean hours (healthy runs plus pre-onset time).
+    pub clean_hours: f64,
+    /// Every run.
+    pub runs: Vec<DataOutcome>,
+    /// Wall time, s.
+    pub wall_s: f64,
+}
+
+/// Figures of one nominal size class.
+#[derive(Debug, Clone, Serialize)]
+pub struct SizeRow {
+    /// Nominal size, L/min.
+    pub size_nominal_lpm: f64,
+    /// Runs.
+    pub runs: usize,
+    /// Detected fraction.
+    pub p_detect: f64,
+    /// Fraction whose first alarm named the right kind (of all runs of the class).
+    pub p_kind_first: f64,
+    /// Median delay from onset, s.
+    pub delay_median_s: f64,
+    /// 95th-percentile delay, s.
+    pub delay_p95_s: f64,
+    /// Median |size − real flow| / real flow at the first alarm (right kind only).
+    pub size_error_first_median: f64,
+    /// Median |size − real flow| / real flow, last size of the event (right kind only).
+    pub size_error_median: f64,
+    /// 95th percentile of the same.
+    pub size_error_p95: f64,
+}
+
+/// The chain's settings (the model, both filters, the classifier).
+#[derive(Debug, Clone)]
+pub struct ChainSettings {
+    /// The model the filters believe in.
+    pub model: ActuatorParams,
+    /// The leak filter.
+    pub leak_filter: Tuning,
+    /// The thesis filter.
+    pub thesis_filter: Tuning,
+    /// The detectors.
+    pub classifier: ClassifierConfig,
+}
+
+impl Default for ChainSettings {
+    fn default() -> Self {
+        ChainSettings {
+            model: ActuatorParams::default(),
+            leak_filter: Tuning::sensor_derived(),
+            thesis_filter: Tuning::thesis(),
+            classifier: ClassifierConfig::default(),
+        }
+    }
+}
+
+fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v.get(key).and_then(|x| x.as_f64()).unwrap_or(f64::NAN)
+}
+
+/// Reads `truth.json` of one run folder.
+pub fn read_truth(dir: &Path) -> Result<Truth, String> {
+    let p = dir.join("truth.json");
+    let text = std::fs::read_to_string(&p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: not JSON: {e}", p.display()))?;
+    let run = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let scenario = v
+        .pointer("/scenario/name")
+        .and_then(|s| s.as_str())
+        .unwrap_or("")
+        .to_string();
+    let fault = v.get("fault").filter(|f| !f.is_null());
+    Ok(match fault {
+        None => Truth {
+            run,
+            scenario,
+            kind: "none".into(),
+            size_nominal_lpm: 0.0,
+            t_on_s: f64::NAN,
+            ramp_s: 0.0,
+            observed_flow_lpm: 0.0,
+        },
+        Some(f) => Truth {
+            run,
+            scenario,
+            kind: f
+                .get("kind")
+                .and_then(|k| k.as_str())
+                .ok_or_else(|| format!("{}: fault without a kind", p.display()))?
+                .to_string(),
+            size_nominal_lpm: num(f, "size_lpm"),
+            t_on_s: num(f, "t_on_s"),
+            ramp_s: num(f, "ramp_s").max(0.0),
+            observed_flow_lpm: num(f, "observed_mean_abs_flow_lpm_after_ramp"),
+        },
+    })
+}
+
+fn measured_file(dir: &Path) -> Result<PathBuf, String> {
+    for name in ["measured.csv.gz", "measured.csv"] {
+        let p = dir.join(name);
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    Err(format!("{}: no measured.csv or measured.csv.gz", dir.display()))
+}
+
+/// Runs one recorded run through the chain; returns every leak-size event and the samples read.
+pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<(Vec<LeakEvent>, u64, f64), String> {
+    let limits = dataset::Limits::for_supply(set.model.supply_pressure_pa);
+    let mut reader = dataset::CsvReader::open(path, limits).map_err(|e| e.to_string())?;
+    let mut stage = EstimatorStage::new(
+        set.model.clone(),
+        set.leak_filter.clone(),
+        set.thesis_filter.clone(),
+    )?;
+    let mut cls = Classifier::new(set.classifier.clone())?;
+    let mut events = Vec::new();
+    let (mut n, mut t_end) = (0u64, 0.0);
+    while let Some(row) = reader.next_row() {
+        let s = match row {
+            dataset::Row::Sample(s) | dataset::Row::AfterGap(s, _) => s,
+            dataset::Row::Skipped(_) => continue,
+        };
+        n += 1;
+        t_end = s.t_s;
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| {
+            if ev.kind.is_leak() && ev.detector == "leak-size" {
+                events.push(ev)
+            }
+        });
+    }
+    Ok((events, n, t_end))
+}
+
+/// Scores one run's events against its truth.
+pub fn score_run(truth: Truth, events: &[LeakEvent], samples: u64, t_end_s: f64) -> DataOutcome {
+    let healthy = truth.kind == "none";
+    let raised = |e: &&LeakEvent| e.phase == Phase::Raised;
+    let false_alarms = events
+        .iter()
+        .filter(raised)
+        .filter(|e| healthy || e.t_detect_s < truth.t_on_s)
+        .count() as u32;
+    let clean_s = if healthy {
+        t_end_s
+    } else {
+        truth.t_on_s.min(t_end_s)
+    };
+    let first = if healthy {
+        None
+    } else {
+        events
+            .iter()
+            .filter(raised)
+            .find(|e| e.t_detect_s >= truth.t_on_s)
+    };
+    let mut o = DataOutcome {
+        truth,
+        detected: first.is_some(),
+        kind_first: String::new(),
+        kind_final: String::new(),
+        delay_s: f64::NAN,
+        size_first_lpm: f64::NAN,
+        size_final_lpm: f64::NAN,
+        false_alarms,
+        clean_s,
+        samples,
+    };
+    if let Some(ev) = first {
+        let last = events
+            .iter()
+            .rev()
+            .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared)
+            .unwrap_or(ev);
+        o.kind_first = ev.kind.name().into();
+        o.kind_final = last.kind.name().into();
+        o.delay_s = ev.t_detect_s - o.truth.t_on_s;
+        o.size_first_lpm = ev.size_lpm;
+        o.size_final_lpm = last.size_lpm;
+    }
+    o
+}
+
+fn quantile(v: &mut [f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() as f64 - 1.0) * p).round() as usize]
+}
+
+/// Scores every `run_*`-like folder (any folder holding a truth.json) of `dir`,
+/// on `threads` threads; `progress(done, total)` after each run.
+pub fn score_dir(
+    dir: &Path,
+    set: &ChainSettings,
+    threads: usize,
+    progress: impl Fn(usize, usize) + Sync,
+) -> Result<DataSummary, String> {
+    let t0 = std::time::Instant::now();
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("cannot read {}: {e}", dir.display()))?
+        .filter_map(|d| d.ok().map(|d| d.path()))
+        .filter(|p| p.join("truth.json").is_file())
+        .collect();
+    dirs.sort();
+    if dirs.is_empty() {
+        return Err(format!(
+            "{}: no run folders (a folder with truth.json and measured.csv[.gz])",
+            dir.display()
+        ));
+    }
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<Result<DataOutcome, String>>>> = Mutex::new(vec![None; dirs.len()]);
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(d) = dirs.get(i) else { break };
+                let r = (|| {
+                    let truth = read_truth(d)?;
+                    let (events, n, t_end) = detect_file(&measured_file(d)?, set)?;
+                    Ok(score_run(truth, &events, n, t_end))
+                })();
+                if let Ok(mut v) = results.lock() {
+                    v[i] = Some(r);
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, dirs.len());
+            });
+        }
+    });
+    let mut runs = Vec::new();
+    for r in results
+        .into_inner()
+        .map_err(|_| "a worker panicked".to_string())?
+    {
+        match r {
+            Some(Ok(o)) => runs.push(o),
+            Some(Err(e)) => return Err(e),
+            None => return Err("a run was not scored".into()),
+        }
+    }
+    Ok(summarise_data(runs, t0.elapsed().as_secs_f64()))
+}
+
+/// Totals per nominal size class.
+pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
+    let mut sizes: Vec<f64> = runs
+        .iter()
+        .filter(|r| r.truth.kind != "none")
+        .map(|r| r.truth.size_nominal_lpm)
+        .collect();
+    sizes.sort_by(f64::total_cmp);
+    sizes.dedup();
+    let by_size = sizes
+        .iter()
+        .map(|&size| {
+            let these: Vec<&DataOutcome> = runs
+                .iter()
+                .filter(|r| r.truth.kind != "none" && r.truth.size_nominal_lpm == size)
+                .collect();
+            let n = these.len();
+            let mut delays: Vec<f64> = these.iter().filter(|o| o.detected).map(|o| o.delay_s).collect();
+            let err =
+                |o: &&&DataOutcome, s: f64| (s - o.truth.observed_flow_lpm).abs() / o.truth.observed_flow_lpm;
+            let right = |o: &&&DataOutcome| o.kind_first == o.truth.kind;
+            let mut e_first: Vec<f64> = these
+                .iter()
+                .filter(right)
+                .map(|o| err(&o, o.size_first_lpm))
+                .collect();
+            let mut e_last: Vec<f64> = these
+                .iter()
+                .filter(|o| o.kind_final == o.truth.kind)
+                .map(|o| err(&o, o.size_final_lpm))
+                .collect();
+            SizeRow {
+                size_nominal_lpm: size,
+                runs: n,
+                p_detect: these.iter().filter(|o| o.detected).count() as f64 / n as f64,
+                p_kind_first: these.iter().filter(right).count() as f64 / n as f64,
+                delay_median_s: quantile(&mut delays, 0.5),
+                delay_p95_s: quantile(&mut delays, 0.95),
+                size_error_first_median: quantile(&mut e_first, 0.5),
+                size_error_median: quantile(&mut e_last, 0.5),
+                size_error_p95: quantile(&mut e_last, 0.95),
+            }
+        })
+        .collect();
+    let false_alarms = runs.iter().map(|r| r.false_alarms).sum();
+    let clean_hours = runs.iter().map(|r| r.clean_s).sum::<f64>() / 3600.0;
+    DataSummary {
+        by_size,
+        false_alarms,
+        clean_hours,
+        runs,
+        wall_s,
+    }
+}
+
+/// The per-run and per-size tables in Markdown.
+pub fn data_markdown(r: &DataSummary) -> String {
+    let f = |v: f64, d: usize| {
+        if v.is_finite() {
+            format!("{v:.d$}")
+        } else {
+            "–".into()
+        }
+    };
+    let pct = |v: f64| {
+        if v.is_finite() {
+            format!("{:.0} %", v * 100.0)
+        } else {
+            "–".into()
+        }
+    };
+    let mut s = String::from(
+        "| run | scenario | truth | real flow L/min | first alarm | delay s | size first | size last | false alarms |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for o in &r.runs {
+        let t = &o.truth;
+        let truth = if t.kind == "none" {
+            "healthy".to_string()
+        } else {
+            format!("{} {} @{:.1}s", t.kind, t.size_nominal_lpm, t.t_on_s)
+        };
+        let first = if o.detected {
+            if o.kind_final != o.kind_first {
+                format!("{} (then {})", o.kind_first, o.kind_final)
+            } else {
+                o.kind_first.clone()
+            }
+        } else {
+            "–".into()
+        };
+        s.push_str(&format!(
+            "| {} | {} | {truth} | {} | {first} | {} | {} | {} | {} |\n",
+            t.run,
+            t.scenario,
+            f(t.observed_flow_lpm, 3),
+            f(o.delay_s, 2),
+            f(o.size_first_lpm, 3),
+            f(o.size_final_lpm, 3),
+            o.false_alarms
+        ));
+    }
+    s.push_str(
+        "\n| nominal L/min | runs | detected | right kind at first alarm | delay median s | delay p95 s | size error at first alarm (median) | size error median | size error p95 |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for c in &r.by_size {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            c.size_nominal_lpm,
+            c.runs,
+            pct(c.p_detect),
+            pct(c.p_kind_first),
+            f(c.delay_median_s, 2),
+            f(c.delay_p95_s, 2),
+            pct(c.size_error_first_median),
+            pct(c.size_error_median),
+            pct(c.size_error_p95),
+        ));
+    }
+    s.push_str(&format!(
+        "\nFalse alarms: {} in {:.2} clean hours (healthy runs and pre-onset time). Sizes are scored against \
+         the flow the rig really lost after the ramp.\n",
+        r.false_alarms, r.clean_hours
+    ));
+    s
+}
