@@ -218,7 +218,10 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
         Tuning::sensor_derived(),
         Tuning::thesis(),
     )?;
-    let mut cls = Classifier::new(ClassifierConfig::default())?;
+    let mut cls = Classifier::new(ClassifierConfig {
+        thesis_baseline: true,
+        ..ClassifierConfig::default()
+    })?;
     let mut events: Vec<LeakEvent> = Vec::new();
     let n = (case.seconds / sim.sample_period_s()).round() as u64;
     for _ in 0..n {
@@ -491,18 +494,11 @@ mod tests {
             ramp_s: 0.0,
             seconds: 30.0,
         };
-        let ev = |kind, phase, t: f64, id, size| LeakEvent {
-            kind,
-            phase,
-            detector: "leak-size".into(),
-            event_id: id,
-            t_detect_s: t,
-            t_onset_s: t,
-            size_lpm: size,
-            size_lpm_sigma: 0.01,
-            confidence: 1.0,
-            channel: String::new(),
-            detail: String::new(),
+        let ev = |kind, phase, t: f64, id, size| {
+            let mut e = LeakEvent::plain(kind, phase, "leak-size", id, t, t);
+            e.size_lpm = size;
+            e.size_lpm_sigma = 0.01;
+            e
         };
         let events = vec![
             ev(EventKind::Ext1, Phase::Raised, 12.0, 1, 0.1),

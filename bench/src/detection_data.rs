@@ -61,6 +61,29 @@ pub struct DataOutcome {
     pub clean_s: f64,
     /// Samples the run had.
     pub samples: u64,
+    /// Thresholds the detector used on the rise of ext1, ext2, int, L/min at p_s/2.
+    pub thresholds_lpm: [f64; 3],
+    /// The same in healthy spreads.
+    pub thresholds_sigma: [f64; 3],
+    /// Seconds without evidence after arming (gaps, excursions, NIS), s.
+    pub blind_s: f64,
+}
+
+/// What the chain did on one recorded file.
+#[derive(Debug, Clone)]
+pub struct FileRun {
+    /// The leak-size detector's leak events.
+    pub events: Vec<LeakEvent>,
+    /// Samples read.
+    pub samples: u64,
+    /// Time of the last sample, s.
+    pub t_end_s: f64,
+    /// Thresholds used, L/min at p_s/2.
+    pub thresholds_lpm: [f64; 3],
+    /// Thresholds in healthy spreads.
+    pub thresholds_sigma: [f64; 3],
+    /// Seconds without evidence after arming, s.
+    pub blind_s: f64,
 }
 
 /// Totals over a directory.
@@ -183,7 +206,7 @@ fn measured_file(dir: &Path) -> Result<PathBuf, String> {
 }
 
 /// Runs one recorded run through the chain; returns every leak-size event and the samples read.
-pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<(Vec<LeakEvent>, u64, f64), String> {
+pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> {
     let limits = dataset::Limits::for_supply(set.model.supply_pressure_pa);
     let mut reader = dataset::CsvReader::open(path, limits).map_err(|e| e.to_string())?;
     let mut stage = EstimatorStage::new(
@@ -208,11 +231,19 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<(Vec<LeakEvent>, 
             }
         });
     }
-    Ok((events, n, t_end))
+    Ok(FileRun {
+        events,
+        samples: n,
+        t_end_s: t_end,
+        thresholds_lpm: cls.leak_size.thresholds_lpm(),
+        thresholds_sigma: cls.leak_size.thresholds_sigma(),
+        blind_s: cls.leak_size.blind_s(),
+    })
 }
 
 /// Scores one run's events against its truth.
-pub fn score_run(truth: Truth, events: &[LeakEvent], samples: u64, t_end_s: f64) -> DataOutcome {
+pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
+    let (events, samples, t_end_s) = (&run.events[..], run.samples, run.t_end_s);
     let healthy = truth.kind == "none";
     let raised = |e: &&LeakEvent| e.phase == Phase::Raised;
     let false_alarms = events
@@ -244,6 +275,9 @@ pub fn score_run(truth: Truth, events: &[LeakEvent], samples: u64, t_end_s: f64)
         false_alarms,
         clean_s,
         samples,
+        thresholds_lpm: run.thresholds_lpm,
+        thresholds_sigma: run.thresholds_sigma,
+        blind_s: run.blind_s,
     };
     if let Some(ev) = first {
         let last = events
@@ -299,8 +333,8 @@ pub fn score_dir(
                 let Some(d) = dirs.get(i) else { break };
                 let r = (|| {
                     let truth = read_truth(d)?;
-                    let (events, n, t_end) = detect_file(&measured_file(d)?, set)?;
-                    Ok(score_run(truth, &events, n, t_end))
+                    let run = detect_file(&measured_file(d)?, set)?;
+                    Ok(score_run(truth, &run))
                 })();
                 if let Ok(mut v) = results.lock() {
                     v[i] = Some(r);
@@ -395,7 +429,7 @@ pub fn data_markdown(r: &DataSummary) -> String {
         }
     };
     let mut s = String::from(
-        "| run | scenario | truth | real flow L/min | first alarm | delay s | size first | size last | false alarms |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| run | scenario | truth | real flow L/min | first alarm | delay s | size first | size last | false alarms | thresholds L/min (σ) |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for o in &r.runs {
         let t = &o.truth;
@@ -414,14 +448,20 @@ pub fn data_markdown(r: &DataSummary) -> String {
             "–".into()
         };
         s.push_str(&format!(
-            "| {} | {} | {truth} | {} | {first} | {} | {} | {} | {} |\n",
+            "| {} | {} | {truth} | {} | {first} | {} | {} | {} | {} | {} |\n",
             t.run,
             t.scenario,
             f(t.observed_flow_lpm, 3),
             f(o.delay_s, 2),
             f(o.size_first_lpm, 3),
             f(o.size_final_lpm, 3),
-            o.false_alarms
+            o.false_alarms,
+            o.thresholds_lpm
+                .iter()
+                .zip(&o.thresholds_sigma)
+                .map(|(l, z)| format!("{} ({})", f(*l, 3), f(*z, 1)))
+                .collect::<Vec<_>>()
+                .join(" ")
         ));
     }
     s.push_str(

@@ -31,7 +31,7 @@
 // The detectors walk parallel per-kind arrays by index; iterators would hide that.
 #![allow(clippy::needless_range_loop)]
 
-use estimator::{Estimate, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use serde::{Deserialize, Serialize};
 
 /// Cubic metres per second in one litre per minute.
@@ -110,10 +110,24 @@ pub struct LeakEvent {
     pub t_detect_s: f64,
     /// Estimated onset time, s (NaN if unknown).
     pub t_onset_s: f64,
-    /// Leak size at the nominal pressure drop p_s/2, L/min (NaN if not sized).
+    /// Leak flow at the measured pressures, L/min (NaN if not sized): the
+    /// estimated coefficient times the mean of √Δp over the last
+    /// `size_window_s` (Δp = p1, p2 or |p1 − p2| for ext1, ext2, int).
     pub size_lpm: f64,
     /// One standard deviation of `size_lpm`, L/min.
     pub size_lpm_sigma: f64,
+    /// The same leak at the nominal pressure drop p_s/2, L/min (NaN if not sized).
+    #[serde(default = "nan")]
+    pub size_nominal_lpm: f64,
+    /// Leak coefficient of the square-root law q = k·√Δp, m³/(s·√Pa) (NaN if not sized).
+    #[serde(default = "nan")]
+    pub coefficient_m3_s_sqrt_pa: f64,
+    /// Decision statistic: the rise in healthy spreads (NaN where not applicable).
+    #[serde(default = "nan")]
+    pub statistic: f64,
+    /// Threshold of the statistic, in healthy spreads (NaN where not applicable).
+    #[serde(default = "nan")]
+    pub threshold: f64,
     /// Confidence in [0, 1] that the kind is right and the leak is real.
     pub confidence: f64,
     /// For sensor events: which channel (`x`, `p1`, `p2`); empty otherwise.
@@ -122,6 +136,91 @@ pub struct LeakEvent {
     /// Human-readable detail.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub detail: String,
+}
+
+fn nan() -> f64 {
+    f64::NAN
+}
+
+impl LeakEvent {
+    /// An event of `detector` with no size or statistic (NaN), confidence 1, no channel or detail.
+    pub fn plain(
+        kind: EventKind,
+        phase: Phase,
+        detector: &str,
+        event_id: u64,
+        t_detect_s: f64,
+        t_onset_s: f64,
+    ) -> Self {
+        LeakEvent {
+            kind,
+            phase,
+            detector: detector.into(),
+            event_id,
+            t_detect_s,
+            t_onset_s,
+            size_lpm: f64::NAN,
+            size_lpm_sigma: f64::NAN,
+            size_nominal_lpm: f64::NAN,
+            coefficient_m3_s_sqrt_pa: f64::NAN,
+            statistic: f64::NAN,
+            threshold: f64::NAN,
+            confidence: 1.0,
+            channel: String::new(),
+            detail: String::new(),
+        }
+    }
+}
+
+/// What a healthy commissioning run taught about the leak filter's estimates:
+/// loaded at start, it arms the detector at once, so that a leak already
+/// present when monitoring starts shows against it (`[classifier.commissioning]`,
+/// written by `leakwatch commission`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Commissioning {
+    /// Healthy offset of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
+    pub offsets_lpm: [f64; 3],
+    /// Healthy spread (standard deviation) of each, L/min at the nominal drop.
+    pub spreads_lpm: [f64; 3],
+    /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
+    pub crossings_per_s: [f64; 3],
+    /// Seconds of healthy, converged data learned from, s.
+    pub healthy_s: f64,
+    /// Where it was learned (the recording's path).
+    #[serde(default)]
+    pub source: String,
+}
+
+impl Commissioning {
+    fn validate(&self) -> Result<(), String> {
+        let all = self
+            .offsets_lpm
+            .iter()
+            .chain(&self.spreads_lpm)
+            .chain(&self.crossings_per_s)
+            .chain(std::iter::once(&self.healthy_s));
+        for v in all {
+            if !v.is_finite() {
+                return Err(format!(
+                    "[classifier.commissioning] holds {v}: every figure must be finite"
+                ));
+            }
+        }
+        if self
+            .spreads_lpm
+            .iter()
+            .chain(&self.crossings_per_s)
+            .any(|v| *v < 0.0)
+            || self.healthy_s <= 0.0
+        {
+            return Err(
+                "[classifier.commissioning] spreads, crossings and healthy_s must be ≥ 0 (healthy_s > 0)"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
 }
 
 /// Settings of the detectors, `[classifier]` in the TOML config.
@@ -135,8 +234,31 @@ pub struct ClassifierConfig {
     pub warmup_s: f64,
     /// Shortest warm-up that can give thresholds, s.
     pub min_warmup_s: f64,
-    /// Leak-size detector: threshold in spreads of the healthy estimate.
+    /// Leak-size detector: the false-alarm rate asked for, per hour. The threshold
+    /// on the rise, in healthy spreads, is c = √(2 ln(N₀/rate)) (Rice's formula for
+    /// a Gaussian process with N₀ upcrossings of its mean per hour, learned in the
+    /// warm-up), never below `threshold_sigma`.
+    pub false_alarms_per_hour: f64,
+    /// Leak-size detector: least threshold in spreads of the healthy estimate.
     pub threshold_sigma: f64,
+    /// Leak-size detector: at the first alarm, the part of the flow mismatch the
+    /// named kind leaves unexplained must be below this fraction of its size (the
+    /// kind is decided before the alarm is raised).
+    pub isolation_max_misfit: f64,
+    /// Leak-size detector: window of the measured pressures over which the real
+    /// leak flow is averaged, s.
+    pub size_window_s: f64,
+    /// Leak-size detector: after a gap, a skipped sample or a filter reset, no
+    /// evidence for this long (the filter re-converges), s.
+    pub recovery_s: f64,
+    /// Leak-size detector: while the normalised innovation squared (averaged over
+    /// 50 ms) exceeds this, the filter is not tracking and gives no evidence.
+    pub nis_gate: f64,
+    /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
+    pub thesis_baseline: bool,
+    /// The healthy state learned by commissioning (absent: learned in a warm-up,
+    /// and a leak present at start cannot be seen).
+    pub commissioning: Option<Commissioning>,
     /// Leak-size detector: smallest leak ever declared, L/min (at nominal drop).
     pub min_size_lpm: f64,
     /// Leak-size detector: time above threshold before a leak is declared, s.
@@ -183,11 +305,18 @@ pub struct ClassifierConfig {
 impl Default for ClassifierConfig {
     fn default() -> Self {
         ClassifierConfig {
-            settle_s: 4.0,
-            warmup_s: 6.0,
+            settle_s: 2.0,
+            warmup_s: 4.0,
             min_warmup_s: 3.0,
-            threshold_sigma: 5.0,
-            min_size_lpm: 0.08,
+            false_alarms_per_hour: 0.05,
+            threshold_sigma: 4.0,
+            isolation_max_misfit: 0.35,
+            size_window_s: 2.0,
+            recovery_s: 2.0,
+            nis_gate: 1000.0,
+            thesis_baseline: false,
+            commissioning: None,
+            min_size_lpm: 0.04,
             confirm_s: 0.5,
             baseline_tau_s: 15.0,
             slow_leak_lpm: 0.5,
@@ -217,6 +346,10 @@ impl ClassifierConfig {
             ("warmup_s", self.warmup_s),
             ("min_warmup_s", self.min_warmup_s),
             ("threshold_sigma", self.threshold_sigma),
+            ("isolation_max_misfit", self.isolation_max_misfit),
+            ("size_window_s", self.size_window_s),
+            ("recovery_s", self.recovery_s),
+            ("nis_gate", self.nis_gate),
             ("min_size_lpm", self.min_size_lpm),
             ("confirm_s", self.confirm_s),
             ("baseline_tau_s", self.baseline_tau_s),
@@ -237,6 +370,15 @@ impl ClassifierConfig {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("[classifier] {name} = {v}: must be a finite number ≥ 0"));
             }
+        }
+        if !(self.false_alarms_per_hour.is_finite() && self.false_alarms_per_hour > 0.0) {
+            return Err(format!(
+                "[classifier] false_alarms_per_hour = {}: must be a finite rate > 0 per hour",
+                self.false_alarms_per_hour
+            ));
+        }
+        if let Some(c) = &self.commissioning {
+            c.validate()?;
         }
         if self.min_warmup_s > self.warmup_s {
             return Err(format!(
@@ -308,6 +450,14 @@ pub struct LeakSizeDetector {
     cfg: ClassifierConfig,
     arming: Arming,
     stats: [Stats; 3],
+    /// Upcrossings of the running healthy mean seen while learning, per kind.
+    upcrossings: [u32; 3],
+    /// Whether each size was above its running mean at the last learning sample.
+    above_mean: [bool; 3],
+    /// Time the learning started, s.
+    learn_t0_s: f64,
+    /// Threshold on the rise of each kind, in healthy spreads.
+    threshold_z: [f64; 3],
     threshold_lpm: [f64; 3],
     /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
     baseline_lpm: [f64; 3],
@@ -320,9 +470,112 @@ pub struct LeakSizeDetector {
     slow_since_s: Option<(usize, f64)>,
     /// No evidence is gathered before this time (an excursion and its recovery), s.
     blind_until_s: f64,
+    /// Evidence is invalid before this time (a gap, a skipped sample, a reset, a NIS burst), s.
+    invalid_until_s: f64,
+    /// The filter restarted: no evidence until it has converged again.
+    awaiting_convergence: bool,
+    /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
+    blind_s: f64,
+    /// Mean NIS over the last 50 ms.
+    nis_avg: f64,
+    /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
+    flow_factor: [f64; 3],
     last_low_s: [f64; 3],
     active: Option<Active>,
     next_id: u64,
+}
+
+/// The threshold in spreads for a requested false-alarm rate `rate_per_h`, with
+/// `crossings_per_s` upcrossings of the mean per second (Rice: the rate of
+/// upcrossings of level c·σ by a Gaussian process is N₀·e^(−c²/2)), at least `floor`.
+pub fn rice_threshold(crossings_per_s: f64, rate_per_h: f64, floor: f64) -> f64 {
+    let n0_per_h = crossings_per_s * 3600.0;
+    if n0_per_h > rate_per_h && rate_per_h > 0.0 {
+        (2.0 * (n0_per_h / rate_per_h).ln()).sqrt().max(floor)
+    } else {
+        floor
+    }
+}
+
+/// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
+/// the offset, spread and upcrossing rate of each single-leak size after the
+/// filter has converged and settled, gaps and resets left out.
+#[derive(Debug, Clone)]
+pub struct CommissioningLearner {
+    settle_s: f64,
+    converged_at_s: Option<f64>,
+    stats: [Stats; 3],
+    upcrossings: [u32; 3],
+    above_mean: [bool; 3],
+    last_t_s: f64,
+    learned_s: f64,
+}
+
+impl CommissioningLearner {
+    /// A learner that starts `settle_s` after the filter has converged.
+    pub fn new(settle_s: f64) -> Self {
+        CommissioningLearner {
+            settle_s,
+            converged_at_s: None,
+            stats: [Stats::default(); 3],
+            upcrossings: [0; 3],
+            above_mean: [false; 3],
+            last_t_s: f64::NAN,
+            learned_s: 0.0,
+        }
+    }
+
+    /// Reads one estimate of the leak filter.
+    pub fn on_estimate(&mut self, e: &Estimate) {
+        if e.n_states < 10 {
+            return;
+        }
+        let bad = FLAG_SKIPPED | FLAG_RESET | FLAG_CONVERGING | FLAG_AFTER_GAP;
+        if e.flags & bad != 0 {
+            if e.flags & (FLAG_RESET | FLAG_CONVERGING) != 0 {
+                self.converged_at_s = None;
+            }
+            self.last_t_s = f64::NAN;
+            return;
+        }
+        let t0 = *self.converged_at_s.get_or_insert(e.t_s);
+        if e.t_s - t0 < self.settle_s {
+            return;
+        }
+        let raw = LeakSizeDetector::raw_sizes(e);
+        if !raw.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        if self.last_t_s.is_finite() {
+            self.learned_s += (e.t_s - self.last_t_s).clamp(0.0, 0.1);
+        }
+        self.last_t_s = e.t_s;
+        for k in 0..3 {
+            self.stats[k].push(raw[k]);
+            let above = raw[k] > self.stats[k].mean;
+            if above && !self.above_mean[k] {
+                self.upcrossings[k] += 1;
+            }
+            self.above_mean[k] = above;
+        }
+    }
+
+    /// The commissioning, or why there is none (too little healthy data).
+    pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
+        if self.learned_s < min_s {
+            return Err(format!(
+                "only {:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)",
+                self.learned_s
+            ));
+        }
+        Ok(Commissioning {
+            offsets_lpm: std::array::from_fn(|k| self.stats[k].mean),
+            spreads_lpm: std::array::from_fn(|k| self.stats[k].std()),
+            crossings_per_s: std::array::from_fn(|k| self.upcrossings[k] as f64 / self.learned_s),
+            healthy_s: self.learned_s,
+            source: source.to_string(),
+        })
+    }
 }
 
 /// The thesis' detector: thresholds on the MAE of the pressure residuals.
@@ -373,6 +626,10 @@ impl LeakSizeDetector {
             cfg,
             arming: Arming::Converging,
             stats: [Stats::default(); 3],
+            upcrossings: [0; 3],
+            above_mean: [false; 3],
+            learn_t0_s: f64::NAN,
+            threshold_z: [f64::NAN; 3],
             threshold_lpm: [f64::NAN; 3],
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
@@ -380,6 +637,11 @@ impl LeakSizeDetector {
             above_since_s: [None; 3],
             slow_since_s: None,
             blind_until_s: f64::NEG_INFINITY,
+            invalid_until_s: f64::NEG_INFINITY,
+            awaiting_convergence: false,
+            blind_s: 0.0,
+            nis_avg: 0.0,
+            flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
             active: None,
             next_id: 1,
@@ -391,9 +653,24 @@ impl LeakSizeDetector {
         self.arming == Arming::Armed
     }
 
-    /// The learned thresholds on the rise of the ext1, ext2 and int sizes, L/min (NaN before arming).
+    /// Whether the healthy state comes from a commissioning (a leak present at start is seen).
+    pub fn is_commissioned(&self) -> bool {
+        self.cfg.commissioning.is_some()
+    }
+
+    /// The thresholds on the rise of the ext1, ext2 and int sizes, L/min at the nominal drop (NaN before arming).
     pub fn thresholds_lpm(&self) -> [f64; 3] {
         self.threshold_lpm
+    }
+
+    /// The thresholds in healthy spreads (from the requested false-alarm rate; NaN before arming).
+    pub fn thresholds_sigma(&self) -> [f64; 3] {
+        self.threshold_z
+    }
+
+    /// Seconds in which no evidence was gathered after arming (gaps, resets, excursions, NIS), s.
+    pub fn blind_s(&self) -> f64 {
+        self.blind_s
     }
 
     /// The healthy offsets of the three hypothesis sizes learned in the warm-up, L/min.
@@ -420,8 +697,20 @@ impl LeakSizeDetector {
         self.baseline_lpm
     }
 
-    /// Restarts the warm-up (after a filter reset).
+    /// Mean √(Δp/Δp_n) of ext1, ext2 and int over the size window: the real flow
+    /// of a leak per L/min of nominal size.
+    pub fn flow_factors(&self) -> [f64; 3] {
+        self.flow_factor
+    }
+
+    /// After a filter reset: an armed detector keeps what it learned and gathers no
+    /// evidence until the filter has converged again and `recovery_s` has passed;
+    /// one not yet armed starts its warm-up again.
     pub fn restart(&mut self) {
+        if self.is_armed() {
+            self.awaiting_convergence = true;
+            return;
+        }
         let cfg = self.cfg.clone();
         let id = self.next_id;
         *self = LeakSizeDetector::new(cfg);
@@ -438,47 +727,144 @@ impl LeakSizeDetector {
         ])
     }
 
+    fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {
+        for k in 0..3 {
+            let z = rice_threshold(
+                crossings_per_s[k],
+                self.cfg.false_alarms_per_hour,
+                self.cfg.threshold_sigma,
+            );
+            self.threshold_z[k] = z;
+            self.threshold_lpm[k] = (z * spreads[k]).max(self.cfg.min_size_lpm);
+            self.last_low_s[k] = t_s;
+            self.baseline_lpm[k] = means[k];
+            self.baseline_low_lpm[k] = means[k];
+            self.stats[k].mean = means[k];
+            self.stats[k].m2 = spreads[k] * spreads[k];
+            self.stats[k].n = 2.0;
+        }
+        self.arming = Arming::Armed;
+        self.last_t_s = t_s;
+    }
+
+    fn update_flow_factor(&mut self, e: &Estimate, dt_s: f64) {
+        let pn = 0.5 * self.cfg.supply_pressure_pa;
+        let p = |i: usize| {
+            if e.measured[i].is_finite() {
+                e.measured[i]
+            } else {
+                e.state[i]
+            }
+        };
+        let (p1, p2) = (p(1), p(2));
+        let g = [
+            (p1.max(0.0) / pn).sqrt(),
+            (p2.max(0.0) / pn).sqrt(),
+            ((p1 - p2).abs() / pn).sqrt(),
+        ];
+        let a = (dt_s / self.cfg.size_window_s.max(1e-3)).clamp(0.0, 1.0);
+        for k in 0..3 {
+            if !g[k].is_finite() {
+                continue;
+            }
+            if self.flow_factor[k].is_finite() {
+                self.flow_factor[k] += a * (g[k] - self.flow_factor[k]);
+            } else {
+                self.flow_factor[k] = g[k];
+            }
+        }
+    }
+
     /// Reads one estimate; pushes any event into `out` (at most one per call).
     pub fn on_estimate(&mut self, e: &Estimate, out: &mut Option<LeakEvent>) {
-        if e.n_states < 10 || e.flags & FLAG_SKIPPED != 0 {
+        if e.n_states < 10 {
             return;
         }
-        let raw = Self::raw_sizes(e);
-        match arm_step(&mut self.arming, &self.cfg, e) {
-            Some(false) => {
-                for k in 0..3 {
-                    self.stats[k].push(raw[k]);
-                }
-                return;
-            }
-            Some(true) => {
-                for k in 0..3 {
-                    self.threshold_lpm[k] =
-                        (self.cfg.threshold_sigma * self.stats[k].std()).max(self.cfg.min_size_lpm);
-                    self.last_low_s[k] = e.t_s;
-                    self.baseline_lpm[k] = self.stats[k].mean;
-                    self.baseline_low_lpm[k] = self.stats[k].mean;
-                }
-                self.last_t_s = e.t_s;
-                return;
-            }
-            None if !self.is_armed() => return,
-            None => {}
+        let dt_s = if self.last_t_s.is_finite() {
+            (e.t_s - self.last_t_s).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        // Validity gate: a gap, a skipped sample or a reset blinds the detector for
+        // `recovery_s`; so does a filter whose innovations are far beyond its own
+        // covariance (not tracking). The baseline holds while blind.
+        let recover = e.t_s + self.cfg.recovery_s;
+        if e.flags & (FLAG_SKIPPED | FLAG_AFTER_GAP | FLAG_RESET) != 0 {
+            self.invalid_until_s = self.invalid_until_s.max(recover);
         }
-        // The healthy baseline follows the estimate slowly while no leak is reported;
-        // during an excursion to tank or supply pressure (where the healthy model is
+        if e.flags & FLAG_SKIPPED != 0 {
+            return;
+        }
+        if e.nis.is_finite() {
+            self.nis_avg += (dt_s / 0.05).min(1.0) * (e.nis.min(1e12) - self.nis_avg);
+            if self.nis_avg > self.cfg.nis_gate {
+                self.invalid_until_s = self.invalid_until_s.max(recover);
+            }
+        }
+        if self.awaiting_convergence {
+            if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {
+                self.invalid_until_s = self.invalid_until_s.max(recover);
+            } else {
+                self.awaiting_convergence = false;
+            }
+        }
+        self.update_flow_factor(e, dt_s);
+        let raw = Self::raw_sizes(e);
+        if !raw.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        if !self.is_armed() {
+            if let (Arming::Converging, Some(c)) = (self.arming, self.cfg.commissioning.clone()) {
+                if e.flags & FLAG_CONVERGING == 0 {
+                    self.arm_with(c.offsets_lpm, c.spreads_lpm, c.crossings_per_s, e.t_s);
+                }
+                return;
+            }
+            let blind = e.t_s < self.blind_until_s;
+            match arm_step(&mut self.arming, &self.cfg, e) {
+                Some(false) if !blind => {
+                    if self.learn_t0_s.is_nan() {
+                        self.learn_t0_s = e.t_s;
+                    }
+                    for k in 0..3 {
+                        self.stats[k].push(raw[k]);
+                        let above = raw[k] > self.stats[k].mean;
+                        if above && !self.above_mean[k] {
+                            self.upcrossings[k] += 1;
+                        }
+                        self.above_mean[k] = above;
+                    }
+                }
+                Some(true) => {
+                    let learned = (e.t_s - self.learn_t0_s).max(1e-3);
+                    let means = std::array::from_fn(|k| self.stats[k].mean);
+                    let spreads = std::array::from_fn(|k| self.stats[k].std());
+                    let crossings = std::array::from_fn(|k| self.upcrossings[k] as f64 / learned);
+                    self.arm_with(means, spreads, crossings, e.t_s);
+                }
+                _ => {}
+            }
+            return;
+        }
+        self.last_t_s = e.t_s;
+        // During an excursion to tank or supply pressure (where the healthy model is
         // worst and its errors move the leak estimates for a while) and a recovery
         // after it, the baseline holds and no evidence is gathered.
-        let dt_s = (e.t_s - self.last_t_s).max(0.0);
-        self.last_t_s = e.t_s;
         let (lo, hi) = (
             self.cfg.excursion_margin * self.cfg.supply_pressure_pa,
             (1.0 - self.cfg.excursion_margin) * self.cfg.supply_pressure_pa,
         );
-        if e.measured[1..].iter().any(|p| *p < lo || *p > hi) {
-            self.blind_until_s = e.t_s + self.cfg.excursion_recovery_s;
+        let excursion = e.measured[1..].iter().any(|p| *p < lo || *p > hi);
+        if excursion {
+            self.blind_until_s = self.blind_until_s.max(e.t_s + self.cfg.excursion_recovery_s);
         }
-        let blind = e.t_s < self.blind_until_s;
+        // After a gap, a reset or while the filter is not tracking nothing counts, not
+        // even a large rise; during an excursion only a very large one does.
+        let invalid = e.t_s < self.invalid_until_s || self.awaiting_convergence;
+        let blind = invalid || e.t_s < self.blind_until_s;
+        if blind {
+            self.blind_s += dt_s;
+        }
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
             let a = if blind {
                 0.0
@@ -535,8 +921,11 @@ impl LeakSizeDetector {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
-            let evidence = !blind || rise[k] > self.cfg.excursion_override * thr;
-            if k == lead && rise[k] > thr && best > 0.5 && evidence {
+            let evidence = !invalid && (!blind || rise[k] > self.cfg.excursion_override * thr);
+            // The kind is decided before the alarm: the named kind must explain the
+            // mismatch (what it leaves unexplained is a small part of its size).
+            let clear = misfit[k] <= self.cfg.isolation_max_misfit * rise[k];
+            if k == lead && rise[k] > thr && best > 0.5 && evidence && (clear || self.active.is_some()) {
                 self.above_since_s[k].get_or_insert(e.t_s);
             } else {
                 self.above_since_s[k] = None;
@@ -606,7 +995,8 @@ impl LeakSizeDetector {
                             0.0,
                         );
                         ev.detail = format!(
-                            "slowly growing: the healthy baseline drifted {size:.3} L/min since the warm-up"
+                            "slowly growing: the healthy baseline drifted {size:.3} L/min (at p_s/2) since the warm-up; {}",
+                            ev.detail
                         );
                         *out = Some(ev);
                     }
@@ -614,33 +1004,43 @@ impl LeakSizeDetector {
             }
             Some(mut a) => {
                 let mut k = EventKind::LEAKS.iter().position(|x| *x == a.kind).unwrap_or(0);
-                // Re-isolation: while the filter settles after an onset the three leak
-                // sizes trade places; when another kind explains the data clearly
-                // better for `reisolate_s`, the same event is updated with that kind.
-                if lead != k && best > 1.0 && best - score[k] > 1.0 {
+                // Re-isolation: when another kind explains the data clearly better for
+                // `reisolate_s`, a new event of that kind is raised (it replaces this one).
+                if lead != k
+                    && best > 1.0
+                    && best - score[k] > 1.0
+                    && misfit[lead] <= self.cfg.isolation_max_misfit * rise[lead]
+                {
                     match a.other_since_s {
                         Some((j, t0)) if j == lead => {
                             if e.t_s - t0 >= self.cfg.reisolate_s {
-                                let from = a.kind;
+                                let from = (a.kind, a.id);
+                                let id = self.next_id;
+                                self.next_id += 1;
                                 a.kind = EventKind::LEAKS[lead];
+                                a.id = id;
                                 a.other_since_s = None;
                                 a.below_since_s = None;
                                 a.last_size_lpm = rise[lead];
                                 a.last_update_s = e.t_s;
                                 k = lead;
+                                self.active = Some(a);
                                 let mut ev = self.event(
                                     a.kind,
-                                    Phase::Updated,
+                                    Phase::Raised,
                                     a.id,
                                     e.t_s,
                                     rise[k],
                                     sigma_lpm[k],
                                     best,
-                                    score[k],
+                                    score[from.0 as usize % 3].min(best),
                                 );
-                                ev.t_onset_s = a.t_onset_s;
-                                ev.detail = format!("re-isolated: was {}", from.name());
-                                self.active = Some(a);
+                                ev.detail = format!(
+                                    "re-isolated: replaces event {} ({}); {}",
+                                    from.1,
+                                    from.0.name(),
+                                    ev.detail
+                                );
                                 *out = Some(ev);
                                 return;
                             }
@@ -651,7 +1051,7 @@ impl LeakSizeDetector {
                     a.other_since_s = None;
                 }
                 let size = rise[k];
-                if size < 0.5 * self.threshold_lpm[k] {
+                if size < 0.5 * self.threshold_lpm[k] && !invalid {
                     let since = *a.below_since_s.get_or_insert(e.t_s);
                     if e.t_s - since >= self.cfg.clear_s {
                         self.active = None;
@@ -670,7 +1070,8 @@ impl LeakSizeDetector {
                 } else {
                     a.below_since_s = None;
                 }
-                if e.t_s - a.last_update_s >= self.cfg.update_interval_s
+                if !invalid
+                    && e.t_s - a.last_update_s >= self.cfg.update_interval_s
                     && (size - a.last_size_lpm).abs()
                         > self.cfg.update_relative * a.last_size_lpm.abs().max(1e-3)
                 {
@@ -698,6 +1099,8 @@ impl LeakSizeDetector {
         }
     }
 
+    /// An event of kind `kind` whose nominal size (at p_s/2) is `size_nominal_lpm`:
+    /// the reported size is the real flow at the measured pressures.
     #[allow(clippy::too_many_arguments)]
     fn event(
         &self,
@@ -705,8 +1108,8 @@ impl LeakSizeDetector {
         phase: Phase,
         id: u64,
         t_s: f64,
-        size_lpm: f64,
-        sigma_lpm: f64,
+        size_nominal_lpm: f64,
+        sigma_nominal_lpm: f64,
         score: f64,
         second: f64,
     ) -> LeakEvent {
@@ -717,19 +1120,37 @@ impl LeakSizeDetector {
         } else {
             1.0 - (-margin).exp()
         };
-        LeakEvent {
+        let k = EventKind::LEAKS.iter().position(|x| *x == kind).unwrap_or(0);
+        let g = self.flow_factor[k];
+        let pn = 0.5 * self.cfg.supply_pressure_pa;
+        let spread = self.stats[k].std().max(1e-12);
+        let z = size_nominal_lpm / spread;
+        let mut ev = LeakEvent::plain(
             kind,
             phase,
-            detector: "leak-size".into(),
-            event_id: id,
-            t_detect_s: t_s,
-            t_onset_s: self.active.map(|a| a.t_onset_s).unwrap_or(f64::NAN),
-            size_lpm,
-            size_lpm_sigma: sigma_lpm,
-            confidence,
-            channel: String::new(),
-            detail: String::new(),
-        }
+            "leak-size",
+            id,
+            t_s,
+            self.active.map(|a| a.t_onset_s).unwrap_or(f64::NAN),
+        );
+        ev.size_lpm = size_nominal_lpm * g;
+        ev.size_lpm_sigma = sigma_nominal_lpm * g;
+        ev.size_nominal_lpm = size_nominal_lpm;
+        ev.coefficient_m3_s_sqrt_pa = size_nominal_lpm * M3_S_PER_LPM / pn.sqrt();
+        ev.statistic = z;
+        ev.threshold = self.threshold_z[k];
+        ev.confidence = confidence;
+        ev.detail = format!(
+            "rise {z:.1} healthy spreads (threshold {:.1}, for {} false alarms/h); {:.3} L/min at the measured \
+             pressures (mean over {} s), {:.3} L/min at p_s/2, k = {:.3e} m³/(s·√Pa)",
+            self.threshold_z[k],
+            self.cfg.false_alarms_per_hour,
+            ev.size_lpm,
+            self.cfg.size_window_s,
+            size_nominal_lpm,
+            ev.coefficient_m3_s_sqrt_pa
+        );
+        ev
     }
 }
 
@@ -822,19 +1243,13 @@ impl MaeDetector {
                             other_since_s: None,
                         });
                         let margin = (ratio[0].max(ratio[1]) - 1.0).max(0.0);
-                        *out = Some(LeakEvent {
-                            kind: k,
-                            phase: Phase::Raised,
-                            detector: "thesis-mae".into(),
-                            event_id: id,
-                            t_detect_s: e.t_s,
-                            t_onset_s: t0,
-                            size_lpm: f64::NAN,
-                            size_lpm_sigma: f64::NAN,
-                            confidence: 1.0 - (-4.0 * margin).exp(),
-                            channel: String::new(),
-                            detail: format!("MAE p1 {:.0} Pa, p2 {:.0} Pa", e.mae_pa[0], e.mae_pa[1]),
-                        });
+                        let mut ev = LeakEvent::plain(k, Phase::Raised, "thesis-mae", id, e.t_s, t0);
+                        ev.confidence = 1.0 - (-4.0 * margin).exp();
+                        ev.detail = format!(
+                            "thesis baseline (not a leakwatch decision): MAE p1 {:.0} Pa, p2 {:.0} Pa",
+                            e.mae_pa[0], e.mae_pa[1]
+                        );
+                        *out = Some(ev);
                     }
                 }
             }
@@ -843,19 +1258,10 @@ impl MaeDetector {
                     let since = *a.below_since_s.get_or_insert(e.t_s);
                     if e.t_s - since >= self.cfg.clear_s {
                         self.active = None;
-                        *out = Some(LeakEvent {
-                            kind: a.kind,
-                            phase: Phase::Cleared,
-                            detector: "thesis-mae".into(),
-                            event_id: a.id,
-                            t_detect_s: e.t_s,
-                            t_onset_s: a.t_onset_s,
-                            size_lpm: f64::NAN,
-                            size_lpm_sigma: f64::NAN,
-                            confidence: 0.0,
-                            channel: String::new(),
-                            detail: String::new(),
-                        });
+                        let mut ev =
+                            LeakEvent::plain(a.kind, Phase::Cleared, "thesis-mae", a.id, e.t_s, a.t_onset_s);
+                        ev.confidence = 0.0;
+                        *out = Some(ev);
                         return;
                     }
                 } else {
@@ -935,7 +1341,36 @@ impl Classifier {
     /// Reads one output of the estimator stage (the leak filter's and the thesis
     /// filter's estimates) and calls `emit` for each event it gives (usually none).
     pub fn on_stage(&mut self, s: &estimator::StageEstimate, mut emit: impl FnMut(LeakEvent)) {
-        self.on_estimates(&s.leak, &s.thesis, &mut emit);
+        if s.missing_before > 0 && s.leak.flags & FLAG_AFTER_GAP == 0 {
+            // Frames lost between the estimator and the classifier: the same gate.
+            let mut leak = s.leak;
+            leak.flags |= FLAG_AFTER_GAP;
+            self.on_estimates(&leak, &s.thesis, &mut emit);
+        } else {
+            self.on_estimates(&s.leak, &s.thesis, &mut emit);
+        }
+    }
+
+    /// Whether a commissioning was loaded (else a leak present at start cannot be seen).
+    pub fn is_commissioned(&self) -> bool {
+        self.leak_size.is_commissioned()
+    }
+
+    /// The note to show at start about what the detector can see.
+    pub fn start_note(&self) -> String {
+        match &self.cfg.commissioning {
+            Some(c) => format!(
+                "commissioned from {} ({:.0} s of healthy data): a leak present at start is seen once the filter has converged",
+                if c.source.is_empty() { "a healthy recording" } else { &c.source },
+                c.healthy_s
+            ),
+            None => format!(
+                "not commissioned: the healthy state is learned in the first {:.0} s after the filter converges; a leak \
+                 present now or opening in that time cannot be seen (run `leakwatch commission HEALTHY.csv` and pass its \
+                 file with --config)",
+                self.cfg.settle_s + self.cfg.warmup_s
+            ),
+        }
     }
 
     /// Reads one estimate of a single filter (both detectors read it) and calls
@@ -947,16 +1382,17 @@ impl Classifier {
     /// Reads the leak filter's estimate `e` and the thesis filter's `thesis`.
     pub fn on_estimates(&mut self, e: &Estimate, thesis: &Estimate, mut emit: impl FnMut(LeakEvent)) {
         if e.flags & FLAG_RESET != 0 {
-            self.leak_size.restart();
+            // (the detector decides itself whether it keeps what it learned)
             if std::ptr::eq(e, thesis) {
                 self.thesis.restart();
             }
-            let ev = self.plain(
-                EventKind::EstimatorReset,
-                e.t_s,
-                "",
-                "the leak filter restarted; warm-up begins again",
-            );
+            let detail = if self.leak_size.is_armed() {
+                "the leak filter restarted; no leak evidence until it has converged again (the learned healthy state is kept)"
+            } else {
+                "the leak filter restarted; warm-up begins again"
+            };
+            let ev = self.plain(EventKind::EstimatorReset, e.t_s, "", detail);
+            self.leak_size.restart();
             emit(ev);
         }
         if thesis.flags & FLAG_RESET != 0 && !std::ptr::eq(e, thesis) {
@@ -989,9 +1425,11 @@ impl Classifier {
         if let Some(ev) = ev.take() {
             emit(ev);
         }
-        self.thesis.on_estimate(thesis, &mut ev);
-        if let Some(ev) = ev {
-            emit(ev);
+        if self.cfg.thesis_baseline {
+            self.thesis.on_estimate(thesis, &mut ev);
+            if let Some(ev) = ev {
+                emit(ev);
+            }
         }
     }
 
@@ -1018,19 +1456,10 @@ impl Classifier {
     fn plain(&mut self, kind: EventKind, t_s: f64, channel: &str, detail: &str) -> LeakEvent {
         let id = self.next_id;
         self.next_id += 1;
-        LeakEvent {
-            kind,
-            phase: Phase::Raised,
-            detector: "sensors".into(),
-            event_id: id,
-            t_detect_s: t_s,
-            t_onset_s: t_s,
-            size_lpm: f64::NAN,
-            size_lpm_sigma: f64::NAN,
-            confidence: 1.0,
-            channel: channel.into(),
-            detail: detail.into(),
-        }
+        let mut ev = LeakEvent::plain(kind, Phase::Raised, "sensors", id, t_s, t_s);
+        ev.channel = channel.into();
+        ev.detail = detail.into();
+        ev
     }
 
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {

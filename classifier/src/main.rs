@@ -72,6 +72,9 @@ fn flags_of(f: u32) -> u32 {
     if f & estimate_flags::CONVERGING != 0 {
         out |= estimator::FLAG_CONVERGING;
     }
+    if f & estimate_flags::AFTER_GAP != 0 {
+        out |= estimator::FLAG_AFTER_GAP;
+    }
     out
 }
 

@@ -88,6 +88,37 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         }
     }
 
+    /// Re-anchors the fast states after a gap: states `0..keep_from` restart at
+    /// `x0` (SI) with covariance diag(`p0_diag`) (SI squared) and no correlation
+    /// with the rest; states `keep_from..N` keep their estimate and their joint
+    /// covariance (the slow parameters, e.g. leak sizes, survive a gap).
+    /// Falls back to a full reset if the kept block is not positive definite.
+    pub fn reanchor(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>, keep_from: usize) {
+        let pz = self.s * self.s.transpose();
+        let mut p = SMatrix::<f64, N, N>::zeros();
+        for i in 0..N {
+            if i < keep_from {
+                let d = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
+                p[(i, i)] = d * d;
+            } else {
+                for j in keep_from..N {
+                    p[(i, j)] = pz[(i, j)];
+                }
+            }
+        }
+        let kept = self.x;
+        match p.cholesky() {
+            Some(c) if self.x.iter().skip(keep_from).all(|v| v.is_finite()) => {
+                self.s = c.l();
+                self.x = x0;
+                for i in keep_from..N {
+                    self.x[i] = kept[i];
+                }
+            }
+            _ => self.reset(x0, p0_diag),
+        }
+    }
+
     /// The state estimate, SI.
     pub fn state(&self) -> &SVector<f64, N> {
         &self.x

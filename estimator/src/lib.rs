@@ -31,6 +31,8 @@ pub const FLAG_SKIPPED: u32 = 2;
 pub const FLAG_CLAMPED: u32 = 4;
 /// Flag bit: the filter is still inside its initial convergence time.
 pub const FLAG_CONVERGING: u32 = 8;
+/// Flag bit: samples were missing just before this one (bridged or re-anchored).
+pub const FLAG_AFTER_GAP: u32 = 16;
 
 /// What the estimator reports for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,8 +122,13 @@ pub struct Estimator {
     started: bool,
     t0_s: f64,
     diverged_samples: u32,
+    /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
+    reanchor_pending: bool,
     counters: EstimatorCounters,
 }
+
+/// First state index kept across a re-anchoring (the leak sizes and the spool bias).
+const FIRST_SLOW_STATE: usize = 7;
 
 /// Typical magnitudes used to scale the filter's internal algebra.
 const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
@@ -152,6 +159,7 @@ impl Estimator {
             started: false,
             t0_s: 0.0,
             diverged_samples: 0,
+            reanchor_pending: false,
             counters: EstimatorCounters::default(),
         })
     }
@@ -204,14 +212,19 @@ impl Estimator {
     }
 
     /// Tells the stage that `missing` samples were lost before the next one.
-    /// Short gaps are bridged by prediction; longer ones reset the filter.
+    /// Gaps up to [`Tuning::max_bridged_gap_samples`] are bridged by prediction;
+    /// after a longer one the fast states (spool, pressures, rod, load) restart
+    /// from the next complete sample while the leak sizes and the spool bias keep
+    /// their estimate and covariance (an open-loop prediction over tens of
+    /// milliseconds of a stick-slipping rod is meaningless, and its update would
+    /// throw the mismatch into the leak states).
     pub fn on_gap(&mut self, missing: u64) {
-        if !self.started {
+        if !self.started || missing == 0 {
             return;
         }
+        self.counters.bridged += missing;
         if missing > self.tuning.max_bridged_gap_samples as u64 {
-            self.started = false; // the next sample re-initialises
-            self.counters.resets += 1;
+            self.reanchor_pending = true;
             return;
         }
         let u = self.last_u_v;
@@ -228,7 +241,6 @@ impl Estimator {
                 return;
             }
         }
-        self.counters.bridged += missing;
     }
 
     /// Processes one sensor sample (one sample period after the previous one).
@@ -272,6 +284,18 @@ impl Estimator {
             self.diverged_samples = 0;
             self.mae[0].clear();
             self.mae[1].clear();
+            self.reanchor_pending = false;
+        } else if self.reanchor_pending && use_channel.iter().all(|u| *u) {
+            let measured = [s.x_m, s.p1_pa, s.p2_pa];
+            let tuning = &self.tuning;
+            match &mut self.filter {
+                Filter::S6(e) => reanchor_filter::<6>(e, tuning, &self.model, measured),
+                Filter::S7(e) => reanchor_filter::<7>(e, tuning, &self.model, measured),
+                Filter::S10(e) => reanchor_filter::<10>(e, tuning, &self.model, measured),
+                Filter::S11(e) => reanchor_filter::<11>(e, tuning, &self.model, measured),
+            }
+            self.reanchor_pending = false;
+            self.diverged_samples = 0;
         }
         let u = if s.u_v.is_finite() { s.u_v } else { self.last_u_v };
         self.last_u_v = u;
@@ -359,6 +383,16 @@ fn make_filter<const N: usize>(
         }
     }
     Ekf::new(x0, &p0, &q, r, scale)
+}
+
+fn reanchor_filter<const N: usize>(
+    e: &mut Ekf<N, 3>,
+    tuning: &Tuning,
+    model: &ProcessModel,
+    measured: [f64; 3],
+) {
+    let fresh = make_filter::<N>(tuning, model, Some(measured));
+    e.reanchor(*fresh.state(), &tuning.p0_diag::<N>(), FIRST_SLOW_STATE.min(N));
 }
 
 fn predict_only<const N: usize>(e: &mut Ekf<N, 3>, model: &ProcessModel, u: f64) -> bool {

@@ -92,6 +92,9 @@ fn flags_of(f: u32) -> u32 {
     if f & estimator::FLAG_CONVERGING != 0 {
         out |= estimate_flags::CONVERGING;
     }
+    if f & estimator::FLAG_AFTER_GAP != 0 {
+        out |= estimate_flags::AFTER_GAP;
+    }
     out
 }
 

@@ -7,8 +7,9 @@
 //!   residuals and MAE of MODEL.md §5 for the baseline detector.
 //!
 //! Samples that arrive more than one period after the previous one mean that
-//! samples were lost: short gaps are bridged by prediction, long ones restart
-//! the filters (see [`crate::Tuning::max_bridged_gap_samples`]).
+//! samples were lost: short gaps are bridged by prediction, longer ones
+//! re-anchor the fast states and keep the leak sizes (see
+//! [`crate::Tuning::max_bridged_gap_samples`]).
 
 use model::{ActuatorParams, Sample};
 
@@ -79,9 +80,15 @@ impl EstimatorStage {
         if s.t_s.is_finite() {
             self.last_t_s = Some(s.t_s);
         }
+        let mut leak = self.leak.on_sample(s);
+        let mut thesis = self.thesis.on_sample(s);
+        if missing_before > 0 {
+            leak.flags |= crate::FLAG_AFTER_GAP;
+            thesis.flags |= crate::FLAG_AFTER_GAP;
+        }
         StageEstimate {
-            leak: self.leak.on_sample(s),
-            thesis: self.thesis.on_sample(s),
+            leak,
+            thesis,
             missing_before,
         }
     }

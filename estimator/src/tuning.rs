@@ -72,7 +72,8 @@ pub struct Tuning {
     pub p0_bias_m2: f64,
     /// Window of the moving average of |residual| (the thesis' MAE), samples.
     pub mae_window_samples: usize,
-    /// Longest run of missing samples bridged by prediction; longer gaps reset the filter.
+    /// Longest run of missing samples bridged by prediction; after a longer gap the
+    /// fast states restart from the next sample and the leak sizes and spool bias are kept.
     pub max_bridged_gap_samples: u32,
     /// A position innovation beyond this, m (or beyond 20 of its standard deviations,
     /// if larger), held for 200 samples, resets the filter; 0 = never (the thesis'
@@ -117,7 +118,7 @@ impl Tuning {
             p0_leak_m6_s2: 1e4,
             p0_bias_m2: 1e4,
             mae_window_samples: 4000,
-            max_bridged_gap_samples: 50,
+            max_bridged_gap_samples: 5,
             convergence_time_s: 2.0,
             divergence_reset_m: 0.0,
         }
@@ -151,6 +152,8 @@ impl Tuning {
             q_bias_m2: 1e-20,
             p0_bias_m2: 1e-11,
             divergence_reset_m: 0.02,
+            // The leak sizes converge within 0.2 s of a start (a leak present at start included).
+            convergence_time_s: 1.0,
             ..Tuning::thesis()
         }
     }

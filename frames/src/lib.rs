@@ -39,6 +39,8 @@ pub mod estimate_flags {
     pub const END_OF_STREAM: u32 = 1 << 3;
     /// The filter is inside its convergence time after a (re)start.
     pub const CONVERGING: u32 = 1 << 4;
+    /// Samples were missing just before this one (the filter bridged or re-anchored).
+    pub const AFTER_GAP: u32 = 1 << 5;
 }
 
 /// Values of [`LeakEventFrame::kind`].

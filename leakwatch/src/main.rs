@@ -2,6 +2,7 @@
 //! simulation, offline replay, the live pipeline, calibration and benchmarks.
 
 mod benches;
+mod commission;
 mod config;
 mod demo;
 mod latency;
@@ -125,6 +126,22 @@ enum Command {
         /// Run all stages in one thread instead of over channels (same results).
         #[arg(long)]
         single_thread: bool,
+        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        #[arg(long)]
+        thesis_baseline: bool,
+    },
+    /// Learn the healthy state of a rig from a healthy recording and write a config
+    /// that `replay`, `run` and every stage load with --config: a leak present when
+    /// monitoring starts then shows against it.
+    Commission {
+        /// A healthy recording (CSV, .csv.gz) of the rig.
+        input: PathBuf,
+        /// The rig's model (e.g. the model.toml that `calibrate` wrote); defaults otherwise.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output config file (TOML) to write; an existing file is not overwritten.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Simulate a scenario on the rig and write a CSV (t,u,x,p1,p2,x_sp,f_load,ref,q_leak).
     Simulate {
@@ -286,6 +303,7 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
+        Command::Commission { input, config, out } => commission::run(&input, config.as_deref(), &out),
         Command::Calibrate { input, config, out } => calibrate_cmd(&input, config.as_deref(), &out),
         Command::Replay {
             input,
@@ -293,8 +311,14 @@ fn run(cli: Cli) -> Result<(), String> {
             model,
             out,
             single_thread,
+            thesis_baseline,
         } => {
             let mut cfg = Config::load_or_default(config.as_deref())?;
+            cfg.classifier.thesis_baseline |= thesis_baseline;
+            eprintln!(
+                "note: {}",
+                classifier::Classifier::new(cfg.classifier.clone())?.start_note()
+            );
             if let Some(m) = model {
                 if m != 6 && m != 7 {
                     return Err(format!("--model {m}: the thesis filter has 6 or 7 states"));

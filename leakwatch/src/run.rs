@@ -135,19 +135,18 @@ pub fn event_of(f: &LeakEventFrame) -> LeakEvent {
         event_phase::UPDATED => Phase::Updated,
         _ => Phase::Cleared,
     };
-    LeakEvent {
+    let mut ev = LeakEvent::plain(
         kind,
         phase,
-        detector: frames::detector_name(&f.detector).to_string(),
-        event_id: f.event_id,
-        t_detect_s: f.t_detect_s,
-        t_onset_s: f.t_onset_s,
-        size_lpm: f.size_lpm,
-        size_lpm_sigma: f.size_lpm_sigma,
-        confidence: f.confidence,
-        channel: String::new(),
-        detail: String::new(),
-    }
+        frames::detector_name(&f.detector),
+        f.event_id,
+        f.t_detect_s,
+        f.t_onset_s,
+    );
+    ev.size_lpm = f.size_lpm;
+    ev.size_lpm_sigma = f.size_lpm_sigma;
+    ev.confidence = f.confidence;
+    ev
 }
 
 /// Latency and counts of one stage, from its stats frames.
@@ -373,6 +372,9 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             if demo { ", off-nominal rig (demonstration)" } else { "" },
             out_dir.display()
         );
+        if let Ok(c) = classifier::Classifier::new(cfg.classifier.clone()) {
+            println!("note: {}", c.start_note());
+        }
     }
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
     for name in STAGES {
@@ -546,7 +548,7 @@ pub fn run(args: RunArgs) -> Result<(), String> {
         .collect();
     match leaks.first() {
         Some(e) => println!(
-            "\ndetected: {} leak at t = {:.2} s (onset {:.2} s), {:.3} L/min",
+            "\ndetected: {} leak at t = {:.2} s (onset {:.2} s), {:.3} L/min at the measured pressures",
             e.kind.name(),
             e.t_detect_s,
             e.t_onset_s,
