@@ -24,6 +24,19 @@ fn off_nominal_rig() -> ActuatorParams {
 }
 
 fn run(scenario: &str, seconds: f64, fault: Option<&str>, seed: u64, rig: ActuatorParams) -> Vec<LeakEvent> {
+    run_flow(scenario, seconds, fault, seed, rig, ClassifierConfig::default()).0
+}
+
+/// Runs a scenario; returns the events and the mean |leak flow| the rig lost in the
+/// last 10 s of the run, L/min (the reference a reported size is scored against).
+fn run_flow(
+    scenario: &str,
+    seconds: f64,
+    fault: Option<&str>,
+    seed: u64,
+    rig: ActuatorParams,
+    cfg: ClassifierConfig,
+) -> (Vec<LeakEvent>, f64) {
     let scenario = Scenario::by_name(scenario, seed, seconds).unwrap();
     let mut sched = FaultSchedule::default();
     if let Some(f) = fault {
@@ -39,18 +52,23 @@ fn run(scenario: &str, seconds: f64, fault: Option<&str>, seed: u64, rig: Actuat
     )
     .unwrap();
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
-    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let mut cls = Classifier::new(cfg).unwrap();
     let mut events = Vec::new();
     let n = (seconds * 1000.0).round() as usize;
     let mut t = 0.0;
+    let (mut flow, mut flow_n) = (0.0, 0.0);
     for _ in 0..n {
         let s = sim.step();
         t = s.t_s;
+        if t > seconds - 10.0 {
+            flow += s.q_leak_lpm.abs();
+            flow_n += 1.0;
+        }
         let e = est.on_sample(&s);
         cls.on_estimate(&e, |ev| events.push(ev));
     }
     cls.finish(t, |ev| events.push(ev));
-    events
+    (events, flow / flow_n.max(1.0))
 }
 
 fn raised(events: &[LeakEvent], detector: &str) -> Vec<LeakEvent> {
@@ -73,7 +91,14 @@ fn last_size(events: &[LeakEvent], id: u64) -> f64 {
 fn check_leak(scenario: &str, kind: &str, expect: EventKind, seed: u64) {
     let onset = 20.0;
     let spec = format!("{kind}:0.5lpm@{onset}s");
-    let events = run(scenario, 32.0, Some(&spec), seed, off_nominal_rig());
+    let (events, real_flow) = run_flow(
+        scenario,
+        32.0,
+        Some(&spec),
+        seed,
+        off_nominal_rig(),
+        ClassifierConfig::default(),
+    );
     let r = raised(&events, "leak-size");
     assert_eq!(
         r.len(),
@@ -89,12 +114,16 @@ fn check_leak(scenario: &str, kind: &str, expect: EventKind, seed: u64) {
         "{scenario} {spec}: onset {}",
         ev.t_onset_s
     );
+    // The size is the flow the rig really lost (at the chamber pressures), not the
+    // nominal 0.5 L/min at p_s/2: an internal leak across a small drop loses less.
     let size = last_size(&events, ev.event_id);
     assert!(
-        (size - 0.5).abs() <= 0.125,
-        "{scenario} {spec}: size {size} L/min"
+        (size - real_flow).abs() <= 0.15 * real_flow,
+        "{scenario} {spec}: size {size} L/min against {real_flow} L/min lost"
     );
     assert!(ev.size_lpm_sigma > 0.0 && ev.size_lpm_sigma < 0.15, "{ev:?}");
+    assert!((ev.size_nominal_lpm - 0.5).abs() < 0.25, "{ev:?}");
+    assert!(ev.statistic > ev.threshold && ev.threshold >= 4.0, "{ev:?}");
 }
 
 #[test]
@@ -207,10 +236,8 @@ fn gaps_nan_and_a_restart_raise_no_false_leak() {
         .iter()
         .filter(|e| e.kind == EventKind::EstimatorReset)
         .collect();
-    assert!(
-        !resets.is_empty() && resets.iter().all(|e| (25.5..25.7).contains(&e.t_detect_s)),
-        "{resets:#?}"
-    );
+    // Gaps no longer reset the filter: the fast states re-anchor, the leak sizes stay.
+    assert!(resets.is_empty(), "{resets:#?}");
     assert_eq!(stage.missing_samples(), 630);
 }
 
@@ -309,9 +336,131 @@ fn a_leak_growing_over_minutes_is_reported_as_slowly_growing() {
     assert!(ev.detail.contains("slowly growing"), "{ev:?}");
     let scheduled = size * ((ev.t_detect_s - onset) / ramp).min(1.0);
     assert!(
-        ev.size_lpm > 0.5 && (ev.size_lpm - scheduled).abs() <= 0.25 * scheduled,
-        "size {} L/min against {scheduled} scheduled at {} s",
-        ev.size_lpm,
+        ev.size_nominal_lpm > 0.5 && (ev.size_nominal_lpm - scheduled).abs() <= 0.25 * scheduled,
+        "nominal size {} L/min against {scheduled} scheduled at {} s",
+        ev.size_nominal_lpm,
         ev.t_detect_s
     );
+}
+
+/// Healthy closed-loop samples of an off-nominal rig (seeded), `seconds` long.
+fn healthy_samples(scenario: &str, seconds: f64, seed: u64) -> Vec<model::Sample> {
+    let scenario = Scenario::by_name(scenario, seed, seconds).unwrap();
+    let mut sim = Simulator::new(
+        off_nominal_rig(),
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        seed,
+    )
+    .unwrap();
+    (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect()
+}
+
+fn replay_events(samples: &[model::Sample], cfg: ClassifierConfig) -> Vec<LeakEvent> {
+    let mut stage =
+        estimator::EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())
+            .unwrap();
+    let mut cls = Classifier::new(cfg).unwrap();
+    let mut events = Vec::new();
+    for s in samples {
+        let e = stage.on_sample(s);
+        cls.on_stage(&e, |ev| events.push(ev));
+    }
+    events
+}
+
+/// Gaps of 1 to 2000 missing samples at positions all over a healthy run raise no
+/// leak (the thesis-free reproduction of a 30-sample gap that raised 120 L/min).
+#[test]
+fn gaps_of_any_length_at_any_position_raise_no_leak() {
+    for (scenario, seed) in [("loaded-sine", 71), ("closed-loop-random", 72)] {
+        let all = healthy_samples(scenario, 30.0, seed);
+        for len in [1usize, 2, 5, 6, 25, 30, 50, 51, 200, 2000] {
+            for start in [11_000usize, 13_240, 17_777, 22_500] {
+                let cut: Vec<model::Sample> = all
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i < start || *i >= start + len)
+                    .map(|(_, s)| *s)
+                    .collect();
+                let events = replay_events(&cut, ClassifierConfig::default());
+                let r = raised(&events, "leak-size");
+                assert!(r.is_empty(), "{scenario}: gap of {len} at sample {start}: {r:#?}");
+            }
+        }
+    }
+}
+
+/// With a commissioning learned on a healthy recording of the rig, a 0.5 L/min leak
+/// present from t = 0 is reported within 2 s of the start, as the right kind.
+#[test]
+fn a_leak_present_at_start_is_seen_with_a_commissioning() {
+    let healthy = healthy_samples("closed-loop-sine", 30.0, 81);
+    let mut stage =
+        estimator::EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())
+            .unwrap();
+    let mut learner = classifier::CommissioningLearner::new(ClassifierConfig::default().settle_s);
+    for s in &healthy {
+        learner.on_estimate(&stage.on_sample(s).leak);
+    }
+    let c = learner.finish(10.0, "healthy.csv").unwrap();
+    assert!(c.healthy_s > 25.0 && c.healthy_s < 29.0, "{c:?}");
+    assert!(c.spreads_lpm.iter().all(|s| *s > 0.0 && *s < 0.05), "{c:?}");
+    // Too little healthy data is refused, not guessed.
+    assert!(classifier::CommissioningLearner::new(2.0).finish(10.0, "").is_err());
+    for (kind, expect) in [("ext1", EventKind::Ext1), ("int", EventKind::Int)] {
+        let cfg = ClassifierConfig {
+            commissioning: Some(c.clone()),
+            ..ClassifierConfig::default()
+        };
+        let spec = format!("{kind}:0.5lpm@0s");
+        let (events, _) = run_flow("closed-loop-sine", 8.0, Some(&spec), 82, off_nominal_rig(), cfg);
+        let r = raised(&events, "leak-size");
+        assert!(!r.is_empty(), "{spec}: nothing raised {events:#?}");
+        assert_eq!(r[0].kind, expect, "{spec}: {:?}", r[0]);
+        assert!(r[0].t_detect_s <= 2.0, "{spec}: raised at {} s", r[0].t_detect_s);
+        // Without it the same leak is never reported (it is learned as healthy).
+        let events = run("closed-loop-sine", 8.0, Some(&spec), 82, off_nominal_rig());
+        assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+    }
+}
+
+/// A leak that opens at 10 s of a loaded sine is reported (the warm-up is over by then).
+#[test]
+fn a_leak_at_ten_seconds_is_reported() {
+    let events = run("loaded-sine", 20.0, Some("ext1:0.5lpm@10s"), 91, off_nominal_rig());
+    let r = raised(&events, "leak-size");
+    assert_eq!(r.len(), 1, "{events:#?}");
+    assert_eq!(r[0].kind, EventKind::Ext1);
+    assert!((10.0..12.0).contains(&r[0].t_detect_s), "{:?}", r[0]);
+}
+
+/// The thesis' MAE detector reports only when asked to, and says it is the baseline.
+#[test]
+fn the_thesis_baseline_is_off_unless_asked_for() {
+    let spec = "ext1:1lpm@15s";
+    let off = run("closed-loop-sine", 25.0, Some(spec), 92, off_nominal_rig());
+    assert!(off.iter().all(|e| e.detector != "thesis-mae"), "{off:#?}");
+    let cfg = ClassifierConfig {
+        thesis_baseline: true,
+        ..ClassifierConfig::default()
+    };
+    let (on, _) = run_flow("closed-loop-sine", 25.0, Some(spec), 92, off_nominal_rig(), cfg);
+    let mae: Vec<_> = on.iter().filter(|e| e.detector == "thesis-mae").collect();
+    assert!(!mae.is_empty(), "{on:#?}");
+    assert!(mae[0].detail.contains("thesis baseline"), "{:?}", mae[0]);
+}
+
+/// Rice's formula: the threshold for a rate of false upcrossings, in spreads.
+#[test]
+fn threshold_from_the_false_alarm_rate() {
+    // 1 upcrossing of the mean per second = 3600/h; 0.05/h asks e^(-c²/2) = 0.05/3600.
+    let c = classifier::rice_threshold(1.0, 0.05, 0.0);
+    assert!((c - (2.0f64 * 72_000.0f64.ln()).sqrt()).abs() < 1e-12, "{c}");
+    assert!((c - 4.7335).abs() < 1e-3, "{c}");
+    // Ten times rarer alarms ask for a higher threshold; the floor holds.
+    assert!(classifier::rice_threshold(1.0, 0.005, 0.0) > c);
+    assert_eq!(classifier::rice_threshold(1e-9, 0.05, 4.0), 4.0);
 }

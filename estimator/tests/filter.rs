@@ -319,3 +319,52 @@ fn effective_load_follows_friction_plus_spring() {
     assert!(loaded.fe_rms_n < 150.0, "loaded: {}", loaded.fe_rms_n);
     assert!(unloaded.fe_rms_n < 150.0, "unloaded: {}", unloaded.fe_rms_n);
 }
+
+/// After a gap too long to bridge, the fast states restart from the next sample while
+/// the leak sizes keep their estimate and joint covariance; the covariance stays
+/// positive definite and the filter tracks again at once.
+#[test]
+fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
+    use model::Fault;
+    let rig = ActuatorParams::default();
+    let mut faults = FaultSchedule::default();
+    faults.faults.push(Fault::parse("ext1:0.5lpm@0s", &rig).unwrap());
+    let scenario = Scenario::by_name("closed-loop-sine", 5, 12.0).unwrap();
+    let mut sim = Simulator::new(rig, SensorParams::default(), SimSettings::default(), scenario, faults, 5).unwrap();
+    let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
+    let mut before = [0.0; 3];
+    let mut cov_before = [0.0; 121];
+    let mut cov_after = [0.0; 121];
+    let mut max_leak_after = 0.0f64;
+    for k in 0..12_000 {
+        let s = sim.step();
+        if (6_000..6_300).contains(&k) {
+            continue; // 300 samples lost
+        }
+        if k == 6_300 {
+            est.covariance_into(&mut cov_before);
+            est.on_gap(300);
+        }
+        let e = est.on_sample(&s);
+        if k == 5_999 {
+            before = [e.state[7], e.state[8], e.state[9]];
+        }
+        if k == 6_300 {
+            est.covariance_into(&mut cov_after);
+            assert_eq!(e.flags & FLAG_RESET, 0, "a gap is not a reset");
+            for i in 0..3 {
+                // One update moves the kept leak sizes only a little.
+                assert!((e.state[7 + i] - before[i]).abs() < 0.05 / 60_000.0, "{:?} vs {before:?}", e.state);
+            }
+        }
+        if k > 6_300 {
+            max_leak_after = max_leak_after.max(e.state[7].abs() * 60_000.0);
+            assert!(e.nis < 1e4, "NIS {} at sample {k}", e.nis);
+        }
+    }
+    // The kept block (leak sizes, bias) survives the re-anchoring; the fast block restarts.
+    let (kept_before, kept_after) = (cov_before[7 * 11 + 7], cov_after[7 * 11 + 7]);
+    assert!(kept_before > 0.0 && kept_after <= kept_before * 1.01 && kept_after > 0.5 * kept_before);
+    assert!(est.min_scaled_eigenvalue() > 0.0);
+    assert!(max_leak_after < 1.0, "ext1 estimate went to {max_leak_after} L/min after the gap");
+}
