@@ -251,8 +251,9 @@ pub struct ClassifierConfig {
     /// Leak-size detector: after a gap, a skipped sample or a filter reset, no
     /// evidence for this long (the filter re-converges), s.
     pub recovery_s: f64,
-    /// Leak-size detector: while the normalised innovation squared (averaged over
-    /// 50 ms) exceeds this, the filter is not tracking and gives no evidence.
+    /// Leak-size detector: a normalised innovation squared above this (an innovation
+    /// of about √nis_gate standard deviations) means the filter has lost track for
+    /// a moment: no evidence for `recovery_s` after it.
     pub nis_gate: f64,
     /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
     pub thesis_baseline: bool,
@@ -305,15 +306,15 @@ pub struct ClassifierConfig {
 impl Default for ClassifierConfig {
     fn default() -> Self {
         ClassifierConfig {
-            settle_s: 2.0,
-            warmup_s: 4.0,
+            settle_s: 3.0,
+            warmup_s: 5.0,
             min_warmup_s: 3.0,
             false_alarms_per_hour: 0.05,
             threshold_sigma: 4.0,
             isolation_max_misfit: 0.35,
             size_window_s: 2.0,
             recovery_s: 2.0,
-            nis_gate: 1000.0,
+            nis_gate: 10000.0,
             thesis_baseline: false,
             commissioning: None,
             min_size_lpm: 0.04,
@@ -450,12 +451,8 @@ pub struct LeakSizeDetector {
     cfg: ClassifierConfig,
     arming: Arming,
     stats: [Stats; 3],
-    /// Upcrossings of the running healthy mean seen while learning, per kind.
-    upcrossings: [u32; 3],
-    /// Whether each size was above its running mean at the last learning sample.
-    above_mean: [bool; 3],
-    /// Time the learning started, s.
-    learn_t0_s: f64,
+    /// The healthy values seen while learning.
+    record: HealthyRecord,
     /// Threshold on the rise of each kind, in healthy spreads.
     threshold_z: [f64; 3],
     threshold_lpm: [f64; 3],
@@ -476,8 +473,6 @@ pub struct LeakSizeDetector {
     awaiting_convergence: bool,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
-    /// Mean NIS over the last 50 ms.
-    nis_avg: f64,
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
     flow_factor: [f64; 3],
     last_low_s: [f64; 3],
@@ -497,6 +492,62 @@ pub fn rice_threshold(crossings_per_s: f64, rate_per_h: f64, floor: f64) -> f64 
     }
 }
 
+/// Healthy values of the three single-leak sizes kept every 10 ms, and their
+/// statistics: the mean as the offset, the standard deviation as the spread
+/// (the healthy estimate wanders with the operating point, which a robust
+/// spread would hide), and the rate of upcrossings of the mean.
+#[derive(Debug, Clone, Default)]
+struct HealthyRecord {
+    values: [Vec<f64>; 3],
+    next_t_s: f64,
+    learned_s: f64,
+}
+
+impl HealthyRecord {
+    /// Interval between kept values, s.
+    const EVERY_S: f64 = 0.01;
+
+    fn with_capacity_s(seconds: f64) -> Self {
+        let n = (seconds / Self::EVERY_S).clamp(0.0, 1e6) as usize + 16;
+        HealthyRecord {
+            values: std::array::from_fn(|_| Vec::with_capacity(n)),
+            next_t_s: f64::NEG_INFINITY,
+            learned_s: 0.0,
+        }
+    }
+
+    fn push(&mut self, t_s: f64, dt_s: f64, raw: [f64; 3]) {
+        self.learned_s += dt_s;
+        if t_s >= self.next_t_s {
+            self.next_t_s = t_s + Self::EVERY_S;
+            for k in 0..3 {
+                self.values[k].push(raw[k]);
+            }
+        }
+    }
+
+    /// (offsets, spreads, upcrossings per second of the learned time).
+    fn summary(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let mut med = [f64::NAN; 3];
+        let mut spread = [f64::NAN; 3];
+        let mut cross = [0.0; 3];
+        for k in 0..3 {
+            let v = &self.values[k];
+            if v.is_empty() {
+                continue;
+            }
+            let n = v.len() as f64;
+            let m = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+            med[k] = m;
+            spread[k] = var.sqrt();
+            let ups = v.windows(2).filter(|w| w[0] <= m && w[1] > m).count();
+            cross[k] = ups as f64 / self.learned_s.max(Self::EVERY_S);
+        }
+        (med, spread, cross)
+    }
+}
+
 /// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
 /// the offset, spread and upcrossing rate of each single-leak size after the
 /// filter has converged and settled, gaps and resets left out.
@@ -504,11 +555,8 @@ pub fn rice_threshold(crossings_per_s: f64, rate_per_h: f64, floor: f64) -> f64 
 pub struct CommissioningLearner {
     settle_s: f64,
     converged_at_s: Option<f64>,
-    stats: [Stats; 3],
-    upcrossings: [u32; 3],
-    above_mean: [bool; 3],
+    record: HealthyRecord,
     last_t_s: f64,
-    learned_s: f64,
 }
 
 impl CommissioningLearner {
@@ -517,11 +565,8 @@ impl CommissioningLearner {
         CommissioningLearner {
             settle_s,
             converged_at_s: None,
-            stats: [Stats::default(); 3],
-            upcrossings: [0; 3],
-            above_mean: [false; 3],
+            record: HealthyRecord::with_capacity_s(600.0),
             last_t_s: f64::NAN,
-            learned_s: 0.0,
         }
     }
 
@@ -546,33 +591,29 @@ impl CommissioningLearner {
         if !raw.iter().all(|v| v.is_finite()) {
             return;
         }
-        if self.last_t_s.is_finite() {
-            self.learned_s += (e.t_s - self.last_t_s).clamp(0.0, 0.1);
-        }
+        let dt_s = if self.last_t_s.is_finite() {
+            (e.t_s - self.last_t_s).clamp(0.0, 0.1)
+        } else {
+            0.0
+        };
         self.last_t_s = e.t_s;
-        for k in 0..3 {
-            self.stats[k].push(raw[k]);
-            let above = raw[k] > self.stats[k].mean;
-            if above && !self.above_mean[k] {
-                self.upcrossings[k] += 1;
-            }
-            self.above_mean[k] = above;
-        }
+        self.record.push(e.t_s, dt_s, raw);
     }
 
     /// The commissioning, or why there is none (too little healthy data).
     pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
-        if self.learned_s < min_s {
+        let learned_s = self.record.learned_s;
+        if learned_s < min_s {
             return Err(format!(
-                "only {:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)",
-                self.learned_s
+                "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
             ));
         }
+        let (offsets_lpm, spreads_lpm, crossings_per_s) = self.record.summary();
         Ok(Commissioning {
-            offsets_lpm: std::array::from_fn(|k| self.stats[k].mean),
-            spreads_lpm: std::array::from_fn(|k| self.stats[k].std()),
-            crossings_per_s: std::array::from_fn(|k| self.upcrossings[k] as f64 / self.learned_s),
-            healthy_s: self.learned_s,
+            offsets_lpm,
+            spreads_lpm,
+            crossings_per_s,
+            healthy_s: learned_s,
             source: source.to_string(),
         })
     }
@@ -623,12 +664,10 @@ impl LeakSizeDetector {
     /// A detector with settings `cfg`.
     pub fn new(cfg: ClassifierConfig) -> Self {
         LeakSizeDetector {
+            record: HealthyRecord::with_capacity_s(cfg.warmup_s),
             cfg,
             arming: Arming::Converging,
             stats: [Stats::default(); 3],
-            upcrossings: [0; 3],
-            above_mean: [false; 3],
-            learn_t0_s: f64::NAN,
             threshold_z: [f64::NAN; 3],
             threshold_lpm: [f64::NAN; 3],
             baseline_lpm: [f64::NAN; 3],
@@ -640,7 +679,6 @@ impl LeakSizeDetector {
             invalid_until_s: f64::NEG_INFINITY,
             awaiting_convergence: false,
             blind_s: 0.0,
-            nis_avg: 0.0,
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
             active: None,
@@ -747,6 +785,15 @@ impl LeakSizeDetector {
         self.last_t_s = t_s;
     }
 
+    /// A chamber pressure within `excursion_margin` of tank or supply.
+    fn excursion(&self, e: &Estimate) -> bool {
+        let (lo, hi) = (
+            self.cfg.excursion_margin * self.cfg.supply_pressure_pa,
+            (1.0 - self.cfg.excursion_margin) * self.cfg.supply_pressure_pa,
+        );
+        e.measured[1..].iter().any(|p| *p < lo || *p > hi)
+    }
+
     fn update_flow_factor(&mut self, e: &Estimate, dt_s: f64) {
         let pn = 0.5 * self.cfg.supply_pressure_pa;
         let p = |i: usize| {
@@ -795,11 +842,8 @@ impl LeakSizeDetector {
         if e.flags & FLAG_SKIPPED != 0 {
             return;
         }
-        if e.nis.is_finite() {
-            self.nis_avg += (dt_s / 0.05).min(1.0) * (e.nis.min(1e12) - self.nis_avg);
-            if self.nis_avg > self.cfg.nis_gate {
-                self.invalid_until_s = self.invalid_until_s.max(recover);
-            }
+        if e.nis.is_finite() && e.nis > self.cfg.nis_gate {
+            self.invalid_until_s = self.invalid_until_s.max(recover);
         }
         if self.awaiting_convergence {
             if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {
@@ -820,41 +864,38 @@ impl LeakSizeDetector {
                 }
                 return;
             }
-            let blind = e.t_s < self.blind_until_s;
-            match arm_step(&mut self.arming, &self.cfg, e) {
-                Some(false) if !blind => {
-                    if self.learn_t0_s.is_nan() {
-                        self.learn_t0_s = e.t_s;
-                    }
-                    for k in 0..3 {
-                        self.stats[k].push(raw[k]);
-                        let above = raw[k] > self.stats[k].mean;
-                        if above && !self.above_mean[k] {
-                            self.upcrossings[k] += 1;
-                        }
-                        self.above_mean[k] = above;
+            // Learning takes every valid sample: the transients a healthy rig shows
+            // (reference steps, excursions) are part of the spread the threshold
+            // must stand above. Gaps, resets and skipped samples are left out.
+            let blind = e.t_s < self.invalid_until_s;
+            match self.arming {
+                Arming::Converging => {
+                    if e.flags & FLAG_CONVERGING == 0 {
+                        self.arming = Arming::Settling(e.t_s);
                     }
                 }
-                Some(true) => {
-                    let learned = (e.t_s - self.learn_t0_s).max(1e-3);
-                    let means = std::array::from_fn(|k| self.stats[k].mean);
-                    let spreads = std::array::from_fn(|k| self.stats[k].std());
-                    let crossings = std::array::from_fn(|k| self.upcrossings[k] as f64 / learned);
-                    self.arm_with(means, spreads, crossings, e.t_s);
+                Arming::Settling(t0) => {
+                    if e.t_s - t0 >= self.cfg.settle_s {
+                        self.arming = Arming::Learning(e.t_s);
+                    }
+                }
+                Arming::Learning(_) if !blind => {
+                    self.record.push(e.t_s, dt_s, raw);
+                    if self.record.learned_s >= self.cfg.warmup_s {
+                        let (offsets, spreads, crossings) = self.record.summary();
+                        self.arm_with(offsets, spreads, crossings, e.t_s);
+                    }
                 }
                 _ => {}
             }
+            self.last_t_s = e.t_s;
             return;
         }
         self.last_t_s = e.t_s;
         // During an excursion to tank or supply pressure (where the healthy model is
         // worst and its errors move the leak estimates for a while) and a recovery
         // after it, the baseline holds and no evidence is gathered.
-        let (lo, hi) = (
-            self.cfg.excursion_margin * self.cfg.supply_pressure_pa,
-            (1.0 - self.cfg.excursion_margin) * self.cfg.supply_pressure_pa,
-        );
-        let excursion = e.measured[1..].iter().any(|p| *p < lo || *p > hi);
+        let excursion = self.excursion(e);
         if excursion {
             self.blind_until_s = self.blind_until_s.max(e.t_s + self.cfg.excursion_recovery_s);
         }

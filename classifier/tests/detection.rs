@@ -56,7 +56,7 @@ fn run_flow(
     let mut events = Vec::new();
     let n = (seconds * 1000.0).round() as usize;
     let mut t = 0.0;
-    let (mut flow, mut flow_n) = (0.0, 0.0);
+    let (mut flow, mut flow_n) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let s = sim.step();
         t = s.t_s;
@@ -359,9 +359,12 @@ fn healthy_samples(scenario: &str, seconds: f64, seed: u64) -> Vec<model::Sample
 }
 
 fn replay_events(samples: &[model::Sample], cfg: ClassifierConfig) -> Vec<LeakEvent> {
-    let mut stage =
-        estimator::EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())
-            .unwrap();
+    let mut stage = estimator::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
     let mut cls = Classifier::new(cfg).unwrap();
     let mut events = Vec::new();
     for s in samples {
@@ -398,9 +401,12 @@ fn gaps_of_any_length_at_any_position_raise_no_leak() {
 #[test]
 fn a_leak_present_at_start_is_seen_with_a_commissioning() {
     let healthy = healthy_samples("closed-loop-sine", 30.0, 81);
-    let mut stage =
-        estimator::EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis())
-            .unwrap();
+    let mut stage = estimator::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
     let mut learner = classifier::CommissioningLearner::new(ClassifierConfig::default().settle_s);
     for s in &healthy {
         learner.on_estimate(&stage.on_sample(s).leak);
@@ -409,7 +415,9 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
     assert!(c.healthy_s > 25.0 && c.healthy_s < 29.0, "{c:?}");
     assert!(c.spreads_lpm.iter().all(|s| *s > 0.0 && *s < 0.05), "{c:?}");
     // Too little healthy data is refused, not guessed.
-    assert!(classifier::CommissioningLearner::new(2.0).finish(10.0, "").is_err());
+    assert!(classifier::CommissioningLearner::new(2.0)
+        .finish(10.0, "")
+        .is_err());
     for (kind, expect) in [("ext1", EventKind::Ext1), ("int", EventKind::Int)] {
         let cfg = ClassifierConfig {
             commissioning: Some(c.clone()),
@@ -422,7 +430,7 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
         assert_eq!(r[0].kind, expect, "{spec}: {:?}", r[0]);
         assert!(r[0].t_detect_s <= 2.0, "{spec}: raised at {} s", r[0].t_detect_s);
         // Without it the same leak is never reported (it is learned as healthy).
-        let events = run("closed-loop-sine", 8.0, Some(&spec), 82, off_nominal_rig());
+        let events = run("closed-loop-sine", 16.0, Some(&spec), 82, off_nominal_rig());
         assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
     }
 }
@@ -430,7 +438,13 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
 /// A leak that opens at 10 s of a loaded sine is reported (the warm-up is over by then).
 #[test]
 fn a_leak_at_ten_seconds_is_reported() {
-    let events = run("loaded-sine", 20.0, Some("ext1:0.5lpm@10s"), 91, off_nominal_rig());
+    let events = run(
+        "loaded-sine",
+        20.0,
+        Some("ext1:0.5lpm@10s"),
+        91,
+        off_nominal_rig(),
+    );
     let r = raised(&events, "leak-size");
     assert_eq!(r.len(), 1, "{events:#?}");
     assert_eq!(r[0].kind, EventKind::Ext1);

@@ -330,7 +330,15 @@ fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
     let mut faults = FaultSchedule::default();
     faults.faults.push(Fault::parse("ext1:0.5lpm@0s", &rig).unwrap());
     let scenario = Scenario::by_name("closed-loop-sine", 5, 12.0).unwrap();
-    let mut sim = Simulator::new(rig, SensorParams::default(), SimSettings::default(), scenario, faults, 5).unwrap();
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        faults,
+        5,
+    )
+    .unwrap();
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
     let mut before = [0.0; 3];
     let mut cov_before = [0.0; 121];
@@ -354,7 +362,11 @@ fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
             assert_eq!(e.flags & FLAG_RESET, 0, "a gap is not a reset");
             for i in 0..3 {
                 // One update moves the kept leak sizes only a little.
-                assert!((e.state[7 + i] - before[i]).abs() < 0.05 / 60_000.0, "{:?} vs {before:?}", e.state);
+                assert!(
+                    (e.state[7 + i] - before[i]).abs() < 0.05 / 60_000.0,
+                    "{:?} vs {before:?}",
+                    e.state
+                );
             }
         }
         if k > 6_300 {
@@ -366,5 +378,8 @@ fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
     let (kept_before, kept_after) = (cov_before[7 * 11 + 7], cov_after[7 * 11 + 7]);
     assert!(kept_before > 0.0 && kept_after <= kept_before * 1.01 && kept_after > 0.5 * kept_before);
     assert!(est.min_scaled_eigenvalue() > 0.0);
-    assert!(max_leak_after < 1.0, "ext1 estimate went to {max_leak_after} L/min after the gap");
+    assert!(
+        max_leak_after < 1.0,
+        "ext1 estimate went to {max_leak_after} L/min after the gap"
+    );
 }
