@@ -14,6 +14,7 @@ fn main() {
         ramp_s: a[5].parse().unwrap(),
         seed: a[6].parse().unwrap(),
         seconds: 0.0,
+        variant: String::new(),
     };
     let mut case = case;
     let seconds = if case.kind == "none" {

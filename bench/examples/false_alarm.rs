@@ -19,6 +19,7 @@ fn main() {
         onset_s: f64::NAN,
         ramp_s: 0.0,
         seconds,
+        variant: String::new(),
     };
     let mut sim = simulator_for(&case).expect("sim");
     let rig = sim.rig().clone();

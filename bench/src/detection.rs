@@ -19,12 +19,21 @@ use serde::Serialize;
 /// Leak sizes of the suite, L/min at the nominal drop.
 pub const SIZES_LPM: [f64; 6] = [0.05, 0.1, 0.15, 0.25, 0.5, 1.0];
 /// Scenarios drawn by the suite.
-pub const SCENARIOS: [&str; 4] = [
+pub const SCENARIOS: [&str; 6] = [
     "open-loop-sine",
+    "open-loop-chirp",
     "closed-loop-sine",
     "closed-loop-random",
     "loaded-sine",
+    "loaded-random",
 ];
+/// Variant of a leak run: the leak opens mid-run after the warm-up.
+pub const MID_RUN: &str = "";
+/// Variant of a leak run: the leak is there from t = 0, with a commissioning learned
+/// on a healthy run of the same rig.
+pub const FROM_START: &str = "from-start";
+/// Variant of a healthy run: samples lost in gaps of 1 to 2000 samples every 10-30 s.
+pub const GAPS: &str = "gaps";
 /// The two detectors, as named in events.
 pub const DETECTORS: [&str; 2] = ["leak-size", "thesis-mae"];
 /// Seconds simulated after the onset of a leak.
@@ -49,6 +58,8 @@ pub struct Case {
     pub ramp_s: f64,
     /// Simulated length, s.
     pub seconds: f64,
+    /// [`MID_RUN`], [`FROM_START`] or [`GAPS`].
+    pub variant: String,
 }
 
 /// What one detector did in one run.
@@ -58,7 +69,7 @@ pub struct Outcome {
     pub detector: String,
     /// A leak event was raised at or after the onset.
     pub detected: bool,
-    /// That event (after its updates, which may re-isolate it) named the right kind.
+    /// That event named the right kind at its first alarm.
     pub isolated: bool,
     /// Detection delay from onset, s (NaN if not detected).
     pub delay_s: f64,
@@ -66,6 +77,8 @@ pub struct Outcome {
     pub size_lpm: f64,
     /// Leak events raised before the onset (or at all, in a healthy run): false alarms.
     pub false_alarms: u32,
+    /// Mean |leak flow| the rig lost after the ramp, L/min (the size reference; 0 when healthy).
+    pub real_flow_lpm: f64,
 }
 
 /// A run and both detectors' outcomes.
@@ -86,6 +99,8 @@ pub struct Cell {
     pub kind: String,
     /// Leak size, L/min.
     pub size_lpm: f64,
+    /// [`MID_RUN`] or [`FROM_START`].
+    pub variant: String,
     /// Runs.
     pub runs: usize,
     /// Fraction of runs with a detection.
@@ -96,7 +111,7 @@ pub struct Cell {
     pub delay_median_s: f64,
     /// 95th-percentile delay, s.
     pub delay_p95_s: f64,
-    /// Median of |size error| / size over correctly isolated runs (NaN if the detector does not size).
+    /// Median of |size − real flow| / real flow over correctly isolated runs (NaN if the detector does not size).
     pub size_error_median: f64,
     /// 95th percentile of |size error| / size.
     pub size_error_p95: f64,
@@ -111,6 +126,12 @@ pub struct SuiteResult {
     pub healthy_hours: f64,
     /// False alarms per hour over the healthy runs, per detector.
     pub false_alarms_per_hour: Vec<(String, f64)>,
+    /// False alarms counted over the healthy runs, per detector.
+    pub false_alarm_counts: Vec<(String, u32)>,
+    /// One-sided 95 % upper bound of the false-alarm rate per hour (Poisson), per detector.
+    pub false_alarms_per_hour_upper95: Vec<(String, f64)>,
+    /// Healthy hours of the runs that lost samples in gaps.
+    pub gap_hours: f64,
     /// Every run.
     pub runs: Vec<RunResult>,
     /// Wall time of the suite, s.
@@ -161,6 +182,21 @@ pub fn cases(runs: usize, hours: f64, seed: u64) -> Vec<Case> {
                     onset_s: onset,
                     ramp_s: ramp,
                     seconds: onset + ramp + AFTER_ONSET_S,
+                    variant: MID_RUN.into(),
+                });
+            }
+            // The same leak present from t = 0, seen against a commissioning.
+            for _ in 0..runs.div_ceil(2) {
+                let scenario = SCENARIOS[(rng.uniform() * SCENARIOS.len() as f64) as usize % SCENARIOS.len()];
+                out.push(Case {
+                    seed: rng.next_u64(),
+                    scenario: scenario.into(),
+                    kind: kind.into(),
+                    size_lpm: size,
+                    onset_s: 0.0,
+                    ramp_s: 0.0,
+                    seconds: AFTER_ONSET_S,
+                    variant: FROM_START.into(),
                 });
             }
         }
@@ -175,6 +211,8 @@ pub fn cases(runs: usize, hours: f64, seed: u64) -> Vec<Case> {
             onset_s: f64::NAN,
             ramp_s: 0.0,
             seconds: HEALTHY_RUN_S,
+            // Every fourth healthy run loses samples in gaps.
+            variant: if i % 4 == 3 { GAPS.into() } else { MID_RUN.into() },
         });
     }
     out
@@ -212,20 +250,42 @@ pub fn simulator_for(case: &Case) -> Result<Simulator, String> {
 
 /// Runs one case through the rig, the estimator stage and the classifier.
 pub fn run_case(case: &Case) -> Result<RunResult, String> {
+    let mut cfg = ClassifierConfig {
+        thesis_baseline: true,
+        ..ClassifierConfig::default()
+    };
+    if case.variant == FROM_START {
+        cfg.commissioning = Some(commission_rig(case)?);
+    }
     let mut sim = simulator_for(case)?;
     let mut stage = EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
         Tuning::thesis(),
     )?;
-    let mut cls = Classifier::new(ClassifierConfig {
-        thesis_baseline: true,
-        ..ClassifierConfig::default()
-    })?;
+    let mut cls = Classifier::new(cfg)?;
     let mut events: Vec<LeakEvent> = Vec::new();
     let n = (case.seconds / sim.sample_period_s()).round() as u64;
+    let (mut flow, mut flow_n) = (0.0f64, 0.0f64);
+    let mut gaps = Rng::new(case.seed ^ 0x9e37_79b9_7f4a_7c15);
+    let mut next_gap_s = gaps.uniform_in(10.0, 30.0);
+    let mut skip = 0u64;
     for _ in 0..n {
         let s = sim.step();
+        if s.t_s >= case.onset_s + case.ramp_s {
+            flow += s.q_leak_lpm.abs();
+            flow_n += 1.0;
+        }
+        if case.variant == GAPS {
+            if s.t_s >= next_gap_s {
+                skip = 1 + (gaps.uniform() * 2000.0) as u64;
+                next_gap_s = s.t_s + skip as f64 * 1e-3 + gaps.uniform_in(10.0, 30.0);
+            }
+            if skip > 0 {
+                skip -= 1;
+                continue;
+            }
+        }
         let e = stage.on_sample(&s);
         cls.on_stage(&e, |ev| {
             if ev.kind.is_leak() {
@@ -240,11 +300,60 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
             events.iter().take(3).collect::<Vec<_>>()
         );
     }
-    let outcomes = DETECTORS.iter().map(|d| score(case, d, &events)).collect();
+    let real = if case.kind == "none" {
+        0.0
+    } else {
+        flow / flow_n.max(1.0)
+    };
+    let outcomes = DETECTORS
+        .iter()
+        .map(|d| {
+            let mut o = score(case, d, &events);
+            o.real_flow_lpm = real;
+            o
+        })
+        .collect();
     Ok(RunResult {
         case: case.clone(),
         outcomes,
     })
+}
+
+/// The commissioning of a case's rig: 40 s of a healthy run of the same rig under the
+/// same scenario with another seed (the rig's noise and reference differ).
+pub fn commission_rig(case: &Case) -> Result<classifier::Commissioning, String> {
+    let healthy = Case {
+        kind: "none".into(),
+        size_lpm: 0.0,
+        onset_s: f64::NAN,
+        ramp_s: 0.0,
+        seconds: 40.0,
+        variant: MID_RUN.into(),
+        ..case.clone()
+    };
+    let mut rng = Rng::new(case.seed);
+    let rig = draw_rig(&mut rng);
+    let scenario =
+        Scenario::by_name(&healthy.scenario, case.seed ^ 1, healthy.seconds).map_err(|e| e.to_string())?;
+    let mut sim = Simulator::new(
+        rig,
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        case.seed ^ 1,
+    )
+    .map_err(|e| e.to_string())?;
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )?;
+    let mut learner = classifier::CommissioningLearner::new(ClassifierConfig::default().settle_s);
+    for _ in 0..40_000 {
+        learner.on_estimate(&stage.on_sample(&sim.step()).leak);
+    }
+    learner.finish(10.0, "40 s healthy run of the same rig")
 }
 
 fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
@@ -269,8 +378,13 @@ fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
                 .rev()
                 .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared);
             let size = last.map(|e| e.size_lpm).unwrap_or(f64::NAN);
-            let kind = last.map(|e| e.kind).unwrap_or(ev.kind);
-            (true, kind.name() == case.kind, ev.t_detect_s - case.onset_s, size)
+            // The kind a user acts on: the one named at the first alarm.
+            (
+                true,
+                ev.kind.name() == case.kind,
+                ev.t_detect_s - case.onset_s,
+                size,
+            )
         }
         None => (false, false, f64::NAN, f64::NAN),
     };
@@ -281,6 +395,7 @@ fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {
         delay_s: delay,
         size_lpm: size,
         false_alarms,
+        real_flow_lpm: f64::NAN,
     }
 }
 
@@ -328,37 +443,42 @@ pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
     for (di, det) in DETECTORS.iter().enumerate() {
         for kind in ["ext1", "ext2", "int"] {
             for size in SIZES_LPM {
-                let these: Vec<&RunResult> = runs
-                    .iter()
-                    .filter(|r| r.case.kind == kind && r.case.size_lpm == size)
-                    .collect();
-                if these.is_empty() {
-                    continue;
+                for variant in [MID_RUN, FROM_START] {
+                    let these: Vec<&RunResult> = runs
+                        .iter()
+                        .filter(|r| {
+                            r.case.kind == kind && r.case.size_lpm == size && r.case.variant == variant
+                        })
+                        .collect();
+                    if these.is_empty() {
+                        continue;
+                    }
+                    let n = these.len();
+                    let det_runs: Vec<&Outcome> = these.iter().map(|r| &r.outcomes[di]).collect();
+                    let mut delays: Vec<f64> = det_runs
+                        .iter()
+                        .filter(|o| o.detected)
+                        .map(|o| o.delay_s)
+                        .collect();
+                    let mut errs: Vec<f64> = det_runs
+                        .iter()
+                        .filter(|o| o.isolated && o.size_lpm.is_finite() && o.real_flow_lpm > 0.0)
+                        .map(|o| (o.size_lpm - o.real_flow_lpm).abs() / o.real_flow_lpm)
+                        .collect();
+                    cells.push(Cell {
+                        detector: det.to_string(),
+                        kind: kind.into(),
+                        size_lpm: size,
+                        variant: variant.into(),
+                        runs: n,
+                        p_detect: det_runs.iter().filter(|o| o.detected).count() as f64 / n as f64,
+                        p_isolate: det_runs.iter().filter(|o| o.isolated).count() as f64 / n as f64,
+                        delay_median_s: quantile(&mut delays, 0.5),
+                        delay_p95_s: quantile(&mut delays, 0.95),
+                        size_error_median: quantile(&mut errs, 0.5),
+                        size_error_p95: quantile(&mut errs, 0.95),
+                    });
                 }
-                let n = these.len();
-                let det_runs: Vec<&Outcome> = these.iter().map(|r| &r.outcomes[di]).collect();
-                let mut delays: Vec<f64> = det_runs
-                    .iter()
-                    .filter(|o| o.detected)
-                    .map(|o| o.delay_s)
-                    .collect();
-                let mut errs: Vec<f64> = det_runs
-                    .iter()
-                    .filter(|o| o.isolated && o.size_lpm.is_finite())
-                    .map(|o| (o.size_lpm - size).abs() / size)
-                    .collect();
-                cells.push(Cell {
-                    detector: det.to_string(),
-                    kind: kind.into(),
-                    size_lpm: size,
-                    runs: n,
-                    p_detect: det_runs.iter().filter(|o| o.detected).count() as f64 / n as f64,
-                    p_isolate: det_runs.iter().filter(|o| o.isolated).count() as f64 / n as f64,
-                    delay_median_s: quantile(&mut delays, 0.5),
-                    delay_p95_s: quantile(&mut delays, 0.95),
-                    size_error_median: quantile(&mut errs, 0.5),
-                    size_error_p95: quantile(&mut errs, 0.95),
-                });
             }
         }
     }
@@ -375,12 +495,48 @@ pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
             )
         })
         .collect();
+    let counts: Vec<(String, u32)> = DETECTORS
+        .iter()
+        .enumerate()
+        .map(|(di, d)| {
+            (
+                d.to_string(),
+                healthy.iter().map(|r| r.outcomes[di].false_alarms).sum(),
+            )
+        })
+        .collect();
+    let upper = counts
+        .iter()
+        .map(|(d, n)| (d.clone(), poisson_upper95(*n) / hours.max(1e-9)))
+        .collect();
+    let gap_hours = healthy
+        .iter()
+        .filter(|r| r.case.variant == GAPS)
+        .map(|r| r.case.seconds)
+        .sum::<f64>()
+        / 3600.0;
     SuiteResult {
         cells,
         healthy_hours: hours,
         false_alarms_per_hour,
+        false_alarm_counts: counts,
+        false_alarms_per_hour_upper95: upper,
+        gap_hours,
         runs,
         wall_s,
+    }
+}
+
+/// One-sided 95 % upper confidence bound of a Poisson mean after `n` events
+/// (exact for n ≤ 5, the Wilson–Hilferty approximation beyond).
+pub fn poisson_upper95(n: u32) -> f64 {
+    const EXACT: [f64; 6] = [2.996, 4.744, 6.296, 7.754, 9.154, 10.513];
+    match EXACT.get(n as usize) {
+        Some(v) => *v,
+        None => {
+            let k = n as f64 + 1.0;
+            k * (1.0 - 1.0 / (9.0 * k) + 1.645 / (3.0 * k.sqrt())).powi(3)
+        }
     }
 }
 
@@ -397,37 +553,52 @@ pub fn markdown(r: &SuiteResult) -> String {
     for kind in ["ext1", "ext2", "int"] {
         s.push_str(&format!("\n### {kind}\n\n"));
         s.push_str(
-            "| size L/min | detector | runs | P(detect) | P(isolate) | delay median s | delay p95 s | size error median | size error p95 |\n",
+            "| size L/min | leak | detector | runs | P(detect) | P(right kind at first alarm) | delay median s | delay p95 s | size error median (real flow) | size error p95 |\n",
         );
-        s.push_str("|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|\n");
         for size in SIZES_LPM {
-            for det in DETECTORS {
-                if let Some(c) = r
-                    .cells
-                    .iter()
-                    .find(|c| c.kind == kind && c.size_lpm == size && c.detector == det)
-                {
-                    s.push_str(&format!(
-                        "| {size} | {det} | {} | {:.2} | {:.2} | {} | {} | {} | {} |\n",
-                        c.runs,
-                        c.p_detect,
-                        c.p_isolate,
-                        f(c.delay_median_s, 2),
-                        f(c.delay_p95_s, 2),
-                        f(c.size_error_median * 100.0, 0)
-                            + if c.size_error_median.is_finite() { " %" } else { "" },
-                        f(c.size_error_p95 * 100.0, 0) + if c.size_error_p95.is_finite() { " %" } else { "" },
-                    ));
+            for variant in [MID_RUN, FROM_START] {
+                for det in DETECTORS {
+                    if let Some(c) = r.cells.iter().find(|c| {
+                        c.kind == kind && c.size_lpm == size && c.detector == det && c.variant == variant
+                    }) {
+                        let when = if variant == FROM_START {
+                            "from t = 0, commissioned"
+                        } else {
+                            "mid-run"
+                        };
+                        s.push_str(&format!(
+                            "| {size} | {when} | {det} | {} | {:.2} | {:.2} | {} | {} | {} | {} |\n",
+                            c.runs,
+                            c.p_detect,
+                            c.p_isolate,
+                            f(c.delay_median_s, 2),
+                            f(c.delay_p95_s, 2),
+                            f(c.size_error_median * 100.0, 0)
+                                + if c.size_error_median.is_finite() { " %" } else { "" },
+                            f(c.size_error_p95 * 100.0, 0)
+                                + if c.size_error_p95.is_finite() { " %" } else { "" },
+                        ));
+                    }
                 }
             }
         }
     }
     s.push_str(&format!(
-        "\nHealthy runs: {:.2} simulated hours.\n\n| detector | false alarms per hour |\n|---|---|\n",
-        r.healthy_hours
+        "\nHealthy runs: {:.2} simulated hours (all six scenarios; {:.2} h of them losing samples in gaps of 1-2000 \
+         samples every 10-30 s).\n\n| detector | false alarms | per hour | 95 % upper bound per hour |\n|---|---|---|---|\n",
+        r.healthy_hours, r.gap_hours
     ));
-    for (d, fa) in &r.false_alarms_per_hour {
-        s.push_str(&format!("| {d} | {} |\n", f(*fa, 3)));
+    for (i, (d, fa)) in r.false_alarms_per_hour.iter().enumerate() {
+        s.push_str(&format!(
+            "| {d} | {} | {} | {} |\n",
+            r.false_alarm_counts.get(i).map_or(0, |c| c.1),
+            f(*fa, 3),
+            f(
+                r.false_alarms_per_hour_upper95.get(i).map_or(f64::NAN, |c| c.1),
+                3
+            )
+        ));
     }
     s
 }
@@ -444,7 +615,7 @@ pub fn probability_figure(r: &SuiteResult) -> plot::Figure {
             let cells: Vec<&Cell> = r
                 .cells
                 .iter()
-                .filter(|c| c.kind == kind && c.detector == det)
+                .filter(|c| c.kind == kind && c.detector == det && c.variant == MID_RUN)
                 .collect();
             let x: Vec<f64> = cells.iter().map(|c| c.size_lpm).collect();
             let pd: Vec<f64> = cells.iter().map(|c| c.p_detect).collect();
@@ -472,12 +643,21 @@ mod tests {
     #[test]
     fn cases_cover_every_kind_and_size_and_the_healthy_hours() {
         let c = cases(2, 0.25, 1);
-        assert_eq!(c.iter().filter(|c| c.kind != "none").count(), 3 * 6 * 2);
+        assert_eq!(
+            c.iter()
+                .filter(|c| c.kind != "none" && c.variant == MID_RUN)
+                .count(),
+            3 * 6 * 2
+        );
+        assert_eq!(c.iter().filter(|c| c.variant == FROM_START).count(), 3 * 6);
+        for sc in SCENARIOS {
+            assert!(c.iter().any(|c| c.scenario == sc), "{sc} missing");
+        }
         let healthy: f64 = c.iter().filter(|c| c.kind == "none").map(|c| c.seconds).sum();
         assert!(healthy >= 0.25 * 3600.0);
         assert!(c
             .iter()
-            .filter(|c| c.kind != "none")
+            .filter(|c| c.kind != "none" && c.variant == MID_RUN)
             .all(|c| (15.0..=25.0).contains(&c.onset_s)));
         // Seeded: the same suite twice.
         assert_eq!(format!("{:?}", cases(2, 0.25, 1)), format!("{c:?}"));
@@ -493,6 +673,7 @@ mod tests {
             onset_s: 20.0,
             ramp_s: 0.0,
             seconds: 30.0,
+            variant: String::new(),
         };
         let ev = |kind, phase, t: f64, id, size| {
             let mut e = LeakEvent::plain(kind, phase, "leak-size", id, t, t);
@@ -525,6 +706,7 @@ mod tests {
             onset_s: 15.0,
             ramp_s: 0.0,
             seconds: 22.0,
+            variant: String::new(),
         };
         let r = run_case(&case).unwrap();
         eprintln!("{r:?}");

@@ -755,6 +755,17 @@ impl LeakSizeDetector {
         self.next_id = id;
     }
 
+    /// After a sensor fault, whose wrong values the filter has folded into its leak
+    /// estimates: the healthy state is learned again from the estimates as they are
+    /// now (a commissioning no longer applies to them).
+    pub fn relearn(&mut self) {
+        let mut cfg = self.cfg.clone();
+        cfg.commissioning = None;
+        let id = self.next_id;
+        *self = LeakSizeDetector::new(cfg);
+        self.next_id = id;
+    }
+
     /// The three single-leak sizes that explain the estimated leak flows, L/min
     /// (before the healthy offsets are removed): see [`signatures_lpm`].
     fn raw_sizes(e: &Estimate) -> [f64; 3] {
@@ -841,6 +852,11 @@ impl LeakSizeDetector {
         }
         if e.flags & FLAG_SKIPPED != 0 {
             return;
+        }
+        // A channel left out of the update (NaN or out of range) leaves the leak
+        // states to drift on the others: no evidence until it has been back for a while.
+        if e.residual.iter().any(|r| r.is_nan()) {
+            self.invalid_until_s = self.invalid_until_s.max(recover);
         }
         if e.nis.is_finite() && e.nis > self.cfg.nis_gate {
             self.invalid_until_s = self.invalid_until_s.max(recover);
@@ -1455,7 +1471,7 @@ impl Classifier {
             return;
         }
         if faulty_before {
-            self.leak_size.restart();
+            self.leak_size.relearn();
             self.thesis.restart();
         }
         if self.learning_since_s.is_none() && e.flags & FLAG_CONVERGING == 0 {
