@@ -187,6 +187,9 @@ pub struct Commissioning {
     pub crossings_per_s: [f64; 3],
     /// Seconds of healthy, converged data learned from, s.
     pub healthy_s: f64,
+    /// Mean normalised innovation squared of the healthy data (NaN: unknown).
+    #[serde(default = "nan")]
+    pub nis_mean: f64,
     /// Where it was learned (the recording's path).
     #[serde(default)]
     pub source: String,
@@ -255,6 +258,10 @@ pub struct ClassifierConfig {
     /// of about √nis_gate standard deviations) means the filter has lost track for
     /// a moment: no evidence for `recovery_s` after it.
     pub nis_gate: f64,
+    /// Leak-size detector: while the NIS averaged over the last second exceeds this
+    /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
+    /// chirp), evidence does not count (0 = off).
+    pub nis_ratio_gate: f64,
     /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
     pub thesis_baseline: bool,
     /// The healthy state learned by commissioning (absent: learned in a warm-up,
@@ -315,6 +322,7 @@ impl Default for ClassifierConfig {
             size_window_s: 2.0,
             recovery_s: 2.0,
             nis_gate: 10000.0,
+            nis_ratio_gate: 3.0,
             thesis_baseline: false,
             commissioning: None,
             min_size_lpm: 0.04,
@@ -351,6 +359,7 @@ impl ClassifierConfig {
             ("size_window_s", self.size_window_s),
             ("recovery_s", self.recovery_s),
             ("nis_gate", self.nis_gate),
+            ("nis_ratio_gate", self.nis_ratio_gate),
             ("min_size_lpm", self.min_size_lpm),
             ("confirm_s", self.confirm_s),
             ("baseline_tau_s", self.baseline_tau_s),
@@ -471,6 +480,10 @@ pub struct LeakSizeDetector {
     invalid_until_s: f64,
     /// The filter restarted: no evidence until it has converged again.
     awaiting_convergence: bool,
+    /// Mean NIS of the healthy data (NaN: unknown).
+    nis_healthy: f64,
+    /// NIS averaged over the last second.
+    nis_avg: f64,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
@@ -501,6 +514,8 @@ struct HealthyRecord {
     values: [Vec<f64>; 3],
     next_t_s: f64,
     learned_s: f64,
+    nis_sum: f64,
+    nis_n: f64,
 }
 
 impl HealthyRecord {
@@ -513,16 +528,31 @@ impl HealthyRecord {
             values: std::array::from_fn(|_| Vec::with_capacity(n)),
             next_t_s: f64::NEG_INFINITY,
             learned_s: 0.0,
+            nis_sum: 0.0,
+            nis_n: 0.0,
         }
     }
 
-    fn push(&mut self, t_s: f64, dt_s: f64, raw: [f64; 3]) {
+    fn push(&mut self, t_s: f64, dt_s: f64, raw: [f64; 3], nis: f64) {
         self.learned_s += dt_s;
+        if nis.is_finite() {
+            self.nis_sum += nis.min(1e6);
+            self.nis_n += 1.0;
+        }
         if t_s >= self.next_t_s {
             self.next_t_s = t_s + Self::EVERY_S;
             for k in 0..3 {
                 self.values[k].push(raw[k]);
             }
+        }
+    }
+
+    /// Mean NIS of the learned samples (NaN if none).
+    fn nis_mean(&self) -> f64 {
+        if self.nis_n > 0.0 {
+            self.nis_sum / self.nis_n
+        } else {
+            f64::NAN
         }
     }
 
@@ -597,7 +627,7 @@ impl CommissioningLearner {
             0.0
         };
         self.last_t_s = e.t_s;
-        self.record.push(e.t_s, dt_s, raw);
+        self.record.push(e.t_s, dt_s, raw, e.nis);
     }
 
     /// The commissioning, or why there is none (too little healthy data).
@@ -614,6 +644,7 @@ impl CommissioningLearner {
             spreads_lpm,
             crossings_per_s,
             healthy_s: learned_s,
+            nis_mean: self.record.nis_mean(),
             source: source.to_string(),
         })
     }
@@ -678,6 +709,8 @@ impl LeakSizeDetector {
             blind_until_s: f64::NEG_INFINITY,
             invalid_until_s: f64::NEG_INFINITY,
             awaiting_convergence: false,
+            nis_healthy: f64::NAN,
+            nis_avg: f64::NAN,
             blind_s: 0.0,
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
@@ -861,6 +894,17 @@ impl LeakSizeDetector {
         if e.nis.is_finite() && e.nis > self.cfg.nis_gate {
             self.invalid_until_s = self.invalid_until_s.max(recover);
         }
+        if e.nis.is_finite() {
+            let nis = e.nis.min(1e6);
+            self.nis_avg = if self.nis_avg.is_finite() {
+                self.nis_avg + dt_s.min(1.0) * (nis - self.nis_avg)
+            } else {
+                nis
+            };
+            if self.cfg.nis_ratio_gate > 0.0 && self.nis_avg > self.cfg.nis_ratio_gate * self.nis_healthy {
+                self.invalid_until_s = self.invalid_until_s.max(recover);
+            }
+        }
         if self.awaiting_convergence {
             if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {
                 self.invalid_until_s = self.invalid_until_s.max(recover);
@@ -876,6 +920,7 @@ impl LeakSizeDetector {
         if !self.is_armed() {
             if let (Arming::Converging, Some(c)) = (self.arming, self.cfg.commissioning.clone()) {
                 if e.flags & FLAG_CONVERGING == 0 {
+                    self.nis_healthy = c.nis_mean;
                     self.arm_with(c.offsets_lpm, c.spreads_lpm, c.crossings_per_s, e.t_s);
                 }
                 return;
@@ -896,9 +941,10 @@ impl LeakSizeDetector {
                     }
                 }
                 Arming::Learning(_) if !blind => {
-                    self.record.push(e.t_s, dt_s, raw);
+                    self.record.push(e.t_s, dt_s, raw, e.nis);
                     if self.record.learned_s >= self.cfg.warmup_s {
                         let (offsets, spreads, crossings) = self.record.summary();
+                        self.nis_healthy = self.record.nis_mean();
                         self.arm_with(offsets, spreads, crossings, e.t_s);
                     }
                 }

@@ -54,7 +54,18 @@ impl Config {
 
     /// Parses and validates config text.
     pub fn parse(text: &str) -> Result<Config, String> {
-        let cfg: Config = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
+        let mut cfg: Config = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
+        // A partial [leak_filter] fills its missing fields from the leak filter's own
+        // defaults (sensor-derived, 11 states), not from the thesis tuning that
+        // `Tuning::default()` gives to a partial [estimator].
+        let table: toml::Table = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
+        if let Some(given) = table.get("leak_filter").and_then(|v| v.as_table()) {
+            let mut merged = toml::Table::try_from(Tuning::sensor_derived()).map_err(|e| e.to_string())?;
+            for (k, v) in given {
+                merged.insert(k.clone(), v.clone());
+            }
+            cfg.leak_filter = Tuning::deserialize(merged).map_err(|e| format!("[leak_filter] {e}"))?;
+        }
         cfg.model.validate().map_err(|e| format!("[model] {e}"))?;
         if let Some(rig) = &cfg.rig {
             rig.validate().map_err(|e| format!("[rig] {e}"))?;
@@ -127,6 +138,11 @@ mod tests {
         assert!(e.contains("mass_kg"), "{e}");
         let e = Config::parse("[modle]\n").unwrap_err();
         assert!(e.contains("modle"), "{e}");
+        // A partial [leak_filter] keeps the leak filter's own defaults for the rest.
+        let c = Config::parse("[leak_filter]\nsubsteps = 2\n").unwrap();
+        assert_eq!(c.leak_filter.states, 11);
+        assert_eq!(c.leak_filter.substeps, 2);
+        assert_eq!(c.leak_filter.r_p_pa2, Tuning::sensor_derived().r_p_pa2);
         let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
         assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);

@@ -8,6 +8,8 @@ use crate::rng::Rng;
 pub const KP_V_PER_M: f64 = 50.0;
 /// Saturation of the valve command, V.
 pub const U_MAX_V: f64 = 10.0;
+/// Length of one sweep of the open-loop chirp, s (0.5 to 10.5 Hz).
+pub const CHIRP_PERIOD_S: f64 = 40.0;
 
 /// The named scenarios.
 pub const SCENARIO_NAMES: [&str; 6] = [
@@ -28,7 +30,10 @@ pub enum Drive {
         freq_hz: f64,
         phase_rad: f64,
     },
-    /// u = amplitude·sin(π(1 + t/4)·t) V: 0.5 Hz rising to 10.5 Hz over 40 s.
+    /// u = amplitude·sin(π(1 + t/4)·t) V: 0.5 Hz rising to 10.5 Hz over 40 s; a
+    /// longer run repeats the sweep every 40 s (t taken modulo 40 s; u is 0 at the
+    /// wrap, so the command stays continuous) instead of rising past the 10.5 Hz
+    /// the thesis' rig was driven at.
     OpenLoopChirp { amplitude_v: f64 },
     /// Closed loop on r = offset + amplitude·sin(2π t / period).
     ClosedLoopSine {
@@ -201,7 +206,8 @@ impl Scenario {
                 phase_rad,
             } => amplitude_v * (2.0 * std::f64::consts::PI * freq_hz * t_s + phase_rad).sin(),
             Drive::OpenLoopChirp { amplitude_v } => {
-                amplitude_v * (std::f64::consts::PI * (1.0 + t_s / 4.0) * t_s).sin()
+                let t = t_s.rem_euclid(CHIRP_PERIOD_S);
+                amplitude_v * (std::f64::consts::PI * (1.0 + t / 4.0) * t).sin()
             }
             _ => (KP_V_PER_M * (self.reference_m(t_s) - x_meas_m)).clamp(-U_MAX_V, U_MAX_V),
         }
