@@ -930,15 +930,11 @@ impl LeakSizeDetector {
             // must stand above. Gaps, resets and skipped samples are left out.
             let blind = e.t_s < self.invalid_until_s;
             match self.arming {
-                Arming::Converging => {
-                    if e.flags & FLAG_CONVERGING == 0 {
-                        self.arming = Arming::Settling(e.t_s);
-                    }
+                Arming::Converging if e.flags & FLAG_CONVERGING == 0 => {
+                    self.arming = Arming::Settling(e.t_s);
                 }
-                Arming::Settling(t0) => {
-                    if e.t_s - t0 >= self.cfg.settle_s {
-                        self.arming = Arming::Learning(e.t_s);
-                    }
+                Arming::Settling(t0) if e.t_s - t0 >= self.cfg.settle_s => {
+                    self.arming = Arming::Learning(e.t_s);
                 }
                 Arming::Learning(_) if !blind => {
                     self.record.push(e.t_s, dt_s, raw, e.nis);
