@@ -47,13 +47,13 @@ pub struct DataOutcome {
     pub detected: bool,
     /// Kind named at the first alarm (empty if none).
     pub kind_first: String,
-    /// Kind of that event after its updates (empty if none).
+    /// Kind of the leak after re-isolations (empty if none).
     pub kind_final: String,
     /// Delay of the first alarm from the onset, s (NaN if none).
     pub delay_s: f64,
     /// Size reported at the first alarm, L/min (NaN if none).
     pub size_first_lpm: f64,
-    /// Last size reported for that event, L/min (NaN if none).
+    /// Last size reported for the leak (that event or the one that replaced it), L/min (NaN if none).
     pub size_final_lpm: f64,
     /// Leak events raised before the onset (or at all when healthy).
     pub false_alarms: u32,
@@ -283,7 +283,7 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         let last = events
             .iter()
             .rev()
-            .find(|e| e.event_id == ev.event_id && e.phase != Phase::Cleared)
+            .find(|e| e.t_detect_s >= ev.t_detect_s && e.phase != Phase::Cleared)
             .unwrap_or(ev);
         o.kind_first = ev.kind.name().into();
         o.kind_final = last.kind.name().into();

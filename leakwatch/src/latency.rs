@@ -160,6 +160,7 @@ pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
             config: None,
             mode: mode.into(),
             out: Some(out.join(format!("run-{mode}"))),
+            thesis_baseline: false,
         };
         eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;

@@ -87,6 +87,9 @@ enum Command {
         /// How stages wait for input: event, low-latency or busy-poll.
         #[arg(long, default_value = "event")]
         mode: String,
+        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        #[arg(long)]
+        thesis_baseline: bool,
         /// Output directory (default ./leakwatch-run).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -287,6 +290,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             mode,
             out,
+            thesis_baseline,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -295,6 +299,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             mode,
             out,
+            thesis_baseline,
         }),
         Command::Export { log, csv } => {
             let files = export_log(&log, &csv)?;

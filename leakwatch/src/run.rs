@@ -37,6 +37,8 @@ pub struct RunArgs {
     pub mode: String,
     /// Output directory (default ./leakwatch-run).
     pub out: Option<PathBuf>,
+    /// Also report the thesis' MAE baseline detector's decisions.
+    pub thesis_baseline: bool,
 }
 
 /// The four stage binaries.
@@ -294,6 +296,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     };
     // One config for every stage: the user's, and for the demonstration an off-nominal rig.
     let mut cfg = Config::load_or_default(args.config.as_deref())?;
+    cfg.classifier.thesis_baseline |= args.thesis_baseline;
     if demo {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
     }
