@@ -34,6 +34,9 @@
 use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use serde::{Deserialize, Serialize};
 
+/// Time constant of the NIS average that the NIS-ratio gate compares, s.
+pub const NIS_RATIO_WINDOW_S: f64 = 5.0;
+
 /// Cubic metres per second in one litre per minute.
 const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
 
@@ -258,7 +261,7 @@ pub struct ClassifierConfig {
     /// of about √nis_gate standard deviations) means the filter has lost track for
     /// a moment: no evidence for `recovery_s` after it.
     pub nis_gate: f64,
-    /// Leak-size detector: while the NIS averaged over the last second exceeds this
+    /// Leak-size detector: while the NIS averaged over the last 5 s exceeds this
     /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
     /// chirp), evidence does not count (0 = off).
     pub nis_ratio_gate: f64,
@@ -482,7 +485,7 @@ pub struct LeakSizeDetector {
     awaiting_convergence: bool,
     /// Mean NIS of the healthy data (NaN: unknown).
     nis_healthy: f64,
-    /// NIS averaged over the last second.
+    /// NIS averaged over the last [`NIS_RATIO_WINDOW_S`].
     nis_avg: f64,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
@@ -896,13 +899,15 @@ impl LeakSizeDetector {
         }
         if e.nis.is_finite() {
             let nis = e.nis.min(1e6);
+            // Averaged over 5 s: the burst of a leak's onset (under a second) does not
+            // trip it, a sustained loss of tracking does.
             self.nis_avg = if self.nis_avg.is_finite() {
-                self.nis_avg + dt_s.min(1.0) * (nis - self.nis_avg)
+                self.nis_avg + (dt_s / NIS_RATIO_WINDOW_S).min(1.0) * (nis - self.nis_avg)
             } else {
                 nis
             };
             if self.cfg.nis_ratio_gate > 0.0 && self.nis_avg > self.cfg.nis_ratio_gate * self.nis_healthy {
-                self.invalid_until_s = self.invalid_until_s.max(recover);
+                self.invalid_until_s = self.invalid_until_s.max(e.t_s);
             }
         }
         if self.awaiting_convergence {

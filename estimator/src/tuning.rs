@@ -217,8 +217,17 @@ impl Tuning {
                 self.substeps
             ));
         }
-        if self.mae_window_samples == 0 {
-            return Err("[estimator] mae_window_samples = 0: must be at least 1".into());
+        if self.mae_window_samples == 0 || self.mae_window_samples > 3_600_000 {
+            return Err(format!(
+                "[estimator] mae_window_samples = {}: must be 1 to 3600000 (an hour at 1 kHz)",
+                self.mae_window_samples
+            ));
+        }
+        if !(1.0e-5..=1.0).contains(&self.sample_period_s) {
+            return Err(format!(
+                "[estimator] sample_period_s = {}: must be from 1e-5 s to 1 s",
+                self.sample_period_s
+            ));
         }
         Ok(())
     }

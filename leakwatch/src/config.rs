@@ -70,6 +70,8 @@ impl Config {
         if let Some(rig) = &cfg.rig {
             rig.validate().map_err(|e| format!("[rig] {e}"))?;
         }
+        cfg.sensors.validate().map_err(|e| format!("[sensors] {e}"))?;
+        cfg.sim.validate().map_err(|e| format!("[sim] {e}"))?;
         cfg.estimator.validate()?;
         cfg.leak_filter
             .validate()
@@ -136,6 +138,22 @@ mod tests {
         assert!(e.contains("supply_pressure_pa"), "{e}");
         let e = Config::parse("[model]\nmass_kg = -3.0\n").unwrap_err();
         assert!(e.contains("mass_kg"), "{e}");
+        // Values that would abort, hang or give NaN are refused by name.
+        for (text, field) in [
+            (
+                "[estimator]\nmae_window_samples = 1000000000000\n",
+                "mae_window_samples",
+            ),
+            ("[model]\nsupply_pressure_pa = 1e308\n", "supply_pressure_pa"),
+            ("[estimator]\nsample_period_s = 1e-300\n", "sample_period_s"),
+            ("[sensors]\nadc_bits = 0\n", "adc_bits"),
+            ("[sensors]\nadc_bits = 64\n", "adc_bits"),
+            ("[sim]\nsubsteps_per_sample = 4000000000\n", "substeps_per_sample"),
+            ("[sim]\nsample_period_s = 1e-300\n", "sample_period_s"),
+        ] {
+            let e = Config::parse(text).unwrap_err();
+            assert!(e.contains(field), "{text}: {e}");
+        }
         let e = Config::parse("[modle]\n").unwrap_err();
         assert!(e.contains("modle"), "{e}");
         // A partial [leak_filter] keeps the leak filter's own defaults for the rest.

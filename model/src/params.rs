@@ -425,8 +425,8 @@ impl ActuatorParams {
         check(
             "supply_pressure_pa",
             self.supply_pressure_pa,
-            self.supply_pressure_pa > self.return_pressure_pa,
-            "a finite value > return_pressure_pa",
+            self.supply_pressure_pa > self.return_pressure_pa && self.supply_pressure_pa <= 1.0e9,
+            "a finite value > return_pressure_pa and at most 1e9 Pa (1000 MPa)",
         )?;
         check(
             "supply_sag_pa_per_m3_s",
@@ -437,8 +437,8 @@ impl ActuatorParams {
         check(
             "return_pressure_pa",
             self.return_pressure_pa,
-            self.return_pressure_pa >= 0.0,
-            nonneg,
+            (0.0..1.0e9).contains(&self.return_pressure_pa),
+            "a finite value in [0, 1e9) Pa",
         )?;
         let mut dirs = vec![("friction", self.friction.extend())];
         if let Some(r) = self.friction.retract {

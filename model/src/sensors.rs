@@ -46,6 +46,40 @@ impl Default for SensorParams {
 }
 
 impl SensorParams {
+    /// Checks every field, naming the first bad one (`sensors.<field>`).
+    pub fn validate(&self) -> Result<(), crate::params::InvalidParam> {
+        let bad = |field: &str, value: f64, expected: &'static str| crate::params::InvalidParam {
+            field: format!("sensors.{field}"),
+            value,
+            expected,
+        };
+        if !(1..=24).contains(&self.adc_bits) {
+            return Err(bad("adc_bits", self.adc_bits as f64, "1 to 24 bits"));
+        }
+        let positive = [
+            ("encoder_resolution_m", self.encoder_resolution_m),
+            ("pressure_full_scale_pa", self.pressure_full_scale_pa),
+            ("spool_full_scale_m", self.spool_full_scale_m),
+            ("load_cell_full_scale_n", self.load_cell_full_scale_n),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0 && v < 1.0e12) {
+                return Err(bad(name, v, "a finite value > 0"));
+            }
+        }
+        let nonneg = [
+            ("pressure_noise_pa", self.pressure_noise_pa),
+            ("spool_noise_m", self.spool_noise_m),
+            ("load_cell_noise_n", self.load_cell_noise_n),
+        ];
+        for (name, v) in nonneg {
+            if !(v.is_finite() && (0.0..1.0e12).contains(&v)) {
+                return Err(bad(name, v, "a finite value >= 0"));
+            }
+        }
+        Ok(())
+    }
+
     /// Ideal sensors: measurements equal the true states.
     pub fn ideal() -> Self {
         SensorParams {

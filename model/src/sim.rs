@@ -25,6 +25,27 @@ pub struct SimSettings {
     pub substeps_per_sample: u32,
 }
 
+impl SimSettings {
+    /// Checks the settings, naming the first bad one (`sim.<field>`).
+    pub fn validate(&self) -> Result<(), InvalidParam> {
+        if !(1.0e-5..=1.0).contains(&self.sample_period_s) {
+            return Err(InvalidParam {
+                field: "sim.sample_period_s".into(),
+                value: self.sample_period_s,
+                expected: "a sample period from 1e-5 s to 1 s",
+            });
+        }
+        if !(1..=10_000).contains(&self.substeps_per_sample) {
+            return Err(InvalidParam {
+                field: "sim.substeps_per_sample".into(),
+                value: self.substeps_per_sample as f64,
+                expected: "1 to 10000 sub-steps per sample",
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for SimSettings {
     fn default() -> Self {
         SimSettings {
@@ -96,20 +117,8 @@ impl Simulator {
             rig.load = scenario.spring;
         }
         rig.validate()?;
-        if !(settings.sample_period_s > 0.0 && settings.sample_period_s.is_finite()) {
-            return Err(InvalidParam {
-                field: "sim.sample_period_s".into(),
-                value: settings.sample_period_s,
-                expected: "a finite value > 0",
-            });
-        }
-        if settings.substeps_per_sample == 0 {
-            return Err(InvalidParam {
-                field: "sim.substeps_per_sample".into(),
-                value: 0.0,
-                expected: "at least 1",
-            });
-        }
+        settings.validate()?;
+        sensors.validate()?;
         let state = state_at_rest(scenario.initial_position_m, rig.nominal_chamber_pressure_pa());
         let base_leaks = LeakSet::from_params(&rig);
         Ok(Simulator {
