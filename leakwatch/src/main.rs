@@ -320,10 +320,6 @@ fn run(cli: Cli) -> Result<(), String> {
         } => {
             let mut cfg = Config::load_or_default(config.as_deref())?;
             cfg.classifier.thesis_baseline |= thesis_baseline;
-            eprintln!(
-                "note: {}",
-                classifier::Classifier::new(cfg.classifier.clone())?.start_note()
-            );
             if let Some(m) = model {
                 if m != 6 && m != 7 {
                     return Err(format!("--model {m}: the thesis filter has 6 or 7 states"));

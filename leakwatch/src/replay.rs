@@ -193,6 +193,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
 
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     let mut cls = Classifier::new(cfg.classifier.clone())?;
+    if req.progress {
+        eprintln!("note: {}", cls.start_note());
+    }
     let mut events: Vec<LeakEvent> = Vec::new();
     let mut summary = Summary {
         input: req.input.display().to_string(),
