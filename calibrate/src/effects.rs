@@ -83,7 +83,9 @@ impl Effect {
     /// Which form of the named effect this is, for reports.
     pub fn form(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "retracting Coulomb friction differs",
+            Effect::FrictionAsymmetry => {
+                "retracting friction differs (Coulomb and static scaled together, viscous)"
+            }
             Effect::SpoolBias => "spool null bias",
             Effect::SpringLoad => "spring with contact position",
             Effect::BulkModulus => "lower constant bulk modulus",
@@ -122,7 +124,7 @@ impl Effect {
     /// Names of the parameters, as dotted field paths of `ActuatorParams`.
     pub fn parameter_names(self) -> &'static [&'static str] {
         match self {
-            Effect::FrictionAsymmetry => &["friction.retract.slip_n"],
+            Effect::FrictionAsymmetry => &["friction.retract.slip_n", "friction.retract.viscous_n_s_per_m"],
             Effect::SpoolBias => &["spool_null_bias_m"],
             Effect::SpringLoad => &["load.stiffness_n_per_m", "load.contact_m"],
             Effect::BulkModulus => &["bulk_modulus_pa"],
@@ -139,7 +141,10 @@ impl Effect {
     /// fit's scaling unit and the yardstick of identifiability), SI.
     pub fn resolution(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
-            Effect::FrictionAsymmetry => vec![0.1 * base.friction.slip_n.max(100.0)],
+            Effect::FrictionAsymmetry => vec![
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+            ],
             Effect::SpoolBias => vec![0.02 * 3.0 * base.spool_gain_m_per_v],
             Effect::SpringLoad => vec![2.0e3, 0.01],
             Effect::BulkModulus => vec![0.1 * base.bulk_modulus_pa],
@@ -158,13 +163,13 @@ impl Effect {
     /// Physical bounds of each parameter, SI.
     pub fn bounds(self, base: &ActuatorParams) -> Vec<(f64, f64)> {
         match self {
-            Effect::FrictionAsymmetry => vec![(0.0, 2.0e4)],
+            Effect::FrictionAsymmetry => vec![(0.0, 2.0e4), (0.0, 1.0e4)],
             Effect::SpoolBias => {
                 let b = 5.0 * base.spool_gain_m_per_v;
                 vec![(-b, b)]
             }
             Effect::SpringLoad => vec![(0.0, 1.0e7), (base.x_min_m, base.x_max_m)],
-            Effect::BulkModulus => vec![(0.02 * base.bulk_modulus_pa, 3.0 * base.bulk_modulus_pa)],
+            Effect::BulkModulus => vec![(0.15 * base.bulk_modulus_pa, 3.0 * base.bulk_modulus_pa)],
             Effect::EntrainedAir => vec![(0.0, 0.3)],
             Effect::SupplySag => vec![(0.0, 1.0e12)],
             Effect::ValveBandwidth => vec![(2.0 * std::f64::consts::PI, 5.0 * base.spool_natural_freq_rad_s)],
@@ -177,11 +182,8 @@ impl Effect {
     pub fn read(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
             Effect::FrictionAsymmetry => {
-                vec![base
-                    .friction
-                    .retract
-                    .map(|r| r.slip_n)
-                    .unwrap_or(base.friction.slip_n)]
+                let r = base.friction.for_direction(-1.0);
+                vec![r.slip_n, r.viscous_n_s_per_m]
             }
             Effect::SpoolBias => vec![base.spool_null_bias_m],
             Effect::SpringLoad => vec![base.load.stiffness_n_per_m, base.load.contact_m],
@@ -224,7 +226,7 @@ impl Effect {
                 .iter()
                 .map(|a| vec![*a])
                 .collect(),
-            Effect::FrictionAsymmetry => [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f]).collect(),
+            Effect::FrictionAsymmetry => [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f, cur[1]]).collect(),
             _ => vec![cur],
         }
     }
@@ -246,11 +248,19 @@ impl Effect {
         let t0 = theta.first().copied().unwrap_or(0.0);
         match self {
             Effect::FrictionAsymmetry => {
+                // the retracting seal: static and Coulomb friction scaled
+                // together from the extending ones, its own viscous term
                 let ext = p.friction.extend();
                 let slip = t0.max(0.0);
+                let ratio = if ext.slip_n > 0.0 {
+                    ext.static_n / ext.slip_n
+                } else {
+                    1.0
+                };
                 p.friction.retract = Some(FrictionParams {
-                    static_n: slip + (ext.static_n - ext.slip_n).max(0.0),
+                    static_n: slip * ratio,
                     slip_n: slip,
+                    viscous_n_s_per_m: theta.get(1).copied().unwrap_or(ext.viscous_n_s_per_m).max(0.0),
                     ..ext
                 });
             }

@@ -67,6 +67,8 @@
 //! All quantities are SI (m, s, Pa, m³/s, N, V).
 
 pub mod effects;
+pub mod equation;
+pub mod external;
 pub mod fit;
 pub mod output;
 pub mod regime;
@@ -87,6 +89,7 @@ pub use regime::RegimeBin;
 pub use suite::{bench, BenchReport};
 
 use fit::Problem;
+pub use shoot::Method;
 use shoot::{gap_of, residuals, Prepared, ShootSettings};
 
 /// Message given when the data does not excite an effect.
@@ -96,7 +99,11 @@ pub const NOT_IDENTIFIABLE: &str = "not identifiable from this data";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrateOptions {
-    /// Length of one shooting window, s.
+    /// How model and measurement are compared: `equation-error` (default;
+    /// short windows started from the measured state, not defeated by
+    /// stick-slip) or `shooting` (windows simulated freely; smooth rigs only).
+    pub method: Method,
+    /// Length of one comparison window, s.
     pub window_s: f64,
     /// Fraction of the windows used for fitting; the rest validate.
     pub fit_fraction: f64,
@@ -113,7 +120,11 @@ pub struct CalibrateOptions {
     pub scale_x_m: f64,
     /// Pressure error scale, Pa.
     pub scale_p_pa: f64,
-    /// Use at most this much of the record (from its start), s; longer data only slows the fit.
+    /// Force error scale of the equation-error comparison, N.
+    pub scale_f_n: f64,
+    /// Spool position error scale of the equation-error comparison, m.
+    pub scale_sp_m: f64,
+    /// Use at most this much of the record (from its start), s; 0: the whole record.
     pub max_seconds: f64,
     /// Least record length accepted, s.
     pub min_seconds: f64,
@@ -158,14 +169,17 @@ pub struct CalibrateOptions {
 impl Default for CalibrateOptions {
     fn default() -> Self {
         CalibrateOptions {
-            window_s: 0.25,
+            method: Method::EquationError,
+            window_s: 0.05,
             fit_fraction: 0.7,
             split_block_windows: 10,
             substeps_per_sample: 4,
             compare_stride: 5,
             scale_x_m: 1.0e-3,
             scale_p_pa: 1.0e5,
-            max_seconds: 20.0,
+            scale_f_n: 100.0,
+            scale_sp_m: 1.0e-6,
+            max_seconds: 0.0,
             min_seconds: 3.0,
             candidates: Vec::new(),
             max_effects: 3,
@@ -176,9 +190,23 @@ impl Default for CalibrateOptions {
             max_iterations: 10,
             screen_keep: 3,
             keep_traces: true,
-            velocity_half_width: 3,
+            velocity_half_width: 1,
             min_form_t: 3.0,
             min_form_gap_ratio: 2.0,
+        }
+    }
+}
+
+impl CalibrateOptions {
+    /// The multiple-shooting comparison with its own defaults (0.25 s
+    /// windows, velocity from ±3 samples): for a smooth rig, where freely
+    /// simulated windows stay close to the measurement.
+    pub fn shooting() -> Self {
+        CalibrateOptions {
+            method: Method::Shooting,
+            window_s: 0.25,
+            velocity_half_width: 3,
+            ..CalibrateOptions::default()
         }
     }
 }
@@ -290,8 +318,14 @@ pub struct Gap {
     pub p1_pa: f64,
     /// Chamber-2 pressure, Pa.
     pub p2_pa: f64,
-    /// All three normalised by `scale_x_m` / `scale_p_pa`, combined RMS (dimensionless).
+    /// Every channel normalised by its scale, combined RMS (dimensionless).
     pub normalised: f64,
+    /// Force balance error (equation-error comparison), N.
+    #[serde(default)]
+    pub force_n: f64,
+    /// Spool position error (equation-error comparison with a measured spool), m.
+    #[serde(default)]
+    pub spool_m: f64,
 }
 
 /// One effect added to the model.
@@ -445,8 +479,41 @@ pub struct EffectFit {
     pub gap_reduction: f64,
 }
 
-/// Reads a measured CSV (dataset format); missing columns and unusable files are errors.
+/// Reads a measured CSV (dataset format; `.csv.gz` is decompressed on the
+/// fly); missing columns and unusable files are errors. Rows that cannot be
+/// used (NaN, out of range) are skipped by the reader; a gap they leave ends
+/// the stretch used.
 pub fn load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError> {
+    if path.extension().is_some_and(|e| e == "gz") {
+        let file = std::fs::File::open(path).map_err(|source| CalibrateError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let reader = std::io::BufReader::new(flate2::read::GzDecoder::new(file));
+        let mut r = dataset::CsvReader::new(reader, path, dataset::Limits::default())?;
+        let mut samples = Vec::new();
+        let mut first_issue = None;
+        let mut skipped = 0usize;
+        while let Some(row) = r.next_row() {
+            match row {
+                dataset::Row::Sample(s) | dataset::Row::AfterGap(s, _) => samples.push(s),
+                dataset::Row::Skipped(issue) => {
+                    skipped += 1;
+                    first_issue.get_or_insert(issue.to_string());
+                }
+            }
+        }
+        if samples.is_empty() {
+            return Err(CalibrateError::Dataset(dataset::DatasetError::NoUsableSamples {
+                path: path.to_path_buf(),
+                detail: match first_issue {
+                    Some(f) => format!("{skipped} rows skipped; first: {f}"),
+                    None => "the file has a header but no rows".to_string(),
+                },
+            }));
+        }
+        return Ok(samples);
+    }
     let ds = dataset::read_csv(path, dataset::Limits::default())?;
     Ok(ds.samples)
 }
@@ -522,7 +589,7 @@ fn setup(
     let mut end = 1;
     while end < n
         && measured[end].t_s - measured[end - 1].t_s < 1.5 * dt
-        && (end as f64) * dt < opts.max_seconds
+        && (opts.max_seconds <= 0.0 || (end as f64) * dt < opts.max_seconds)
     {
         end += 1;
     }
@@ -552,6 +619,9 @@ fn setup(
         });
     }
     let set = ShootSettings {
+        method: opts.method,
+        scale_f_n: opts.scale_f_n,
+        scale_sp_m: opts.scale_sp_m,
         substeps: opts.substeps_per_sample.max(1),
         stride: opts.compare_stride.max(1),
         scale_x_m: opts.scale_x_m,
@@ -562,12 +632,25 @@ fn setup(
 
 fn gap_on(p: &ActuatorParams, d: &Prepared, windows: &[(usize, usize)], set: &ShootSettings) -> Gap {
     let (r, _) = residuals(p, d, windows, set);
+    if set.method == Method::EquationError {
+        let (ch, j) = equation::gap_of(&r, d, set);
+        return Gap {
+            x_m: 0.0,
+            p1_pa: ch[0],
+            p2_pa: ch[1],
+            normalised: j,
+            force_n: ch[2],
+            spool_m: ch[3],
+        };
+    }
     let (ch, j) = gap_of(&r, set);
     Gap {
         x_m: ch[0],
         p1_pa: ch[1],
         p2_pa: ch[2],
         normalised: j,
+        force_n: 0.0,
+        spool_m: 0.0,
     }
 }
 
@@ -853,6 +936,12 @@ pub fn run(
 /// Per-window mean squared normalised residual of model `p` over every window of the record.
 fn per_window_cost(p: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Vec<f64> {
     let (r, idx) = residuals(p, d, &d.windows, set);
+    if set.method == Method::EquationError {
+        return r
+            .chunks_exact(equation::per_window(d))
+            .map(|c| c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64)
+            .collect();
+    }
     let mut out = vec![(0.0, 0usize); d.windows.len()];
     let mut w = 0;
     for (k, i) in idx.iter().enumerate() {

@@ -1,5 +1,6 @@
-//! Writing the results: `calibration.json`, `model.toml` (a `[model]` table
-//! loadable with `leakwatch --config`), `report.md` and its PNG plots.
+//! Writing the results: `calibration.json`, `model.toml` (a leakwatch
+//! configuration with only its `[model]` table: `leakwatch replay|run|calibrate
+//! --config model.toml`), `report.md` and its PNG plots.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -33,8 +34,14 @@ pub fn model_toml(params: &ActuatorParams) -> Result<String, CalibrateError> {
     let body = toml::to_string(&ModelFile { model: params })
         .map_err(|e| CalibrateError::Serialize(e.to_string()))?;
     Ok(format!(
-        "# Written by `leakwatch calibrate`: the calibrated actuator model.\n\
-         # Load it with `leakwatch --config model.toml`; other sections keep their defaults.\n\n{body}"
+        "# Written by `leakwatch calibrate`: the calibrated actuator model, a leakwatch\n\
+         # configuration file with only its [model] table (SI units); every other\n\
+         # section keeps its default. Use it as it is:\n\
+         #   leakwatch replay MEASURED.csv --config model.toml --out replay-out\n\
+         #   leakwatch run --config model.toml\n\
+         #   leakwatch calibrate MEASURED.csv --config model.toml --out cal-out   (calibrate further)\n\
+         # (the stage binaries take the same `--config model.toml`), or paste the [model]\n\
+         # table into your own configuration file in place of its [model].\n\n{body}"
     ))
 }
 
@@ -361,7 +368,8 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
     }
     let _ = writeln!(
         s,
-        "The calibrated model is in `model.toml` (`leakwatch --config model.toml`); every number is in `calibration.json`."
+        "The calibrated model is in `model.toml` (`leakwatch replay MEASURED.csv --config model.toml --out DIR`, \
+         or `leakwatch run --config model.toml`); every number is in `calibration.json`."
     );
     s
 }

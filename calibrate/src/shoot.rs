@@ -120,6 +120,11 @@ impl Prepared {
         &self.val
     }
 
+    /// Whether the spool position was measured on every sample.
+    pub fn has_spool(&self) -> bool {
+        !self.x_sp_m.is_empty() && self.x_sp_m.iter().all(|v| v.is_finite())
+    }
+
     /// Measured stroke range (min, max), m.
     pub fn x_range_m(&self) -> (f64, f64) {
         let lo = self.x_m.iter().copied().fold(f64::INFINITY, f64::min);
@@ -128,9 +133,27 @@ impl Prepared {
     }
 }
 
+/// How model and measurement are compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Equation error over short windows started from the measured state
+    /// ([`crate::equation`]): not defeated by stick-slip (the default).
+    EquationError,
+    /// Multiple shooting: each window simulated from its measured start
+    /// (works on a smooth rig; a stick-slipping rod diverges within tens of ms).
+    Shooting,
+}
+
 /// How the windows are simulated and compared.
 #[derive(Debug, Clone, Copy)]
 pub struct ShootSettings {
+    /// The comparison.
+    pub method: Method,
+    /// Force error scale (equation error), N.
+    pub scale_f_n: f64,
+    /// Spool position error scale (equation error), m.
+    pub scale_sp_m: f64,
     /// RK4 sub-steps per sample period.
     pub substeps: u32,
     /// Compare every `stride`-th sample of a window.
@@ -204,6 +227,11 @@ pub fn residuals(
     windows: &[(usize, usize)],
     set: &ShootSettings,
 ) -> (Vec<f64>, Vec<usize>) {
+    if set.method == Method::EquationError {
+        let r = crate::equation::residuals(p, d, windows, set);
+        let idx = windows.iter().map(|w| w.0).collect();
+        return (r, idx);
+    }
     let leaks = LeakSet::from_params(p);
     let spool = spool_trajectory(p, d, set.substeps);
     let mut r = Vec::new();

@@ -51,7 +51,7 @@ pub fn cases() -> Vec<SuiteCase> {
             "friction-asymmetry",
             "open-loop-sine",
             11,
-            vec![(Effect::FrictionAsymmetry, vec![1600.0])],
+            vec![(Effect::FrictionAsymmetry, vec![1600.0, 385.0])],
         ),
         c(
             "spool-bias",
@@ -113,7 +113,7 @@ pub fn cases() -> Vec<SuiteCase> {
             20,
             vec![
                 (Effect::LeakExt2, vec![3.0e-9]),
-                (Effect::FrictionAsymmetry, vec![1600.0]),
+                (Effect::FrictionAsymmetry, vec![1600.0, 385.0]),
             ],
         ),
         c(
