@@ -11,8 +11,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Effect {
-    /// `friction-asymmetry`: the retracting seal friction differs from the extending one.
+    /// `friction-asymmetry`: the retracting seal's static and Coulomb friction
+    /// differ from the extending one's (scaled together), viscous unchanged.
     FrictionAsymmetry,
+    /// `friction-asymmetry` with its own retracting viscous coefficient too.
+    FrictionAsymmetryViscous,
     /// `spool-bias`: the spool sits off centre at zero command.
     SpoolBias,
     /// `spring-load`: a spring in front of the rod (stiffness and contact position).
@@ -39,8 +42,9 @@ const LEAK_RESOLUTION: f64 = 3.0e-10;
 
 impl Effect {
     /// Every candidate, in the library's order.
-    pub const ALL: [Effect; 10] = [
+    pub const ALL: [Effect; 11] = [
         Effect::FrictionAsymmetry,
+        Effect::FrictionAsymmetryViscous,
         Effect::SpoolBias,
         Effect::SpringLoad,
         Effect::BulkModulus,
@@ -68,7 +72,7 @@ impl Effect {
     /// The effect's name (`bulk-modulus` for both of its forms).
     pub fn name(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "friction-asymmetry",
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => "friction-asymmetry",
             Effect::SpoolBias => "spool-bias",
             Effect::SpringLoad => "spring-load",
             Effect::BulkModulus | Effect::EntrainedAir => "bulk-modulus",
@@ -83,8 +87,9 @@ impl Effect {
     /// Which form of the named effect this is, for reports.
     pub fn form(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => {
-                "retracting friction differs (Coulomb and static scaled together, viscous)"
+            Effect::FrictionAsymmetry => "retracting static and Coulomb friction differ (scaled together)",
+            Effect::FrictionAsymmetryViscous => {
+                "retracting static, Coulomb (scaled together) and viscous friction differ"
             }
             Effect::SpoolBias => "spool null bias",
             Effect::SpringLoad => "spring with contact position",
@@ -107,7 +112,9 @@ impl Effect {
     /// The residual signature the effect leaves, for reports.
     pub fn signature(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "Δp error of one sign while retracting only; none while extending",
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => {
+                "Δp error of one sign while retracting only; none while extending"
+            }
             Effect::SpoolBias => "position drift and p1/p2 offsets of opposite sign near zero command",
             Effect::SpringLoad => "p1 − p2 error growing with stroke beyond a contact position",
             Effect::BulkModulus | Effect::EntrainedAir => {
@@ -124,7 +131,10 @@ impl Effect {
     /// Names of the parameters, as dotted field paths of `ActuatorParams`.
     pub fn parameter_names(self) -> &'static [&'static str] {
         match self {
-            Effect::FrictionAsymmetry => &["friction.retract.slip_n", "friction.retract.viscous_n_s_per_m"],
+            Effect::FrictionAsymmetry => &["friction.retract.slip_n"],
+            Effect::FrictionAsymmetryViscous => {
+                &["friction.retract.slip_n", "friction.retract.viscous_n_s_per_m"]
+            }
             Effect::SpoolBias => &["spool_null_bias_m"],
             Effect::SpringLoad => &["load.stiffness_n_per_m", "load.contact_m"],
             Effect::BulkModulus => &["bulk_modulus_pa"],
@@ -141,7 +151,8 @@ impl Effect {
     /// fit's scaling unit and the yardstick of identifiability), SI.
     pub fn resolution(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
-            Effect::FrictionAsymmetry => vec![
+            Effect::FrictionAsymmetry => vec![0.1 * base.friction.slip_n.max(100.0)],
+            Effect::FrictionAsymmetryViscous => vec![
                 0.1 * base.friction.slip_n.max(100.0),
                 0.1 * base.friction.viscous_n_s_per_m.max(100.0),
             ],
@@ -163,7 +174,8 @@ impl Effect {
     /// Physical bounds of each parameter, SI.
     pub fn bounds(self, base: &ActuatorParams) -> Vec<(f64, f64)> {
         match self {
-            Effect::FrictionAsymmetry => vec![(0.0, 2.0e4), (0.0, 1.0e4)],
+            Effect::FrictionAsymmetry => vec![(0.0, 2.0e4)],
+            Effect::FrictionAsymmetryViscous => vec![(0.0, 2.0e4), (0.0, 1.0e4)],
             Effect::SpoolBias => {
                 let b = 5.0 * base.spool_gain_m_per_v;
                 vec![(-b, b)]
@@ -181,7 +193,8 @@ impl Effect {
     /// except where [`Effect::starting_points`] says otherwise), SI.
     pub fn read(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
-            Effect::FrictionAsymmetry => {
+            Effect::FrictionAsymmetry => vec![base.friction.for_direction(-1.0).slip_n],
+            Effect::FrictionAsymmetryViscous => {
                 let r = base.friction.for_direction(-1.0);
                 vec![r.slip_n, r.viscous_n_s_per_m]
             }
@@ -226,7 +239,10 @@ impl Effect {
                 .iter()
                 .map(|a| vec![*a])
                 .collect(),
-            Effect::FrictionAsymmetry => [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f, cur[1]]).collect(),
+            Effect::FrictionAsymmetry => [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f]).collect(),
+            Effect::FrictionAsymmetryViscous => {
+                [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f, cur[1]]).collect()
+            }
             _ => vec![cur],
         }
     }
@@ -247,7 +263,7 @@ impl Effect {
         let mut p = base.clone();
         let t0 = theta.first().copied().unwrap_or(0.0);
         match self {
-            Effect::FrictionAsymmetry => {
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => {
                 // the retracting seal: static and Coulomb friction scaled
                 // together from the extending ones, its own viscous term
                 let ext = p.friction.extend();
@@ -260,7 +276,13 @@ impl Effect {
                 p.friction.retract = Some(FrictionParams {
                     static_n: slip * ratio,
                     slip_n: slip,
-                    viscous_n_s_per_m: theta.get(1).copied().unwrap_or(ext.viscous_n_s_per_m).max(0.0),
+                    viscous_n_s_per_m: match self {
+                        Effect::FrictionAsymmetryViscous => {
+                            theta.get(1).copied().unwrap_or(ext.viscous_n_s_per_m)
+                        }
+                        _ => p.friction.for_direction(-1.0).viscous_n_s_per_m,
+                    }
+                    .max(0.0),
                     ..ext
                 });
             }

@@ -184,6 +184,7 @@ pub fn run_dir_case(case: &Path, model: &ActuatorParams, opts: &CalibrateOptions
         error: None,
         caveats: Vec::new(),
         effective_bulk_modulus_error: None,
+        not_identifiable: Vec::new(),
     };
     let truth = match std::fs::read_to_string(case.join("truth.json"))
         .map_err(|e| e.to_string())
@@ -239,8 +240,16 @@ pub fn score(res: &mut CaseResult, truth: &Truth, cal: &Calibration) {
     };
     res.false_claims = res.named.iter().filter(|n| !hidden.contains(n)).count();
     res.all_found = res.false_claims == 0 && hidden.iter().all(|h| res.named.contains(h));
+    res.not_identifiable = cal
+        .effects
+        .iter()
+        .flat_map(|e| e.not_identifiable.iter().cloned())
+        .collect();
     let mut max_err: f64 = 0.0;
     for tp in &truth.params {
+        if res.not_identifiable.iter().any(|n| n.starts_with(&tp.name)) {
+            continue;
+        }
         let f = fitted(cal, &tp.name);
         let rel = ((f - tp.value) / tp.value).abs();
         let rel = if rel.is_nan() { f64::INFINITY } else { rel };

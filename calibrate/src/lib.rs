@@ -355,6 +355,10 @@ pub struct FoundEffect {
     /// holds near the pressures visited, not beyond.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub caveat: Option<String>,
+    /// Parameters of the effect this data cannot pin down, each with why
+    /// (contains [`NOT_IDENTIFIABLE`]); they keep the model's value.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_identifiable: Vec<String>,
 }
 
 /// How one candidate fared in one round of the selection.
@@ -869,10 +873,48 @@ pub fn run(
             gap_before: gap_cur.normalised,
             candidates: cands,
         });
-        let Some(i) = chosen else { break };
+        let Some(mut i) = chosen else { break };
+        // a richer form (more parameters) is kept only when the data tell it
+        // from the simpler one; otherwise the simpler one, and the extra
+        // parameters are stated as not identifiable
+        let mut not_identifiable = Vec::new();
+        if let Some((j, why)) = prefer_simpler(i, &scored, &current, d, &s.set, opts) {
+            let extra: Vec<&str> = scored[i]
+                .effect
+                .parameter_names()
+                .iter()
+                .filter(|n| !scored[j].effect.parameter_names().contains(n))
+                .copied()
+                .collect();
+            for n in extra {
+                not_identifiable.push(format!("{n}: {NOT_IDENTIFIABLE} ({why})"));
+            }
+            i = j;
+        } else if let Some(rich) = scored.iter().find(|o| {
+            o.effect.name() == scored[i].effect.name()
+                && o.effect.parameter_names().len() > scored[i].effect.parameter_names().len()
+        }) {
+            // the simpler form explained the record better than the richer one
+            for n in rich
+                .effect
+                .parameter_names()
+                .iter()
+                .filter(|n| !scored[i].effect.parameter_names().contains(n))
+            {
+                not_identifiable.push(format!(
+                    "{n}: {NOT_IDENTIFIABLE} (fitting it does not lower the validation gap: {:.3} with it, \
+                     {:.3} without); it keeps the model's value",
+                    rich.val.normalised, scored[i].val.normalised
+                ));
+            }
+        }
         let c = &scored[i];
         let r = red(c);
-        let caveat = form_caveat(c, &scored, &current, d, &s.set, opts);
+        let caveat = if c.effect.name() == "friction-asymmetry" {
+            None
+        } else {
+            form_caveat(c, &scored, &current, d, &s.set, opts)
+        };
         current = c.effect.apply(&current, &c.theta);
         fit_cost_cur = c.fit_cost;
         gap_cur = c.val;
@@ -886,6 +928,7 @@ pub fn run(
             gap_after: gap_cur,
             signature: c.effect.signature().to_string(),
             caveat,
+            not_identifiable,
         });
         let name = c.effect.name();
         pool.retain(|e| e.name() != name);
@@ -957,6 +1000,62 @@ fn per_window_cost(p: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Vec
         .filter(|(_, n)| *n > 0)
         .map(|(s, n)| s / n as f64)
         .collect()
+}
+
+/// Least relative reduction of the validation gap a richer form of an effect
+/// must add over its simpler form to be kept.
+pub const MIN_RICHER_FORM_GAIN: f64 = 0.05;
+
+/// For a chosen candidate with a simpler form of the same effect (fewer
+/// parameters, e.g. `friction-asymmetry` without its own viscous term):
+/// the simpler one's index and why, unless the richer form lowers the
+/// validation gap by at least [`MIN_RICHER_FORM_GAIN`] and beats it over
+/// every window (paired t ≥ `min_form_t`).
+fn prefer_simpler(
+    i: usize,
+    scored: &[Scored],
+    base: &ActuatorParams,
+    d: &Prepared,
+    set: &ShootSettings,
+    opts: &CalibrateOptions,
+) -> Option<(usize, String)> {
+    let c = &scored[i];
+    let np = c.effect.parameter_names().len();
+    let (j, simple) = scored.iter().enumerate().find(|(_, o)| {
+        o.effect != c.effect
+            && o.effect.name() == c.effect.name()
+            && o.effect.parameter_names().len() < np
+            && !o.screened_out
+            && o.identifiable
+    })?;
+    let gain = 1.0 - c.val.normalised / simple.val.normalised.max(1e-300);
+    let a = per_window_cost(&c.effect.apply(base, &c.theta), d, set);
+    let b = per_window_cost(&simple.effect.apply(base, &simple.theta), d, set);
+    let t = paired_t(&b, &a);
+    if gain >= MIN_RICHER_FORM_GAIN && t >= opts.min_form_t {
+        return None;
+    }
+    Some((
+        j,
+        format!(
+            "fitting it lowers the validation gap by only {:.1} % (needs {:.0} %; paired t {t:.1} over every window); \
+             it keeps the model's value",
+            100.0 * gain,
+            100.0 * MIN_RICHER_FORM_GAIN
+        ),
+    ))
+}
+
+/// Paired t statistic of `b − a` (0 when fewer than three pairs).
+fn paired_t(b: &[f64], a: &[f64]) -> f64 {
+    if a.len() != b.len() || a.len() < 3 {
+        return 0.0;
+    }
+    let n = a.len() as f64;
+    let diff: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
+    let mean = diff.iter().sum::<f64>() / n;
+    let var = diff.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    mean / (var / n).sqrt().max(1e-300)
 }
 
 /// Whether the data tell the chosen form of a multi-form effect from its

@@ -127,7 +127,7 @@ fn every_effect_under_every_input() {
         for sc in MATRIX_SCENARIOS {
             assert!(
                 list.iter()
-                    .any(|c| c.scenario == sc && c.hidden.len() == 1 && c.hidden[0].0 == e),
+                    .any(|c| c.scenario == sc && c.hidden.len() == 1 && c.hidden[0].0.name() == e.name()),
                 "no matrix case for {e:?} under {sc}"
             );
         }
