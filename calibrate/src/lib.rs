@@ -74,6 +74,7 @@ pub mod output;
 pub mod regime;
 pub mod shoot;
 pub mod suite;
+pub mod units;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -243,6 +244,13 @@ pub enum CalibrateError {
     },
     /// The model (given directly) is not a valid actuator.
     InvalidModel(model::params::InvalidParam),
+    /// A channel never changes over the record (a disconnected transducer?).
+    FlatChannel {
+        /// The column.
+        column: &'static str,
+        /// Its constant value, SI.
+        value: f64,
+    },
     /// The effect name is not in the library.
     UnknownEffect(String),
     /// The data does not excite the effect enough to fit it.
@@ -286,6 +294,11 @@ impl std::fmt::Display for CalibrateError {
                 write!(f, "model file {}: {message}", path.display())
             }
             CalibrateError::InvalidModel(e) => write!(f, "model: {e}"),
+            CalibrateError::FlatChannel { column, value } => write!(
+                f,
+                "column `{column}` is flat ({value:.6e} throughout): a disconnected or broken channel; \
+                 nothing can be identified from it"
+            ),
             CalibrateError::UnknownEffect(n) => write!(
                 f,
                 "unknown effect `{n}`: expected one of {}",
@@ -359,6 +372,9 @@ pub struct FoundEffect {
     /// (contains [`NOT_IDENTIFIABLE`]); they keep the model's value.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub not_identifiable: Vec<String>,
+    /// The effect in engineering units (N, µm, kN/m, MPa, L/min, Hz, ...), one line per quantity.
+    #[serde(default)]
+    pub engineering: Vec<String>,
 }
 
 /// How one candidate fared in one round of the selection.
@@ -453,6 +469,9 @@ pub struct Calibration {
     /// Traces for plots (empty unless `keep_traces`).
     #[serde(skip)]
     pub traces: Traces,
+    /// What the user should know about the data used (gaps, stretch used, no motion).
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Wall time, s.
     pub elapsed_s: f64,
 }
@@ -547,7 +566,15 @@ struct Setup {
     data: Prepared,
     set: ShootSettings,
     seconds: f64,
+    warnings: Vec<String>,
 }
+
+/// A pressure channel whose whole range is within this is taken as flat (a
+/// disconnected transducer), Pa.
+pub const FLAT_PRESSURE_PA: f64 = 1.0e3;
+
+/// Below this stroke the record is said not to excite effects that need motion, m.
+pub const MIN_STROKE_M: f64 = 1.0e-3;
 
 fn setup(
     measured: &[Sample],
@@ -589,16 +616,61 @@ fn setup(
             "time does not increase from one sample to the next".into(),
         ));
     }
-    // Use the leading stretch without gaps, at most max_seconds.
-    let mut end = 1;
-    while end < n
-        && measured[end].t_s - measured[end - 1].t_s < 1.5 * dt
-        && (opts.max_seconds <= 0.0 || (end as f64) * dt < opts.max_seconds)
-    {
-        end += 1;
+    let mut warnings = Vec::new();
+    // The longest stretch without gaps (rows the reader skipped, NaN, ...), at most max_seconds.
+    let (mut best, mut start) = ((0usize, 1usize), 0usize);
+    for i in 1..=n {
+        if i == n || measured[i].t_s - measured[i - 1].t_s >= 1.5 * dt {
+            if i - start > best.1 - best.0 {
+                best = (start, i);
+            }
+            start = i;
+        }
     }
-    let used = &measured[..end];
+    let (first, mut end) = best;
+    if best.1 - best.0 < n {
+        warnings.push(format!(
+            "the record has gaps in time (rows skipped or missing); the longest stretch without one is used, \
+             t = {:.3} .. {:.3} s ({} of {} samples)",
+            measured[first].t_s,
+            measured[end - 1].t_s,
+            end - first,
+            n
+        ));
+    }
+    if opts.max_seconds > 0.0 && ((end - first) as f64) * dt > opts.max_seconds {
+        end = first + (opts.max_seconds / dt).round() as usize;
+        warnings.push(format!(
+            "only the first {:.1} s of the stretch are used (max_seconds)",
+            opts.max_seconds
+        ));
+    }
+    let used = &measured[first..end];
+    let end = end - first;
     let seconds = end as f64 * dt;
+    // A channel that never changes is a disconnected or broken transducer.
+    for (name, get) in [
+        ("p1", (|s: &Sample| s.p1_pa) as fn(&Sample) -> f64),
+        ("p2", |s: &Sample| s.p2_pa),
+    ] {
+        let lo = used.iter().map(get).fold(f64::INFINITY, f64::min);
+        let hi = used.iter().map(get).fold(f64::NEG_INFINITY, f64::max);
+        if hi - lo <= FLAT_PRESSURE_PA {
+            return Err(CalibrateError::FlatChannel {
+                column: name,
+                value: lo,
+            });
+        }
+    }
+    let x_lo = used.iter().map(|s| s.x_m).fold(f64::INFINITY, f64::min);
+    let x_hi = used.iter().map(|s| s.x_m).fold(f64::NEG_INFINITY, f64::max);
+    if x_hi - x_lo < MIN_STROKE_M {
+        warnings.push(format!(
+            "the rod moved only {:.3} mm: friction, a spring and anything that needs motion {NOT_IDENTIFIABLE} \
+             (move the rod over some centimetres, e.g. an open-loop sine of 3 V at 1 Hz)",
+            (x_hi - x_lo) * 1e3
+        ));
+    }
     if seconds < opts.min_seconds {
         return Err(CalibrateError::TooLittleData {
             samples: end,
@@ -631,7 +703,12 @@ fn setup(
         scale_x_m: opts.scale_x_m,
         scale_p_pa: opts.scale_p_pa,
     };
-    Ok(Setup { data, set, seconds })
+    Ok(Setup {
+        data,
+        set,
+        seconds,
+        warnings,
+    })
 }
 
 fn gap_on(p: &ActuatorParams, d: &Prepared, windows: &[(usize, usize)], set: &ShootSettings) -> Gap {
@@ -799,8 +876,26 @@ pub fn run(
     model: &ActuatorParams,
     opts: &CalibrateOptions,
 ) -> Result<Calibration, CalibrateError> {
+    run_with_progress(measured, model, opts, &|_| {})
+}
+
+/// [`run`], telling `progress` what it is doing (one line per step: the
+/// data used, each round of the selection and its verdict).
+pub fn run_with_progress(
+    measured: &[Sample],
+    model: &ActuatorParams,
+    opts: &CalibrateOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Calibration, CalibrateError> {
     let t0 = Instant::now();
     let s = setup(measured, model, opts)?;
+    progress(&format!(
+        "using {:.1} s ({} samples): {} windows fit, {} validate",
+        s.seconds,
+        s.data.t_s.len(),
+        s.data.fit_windows().len(),
+        s.data.val_windows().len()
+    ));
     let d = &s.data;
     let mut pool: Vec<Effect> = if opts.candidates.is_empty() {
         Effect::ALL.to_vec()
@@ -824,6 +919,13 @@ pub fn run(
     let mut rounds = Vec::new();
     let ne = n_eff(d);
     while effects.len() < opts.max_effects && !pool.is_empty() {
+        progress(&format!(
+            "round {}: fitting {} candidates (validation gap {:.3}) ... {:.1} s",
+            rounds.len() + 1,
+            pool.len(),
+            gap_cur.normalised,
+            t0.elapsed().as_secs_f64()
+        ));
         let mut scored = screen_and_fit(&pool, &current, &s, opts, opts.screen_keep.max(1));
         let red = |x: &Scored| 1.0 - x.val.normalised / gap_cur.normalised.max(1e-300);
         scored.sort_by(|a, b| red(b).total_cmp(&red(a)));
@@ -873,7 +975,10 @@ pub fn run(
             gap_before: gap_cur.normalised,
             candidates: cands,
         });
-        let Some(mut i) = chosen else { break };
+        let Some(mut i) = chosen else {
+            progress("nothing else explains a significant part of the gap");
+            break;
+        };
         // a richer form (more parameters) is kept only when the data tell it
         // from the simpler one; otherwise the simpler one, and the extra
         // parameters are stated as not identifiable
@@ -915,7 +1020,9 @@ pub fn run(
         } else {
             form_caveat(c, &scored, &current, d, &s.set, opts)
         };
+        let previous = current.clone();
         current = c.effect.apply(&current, &c.theta);
+        let engineering = units::describe(c.effect.name(), &previous, &current, d.mean_pressures_pa());
         fit_cost_cur = c.fit_cost;
         gap_cur = c.val;
         effects.push(FoundEffect {
@@ -929,8 +1036,10 @@ pub fn run(
             signature: c.effect.signature().to_string(),
             caveat,
             not_identifiable,
+            engineering,
         });
         let name = c.effect.name();
+        progress(&format!("added {name}: the gap shrinks by {:.0} %", 100.0 * r));
         pool.retain(|e| e.name() != name);
     }
     let breakdown_after = regime::breakdown(&current, d, d.val_windows(), &s.set);
@@ -972,6 +1081,7 @@ pub fn run(
         model_before: model.clone(),
         model_after: current,
         traces,
+        warnings: s.warnings.clone(),
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
 }

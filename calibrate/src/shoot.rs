@@ -120,6 +120,15 @@ impl Prepared {
         &self.val
     }
 
+    /// Mean measured chamber pressures [p1, p2], Pa.
+    pub fn mean_pressures_pa(&self) -> [f64; 2] {
+        let n = self.p1_pa.len().max(1) as f64;
+        [
+            self.p1_pa.iter().sum::<f64>() / n,
+            self.p2_pa.iter().sum::<f64>() / n,
+        ]
+    }
+
     /// Whether the spool position was measured on every sample.
     pub fn has_spool(&self) -> bool {
         !self.x_sp_m.is_empty() && self.x_sp_m.iter().all(|v| v.is_finite())
