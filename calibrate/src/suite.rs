@@ -467,6 +467,15 @@ pub struct BenchReport {
     pub gap_shrink_70pct_rate: f64,
     /// Effects claimed on the clean controls (target 0).
     pub clean_false_claims: usize,
+    /// Median relative shrink of the validation gap over the hidden-effect cases.
+    #[serde(default)]
+    pub median_gap_shrink: f64,
+    /// Hidden-effect cases whose first named effect is right, and their number.
+    #[serde(default)]
+    pub right_first: [usize; 2],
+    /// Clean controls on which nothing was named, and their number.
+    #[serde(default)]
+    pub controls_quiet: [usize; 2],
     /// Total wall time, s.
     pub total_s: f64,
 }
@@ -526,7 +535,30 @@ pub fn summarise(rows: Vec<CaseResult>, total_s: f64) -> BenchReport {
         effect_rows.len() as f64
     };
     let frac = |f: &dyn Fn(&CaseResult) -> bool| effect_rows.iter().filter(|r| f(r)).count() as f64 / n;
+    let mut shrinks: Vec<f64> = effect_rows
+        .iter()
+        .map(|r| if r.gap_shrink.is_nan() { 0.0 } else { r.gap_shrink })
+        .collect();
+    shrinks.sort_by(f64::total_cmp);
+    let median_gap_shrink = match shrinks.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => shrinks[n / 2],
+        n => 0.5 * (shrinks[n / 2 - 1] + shrinks[n / 2]),
+    };
+    let controls: Vec<&CaseResult> = rows.iter().filter(|r| r.hidden.is_empty()).collect();
     BenchReport {
+        median_gap_shrink,
+        right_first: [
+            effect_rows.iter().filter(|r| r.right_first).count(),
+            effect_rows.len(),
+        ],
+        controls_quiet: [
+            controls
+                .iter()
+                .filter(|r| r.named.is_empty() && r.error.is_none())
+                .count(),
+            controls.len(),
+        ],
         right_named_rate: frac(&|r| r.right_first),
         params_within_10pct_rate: frac(&|r| r.max_parameter_error <= 0.10),
         gap_shrink_70pct_rate: frac(&|r| r.gap_shrink >= 0.70),
@@ -611,8 +643,34 @@ impl BenchReport {
                 s.push_str(&format!("- {}{eff}: {}\n", r.case, r.caveats.join("; ")));
             }
         }
+        s.push_str("\nParameters (fitted vs truth, SI) and what was stated not identifiable:\n\n");
+        for r in self.cases.iter().filter(|r| !r.hidden.is_empty()) {
+            let mut parts: Vec<String> = r
+                .parameters
+                .iter()
+                .map(|p| {
+                    format!(
+                        "{} {:.4e} vs {:.4e} ({:.1} %)",
+                        p.parameter,
+                        p.fitted,
+                        p.truth,
+                        100.0 * p.relative_error
+                    )
+                })
+                .collect();
+            parts.extend(r.not_identifiable.iter().cloned());
+            s.push_str(&format!("- {}: {}\n", r.case, parts.join("; ")));
+        }
         s.push_str(&format!(
-            "\nRight effect named first: {:.0} % (target ≥ 95 %); parameters within 10 %: {:.0} %; \
+            "\nRight effect named first: {} of {}; clean controls quiet: {} of {}; median gap shrink {:.0} %.\n",
+            self.right_first[0],
+            self.right_first[1],
+            self.controls_quiet[0],
+            self.controls_quiet[1],
+            100.0 * self.median_gap_shrink
+        ));
+        s.push_str(&format!(
+            "Right effect named first: {:.0} % (target ≥ 95 %); parameters within 10 %: {:.0} %; \
              gap shrink ≥ 70 %: {:.0} %; effects claimed on clean data: {} (target 0); total {:.1} s.\n",
             100.0 * self.right_named_rate,
             100.0 * self.params_within_10pct_rate,
