@@ -617,34 +617,30 @@ fn setup(
         ));
     }
     let mut warnings = Vec::new();
-    // The longest stretch without gaps (rows the reader skipped, NaN, ...), at most max_seconds.
-    let (mut best, mut start) = ((0usize, 1usize), 0usize);
-    for i in 1..=n {
-        if i == n || measured[i].t_s - measured[i - 1].t_s >= 1.5 * dt {
-            if i - start > best.1 - best.0 {
-                best = (start, i);
-            }
-            start = i;
+    // Every sample (up to max_seconds); gaps in time (rows the reader skipped:
+    // NaN, out of range, ...) are left out of the comparison windows.
+    let mut end = n;
+    if opts.max_seconds > 0.0 {
+        let t_end = measured[0].t_s + opts.max_seconds;
+        end = measured.iter().position(|s| s.t_s >= t_end).unwrap_or(n);
+        if end < n {
+            warnings.push(format!(
+                "only the first {:.1} s of the record are used (max_seconds)",
+                opts.max_seconds
+            ));
         }
     }
-    let (first, mut end) = best;
-    if best.1 - best.0 < n {
+    let gaps = measured[..end]
+        .windows(2)
+        .filter(|w| w[1].t_s - w[0].t_s >= 1.5 * dt)
+        .count();
+    if gaps > 0 {
         warnings.push(format!(
-            "the record has gaps in time (rows skipped or missing); the longest stretch without one is used, \
-             t = {:.3} .. {:.3} s ({} of {} samples)",
-            measured[first].t_s,
-            measured[end - 1].t_s,
-            end - first,
-            n
+            "the record has {gaps} gap(s) in time (rows skipped or missing); comparison windows that \
+             straddle one are left out"
         ));
     }
-    if opts.max_seconds > 0.0 && ((end - first) as f64) * dt > opts.max_seconds {
-        end = first + (opts.max_seconds / dt).round() as usize;
-        warnings.push(format!(
-            "only the first {:.1} s of the stretch are used (max_seconds)",
-            opts.max_seconds
-        ));
-    }
+    let first = 0;
     let used = &measured[first..end];
     let end = end - first;
     let seconds = end as f64 * dt;

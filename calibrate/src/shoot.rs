@@ -72,11 +72,24 @@ impl Prepared {
             }
         }
         let w = window_samples.max(2);
+        // gaps in time (missing rows): no window (with its velocity margin) straddles one
+        let gap_after: Vec<bool> = samples
+            .windows(2)
+            .map(|p| p[1].t_s - p[0].t_s >= 1.5 * dt_s)
+            .collect();
         let mut windows = Vec::new();
         let mut s = vel_half;
         while s + w <= n.saturating_sub(vel_half) {
-            windows.push((s, s + w));
-            s += w;
+            let lo = s - vel_half;
+            let hi = (s + w + vel_half).min(n - 1);
+            match (lo..hi).rev().find(|&k| gap_after[k]) {
+                // restart just after the gap
+                Some(k) => s = k + 1 + vel_half,
+                None => {
+                    windows.push((s, s + w));
+                    s += w;
+                }
+            }
         }
         let (mut fit, mut val) = (Vec::new(), Vec::new());
         if block == 0 {
@@ -183,9 +196,14 @@ pub fn spool_trajectory(p: &ActuatorParams, d: &Prepared, substeps: u32) -> Vec<
     let b = p.spool_null_bias_m;
     let mut y = [b + k * d.u_v.first().copied().unwrap_or(0.0), 0.0];
     let h = d.dt_s / substeps as f64;
-    for &u in &d.u_v {
+    for (i, &u) in d.u_v.iter().enumerate() {
         out.push(y);
-        for _ in 0..substeps {
+        // a missing row: the command held over the whole interval
+        let periods = match d.t_s.get(i + 1) {
+            Some(t) => ((t - d.t_s[i]) / d.dt_s).round().clamp(1.0, 1.0e6) as u32,
+            None => 1,
+        };
+        for _ in 0..substeps * periods {
             y = rk4_step(&y, h, |s| {
                 [
                     s[1],

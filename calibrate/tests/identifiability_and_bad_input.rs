@@ -297,3 +297,60 @@ fn model_files_that_do_not_load_are_named() {
     std::fs::write(&p, "[sim]\nsubsteps_per_sample = 20\n").expect("write");
     assert_eq!(load_model(&p).expect("loads"), model::ActuatorParams::default());
 }
+
+#[test]
+fn a_held_rod_is_said_not_to_excite_motion() {
+    let cal = run(&held_rod(), &nominal_model(), &CalibrateOptions::default()).expect("runs");
+    assert!(cal.effects.is_empty(), "{:?}", cal.names());
+    assert!(
+        cal.warnings
+            .iter()
+            .any(|w| w.contains("the rod moved only") && w.contains(NOT_IDENTIFIABLE)),
+        "{:?}",
+        cal.warnings
+    );
+}
+
+#[test]
+fn a_flat_pressure_channel_is_refused() {
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "clean open-loop-sine")
+        .expect("case");
+    let data: Vec<Sample> = calibrate::suite::generate(&case)
+        .into_iter()
+        .map(|s| Sample { p2_pa: 6.9e6, ..s })
+        .collect();
+    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused");
+    assert!(
+        matches!(e, CalibrateError::FlatChannel { column: "p2", .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("column `p2` is flat"), "{e}");
+}
+
+#[test]
+fn rows_missing_here_and_there_leave_the_rest_usable() {
+    // a leak record with every 500th row dropped (what the reader does with
+    // NaN rows): windows straddling a gap are left out, the leak is still
+    // named and sized, and the gaps are reported
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "leak-ext1")
+        .expect("case");
+    let data: Vec<Sample> = calibrate::suite::generate(&case)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % 500 != 250)
+        .map(|(_, s)| s)
+        .collect();
+    let cal = run(&data, &nominal_model(), &CalibrateOptions::default()).expect("runs");
+    assert_eq!(cal.names(), vec!["leak-ext1".to_string()]);
+    let k = cal.effects[0].parameters["leaks.ext1.sqrt_m3_s_sqrt_pa"];
+    assert!((k - 3.0e-9).abs() < 0.3e-9, "{k}");
+    assert!(
+        cal.warnings.iter().any(|w| w.contains("24 gap(s)")),
+        "{:?}",
+        cal.warnings
+    );
+}

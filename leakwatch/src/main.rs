@@ -505,7 +505,22 @@ fn calibrate_cmd(
     };
     println!("gap before (validation RMS): {}", g(&cal.gap_before));
     if cal.effects.is_empty() {
-        println!("no missing effect explains a significant part of the gap: the model stands as it is");
+        if cal
+            .warnings
+            .iter()
+            .any(|w| w.contains(calibrate::NOT_IDENTIFIABLE))
+        {
+            println!("nothing identifiable from this data (see the note above); the model is left as it is");
+        } else {
+            println!("no missing effect explains a significant part of the gap: the model stands as it is");
+        }
+    }
+    if cal.gap_after.normalised > 1.0 {
+        println!(
+            "the remaining gap ({:.2}) is well above the sensor floor (about 0.2-0.4): the rig differs in \
+             something the library does not have, or a channel is scaled or wired differently",
+            cal.gap_after.normalised
+        );
     }
     for (i, e) in cal.effects.iter().enumerate() {
         let params: Vec<String> = e
