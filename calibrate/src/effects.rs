@@ -156,7 +156,7 @@ impl Effect {
                 0.1 * base.friction.slip_n.max(100.0),
                 0.1 * base.friction.viscous_n_s_per_m.max(100.0),
             ],
-            Effect::SpoolBias => vec![0.02 * 3.0 * base.spool_gain_m_per_v],
+            Effect::SpoolBias => vec![0.01 * 3.0 * base.spool_gain_m_per_v],
             Effect::SpringLoad => vec![2.0e3, 0.01],
             Effect::BulkModulus => vec![0.1 * base.bulk_modulus_pa],
             Effect::EntrainedAir => {

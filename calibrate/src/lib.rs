@@ -211,7 +211,7 @@ impl Default for CalibrateOptions {
             max_effects: 3,
             min_gap_reduction: 0.2,
             min_sensitivity: 0.01,
-            min_size_steps: 1.0,
+            min_size_steps: 0.5,
             min_gap_reduction_normalised: 0.03,
             max_iterations: 10,
             screen_keep: 3,
@@ -232,6 +232,7 @@ impl CalibrateOptions {
             method: Method::Shooting,
             window_s: 0.25,
             velocity_half_width: 3,
+            min_size_steps: 1.0,
             ..CalibrateOptions::default()
         }
     }
