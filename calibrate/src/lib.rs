@@ -154,6 +154,9 @@ pub struct CalibrateOptions {
     pub max_seconds: f64,
     /// Least record length accepted, s.
     pub min_seconds: f64,
+    /// Compare at most about this many windows (whole blocks spread evenly
+    /// over the record; 0: all). 6000 windows of 50 ms = 5 min of data.
+    pub max_windows: usize,
     /// Effect names to consider (empty: the whole library).
     pub candidates: Vec<String>,
     /// At most this many effects are added.
@@ -206,6 +209,7 @@ impl Default for CalibrateOptions {
             scale_f_n: 100.0,
             scale_sp_m: 1.0e-6,
             max_seconds: 0.0,
+            max_windows: 6000,
             min_seconds: 3.0,
             candidates: Vec::new(),
             max_effects: 3,
@@ -701,7 +705,7 @@ fn setup(
         });
     }
     let w = ((opts.window_s / dt).round() as usize).max(10);
-    let data = Prepared::new(
+    let mut data = Prepared::new(
         used,
         dt,
         w,
@@ -709,6 +713,15 @@ fn setup(
         opts.split_block_windows,
         opts.velocity_half_width,
     );
+    let before = data.thin(opts.max_windows, opts.split_block_windows.max(1));
+    if before > 0 {
+        warnings.push(format!(
+            "for speed, {} of the {before} windows are compared: whole blocks of {} spread evenly \
+             from the start to the end of the record (max_windows)",
+            data.windows.len(),
+            opts.split_block_windows.max(1)
+        ));
+    }
     if data.fit_windows().len() < 2 || data.val_windows().is_empty() {
         return Err(CalibrateError::TooLittleData {
             samples: end,

@@ -123,6 +123,30 @@ impl Prepared {
         }
     }
 
+    /// Keeps at most about `max_windows` windows, whole blocks of `block`
+    /// windows spread evenly over the record (every k-th block), so a long
+    /// record is still covered from start to end; returns how many windows
+    /// there were before (0 when nothing was dropped).
+    pub fn thin(&mut self, max_windows: usize, block: usize) -> usize {
+        let n = self.windows.len();
+        if max_windows == 0 || n <= max_windows {
+            return 0;
+        }
+        let block = block.max(1);
+        let k = n.div_ceil(max_windows);
+        let keep: std::collections::HashSet<usize> = self
+            .windows
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| (i / block).is_multiple_of(k))
+            .map(|(_, w)| w.0)
+            .collect();
+        self.windows.retain(|w| keep.contains(&w.0));
+        self.fit.retain(|w| keep.contains(&w.0));
+        self.val.retain(|w| keep.contains(&w.0));
+        n
+    }
+
     /// The fitting windows.
     pub fn fit_windows(&self) -> &[(usize, usize)] {
         &self.fit

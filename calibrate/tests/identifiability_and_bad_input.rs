@@ -354,3 +354,36 @@ fn rows_missing_here_and_there_leave_the_rest_usable() {
         cal.warnings
     );
 }
+
+#[test]
+fn a_long_record_is_thinned_evenly_and_says_so() {
+    // max_windows below the record's 239 windows: whole blocks spread from
+    // start to end are compared, the leak is still named and sized
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "leak-ext2")
+        .expect("case");
+    let data = calibrate::suite::generate(&case);
+    let opts = CalibrateOptions {
+        max_windows: 60,
+        ..CalibrateOptions::default()
+    };
+    let cal = run(&data, &nominal_model(), &opts).expect("runs");
+    let n = cal.data.fit_windows + cal.data.validation_windows;
+    assert!((50..=70).contains(&n), "{n} windows");
+    assert!(
+        cal.warnings
+            .iter()
+            .any(|w| w.contains("for speed") && w.contains("of the 239 windows")),
+        "{:?}",
+        cal.warnings
+    );
+    assert!(
+        cal.data.validation_start_s < 2.0,
+        "{}",
+        cal.data.validation_start_s
+    );
+    assert_eq!(cal.names(), vec!["leak-ext2".to_string()]);
+    let k = cal.effects[0].parameters["leaks.ext2.sqrt_m3_s_sqrt_pa"];
+    assert!((k - 3.0e-9).abs() < 0.3e-9, "{k}");
+}

@@ -479,12 +479,20 @@ fn calibrate_cmd(
         _ => 0.0,
     };
     eprintln!(
-        "read {} samples ({span:.1} s) from {}; the whole record is used (no decimation): \
-         {} comparison windows of {:.0} ms, started from the measured state, 70 % fit / 30 % validate",
+        "read {} samples ({span:.1} s) from {}; the whole record is used, no decimation: \
+         {} comparison windows of {:.0} ms{}, started from the measured state, 70 % fit / 30 % validate",
         measured.len(),
         input.display(),
         (span / opts.window_s) as usize,
-        opts.window_s * 1e3
+        opts.window_s * 1e3,
+        if span / opts.window_s > opts.max_windows as f64 {
+            format!(
+                " (for speed {} of them, spread over the whole record)",
+                opts.max_windows
+            )
+        } else {
+            String::new()
+        }
     );
     let cal = calibrate::run_with_progress(&measured, &model, &opts, &|m: &str| eprintln!("  {m}"))
         .map_err(|e| e.to_string())?;
