@@ -57,6 +57,26 @@ fn main() {
             });
         }
     }
+    if let Ok(f) = std::env::var("SPOOL") {
+        for c in list.iter().filter(|c| c.name.contains(&f)) {
+            let data = calibrate::suite::generate(c);
+            let m = calibrate::suite::nominal_model_for(c.friction);
+            for e in ["valve-bandwidth", "spool-bias"] {
+                if let Ok(r) = calibrate::fit_effect(&data, &m, e, &CalibrateOptions::default()) {
+                    println!(
+                        "{} {e}: spool {:.3} -> {:.3} um, total {:.3} -> {:.3}, {:?}",
+                        c.name,
+                        r.gap_before.spool_m * 1e6,
+                        r.gap_after.spool_m * 1e6,
+                        r.gap_before.normalised,
+                        r.gap_after.normalised,
+                        r.parameters
+                    );
+                }
+            }
+        }
+        return;
+    }
     if let Ok(f) = std::env::var("FILTER") {
         for c in list.iter().filter(|c| c.name.contains(&f)) {
             let data = calibrate::suite::generate(c);

@@ -970,6 +970,20 @@ pub fn run_with_progress(
             let k = c.theta.len() as f64;
             let dbic = ne * (c.fit_cost.max(1e-300) / fit_cost_cur.max(1e-300)).ln() + k * ne.ln();
             let r = red(c);
+            // an effect of the spool alone, with the spool measured: judged on
+            // the spool channel, which measures it directly (the other
+            // channels sit at their sensor floor and would dilute it)
+            let spool_only = s.set.method == Method::EquationError
+                && d.has_spool()
+                && matches!(c.effect, Effect::SpoolBias | Effect::ValveBandwidth);
+            let (r_judged, abs_judged) = if spool_only && gap_cur.spool_m > 0.0 {
+                (
+                    1.0 - c.val.spool_m / gap_cur.spool_m,
+                    (gap_cur.spool_m - c.val.spool_m) / s.set.scale_sp_m,
+                )
+            } else {
+                (r, gap_cur.normalised - c.val.normalised)
+            };
             let status = if !c.identifiable {
                 format!(
                     "{NOT_IDENTIFIABLE} (`{}` moves the residuals by {:.2e} per step of {:.3e})",
@@ -984,10 +998,15 @@ pub fn run_with_progress(
                     "too small to claim (parameters moved {:.2} resolution steps; needs {})",
                     c.size_steps, opts.min_size_steps
                 )
-            } else if r < opts.min_gap_reduction
-                || gap_cur.normalised - c.val.normalised < opts.min_gap_reduction_normalised
-            {
-                format!("explains too little ({:.0} % of the gap)", 100.0 * r)
+            } else if r_judged < opts.min_gap_reduction || abs_judged < opts.min_gap_reduction_normalised {
+                if spool_only {
+                    format!(
+                        "explains too little ({:.0} % of the spool channel's gap)",
+                        100.0 * r_judged
+                    )
+                } else {
+                    format!("explains too little ({:.0} % of the gap)", 100.0 * r)
+                }
             } else if dbic >= 0.0 {
                 "not significant (BIC)".to_string()
             } else if chosen.is_none() {
