@@ -182,7 +182,7 @@ impl Effect {
             }
             Effect::SpringLoad => vec![(0.0, 1.0e7), (base.x_min_m, base.x_max_m)],
             Effect::BulkModulus => vec![(0.15 * base.bulk_modulus_pa, 3.0 * base.bulk_modulus_pa)],
-            Effect::EntrainedAir => vec![(0.0, 0.3)],
+            Effect::EntrainedAir => vec![(0.0, 0.5)],
             Effect::SupplySag => vec![(0.0, 1.0e12)],
             Effect::ValveBandwidth => vec![(2.0 * std::f64::consts::PI, 5.0 * base.spool_natural_freq_rad_s)],
             Effect::LeakExt1 | Effect::LeakExt2 | Effect::LeakInt => vec![(0.0, 1.0e-7)],

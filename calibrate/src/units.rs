@@ -72,14 +72,21 @@ pub fn describe(
             } else {
                 ((1.0 / b - 1.0 / oil) * p_abs * p_abs / P_ATM_PA).max(0.0)
             };
+            // the same effective modulus from air compressed polytropically
+            // (n = 1.4): 1/β_eff = 1/β_oil + ε p_atm^(1/n) / (n p_abs^(1+1/n))
+            const N: f64 = 1.4;
+            let air_poly =
+                ((1.0 / b - 1.0 / oil) * N * p_abs.powf(1.0 + 1.0 / N) / P_ATM_PA.powf(1.0 / N)).max(0.0);
             out.push(format!(
                 "effective bulk modulus {:.0} MPa at {:.1} MPa ({:.0} % of the model's {:.0} MPa); \
-                 entrained air {:.2} % by volume at 1 atm (isothermal)",
+                 entrained air at 1 atm, by volume: {:.2} % if it is compressed isothermally (the model's law), \
+                 {:.2} % if polytropically (n = 1.4)",
                 b * 1e-6,
                 BULK_MODULUS_QUOTE_PA * 1e-6,
                 100.0 * b / oil,
                 oil * 1e-6,
-                100.0 * air
+                100.0 * air,
+                100.0 * air_poly
             ));
             let lo = effective_bulk_modulus_pa(after, 1.0e6);
             let hi = effective_bulk_modulus_pa(after, 12.0e6);
@@ -132,4 +139,45 @@ pub fn describe(
         _ => {}
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn engineering_units_of_each_effect() {
+        let base = ActuatorParams::default();
+        let mean = [7.0e6, 6.8e6];
+        // 13.28 % of free air compressed polytropically gives 474.1 MPa at 6.9 MPa
+        let after = Effect::BulkModulus.apply(&base, &[474.129e6]);
+        let l = describe("bulk-modulus", &base, &after, mean).join("\n");
+        assert!(l.contains("effective bulk modulus 474 MPa at 6.9 MPa"), "{l}");
+        assert!(l.contains("13.28 % if polytropically"), "{l}");
+        let after = Effect::SpoolBias.apply(&base, &[-5.2e-6]);
+        let l = describe("spool-bias", &base, &after, mean).join("\n");
+        assert!(l.contains("-5.20 µm = -1.86 % of the spool stroke"), "{l}");
+        let after = Effect::SupplySag.apply(&base, &[6.0e9]);
+        let l = describe("supply-sag", &base, &after, mean).join("\n");
+        assert!(l.contains("0.100 MPa per L/min"), "{l}");
+        let after = Effect::LeakExt1.apply(&base, &[4.0e-9]);
+        let l = describe("leak-ext1", &base, &after, mean).join("\n");
+        // 4e-9 · √7e6 m³/s = 0.635 L/min
+        assert!(
+            l.contains("0.635 L/min at the record's mean Δp of 7.00 MPa"),
+            "{l}"
+        );
+        let after = Effect::ValveBandwidth.apply(&base, &[316.0]);
+        let l = describe("valve-bandwidth", &base, &after, mean).join("\n");
+        assert!(l.contains("spool natural frequency 50.3 Hz"), "{l}");
+        let after = Effect::SpringLoad.apply(&base, &[3.8e4, 0.296]);
+        let l = describe("spring-load", &base, &after, mean).join("\n");
+        assert!(l.contains("x = 0.2960 m, stiffness 38.00 kN/m"), "{l}");
+        let after = Effect::FrictionAsymmetry.apply(&base, &[822.0]);
+        let l = describe("friction-asymmetry", &base, &after, mean).join("\n");
+        assert!(
+            l.contains("retracting: static 1793 N, Coulomb 822 N, viscous 350 N·s/m"),
+            "{l}"
+        );
+    }
 }
