@@ -16,6 +16,10 @@ pub enum Effect {
     FrictionAsymmetry,
     /// `friction-asymmetry` with its own retracting viscous coefficient too.
     FrictionAsymmetryViscous,
+    /// `friction`, fitted only on request ([`Effect::ON_REQUEST`]): static
+    /// and Coulomb (scaled together) and viscous friction per direction, and
+    /// the Stribeck velocity.
+    Friction,
     /// `spool-bias`: the spool sits off centre at zero command.
     SpoolBias,
     /// `spring-load`: a spring in front of the rod (stiffness and contact position).
@@ -56,8 +60,13 @@ impl Effect {
         Effect::LeakInt,
     ];
 
-    /// The effect names of the library (BENCHMARKS.md §3, issue 6).
-    pub const NAMES: [&'static str; 9] = [
+    /// Effects fitted only when asked for by name (`fit_effect`, or
+    /// [`crate::CalibrateOptions::candidates`]), not searched by default.
+    pub const ON_REQUEST: [Effect; 1] = [Effect::Friction];
+
+    /// The effect names of the library (BENCHMARKS.md §3, issue 6; `friction` on request).
+    pub const NAMES: [&'static str; 10] = [
+        "friction",
         "friction-asymmetry",
         "spool-bias",
         "spring-load",
@@ -73,6 +82,7 @@ impl Effect {
     pub fn name(self) -> &'static str {
         match self {
             Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => "friction-asymmetry",
+            Effect::Friction => "friction",
             Effect::SpoolBias => "spool-bias",
             Effect::SpringLoad => "spring-load",
             Effect::BulkModulus | Effect::EntrainedAir => "bulk-modulus",
@@ -91,6 +101,9 @@ impl Effect {
             Effect::FrictionAsymmetryViscous => {
                 "retracting static, Coulomb (scaled together) and viscous friction differ"
             }
+            Effect::Friction => {
+                "static and Coulomb (scaled together) and viscous friction per direction, Stribeck velocity"
+            }
             Effect::SpoolBias => "spool null bias",
             Effect::SpringLoad => "spring with contact position",
             Effect::BulkModulus => "lower constant bulk modulus",
@@ -106,7 +119,12 @@ impl Effect {
     /// The candidates with this name (both forms for `bulk-modulus`), or
     /// none if the name is unknown.
     pub fn by_name(name: &str) -> Vec<Effect> {
-        Effect::ALL.iter().copied().filter(|e| e.name() == name).collect()
+        Effect::ALL
+            .iter()
+            .chain(Effect::ON_REQUEST.iter())
+            .copied()
+            .filter(|e| e.name() == name)
+            .collect()
     }
 
     /// The residual signature the effect leaves, for reports.
@@ -115,6 +133,7 @@ impl Effect {
             Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => {
                 "Δp error of one sign while retracting only; none while extending"
             }
+            Effect::Friction => "force-balance error depending on the direction and speed of motion",
             Effect::SpoolBias => "position drift and p1/p2 offsets of opposite sign near zero command",
             Effect::SpringLoad => "p1 − p2 error growing with stroke beyond a contact position",
             Effect::BulkModulus | Effect::EntrainedAir => {
@@ -135,6 +154,13 @@ impl Effect {
             Effect::FrictionAsymmetryViscous => {
                 &["friction.retract.slip_n", "friction.retract.viscous_n_s_per_m"]
             }
+            Effect::Friction => &[
+                "friction.slip_n",
+                "friction.viscous_n_s_per_m",
+                "friction.retract.slip_n",
+                "friction.retract.viscous_n_s_per_m",
+                "friction.stribeck_velocity_m_s",
+            ],
             Effect::SpoolBias => &["spool_null_bias_m"],
             Effect::SpringLoad => &["load.stiffness_n_per_m", "load.contact_m"],
             Effect::BulkModulus => &["bulk_modulus_pa"],
@@ -152,6 +178,13 @@ impl Effect {
     pub fn resolution(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
             Effect::FrictionAsymmetry => vec![0.1 * base.friction.slip_n.max(100.0)],
+            Effect::Friction => vec![
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+                0.1 * base.friction.stribeck_velocity_m_s.max(0.005),
+            ],
             Effect::FrictionAsymmetryViscous => vec![
                 0.1 * base.friction.slip_n.max(100.0),
                 0.1 * base.friction.viscous_n_s_per_m.max(100.0),
@@ -176,6 +209,13 @@ impl Effect {
         match self {
             Effect::FrictionAsymmetry => vec![(0.0, 2.0e4)],
             Effect::FrictionAsymmetryViscous => vec![(0.0, 2.0e4), (0.0, 1.0e4)],
+            Effect::Friction => vec![
+                (0.0, 2.0e4),
+                (0.0, 1.0e4),
+                (0.0, 2.0e4),
+                (0.0, 1.0e4),
+                (0.002, 0.5),
+            ],
             Effect::SpoolBias => {
                 let b = 5.0 * base.spool_gain_m_per_v;
                 vec![(-b, b)]
@@ -197,6 +237,17 @@ impl Effect {
             Effect::FrictionAsymmetryViscous => {
                 let r = base.friction.for_direction(-1.0);
                 vec![r.slip_n, r.viscous_n_s_per_m]
+            }
+            Effect::Friction => {
+                let e = base.friction.for_direction(1.0);
+                let r = base.friction.for_direction(-1.0);
+                vec![
+                    e.slip_n,
+                    e.viscous_n_s_per_m,
+                    r.slip_n,
+                    r.viscous_n_s_per_m,
+                    e.stribeck_velocity_m_s,
+                ]
             }
             Effect::SpoolBias => vec![base.spool_null_bias_m],
             Effect::SpringLoad => vec![base.load.stiffness_n_per_m, base.load.contact_m],
@@ -285,6 +336,30 @@ impl Effect {
                     .max(0.0),
                     ..ext
                 });
+            }
+            Effect::Friction => {
+                // each direction: static and Coulomb scaled together (the
+                // model's static/Coulomb ratio kept), its own viscous term;
+                // one Stribeck velocity
+                let th = |i: usize| theta.get(i).copied();
+                let scale = |f: FrictionParams, slip: Option<f64>, visc: Option<f64>, alpha: Option<f64>| {
+                    let ratio = if f.slip_n > 0.0 {
+                        f.static_n / f.slip_n
+                    } else {
+                        1.0
+                    };
+                    let slip = slip.unwrap_or(f.slip_n).max(0.0);
+                    FrictionParams {
+                        static_n: slip * ratio,
+                        slip_n: slip,
+                        viscous_n_s_per_m: visc.unwrap_or(f.viscous_n_s_per_m).max(0.0),
+                        stribeck_velocity_m_s: alpha.unwrap_or(f.stribeck_velocity_m_s).max(1.0e-4),
+                    }
+                };
+                let e = scale(p.friction.for_direction(1.0), th(0), th(1), th(4));
+                let r = scale(p.friction.for_direction(-1.0), th(2), th(3), th(4));
+                p.friction.set_extend(e);
+                p.friction.retract = Some(r);
             }
             Effect::SpoolBias => p.spool_null_bias_m = t0,
             Effect::SpringLoad => {

@@ -27,7 +27,7 @@ pub fn describe(
 ) -> Vec<String> {
     let mut out = Vec::new();
     match name {
-        "friction-asymmetry" => {
+        "friction-asymmetry" | "friction" => {
             let e = after.friction.for_direction(1.0);
             let r = after.friction.for_direction(-1.0);
             out.push(format!(

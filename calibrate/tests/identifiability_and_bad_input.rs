@@ -250,11 +250,11 @@ fn non_finite_values_and_bad_models_are_named() {
     let e = run(&held_rod(), &bad, &CalibrateOptions::default()).unwrap_err();
     assert!(e.to_string().contains("bulk_modulus_pa"), "{e}");
     let opts = CalibrateOptions {
-        candidates: vec!["friction".into()],
+        candidates: vec!["seal-wear".into()],
         ..CalibrateOptions::default()
     };
     let e = run(&held_rod(), &nominal_model(), &opts).unwrap_err();
-    assert!(e.to_string().contains("unknown effect `friction`"), "{e}");
+    assert!(e.to_string().contains("unknown effect `seal-wear`"), "{e}");
 }
 
 #[test]

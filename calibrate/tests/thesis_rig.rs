@@ -146,3 +146,30 @@ fn small_effects_are_named_and_more_controls_stay_quiet() {
         }
     }
 }
+
+#[test]
+fn friction_per_direction_is_fitted_on_request() {
+    use calibrate::suite::{generate, nominal_model_for, thesis_cases};
+    // the stick-slip rig with the retracting static and Coulomb friction
+    // 1600/1100 times the extending ones: `friction` fits both directions
+    let case = thesis_cases()
+        .into_iter()
+        .find(|c| c.name == "friction-asymmetry / closed-loop-random [thesis]")
+        .expect("case");
+    let data = generate(&case);
+    let model = nominal_model_for(case.friction);
+    let fit = calibrate::fit_effect(&data, &model, "friction", &CalibrateOptions::default()).expect("fits");
+    eprintln!("{fit:?}");
+    let p = |k: &str| fit.parameters[k];
+    assert!(
+        (p("friction.slip_n") - 1100.0).abs() < 110.0,
+        "{:?}",
+        fit.parameters
+    );
+    assert!(
+        (p("friction.retract.slip_n") - 1600.0).abs() < 160.0,
+        "{:?}",
+        fit.parameters
+    );
+    assert!(fit.gap_reduction > 0.5, "{}", fit.gap_reduction);
+}
