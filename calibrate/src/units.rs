@@ -35,7 +35,8 @@ pub fn describe(
                 r.static_n, r.slip_n, r.viscous_n_s_per_m, r.stribeck_velocity_m_s
             ));
             out.push(format!(
-                "extending (model's): static {:.0} N, Coulomb {:.0} N, viscous {:.0} N·s/m (retracting/extending Coulomb {:.2})",
+                "extending{}: static {:.0} N, Coulomb {:.0} N, viscous {:.0} N·s/m (retracting/extending Coulomb {:.2})",
+                if name == "friction" { "" } else { " (the model's)" },
                 e.static_n,
                 e.slip_n,
                 e.viscous_n_s_per_m,

@@ -108,6 +108,10 @@ enum Command {
         /// Output directory: calibration.json, model.toml, report.md and plots.
         #[arg(long)]
         out: PathBuf,
+        /// Effects to consider, comma-separated (default: the whole library; `friction` fits
+        /// static/Coulomb, viscous per direction and the Stribeck velocity, on request only).
+        #[arg(long, value_delimiter = ',')]
+        effects: Vec<String>,
     },
     /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time.
     Replay {
@@ -289,7 +293,12 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
-        Command::Calibrate { input, config, out } => calibrate_cmd(&input, config.as_deref(), &out),
+        Command::Calibrate {
+            input,
+            config,
+            out,
+            effects,
+        } => calibrate_cmd(&input, config.as_deref(), &out, effects),
         Command::Replay {
             input,
             config,
@@ -459,6 +468,7 @@ fn calibrate_cmd(
     input: &std::path::Path,
     config: Option<&std::path::Path>,
     out: &std::path::Path,
+    effects: Vec<String>,
 ) -> Result<(), String> {
     let model = match config {
         Some(p) => calibrate::load_model(p).map_err(|e| e.to_string())?,
@@ -473,7 +483,10 @@ fn calibrate_cmd(
         input.to_path_buf()
     };
     let measured = calibrate::load_measured(&input).map_err(|e| e.to_string())?;
-    let opts = calibrate::CalibrateOptions::default();
+    let opts = calibrate::CalibrateOptions {
+        candidates: effects,
+        ..calibrate::CalibrateOptions::default()
+    };
     let span = match (measured.first(), measured.last()) {
         (Some(a), Some(b)) => b.t_s - a.t_s,
         _ => 0.0,
