@@ -1,12 +1,15 @@
 //! Runs the hidden-effect suite and prints the table of BENCHMARKS.md §3.
 //!
 //! `cargo run -p calibrate --example bench_suite [CASE-SUBSTRING]`; with
-//! `MATRIX=1` every effect under every input (`suite::matrix_cases`).
+//! `MATRIX=1` every effect under every input (`suite::matrix_cases`); with
+//! `THESIS=1` the stick-slip rig (`suite::thesis_cases`).
 fn main() {
     let opts = calibrate::CalibrateOptions::default();
     let filter = std::env::args().nth(1).unwrap_or_default();
     let all = if std::env::var("MATRIX").is_ok() {
         calibrate::suite::matrix_cases()
+    } else if std::env::var("THESIS").is_ok() {
+        calibrate::suite::thesis_cases()
     } else {
         calibrate::suite::cases()
     };

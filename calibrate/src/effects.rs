@@ -11,8 +11,15 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Effect {
-    /// `friction-asymmetry`: the retracting seal friction differs from the extending one.
+    /// `friction-asymmetry`: the retracting seal's static and Coulomb friction
+    /// differ from the extending one's (scaled together), viscous unchanged.
     FrictionAsymmetry,
+    /// `friction-asymmetry` with its own retracting viscous coefficient too.
+    FrictionAsymmetryViscous,
+    /// `friction`, fitted only on request ([`Effect::ON_REQUEST`]): static
+    /// and Coulomb (scaled together) and viscous friction per direction, and
+    /// the Stribeck velocity.
+    Friction,
     /// `spool-bias`: the spool sits off centre at zero command.
     SpoolBias,
     /// `spring-load`: a spring in front of the rod (stiffness and contact position).
@@ -39,8 +46,9 @@ const LEAK_RESOLUTION: f64 = 3.0e-10;
 
 impl Effect {
     /// Every candidate, in the library's order.
-    pub const ALL: [Effect; 10] = [
+    pub const ALL: [Effect; 11] = [
         Effect::FrictionAsymmetry,
+        Effect::FrictionAsymmetryViscous,
         Effect::SpoolBias,
         Effect::SpringLoad,
         Effect::BulkModulus,
@@ -52,8 +60,13 @@ impl Effect {
         Effect::LeakInt,
     ];
 
-    /// The effect names of the library (BENCHMARKS.md §3, issue 6).
-    pub const NAMES: [&'static str; 9] = [
+    /// Effects fitted only when asked for by name (`fit_effect`, or
+    /// [`crate::CalibrateOptions::candidates`]), not searched by default.
+    pub const ON_REQUEST: [Effect; 1] = [Effect::Friction];
+
+    /// The effect names of the library (BENCHMARKS.md §3, issue 6; `friction` on request).
+    pub const NAMES: [&'static str; 10] = [
+        "friction",
         "friction-asymmetry",
         "spool-bias",
         "spring-load",
@@ -68,7 +81,8 @@ impl Effect {
     /// The effect's name (`bulk-modulus` for both of its forms).
     pub fn name(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "friction-asymmetry",
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => "friction-asymmetry",
+            Effect::Friction => "friction",
             Effect::SpoolBias => "spool-bias",
             Effect::SpringLoad => "spring-load",
             Effect::BulkModulus | Effect::EntrainedAir => "bulk-modulus",
@@ -83,7 +97,13 @@ impl Effect {
     /// Which form of the named effect this is, for reports.
     pub fn form(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "retracting Coulomb friction differs",
+            Effect::FrictionAsymmetry => "retracting static and Coulomb friction differ (scaled together)",
+            Effect::FrictionAsymmetryViscous => {
+                "retracting static, Coulomb (scaled together) and viscous friction differ"
+            }
+            Effect::Friction => {
+                "static and Coulomb (scaled together) and viscous friction per direction, Stribeck velocity"
+            }
             Effect::SpoolBias => "spool null bias",
             Effect::SpringLoad => "spring with contact position",
             Effect::BulkModulus => "lower constant bulk modulus",
@@ -99,13 +119,21 @@ impl Effect {
     /// The candidates with this name (both forms for `bulk-modulus`), or
     /// none if the name is unknown.
     pub fn by_name(name: &str) -> Vec<Effect> {
-        Effect::ALL.iter().copied().filter(|e| e.name() == name).collect()
+        Effect::ALL
+            .iter()
+            .chain(Effect::ON_REQUEST.iter())
+            .copied()
+            .filter(|e| e.name() == name)
+            .collect()
     }
 
     /// The residual signature the effect leaves, for reports.
     pub fn signature(self) -> &'static str {
         match self {
-            Effect::FrictionAsymmetry => "Δp error of one sign while retracting only; none while extending",
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => {
+                "Δp error of one sign while retracting only; none while extending"
+            }
+            Effect::Friction => "force-balance error depending on the direction and speed of motion",
             Effect::SpoolBias => "position drift and p1/p2 offsets of opposite sign near zero command",
             Effect::SpringLoad => "p1 − p2 error growing with stroke beyond a contact position",
             Effect::BulkModulus | Effect::EntrainedAir => {
@@ -123,6 +151,16 @@ impl Effect {
     pub fn parameter_names(self) -> &'static [&'static str] {
         match self {
             Effect::FrictionAsymmetry => &["friction.retract.slip_n"],
+            Effect::FrictionAsymmetryViscous => {
+                &["friction.retract.slip_n", "friction.retract.viscous_n_s_per_m"]
+            }
+            Effect::Friction => &[
+                "friction.slip_n",
+                "friction.viscous_n_s_per_m",
+                "friction.retract.slip_n",
+                "friction.retract.viscous_n_s_per_m",
+                "friction.stribeck_velocity_m_s",
+            ],
             Effect::SpoolBias => &["spool_null_bias_m"],
             Effect::SpringLoad => &["load.stiffness_n_per_m", "load.contact_m"],
             Effect::BulkModulus => &["bulk_modulus_pa"],
@@ -140,7 +178,18 @@ impl Effect {
     pub fn resolution(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
             Effect::FrictionAsymmetry => vec![0.1 * base.friction.slip_n.max(100.0)],
-            Effect::SpoolBias => vec![0.02 * 3.0 * base.spool_gain_m_per_v],
+            Effect::Friction => vec![
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+                0.1 * base.friction.stribeck_velocity_m_s.max(0.005),
+            ],
+            Effect::FrictionAsymmetryViscous => vec![
+                0.1 * base.friction.slip_n.max(100.0),
+                0.1 * base.friction.viscous_n_s_per_m.max(100.0),
+            ],
+            Effect::SpoolBias => vec![0.01 * 3.0 * base.spool_gain_m_per_v],
             Effect::SpringLoad => vec![2.0e3, 0.01],
             Effect::BulkModulus => vec![0.1 * base.bulk_modulus_pa],
             Effect::EntrainedAir => {
@@ -159,13 +208,21 @@ impl Effect {
     pub fn bounds(self, base: &ActuatorParams) -> Vec<(f64, f64)> {
         match self {
             Effect::FrictionAsymmetry => vec![(0.0, 2.0e4)],
+            Effect::FrictionAsymmetryViscous => vec![(0.0, 2.0e4), (0.0, 1.0e4)],
+            Effect::Friction => vec![
+                (0.0, 2.0e4),
+                (0.0, 1.0e4),
+                (0.0, 2.0e4),
+                (0.0, 1.0e4),
+                (0.002, 0.5),
+            ],
             Effect::SpoolBias => {
                 let b = 5.0 * base.spool_gain_m_per_v;
                 vec![(-b, b)]
             }
             Effect::SpringLoad => vec![(0.0, 1.0e7), (base.x_min_m, base.x_max_m)],
-            Effect::BulkModulus => vec![(0.02 * base.bulk_modulus_pa, 3.0 * base.bulk_modulus_pa)],
-            Effect::EntrainedAir => vec![(0.0, 0.3)],
+            Effect::BulkModulus => vec![(0.15 * base.bulk_modulus_pa, 3.0 * base.bulk_modulus_pa)],
+            Effect::EntrainedAir => vec![(0.0, 0.5)],
             Effect::SupplySag => vec![(0.0, 1.0e12)],
             Effect::ValveBandwidth => vec![(2.0 * std::f64::consts::PI, 5.0 * base.spool_natural_freq_rad_s)],
             Effect::LeakExt1 | Effect::LeakExt2 | Effect::LeakInt => vec![(0.0, 1.0e-7)],
@@ -176,12 +233,21 @@ impl Effect {
     /// except where [`Effect::starting_points`] says otherwise), SI.
     pub fn read(self, base: &ActuatorParams) -> Vec<f64> {
         match self {
-            Effect::FrictionAsymmetry => {
-                vec![base
-                    .friction
-                    .retract
-                    .map(|r| r.slip_n)
-                    .unwrap_or(base.friction.slip_n)]
+            Effect::FrictionAsymmetry => vec![base.friction.for_direction(-1.0).slip_n],
+            Effect::FrictionAsymmetryViscous => {
+                let r = base.friction.for_direction(-1.0);
+                vec![r.slip_n, r.viscous_n_s_per_m]
+            }
+            Effect::Friction => {
+                let e = base.friction.for_direction(1.0);
+                let r = base.friction.for_direction(-1.0);
+                vec![
+                    e.slip_n,
+                    e.viscous_n_s_per_m,
+                    r.slip_n,
+                    r.viscous_n_s_per_m,
+                    e.stribeck_velocity_m_s,
+                ]
             }
             Effect::SpoolBias => vec![base.spool_null_bias_m],
             Effect::SpringLoad => vec![base.load.stiffness_n_per_m, base.load.contact_m],
@@ -225,6 +291,9 @@ impl Effect {
                 .map(|a| vec![*a])
                 .collect(),
             Effect::FrictionAsymmetry => [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f]).collect(),
+            Effect::FrictionAsymmetryViscous => {
+                [1.0, 1.5, 0.6].iter().map(|f| vec![cur[0] * f, cur[1]]).collect()
+            }
             _ => vec![cur],
         }
     }
@@ -245,14 +314,52 @@ impl Effect {
         let mut p = base.clone();
         let t0 = theta.first().copied().unwrap_or(0.0);
         match self {
-            Effect::FrictionAsymmetry => {
+            Effect::FrictionAsymmetry | Effect::FrictionAsymmetryViscous => {
+                // the retracting seal: static and Coulomb friction scaled
+                // together from the extending ones, its own viscous term
                 let ext = p.friction.extend();
                 let slip = t0.max(0.0);
+                let ratio = if ext.slip_n > 0.0 {
+                    ext.static_n / ext.slip_n
+                } else {
+                    1.0
+                };
                 p.friction.retract = Some(FrictionParams {
-                    static_n: slip + (ext.static_n - ext.slip_n).max(0.0),
+                    static_n: slip * ratio,
                     slip_n: slip,
+                    viscous_n_s_per_m: match self {
+                        Effect::FrictionAsymmetryViscous => {
+                            theta.get(1).copied().unwrap_or(ext.viscous_n_s_per_m)
+                        }
+                        _ => p.friction.for_direction(-1.0).viscous_n_s_per_m,
+                    }
+                    .max(0.0),
                     ..ext
                 });
+            }
+            Effect::Friction => {
+                // each direction: static and Coulomb scaled together (the
+                // model's static/Coulomb ratio kept), its own viscous term;
+                // one Stribeck velocity
+                let th = |i: usize| theta.get(i).copied();
+                let scale = |f: FrictionParams, slip: Option<f64>, visc: Option<f64>, alpha: Option<f64>| {
+                    let ratio = if f.slip_n > 0.0 {
+                        f.static_n / f.slip_n
+                    } else {
+                        1.0
+                    };
+                    let slip = slip.unwrap_or(f.slip_n).max(0.0);
+                    FrictionParams {
+                        static_n: slip * ratio,
+                        slip_n: slip,
+                        viscous_n_s_per_m: visc.unwrap_or(f.viscous_n_s_per_m).max(0.0),
+                        stribeck_velocity_m_s: alpha.unwrap_or(f.stribeck_velocity_m_s).max(1.0e-4),
+                    }
+                };
+                let e = scale(p.friction.for_direction(1.0), th(0), th(1), th(4));
+                let r = scale(p.friction.for_direction(-1.0), th(2), th(3), th(4));
+                p.friction.set_extend(e);
+                p.friction.retract = Some(r);
             }
             Effect::SpoolBias => p.spool_null_bias_m = t0,
             Effect::SpringLoad => {

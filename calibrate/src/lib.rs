@@ -1,50 +1,67 @@
-//! The calibration workflow (issue 6): find where the simulated actuator and
-//! the measured one disagree, name the physical effect the model lacks, fit
-//! it, add it, and show the gap shrink on held-out data.
+//! The calibration workflow (issues 6 and 10): find where the simulated
+//! actuator and the measured one disagree, name the physical effect the model
+//! lacks, fit it, add it, and show the gap shrink on held-out data; on a
+//! smooth rig and on one whose rod stick-slips (the thesis friction).
 //!
 //! # API
 //!
 //! ```text
 //! calibrate::run(measured: &[Sample], model: &ActuatorParams, opts: &CalibrateOptions)
 //!     -> Result<Calibration, CalibrateError>
+//! calibrate::run_with_progress(measured, model, opts, &|line: &str| ...)   // same, with progress lines
 //! calibrate::write_outputs(cal: &Calibration, out_dir: &Path) -> Result<OutputFiles, CalibrateError>
-//!     // DIR/calibration.json, DIR/model.toml ([model] table), DIR/report.md + DIR/*.png
+//!     // DIR/calibration.json, DIR/model.toml (a leakwatch config: `--config model.toml`),
+//!     // DIR/report.md + DIR/*.png
 //! calibrate::fit_effect(measured, model, effect_name: &str, opts) -> Result<EffectFit, CalibrateError>
 //!     // one named effect; Err(NotIdentifiable) when the data does not excite it
-//! calibrate::load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError>   // dataset CSV
+//! calibrate::load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError>   // dataset CSV, .csv.gz
 //! calibrate::load_model(path: &Path) -> Result<ActuatorParams, CalibrateError>    // [model] of a config TOML
 //! calibrate::model_toml(params: &ActuatorParams) -> Result<String, CalibrateError>
-//! calibrate::suite::bench(opts: &CalibrateOptions) -> BenchReport                 // BENCHMARKS.md §3, 16 cases
-//! calibrate::suite::bench_matrix(opts) -> BenchReport        // every effect under every input, 44 cases
+//! calibrate::suite::bench(opts) -> BenchReport           // BENCHMARKS.md §3, smooth rig, 16 cases
+//! calibrate::suite::bench_thesis(opts) -> BenchReport    // the stick-slip rig, 32 cases
+//! calibrate::suite::bench_matrix(opts) -> BenchReport    // smooth rig, every effect under every input, 44 cases
 //!     // BenchReport::markdown(), ::to_json(), ::write(dir) -> [calibration_bench.md, .json];
-//!     // suite::cases(), suite::matrix_cases(), suite::run_case(), suite::bench_cases(list, opts, threads)
-//!
-//! The suite's nominal model is the thesis' with the smooth friction preset
-//! (`suite::nominal_model()`). With the thesis' stick-slip friction the
-//! re-anchored windows diverge within tens of ms (the chatter is chaotic),
-//! the gap floor is 30-100x higher and effects are mostly missed (nothing is
-//! falsely claimed): calibrate with the smooth variant, or short windows.
+//!     // suite::cases(), thesis_cases(), matrix_cases(), run_case(), bench_cases(list, opts, threads)
+//! calibrate::external::bench_dir(dir, model, opts, threads, &progress) -> BenchReport
+//!     // any directory of cases DIR/case_*/measured.csv[.gz] + truth.json (the hidden_dev layout)
 //! ```
 //!
-//! `leakwatch calibrate MEASURED.csv [--config FILE] --out DIR` is
-//! `load_measured` + (`load_model` or the default model) + `run` + `write_outputs`;
-//! `leakwatch bench calibration` prints `suite::bench(&CalibrateOptions::default()).markdown()`.
+//! `leakwatch calibrate MEASURED.{csv,csv.gz,mcap} [--config FILE] --out DIR` is
+//! `load_measured` + (`load_model` or the default model) + `run_with_progress` +
+//! `write_outputs`; `leakwatch bench calibration [--data DIR] [--json] [--out DIR]`
+//! prints the smooth and stick-slip suites (or scores DIR).
 //!
 //! # Method
 //!
-//! 1. **Compare** by multiple shooting: the record is cut into windows
-//!    ([`CalibrateOptions::window_s`], 0.25 s); each is simulated from the
-//!    measured state at its start (x, p1, p2; velocity from a local quadratic
-//!    fit of the positions; spool from the model's spool driven by the command
-//!    over the whole record) with RK4 sub-steps of `model::dynamics`. In every
-//!    block of 10 windows the first 70 % fit and the rest validate
-//!    ([`CalibrateOptions::split_block_windows`], `fit_fraction`), so both
-//!    parts see every regime of the record.
-//!    Residuals (model − measured) are normalised by `scale_x_m` and
-//!    `scale_p_pa`; the gap is their RMS (also given per channel in SI).
+//! 1. **Compare** ([`Method`]). The default, **equation error**
+//!    ([`equation`]): the whole record is cut into windows of
+//!    [`CalibrateOptions::window_s`] (50 ms); in each, every equation of the
+//!    model is checked on the measured signals from the measured state at the
+//!    window's start: the pressure change each chamber's continuity predicts
+//!    (valve flows from the measured spool, or the model's spool when the log
+//!    has none; the piston's measured displacement; leaks) against the
+//!    measured one; the mean force balance A(p1 − p2) − friction − load − m·Δv/T;
+//!    and the model's spool against the measured spool. Nothing is simulated
+//!    freely, so the chaos of a stick-slipping rod (MODEL.md §8), which makes
+//!    a free simulation diverge within tens of ms whatever the effect, does
+//!    not enter. A chamber at tank or supply pressure is left out of that
+//!    window (the orifice law is too stiff there). Velocity from a central
+//!    difference ([`CalibrateOptions::velocity_half_width`] = 1: wider fits
+//!    smear the stick-slip phases). The alternative, **multiple shooting**
+//!    ([`CalibrateOptions::shooting`]: 0.25 s windows each simulated from its
+//!    measured start with RK4 sub-steps of `model::dynamics`), works on a
+//!    smooth rig only. In every block of 10 windows the first 70 % fit and the
+//!    rest validate ([`CalibrateOptions::split_block_windows`],
+//!    `fit_fraction`), so both parts see every regime of the record; windows
+//!    straddling a gap in time (missing or NaN rows) are left out. Residuals
+//!    (model − measured) are normalised by `scale_p_pa`, `scale_f_n`,
+//!    `scale_sp_m` (`scale_x_m` for shooting); the gap is their RMS (also
+//!    given per channel in SI).
 //! 2. **Localise**: the validation residuals broken down by direction of
 //!    motion, spool sign, stroke position, velocity, pressure level,
-//!    frequency band and time ([`RegimeBin`]).
+//!    frequency band and time ([`RegimeBin`]), from windows simulated from
+//!    their measured start (a diagnostic for the report; on a stick-slipping
+//!    rod it shows the chatter more than the effect).
 //! 3. **Name**: every candidate of the library ([`Effect`]) is fitted on the
 //!    fitting windows by Levenberg–Marquardt (finite-difference Jacobian in
 //!    resolution-scaled units); after one screening iteration only the best
@@ -61,17 +78,28 @@
 //!    `min_form_t`, or `min_form_gap_ratio` times less residual); otherwise
 //!    the effect is still named and added, with the caveat "form not
 //!    identifiable from this data" ([`FoundEffect::caveat`]).
+//!    `friction-asymmetry` also has two forms: the retracting static and
+//!    Coulomb friction scaled together, and the same with its own viscous
+//!    term; the richer is kept only if it lowers the validation gap by
+//!    [`MIN_RICHER_FORM_GAIN`] more and beats the simpler over every window,
+//!    else the viscous term is stated not identifiable
+//!    ([`FoundEffect::not_identifiable`]; on a stick-slipping rod the velocity
+//!    while sliding is too poorly resolved for it).
+//!    Each effect is restated in engineering units ([`units::describe`]).
 //! 4. **Add and repeat** (greedy forward selection) while something is
 //!    accepted, up to `max_effects`.
 //!
 //! All quantities are SI (m, s, Pa, m³/s, N, V).
 
 pub mod effects;
+pub mod equation;
+pub mod external;
 pub mod fit;
 pub mod output;
 pub mod regime;
 pub mod shoot;
 pub mod suite;
+pub mod units;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -87,6 +115,7 @@ pub use regime::RegimeBin;
 pub use suite::{bench, BenchReport};
 
 use fit::Problem;
+pub use shoot::Method;
 use shoot::{gap_of, residuals, Prepared, ShootSettings};
 
 /// Message given when the data does not excite an effect.
@@ -96,7 +125,11 @@ pub const NOT_IDENTIFIABLE: &str = "not identifiable from this data";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrateOptions {
-    /// Length of one shooting window, s.
+    /// How model and measurement are compared: `equation-error` (default;
+    /// short windows started from the measured state, not defeated by
+    /// stick-slip) or `shooting` (windows simulated freely; smooth rigs only).
+    pub method: Method,
+    /// Length of one comparison window, s.
     pub window_s: f64,
     /// Fraction of the windows used for fitting; the rest validate.
     pub fit_fraction: f64,
@@ -113,10 +146,17 @@ pub struct CalibrateOptions {
     pub scale_x_m: f64,
     /// Pressure error scale, Pa.
     pub scale_p_pa: f64,
-    /// Use at most this much of the record (from its start), s; longer data only slows the fit.
+    /// Force error scale of the equation-error comparison, N.
+    pub scale_f_n: f64,
+    /// Spool position error scale of the equation-error comparison, m.
+    pub scale_sp_m: f64,
+    /// Use at most this much of the record (from its start), s; 0: the whole record.
     pub max_seconds: f64,
     /// Least record length accepted, s.
     pub min_seconds: f64,
+    /// Compare at most about this many windows (whole blocks spread evenly
+    /// over the record; 0: all). 6000 windows of 50 ms = 5 min of data.
+    pub max_windows: usize,
     /// Effect names to consider (empty: the whole library).
     pub candidates: Vec<String>,
     /// At most this many effects are added.
@@ -158,27 +198,46 @@ pub struct CalibrateOptions {
 impl Default for CalibrateOptions {
     fn default() -> Self {
         CalibrateOptions {
-            window_s: 0.25,
+            method: Method::EquationError,
+            window_s: 0.05,
             fit_fraction: 0.7,
             split_block_windows: 10,
             substeps_per_sample: 4,
             compare_stride: 5,
             scale_x_m: 1.0e-3,
             scale_p_pa: 1.0e5,
-            max_seconds: 20.0,
+            scale_f_n: 100.0,
+            scale_sp_m: 1.0e-6,
+            max_seconds: 0.0,
+            max_windows: 6000,
             min_seconds: 3.0,
             candidates: Vec::new(),
             max_effects: 3,
             min_gap_reduction: 0.2,
             min_sensitivity: 0.01,
-            min_size_steps: 1.0,
+            min_size_steps: 0.5,
             min_gap_reduction_normalised: 0.03,
             max_iterations: 10,
             screen_keep: 3,
             keep_traces: true,
-            velocity_half_width: 3,
+            velocity_half_width: 1,
             min_form_t: 3.0,
             min_form_gap_ratio: 2.0,
+        }
+    }
+}
+
+impl CalibrateOptions {
+    /// The multiple-shooting comparison with its own defaults (0.25 s
+    /// windows, velocity from ±3 samples): for a smooth rig, where freely
+    /// simulated windows stay close to the measurement.
+    pub fn shooting() -> Self {
+        CalibrateOptions {
+            method: Method::Shooting,
+            window_s: 0.25,
+            velocity_half_width: 3,
+            min_size_steps: 1.0,
+            ..CalibrateOptions::default()
         }
     }
 }
@@ -215,6 +274,13 @@ pub enum CalibrateError {
     },
     /// The model (given directly) is not a valid actuator.
     InvalidModel(model::params::InvalidParam),
+    /// A channel never changes over the record (a disconnected transducer?).
+    FlatChannel {
+        /// The column.
+        column: &'static str,
+        /// Its constant value, SI.
+        value: f64,
+    },
     /// The effect name is not in the library.
     UnknownEffect(String),
     /// The data does not excite the effect enough to fit it.
@@ -258,6 +324,11 @@ impl std::fmt::Display for CalibrateError {
                 write!(f, "model file {}: {message}", path.display())
             }
             CalibrateError::InvalidModel(e) => write!(f, "model: {e}"),
+            CalibrateError::FlatChannel { column, value } => write!(
+                f,
+                "column `{column}` is flat ({value:.6e} throughout): a disconnected or broken channel; \
+                 nothing can be identified from it"
+            ),
             CalibrateError::UnknownEffect(n) => write!(
                 f,
                 "unknown effect `{n}`: expected one of {}",
@@ -290,8 +361,14 @@ pub struct Gap {
     pub p1_pa: f64,
     /// Chamber-2 pressure, Pa.
     pub p2_pa: f64,
-    /// All three normalised by `scale_x_m` / `scale_p_pa`, combined RMS (dimensionless).
+    /// Every channel normalised by its scale, combined RMS (dimensionless).
     pub normalised: f64,
+    /// Force balance error (equation-error comparison), N.
+    #[serde(default)]
+    pub force_n: f64,
+    /// Spool position error (equation-error comparison with a measured spool), m.
+    #[serde(default)]
+    pub spool_m: f64,
 }
 
 /// One effect added to the model.
@@ -321,6 +398,13 @@ pub struct FoundEffect {
     /// holds near the pressures visited, not beyond.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub caveat: Option<String>,
+    /// Parameters of the effect this data cannot pin down, each with why
+    /// (contains [`NOT_IDENTIFIABLE`]); they keep the model's value.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_identifiable: Vec<String>,
+    /// The effect in engineering units (N, µm, kN/m, MPa, L/min, Hz, ...), one line per quantity.
+    #[serde(default)]
+    pub engineering: Vec<String>,
 }
 
 /// How one candidate fared in one round of the selection.
@@ -415,6 +499,9 @@ pub struct Calibration {
     /// Traces for plots (empty unless `keep_traces`).
     #[serde(skip)]
     pub traces: Traces,
+    /// What the user should know about the data used (gaps, stretch used, no motion).
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Wall time, s.
     pub elapsed_s: f64,
 }
@@ -445,8 +532,41 @@ pub struct EffectFit {
     pub gap_reduction: f64,
 }
 
-/// Reads a measured CSV (dataset format); missing columns and unusable files are errors.
+/// Reads a measured CSV (dataset format; `.csv.gz` is decompressed on the
+/// fly); missing columns and unusable files are errors. Rows that cannot be
+/// used (NaN, out of range) are skipped by the reader; a gap they leave ends
+/// the stretch used.
 pub fn load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError> {
+    if path.extension().is_some_and(|e| e == "gz") {
+        let file = std::fs::File::open(path).map_err(|source| CalibrateError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let reader = std::io::BufReader::new(flate2::read::GzDecoder::new(file));
+        let mut r = dataset::CsvReader::new(reader, path, dataset::Limits::default())?;
+        let mut samples = Vec::new();
+        let mut first_issue = None;
+        let mut skipped = 0usize;
+        while let Some(row) = r.next_row() {
+            match row {
+                dataset::Row::Sample(s) | dataset::Row::AfterGap(s, _) => samples.push(s),
+                dataset::Row::Skipped(issue) => {
+                    skipped += 1;
+                    first_issue.get_or_insert(issue.to_string());
+                }
+            }
+        }
+        if samples.is_empty() {
+            return Err(CalibrateError::Dataset(dataset::DatasetError::NoUsableSamples {
+                path: path.to_path_buf(),
+                detail: match first_issue {
+                    Some(f) => format!("{skipped} rows skipped; first: {f}"),
+                    None => "the file has a header but no rows".to_string(),
+                },
+            }));
+        }
+        return Ok(samples);
+    }
     let ds = dataset::read_csv(path, dataset::Limits::default())?;
     Ok(ds.samples)
 }
@@ -476,7 +596,15 @@ struct Setup {
     data: Prepared,
     set: ShootSettings,
     seconds: f64,
+    warnings: Vec<String>,
 }
+
+/// A pressure channel whose whole range is within this is taken as flat (a
+/// disconnected transducer), Pa.
+pub const FLAT_PRESSURE_PA: f64 = 1.0e3;
+
+/// Below this stroke the record is said not to excite effects that need motion, m.
+pub const MIN_STROKE_M: f64 = 1.0e-3;
 
 fn setup(
     measured: &[Sample],
@@ -518,16 +646,57 @@ fn setup(
             "time does not increase from one sample to the next".into(),
         ));
     }
-    // Use the leading stretch without gaps, at most max_seconds.
-    let mut end = 1;
-    while end < n
-        && measured[end].t_s - measured[end - 1].t_s < 1.5 * dt
-        && (end as f64) * dt < opts.max_seconds
-    {
-        end += 1;
+    let mut warnings = Vec::new();
+    // Every sample (up to max_seconds); gaps in time (rows the reader skipped:
+    // NaN, out of range, ...) are left out of the comparison windows.
+    let mut end = n;
+    if opts.max_seconds > 0.0 {
+        let t_end = measured[0].t_s + opts.max_seconds;
+        end = measured.iter().position(|s| s.t_s >= t_end).unwrap_or(n);
+        if end < n {
+            warnings.push(format!(
+                "only the first {:.1} s of the record are used (max_seconds)",
+                opts.max_seconds
+            ));
+        }
     }
-    let used = &measured[..end];
+    let gaps = measured[..end]
+        .windows(2)
+        .filter(|w| w[1].t_s - w[0].t_s >= 1.5 * dt)
+        .count();
+    if gaps > 0 {
+        warnings.push(format!(
+            "the record has {gaps} gap(s) in time (rows skipped or missing); comparison windows that \
+             straddle one are left out"
+        ));
+    }
+    let first = 0;
+    let used = &measured[first..end];
+    let end = end - first;
     let seconds = end as f64 * dt;
+    // A channel that never changes is a disconnected or broken transducer.
+    for (name, get) in [
+        ("p1", (|s: &Sample| s.p1_pa) as fn(&Sample) -> f64),
+        ("p2", |s: &Sample| s.p2_pa),
+    ] {
+        let lo = used.iter().map(get).fold(f64::INFINITY, f64::min);
+        let hi = used.iter().map(get).fold(f64::NEG_INFINITY, f64::max);
+        if hi - lo <= FLAT_PRESSURE_PA {
+            return Err(CalibrateError::FlatChannel {
+                column: name,
+                value: lo,
+            });
+        }
+    }
+    let x_lo = used.iter().map(|s| s.x_m).fold(f64::INFINITY, f64::min);
+    let x_hi = used.iter().map(|s| s.x_m).fold(f64::NEG_INFINITY, f64::max);
+    if x_hi - x_lo < MIN_STROKE_M {
+        warnings.push(format!(
+            "the rod moved only {:.3} mm: friction, a spring and anything that needs motion {NOT_IDENTIFIABLE} \
+             (move the rod over some centimetres, e.g. an open-loop sine of 3 V at 1 Hz)",
+            (x_hi - x_lo) * 1e3
+        ));
+    }
     if seconds < opts.min_seconds {
         return Err(CalibrateError::TooLittleData {
             samples: end,
@@ -536,7 +705,7 @@ fn setup(
         });
     }
     let w = ((opts.window_s / dt).round() as usize).max(10);
-    let data = Prepared::new(
+    let mut data = Prepared::new(
         used,
         dt,
         w,
@@ -544,6 +713,15 @@ fn setup(
         opts.split_block_windows,
         opts.velocity_half_width,
     );
+    let before = data.thin(opts.max_windows, opts.split_block_windows.max(1));
+    if before > 0 {
+        warnings.push(format!(
+            "for speed, {} of the {before} windows are compared: whole blocks of {} spread evenly \
+             from the start to the end of the record (max_windows)",
+            data.windows.len(),
+            opts.split_block_windows.max(1)
+        ));
+    }
     if data.fit_windows().len() < 2 || data.val_windows().is_empty() {
         return Err(CalibrateError::TooLittleData {
             samples: end,
@@ -552,22 +730,43 @@ fn setup(
         });
     }
     let set = ShootSettings {
+        method: opts.method,
+        scale_f_n: opts.scale_f_n,
+        scale_sp_m: opts.scale_sp_m,
         substeps: opts.substeps_per_sample.max(1),
         stride: opts.compare_stride.max(1),
         scale_x_m: opts.scale_x_m,
         scale_p_pa: opts.scale_p_pa,
     };
-    Ok(Setup { data, set, seconds })
+    Ok(Setup {
+        data,
+        set,
+        seconds,
+        warnings,
+    })
 }
 
 fn gap_on(p: &ActuatorParams, d: &Prepared, windows: &[(usize, usize)], set: &ShootSettings) -> Gap {
     let (r, _) = residuals(p, d, windows, set);
+    if set.method == Method::EquationError {
+        let (ch, j) = equation::gap_of(&r, d, set);
+        return Gap {
+            x_m: 0.0,
+            p1_pa: ch[0],
+            p2_pa: ch[1],
+            normalised: j,
+            force_n: ch[2],
+            spool_m: ch[3],
+        };
+    }
     let (ch, j) = gap_of(&r, set);
     Gap {
         x_m: ch[0],
         p1_pa: ch[1],
         p2_pa: ch[2],
         normalised: j,
+        force_n: 0.0,
+        spool_m: 0.0,
     }
 }
 
@@ -712,8 +911,26 @@ pub fn run(
     model: &ActuatorParams,
     opts: &CalibrateOptions,
 ) -> Result<Calibration, CalibrateError> {
+    run_with_progress(measured, model, opts, &|_| {})
+}
+
+/// [`run`], telling `progress` what it is doing (one line per step: the
+/// data used, each round of the selection and its verdict).
+pub fn run_with_progress(
+    measured: &[Sample],
+    model: &ActuatorParams,
+    opts: &CalibrateOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Calibration, CalibrateError> {
     let t0 = Instant::now();
     let s = setup(measured, model, opts)?;
+    progress(&format!(
+        "using {:.1} s ({} samples): {} windows fit, {} validate",
+        s.seconds,
+        s.data.t_s.len(),
+        s.data.fit_windows().len(),
+        s.data.val_windows().len()
+    ));
     let d = &s.data;
     let mut pool: Vec<Effect> = if opts.candidates.is_empty() {
         Effect::ALL.to_vec()
@@ -737,6 +954,13 @@ pub fn run(
     let mut rounds = Vec::new();
     let ne = n_eff(d);
     while effects.len() < opts.max_effects && !pool.is_empty() {
+        progress(&format!(
+            "round {}: fitting {} candidates (validation gap {:.3}) ... {:.1} s",
+            rounds.len() + 1,
+            pool.len(),
+            gap_cur.normalised,
+            t0.elapsed().as_secs_f64()
+        ));
         let mut scored = screen_and_fit(&pool, &current, &s, opts, opts.screen_keep.max(1));
         let red = |x: &Scored| 1.0 - x.val.normalised / gap_cur.normalised.max(1e-300);
         scored.sort_by(|a, b| red(b).total_cmp(&red(a)));
@@ -746,6 +970,20 @@ pub fn run(
             let k = c.theta.len() as f64;
             let dbic = ne * (c.fit_cost.max(1e-300) / fit_cost_cur.max(1e-300)).ln() + k * ne.ln();
             let r = red(c);
+            // an effect of the spool alone, with the spool measured: judged on
+            // the spool channel, which measures it directly (the other
+            // channels sit at their sensor floor and would dilute it)
+            let spool_only = s.set.method == Method::EquationError
+                && d.has_spool()
+                && matches!(c.effect, Effect::SpoolBias | Effect::ValveBandwidth);
+            let (r_judged, abs_judged) = if spool_only && gap_cur.spool_m > 0.0 {
+                (
+                    1.0 - c.val.spool_m / gap_cur.spool_m,
+                    (gap_cur.spool_m - c.val.spool_m) / s.set.scale_sp_m,
+                )
+            } else {
+                (r, gap_cur.normalised - c.val.normalised)
+            };
             let status = if !c.identifiable {
                 format!(
                     "{NOT_IDENTIFIABLE} (`{}` moves the residuals by {:.2e} per step of {:.3e})",
@@ -760,10 +998,15 @@ pub fn run(
                     "too small to claim (parameters moved {:.2} resolution steps; needs {})",
                     c.size_steps, opts.min_size_steps
                 )
-            } else if r < opts.min_gap_reduction
-                || gap_cur.normalised - c.val.normalised < opts.min_gap_reduction_normalised
-            {
-                format!("explains too little ({:.0} % of the gap)", 100.0 * r)
+            } else if r_judged < opts.min_gap_reduction || abs_judged < opts.min_gap_reduction_normalised {
+                if spool_only {
+                    format!(
+                        "explains too little ({:.0} % of the spool channel's gap)",
+                        100.0 * r_judged
+                    )
+                } else {
+                    format!("explains too little ({:.0} % of the gap)", 100.0 * r)
+                }
             } else if dbic >= 0.0 {
                 "not significant (BIC)".to_string()
             } else if chosen.is_none() {
@@ -786,11 +1029,54 @@ pub fn run(
             gap_before: gap_cur.normalised,
             candidates: cands,
         });
-        let Some(i) = chosen else { break };
+        let Some(mut i) = chosen else {
+            progress("nothing else explains a significant part of the gap");
+            break;
+        };
+        // a richer form (more parameters) is kept only when the data tell it
+        // from the simpler one; otherwise the simpler one, and the extra
+        // parameters are stated as not identifiable
+        let mut not_identifiable = Vec::new();
+        if let Some((j, why)) = prefer_simpler(i, &scored, &current, d, &s.set, opts) {
+            let extra: Vec<&str> = scored[i]
+                .effect
+                .parameter_names()
+                .iter()
+                .filter(|n| !scored[j].effect.parameter_names().contains(n))
+                .copied()
+                .collect();
+            for n in extra {
+                not_identifiable.push(format!("{n}: {NOT_IDENTIFIABLE} ({why})"));
+            }
+            i = j;
+        } else if let Some(rich) = scored.iter().find(|o| {
+            o.effect.name() == scored[i].effect.name()
+                && o.effect.parameter_names().len() > scored[i].effect.parameter_names().len()
+        }) {
+            // the simpler form explained the record better than the richer one
+            for n in rich
+                .effect
+                .parameter_names()
+                .iter()
+                .filter(|n| !scored[i].effect.parameter_names().contains(n))
+            {
+                not_identifiable.push(format!(
+                    "{n}: {NOT_IDENTIFIABLE} (fitting it does not lower the validation gap: {:.3} with it, \
+                     {:.3} without); it keeps the model's value",
+                    rich.val.normalised, scored[i].val.normalised
+                ));
+            }
+        }
         let c = &scored[i];
         let r = red(c);
-        let caveat = form_caveat(c, &scored, &current, d, &s.set, opts);
+        let caveat = if c.effect.name() == "friction-asymmetry" {
+            None
+        } else {
+            form_caveat(c, &scored, &current, d, &s.set, opts)
+        };
+        let previous = current.clone();
         current = c.effect.apply(&current, &c.theta);
+        let engineering = units::describe(c.effect.name(), &previous, &current, d.mean_pressures_pa());
         fit_cost_cur = c.fit_cost;
         gap_cur = c.val;
         effects.push(FoundEffect {
@@ -803,8 +1089,11 @@ pub fn run(
             gap_after: gap_cur,
             signature: c.effect.signature().to_string(),
             caveat,
+            not_identifiable,
+            engineering,
         });
         let name = c.effect.name();
+        progress(&format!("added {name}: the gap shrinks by {:.0} %", 100.0 * r));
         pool.retain(|e| e.name() != name);
     }
     let breakdown_after = regime::breakdown(&current, d, d.val_windows(), &s.set);
@@ -846,6 +1135,7 @@ pub fn run(
         model_before: model.clone(),
         model_after: current,
         traces,
+        warnings: s.warnings.clone(),
         elapsed_s: t0.elapsed().as_secs_f64(),
     })
 }
@@ -853,6 +1143,12 @@ pub fn run(
 /// Per-window mean squared normalised residual of model `p` over every window of the record.
 fn per_window_cost(p: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Vec<f64> {
     let (r, idx) = residuals(p, d, &d.windows, set);
+    if set.method == Method::EquationError {
+        return r
+            .chunks_exact(equation::per_window(d))
+            .map(|c| c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64)
+            .collect();
+    }
     let mut out = vec![(0.0, 0usize); d.windows.len()];
     let mut w = 0;
     for (k, i) in idx.iter().enumerate() {
@@ -868,6 +1164,62 @@ fn per_window_cost(p: &ActuatorParams, d: &Prepared, set: &ShootSettings) -> Vec
         .filter(|(_, n)| *n > 0)
         .map(|(s, n)| s / n as f64)
         .collect()
+}
+
+/// Least relative reduction of the validation gap a richer form of an effect
+/// must add over its simpler form to be kept.
+pub const MIN_RICHER_FORM_GAIN: f64 = 0.05;
+
+/// For a chosen candidate with a simpler form of the same effect (fewer
+/// parameters, e.g. `friction-asymmetry` without its own viscous term):
+/// the simpler one's index and why, unless the richer form lowers the
+/// validation gap by at least [`MIN_RICHER_FORM_GAIN`] and beats it over
+/// every window (paired t ≥ `min_form_t`).
+fn prefer_simpler(
+    i: usize,
+    scored: &[Scored],
+    base: &ActuatorParams,
+    d: &Prepared,
+    set: &ShootSettings,
+    opts: &CalibrateOptions,
+) -> Option<(usize, String)> {
+    let c = &scored[i];
+    let np = c.effect.parameter_names().len();
+    let (j, simple) = scored.iter().enumerate().find(|(_, o)| {
+        o.effect != c.effect
+            && o.effect.name() == c.effect.name()
+            && o.effect.parameter_names().len() < np
+            && !o.screened_out
+            && o.identifiable
+    })?;
+    let gain = 1.0 - c.val.normalised / simple.val.normalised.max(1e-300);
+    let a = per_window_cost(&c.effect.apply(base, &c.theta), d, set);
+    let b = per_window_cost(&simple.effect.apply(base, &simple.theta), d, set);
+    let t = paired_t(&b, &a);
+    if gain >= MIN_RICHER_FORM_GAIN && t >= opts.min_form_t {
+        return None;
+    }
+    Some((
+        j,
+        format!(
+            "fitting it lowers the validation gap by only {:.1} % (needs {:.0} %; paired t {t:.1} over every window); \
+             it keeps the model's value",
+            100.0 * gain,
+            100.0 * MIN_RICHER_FORM_GAIN
+        ),
+    ))
+}
+
+/// Paired t statistic of `b − a` (0 when fewer than three pairs).
+fn paired_t(b: &[f64], a: &[f64]) -> f64 {
+    if a.len() != b.len() || a.len() < 3 {
+        return 0.0;
+    }
+    let n = a.len() as f64;
+    let diff: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
+    let mean = diff.iter().sum::<f64>() / n;
+    let var = diff.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+    mean / (var / n).sqrt().max(1e-300)
 }
 
 /// Whether the data tell the chosen form of a multi-form effect from its

@@ -1,5 +1,6 @@
-//! Writing the results: `calibration.json`, `model.toml` (a `[model]` table
-//! loadable with `leakwatch --config`), `report.md` and its PNG plots.
+//! Writing the results: `calibration.json`, `model.toml` (a leakwatch
+//! configuration with only its `[model]` table: `leakwatch replay|run|calibrate
+//! --config model.toml`), `report.md` and its PNG plots.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -33,8 +34,14 @@ pub fn model_toml(params: &ActuatorParams) -> Result<String, CalibrateError> {
     let body = toml::to_string(&ModelFile { model: params })
         .map_err(|e| CalibrateError::Serialize(e.to_string()))?;
     Ok(format!(
-        "# Written by `leakwatch calibrate`: the calibrated actuator model.\n\
-         # Load it with `leakwatch --config model.toml`; other sections keep their defaults.\n\n{body}"
+        "# Written by `leakwatch calibrate`: the calibrated actuator model, a leakwatch\n\
+         # configuration file with only its [model] table (SI units); every other\n\
+         # section keeps its default. Use it as it is:\n\
+         #   leakwatch replay MEASURED.csv --config model.toml --out replay-out\n\
+         #   leakwatch run --config model.toml\n\
+         #   leakwatch calibrate MEASURED.csv --config model.toml --out cal-out   (calibrate further)\n\
+         # (the stage binaries take the same `--config model.toml`), or paste the [model]\n\
+         # table into your own configuration file in place of its [model].\n\n{body}"
     ))
 }
 
@@ -224,22 +231,45 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration report\n");
     let d = &cal.data;
+    let how = match cal.options.method {
+        crate::Method::EquationError => format!(
+            "Compared by equation error: {} windows of {:.3} s, each checked from the measured state at \
+             its start (chamber continuity, force balance, spool); {} fit and {} validate ({}). \
+             Residuals are normalised by {:.3} MPa, {:.0} N and {:.2} µm of spool.",
+            d.fit_windows + d.validation_windows,
+            d.window_s,
+            d.fit_windows,
+            d.validation_windows,
+            d.split,
+            cal.options.scale_p_pa * 1e-6,
+            cal.options.scale_f_n,
+            cal.options.scale_sp_m * 1e6
+        ),
+        crate::Method::Shooting => format!(
+            "Compared by multiple shooting: {} windows of {:.2} s, each simulated from the measured \
+             state at its start; {} fit and {} validate ({}). Residuals are normalised by {:.3} mm and {:.3} MPa.",
+            d.fit_windows + d.validation_windows,
+            d.window_s,
+            d.fit_windows,
+            d.validation_windows,
+            d.split,
+            cal.options.scale_x_m * 1e3,
+            cal.options.scale_p_pa * 1e-6
+        ),
+    };
     let _ = writeln!(
         s,
-        "Data: {} samples ({:.1} s at {:.0} Hz). Compared by multiple shooting: {} windows of {:.2} s, \
-         each simulated from the measured state at its start; {} fit and {} validate ({}). \
-         Residuals are normalised by {:.3} mm and {:.3} MPa.\n",
+        "Data: {} samples ({:.1} s at {:.0} Hz). {how}\n",
         d.samples,
         d.seconds,
         1.0 / d.sample_period_s,
-        d.fit_windows + d.validation_windows,
-        d.window_s,
-        d.fit_windows,
-        d.validation_windows,
-        d.split,
-        cal.options.scale_x_m * 1e3,
-        cal.options.scale_p_pa * 1e-6
     );
+    for w in &cal.warnings {
+        let _ = writeln!(s, "- Note: {w}");
+    }
+    if !cal.warnings.is_empty() {
+        s.push('\n');
+    }
     let _ = writeln!(s, "## Result\n");
     if cal.effects.is_empty() {
         let _ = writeln!(
@@ -275,6 +305,14 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
         }
         s.push('\n');
         for e in &cal.effects {
+            let _ = writeln!(s, "**`{}`** in engineering units:\n", e.name);
+            for l in &e.engineering {
+                let _ = writeln!(s, "- {l}");
+            }
+            for l in &e.not_identifiable {
+                let _ = writeln!(s, "- {l}");
+            }
+            s.push('\n');
             if let Some(c) = &e.caveat {
                 let _ = writeln!(s, "**`{}`**: {c}.\n", e.name);
             }
@@ -361,7 +399,8 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
     }
     let _ = writeln!(
         s,
-        "The calibrated model is in `model.toml` (`leakwatch --config model.toml`); every number is in `calibration.json`."
+        "The calibrated model is in `model.toml` (`leakwatch replay MEASURED.csv --config model.toml --out DIR`, \
+         or `leakwatch run --config model.toml`); every number is in `calibration.json`."
     );
     s
 }

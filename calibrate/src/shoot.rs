@@ -72,11 +72,24 @@ impl Prepared {
             }
         }
         let w = window_samples.max(2);
+        // gaps in time (missing rows): no window (with its velocity margin) straddles one
+        let gap_after: Vec<bool> = samples
+            .windows(2)
+            .map(|p| p[1].t_s - p[0].t_s >= 1.5 * dt_s)
+            .collect();
         let mut windows = Vec::new();
         let mut s = vel_half;
         while s + w <= n.saturating_sub(vel_half) {
-            windows.push((s, s + w));
-            s += w;
+            let lo = s - vel_half;
+            let hi = (s + w + vel_half).min(n - 1);
+            match (lo..hi).rev().find(|&k| gap_after[k]) {
+                // restart just after the gap
+                Some(k) => s = k + 1 + vel_half,
+                None => {
+                    windows.push((s, s + w));
+                    s += w;
+                }
+            }
         }
         let (mut fit, mut val) = (Vec::new(), Vec::new());
         if block == 0 {
@@ -110,6 +123,30 @@ impl Prepared {
         }
     }
 
+    /// Keeps at most about `max_windows` windows, whole blocks of `block`
+    /// windows spread evenly over the record (every k-th block), so a long
+    /// record is still covered from start to end; returns how many windows
+    /// there were before (0 when nothing was dropped).
+    pub fn thin(&mut self, max_windows: usize, block: usize) -> usize {
+        let n = self.windows.len();
+        if max_windows == 0 || n <= max_windows {
+            return 0;
+        }
+        let block = block.max(1);
+        let k = n.div_ceil(max_windows);
+        let keep: std::collections::HashSet<usize> = self
+            .windows
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| (i / block).is_multiple_of(k))
+            .map(|(_, w)| w.0)
+            .collect();
+        self.windows.retain(|w| keep.contains(&w.0));
+        self.fit.retain(|w| keep.contains(&w.0));
+        self.val.retain(|w| keep.contains(&w.0));
+        n
+    }
+
     /// The fitting windows.
     pub fn fit_windows(&self) -> &[(usize, usize)] {
         &self.fit
@@ -120,6 +157,20 @@ impl Prepared {
         &self.val
     }
 
+    /// Mean measured chamber pressures [p1, p2], Pa.
+    pub fn mean_pressures_pa(&self) -> [f64; 2] {
+        let n = self.p1_pa.len().max(1) as f64;
+        [
+            self.p1_pa.iter().sum::<f64>() / n,
+            self.p2_pa.iter().sum::<f64>() / n,
+        ]
+    }
+
+    /// Whether the spool position was measured on every sample.
+    pub fn has_spool(&self) -> bool {
+        !self.x_sp_m.is_empty() && self.x_sp_m.iter().all(|v| v.is_finite())
+    }
+
     /// Measured stroke range (min, max), m.
     pub fn x_range_m(&self) -> (f64, f64) {
         let lo = self.x_m.iter().copied().fold(f64::INFINITY, f64::min);
@@ -128,9 +179,27 @@ impl Prepared {
     }
 }
 
+/// How model and measurement are compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Equation error over short windows started from the measured state
+    /// ([`crate::equation`]): not defeated by stick-slip (the default).
+    EquationError,
+    /// Multiple shooting: each window simulated from its measured start
+    /// (works on a smooth rig; a stick-slipping rod diverges within tens of ms).
+    Shooting,
+}
+
 /// How the windows are simulated and compared.
 #[derive(Debug, Clone, Copy)]
 pub struct ShootSettings {
+    /// The comparison.
+    pub method: Method,
+    /// Force error scale (equation error), N.
+    pub scale_f_n: f64,
+    /// Spool position error scale (equation error), m.
+    pub scale_sp_m: f64,
     /// RK4 sub-steps per sample period.
     pub substeps: u32,
     /// Compare every `stride`-th sample of a window.
@@ -151,9 +220,14 @@ pub fn spool_trajectory(p: &ActuatorParams, d: &Prepared, substeps: u32) -> Vec<
     let b = p.spool_null_bias_m;
     let mut y = [b + k * d.u_v.first().copied().unwrap_or(0.0), 0.0];
     let h = d.dt_s / substeps as f64;
-    for &u in &d.u_v {
+    for (i, &u) in d.u_v.iter().enumerate() {
         out.push(y);
-        for _ in 0..substeps {
+        // a missing row: the command held over the whole interval
+        let periods = match d.t_s.get(i + 1) {
+            Some(t) => ((t - d.t_s[i]) / d.dt_s).round().clamp(1.0, 1.0e6) as u32,
+            None => 1,
+        };
+        for _ in 0..substeps * periods {
             y = rk4_step(&y, h, |s| {
                 [
                     s[1],
@@ -204,6 +278,11 @@ pub fn residuals(
     windows: &[(usize, usize)],
     set: &ShootSettings,
 ) -> (Vec<f64>, Vec<usize>) {
+    if set.method == Method::EquationError {
+        let r = crate::equation::residuals(p, d, windows, set);
+        let idx = windows.iter().map(|w| w.0).collect();
+        return (r, idx);
+    }
     let leaks = LeakSet::from_params(p);
     let spool = spool_trajectory(p, d, set.substeps);
     let mut r = Vec::new();

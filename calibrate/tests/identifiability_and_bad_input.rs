@@ -189,7 +189,17 @@ fn a_rod_on_its_end_stop_does_not_excite_leaks_or_spool_bias() {
         data.iter().all(|s| s.x_m.abs() < 1e-3 && s.p1_pa < 0.2e6),
         "the rod is not on its stop with chamber 1 at tank"
     );
-    assert_not_identifiable(&data, &["leak-ext1", "leak-ext2", "spool-bias"]);
+    assert_not_identifiable(&data, &["leak-ext1", "leak-ext2"]);
+    // without the spool channel nothing shows a spool null offset either (with
+    // it, the measured spool shows the offset directly)
+    let no_spool: Vec<Sample> = data
+        .iter()
+        .map(|s| Sample {
+            x_sp_m: f64::NAN,
+            ..*s
+        })
+        .collect();
+    assert_not_identifiable(&no_spool, &["leak-ext1", "leak-ext2", "spool-bias"]);
 }
 
 #[test]
@@ -240,11 +250,11 @@ fn non_finite_values_and_bad_models_are_named() {
     let e = run(&held_rod(), &bad, &CalibrateOptions::default()).unwrap_err();
     assert!(e.to_string().contains("bulk_modulus_pa"), "{e}");
     let opts = CalibrateOptions {
-        candidates: vec!["friction".into()],
+        candidates: vec!["seal-wear".into()],
         ..CalibrateOptions::default()
     };
     let e = run(&held_rod(), &nominal_model(), &opts).unwrap_err();
-    assert!(e.to_string().contains("unknown effect `friction`"), "{e}");
+    assert!(e.to_string().contains("unknown effect `seal-wear`"), "{e}");
 }
 
 #[test]
@@ -286,4 +296,94 @@ fn model_files_that_do_not_load_are_named() {
     let p = tmp("other_sections.toml");
     std::fs::write(&p, "[sim]\nsubsteps_per_sample = 20\n").expect("write");
     assert_eq!(load_model(&p).expect("loads"), model::ActuatorParams::default());
+}
+
+#[test]
+fn a_held_rod_is_said_not_to_excite_motion() {
+    let cal = run(&held_rod(), &nominal_model(), &CalibrateOptions::default()).expect("runs");
+    assert!(cal.effects.is_empty(), "{:?}", cal.names());
+    assert!(
+        cal.warnings
+            .iter()
+            .any(|w| w.contains("the rod moved only") && w.contains(NOT_IDENTIFIABLE)),
+        "{:?}",
+        cal.warnings
+    );
+}
+
+#[test]
+fn a_flat_pressure_channel_is_refused() {
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "clean open-loop-sine")
+        .expect("case");
+    let data: Vec<Sample> = calibrate::suite::generate(&case)
+        .into_iter()
+        .map(|s| Sample { p2_pa: 6.9e6, ..s })
+        .collect();
+    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused");
+    assert!(
+        matches!(e, CalibrateError::FlatChannel { column: "p2", .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("column `p2` is flat"), "{e}");
+}
+
+#[test]
+fn rows_missing_here_and_there_leave_the_rest_usable() {
+    // a leak record with every 500th row dropped (what the reader does with
+    // NaN rows): windows straddling a gap are left out, the leak is still
+    // named and sized, and the gaps are reported
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "leak-ext1")
+        .expect("case");
+    let data: Vec<Sample> = calibrate::suite::generate(&case)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % 500 != 250)
+        .map(|(_, s)| s)
+        .collect();
+    let cal = run(&data, &nominal_model(), &CalibrateOptions::default()).expect("runs");
+    assert_eq!(cal.names(), vec!["leak-ext1".to_string()]);
+    let k = cal.effects[0].parameters["leaks.ext1.sqrt_m3_s_sqrt_pa"];
+    assert!((k - 3.0e-9).abs() < 0.3e-9, "{k}");
+    assert!(
+        cal.warnings.iter().any(|w| w.contains("24 gap(s)")),
+        "{:?}",
+        cal.warnings
+    );
+}
+
+#[test]
+fn a_long_record_is_thinned_evenly_and_says_so() {
+    // max_windows below the record's 239 windows: whole blocks spread from
+    // start to end are compared, the leak is still named and sized
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "leak-ext2")
+        .expect("case");
+    let data = calibrate::suite::generate(&case);
+    let opts = CalibrateOptions {
+        max_windows: 60,
+        ..CalibrateOptions::default()
+    };
+    let cal = run(&data, &nominal_model(), &opts).expect("runs");
+    let n = cal.data.fit_windows + cal.data.validation_windows;
+    assert!((50..=70).contains(&n), "{n} windows");
+    assert!(
+        cal.warnings
+            .iter()
+            .any(|w| w.contains("for speed") && w.contains("of the 239 windows")),
+        "{:?}",
+        cal.warnings
+    );
+    assert!(
+        cal.data.validation_start_s < 2.0,
+        "{}",
+        cal.data.validation_start_s
+    );
+    assert_eq!(cal.names(), vec!["leak-ext2".to_string()]);
+    let k = cal.effects[0].parameters["leaks.ext2.sqrt_m3_s_sqrt_pa"];
+    assert!((k - 3.0e-9).abs() < 0.3e-9, "{k}");
 }

@@ -17,7 +17,7 @@ fn outputs_are_written_and_the_model_loads_back() {
     assert_eq!(json["effects"][0]["name"], "leak-ext1");
     assert!(json["effects"][0]["parameters"]["leaks.ext1.sqrt_m3_s_sqrt_pa"].is_number());
     assert!(json["effects"][0]["gap_reduction"].as_f64().expect("number") > 0.7);
-    for key in ["x_m", "p1_pa", "p2_pa"] {
+    for key in ["p1_pa", "normalised"] {
         let b = json["gap_before"][key].as_f64().expect("number");
         let a = json["gap_after"][key].as_f64().expect("number");
         assert!(a < b, "{key}: {a} !< {b}");
@@ -28,6 +28,11 @@ fn outputs_are_written_and_the_model_loads_back() {
     assert_eq!(loaded.leaks.len(), 1);
     let text = std::fs::read_to_string(&files.model_toml).expect("toml");
     assert!(text.contains("[model]"), "{text}");
+    assert!(
+        text.contains("leakwatch replay MEASURED.csv --config model.toml")
+            && text.contains("leakwatch run --config model.toml"),
+        "{text}"
+    );
 
     let report = std::fs::read_to_string(&files.report).expect("report");
     assert!(

@@ -22,12 +22,16 @@ fn breakdown_of(case: &str) -> Vec<RegimeBin> {
     let d = Prepared::new(
         &data,
         dt,
-        (o.window_s / dt).round() as usize,
+        // the breakdown localises shooting residuals over 0.25 s windows
+        (0.25 / dt).round() as usize,
         o.fit_fraction,
         o.split_block_windows,
         o.velocity_half_width,
     );
     let set = ShootSettings {
+        method: calibrate::Method::Shooting,
+        scale_f_n: o.scale_f_n,
+        scale_sp_m: o.scale_sp_m,
         substeps: o.substeps_per_sample,
         stride: o.compare_stride,
         scale_x_m: o.scale_x_m,

@@ -153,20 +153,70 @@ pub fn detection_data(
     write_json(out, "detection.json", &json)
 }
 
-/// The calibration workflow's hidden-effect suite.
-pub fn calibration(matrix: bool, out: Option<PathBuf>) -> Result<(), String> {
-    let opts = calibrate::CalibrateOptions::default();
-    let report = if matrix {
-        calibrate::suite::bench_matrix(&opts)
-    } else {
-        calibrate::suite::bench(&opts)
+/// The calibration workflow's hidden-effect suites (smooth and stick-slip rig, or the smooth
+/// matrix), or a directory of cases with truth (`--data`).
+pub fn calibration(
+    matrix: bool,
+    data: Option<PathBuf>,
+    config: Option<PathBuf>,
+    json: bool,
+    out: Option<PathBuf>,
+) -> Result<(), String> {
+    let opts = calibrate::CalibrateOptions {
+        keep_traces: false,
+        ..calibrate::CalibrateOptions::default()
     };
-    println!("{}", report.markdown());
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+        .min(2);
+    let reports: Vec<(&str, calibrate::BenchReport)> = if let Some(dir) = data {
+        let model = match config {
+            Some(p) => calibrate::load_model(&p).map_err(|e| e.to_string())?,
+            None => model::ActuatorParams::default(),
+        };
+        let bar = indicatif::ProgressBar::new(0);
+        let r = calibrate::external::bench_dir(&dir, &model, &opts, threads, &|d, n| {
+            bar.set_length(n as u64);
+            bar.set_position(d as u64);
+        })
+        .map_err(|e| e.to_string())?;
+        bar.finish_and_clear();
+        vec![("data", r)]
+    } else if matrix {
+        vec![(
+            "matrix",
+            calibrate::suite::bench_matrix(&calibrate::CalibrateOptions::shooting()),
+        )]
+    } else {
+        eprintln!("smooth rig (16 cases), then the stick-slip rig (32 cases) ...");
+        vec![
+            ("smooth", calibrate::suite::bench(&opts)),
+            ("thesis", calibrate::suite::bench_thesis(&opts)),
+        ]
+    };
+    if json {
+        let v: serde_json::Map<String, serde_json::Value> = reports
+            .iter()
+            .map(|(k, r)| (k.to_string(), serde_json::to_value(r).unwrap_or_default()))
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?);
+    } else {
+        for (k, r) in &reports {
+            println!("## {k}\n\n{}", r.markdown());
+        }
+    }
     if let Some(dir) = out {
-        std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-        let files = report.write(&dir).map_err(|e| e.to_string())?;
-        for f in files {
-            eprintln!("wrote {}", f.display());
+        for (k, r) in &reports {
+            let d = if reports.len() > 1 {
+                dir.join(k)
+            } else {
+                dir.clone()
+            };
+            let files = r.write(&d).map_err(|e| e.to_string())?;
+            for f in files {
+                eprintln!("wrote {}", f.display());
+            }
         }
     }
     Ok(())

@@ -165,4 +165,37 @@ mod tests {
         assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
     }
+
+    #[test]
+    fn the_model_toml_calibrate_writes_is_a_config() {
+        // a calibrated model with every kind of effect the library adds
+        let mut m = ActuatorParams::default();
+        for (e, theta) in [
+            (calibrate::Effect::FrictionAsymmetryViscous, vec![1500.0, 300.0]),
+            (calibrate::Effect::SpoolBias, vec![-5.0e-6]),
+            (calibrate::Effect::SpringLoad, vec![3.0e4, 0.3]),
+            (calibrate::Effect::EntrainedAir, vec![0.01]),
+            (calibrate::Effect::SupplySag, vec![5.0e9]),
+            (calibrate::Effect::ValveBandwidth, vec![320.0]),
+            (calibrate::Effect::LeakExt1, vec![4.0e-9]),
+        ] {
+            m = e.apply(&m, &theta);
+        }
+        let text = calibrate::model_toml(&m).unwrap();
+        // the file says how to use it, and `--config model.toml` takes it as it is
+        assert!(
+            text.contains("leakwatch replay MEASURED.csv --config model.toml"),
+            "{text}"
+        );
+        let cfg = Config::parse(&text).unwrap();
+        assert_eq!(cfg.model, m);
+        assert_eq!(cfg.model.spool_null_bias_m, -5.0e-6);
+        assert_eq!(cfg.model.leaks.len(), 1);
+        let r = cfg.model.friction.for_direction(-1.0);
+        assert_eq!((r.slip_n, r.viscous_n_s_per_m), (1500.0, 300.0));
+        // everything else keeps its default
+        assert_eq!(cfg.estimator, Config::default().estimator);
+        assert_eq!(cfg.classifier, Config::default().classifier);
+        assert!(cfg.rig.is_none());
+    }
 }
