@@ -34,6 +34,11 @@
 use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use serde::{Deserialize, Serialize};
 
+/// Half-width of the band the valve command must swing through to count as a reversal, V.
+pub const COMMAND_REVERSAL_BAND_V: f64 = 1.0;
+/// Time constant of the command reversal rate, s.
+pub const COMMAND_RATE_WINDOW_S: f64 = 2.0;
+
 /// Time constant of the NIS average that the NIS-ratio gate compares, s.
 pub const NIS_RATIO_WINDOW_S: f64 = 5.0;
 
@@ -265,6 +270,11 @@ pub struct ClassifierConfig {
     /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
     /// chirp), evidence does not count (0 = off).
     pub nis_ratio_gate: f64,
+    /// Leak-size detector: while the valve command reverses faster than this (its
+    /// frequency, from swings through ±1 V over the last 2 s), evidence does not
+    /// count: the healthy model's effective load (a random walk) cannot follow the
+    /// friction reversals and the leak estimates wander (0 = off), Hz.
+    pub max_command_hz: f64,
     /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
     pub thesis_baseline: bool,
     /// The healthy state learned by commissioning (absent: learned in a warm-up,
@@ -326,9 +336,10 @@ impl Default for ClassifierConfig {
             recovery_s: 2.0,
             nis_gate: 10000.0,
             nis_ratio_gate: 3.0,
+            max_command_hz: 4.0,
             thesis_baseline: false,
             commissioning: None,
-            min_size_lpm: 0.04,
+            min_size_lpm: 0.06,
             confirm_s: 0.5,
             baseline_tau_s: 15.0,
             slow_leak_lpm: 0.5,
@@ -363,6 +374,7 @@ impl ClassifierConfig {
             ("recovery_s", self.recovery_s),
             ("nis_gate", self.nis_gate),
             ("nis_ratio_gate", self.nis_ratio_gate),
+            ("max_command_hz", self.max_command_hz),
             ("min_size_lpm", self.min_size_lpm),
             ("confirm_s", self.confirm_s),
             ("baseline_tau_s", self.baseline_tau_s),
@@ -487,6 +499,10 @@ pub struct LeakSizeDetector {
     nis_healthy: f64,
     /// NIS averaged over the last [`NIS_RATIO_WINDOW_S`].
     nis_avg: f64,
+    /// Side of the ±1 V band the command was last on (−1, 0 before the first swing, +1).
+    command_side: i8,
+    /// Command reversals per second, averaged over [`COMMAND_RATE_WINDOW_S`].
+    reversals_per_s: f64,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
@@ -714,6 +730,8 @@ impl LeakSizeDetector {
             awaiting_convergence: false,
             nis_healthy: f64::NAN,
             nis_avg: f64::NAN,
+            command_side: 0,
+            reversals_per_s: 0.0,
             blind_s: 0.0,
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
@@ -908,6 +926,26 @@ impl LeakSizeDetector {
             };
             if self.cfg.nis_ratio_gate > 0.0 && self.nis_avg > self.cfg.nis_ratio_gate * self.nis_healthy {
                 self.invalid_until_s = self.invalid_until_s.max(e.t_s);
+            }
+        }
+        if e.u_v.is_finite() {
+            let side = if e.u_v > COMMAND_REVERSAL_BAND_V {
+                1
+            } else if e.u_v < -COMMAND_REVERSAL_BAND_V {
+                -1
+            } else {
+                0
+            };
+            let mut impulse = 0.0;
+            if side != 0 && side != self.command_side {
+                if self.command_side != 0 {
+                    impulse = 1.0;
+                }
+                self.command_side = side;
+            }
+            self.reversals_per_s += (impulse - self.reversals_per_s * dt_s) / COMMAND_RATE_WINDOW_S;
+            if self.cfg.max_command_hz > 0.0 && 0.5 * self.reversals_per_s > self.cfg.max_command_hz {
+                self.invalid_until_s = self.invalid_until_s.max(e.t_s + 1.0);
             }
         }
         if self.awaiting_convergence {
