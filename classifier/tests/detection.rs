@@ -484,3 +484,21 @@ fn threshold_from_the_false_alarm_rate() {
     assert!(classifier::rice_threshold(1.0, 0.005, 0.0) > c);
     assert_eq!(classifier::rice_threshold(1e-9, 0.05, 4.0), 4.0);
 }
+
+/// The open-loop chirp sweeps to 10.5 Hz: past about 4 Hz the healthy model's
+/// effective load no longer follows the friction reversals and the leak estimates
+/// wander by several hundredths of a L/min. The command-rate gate keeps that from
+/// becoming a leak; with the gate off the same run raises one.
+#[test]
+fn a_fast_chirp_raises_no_leak() {
+    let events = run("open-loop-chirp", 80.0, None, 93, ActuatorParams::default());
+    assert!(events.iter().all(|e| e.kind != EventKind::NotArmed), "{events:#?}");
+    assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+    let cfg = ClassifierConfig {
+        max_command_hz: 0.0,
+        nis_ratio_gate: 0.0,
+        ..ClassifierConfig::default()
+    };
+    let (ungated, _) = run_flow("open-loop-chirp", 80.0, None, 93, ActuatorParams::default(), cfg);
+    assert!(!raised(&ungated, "leak-size").is_empty(), "{ungated:#?}");
+}
