@@ -492,7 +492,10 @@ fn threshold_from_the_false_alarm_rate() {
 #[test]
 fn a_fast_chirp_raises_no_leak() {
     let events = run("open-loop-chirp", 80.0, None, 93, ActuatorParams::default());
-    assert!(events.iter().all(|e| e.kind != EventKind::NotArmed), "{events:#?}");
+    assert!(
+        events.iter().all(|e| e.kind != EventKind::NotArmed),
+        "{events:#?}"
+    );
     assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
     let cfg = ClassifierConfig {
         max_command_hz: 0.0,
