@@ -36,6 +36,11 @@ use serde::{Deserialize, Serialize};
 
 /// Half-width of the band the valve command must swing through to count as a reversal, V.
 pub const COMMAND_REVERSAL_BAND_V: f64 = 1.0;
+/// Time over which the baseline is taken again after a stretch the model could not
+/// follow (it follows the estimates with a 0.5 s time constant meanwhile, and no
+/// evidence counts), s.
+pub const REACQUIRE_S: f64 = 4.0;
+
 /// Time constant of the command reversal rate, s.
 pub const COMMAND_RATE_WINDOW_S: f64 = 2.0;
 
@@ -503,6 +508,9 @@ pub struct LeakSizeDetector {
     command_side: i8,
     /// Command reversals per second, averaged over [`COMMAND_RATE_WINDOW_S`].
     reversals_per_s: f64,
+    /// After a stretch the model could not follow, the baseline is taken again from
+    /// this time (s) for [`REACQUIRE_S`], following the estimates quickly.
+    reacquire_after_s: f64,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
@@ -732,6 +740,7 @@ impl LeakSizeDetector {
             nis_avg: f64::NAN,
             command_side: 0,
             reversals_per_s: 0.0,
+            reacquire_after_s: f64::NEG_INFINITY,
             blind_s: 0.0,
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
@@ -946,6 +955,9 @@ impl LeakSizeDetector {
             self.reversals_per_s += (impulse - self.reversals_per_s * dt_s) / COMMAND_RATE_WINDOW_S;
             if self.cfg.max_command_hz > 0.0 && 0.5 * self.reversals_per_s > self.cfg.max_command_hz {
                 self.invalid_until_s = self.invalid_until_s.max(e.t_s + 1.0);
+                // The leak estimates wander while the model cannot follow the input and
+                // relax slowly afterwards: take the baseline again once it is over.
+                self.reacquire_after_s = self.invalid_until_s;
             }
         }
         if self.awaiting_convergence {
@@ -1002,19 +1014,27 @@ impl LeakSizeDetector {
         }
         // After a gap, a reset or while the filter is not tracking nothing counts, not
         // even a large rise; during an excursion only a very large one does.
-        let invalid = e.t_s < self.invalid_until_s || self.awaiting_convergence;
+        let reacquiring = e.t_s >= self.reacquire_after_s && e.t_s < self.reacquire_after_s + REACQUIRE_S;
+        let invalid = e.t_s < self.invalid_until_s || self.awaiting_convergence || reacquiring;
         let blind = invalid || e.t_s < self.blind_until_s;
         if blind {
             self.blind_s += dt_s;
         }
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
-            let a = if blind {
+            let a = if reacquiring {
+                (dt_s / 0.5).min(1.0)
+            } else if blind {
                 0.0
             } else {
                 (dt_s / self.cfg.baseline_tau_s).min(1.0)
             };
             for k in 0..3 {
                 self.baseline_lpm[k] += a * (raw[k] - self.baseline_lpm[k]);
+                if reacquiring {
+                    // The reference of the slow-leak check moves with it: what the
+                    // baseline takes up here is not a leak growing.
+                    self.stats[k].mean = self.baseline_lpm[k];
+                }
             }
         }
         // Rise of each hypothesis' size above its healthy baseline, and how badly the
