@@ -100,13 +100,7 @@ pub fn residuals(
             }
             let v = d.v_m_s[i];
             let load = p.load.force_n(x, v);
-            let end_stop = if x < p.x_min_m {
-                p.end_stop_stiffness_n_per_m * (p.x_min_m - x) - p.end_stop_damping_n_s_per_m * v.min(0.0)
-            } else if x > p.x_max_m {
-                -p.end_stop_stiffness_n_per_m * (x - p.x_max_m) - p.end_stop_damping_n_s_per_m * v.max(0.0)
-            } else {
-                0.0
-            };
+            let end_stop = model::dynamics::end_stop_force_n(p, x, v);
             let drive = area * (p1 - p2) - load + end_stop;
             let fr = friction_force_n(&p.friction, v, drive);
             force += drive - fr;

@@ -228,23 +228,7 @@ pub fn run_dir_case(case: &Path, model: &ActuatorParams, opts: &CalibrateOptions
 /// Fills the verdicts of `res` from a calibration against the truth.
 pub fn score(res: &mut CaseResult, truth: &Truth, cal: &Calibration) {
     let hidden = &truth.effects;
-    res.named = cal.names();
-    res.caveats = cal
-        .effects
-        .iter()
-        .filter_map(|e| e.caveat.as_ref().map(|c| format!("{}: {c}", e.name)))
-        .collect();
-    res.right_first = match res.named.first() {
-        Some(n) => hidden.contains(n),
-        None => hidden.is_empty(),
-    };
-    res.false_claims = res.named.iter().filter(|n| !hidden.contains(n)).count();
-    res.all_found = res.false_claims == 0 && hidden.iter().all(|h| res.named.contains(h));
-    res.not_identifiable = cal
-        .effects
-        .iter()
-        .flat_map(|e| e.not_identifiable.iter().cloned())
-        .collect();
+    res.verdicts(hidden, cal);
     let mut max_err: f64 = 0.0;
     for tp in &truth.params {
         if res.not_identifiable.iter().any(|n| n.starts_with(&tp.name)) {

@@ -361,6 +361,30 @@ pub struct CaseResult {
     pub not_identifiable: Vec<String>,
 }
 
+impl CaseResult {
+    /// Fills what was named, the caveats, the verdicts against the `hidden` effect
+    /// names and what was stated not identifiable, from calibration `cal`.
+    pub fn verdicts(&mut self, hidden: &[String], cal: &crate::Calibration) {
+        self.named = cal.names();
+        self.caveats = cal
+            .effects
+            .iter()
+            .filter_map(|e| e.caveat.as_ref().map(|c| format!("{}: {c}", e.name)))
+            .collect();
+        self.right_first = match self.named.first() {
+            Some(n) => hidden.contains(n),
+            None => hidden.is_empty(),
+        };
+        self.false_claims = self.named.iter().filter(|n| !hidden.contains(n)).count();
+        self.all_found = self.false_claims == 0 && hidden.iter().all(|h| self.named.contains(h));
+        self.not_identifiable = cal
+            .effects
+            .iter()
+            .flat_map(|e| e.not_identifiable.iter().cloned())
+            .collect();
+    }
+}
+
 /// Runs one case: simulate, calibrate, score.
 pub fn run_case(case: &SuiteCase, opts: &CalibrateOptions) -> CaseResult {
     let t0 = Instant::now();
@@ -397,23 +421,7 @@ pub fn run_case(case: &SuiteCase, opts: &CalibrateOptions) -> CaseResult {
         }
     };
     res.calibrate_s = t1.elapsed().as_secs_f64();
-    res.named = cal.names();
-    res.caveats = cal
-        .effects
-        .iter()
-        .filter_map(|e| e.caveat.as_ref().map(|c| format!("{}: {c}", e.name)))
-        .collect();
-    res.right_first = match res.named.first() {
-        Some(n) => hidden.contains(n),
-        None => hidden.is_empty(),
-    };
-    res.false_claims = res.named.iter().filter(|n| !hidden.contains(n)).count();
-    res.all_found = res.false_claims == 0 && hidden.iter().all(|h| res.named.contains(h));
-    res.not_identifiable = cal
-        .effects
-        .iter()
-        .flat_map(|e| e.not_identifiable.iter().cloned())
-        .collect();
+    res.verdicts(&hidden, &cal);
     let mut max_err: f64 = 0.0;
     for (e, truth) in &case.hidden {
         let found = cal.effects.iter().find(|f| f.name == e.name());

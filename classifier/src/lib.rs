@@ -973,10 +973,13 @@ impl LeakSizeDetector {
             return;
         }
         if !self.is_armed() {
-            if let (Arming::Converging, Some(c)) = (self.arming, self.cfg.commissioning.clone()) {
+            // (the figures are copied out: no clone of the commissioning, which holds a String, per sample)
+            if let (Arming::Converging, Some(c)) = (self.arming, self.cfg.commissioning.as_ref()) {
+                let (nis, offsets, spreads, crossings) =
+                    (c.nis_mean, c.offsets_lpm, c.spreads_lpm, c.crossings_per_s);
                 if e.flags & FLAG_CONVERGING == 0 {
-                    self.nis_healthy = c.nis_mean;
-                    self.arm_with(c.offsets_lpm, c.spreads_lpm, c.crossings_per_s, e.t_s);
+                    self.nis_healthy = nis;
+                    self.arm_with(offsets, spreads, crossings, e.t_s);
                 }
                 return;
             }

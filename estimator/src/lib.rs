@@ -93,7 +93,7 @@ pub struct EstimatorCounters {
     pub skipped: u64,
     /// Samples with at least one channel left out (NaN or out of range).
     pub channels_dropped: u64,
-    /// Samples missing from the input (gaps) that the filter predicted across.
+    /// Samples missing from the input (gaps): predicted across, or re-anchored after.
     pub bridged: u64,
     /// Filter resets (divergence, a non-finite step, or a gap too long to bridge).
     pub resets: u64,

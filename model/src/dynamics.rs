@@ -184,6 +184,18 @@ pub const STICK_VELOCITY_DECAY_S: f64 = 5.0e-4;
 /// The continuous right-hand side dx/dt for state `s`, command `u_v` (V) and
 /// leaks `leaks`; returns the derivative and the forces and flows behind it.
 #[inline]
+/// Force of the end stops on the rod at position `x` m and velocity `v` m/s, N
+/// (a stiff spring-damper beyond each end of the stroke, 0 inside it).
+pub fn end_stop_force_n(p: &ActuatorParams, x: f64, v: f64) -> f64 {
+    if x < p.x_min_m {
+        p.end_stop_stiffness_n_per_m * (p.x_min_m - x) - p.end_stop_damping_n_s_per_m * v.min(0.0)
+    } else if x > p.x_max_m {
+        -p.end_stop_stiffness_n_per_m * (x - p.x_max_m) - p.end_stop_damping_n_s_per_m * v.max(0.0)
+    } else {
+        0.0
+    }
+}
+
 pub fn derivative(p: &ActuatorParams, s: &State, u_v: f64, leaks: &LeakSet) -> (State, Forces) {
     let [x_sp, p1, p2, x, v, v_sp] = *s;
     let wn = p.spool_natural_freq_rad_s;
@@ -198,13 +210,7 @@ pub fn derivative(p: &ActuatorParams, s: &State, u_v: f64, leaks: &LeakSet) -> (
     let dp2 = effective_bulk_modulus_pa(p, p2) / v2 * (area * v - valve.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s);
 
     let load = p.load.force_n(x, v);
-    let end_stop = if x < p.x_min_m {
-        p.end_stop_stiffness_n_per_m * (p.x_min_m - x) - p.end_stop_damping_n_s_per_m * v.min(0.0)
-    } else if x > p.x_max_m {
-        -p.end_stop_stiffness_n_per_m * (x - p.x_max_m) - p.end_stop_damping_n_s_per_m * v.max(0.0)
-    } else {
-        0.0
-    };
+    let end_stop = end_stop_force_n(p, x, v);
     let drive = area * (p1 - p2) - load + end_stop;
     let mut friction = friction_force_n(&p.friction, v, drive);
     if v.abs() <= p.friction.zero_velocity_m_s && friction == drive {
