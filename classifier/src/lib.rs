@@ -292,6 +292,11 @@ pub struct ClassifierConfig {
     /// Leak-size detector: time constant of the healthy baseline that the rise is
     /// measured from, s (0 = the warm-up offset, never adapted).
     pub baseline_tau_s: f64,
+    /// Leak-size detector: while any rise exceeds this fraction of its threshold the
+    /// baseline holds (a ramping leak is not absorbed on its way to the threshold);
+    /// only once the baseline has followed the estimates for `baseline_tau_s` after
+    /// arming (before that it is still settling onto the operating point).
+    pub baseline_hold: f64,
     /// Leak-size detector: drift of the baseline since the warm-up that is reported
     /// as a slowly growing leak, L/min (at nominal drop).
     pub slow_leak_lpm: f64,
@@ -347,6 +352,7 @@ impl Default for ClassifierConfig {
             min_size_lpm: 0.06,
             confirm_s: 0.5,
             baseline_tau_s: 15.0,
+            baseline_hold: 0.5,
             slow_leak_lpm: 0.5,
             supply_pressure_pa: 13.8e6,
             excursion_margin: 0.05,
@@ -383,6 +389,7 @@ impl ClassifierConfig {
             ("min_size_lpm", self.min_size_lpm),
             ("confirm_s", self.confirm_s),
             ("baseline_tau_s", self.baseline_tau_s),
+            ("baseline_hold", self.baseline_hold),
             ("slow_leak_lpm", self.slow_leak_lpm),
             ("supply_pressure_pa", self.supply_pressure_pa),
             ("excursion_margin", self.excursion_margin),
@@ -491,6 +498,8 @@ pub struct LeakSizeDetector {
     baseline_low_lpm: [f64; 3],
     /// Time of the last estimate read, s (for the baseline's time step).
     last_t_s: f64,
+    /// When the detector armed, s.
+    armed_at_s: f64,
     above_since_s: [Option<f64>; 3],
     /// Since when the baseline's drift has exceeded `slow_leak_lpm` (lead kind, time s).
     slow_since_s: Option<(usize, f64)>,
@@ -731,6 +740,7 @@ impl LeakSizeDetector {
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
             last_t_s: f64::NAN,
+            armed_at_s: f64::NAN,
             above_since_s: [None; 3],
             slow_since_s: None,
             blind_until_s: f64::NEG_INFINITY,
@@ -856,6 +866,7 @@ impl LeakSizeDetector {
             self.stats[k].n = 2.0;
         }
         self.arming = Arming::Armed;
+        self.armed_at_s = t_s;
         self.last_t_s = t_s;
     }
 
@@ -1023,10 +1034,15 @@ impl LeakSizeDetector {
         if blind {
             self.blind_s += dt_s;
         }
+        // A rise past `baseline_hold` of its threshold holds the baseline: a leak that
+        // ramps in over seconds is not absorbed before it reaches the threshold.
+        let settled = e.t_s - self.armed_at_s >= self.cfg.baseline_tau_s;
+        let holding = settled
+            && (0..3).any(|k| raw[k] - self.baseline_lpm[k] > self.cfg.baseline_hold * self.threshold_lpm[k]);
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
             let a = if reacquiring {
                 (dt_s / 0.5).min(1.0)
-            } else if blind {
+            } else if blind || holding {
                 0.0
             } else {
                 (dt_s / self.cfg.baseline_tau_s).min(1.0)
