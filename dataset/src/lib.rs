@@ -506,7 +506,7 @@ impl<R: BufRead> CsvReader<R> {
             let period = *self.period.get_or_insert(dt);
             if dt < (1.0 - self.limits.step_tolerance) * period {
                 let msg = format!(
-                    "time step {dt} s (from {last} s) is shorter than {} of the sample period {period} s",
+                    "time step {dt:?} s (from {last:?} s) is shorter than {} of the sample period {period:?} s",
                     1.0 - self.limits.step_tolerance
                 );
                 return Err(self.issue(Some(0), IssueKind::StepTooShort, msg, true));

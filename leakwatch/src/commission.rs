@@ -15,7 +15,7 @@ pub const MIN_HEALTHY_S: f64 = 10.0;
 
 /// Learns the commissioning of `input` under the config at `config` (or the defaults).
 pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, String> {
-    let limits = Limits::for_supply(cfg.model.supply_pressure_pa);
+    let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     if cfg.leak_filter.states < 10 {
@@ -31,6 +31,8 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
             Row::Skipped(_) => {}
         }
     }
+    dataset::check_bad_fraction(reader.rows, reader.skipped, dataset::DEFAULT_MAX_BAD_FRACTION)
+        .map_err(|e| format!("{}: cannot commission from it: {e}", input.display()))?;
     learner
         .finish(MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))

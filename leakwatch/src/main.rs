@@ -136,6 +136,10 @@ enum Command {
         /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
         #[arg(long)]
         thesis_baseline: bool,
+        /// Largest fraction of unusable input rows (0 to 1) before the file is refused
+        /// with a non-zero exit (outputs are still written).
+        #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
+        max_bad_rows: f64,
     },
     /// Learn the healthy state of a rig from a healthy recording and write a config
     /// that `replay`, `run` and every stage load with --config: a leak present when
@@ -336,7 +340,13 @@ fn run(cli: Cli) -> Result<(), String> {
             out,
             single_thread,
             thesis_baseline,
+            max_bad_rows,
         } => {
+            if !(0.0..=1.0).contains(&max_bad_rows) {
+                return Err(format!(
+                    "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
+                ));
+            }
             let mut cfg = Config::load_or_default(config.as_deref())?;
             cfg.classifier.thesis_baseline |= thesis_baseline;
             if let Some(m) = model {
@@ -363,6 +373,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     replay::Wiring::Channels
                 },
                 progress: true,
+                max_bad_fraction: max_bad_rows,
             };
             let s = replay::run(&req)?;
             for i in s.issues.iter().take(10) {
