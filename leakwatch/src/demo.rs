@@ -27,6 +27,7 @@ pub fn off_nominal_rig(model: &model::ActuatorParams) -> model::ActuatorParams {
 /// Runs the demonstration and prints what happens.
 pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result<(), String> {
     let cfg = Config::default();
+    crate::simulate::check_seconds(seconds, cfg.sim.sample_period_s)?;
     let rig = off_nominal_rig(&cfg.model);
     let specs: Vec<String> = if faults.is_empty() {
         vec!["ext1:0.5lpm@20s".into()]

@@ -376,6 +376,15 @@ fn run(cli: Cli) -> Result<(), String> {
                 max_bad_fraction: max_bad_rows,
             };
             let s = replay::run(&req)?;
+            for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
+                if f.resets * 10 > s.samples {
+                    eprintln!(
+                        "warning: the {name} filter was reset {} times in {} samples: its tuning does not fit \
+                         the data (its estimates are mostly NaN)",
+                        f.resets, s.samples
+                    );
+                }
+            }
             for i in s.issues.iter().take(10) {
                 eprintln!("warning: {i}");
             }
