@@ -21,6 +21,8 @@ use std::path::{Path, PathBuf};
 
 pub use model::Sample;
 
+pub mod output;
+
 /// The column names, in the order they are written.
 pub const COLUMNS: [&str; 9] = ["t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak"];
 /// The columns every file must have.
@@ -593,13 +595,14 @@ pub fn read_csv(path: &Path, limits: Limits) -> Result<Dataset, DatasetError> {
 }
 
 /// Writes samples to a CSV file with every column of [`COLUMNS`], floats at
-/// full round-trip precision.
-pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), DatasetError> {
+/// full round-trip precision. The file is created by [`output::create_file`]:
+/// an existing file is replaced only if `overwrite`, a symbolic link never.
+pub fn write_csv(path: &Path, samples: &[Sample], overwrite: bool) -> Result<(), DatasetError> {
     let io = |source| DatasetError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let file = File::create(path).map_err(io)?;
+    let file = output::create_file(path, overwrite, &[]).map_err(io)?;
     let mut w = BufWriter::new(file);
     write_header(&mut w).map_err(io)?;
     for s in samples {

@@ -30,7 +30,7 @@ fn round_trip_is_bit_exact() {
         })
         .collect();
     let p = tmp("round.csv");
-    write_csv(&p, &samples).unwrap();
+    write_csv(&p, &samples, true).unwrap();
     let back = read_csv(&p, Limits::default()).unwrap();
     assert!(back.issues.is_empty(), "{:?}", back.issues.first());
     assert_eq!(back.samples.len(), samples.len());
@@ -100,7 +100,7 @@ fn bad_rows_are_skipped_and_reported_with_line_and_column() {
 
 #[test]
 fn unwritable_path_names_the_path() {
-    let e = write_csv(Path::new("/nonexistent-dir/x.csv"), &[]).unwrap_err();
+    let e = write_csv(Path::new("/nonexistent-dir/x.csv"), &[], false).unwrap_err();
     assert!(e.to_string().contains("/nonexistent-dir/x.csv"));
 }
 
