@@ -47,11 +47,10 @@ fn check_not_input(meta: &std::fs::Metadata, inputs: &[&Path]) -> std::io::Resul
     Ok(())
 }
 
-/// Opens `path` for writing, created or emptied, without following a symbolic
-/// link; an existing file is refused unless `overwrite`, and one of `inputs`
-/// always. With `overwrite`, an existing device or FIFO (e.g. /dev/null) is
-/// opened as it is.
-pub fn create_file(path: &Path, overwrite: bool, inputs: &[&Path]) -> std::io::Result<File> {
+/// Checks, without opening anything, that [`create_file`] may write `path`: it is
+/// absent, or (with `overwrite`) an existing file that is neither a symbolic
+/// link nor one of `inputs`.
+pub fn check_replaceable(path: &Path, overwrite: bool, inputs: &[&Path]) -> std::io::Result<()> {
     if let Ok(meta) = std::fs::symlink_metadata(path) {
         if meta.file_type().is_symlink() {
             return Err(symlink_error());
@@ -64,6 +63,15 @@ pub fn create_file(path: &Path, overwrite: bool, inputs: &[&Path]) -> std::io::R
             ));
         }
     }
+    Ok(())
+}
+
+/// Opens `path` for writing, created or emptied, without following a symbolic
+/// link; an existing file is refused unless `overwrite`, and one of `inputs`
+/// always. With `overwrite`, an existing device or FIFO (e.g. /dev/null) is
+/// opened as it is.
+pub fn create_file(path: &Path, overwrite: bool, inputs: &[&Path]) -> std::io::Result<File> {
+    check_replaceable(path, overwrite, inputs)?;
     let mut opts = OpenOptions::new();
     opts.write(true).custom_flags(O_NOFOLLOW);
     if overwrite {

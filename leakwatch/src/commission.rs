@@ -39,13 +39,11 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
 }
 
 /// The command: learn, then write the config with its commissioning.
-pub fn run(input: &Path, config: Option<&Path>, out: &Path) -> Result<(), String> {
-    if out.exists() {
-        return Err(format!(
-            "{} exists: not overwritten (remove it or choose another --out)",
-            out.display()
-        ));
-    }
+pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<(), String> {
+    let mut inputs = vec![input];
+    inputs.extend(config);
+    // refused before the learning, not after
+    crate::out::check(out, force, &inputs)?;
     let mut cfg = Config::load_or_default(config)?;
     let c = learn(input, &cfg)?;
     eprintln!(
@@ -64,13 +62,7 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path) -> Result<(), String
         input.display(),
         name = out.display()
     );
-    let mut f = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(out)
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
-    std::io::Write::write_all(&mut f, text.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    crate::out::write(out, text.as_bytes(), force, &inputs)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }

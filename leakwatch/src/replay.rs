@@ -3,7 +3,6 @@
 //! thread; both give the same output bit for bit).
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -41,6 +40,10 @@ pub struct ReplayRequest {
     /// Largest fraction of unusable rows (0 to 1) before the file is refused
     /// (outputs written, then an error).
     pub max_bad_fraction: f64,
+    /// Replace existing output files (`--force`).
+    pub overwrite: bool,
+    /// Other inputs (the config, an original log) that no output may replace.
+    pub protect: Vec<PathBuf>,
 }
 
 /// Residual statistics of one filter.
@@ -182,10 +185,11 @@ pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Re
     )
 }
 
-/// Writes events as a JSON array (NaN becomes null).
-pub fn write_events(path: &Path, events: &[LeakEvent]) -> Result<(), String> {
+/// Writes events as a JSON array (NaN becomes null); an existing file only if
+/// `force`, none of `inputs` ever (see [`crate::out::write`]).
+pub fn write_events(path: &Path, events: &[LeakEvent], force: bool, inputs: &[&Path]) -> Result<(), String> {
     let text = serde_json::to_string_pretty(events).map_err(|e| format!("events: {e}"))?;
-    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
+    crate::out::write(path, (text + "\n").as_bytes(), force, inputs)
 }
 
 enum Batch {
@@ -197,13 +201,20 @@ const BATCH: usize = 2048;
 
 /// Runs a replay and writes estimates.csv, events.json and summary.json into the output directory.
 pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
-    std::fs::create_dir_all(&req.out_dir)
-        .map_err(|e| format!("cannot create output directory {}: {e}", req.out_dir.display()))?;
+    crate::out::dir(&req.out_dir)?;
+    let mut inputs: Vec<&Path> = vec![req.input.as_path()];
+    inputs.extend(req.protect.iter().map(|p| p.as_path()));
+    let est_path = req.out_dir.join("estimates.csv");
+    let events_path = req.out_dir.join("events.json");
+    let summary_path = req.out_dir.join("summary.json");
+    // Refuse before reading or writing anything.
+    for p in [&est_path, &events_path, &summary_path] {
+        crate::out::check(p, req.overwrite, &inputs)?;
+    }
     let cfg = &req.config;
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
-    let est_path = req.out_dir.join("estimates.csv");
-    let file = File::create(&est_path).map_err(|e| format!("cannot write {}: {e}", est_path.display()))?;
+    let file = crate::out::create(&est_path, req.overwrite, &inputs)?;
     let mut out = BufWriter::with_capacity(1 << 20, file);
     writeln!(out, "{ESTIMATES_HEADER}").map_err(|e| format!("{}: {e}", est_path.display()))?;
 
@@ -380,10 +391,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                 )
             })
     };
-    write_events(&req.out_dir.join("events.json"), &events)?;
-    let path = req.out_dir.join("summary.json");
+    write_events(&events_path, &events, req.overwrite, &inputs)?;
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(&path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    crate::out::write(&summary_path, (text + "\n").as_bytes(), req.overwrite, &inputs)?;
     if let Some(why) = &summary.refused {
         return Err(why.clone());
     }

@@ -1,6 +1,6 @@
 //! `leakwatch simulate`: run a scenario on the simulated rig and write the CSV.
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use model::fault::{Fault, FaultSchedule};
 use model::params::FrictionPreset;
@@ -69,13 +69,27 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
     Ok((sim, seconds))
 }
 
-/// Runs the request and writes the CSV to `out`; returns the number of samples.
-pub fn run(cfg: &Config, req: &SimulateRequest, out: &PathBuf) -> Result<usize, String> {
+/// Runs the request and writes the CSV to `out` (an existing file only if `force`,
+/// never the `config` file or through a symbolic link); returns the number of samples.
+pub fn run(
+    cfg: &Config,
+    req: &SimulateRequest,
+    out: &Path,
+    force: bool,
+    config: Option<&Path>,
+) -> Result<usize, String> {
     let (mut sim, seconds) = build(cfg, req)?;
-    // fail on an unwritable path before spending time simulating
-    std::fs::File::create(out).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    // fail on an unwritable or refused path before spending time simulating
+    let inputs: Vec<&Path> = config.into_iter().collect();
+    let file = crate::out::create(out, force, &inputs)?;
     let samples = sim.run(seconds);
-    dataset::write_csv(out, &samples).map_err(|e| e.to_string())?;
+    let io = |e: std::io::Error| dataset::output::message(out, &e);
+    let mut w = std::io::BufWriter::new(file);
+    dataset::write_header(&mut w).map_err(io)?;
+    for s in &samples {
+        dataset::write_row(&mut w, s).map_err(io)?;
+    }
+    std::io::Write::flush(&mut w).map_err(io)?;
     Ok(samples.len())
 }
 

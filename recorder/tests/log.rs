@@ -7,6 +7,7 @@ use recorder::{export_csv, Entry, GapRecord, LogReader, LogWriter, WriterOptions
 
 fn dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("recorder-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -224,8 +225,27 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     write_sample_log(&path, 50, WriterOptions::default());
     let log = LogReader::open(&path).unwrap().read().unwrap();
     let out = d.join("csv");
-    let files = export_csv(&log, &out).unwrap();
+    let files = export_csv(&log, &out, false).unwrap();
     assert_eq!(files.len(), 7);
+    // a second export into the same directory replaces nothing without overwrite
+    let e = export_csv(&log, &out, false).unwrap_err().to_string();
+    assert!(e.contains("frames.csv: exists: not overwritten"), "{e}");
+    assert_eq!(export_csv(&log, &out, true).unwrap().len(), 7);
+    // and a second log over the first one neither
+    let e = LogWriter::create(&path, WriterOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("x.mcap: exists: not overwritten"), "{e}");
+    // a symbolic link as the log is never followed, even with overwrite
+    let link = d.join("link.mcap");
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    let options = WriterOptions {
+        overwrite: true,
+        ..WriterOptions::default()
+    };
+    let e = LogWriter::create(&link, options).err().unwrap().to_string();
+    assert!(e.contains("link.mcap: is a symbolic link"), "{e}");
     let frames_csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let mut lines = frames_csv.lines();
     assert_eq!(
