@@ -11,8 +11,8 @@ fn series(label: &str, x: &[f64], y: Vec<f64>) -> Series {
 /// Draws a run in the CSV format: rod position and reference, both pressures,
 /// valve command and leak flow on a shared time axis.
 pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String> {
-    crate::out::check(out, force, &[input])?;
     let ds = dataset::read_csv(input, dataset::Limits::default()).map_err(|e| e.to_string())?;
+    crate::out::check(out, force, &[input])?;
     let s = &ds.samples;
     let t: Vec<f64> = s.iter().map(|s| s.t_s).collect();
     let col = |f: fn(&model::Sample) -> f64, scale: f64| s.iter().map(|s| f(s) * scale).collect::<Vec<f64>>();
@@ -65,12 +65,12 @@ fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
 /// estimated position and pressures, the thesis filter's residuals and MAE, and
 /// the leak filter's leak sizes, with detections and onsets marked.
 pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
+    let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
     crate::out::check(
         out,
         force,
         &[&dir.join("estimates.csv"), &dir.join("events.json")],
     )?;
-    let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
     let col = |name: &str| -> Result<&Vec<f64>, String> {
         header
             .iter()
