@@ -328,7 +328,7 @@ fn run(cli: Cli) -> Result<(), String> {
             force,
         }),
         Command::Export { log, csv } => {
-            let files = export_log(&log, &csv, force)?;
+            let (files, _) = export_log(&log, &csv, force)?;
             for f in files {
                 eprintln!("wrote {}", f.display());
             }
@@ -365,10 +365,11 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             // A recorded log is replayed through its frames, exported as dataset.csv.
             let mut protect: Vec<PathBuf> = config.iter().cloned().collect();
+            let mut log = None;
             let input = if input.extension().is_some_and(|e| e == "mcap") {
                 out::dir(&out)?;
                 let dir = out.join("log-export");
-                export_log(&input, &dir, force)?;
+                log = Some(export_log(&input, &dir, force)?.1);
                 protect.push(input);
                 dir.join("dataset.csv")
             } else {
@@ -387,6 +388,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 max_bad_fraction: max_bad_rows,
                 overwrite: force,
                 protect,
+                log,
             };
             let s = replay::run(&req)?;
             for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
@@ -665,13 +667,34 @@ pub(crate) fn benches_samples(seconds: f64) -> Vec<model::Sample> {
     bench::speed::recorded_samples(seconds)
 }
 
-/// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv).
-fn export_log(log: &std::path::Path, dir: &std::path::Path, force: bool) -> Result<Vec<PathBuf>, String> {
+/// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv);
+/// returns the files and what reading the log skipped (damaged chunks).
+fn export_log(
+    log: &std::path::Path,
+    dir: &std::path::Path,
+    force: bool,
+) -> Result<(Vec<PathBuf>, replay::LogDamage), String> {
     let l = recorder::LogReader::open(log)
         .and_then(|r| r.read())
         .map_err(|e| format!("{}: {e}", log.display()))?;
     if let Some(why) = &l.truncated {
         eprintln!("warning: {}: {why}; reading what is complete", log.display());
     }
-    recorder::export_csv(&l, dir, force).map_err(|e| e.to_string())
+    for c in &l.chunks_skipped {
+        eprintln!("warning: {}: damaged {c}; skipped", log.display());
+    }
+    if !l.chunks_skipped.is_empty() {
+        eprintln!(
+            "warning: {}: {} damaged chunks skipped, {} samples lost with them",
+            log.display(),
+            l.chunks_skipped.len(),
+            l.frames_lost
+        );
+    }
+    let files = recorder::export_csv(&l, dir, force).map_err(|e| e.to_string())?;
+    let damage = replay::LogDamage {
+        chunks_skipped: l.chunks_skipped,
+        frames_lost: l.frames_lost,
+    };
+    Ok((files, damage))
 }

@@ -44,6 +44,17 @@ pub struct ReplayRequest {
     pub overwrite: bool,
     /// Other inputs (the config, an original log) that no output may replace.
     pub protect: Vec<PathBuf>,
+    /// When the input was exported from a recorded log: what reading it skipped.
+    pub log: Option<LogDamage>,
+}
+
+/// What reading a recorded log (MCAP) skipped, reported in summary.json.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct LogDamage {
+    /// Damaged chunks skipped (byte offset and reason), never decompressed unbounded.
+    pub chunks_skipped: Vec<String>,
+    /// Sensor frames (samples) lost with them.
+    pub frames_lost: u64,
 }
 
 /// Residual statistics of one filter.
@@ -86,6 +97,9 @@ pub struct Summary {
     pub refused: Option<String>,
     /// Usable rows with an optional column absent (empty or NaN), per column present in the header.
     pub optional_absent: BTreeMap<String, u64>,
+    /// For a recorded log (MCAP) input: damaged chunks skipped and the samples lost with them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub log: Option<LogDamage>,
     /// Samples missing from the time stamps (gaps), bridged or causing resets.
     pub samples_missing: u64,
     /// Input problems, with line and column (the first 100).
@@ -226,6 +240,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let mut events: Vec<LeakEvent> = Vec::new();
     let mut summary = Summary {
         input: req.input.display().to_string(),
+        log: req.log.clone(),
         wiring: match req.wiring {
             Wiring::Channels => "channels".into(),
             Wiring::SingleThread => "single-thread".into(),

@@ -358,3 +358,64 @@ fn values_outside_physical_ranges_are_rejected_counted_and_too_many_fail_the_fil
     assert!(String::from_utf8_lossy(&o.stderr).contains("--max-bad-rows 2"));
     assert!(!o.status.success());
 }
+
+#[test]
+fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samples() {
+    use recorder::{Entry, LogWriter, WriterOptions};
+    let d = tmpdir("mcap");
+    let log = d.join("run.mcap");
+    let options = WriterOptions {
+        chunk_size: 16 * 1024,
+        ..WriterOptions::default()
+    };
+    let mut w = LogWriter::create(&log, options).unwrap();
+    for i in 0..4000u64 {
+        let t = i as f64 * 1e-3;
+        let frame = frames::SensorFrame {
+            seq: i,
+            acq_mono_ns: i * 1_000_000,
+            t_s: t,
+            u_v: 0.5 * (t * 6.0).sin(),
+            x_m: 0.3,
+            p1_pa: 6.9e6,
+            p2_pa: 6.9e6,
+            x_sp_m: f64::NAN,
+            f_load_n: f64::NAN,
+            ref_m: f64::NAN,
+            q_leak_lpm: f64::NAN,
+            flags: 0,
+            _pad: 0,
+        };
+        assert!(w.write(Entry::Frame(frame, i)).unwrap());
+    }
+    w.finish().unwrap();
+    // declare a wrong uncompressed size in the 10th chunk (offset of the size field:
+    // opcode, record length, start and end time)
+    let mut bytes = std::fs::read(&log).unwrap();
+    let (mut at, mut seen) = (8usize, 0);
+    while bytes[at] != 0x06 || seen < 9 {
+        if bytes[at] == 0x06 {
+            seen += 1;
+        }
+        at += 9 + u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+    }
+    bytes[at + 25..at + 33].copy_from_slice(&1u64.to_le_bytes());
+    let bad = d.join("bad.mcap");
+    std::fs::write(&bad, &bytes).unwrap();
+    let out = d.join("out");
+    let o = replay(&bad, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "damaged chunk at byte {at}: declares 1 bytes uncompressed, but the data holds more; skipped"
+        )),
+        "{err}"
+    );
+    let s = json(&out.join("summary.json"));
+    let lost = s["log"]["frames_lost"].as_u64().unwrap();
+    assert!(lost >= 50, "{s:#}");
+    assert_eq!(s["samples"].as_u64().unwrap() + lost, 4000, "{s:#}");
+    assert_eq!(s["samples_missing"].as_u64().unwrap(), lost, "{s:#}");
+    assert_eq!(s["log"]["chunks_skipped"].as_array().unwrap().len(), 1, "{s:#}");
+}
