@@ -181,7 +181,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("acq-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("a.csv");
-        dataset::write_csv(&p, &samples).unwrap();
+        dataset::write_csv(&p, &samples, true).unwrap();
         let mut csv = CsvSource::open(&p, dataset::Limits::default()).unwrap();
         let mut back = Vec::new();
         while let Some(item) = csv.next_item() {

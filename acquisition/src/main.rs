@@ -100,7 +100,7 @@ fn build_source(args: &Args) -> Result<Box<dyn Source>, String> {
     let cfg = RigConfig::load(args.config.as_deref())?;
     let rig = cfg.rig.clone().unwrap_or_else(|| cfg.model.clone());
     if let Some(csv) = &args.csv {
-        let limits = dataset::Limits::for_supply(rig.supply_pressure_pa);
+        let limits = dataset::Limits::for_model(&rig, cfg.sim.sample_period_s);
         let src = CsvSource::open(csv, limits).map_err(|e| e.to_string())?;
         return Ok(Box::new(src));
     }

@@ -220,7 +220,7 @@ fn measured_file(dir: &Path) -> Result<PathBuf, String> {
 
 /// Runs one recorded run through the chain; returns every leak-size event and the samples read.
 pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> {
-    let limits = dataset::Limits::for_supply(set.model.supply_pressure_pa);
+    let limits = dataset::Limits::for_model(&set.model, set.leak_filter.sample_period_s);
     let mut reader = dataset::CsvReader::open(path, limits).map_err(|e| e.to_string())?;
     let mut stage = EstimatorStage::new(
         set.model.clone(),
@@ -247,6 +247,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
             }
         });
     }
+    dataset::check_bad_fraction(reader.rows, reader.skipped, dataset::DEFAULT_MAX_BAD_FRACTION)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(FileRun {
         events,
         samples: n,

@@ -17,7 +17,7 @@ fn main() {
     let rep = calibrate::suite::bench_cases(&list, &opts, 2);
     println!("{}", rep.markdown());
     if let Ok(dir) = std::env::var("OUT") {
-        match rep.write(std::path::Path::new(&dir)) {
+        match rep.write(std::path::Path::new(&dir), true) {
             Ok(p) => eprintln!("wrote {} and {}", p[0].display(), p[1].display()),
             Err(e) => eprintln!("{e}"),
         }

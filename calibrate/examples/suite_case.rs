@@ -42,7 +42,7 @@ fn main() {
             );
         }
     }
-    match calibrate::write_outputs(&cal, std::path::Path::new(&out)) {
+    match calibrate::write_outputs(&cal, std::path::Path::new(&out), true, &[]) {
         Ok(f) => println!("wrote {}", f.report.display()),
         Err(e) => eprintln!("{e}"),
     }

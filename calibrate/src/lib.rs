@@ -9,7 +9,7 @@
 //! calibrate::run(measured: &[Sample], model: &ActuatorParams, opts: &CalibrateOptions)
 //!     -> Result<Calibration, CalibrateError>
 //! calibrate::run_with_progress(measured, model, opts, &|line: &str| ...)   // same, with progress lines
-//! calibrate::write_outputs(cal: &Calibration, out_dir: &Path) -> Result<OutputFiles, CalibrateError>
+//! calibrate::write_outputs(cal: &Calibration, out_dir: &Path, overwrite: bool, inputs: &[&Path]) -> Result<OutputFiles, CalibrateError>
 //!     // DIR/calibration.json, DIR/model.toml (a leakwatch config: `--config model.toml`),
 //!     // DIR/report.md + DIR/*.png
 //! calibrate::fit_effect(measured, model, effect_name: &str, opts) -> Result<EffectFit, CalibrateError>

@@ -56,14 +56,49 @@ fn plot_err(e: plot::PlotError) -> CalibrateError {
     CalibrateError::Plot(e.to_string())
 }
 
-/// Writes `calibration.json`, `model.toml`, `report.md` and the plots into `out_dir` (created if needed).
-pub fn write_outputs(cal: &Calibration, out_dir: &Path) -> Result<OutputFiles, CalibrateError> {
-    std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
+/// Writes `bytes` to `path` through [`dataset::output`] (no symbolic link followed).
+fn write(path: &Path, bytes: &[u8], overwrite: bool, inputs: &[&Path]) -> Result<(), CalibrateError> {
+    dataset::output::write_file(path, bytes, overwrite, inputs).map_err(io(path))
+}
+
+/// Renders `fig` and writes it as a PNG to `path` (an existing file replaced: the
+/// caller has checked).
+fn save_png(fig: &Figure, path: &Path) -> Result<(), CalibrateError> {
+    let bytes = plot::encode_png(&plot::render(fig).map_err(plot_err)?).map_err(plot_err)?;
+    write(path, &bytes, true, &[])
+}
+
+/// The files [`write_outputs`] may write into a directory.
+const OUTPUT_NAMES: [&str; 7] = [
+    "calibration.json",
+    "model.toml",
+    "report.md",
+    "traces.png",
+    "breakdown_position.png",
+    "breakdown_velocity.png",
+    "gap.png",
+];
+
+/// Writes `calibration.json`, `model.toml`, `report.md` and the plots into `out_dir`
+/// (created if needed; not a symbolic link). An existing output is replaced only if
+/// `overwrite` (`--force`); none of `inputs` is ever replaced.
+pub fn write_outputs(
+    cal: &Calibration,
+    out_dir: &Path,
+    overwrite: bool,
+    inputs: &[&Path],
+) -> Result<OutputFiles, CalibrateError> {
+    dataset::output::create_dir(out_dir).map_err(io(out_dir))?;
+    // Refuse before writing anything, rather than leave a half-replaced set.
+    for name in OUTPUT_NAMES {
+        let p = out_dir.join(name);
+        dataset::output::check_replaceable(&p, overwrite, inputs).map_err(io(&p))?;
+    }
     let json = out_dir.join("calibration.json");
     let text = serde_json::to_string_pretty(cal).map_err(|e| CalibrateError::Serialize(e.to_string()))?;
-    std::fs::write(&json, text).map_err(io(&json))?;
+    write(&json, text.as_bytes(), true, inputs)?;
     let mt = out_dir.join("model.toml");
-    std::fs::write(&mt, model_toml(&cal.model_after)?).map_err(io(&mt))?;
+    write(&mt, model_toml(&cal.model_after)?.as_bytes(), true, inputs)?;
 
     let mut plots = Vec::new();
     if !cal.traces.t_s.is_empty() {
@@ -85,7 +120,7 @@ pub fn write_outputs(cal: &Calibration, out_dir: &Path) -> Result<OutputFiles, C
     plots.push(g);
 
     let report = out_dir.join("report.md");
-    std::fs::write(&report, report_md(cal, &plots)).map_err(io(&report))?;
+    write(&report, report_md(cal, &plots).as_bytes(), true, inputs)?;
     Ok(OutputFiles {
         json,
         model_toml: mt,
@@ -129,7 +164,7 @@ fn plot_traces(cal: &Calibration, path: &Path) -> Result<(), CalibrateError> {
                 .with_series(Series::line("after (calibrated)", t, &col(&tr.after))),
         );
     }
-    plot::render_png(&fig, path).map_err(plot_err)
+    save_png(&fig, path)
 }
 
 fn plot_breakdown(cal: &Calibration, regime: &str, unit: &str, path: &Path) -> Result<bool, CalibrateError> {
@@ -166,7 +201,7 @@ fn plot_breakdown(cal: &Calibration, regime: &str, unit: &str, path: &Path) -> R
                 .with_series(Series::line("after", &xa, &ya)),
         );
     }
-    plot::render_png(&fig, path).map_err(plot_err)?;
+    save_png(&fig, path)?;
     Ok(true)
 }
 
@@ -213,7 +248,7 @@ fn plot_gap(cal: &Calibration, path: &Path) -> Result<(), CalibrateError> {
     }
     fig.panels
         .push(Panel::new("combined", "normalised RMS [-]").with_series(pts));
-    plot::render_png(&fig, path).map_err(plot_err)
+    save_png(&fig, path)
 }
 
 fn fmt_gap(g: &crate::Gap) -> String {

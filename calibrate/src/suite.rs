@@ -763,17 +763,26 @@ impl BenchReport {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
     }
 
-    /// Writes `DIR/calibration_bench.md` and `DIR/calibration_bench.json` and returns their paths.
-    pub fn write(&self, dir: &std::path::Path) -> Result<[std::path::PathBuf; 2], crate::CalibrateError> {
+    /// Writes `DIR/calibration_bench.md` and `DIR/calibration_bench.json` and returns their
+    /// paths; existing ones are replaced only if `overwrite` (`--force`), symbolic links never.
+    pub fn write(
+        &self,
+        dir: &std::path::Path,
+        overwrite: bool,
+    ) -> Result<[std::path::PathBuf; 2], crate::CalibrateError> {
         let io = |path: &std::path::Path| {
             let path = path.to_path_buf();
             move |source| crate::CalibrateError::Io { path, source }
         };
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        use dataset::output::{check_replaceable, create_dir, write_file};
+        create_dir(dir).map_err(io(dir))?;
         let md = dir.join("calibration_bench.md");
-        std::fs::write(&md, self.markdown()).map_err(io(&md))?;
         let js = dir.join("calibration_bench.json");
-        std::fs::write(&js, self.to_json()).map_err(io(&js))?;
+        for p in [&md, &js] {
+            check_replaceable(p, overwrite, &[]).map_err(io(p))?;
+        }
+        write_file(&md, self.markdown().as_bytes(), true, &[]).map_err(io(&md))?;
+        write_file(&js, self.to_json().as_bytes(), true, &[]).map_err(io(&js))?;
         Ok([md, js])
     }
 }

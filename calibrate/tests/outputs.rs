@@ -10,7 +10,21 @@ fn outputs_are_written_and_the_model_loads_back() {
     let data = generate(&c);
     let cal = run(&data, &nominal_model(), &CalibrateOptions::default()).expect("runs");
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("calibrate-outputs");
-    let files = write_outputs(&cal, &dir).expect("written");
+    // the directory persists between test runs: replace what an earlier run left
+    let files = write_outputs(&cal, &dir, true, &[]).expect("written");
+    // a second write without overwrite is refused before anything is touched
+    let before = std::fs::read(&files.json).expect("json");
+    let e = write_outputs(&cal, &dir, false, &[]).unwrap_err().to_string();
+    assert!(
+        e.contains("calibration.json: exists: not overwritten (use --force to replace it)"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&files.json).expect("json"), before);
+    // an output that is the input is refused even with overwrite
+    let e = write_outputs(&cal, &dir, true, &[files.report.as_path()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("report.md: is the input"), "{e}");
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&files.json).expect("json")).expect("parses");

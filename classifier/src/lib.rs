@@ -235,6 +235,21 @@ impl Commissioning {
                     .into(),
             );
         }
+        if self
+            .offsets_lpm
+            .iter()
+            .chain(&self.spreads_lpm)
+            .any(|v| v.abs() > 1e4)
+            || self.crossings_per_s.iter().any(|v| *v > 1e6)
+            || self.healthy_s > 1e9
+            || self.nis_mean.is_infinite()
+        {
+            return Err(
+                "[classifier.commissioning] offsets and spreads must be within ±1e4 L/min, crossings \
+                 at most 1e6 per s, healthy_s at most 1e9 s, nis_mean finite or NaN"
+                    .into(),
+            );
+        }
         Ok(())
     }
 }
@@ -375,44 +390,113 @@ impl Default for ClassifierConfig {
 impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
-        let fields = [
-            ("settle_s", self.settle_s),
-            ("warmup_s", self.warmup_s),
-            ("min_warmup_s", self.min_warmup_s),
-            ("threshold_sigma", self.threshold_sigma),
-            ("isolation_max_misfit", self.isolation_max_misfit),
-            ("size_window_s", self.size_window_s),
-            ("recovery_s", self.recovery_s),
-            ("nis_gate", self.nis_gate),
-            ("nis_ratio_gate", self.nis_ratio_gate),
-            ("max_command_hz", self.max_command_hz),
-            ("min_size_lpm", self.min_size_lpm),
-            ("confirm_s", self.confirm_s),
-            ("baseline_tau_s", self.baseline_tau_s),
-            ("baseline_hold", self.baseline_hold),
-            ("slow_leak_lpm", self.slow_leak_lpm),
-            ("supply_pressure_pa", self.supply_pressure_pa),
-            ("excursion_margin", self.excursion_margin),
-            ("excursion_recovery_s", self.excursion_recovery_s),
-            ("excursion_override", self.excursion_override),
-            ("clear_s", self.clear_s),
-            ("update_relative", self.update_relative),
-            ("reisolate_s", self.reisolate_s),
-            ("update_interval_s", self.update_interval_s),
-            ("mae_margin", self.mae_margin),
-            ("mae_confirm_s", self.mae_confirm_s),
-            ("pressure_full_scale_pa", self.pressure_full_scale_pa),
+        // (name, value, least, largest, unit)
+        let fields: [(&str, f64, f64, f64, &str); 27] = [
+            ("settle_s", self.settle_s, 0.0, 1e6, "s"),
+            ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
+            ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
+            (
+                "false_alarms_per_hour",
+                self.false_alarms_per_hour,
+                1e-9,
+                1e6,
+                "per hour",
+            ),
+            (
+                "threshold_sigma",
+                self.threshold_sigma,
+                0.0,
+                1e3,
+                "healthy spreads",
+            ),
+            (
+                "isolation_max_misfit",
+                self.isolation_max_misfit,
+                0.0,
+                10.0,
+                "(fraction of the size)",
+            ),
+            ("size_window_s", self.size_window_s, 0.0, 1e6, "s"),
+            ("recovery_s", self.recovery_s, 0.0, 1e6, "s"),
+            (
+                "nis_gate",
+                self.nis_gate,
+                0.0,
+                1e15,
+                "(normalised innovation squared)",
+            ),
+            (
+                "nis_ratio_gate",
+                self.nis_ratio_gate,
+                0.0,
+                1e6,
+                "(times the healthy mean NIS)",
+            ),
+            ("max_command_hz", self.max_command_hz, 0.0, 1e5, "Hz"),
+            ("min_size_lpm", self.min_size_lpm, 0.0, 1e4, "L/min"),
+            ("confirm_s", self.confirm_s, 0.0, 1e6, "s"),
+            ("baseline_tau_s", self.baseline_tau_s, 0.0, 1e8, "s"),
+            (
+                "baseline_hold",
+                self.baseline_hold,
+                0.0,
+                1e3,
+                "(fraction of the threshold)",
+            ),
+            ("slow_leak_lpm", self.slow_leak_lpm, 0.0, 1e4, "L/min"),
+            ("supply_pressure_pa", self.supply_pressure_pa, 1e4, 1e9, "Pa"),
+            (
+                "excursion_margin",
+                self.excursion_margin,
+                0.0,
+                1.0,
+                "(fraction of the supply pressure)",
+            ),
+            ("excursion_recovery_s", self.excursion_recovery_s, 0.0, 1e6, "s"),
+            (
+                "excursion_override",
+                self.excursion_override,
+                0.0,
+                1e6,
+                "thresholds",
+            ),
+            ("clear_s", self.clear_s, 0.0, 1e6, "s"),
+            (
+                "update_relative",
+                self.update_relative,
+                0.0,
+                1e6,
+                "(relative change)",
+            ),
+            ("reisolate_s", self.reisolate_s, 0.0, 1e6, "s"),
+            ("update_interval_s", self.update_interval_s, 0.0, 1e6, "s"),
+            ("mae_margin", self.mae_margin, 0.0, 1e6, "(times the healthy MAE)"),
+            ("mae_confirm_s", self.mae_confirm_s, 0.0, 1e6, "s"),
+            (
+                "pressure_full_scale_pa",
+                self.pressure_full_scale_pa,
+                1e5,
+                1e9,
+                "Pa",
+            ),
         ];
-        for (name, v) in fields {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("[classifier] {name} = {v}: must be a finite number ≥ 0"));
+        for (name, v, lo, hi, unit) in fields {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(format!(
+                    "[classifier] {name} = {v:?}: must be a number from {lo:?} to {hi:?} {unit}"
+                ));
             }
         }
-        if !(self.false_alarms_per_hour.is_finite() && self.false_alarms_per_hour > 0.0) {
-            return Err(format!(
-                "[classifier] false_alarms_per_hour = {}: must be a finite rate > 0 per hour",
-                self.false_alarms_per_hour
-            ));
+        for (name, v) in [
+            ("stuck_samples", self.stuck_samples),
+            ("saturated_samples", self.saturated_samples),
+            ("dead_samples", self.dead_samples),
+        ] {
+            if !(1..=1_000_000_000).contains(&v) {
+                return Err(format!(
+                    "[classifier] {name} = {v}: must be 1 to 1000000000 samples"
+                ));
+            }
         }
         if let Some(c) = &self.commissioning {
             c.validate()?;

@@ -6,16 +6,22 @@
 //! round-trip formatting, so a file reads back bit for bit.
 //!
 //! Reading streams rows one at a time. A row that cannot be used (a
-//! non-numeric cell, a NaN or infinite required value, time going backwards,
-//! a pressure outside the physical range) is skipped and reported as an
-//! [`Issue`] naming the line and column; nothing is silently filled. A gap in
-//! time is reported but the row is kept, so the consumer can bridge it.
+//! non-numeric cell, a NaN or infinite required value, an infinite optional
+//! value, time going backwards or advancing by less than half a sample
+//! period, any value outside its physical range: see [`Limits`]) is skipped
+//! and reported as an [`Issue`] naming the line and column; nothing is
+//! silently filled. An empty or NaN optional cell means "absent" (counted in
+//! [`CsvReader::absent`]). A gap in time is reported but the row is kept, so
+//! the consumer can bridge it. [`check_bad_fraction`] decides whether a file
+//! with many unusable rows is usable at all.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub use model::Sample;
+
+pub mod output;
 
 /// The column names, in the order they are written.
 pub const COLUMNS: [&str; 9] = ["t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak"];
@@ -84,19 +90,39 @@ impl std::error::Error for DatasetError {}
 pub enum IssueKind {
     /// A cell is not a number; the row is skipped.
     NotANumber,
-    /// A required value is NaN or infinite; the row is skipped.
+    /// A value is NaN or infinite (a required column), or infinite (an optional
+    /// column, where NaN or an empty cell means "absent"); the row is skipped.
     NonFinite,
     /// The row has fewer or more cells than the header; the row is skipped.
     WrongCellCount,
     /// Time does not increase; the row is skipped.
     TimeNotIncreasing,
+    /// Time advances by less than `(1 - step_tolerance)` sample periods; the row is skipped.
+    StepTooShort,
     /// Time jumps by more than 1.5 sample periods; the row is kept.
     Gap {
         /// Number of missing samples.
         missing: u64,
     },
-    /// A pressure is outside the accepted range; the row is skipped.
+    /// A value is outside its physical range ([`Limits`]); the row is skipped.
     OutOfRange,
+}
+
+impl IssueKind {
+    /// A short name of the kind, used as a key in replay's summary.json
+    /// (`not_a_number`, `non_finite`, `wrong_cell_count`, `time_not_increasing`,
+    /// `step_too_short`, `gap`, `out_of_range`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            IssueKind::NotANumber => "not_a_number",
+            IssueKind::NonFinite => "non_finite",
+            IssueKind::WrongCellCount => "wrong_cell_count",
+            IssueKind::TimeNotIncreasing => "time_not_increasing",
+            IssueKind::StepTooShort => "step_too_short",
+            IssueKind::Gap { .. } => "gap",
+            IssueKind::OutOfRange => "out_of_range",
+        }
+    }
 }
 
 /// A problem with one row of the file.
@@ -123,32 +149,154 @@ impl std::fmt::Display for Issue {
     }
 }
 
-/// Limits that decide which rows are usable.
+/// The default largest fraction of a file's rows that may be unusable (1 %);
+/// beyond it replay reports the file as bad (non-zero exit).
+pub const DEFAULT_MAX_BAD_FRACTION: f64 = 0.01;
+
+/// Limits that decide which rows are usable: the physical range of every
+/// column, from the actuator's parameters (see [`Limits::for_model`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
     /// Lowest accepted pressure, Pa.
     pub min_pressure_pa: f64,
     /// Highest accepted pressure, Pa (MODEL: 1.5 p_s).
     pub max_pressure_pa: f64,
-    /// Nominal sample period, s, used to detect gaps (None: learned from the first two rows).
+    /// Nominal sample period, s, used to detect gaps and too short steps
+    /// (None: learned from the first two rows).
     pub sample_period_s: Option<f64>,
+    /// A time step shorter than `(1 - step_tolerance)` sample periods is refused
+    /// (a duplicated or jittered time stamp), dimensionless in [0, 1).
+    pub step_tolerance: f64,
+    /// Largest accepted |t|, s (1e10 s: Unix time stamps pass, 1e308 does not).
+    pub max_abs_time_s: f64,
+    /// Lowest accepted rod position (and position reference `ref`), m.
+    pub min_position_m: f64,
+    /// Highest accepted rod position (and position reference `ref`), m.
+    pub max_position_m: f64,
+    /// Largest accepted |u|, V.
+    pub max_command_v: f64,
+    /// Largest accepted |x_sp|, m.
+    pub max_spool_m: f64,
+    /// Largest accepted |f_load|, N.
+    pub max_force_n: f64,
+    /// Largest accepted |q_leak|, L/min.
+    pub max_leak_lpm: f64,
 }
 
 impl Limits {
-    /// Accepts pressures in [0, 1.5 p_s] for supply pressure `supply_pa`, 1 kHz.
-    pub fn for_supply(supply_pa: f64) -> Limits {
+    /// The physical ranges of an actuator with parameters `p`, sampled every
+    /// `sample_period_s` seconds:
+    /// - position x and reference within the stroke [x_min, x_max] plus 10 % of
+    ///   the stroke on each side, m;
+    /// - command |u| within 1.5 × the valve's ±10 V range, V;
+    /// - pressures in [0, 1.5 p_s] inclusive, Pa;
+    /// - spool |x_sp| within 2 × the opening at 10 V, m;
+    /// - load |f_load| within 10 × the force of 1.5 p_s on the piston, N;
+    /// - leak |q_leak| within 10 × the valve's flow at full opening and 1.5 p_s, L/min;
+    /// - time steps no shorter than half a sample period, |t| ≤ 1e10 s.
+    pub fn for_model(p: &model::ActuatorParams, sample_period_s: f64) -> Limits {
+        let u_max = model::scenario::U_MAX_V;
+        let stroke = p.x_max_m - p.x_min_m;
+        let p_max = 1.5 * p.supply_pressure_pa;
+        let spool_open = u_max * p.spool_gain_m_per_v;
+        let q_valve_m3_s = p.discharge_coefficient
+            * p.area_gradient_m2_per_m
+            * spool_open
+            * (2.0 * p_max / p.oil_density_kg_m3).sqrt();
         Limits {
             min_pressure_pa: 0.0,
-            max_pressure_pa: 1.5 * supply_pa,
-            sample_period_s: Some(1.0e-3),
+            max_pressure_pa: p_max,
+            sample_period_s: Some(sample_period_s),
+            step_tolerance: 0.5,
+            max_abs_time_s: 1.0e10,
+            min_position_m: p.x_min_m - 0.1 * stroke,
+            max_position_m: p.x_max_m + 0.1 * stroke,
+            max_command_v: 1.5 * u_max,
+            max_spool_m: 2.0 * spool_open,
+            max_force_n: 10.0 * p_max * p.piston_area_m2,
+            max_leak_lpm: 10.0 * model::units::m3_s_to_lpm(q_valve_m3_s),
         }
+    }
+
+    /// The default actuator's ranges with supply pressure `supply_pa` (pressures
+    /// in [0, 1.5 p_s], Pa), 1 kHz.
+    pub fn for_supply(supply_pa: f64) -> Limits {
+        let p = model::ActuatorParams {
+            supply_pressure_pa: supply_pa,
+            ..model::ActuatorParams::default()
+        };
+        Limits::for_model(&p, 1.0e-3)
+    }
+
+    /// The first value of `s` outside its range, as (column index in
+    /// [`COLUMNS`], kind, message); `None` if every value is usable. NaN in an
+    /// optional column means "absent" and passes.
+    pub fn check(&self, s: &Sample) -> Option<(usize, IssueKind, String)> {
+        let values = [
+            s.t_s,
+            s.u_v,
+            s.x_m,
+            s.p1_pa,
+            s.p2_pa,
+            s.x_sp_m,
+            s.f_load_n,
+            s.ref_m,
+            s.q_leak_lpm,
+        ];
+        for (j, v) in values.into_iter().enumerate() {
+            let optional = j >= REQUIRED.len();
+            if optional && v.is_nan() {
+                continue;
+            }
+            if !v.is_finite() {
+                let what = if optional { "value" } else { "required value" };
+                return Some((j, IssueKind::NonFinite, format!("{what} is {v:?} (not finite)")));
+            }
+            let (lo, hi, unit) = match j {
+                0 => (-self.max_abs_time_s, self.max_abs_time_s, "s"),
+                1 => (-self.max_command_v, self.max_command_v, "V"),
+                2 | 7 => (self.min_position_m, self.max_position_m, "m"),
+                3 | 4 => (self.min_pressure_pa, self.max_pressure_pa, "Pa"),
+                5 => (-self.max_spool_m, self.max_spool_m, "m"),
+                6 => (-self.max_force_n, self.max_force_n, "N"),
+                _ => (-self.max_leak_lpm, self.max_leak_lpm, "L/min"),
+            };
+            if !(lo..=hi).contains(&v) {
+                let what = match j {
+                    0 => "time",
+                    1 => "command",
+                    2 => "position",
+                    3 | 4 => "pressure",
+                    5 => "spool position",
+                    6 => "load",
+                    7 => "position reference",
+                    _ => "leak flow",
+                };
+                let msg = format!("{what} {v:?} {unit} is outside [{lo:?}, {hi:?}] {unit}");
+                return Some((j, IssueKind::OutOfRange, msg));
+            }
+        }
+        None
     }
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits::for_supply(13.8e6)
+        Limits::for_model(&model::ActuatorParams::default(), 1.0e-3)
     }
+}
+
+/// Checks that at most `max_fraction` of `rows` were unusable; the error says
+/// how many were and the limit (a message for the user).
+pub fn check_bad_fraction(rows: u64, skipped: u64, max_fraction: f64) -> Result<(), String> {
+    if rows > 0 && skipped as f64 > max_fraction * rows as f64 {
+        return Err(format!(
+            "{skipped} of {rows} rows ({:.2} %) are unusable, more than the {:.2} % accepted",
+            100.0 * skipped as f64 / rows as f64,
+            100.0 * max_fraction
+        ));
+    }
+    Ok(())
 }
 
 /// A streaming reader of samples from a CSV file.
@@ -166,6 +314,9 @@ pub struct CsvReader<R: BufRead> {
     pub rows: u64,
     /// Rows skipped.
     pub skipped: u64,
+    /// Usable rows whose optional column was absent (empty or NaN), per column
+    /// in [`COLUMNS`] order (x_sp, f_load, ref, q_leak); only columns in the header count.
+    pub absent: [u64; 4],
 }
 
 /// A buffered byte source: a plain file, or a gzip-compressed one decoded on the fly.
@@ -238,6 +389,7 @@ impl<R: BufRead> CsvReader<R> {
             cells: Vec::with_capacity(names.len()),
             rows: 0,
             skipped: 0,
+            absent: [0; 4],
         })
     }
 
@@ -281,7 +433,18 @@ impl<R: BufRead> CsvReader<R> {
                 continue;
             }
             self.rows += 1;
-            return Some(match self.parse_row(line) {
+            let parsed = self.parse_row(line);
+            if let Ok((s, _)) = &parsed {
+                for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm]
+                    .into_iter()
+                    .enumerate()
+                {
+                    if v.is_nan() && self.map[5 + k].is_some() {
+                        self.absent[k] += 1;
+                    }
+                }
+            }
+            return Some(match parsed {
                 Ok((sample, None)) => Row::Sample(sample),
                 Ok((sample, Some(issue))) => Row::AfterGap(sample, issue),
                 Err(issue) => Row::Skipped(issue),
@@ -333,20 +496,8 @@ impl<R: BufRead> CsvReader<R> {
             ref_m: get(7),
             q_leak_lpm: get(8),
         };
-        for (j, v) in [s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa].into_iter().enumerate() {
-            if !v.is_finite() {
-                let msg = format!("required value is {v} (not finite)");
-                return Err(self.issue(Some(j), IssueKind::NonFinite, msg, true));
-            }
-        }
-        for (j, v) in [(3, s.p1_pa), (4, s.p2_pa)] {
-            if v < self.limits.min_pressure_pa || v > self.limits.max_pressure_pa {
-                let msg = format!(
-                    "pressure {v} Pa is outside [{}, {}] Pa",
-                    self.limits.min_pressure_pa, self.limits.max_pressure_pa
-                );
-                return Err(self.issue(Some(j), IssueKind::OutOfRange, msg, true));
-            }
+        if let Some((j, kind, msg)) = self.limits.check(&s) {
+            return Err(self.issue(Some(j), kind, msg, true));
         }
         if let Some(last) = self.last_t {
             if s.t_s <= last {
@@ -355,6 +506,13 @@ impl<R: BufRead> CsvReader<R> {
             }
             let dt = s.t_s - last;
             let period = *self.period.get_or_insert(dt);
+            if dt < (1.0 - self.limits.step_tolerance) * period {
+                let msg = format!(
+                    "time step {dt:?} s (from {last:?} s) is shorter than {} of the sample period {period:?} s",
+                    1.0 - self.limits.step_tolerance
+                );
+                return Err(self.issue(Some(0), IssueKind::StepTooShort, msg, true));
+            }
             self.last_t = Some(s.t_s);
             if dt > 1.5 * period {
                 let missing = (dt / period).round() as u64 - 1;
@@ -394,6 +552,8 @@ pub struct Dataset {
     pub issues: Vec<Issue>,
     /// Which optional columns the file has (x_sp, f_load, ref, q_leak).
     pub has_optional: [bool; 4],
+    /// Rows read (excluding the header and empty lines).
+    pub rows: u64,
 }
 
 impl Dataset {
@@ -430,17 +590,19 @@ pub fn read_csv(path: &Path, limits: Limits) -> Result<Dataset, DatasetError> {
             detail,
         });
     }
+    ds.rows = reader.rows;
     Ok(ds)
 }
 
 /// Writes samples to a CSV file with every column of [`COLUMNS`], floats at
-/// full round-trip precision.
-pub fn write_csv(path: &Path, samples: &[Sample]) -> Result<(), DatasetError> {
+/// full round-trip precision. The file is created by [`output::create_file`]:
+/// an existing file is replaced only if `overwrite`, a symbolic link never.
+pub fn write_csv(path: &Path, samples: &[Sample], overwrite: bool) -> Result<(), DatasetError> {
     let io = |source| DatasetError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let file = File::create(path).map_err(io)?;
+    let file = output::create_file(path, overwrite, &[]).map_err(io)?;
     let mut w = BufWriter::new(file);
     write_header(&mut w).map_err(io)?;
     for s in samples {

@@ -30,7 +30,7 @@ fn round_trip_is_bit_exact() {
         })
         .collect();
     let p = tmp("round.csv");
-    write_csv(&p, &samples).unwrap();
+    write_csv(&p, &samples, true).unwrap();
     let back = read_csv(&p, Limits::default()).unwrap();
     assert!(back.issues.is_empty(), "{:?}", back.issues.first());
     assert_eq!(back.samples.len(), samples.len());
@@ -100,6 +100,177 @@ fn bad_rows_are_skipped_and_reported_with_line_and_column() {
 
 #[test]
 fn unwritable_path_names_the_path() {
-    let e = write_csv(Path::new("/nonexistent-dir/x.csv"), &[]).unwrap_err();
+    let e = write_csv(Path::new("/nonexistent-dir/x.csv"), &[], false).unwrap_err();
     assert!(e.to_string().contains("/nonexistent-dir/x.csv"));
+}
+
+/// One good row at time `k` ms, with `edit` applied to its cells (t,u,x,p1,p2,x_sp,f_load,ref,q_leak).
+fn row(k: usize, edit: &[(usize, &str)]) -> String {
+    let t = format!("{:?}", k as f64 * 1e-3);
+    let mut cells = vec![
+        t.as_str(),
+        "1.5",
+        "0.3",
+        "6.9e6",
+        "6.8e6",
+        "1e-5",
+        "1500",
+        "0.31",
+        "0.0",
+    ];
+    for (j, v) in edit {
+        cells[*j] = v;
+    }
+    cells.join(",")
+}
+
+const HEADER: &str = "t,u,x,p1,p2,x_sp,f_load,ref,q_leak";
+
+#[test]
+fn values_outside_their_physical_range_are_skipped_by_column() {
+    // (column index, bad value, column name, kind)
+    let cases: [(usize, &str, &str, IssueKind); 21] = [
+        (5, "inf", "x_sp", IssueKind::NonFinite),
+        (5, "-inf", "x_sp", IssueKind::NonFinite),
+        (5, "1e308", "x_sp", IssueKind::OutOfRange),
+        (6, "-1e308", "f_load", IssueKind::OutOfRange),
+        (6, "inf", "f_load", IssueKind::NonFinite),
+        (7, "1e308", "ref", IssueKind::OutOfRange),
+        (7, "-inf", "ref", IssueKind::NonFinite),
+        (8, "1e308", "q_leak", IssueKind::OutOfRange),
+        (8, "inf", "q_leak", IssueKind::NonFinite),
+        (1, "1e308", "u", IssueKind::OutOfRange),
+        (1, "-1e308", "u", IssueKind::OutOfRange),
+        (1, "1000", "u", IssueKind::OutOfRange),
+        (1, "1e300", "u", IssueKind::OutOfRange),
+        (2, "1e308", "x", IssueKind::OutOfRange),
+        (2, "-10", "x", IssueKind::OutOfRange),
+        (2, "-1e308", "x", IssueKind::OutOfRange),
+        (3, "-1", "p1", IssueKind::OutOfRange),
+        (4, "20700001", "p2", IssueKind::OutOfRange),
+        (3, "NaN", "p1", IssueKind::NonFinite),
+        (0, "1e308", "t", IssueKind::OutOfRange),
+        (0, "inf", "t", IssueKind::NonFinite),
+    ];
+    for (j, v, col, kind) in cases {
+        let text = format!(
+            "{HEADER}\n{}\n{}\n{}\n",
+            row(0, &[]),
+            row(1, &[(j, v)]),
+            row(2, &[])
+        );
+        let ds = read_str(&text).unwrap();
+        assert_eq!(ds.samples.len(), 2, "{v} in {col}");
+        assert_eq!(ds.skipped(), 1, "{v} in {col}");
+        let i = &ds.issues[0];
+        assert_eq!(
+            (i.line, i.column.as_deref(), &i.kind),
+            (3, Some(col), &kind),
+            "{v} in {col}: {i}"
+        );
+        // the gap the skipped row leaves is reported, the next row kept
+        assert_eq!(ds.issues[1].kind, IssueKind::Gap { missing: 1 });
+    }
+    // the boundaries are inclusive: p = 0 and p = 1.5 p_s pass, as do u = ±15 V
+    let text = format!(
+        "{HEADER}\n{}\n{}\n{}\n",
+        row(0, &[(3, "0"), (4, "20700000")]),
+        row(1, &[(1, "-15")]),
+        row(2, &[(1, "15")])
+    );
+    let ds = read_str(&text).unwrap();
+    assert_eq!((ds.samples.len(), ds.issues.len()), (3, 0), "{:?}", ds.issues);
+    // NaN or empty in an optional column means absent: kept, and counted
+    let p = tmp("absent.csv");
+    let text = format!(
+        "{HEADER}\n{}\n{}\n{}\n",
+        row(0, &[(7, "NaN")]),
+        row(1, &[(7, "")]),
+        row(2, &[])
+    );
+    std::fs::write(&p, text).unwrap();
+    let mut r = CsvReader::open(&p, Limits::default()).unwrap();
+    let mut n = 0;
+    while let Some(Row::Sample(_)) = r.next_row() {
+        n += 1;
+    }
+    assert_eq!((n, r.skipped, r.absent), (3, 0, [0, 0, 2, 0]));
+}
+
+#[test]
+fn the_ranges_come_from_the_model() {
+    let l = Limits::default();
+    assert_eq!(l.max_pressure_pa, 20.7e6);
+    assert_eq!(l.max_command_v, 15.0);
+    assert!((l.min_position_m + 0.06069).abs() < 1e-12, "{}", l.min_position_m);
+    assert!((l.max_position_m - 0.66759).abs() < 1e-12, "{}", l.max_position_m);
+    assert!((l.max_spool_m - 5.588e-4).abs() < 1e-12, "{}", l.max_spool_m);
+    assert!((l.max_force_n - 131_031.0).abs() < 1e-6, "{}", l.max_force_n);
+    assert!((l.max_leak_lpm - 461.5).abs() < 0.5, "{}", l.max_leak_lpm);
+    let l = Limits::for_supply(21.0e6);
+    assert_eq!(l.max_pressure_pa, 31.5e6);
+    assert_eq!(l.sample_period_s, Some(1e-3));
+}
+
+#[test]
+fn time_reversed_duplicated_or_too_short_steps_are_skipped() {
+    let text = format!(
+        "{HEADER}\n{}\n{}\n{}\n{}\n{}\n{}\n",
+        row(0, &[]),
+        row(1, &[]),
+        row(1, &[]),                // duplicated time
+        row(1, &[(0, "0.001001")]), // a 1 µs step
+        row(1, &[(0, "0.0005")]),   // reversed
+        row(2, &[(0, "0.0019")]),   // 0.9 ms: within tolerance, kept
+    );
+    let ds = read_str(&text).unwrap();
+    let got: Vec<(u64, &IssueKind)> = ds.issues.iter().map(|i| (i.line, &i.kind)).collect();
+    assert_eq!(
+        got,
+        vec![
+            (4, &IssueKind::TimeNotIncreasing),
+            (5, &IssueKind::StepTooShort),
+            (6, &IssueKind::TimeNotIncreasing),
+        ]
+    );
+    assert_eq!(ds.samples.len(), 3);
+    assert_eq!(ds.rows, 6);
+    assert_eq!(ds.issues[1].kind.name(), "step_too_short");
+}
+
+#[test]
+fn a_file_reversed_in_time_fails_the_bad_fraction() {
+    // 3000 rows, time reversed: only the first is usable
+    let mut text = format!("{HEADER}\n");
+    for k in (0..3000).rev() {
+        text += &row(k, &[]);
+        text += "\n";
+    }
+    let ds = read_str(&text).unwrap();
+    assert_eq!((ds.samples.len(), ds.skipped(), ds.rows), (1, 2999, 3000));
+    let e = check_bad_fraction(ds.rows, ds.skipped() as u64, DEFAULT_MAX_BAD_FRACTION).unwrap_err();
+    assert!(
+        e.contains("2999 of 3000 rows (99.97 %)") && e.contains("1.00 %"),
+        "{e}"
+    );
+    // 1 % is accepted, one more row is not
+    assert_eq!(check_bad_fraction(1000, 10, 0.01), Ok(()));
+    assert!(check_bad_fraction(1000, 11, 0.01).is_err());
+    assert_eq!(check_bad_fraction(0, 0, 0.01), Ok(()));
+}
+
+#[test]
+fn u_of_1e300_in_every_row_gives_no_usable_sample() {
+    let mut text = format!("{HEADER}\n");
+    for k in 0..1000 {
+        text += &row(k, &[(1, "1e300")]);
+        text += "\n";
+    }
+    let e = read_str(&text).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("1000 rows skipped")
+            && m.contains("line 2, column `u`: command 1e300 V is outside [-15.0, 15.0] V"),
+        "{m}"
+    );
 }

@@ -175,45 +175,45 @@ impl Tuning {
                 self.states
             ));
         }
-        let positive = [
-            ("sample_period_s", self.sample_period_s),
-            ("r_x_m2", self.r_x_m2),
-            ("r_p_pa2", self.r_p_pa2),
-            ("init_pressure_pa", self.init_pressure_pa + 1.0),
+        // (name, value, least, largest, unit): variances in SI squared units, capped at
+        // the square of a physically absurd value of their state (1 cm of spool,
+        // 1 GPa, 10 m, 100 m/s, 10 MN, 0.01 m³/s); P0 up to the thesis' 1e4 in
+        // every state; P0 > 0 (a zero initial variance makes the square-root
+        // factor singular).
+        let ranges: [(&str, f64, f64, f64, &str); 22] = [
+            ("r_x_m2", self.r_x_m2, 1e-30, 100.0, "m²"),
+            ("r_p_pa2", self.r_p_pa2, 1e-30, 1e18, "Pa²"),
+            ("init_pressure_pa", self.init_pressure_pa, 0.0, 1e9, "Pa"),
+            ("q_x_sp_m2", self.q_x_sp_m2, 0.0, 1e-4, "m²"),
+            ("q_p_pa2", self.q_p_pa2, 0.0, 1e18, "Pa²"),
+            ("q_x_m2", self.q_x_m2, 0.0, 100.0, "m²"),
+            ("q_v_m2_s2", self.q_v_m2_s2, 0.0, 1e4, "m²/s²"),
+            ("q_v_sp_m2_s2", self.q_v_sp_m2_s2, 0.0, 1e4, "m²/s²"),
+            ("q_f_e_n2", self.q_f_e_n2, 0.0, 1e14, "N²"),
+            ("q_leak_m6_s2", self.q_leak_m6_s2, 0.0, 1e-4, "m⁶/s²"),
+            ("q_bias_m2", self.q_bias_m2, 0.0, 1e-4, "m²"),
+            ("p0_x_sp_m2", self.p0_x_sp_m2, 1e-30, 1e4, "m²"),
+            ("p0_p_pa2", self.p0_p_pa2, 1e-30, 1e18, "Pa²"),
+            ("p0_x_m2", self.p0_x_m2, 1e-30, 1e4, "m²"),
+            ("p0_v_m2_s2", self.p0_v_m2_s2, 1e-30, 1e4, "m²/s²"),
+            ("p0_v_sp_m2_s2", self.p0_v_sp_m2_s2, 1e-30, 1e4, "m²/s²"),
+            ("p0_f_e_n2", self.p0_f_e_n2, 1e-30, 1e14, "N²"),
+            ("p0_leak_m6_s2", self.p0_leak_m6_s2, 1e-30, 1e4, "m⁶/s²"),
+            ("p0_bias_m2", self.p0_bias_m2, 1e-30, 1e4, "m²"),
+            ("convergence_time_s", self.convergence_time_s, 0.0, 1e6, "s"),
+            ("divergence_reset_m", self.divergence_reset_m, 0.0, 100.0, "m"),
+            ("sample_period_s", self.sample_period_s, 1e-5, 1.0, "s"),
         ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("[estimator] {name} = {v}: must be a positive number"));
-            }
-        }
-        let non_negative = [
-            ("q_x_sp_m2", self.q_x_sp_m2),
-            ("q_p_pa2", self.q_p_pa2),
-            ("q_x_m2", self.q_x_m2),
-            ("q_v_m2_s2", self.q_v_m2_s2),
-            ("q_v_sp_m2_s2", self.q_v_sp_m2_s2),
-            ("q_f_e_n2", self.q_f_e_n2),
-            ("q_leak_m6_s2", self.q_leak_m6_s2),
-            ("p0_x_sp_m2", self.p0_x_sp_m2),
-            ("p0_p_pa2", self.p0_p_pa2),
-            ("p0_x_m2", self.p0_x_m2),
-            ("p0_v_m2_s2", self.p0_v_m2_s2),
-            ("p0_v_sp_m2_s2", self.p0_v_sp_m2_s2),
-            ("p0_f_e_n2", self.p0_f_e_n2),
-            ("p0_leak_m6_s2", self.p0_leak_m6_s2),
-            ("q_bias_m2", self.q_bias_m2),
-            ("p0_bias_m2", self.p0_bias_m2),
-            ("convergence_time_s", self.convergence_time_s),
-            ("divergence_reset_m", self.divergence_reset_m),
-        ];
-        for (name, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("[estimator] {name} = {v}: must be a finite number ≥ 0"));
+        for (name, v, lo, hi, unit) in ranges {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(format!(
+                    "[estimator] {name} = {v:?}: must be a number from {lo:?} to {hi:?} {unit}"
+                ));
             }
         }
         if self.substeps == 0 || self.substeps > 100 {
             return Err(format!(
-                "[estimator] substeps = {}: must be 1 to 100",
+                "[estimator] substeps = {}: must be 1 to 100 forward-Euler steps per sample",
                 self.substeps
             ));
         }
@@ -223,10 +223,10 @@ impl Tuning {
                 self.mae_window_samples
             ));
         }
-        if !(1.0e-5..=1.0).contains(&self.sample_period_s) {
+        if self.max_bridged_gap_samples > 3_600_000 {
             return Err(format!(
-                "[estimator] sample_period_s = {}: must be from 1e-5 s to 1 s",
-                self.sample_period_s
+                "[estimator] max_bridged_gap_samples = {}: must be 0 to 3600000 samples (an hour at 1 kHz)",
+                self.max_bridged_gap_samples
             ));
         }
         Ok(())

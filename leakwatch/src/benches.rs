@@ -6,17 +6,22 @@ use bench::speed::{step_time, timer_overhead_ns};
 use bench::{detection, speed};
 use estimator::Tuning;
 
-fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+use crate::out::{self, outln};
+
+fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) -> Result<(), String> {
+    out::dir(dir)?;
     let p = dir.join(name);
     let text = serde_json::to_string_pretty(value).map_err(|e| e.to_string())?;
-    std::fs::write(&p, text + "\n").map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    out::write(&p, (text + "\n").as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())
 }
 
 /// EKF step time per layout (every step timed individually) and the in-process chain's throughput.
-pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
+pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> {
+    if let Some(dir) = &out {
+        out::check(&dir.join("ekf.json"), force, &[])?;
+    }
     let samples = speed::recorded_samples(60.0);
     if samples.is_empty() {
         return Err("could not simulate the recorded scenario".into());
@@ -50,23 +55,33 @@ pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
             overhead,
         ),
     ];
-    println!(
+    outln!(
         "Each predict + update timed on its own with std::time::Instant; every figure includes \
          the clock's own cost, {overhead:.0} ns here (median of an empty timed region)."
     );
-    println!("| filter | states | steps | median ns | p99 ns | p99.9 ns | max ns | mean ns |");
-    println!("|---|---|---|---|---|---|---|---|");
+    outln!("| filter | states | steps | median ns | p99 ns | p99.9 ns | max ns | mean ns |");
+    outln!("|---|---|---|---|---|---|---|---|");
     for r in &rows {
-        println!(
+        outln!(
             "| {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
-            r.filter, r.states, r.steps, r.median_ns, r.p99_ns, r.p999_ns, r.max_ns, r.mean_ns
+            r.filter,
+            r.states,
+            r.steps,
+            r.median_ns,
+            r.p99_ns,
+            r.p999_ns,
+            r.max_ns,
+            r.mean_ns
         );
     }
     let tp = speed::chain_throughput(&samples, 5);
-    println!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
-    println!(
+    outln!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
+    outln!(
         "| {} | {} | {:.3} | {:.0} |",
-        tp.chain, tp.samples, tp.wall_s, tp.samples_per_s
+        tp.chain,
+        tp.samples,
+        tp.wall_s,
+        tp.samples_per_s
     );
     let json = serde_json::json!({
         "step_time": rows,
@@ -74,9 +89,9 @@ pub fn ekf(steps: u64, out: Option<PathBuf>) -> Result<(), String> {
         "throughput": tp,
     });
     match out {
-        Some(dir) => write_json(&dir, "ekf.json", &json),
+        Some(dir) => write_json(&dir, "ekf.json", &json, force),
         None => {
-            println!("{json}");
+            outln!("{json}");
             Ok(())
         }
     }
@@ -89,11 +104,15 @@ pub fn detection(
     seed: u64,
     threads: Option<usize>,
     out: &Path,
+    force: bool,
 ) -> Result<(), String> {
     if runs == 0 && hours <= 0.0 {
         return Err("nothing to run: --runs and --hours are both zero".into());
     }
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    out::dir(out)?;
+    for name in ["detection.md", "detection.png", "detection.json"] {
+        out::check(&out.join(name), force, &[])?;
+    }
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
     let cases = detection::cases(runs, hours, seed);
@@ -107,14 +126,22 @@ pub fn detection(
     let r = detection::run_suite(&cases, threads, |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
     let md = detection::markdown(&r);
-    println!("{md}");
-    println!("suite wall time {:.0} s", r.wall_s);
-    std::fs::write(out.join("detection.md"), format!("# Detection suite\n{md}"))
-        .map_err(|e| format!("cannot write detection.md: {e}"))?;
-    plot::render_png(&detection::probability_figure(&r), &out.join("detection.png"))
-        .map_err(|e| e.to_string())?;
+    outln!("{md}");
+    outln!("suite wall time {:.0} s", r.wall_s);
+    out::write(
+        &out.join("detection.md"),
+        format!("# Detection suite\n{md}").as_bytes(),
+        force,
+        &[],
+    )?;
+    out::png(
+        &detection::probability_figure(&r),
+        &out.join("detection.png"),
+        force,
+        &[],
+    )?;
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
-    write_json(out, "detection.json", &json)
+    write_json(out, "detection.json", &json, force)
 }
 
 /// Detection scored on recorded runs with truth (a directory like ../shared/data/leaks_dev).
@@ -123,8 +150,14 @@ pub fn detection_data(
     config: Option<&Path>,
     threads: Option<usize>,
     out: &Path,
+    force: bool,
 ) -> Result<(), String> {
     let cfg = crate::config::Config::load_or_default(config)?;
+    out::dir(out)?;
+    let inputs: Vec<&Path> = config.into_iter().collect();
+    for name in ["detection.md", "detection.json"] {
+        out::check(&out.join(name), force, &inputs)?;
+    }
     let set = bench::detection_data::ChainSettings {
         model: cfg.model.clone(),
         leak_filter: cfg.leak_filter.clone(),
@@ -141,16 +174,16 @@ pub fn detection_data(
     })?;
     bar.finish_and_clear();
     let md = bench::detection_data::data_markdown(&r);
-    println!("{md}");
-    println!("wall time {:.1} s", r.wall_s);
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    std::fs::write(
-        out.join("detection.md"),
-        format!("# Detection on {}\n\n{md}", dir.display()),
-    )
-    .map_err(|e| format!("cannot write detection.md: {e}"))?;
+    outln!("{md}");
+    outln!("wall time {:.1} s", r.wall_s);
+    out::write(
+        &out.join("detection.md"),
+        format!("# Detection on {}\n\n{md}", dir.display()).as_bytes(),
+        force,
+        &inputs,
+    )?;
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
-    write_json(out, "detection.json", &json)
+    write_json(out, "detection.json", &json, force)
 }
 
 /// The calibration workflow's hidden-effect suites (smooth and stick-slip rig, or the smooth
@@ -161,6 +194,7 @@ pub fn calibration(
     config: Option<PathBuf>,
     json: bool,
     out: Option<PathBuf>,
+    force: bool,
 ) -> Result<(), String> {
     let opts = calibrate::CalibrateOptions {
         keep_traces: false,
@@ -200,10 +234,10 @@ pub fn calibration(
             .iter()
             .map(|(k, r)| (k.to_string(), serde_json::to_value(r).unwrap_or_default()))
             .collect();
-        println!("{}", serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?);
+        outln!("{}", serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?);
     } else {
         for (k, r) in &reports {
-            println!("## {k}\n\n{}", r.markdown());
+            outln!("## {k}\n\n{}", r.markdown());
         }
     }
     if let Some(dir) = out {
@@ -213,7 +247,7 @@ pub fn calibration(
             } else {
                 dir.clone()
             };
-            let files = r.write(&d).map_err(|e| e.to_string())?;
+            let files = r.write(&d, force).map_err(|e| e.to_string())?;
             for f in files {
                 eprintln!("wrote {}", f.display());
             }

@@ -15,7 +15,7 @@ pub const MIN_HEALTHY_S: f64 = 10.0;
 
 /// Learns the commissioning of `input` under the config at `config` (or the defaults).
 pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, String> {
-    let limits = Limits::for_supply(cfg.model.supply_pressure_pa);
+    let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     if cfg.leak_filter.states < 10 {
@@ -31,19 +31,19 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
             Row::Skipped(_) => {}
         }
     }
+    dataset::check_bad_fraction(reader.rows, reader.skipped, dataset::DEFAULT_MAX_BAD_FRACTION)
+        .map_err(|e| format!("{}: cannot commission from it: {e}", input.display()))?;
     learner
         .finish(MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))
 }
 
 /// The command: learn, then write the config with its commissioning.
-pub fn run(input: &Path, config: Option<&Path>, out: &Path) -> Result<(), String> {
-    if out.exists() {
-        return Err(format!(
-            "{} exists: not overwritten (remove it or choose another --out)",
-            out.display()
-        ));
-    }
+pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<(), String> {
+    let mut inputs = vec![input];
+    inputs.extend(config);
+    // refused before the learning, not after
+    crate::out::check(out, force, &inputs)?;
     let mut cfg = Config::load_or_default(config)?;
     let c = learn(input, &cfg)?;
     eprintln!(
@@ -62,13 +62,7 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path) -> Result<(), String
         input.display(),
         name = out.display()
     );
-    let mut f = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(out)
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
-    std::io::Write::write_all(&mut f, text.as_bytes())
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    crate::out::write(out, text.as_bytes(), force, &inputs)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }

@@ -166,6 +166,144 @@ mod tests {
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
     }
 
+    /// Every numeric leaf of `t` with its path (section names, then the key).
+    fn numeric_leaves(t: &toml::Table, path: &mut Vec<String>, out: &mut Vec<(Vec<String>, toml::Value)>) {
+        for (k, v) in t {
+            path.push(k.clone());
+            match v {
+                toml::Value::Table(sub) => numeric_leaves(sub, path, out),
+                toml::Value::Integer(_) | toml::Value::Float(_) => out.push((path.clone(), v.clone())),
+                _ => {}
+            }
+            path.pop();
+        }
+    }
+
+    fn set(t: &mut toml::Table, path: &[String], v: toml::Value) {
+        if path.len() == 1 {
+            t.insert(path[0].clone(), v);
+        } else if let Some(toml::Value::Table(sub)) = t.get_mut(&path[0]) {
+            set(sub, &path[1..], v);
+        }
+    }
+
+    /// Runs 0.3 s of the loaded scenario on the configured rig through both filters and
+    /// the classifier; every measurement and every filter state must stay finite.
+    fn runs_finite(cfg: &Config, what: &str) -> Result<(), String> {
+        let req = crate::simulate::SimulateRequest {
+            scenario: "loaded-sine".into(),
+            seconds: Some(0.3),
+            seed: 1,
+            faults: vec![],
+            rig_variant: None,
+        };
+        let (mut sim, seconds) = crate::simulate::build(cfg, &req).unwrap();
+        let samples = sim.run(seconds);
+        let mut stage =
+            estimator::EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())
+                .unwrap();
+        let mut cls = classifier::Classifier::new(cfg.classifier.clone()).unwrap();
+        for s in &samples {
+            if ![s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa]
+                .iter()
+                .all(|v| v.is_finite())
+            {
+                return Err(format!("{what}: sample {s:?}"));
+            }
+            let e = stage.on_sample(s);
+            for f in [&e.leak, &e.thesis] {
+                let n = f.n_states as usize;
+                if !f.state[..n].iter().all(|v| v.is_finite()) {
+                    return Err(format!("{what}: t = {} s, state {:?}", f.t_s, &f.state[..n]));
+                }
+            }
+            cls.on_stage(&e, |_| {});
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn every_numeric_field_swept_with_absurd_values_is_refused_by_name_or_stays_finite() {
+        let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
+        let mut leaves = Vec::new();
+        numeric_leaves(&base, &mut Vec::new(), &mut leaves);
+        assert_eq!(leaves.len(), 120, "numeric fields");
+        let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
+        let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
+        let (mut refused, mut accepted) = (0, 0);
+        let mut not_finite = Vec::new();
+        for (path, v) in &leaves {
+            let values: Vec<toml::Value> = match v {
+                toml::Value::Float(_) => floats.iter().map(|f| toml::Value::Float(*f)).collect(),
+                _ => ints.iter().map(|i| toml::Value::Integer(*i)).collect(),
+            };
+            for value in values {
+                let mut t = base.clone();
+                set(&mut t, path, value.clone());
+                let text = toml::to_string(&t).unwrap();
+                let what = format!("[{}] = {value}", path.join("."));
+                let key = path.last().unwrap();
+                let parsed = std::panic::catch_unwind(|| Config::parse(&text));
+                match parsed {
+                    Err(_) => panic!("{what}: Config::parse panicked"),
+                    Ok(Err(e)) => {
+                        refused += 1;
+                        assert!(
+                            e.contains(key.as_str()),
+                            "{what}: the error does not name the field: {e}"
+                        );
+                    }
+                    Ok(Ok(cfg)) => {
+                        accepted += 1;
+                        if let Err(e) = runs_finite(&cfg, &what) {
+                            not_finite.push(e);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(not_finite.is_empty(), "{not_finite:#?}");
+        // most absurd values are refused; the rest (zeros of noises, offsets, ...) run finite
+        assert!(refused > 3 * accepted, "{refused} refused, {accepted} accepted");
+    }
+
+    #[test]
+    fn ranges_name_the_unit() {
+        for (text, expect) in [
+            (
+                "[model]\nmass_kg = 1e308\n",
+                "[model] parameter `mass_kg` = 1e308 is invalid: expected a mass from 1e-3 to 1e5 kg",
+            ),
+            (
+                "[sensors]\nadc_bits = 64\n",
+                "parameter `sensors.adc_bits` = 64 is invalid: expected 1 to 24 bits",
+            ),
+            (
+                "[sensors]\npressure_noise_pa = 1e308\n",
+                "a noise from 0 to 1e8 Pa",
+            ),
+            (
+                "[estimator]\nq_p_pa2 = 1e308\n",
+                "q_p_pa2 = 1e308: must be a number from 0.0 to 1e18 Pa²",
+            ),
+            (
+                "[leak_filter]\nr_x_m2 = 1e-300\n",
+                "[leak_filter] r_x_m2 = 1e-300: must be a number from 1e-30 to 100.0 m²",
+            ),
+            (
+                "[classifier]\nwarmup_s = 1e308\n",
+                "[classifier] warmup_s = 1e308: must be a number from 0.0 to 1000000.0 s",
+            ),
+            (
+                "[estimator]\nmax_bridged_gap_samples = 4000000000\n",
+                "must be 0 to 3600000 samples",
+            ),
+        ] {
+            let e = Config::parse(text).unwrap_err();
+            assert!(e.contains(expect), "{text}: {e}");
+        }
+    }
+
     #[test]
     fn the_model_toml_calibrate_writes_is_a_config() {
         // a calibrated model with every kind of effect the library adds

@@ -5,6 +5,7 @@ use estimator::EstimatorStage;
 use model::{Fault, FaultSchedule, Scenario, Simulator};
 
 use crate::config::Config;
+use crate::out::outln;
 
 /// A rig that differs from the model the way real ones do: friction 15 % higher
 /// extending and 10 % lower retracting, bulk modulus 15 % lower (air), a spool
@@ -27,6 +28,7 @@ pub fn off_nominal_rig(model: &model::ActuatorParams) -> model::ActuatorParams {
 /// Runs the demonstration and prints what happens.
 pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result<(), String> {
     let cfg = Config::default();
+    crate::simulate::check_seconds(seconds, cfg.sim.sample_period_s)?;
     let rig = off_nominal_rig(&cfg.model);
     let specs: Vec<String> = if faults.is_empty() {
         vec!["ext1:0.5lpm@20s".into()]
@@ -40,11 +42,9 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
             .push(Fault::parse(s, &rig).map_err(|e| e.to_string())?);
     }
     let sc = Scenario::by_name(scenario, seed, seconds).map_err(|e| e.to_string())?;
-    println!(
-        "leakwatch demo: scenario {scenario}, {seconds} s, rig off-nominal (friction ±, air, spool bias)"
-    );
+    outln!("leakwatch demo: scenario {scenario}, {seconds} s, rig off-nominal (friction ±, air, spool bias)");
     for f in &schedule.faults {
-        println!(
+        outln!(
             "  injected: {} leak ({} law) at t = {} s{}",
             f.path.name(),
             f.law.name(),
@@ -54,7 +54,7 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
                 .unwrap_or_default()
         );
     }
-    println!(
+    outln!(
         "  estimator: 11-state leak filter + the thesis' 7-state filter; classifier warm-up {} s",
         cfg.classifier.warmup_s
     );
@@ -65,6 +65,7 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
     let t0 = std::time::Instant::now();
     let mut leak_found = false;
     let mut last_t = 0.0;
+    let mut out_err: Option<String> = None;
     for _ in 0..n {
         let s = sim.step();
         last_t = s.t_s;
@@ -78,8 +79,8 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
             } else {
                 String::new()
             };
-            println!(
-                "  t = {:6.3} s  {:<10} {:<8} {:<16} onset {:.2} s{size}  confidence {:.2}{}",
+            let line = format!(
+                "  t = {:6.3} s  {:<10} {:<8} {:<16} onset {:.2} s{size}  confidence {:.2}{}\n",
                 ev.t_detect_s,
                 ev.detector,
                 format!("{:?}", ev.phase).to_lowercase(),
@@ -92,11 +93,24 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
                     format!("  ({})", ev.detail)
                 }
             );
+            if let Err(e) = crate::out::stdout(&line) {
+                out_err.get_or_insert(e);
+            }
         });
+        if let Some(e) = out_err.take() {
+            return Err(e);
+        }
     }
-    cls.finish(last_t, |ev| println!("  {} {}", ev.kind.name(), ev.detail));
+    cls.finish(last_t, |ev| {
+        if let Err(e) = crate::out::stdout(&format!("  {} {}\n", ev.kind.name(), ev.detail)) {
+            out_err.get_or_insert(e);
+        }
+    });
+    if let Some(e) = out_err {
+        return Err(e);
+    }
     let wall = t0.elapsed().as_secs_f64();
-    println!(
+    outln!(
         "done: {seconds} s simulated and watched in {wall:.2} s ({:.0}x real time); leak {}",
         seconds / wall,
         if leak_found { "detected" } else { "not detected" }

@@ -4,6 +4,8 @@
 
 use std::os::unix::net::UnixDatagram;
 use std::path::Path;
+
+use crate::out::outln;
 use std::time::{Duration, Instant};
 
 use classifier::{Classifier, ClassifierConfig};
@@ -145,11 +147,12 @@ fn decode(b: &[u8; WIRE]) -> (u64, Sample) {
 }
 
 /// Runs the benchmark and prints the table; writes DIR/latency.json.
-pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
+pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     if !(seconds > 0.0 && seconds.is_finite()) {
         return Err(format!("--seconds {seconds}: must be a positive number"));
     }
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    crate::out::dir(out)?;
+    crate::out::check(&out.join("latency.json"), force, &[])?;
     let mut rows = Vec::new();
     for mode in ["event", "low-latency"] {
         let args = crate::run::RunArgs {
@@ -161,6 +164,7 @@ pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
             mode: mode.into(),
             out: Some(out.join(format!("run-{mode}"))),
             thesis_baseline: false,
+            force,
         };
         eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;
@@ -204,8 +208,8 @@ pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
         |s, stamp, x| s.send((stamp, *x)).is_ok(),
         |r| r.recv().ok(),
     ));
-    println!("| transport | hop p50 µs | hop p99 µs | hop max µs | end-to-end p50 µs | p99 µs | p99.9 µs | max µs | frames sent / classified | estimator CPU % |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    outln!("| transport | hop p50 µs | hop p99 µs | hop max µs | end-to-end p50 µs | p99 µs | p99.9 µs | max µs | frames sent / classified | estimator CPU % |");
+    outln!("|---|---|---|---|---|---|---|---|---|---|");
     let f = |v: f64| {
         if v.is_finite() {
             format!("{v:.1}")
@@ -214,7 +218,7 @@ pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
         }
     };
     for r in &rows {
-        println!(
+        outln!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} |",
             r.transport,
             f(r.hop_us[0]),
@@ -230,11 +234,8 @@ pub fn bench(seconds: f64, out: &Path) -> Result<(), String> {
         );
     }
     let p = out.join("latency.json");
-    std::fs::write(
-        &p,
-        serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n",
-    )
-    .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    let text = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n";
+    crate::out::write(&p, text.as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())
 }

@@ -6,6 +6,7 @@ mod commission;
 mod config;
 mod demo;
 mod latency;
+mod out;
 mod plots;
 mod replay;
 mod run;
@@ -17,6 +18,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use config::Config;
+use out::outln;
 
 #[derive(Parser)]
 #[command(
@@ -25,6 +27,10 @@ use config::Config;
     about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz"
 )]
 struct Cli {
+    /// Replace existing output files (logs, CSVs, JSON, PNGs); without it an
+    /// existing output is an error. Symbolic links and the inputs are never written.
+    #[arg(long, global = true)]
+    force: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -136,6 +142,10 @@ enum Command {
         /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
         #[arg(long)]
         thesis_baseline: bool,
+        /// Largest fraction of unusable input rows (0 to 1) before the file is refused
+        /// with a non-zero exit (outputs are still written).
+        #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
+        max_bad_rows: f64,
     },
     /// Learn the healthy state of a rig from a healthy recording and write a config
     /// that `replay`, `run` and every stage load with --config: a leak present when
@@ -289,6 +299,7 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<(), String> {
+    let force = cli.force;
     match cli.command {
         Command::Demo {
             faults,
@@ -314,21 +325,22 @@ fn run(cli: Cli) -> Result<(), String> {
             mode,
             out,
             thesis_baseline,
+            force,
         }),
         Command::Export { log, csv } => {
-            let files = export_log(&log, &csv)?;
+            let (files, _) = export_log(&log, &csv, force)?;
             for f in files {
                 eprintln!("wrote {}", f.display());
             }
             Ok(())
         }
-        Command::Commission { input, config, out } => commission::run(&input, config.as_deref(), &out),
+        Command::Commission { input, config, out } => commission::run(&input, config.as_deref(), &out, force),
         Command::Calibrate {
             input,
             config,
             out,
             effects,
-        } => calibrate_cmd(&input, config.as_deref(), &out, effects),
+        } => calibrate_cmd(&input, config.as_deref(), &out, effects, force),
         Command::Replay {
             input,
             config,
@@ -336,7 +348,13 @@ fn run(cli: Cli) -> Result<(), String> {
             out,
             single_thread,
             thesis_baseline,
+            max_bad_rows,
         } => {
+            if !(0.0..=1.0).contains(&max_bad_rows) {
+                return Err(format!(
+                    "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
+                ));
+            }
             let mut cfg = Config::load_or_default(config.as_deref())?;
             cfg.classifier.thesis_baseline |= thesis_baseline;
             if let Some(m) = model {
@@ -346,9 +364,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 cfg.estimator.states = m;
             }
             // A recorded log is replayed through its frames, exported as dataset.csv.
+            let mut protect: Vec<PathBuf> = config.iter().cloned().collect();
+            let mut log = None;
             let input = if input.extension().is_some_and(|e| e == "mcap") {
+                out::dir(&out)?;
                 let dir = out.join("log-export");
-                export_log(&input, &dir)?;
+                log = Some(export_log(&input, &dir, force)?.1);
+                protect.push(input);
                 dir.join("dataset.csv")
             } else {
                 input
@@ -363,8 +385,21 @@ fn run(cli: Cli) -> Result<(), String> {
                     replay::Wiring::Channels
                 },
                 progress: true,
+                max_bad_fraction: max_bad_rows,
+                overwrite: force,
+                protect,
+                log,
             };
             let s = replay::run(&req)?;
+            for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
+                if f.resets * 10 > s.samples {
+                    eprintln!(
+                        "warning: the {name} filter was reset {} times in {} samples: its tuning does not fit \
+                         the data (its estimates are mostly NaN)",
+                        f.resets, s.samples
+                    );
+                }
+            }
             for i in s.issues.iter().take(10) {
                 eprintln!("warning: {i}");
             }
@@ -403,15 +438,15 @@ fn run(cli: Cli) -> Result<(), String> {
                 faults,
                 rig_variant: rig_variant.map(Into::into),
             };
-            let n = simulate::run(&cfg, &req, &out)?;
+            let n = simulate::run(&cfg, &req, &out, force, config.as_deref())?;
             eprintln!("wrote {n} samples to {}", out.display());
             Ok(())
         }
         Command::Plot { input, out } => {
             if input.is_dir() {
-                plots::plot_replay(&input, &out)?;
+                plots::plot_replay(&input, &out, force)?;
             } else {
-                plots::plot_run_csv(&input, &out)?;
+                plots::plot_run_csv(&input, &out, force)?;
             }
             eprintln!("wrote {}", out.display());
             Ok(())
@@ -419,33 +454,31 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Config { print_default, check } => {
             if let Some(path) = check {
                 let cfg = Config::load(&path)?;
-                print!("{}", toml::to_string(&cfg).map_err(|e| e.to_string())?);
-                Ok(())
+                out::stdout(&toml::to_string(&cfg).map_err(|e| e.to_string())?)
             } else if print_default {
-                print!("{}", Config::default_toml());
-                Ok(())
+                out::stdout(&Config::default_toml())
             } else {
                 Err("nothing to do: use --print-default or --check FILE".into())
             }
         }
         Command::Bench { which } => match which {
-            BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out),
-            BenchCommand::Ekf { steps, out } => benches::ekf(steps, out),
+            BenchCommand::Sim { seconds, repeat, out } => bench_sim(seconds, repeat, out, force),
+            BenchCommand::Ekf { steps, out } => benches::ekf(steps, out, force),
             BenchCommand::Calibration {
                 matrix,
                 data,
                 config,
                 json,
                 out,
-            } => benches::calibration(matrix, data, config, json, out),
-            BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out),
+            } => benches::calibration(matrix, data, config, json, out, force),
+            BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
             BenchCommand::Detection {
                 threads,
                 data: Some(data),
                 config,
                 out,
                 ..
-            } => benches::detection_data(&data, config.as_deref(), threads, &out),
+            } => benches::detection_data(&data, config.as_deref(), threads, &out, force),
             BenchCommand::Detection {
                 runs,
                 hours,
@@ -454,12 +487,12 @@ fn run(cli: Cli) -> Result<(), String> {
                 data: None,
                 config: _,
                 out,
-            } => benches::detection(runs, hours, seed, threads, &out),
+            } => benches::detection(runs, hours, seed, threads, &out, force),
         },
     }
 }
 
-fn bench_sim(seconds: f64, repeat: u32, out: Option<PathBuf>) -> Result<(), String> {
+fn bench_sim(seconds: f64, repeat: u32, out: Option<PathBuf>, force: bool) -> Result<(), String> {
     let cfg = Config::default();
     let req = simulate::SimulateRequest {
         scenario: "loaded-sine".into(),
@@ -479,11 +512,12 @@ fn bench_sim(seconds: f64, repeat: u32, out: Option<PathBuf>) -> Result<(), Stri
     times.sort_by(f64::total_cmp);
     let median = times[times.len() / 2];
     let rate = seconds / median;
-    println!("| benchmark | simulated s | median wall s | min wall s | × real time |");
-    println!("|---|---|---|---|---|");
-    println!(
+    outln!("| benchmark | simulated s | median wall s | min wall s | × real time |");
+    outln!("|---|---|---|---|---|");
+    outln!(
         "| sim loaded-sine (RK4, {} sub-steps/ms) | {seconds} | {median:.3} | {:.3} | {rate:.0} |",
-        cfg.sim.substeps_per_sample, times[0]
+        cfg.sim.substeps_per_sample,
+        times[0]
     );
     let json = serde_json::json!({
         "benchmark": "sim",
@@ -495,12 +529,16 @@ fn bench_sim(seconds: f64, repeat: u32, out: Option<PathBuf>) -> Result<(), Stri
         "real_time_factor": rate,
     });
     if let Some(dir) = out {
-        std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        out::dir(&dir)?;
         let p = dir.join("sim.json");
-        std::fs::write(&p, serde_json::to_string_pretty(&json).unwrap_or_default())
-            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+        out::write(
+            &p,
+            serde_json::to_string_pretty(&json).unwrap_or_default().as_bytes(),
+            force,
+            &[],
+        )?;
     } else {
-        println!("{json}");
+        outln!("{json}");
     }
     Ok(())
 }
@@ -510,15 +548,18 @@ fn calibrate_cmd(
     config: Option<&std::path::Path>,
     out: &std::path::Path,
     effects: Vec<String>,
+    force: bool,
 ) -> Result<(), String> {
+    let original = input;
     let model = match config {
         Some(p) => calibrate::load_model(p).map_err(|e| e.to_string())?,
         None => model::ActuatorParams::default(),
     };
     // A recorded log is read through its frames, exported as dataset.csv.
     let input = if input.extension().is_some_and(|e| e == "mcap") {
+        out::dir(out)?;
         let dir = out.join("log-export");
-        export_log(input, &dir)?;
+        export_log(input, &dir, force)?;
         dir.join("dataset.csv")
     } else {
         input.to_path_buf()
@@ -553,7 +594,9 @@ fn calibrate_cmd(
     for w in &cal.warnings {
         eprintln!("note: {w}");
     }
-    let files = calibrate::write_outputs(&cal, out).map_err(|e| e.to_string())?;
+    let mut inputs = vec![original, input.as_path()];
+    inputs.extend(config);
+    let files = calibrate::write_outputs(&cal, out, force, &inputs).map_err(|e| e.to_string())?;
     let g = |gap: &calibrate::Gap| {
         format!(
             "chamber 1 {:.1} kPa, chamber 2 {:.1} kPa, force {:.0} N, spool {:.2} µm per {:.0} ms window; normalised {:.3}",
@@ -565,20 +608,20 @@ fn calibrate_cmd(
             gap.normalised
         )
     };
-    println!("gap before (validation RMS): {}", g(&cal.gap_before));
+    outln!("gap before (validation RMS): {}", g(&cal.gap_before));
     if cal.effects.is_empty() {
         if cal
             .warnings
             .iter()
             .any(|w| w.contains(calibrate::NOT_IDENTIFIABLE))
         {
-            println!("nothing identifiable from this data (see the note above); the model is left as it is");
+            outln!("nothing identifiable from this data (see the note above); the model is left as it is");
         } else {
-            println!("no missing effect explains a significant part of the gap: the model stands as it is");
+            outln!("no missing effect explains a significant part of the gap: the model stands as it is");
         }
     }
     if cal.gap_after.normalised > 1.0 {
-        println!(
+        outln!(
             "the remaining gap ({:.2}) is well above the sensor floor (about 0.2-0.4): the rig differs in \
              something the library does not have, or a channel is scaled or wired differently",
             cal.gap_after.normalised
@@ -590,7 +633,7 @@ fn calibrate_cmd(
             .iter()
             .map(|(k, v)| format!("{k} = {v:.4e}"))
             .collect();
-        println!(
+        outln!(
             "{}. {} ({}), explains {:.0} % of the gap: {} (SI)",
             i + 1,
             e.name,
@@ -599,18 +642,18 @@ fn calibrate_cmd(
             params.join(", ")
         );
         for l in e.engineering.iter().chain(&e.not_identifiable) {
-            println!("   {l}");
+            outln!("   {l}");
         }
         if let Some(c) = &e.caveat {
-            println!("   {c}");
+            outln!("   {c}");
         }
     }
-    println!(
+    outln!(
         "gap after: {} ({:.0} % smaller)",
         g(&cal.gap_after),
         cal.gap_reduction * 100.0
     );
-    println!(
+    outln!(
         "wrote {}, {}, {}",
         files.json.display(),
         files.model_toml.display(),
@@ -624,13 +667,34 @@ pub(crate) fn benches_samples(seconds: f64) -> Vec<model::Sample> {
     bench::speed::recorded_samples(seconds)
 }
 
-/// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv).
-fn export_log(log: &std::path::Path, dir: &std::path::Path) -> Result<Vec<PathBuf>, String> {
+/// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv);
+/// returns the files and what reading the log skipped (damaged chunks).
+fn export_log(
+    log: &std::path::Path,
+    dir: &std::path::Path,
+    force: bool,
+) -> Result<(Vec<PathBuf>, replay::LogDamage), String> {
     let l = recorder::LogReader::open(log)
         .and_then(|r| r.read())
         .map_err(|e| format!("{}: {e}", log.display()))?;
     if let Some(why) = &l.truncated {
         eprintln!("warning: {}: {why}; reading what is complete", log.display());
     }
-    recorder::export_csv(&l, dir).map_err(|e| e.to_string())
+    for c in &l.chunks_skipped {
+        eprintln!("warning: {}: damaged {c}; skipped", log.display());
+    }
+    if !l.chunks_skipped.is_empty() {
+        eprintln!(
+            "warning: {}: {} damaged chunks skipped, {} samples lost with them",
+            log.display(),
+            l.chunks_skipped.len(),
+            l.frames_lost
+        );
+    }
+    let files = recorder::export_csv(&l, dir, force).map_err(|e| e.to_string())?;
+    let damage = replay::LogDamage {
+        chunks_skipped: l.chunks_skipped,
+        frames_lost: l.frames_lost,
+    };
+    Ok((files, damage))
 }

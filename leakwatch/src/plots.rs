@@ -10,8 +10,9 @@ fn series(label: &str, x: &[f64], y: Vec<f64>) -> Series {
 
 /// Draws a run in the CSV format: rod position and reference, both pressures,
 /// valve command and leak flow on a shared time axis.
-pub fn plot_run_csv(input: &Path, out: &Path) -> Result<(), String> {
+pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String> {
     let ds = dataset::read_csv(input, dataset::Limits::default()).map_err(|e| e.to_string())?;
+    crate::out::check(out, force, &[input])?;
     let s = &ds.samples;
     let t: Vec<f64> = s.iter().map(|s| s.t_s).collect();
     let col = |f: fn(&model::Sample) -> f64, scale: f64| s.iter().map(|s| f(s) * scale).collect::<Vec<f64>>();
@@ -38,7 +39,7 @@ pub fn plot_run_csv(input: &Path, out: &Path) -> Result<(), String> {
         .unwrap_or_default();
     let mut fig = Figure::new(&title, "t [s]");
     fig.panels = panels;
-    plot::render_png(&fig, out).map_err(|e| e.to_string())
+    crate::out::png(&fig, out, force, &[input])
 }
 
 /// Reads a CSV with a header into named columns (non-numbers become NaN).
@@ -63,8 +64,13 @@ fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
 /// Draws a replay directory (estimates.csv, events.json): measured against
 /// estimated position and pressures, the thesis filter's residuals and MAE, and
 /// the leak filter's leak sizes, with detections and onsets marked.
-pub fn plot_replay(dir: &Path, out: &Path) -> Result<(), String> {
+pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
     let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
+    crate::out::check(
+        out,
+        force,
+        &[&dir.join("estimates.csv"), &dir.join("events.json")],
+    )?;
     let col = |name: &str| -> Result<&Vec<f64>, String> {
         header
             .iter()
@@ -136,5 +142,10 @@ pub fn plot_replay(dir: &Path, out: &Path) -> Result<(), String> {
     let title = format!("replay {}", dir.display());
     let mut fig = Figure::new(&title, "t [s]");
     fig.panels = vec![pos, pres, resid, mae, leaks];
-    plot::render_png(&fig, out).map_err(|e| e.to_string())
+    crate::out::png(
+        &fig,
+        out,
+        force,
+        &[&dir.join("estimates.csv"), &dir.join("events.json")],
+    )
 }

@@ -2,13 +2,13 @@
 //! than real time, as stages connected by crossbeam channels (or in one
 //! thread; both give the same output bit for bit).
 
-use std::fs::File;
+use std::collections::BTreeMap;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use classifier::{Classifier, LeakEvent};
-use dataset::{CsvReader, Limits, Row};
+use dataset::{CsvReader, Issue, Limits, Row};
 use estimator::{EstimatorStage, StageEstimate};
 use model::Sample;
 use serde::Serialize;
@@ -37,6 +37,24 @@ pub struct ReplayRequest {
     pub wiring: Wiring,
     /// Show a progress bar on a terminal.
     pub progress: bool,
+    /// Largest fraction of unusable rows (0 to 1) before the file is refused
+    /// (outputs written, then an error).
+    pub max_bad_fraction: f64,
+    /// Replace existing output files (`--force`).
+    pub overwrite: bool,
+    /// Other inputs (the config, an original log) that no output may replace.
+    pub protect: Vec<PathBuf>,
+    /// When the input was exported from a recorded log: what reading it skipped.
+    pub log: Option<LogDamage>,
+}
+
+/// What reading a recorded log (MCAP) skipped, reported in summary.json.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct LogDamage {
+    /// Damaged chunks skipped (byte offset and reason), never decompressed unbounded.
+    pub chunks_skipped: Vec<String>,
+    /// Sensor frames (samples) lost with them.
+    pub frames_lost: u64,
 }
 
 /// Residual statistics of one filter.
@@ -65,8 +83,23 @@ pub struct Summary {
     pub input: String,
     /// Samples processed.
     pub samples: u64,
+    /// Data rows read from the input (usable and skipped).
+    pub rows: u64,
     /// Rows of the input that could not be used (skipped, each reported).
     pub rows_skipped: u64,
+    /// The skipped rows by reason (`not_a_number`, `non_finite`, `out_of_range`,
+    /// `time_not_increasing`, `step_too_short`, `wrong_cell_count`).
+    pub rows_rejected: BTreeMap<String, u64>,
+    /// Largest fraction of skipped rows accepted (0 to 1, `--max-bad-rows`).
+    pub max_bad_fraction: f64,
+    /// Why the input was refused (too many unusable rows), if it was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refused: Option<String>,
+    /// Usable rows with an optional column absent (empty or NaN), per column present in the header.
+    pub optional_absent: BTreeMap<String, u64>,
+    /// For a recorded log (MCAP) input: damaged chunks skipped and the samples lost with them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub log: Option<LogDamage>,
     /// Samples missing from the time stamps (gaps), bridged or causing resets.
     pub samples_missing: u64,
     /// Input problems, with line and column (the first 100).
@@ -166,28 +199,36 @@ pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Re
     )
 }
 
-/// Writes events as a JSON array (NaN becomes null).
-pub fn write_events(path: &Path, events: &[LeakEvent]) -> Result<(), String> {
+/// Writes events as a JSON array (NaN becomes null); an existing file only if
+/// `force`, none of `inputs` ever (see [`crate::out::write`]).
+pub fn write_events(path: &Path, events: &[LeakEvent], force: bool, inputs: &[&Path]) -> Result<(), String> {
     let text = serde_json::to_string_pretty(events).map_err(|e| format!("events: {e}"))?;
-    std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))
+    crate::out::write(path, (text + "\n").as_bytes(), force, inputs)
 }
 
 enum Batch {
     Samples(Vec<Sample>),
-    Issue(String, bool),
+    Issue(Issue),
 }
 
 const BATCH: usize = 2048;
 
 /// Runs a replay and writes estimates.csv, events.json and summary.json into the output directory.
 pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
-    std::fs::create_dir_all(&req.out_dir)
-        .map_err(|e| format!("cannot create output directory {}: {e}", req.out_dir.display()))?;
-    let cfg = &req.config;
-    let limits = Limits::for_supply(cfg.model.supply_pressure_pa);
-    let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
+    crate::out::dir(&req.out_dir)?;
+    let mut inputs: Vec<&Path> = vec![req.input.as_path()];
+    inputs.extend(req.protect.iter().map(|p| p.as_path()));
     let est_path = req.out_dir.join("estimates.csv");
-    let file = File::create(&est_path).map_err(|e| format!("cannot write {}: {e}", est_path.display()))?;
+    let events_path = req.out_dir.join("events.json");
+    let summary_path = req.out_dir.join("summary.json");
+    // Refuse before reading or writing anything.
+    for p in [&est_path, &events_path, &summary_path] {
+        crate::out::check(p, req.overwrite, &inputs)?;
+    }
+    let cfg = &req.config;
+    let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
+    let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
+    let file = crate::out::create(&est_path, req.overwrite, &inputs)?;
     let mut out = BufWriter::with_capacity(1 << 20, file);
     writeln!(out, "{ESTIMATES_HEADER}").map_err(|e| format!("{}: {e}", est_path.display()))?;
 
@@ -199,6 +240,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let mut events: Vec<LeakEvent> = Vec::new();
     let mut summary = Summary {
         input: req.input.display().to_string(),
+        log: req.log.clone(),
         wiring: match req.wiring {
             Wiring::Channels => "channels".into(),
             Wiring::SingleThread => "single-thread".into(),
@@ -224,26 +266,31 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             }
         }
     };
-    let on_issue = |msg: String, skipped: bool, summary: &mut Summary| {
-        if skipped {
+    let on_issue = |issue: &Issue, summary: &mut Summary| {
+        if issue.skipped {
             summary.rows_skipped += 1;
+            *summary
+                .rows_rejected
+                .entry(issue.kind.name().to_string())
+                .or_insert(0) += 1;
         }
         if summary.issues.len() < 100 {
-            summary.issues.push(msg);
+            summary.issues.push(issue.to_string());
         }
     };
+    let has_optional = reader.has_optional();
 
-    match req.wiring {
+    let absent = match req.wiring {
         Wiring::SingleThread => {
             while let Some(row) = reader.next_row() {
                 let sample = match row {
                     Row::Sample(s) => s,
                     Row::AfterGap(s, issue) => {
-                        on_issue(issue.to_string(), false, &mut summary);
+                        on_issue(&issue, &mut summary);
                         s
                     }
                     Row::Skipped(issue) => {
-                        on_issue(issue.to_string(), true, &mut summary);
+                        on_issue(&issue, &mut summary);
                         continue;
                     }
                 };
@@ -253,12 +300,13 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                     bar.set_position(summary.samples);
                 }
             }
+            reader.absent
         }
         Wiring::Channels => {
             let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(8);
-            let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<(String, bool)>)>(8);
+            let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<Issue>)>(8);
             std::thread::scope(|scope| {
-                scope.spawn(move || {
+                let read = scope.spawn(move || {
                     let mut batch = Vec::with_capacity(BATCH);
                     while let Some(row) = reader.next_row() {
                         match row {
@@ -267,35 +315,36 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                                 batch.push(s);
                                 let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                                 if tx_in.send(Batch::Samples(full)).is_err()
-                                    || tx_in.send(Batch::Issue(issue.to_string(), false)).is_err()
+                                    || tx_in.send(Batch::Issue(issue)).is_err()
                                 {
-                                    return;
+                                    return reader.absent;
                                 }
                             }
                             Row::Skipped(issue) => {
                                 let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                                 if tx_in.send(Batch::Samples(full)).is_err()
-                                    || tx_in.send(Batch::Issue(issue.to_string(), true)).is_err()
+                                    || tx_in.send(Batch::Issue(issue)).is_err()
                                 {
-                                    return;
+                                    return reader.absent;
                                 }
                             }
                         }
                         if batch.len() == BATCH {
                             let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                             if tx_in.send(Batch::Samples(full)).is_err() {
-                                return;
+                                return reader.absent;
                             }
                         }
                     }
                     let _ = tx_in.send(Batch::Samples(batch));
+                    reader.absent
                 });
                 let stage = &mut stage;
                 scope.spawn(move || {
                     for b in rx_in {
                         let msg = match b {
                             Batch::Samples(v) => (v.iter().map(|s| stage.on_sample(s)).collect(), Vec::new()),
-                            Batch::Issue(m, skipped) => (Vec::new(), vec![(m, skipped)]),
+                            Batch::Issue(issue) => (Vec::new(), vec![issue]),
                         };
                         if tx_out.send(msg).is_err() {
                             return;
@@ -306,14 +355,15 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                     for e in &ests {
                         sink(e, &mut summary);
                     }
-                    for (m, skipped) in issues {
-                        on_issue(m, skipped, &mut summary);
+                    for issue in &issues {
+                        on_issue(issue, &mut summary);
                     }
                     bar.set_position(summary.samples);
                 }
-            });
+                read.join().unwrap_or_default()
+            })
         }
-    }
+    };
     cls.finish(last_t, |ev| events.push(ev));
     bar.finish_and_clear();
     if let Some(e) = write_err {
@@ -326,13 +376,42 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     summary.leak_filter = acc.0.finish(stage.leak().counters().resets);
     summary.thesis_filter = acc.1.finish(stage.thesis().counters().resets);
     summary.events = events.len();
-    if summary.samples == 0 {
-        return Err(format!("{}: no usable samples", req.input.display()));
+    summary.rows = summary.samples + summary.rows_skipped;
+    summary.max_bad_fraction = req.max_bad_fraction;
+    for (k, name) in ["x_sp", "f_load", "ref", "q_leak"].into_iter().enumerate() {
+        if has_optional[k] {
+            summary.optional_absent.insert(name.to_string(), absent[k]);
+        }
     }
-    write_events(&req.out_dir.join("events.json"), &events)?;
-    let path = req.out_dir.join("summary.json");
+    let first = summary
+        .issues
+        .iter()
+        .find(|i| !i.contains("gap of"))
+        .map(|i| format!("; first: {i}"))
+        .unwrap_or_default();
+    summary.refused = if summary.samples == 0 {
+        Some(format!(
+            "{}: no usable samples ({} rows skipped{first})",
+            req.input.display(),
+            summary.rows_skipped
+        ))
+    } else {
+        dataset::check_bad_fraction(summary.rows, summary.rows_skipped, req.max_bad_fraction)
+            .err()
+            .map(|e| {
+                format!(
+                    "{}: {e} (--max-bad-rows {}){first}; see summary.json",
+                    req.input.display(),
+                    req.max_bad_fraction
+                )
+            })
+    };
+    write_events(&events_path, &events, req.overwrite, &inputs)?;
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(&path, text + "\n").map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    crate::out::write(&summary_path, (text + "\n").as_bytes(), req.overwrite, &inputs)?;
+    if let Some(why) = &summary.refused {
+        return Err(why.clone());
+    }
     Ok(summary)
 }
 

@@ -19,6 +19,7 @@ use frames::{event_kind, event_phase, LeakEventFrame, StatsFrame};
 use serde::Serialize;
 
 use crate::config::Config;
+use crate::out::outln;
 
 /// What `leakwatch run` was asked to do.
 #[derive(Debug, Clone)]
@@ -39,6 +40,8 @@ pub struct RunArgs {
     pub out: Option<PathBuf>,
     /// Also report the thesis' MAE baseline detector's decisions.
     pub thesis_baseline: bool,
+    /// Replace the outputs of an earlier run in the same directory (`--force`).
+    pub force: bool,
 }
 
 /// The four stage binaries.
@@ -261,7 +264,8 @@ pub struct RunOutcome {
 }
 
 fn spawn(bin: &Path, args: &[String], prefix: &str, log: &Path) -> Result<Child, String> {
-    let err = std::fs::File::create(log).map_err(|e| format!("cannot create {}: {e}", log.display()))?;
+    // the outputs were checked at start (an earlier run's only with --force)
+    let err = crate::out::create(log, true, &[])?;
     Command::new(bin)
         .args(args)
         .env(bus::PREFIX_ENV, prefix)
@@ -285,7 +289,19 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let bins = stage_binaries()?;
     frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
-    std::fs::create_dir_all(&out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
+    crate::out::dir(&out_dir)?;
+    // An earlier run's outputs are replaced only with --force; refused before anything starts.
+    let mut outputs = vec!["config.toml", "events.json", "latency.json", "run.mcap"];
+    outputs.extend(STAGES.iter().map(|n| match *n {
+        "recorder" => "recorder.log",
+        "classifier" => "classifier.log",
+        "estimator" => "estimator.log",
+        _ => "acquisition.log",
+    }));
+    let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
+    for name in outputs {
+        crate::out::check(&out_dir.join(name), args.force, &inputs)?;
+    }
     let demo = args.scenario.is_none() && args.faults.is_empty() && args.config.is_none();
     let scenario = args.scenario.clone().unwrap_or_else(|| "loaded-sine".into());
     let seconds = args.seconds.unwrap_or(40.0);
@@ -301,8 +317,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
     }
     let cfg_path = out_dir.join("config.toml");
-    std::fs::write(&cfg_path, toml::to_string(&cfg).map_err(|e| e.to_string())?)
-        .map_err(|e| format!("cannot write {}: {e}", cfg_path.display()))?;
+    let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
+    crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
     WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
     // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
     let prefix = match std::env::var(bus::PREFIX_ENV) {
@@ -327,14 +343,20 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let log = out_dir.join("run.mcap").display().to_string();
     let stage_args = |name: &str| -> Vec<String> {
         match name {
-            "recorder" => vec![
-                s("--rig"),
-                args.rig.clone(),
-                s("--out"),
-                log.clone(),
-                s("--grace-ms"),
-                s("1500"),
-            ],
+            "recorder" => {
+                let mut a = vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--out"),
+                    log.clone(),
+                    s("--grace-ms"),
+                    s("1500"),
+                ];
+                if args.force {
+                    a.push(s("--force"));
+                }
+                a
+            }
             "classifier" | "estimator" => {
                 vec![
                     s("--rig"),
@@ -367,7 +389,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
     };
     if !quiet {
-        println!(
+        outln!(
             "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
             args.rig,
             faults.join(", "),
@@ -376,7 +398,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             out_dir.display()
         );
         if let Ok(c) = classifier::Classifier::new(cfg.classifier.clone()) {
-            println!("note: {}", c.start_note());
+            outln!("note: {}", c.start_note());
         }
     }
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
@@ -402,7 +424,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         while let Ok(Some(f)) = events_rx.try_receive() {
             let ev = event_of(&f.frame);
             if !quiet {
-                print_event(&ev);
+                print_event(&ev)?;
             }
             events.push(ev);
         }
@@ -493,10 +515,14 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         stages,
         restarts,
     };
-    crate::replay::write_events(&out_dir.join("events.json"), &events)?;
+    crate::replay::write_events(&out_dir.join("events.json"), &events, args.force, &inputs)?;
     let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())?;
-    std::fs::write(out_dir.join("latency.json"), text + "\n")
-        .map_err(|e| format!("cannot write latency.json: {e}"))?;
+    crate::out::write(
+        &out_dir.join("latency.json"),
+        (text + "\n").as_bytes(),
+        args.force,
+        &inputs,
+    )?;
     drop(events_rx);
     drop(stats_rx);
     drop(bus);
@@ -508,13 +534,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     })
 }
 
-fn print_event(ev: &LeakEvent) {
+fn print_event(ev: &LeakEvent) -> Result<(), String> {
     let size = if ev.size_lpm.is_finite() {
         format!(" size {:.3} ± {:.3} L/min", ev.size_lpm, ev.size_lpm_sigma)
     } else {
         String::new()
     };
-    println!(
+    outln!(
         "  t = {:7.3} s  {:<10} {:<8} {:<16} onset {:.2} s{size}  confidence {:.2}",
         ev.t_detect_s,
         ev.detector,
@@ -523,15 +549,16 @@ fn print_event(ev: &LeakEvent) {
         ev.t_onset_s,
         ev.confidence
     );
+    Ok(())
 }
 
 /// `leakwatch run`.
 pub fn run(args: RunArgs) -> Result<(), String> {
     let o = run_pipeline(&args, false)?;
-    println!("\n| stage | frames in | frames out | missing | latency p50 µs | p99 µs | max µs | proc p50 µs | CPU % | RSS MB |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    outln!("\n| stage | frames in | frames out | missing | latency p50 µs | p99 µs | max µs | proc p50 µs | CPU % | RSS MB |");
+    outln!("|---|---|---|---|---|---|---|---|---|---|");
     for (name, f) in &o.latency.stages {
-        println!(
+        outln!(
             "| {name} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
             f.frames_in,
             f.frames_out,
@@ -550,7 +577,7 @@ pub fn run(args: RunArgs) -> Result<(), String> {
         .filter(|e| e.kind.is_leak() && e.phase == Phase::Raised && e.detector == "leak-size")
         .collect();
     match leaks.first() {
-        Some(e) => println!(
+        Some(e) => outln!(
             "\ndetected: {} leak at t = {:.2} s (onset {:.2} s), {:.3} L/min at the measured pressures",
             e.kind.name(),
             e.t_detect_s,
@@ -561,9 +588,9 @@ pub fn run(args: RunArgs) -> Result<(), String> {
                 .find(|x| x.event_id == e.event_id && x.detector == e.detector)
                 .map_or(e.size_lpm, |x| x.size_lpm)
         ),
-        None => println!("\nno leak detected"),
+        None => outln!("\nno leak detected"),
     }
-    println!(
+    outln!(
         "wrote {}/events.json, latency.json, run.mcap",
         o.out_dir.display()
     );

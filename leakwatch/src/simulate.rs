@@ -1,6 +1,6 @@
 //! `leakwatch simulate`: run a scenario on the simulated rig and write the CSV.
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use model::fault::{Fault, FaultSchedule};
 use model::params::FrictionPreset;
@@ -8,6 +8,9 @@ use model::scenario::Scenario;
 use model::sim::Simulator;
 
 use crate::config::Config;
+
+/// Most samples one `simulate` writes (an hour at 1 kHz; about 260 MB in memory).
+pub const MAX_SAMPLES: f64 = 3.6e6;
 
 /// What to simulate.
 #[derive(Debug, Clone)]
@@ -24,16 +27,33 @@ pub struct SimulateRequest {
     pub rig_variant: Option<FrictionPreset>,
 }
 
+/// Checks a run length `seconds` (s) at sample period `period_s` (s): positive,
+/// finite and at most [`MAX_SAMPLES`] samples.
+pub fn check_seconds(seconds: f64, period_s: f64) -> Result<(), String> {
+    if !(seconds > 0.0 && seconds.is_finite()) {
+        return Err(format!(
+            "--seconds {seconds:?} must be a positive number of seconds"
+        ));
+    }
+    let samples = seconds / period_s;
+    if samples > MAX_SAMPLES {
+        return Err(format!(
+            "--seconds {seconds:?}: {samples:e} samples at a sample period of {period_s} s is more than \
+             {MAX_SAMPLES:.0} samples (an hour at 1 kHz) in one run"
+        ));
+    }
+    Ok(())
+}
+
 /// Builds the simulator for a request.
 pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), String> {
+    if let Some(s) = req.seconds {
+        check_seconds(s, cfg.sim.sample_period_s)?;
+    }
     let seconds_max = req.seconds.unwrap_or(60.0);
     let scenario = Scenario::by_name(&req.scenario, req.seed, seconds_max).map_err(|e| e.to_string())?;
     let seconds = req.seconds.unwrap_or(scenario.default_seconds);
-    if !(seconds > 0.0 && seconds.is_finite()) {
-        return Err(format!(
-            "--seconds {seconds} must be a positive number of seconds"
-        ));
-    }
+    check_seconds(seconds, cfg.sim.sample_period_s)?;
     let mut rig = cfg.rig_params();
     if let Some(v) = req.rig_variant {
         rig = rig.with_friction_preset(v);
@@ -49,12 +69,51 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
     Ok((sim, seconds))
 }
 
-/// Runs the request and writes the CSV to `out`; returns the number of samples.
-pub fn run(cfg: &Config, req: &SimulateRequest, out: &PathBuf) -> Result<usize, String> {
+/// Runs the request and writes the CSV to `out` (an existing file only if `force`,
+/// never the `config` file or through a symbolic link); returns the number of samples.
+pub fn run(
+    cfg: &Config,
+    req: &SimulateRequest,
+    out: &Path,
+    force: bool,
+    config: Option<&Path>,
+) -> Result<usize, String> {
     let (mut sim, seconds) = build(cfg, req)?;
-    // fail on an unwritable path before spending time simulating
-    std::fs::File::create(out).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    // fail on an unwritable or refused path before spending time simulating
+    let inputs: Vec<&Path> = config.into_iter().collect();
+    let file = crate::out::create(out, force, &inputs)?;
     let samples = sim.run(seconds);
-    dataset::write_csv(out, &samples).map_err(|e| e.to_string())?;
+    let io = |e: std::io::Error| dataset::output::message(out, &e);
+    let mut w = std::io::BufWriter::new(file);
+    dataset::write_header(&mut w).map_err(io)?;
+    for s in &samples {
+        dataset::write_row(&mut w, s).map_err(io)?;
+    }
+    std::io::Write::flush(&mut w).map_err(io)?;
     Ok(samples.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_lengths_that_would_exhaust_memory_or_never_end_are_refused() {
+        assert_eq!(check_seconds(3600.0, 1e-3), Ok(()));
+        let e = check_seconds(3601.0, 1e-3).unwrap_err();
+        assert!(e.contains("--seconds 3601.0: 3.601e6 samples"), "{e}");
+        for s in [1e308, f64::INFINITY, f64::NAN, 0.0, -1.0] {
+            assert!(check_seconds(s, 1e-3).is_err(), "{s}");
+        }
+        // the random scenario's levels are not drawn for 1e308 s
+        let req = SimulateRequest {
+            scenario: "closed-loop-random".into(),
+            seconds: Some(1e308),
+            seed: 1,
+            faults: vec![],
+            rig_variant: None,
+        };
+        let e = build(&Config::default(), &req).err().unwrap();
+        assert!(e.starts_with("--seconds 1e308: inf samples"), "{e}");
+    }
 }

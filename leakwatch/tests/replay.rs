@@ -254,3 +254,168 @@ fn model_6_replays_the_six_state_thesis_filter() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--model 8"));
 }
+
+#[test]
+fn values_outside_physical_ranges_are_rejected_counted_and_too_many_fail_the_file() {
+    let d = tmpdir("ranges");
+    let input = simulate(&d, "loaded-sine", "3", "ext1:0.5lpm@100s");
+    let text = std::fs::read_to_string(&input).unwrap();
+    let lines: Vec<String> = text.lines().map(String::from).collect();
+    let write = |name: &str, rows: &[String]| {
+        let p = d.join(name);
+        std::fs::write(&p, rows.join("\n") + "\n").unwrap();
+        p
+    };
+    let edited = |edits: &[(usize, usize, &str)]| {
+        let mut l = lines.clone();
+        for (row, col, v) in edits {
+            let mut cells: Vec<String> = l[*row].split(',').map(String::from).collect();
+            cells[*col] = v.to_string();
+            l[*row] = cells.join(",");
+        }
+        l
+    };
+    // One row each: u = 1e308, x = -10 m, f_load = inf, ref = 1e308, a 1 µs step; ref NaN is "absent".
+    let t1500: f64 = lines[1500].split(',').next().unwrap().parse().unwrap();
+    let step = format!("{:?}", t1500 + 1e-6);
+    let bad = write(
+        "bad.csv",
+        &edited(&[
+            (500, 1, "1e308"),
+            (1000, 2, "-10"),
+            (1200, 6, "inf"),
+            (1300, 7, "1e308"),
+            (1400, 7, "NaN"),
+            (1501, 0, &step),
+        ]),
+    );
+    let out = d.join("out");
+    let o = replay(&bad, &out, &["--max-bad-rows", "0.002"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&out.join("summary.json"));
+    assert_eq!(s["rows"], 3000, "{s:#}");
+    assert_eq!(s["rows_skipped"], 5, "{s:#}");
+    assert_eq!(s["rows_rejected"]["out_of_range"], 3, "{s:#}");
+    assert_eq!(s["rows_rejected"]["non_finite"], 1, "{s:#}");
+    assert_eq!(s["rows_rejected"]["step_too_short"], 1, "{s:#}");
+    assert_eq!(s["optional_absent"]["ref"], 1, "{s:#}");
+    assert_eq!(s["max_bad_fraction"], 0.002, "{s:#}");
+    assert_eq!(s["leak_filter"]["resets"], 0, "{s:#}");
+    assert_eq!(s["thesis_filter"]["resets"], 0, "{s:#}");
+    assert!(s.get("refused").is_none(), "{s:#}");
+    let issues = s["issues"].to_string();
+    assert!(
+        issues.contains("line 501, column `u`: command 1e308 V is outside [-15.0, 15.0] V"),
+        "{issues}"
+    );
+    assert!(
+        issues.contains("line 1001, column `x`: position -10.0 m"),
+        "{issues}"
+    );
+    // 5 bad rows of 3000 (0.17 %) pass at 0.2 %; at 0.1 % the file is refused.
+    let o = replay(&bad, &d.join("strict"), &["--max-bad-rows", "0.001"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("5 of 3000 rows (0.17 %) are unusable, more than the 0.10 % accepted"),
+        "{err}"
+    );
+    let s = json(&d.join("strict").join("summary.json"));
+    assert!(s["refused"].as_str().unwrap().contains("5 of 3000 rows"), "{s:#}");
+
+    // Time reversed: 2999 of 3000 rows rejected, the file is refused.
+    let mut rev = vec![lines[0].clone()];
+    rev.extend(lines[1..].iter().rev().cloned());
+    let o = replay(&write("rev.csv", &rev), &d.join("rev"), &[]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("2999 of 3000 rows (99.97 %) are unusable"), "{err}");
+    let s = json(&d.join("rev").join("summary.json"));
+    assert_eq!(s["rows_rejected"]["time_not_increasing"], 2999, "{s:#}");
+
+    // u = 1e300 in every row: no usable sample, a non-zero exit and no filter run.
+    let all: Vec<String> = (0..lines.len())
+        .map(|k| {
+            if k == 0 {
+                return lines[0].clone();
+            }
+            let mut cells: Vec<&str> = lines[k].split(',').collect();
+            cells[1] = "1e300";
+            cells.join(",")
+        })
+        .collect();
+    let o = replay(&write("uall.csv", &all), &d.join("uall"), &[]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no usable samples (3000 rows skipped"), "{err}");
+    let s = json(&d.join("uall").join("summary.json"));
+    assert_eq!(
+        (s["samples"].as_u64(), s["leak_filter"]["resets"].as_u64()),
+        (Some(0), Some(0))
+    );
+    // A bad --max-bad-rows is refused by name.
+    let o = replay(&bad, &d.join("x"), &["--max-bad-rows", "2"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--max-bad-rows 2"));
+    assert!(!o.status.success());
+}
+
+#[test]
+fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samples() {
+    use recorder::{Entry, LogWriter, WriterOptions};
+    let d = tmpdir("mcap");
+    let log = d.join("run.mcap");
+    let options = WriterOptions {
+        chunk_size: 16 * 1024,
+        ..WriterOptions::default()
+    };
+    let mut w = LogWriter::create(&log, options).unwrap();
+    for i in 0..4000u64 {
+        let t = i as f64 * 1e-3;
+        let frame = frames::SensorFrame {
+            seq: i,
+            acq_mono_ns: i * 1_000_000,
+            t_s: t,
+            u_v: 0.5 * (t * 6.0).sin(),
+            x_m: 0.3,
+            p1_pa: 6.9e6,
+            p2_pa: 6.9e6,
+            x_sp_m: f64::NAN,
+            f_load_n: f64::NAN,
+            ref_m: f64::NAN,
+            q_leak_lpm: f64::NAN,
+            flags: 0,
+            _pad: 0,
+        };
+        assert!(w.write(Entry::Frame(frame, i)).unwrap());
+    }
+    w.finish().unwrap();
+    // declare a wrong uncompressed size in the 10th chunk (offset of the size field:
+    // opcode, record length, start and end time)
+    let mut bytes = std::fs::read(&log).unwrap();
+    let (mut at, mut seen) = (8usize, 0);
+    while bytes[at] != 0x06 || seen < 9 {
+        if bytes[at] == 0x06 {
+            seen += 1;
+        }
+        at += 9 + u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+    }
+    bytes[at + 25..at + 33].copy_from_slice(&1u64.to_le_bytes());
+    let bad = d.join("bad.mcap");
+    std::fs::write(&bad, &bytes).unwrap();
+    let out = d.join("out");
+    let o = replay(&bad, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "damaged chunk at byte {at}: declares 1 bytes uncompressed, but the data holds more; skipped"
+        )),
+        "{err}"
+    );
+    let s = json(&out.join("summary.json"));
+    let lost = s["log"]["frames_lost"].as_u64().unwrap();
+    assert!(lost >= 50, "{s:#}");
+    assert_eq!(s["samples"].as_u64().unwrap() + lost, 4000, "{s:#}");
+    assert_eq!(s["samples_missing"].as_u64().unwrap(), lost, "{s:#}");
+    assert_eq!(s["log"]["chunks_skipped"].as_array().unwrap().len(), 1, "{s:#}");
+}

@@ -56,25 +56,60 @@ impl SensorParams {
         if !(1..=24).contains(&self.adc_bits) {
             return Err(bad("adc_bits", self.adc_bits as f64, "1 to 24 bits"));
         }
-        let positive = [
-            ("encoder_resolution_m", self.encoder_resolution_m),
-            ("pressure_full_scale_pa", self.pressure_full_scale_pa),
-            ("spool_full_scale_m", self.spool_full_scale_m),
-            ("load_cell_full_scale_n", self.load_cell_full_scale_n),
+        let ranges: [(&str, f64, f64, f64, &'static str); 7] = [
+            (
+                "encoder_resolution_m",
+                self.encoder_resolution_m,
+                1e-9,
+                1e-2,
+                "a resolution from 1e-9 to 1e-2 m",
+            ),
+            (
+                "pressure_full_scale_pa",
+                self.pressure_full_scale_pa,
+                1e5,
+                1e9,
+                "a full scale from 1e5 to 1e9 Pa",
+            ),
+            (
+                "spool_full_scale_m",
+                self.spool_full_scale_m,
+                1e-6,
+                0.1,
+                "a full scale from 1e-6 to 0.1 m",
+            ),
+            (
+                "load_cell_full_scale_n",
+                self.load_cell_full_scale_n,
+                1.0,
+                1e8,
+                "a full scale from 1 to 1e8 N",
+            ),
+            (
+                "pressure_noise_pa",
+                self.pressure_noise_pa,
+                0.0,
+                1e8,
+                "a noise from 0 to 1e8 Pa",
+            ),
+            (
+                "spool_noise_m",
+                self.spool_noise_m,
+                0.0,
+                1e-2,
+                "a noise from 0 to 1e-2 m",
+            ),
+            (
+                "load_cell_noise_n",
+                self.load_cell_noise_n,
+                0.0,
+                1e7,
+                "a noise from 0 to 1e7 N",
+            ),
         ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0 && v < 1.0e12) {
-                return Err(bad(name, v, "a finite value > 0"));
-            }
-        }
-        let nonneg = [
-            ("pressure_noise_pa", self.pressure_noise_pa),
-            ("spool_noise_m", self.spool_noise_m),
-            ("load_cell_noise_n", self.load_cell_noise_n),
-        ];
-        for (name, v) in nonneg {
-            if !(v.is_finite() && (0.0..1.0e12).contains(&v)) {
-                return Err(bad(name, v, "a finite value >= 0"));
+        for (name, v, lo, hi, expected) in ranges {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(bad(name, v, expected));
             }
         }
         Ok(())

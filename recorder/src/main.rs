@@ -30,9 +30,12 @@ struct Args {
     /// Rig id ([A-Za-z0-9_-]{1,32}).
     #[arg(long)]
     rig: String,
-    /// The log file to write (MCAP; overwritten).
+    /// The log file to write (MCAP; an existing file only with --force; never through a symbolic link).
     #[arg(long)]
     out: PathBuf,
+    /// Replace an existing log file.
+    #[arg(long)]
+    force: bool,
     /// After the frames stream ended, stop once no frame, estimate, event or
     /// health message came for this long, ms.
     #[arg(long, default_value_t = 1000)]
@@ -133,6 +136,7 @@ fn run(args: &Args) -> Result<(), String> {
     let options = WriterOptions {
         chunk_size: args.chunk_kib.max(1) * 1024,
         metadata,
+        overwrite: args.force,
         ..WriterOptions::default()
     };
     let mut writer = LogWriter::create(&args.out, options).map_err(|e| e.to_string())?;

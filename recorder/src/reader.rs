@@ -23,11 +23,62 @@ pub struct Log {
     pub stats: Vec<StatsFrame>,
     /// The `gaps` channel.
     pub gaps: Vec<GapRecord>,
-    /// Messages on channels this version does not know, skipped.
+    /// Messages on channels this version does not know (or whose channel
+    /// record was in a skipped chunk), skipped.
     pub unknown_messages: u64,
     /// `Some(reason)` if the file ended early (a killed recorder): everything
     /// up to the last complete chunk was read.
     pub truncated: Option<String>,
+    /// Damaged chunks that were skipped (declared size above [`MAX_CHUNK_BYTES`]
+    /// or different from the data, bad CRC, unknown compression, bad records),
+    /// each with its byte offset in the file and the reason.
+    pub chunks_skipped: Vec<String>,
+    /// Sensor frames lost in the skipped chunks (from the gap in the frames'
+    /// sequence numbers around each; a chunk skipped after the last frame is not counted).
+    pub frames_lost: u64,
+}
+
+/// Largest uncompressed chunk accepted, bytes (64 MiB; the recorder writes 256 KiB chunks).
+/// A chunk declaring more is skipped before anything is decompressed.
+pub const MAX_CHUNK_BYTES: u64 = 64 << 20;
+
+/// The records of one chunk, decompressed with its declared size as a hard bound:
+/// a chunk that declares more than [`MAX_CHUNK_BYTES`], decompresses to more or
+/// less than it declares, or fails its CRC is refused with the reason.
+fn decompress_chunk(header: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let size = header.uncompressed_size;
+    if size > MAX_CHUNK_BYTES {
+        return Err(format!(
+            "declares {size} bytes uncompressed, more than the {MAX_CHUNK_BYTES} accepted"
+        ));
+    }
+    let out = match header.compression.as_str() {
+        "" => data.to_vec(),
+        "zstd" => {
+            let mut out = Vec::with_capacity(size as usize);
+            zstd::stream::read::Decoder::new(data)
+                .and_then(|d| d.take(size + 1).read_to_end(&mut out))
+                .map_err(|e| format!("zstd: {e}"))?;
+            out
+        }
+        other => return Err(format!("compression `{other}` is not supported")),
+    };
+    if out.len() as u64 > size {
+        return Err(format!(
+            "declares {size} bytes uncompressed, but the data holds more"
+        ));
+    }
+    if (out.len() as u64) < size {
+        return Err(format!(
+            "declares {size} bytes uncompressed, but the data holds {}",
+            out.len()
+        ));
+    }
+    if header.uncompressed_crc != 0 && crc32fast::hash(&out) != header.uncompressed_crc {
+        return Err("CRC of the uncompressed data does not match".into());
+    }
+    Ok(out)
 }
 
 /// Reads a whole log file (into memory).
@@ -48,44 +99,86 @@ impl LogReader {
 
     /// Decodes every message. A file that ends early (no footer, a partial
     /// chunk) is read up to its last complete chunk and marked
-    /// [`Log::truncated`]; a file that is not MCAP, or a message that does not
-    /// decode, is an error naming the channel and message.
+    /// [`Log::truncated`]; a damaged chunk (see [`MAX_CHUNK_BYTES`]) is skipped
+    /// and listed in [`Log::chunks_skipped`], never handed to the decompressor
+    /// unbounded; a file that is not MCAP, or a message that does not decode, is
+    /// an error naming the channel and message.
     pub fn read(&self) -> Result<Log, RecorderError> {
         let mut log = Log::default();
-        let stream =
-            mcap::MessageStream::new_with_options(&self.data, mcap::read::Options::IgnoreEndMagic.into())
-                .map_err(|e| RecorderError::Mcap(self.path.clone(), e.to_string()))?;
+        let records = mcap::read::LinearReader::new_with_options(
+            &self.data,
+            mcap::read::Options::IgnoreEndMagic.into(),
+        )
+        .map_err(|e| RecorderError::Mcap(self.path.clone(), e.to_string()))?;
+        // The channels, from the summary at the end when there is one (a damaged
+        // first chunk then loses its messages, not the channels of all others).
+        let mut channels: std::collections::HashMap<u16, String> = match mcap::read::Summary::read(&self.data)
+        {
+            Ok(Some(summary)) => summary
+                .channels
+                .iter()
+                .map(|(id, c)| (*id, c.topic.clone()))
+                .collect(),
+            _ => std::collections::HashMap::new(),
+        };
+        // where in `log.frames` each skipped chunk was
+        let mut skipped_at: Vec<usize> = Vec::new();
+        let mut offset = 8usize; // after the magic
         let mut any = false;
-        for item in stream {
-            let msg = match item {
-                Ok(m) => m,
+        for item in records {
+            let record = match item {
+                Ok(r) => r,
                 Err(e) if any || self.data.len() > 8 && self.data.starts_with(b"\x89MCAP0\r\n") => {
                     log.truncated = Some(e.to_string());
                     break;
                 }
                 Err(e) => return Err(RecorderError::Mcap(self.path.clone(), e.to_string())),
             };
-            any = true;
-            let topic = msg.channel.topic.as_str();
-            let decode_err = |problem: String| RecorderError::Decode {
-                path: self.path.clone(),
-                channel: topic.to_string(),
-                sequence: msg.sequence,
-                problem,
-            };
-            let v: Value = serde_json::from_slice(&msg.data).map_err(|e| decode_err(e.to_string()))?;
-            match topic {
-                "frames" => log.frames.push(SensorFrame::from_json(&v).map_err(decode_err)?),
-                "estimates" => log
-                    .estimates
-                    .push(EstimateFrame::from_json(&v).map_err(decode_err)?),
-                "events" => log
-                    .events
-                    .push(LeakEventFrame::from_json(&v).map_err(decode_err)?),
-                "health" => log.health.push(HealthFrame::from_json(&v).map_err(decode_err)?),
-                "stats" => log.stats.push(StatsFrame::from_json(&v).map_err(decode_err)?),
-                GAPS_CHANNEL => log.gaps.push(GapRecord::from_json(&v).map_err(decode_err)?),
-                _ => log.unknown_messages += 1,
+            let at = offset;
+            offset += record_len(&self.data, at);
+            match record {
+                mcap::records::Record::Channel(c) => {
+                    channels.insert(c.id, c.topic);
+                }
+                mcap::records::Record::Message { header, data } => {
+                    any = true;
+                    self.decode(&mut log, &channels, &header, &data)?;
+                }
+                mcap::records::Record::Chunk { header, data } => {
+                    let bytes = match decompress_chunk(&header, &data) {
+                        Ok(b) => b,
+                        Err(why) => {
+                            log.chunks_skipped.push(format!("chunk at byte {at}: {why}"));
+                            skipped_at.push(log.frames.len());
+                            continue;
+                        }
+                    };
+                    for inner in mcap::read::LinearReader::sans_magic(&bytes) {
+                        match inner {
+                            Ok(mcap::records::Record::Channel(c)) => {
+                                channels.insert(c.id, c.topic);
+                            }
+                            Ok(mcap::records::Record::Message { header, data }) => {
+                                any = true;
+                                self.decode(&mut log, &channels, &header, &data)?;
+                            }
+                            Ok(_) => {}
+                            Err(e) => {
+                                log.chunks_skipped
+                                    .push(format!("chunk at byte {at}: record: {e}"));
+                                skipped_at.push(log.frames.len());
+                                break;
+                            }
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        for p in skipped_at {
+            if p > 0 && p < log.frames.len() {
+                let gap = log.frames[p].seq.saturating_sub(log.frames[p - 1].seq);
+                log.frames_lost += gap.saturating_sub(1);
             }
         }
         if !any && log.truncated.is_none() && !self.data.ends_with(b"\x89MCAP0\r\n") {
@@ -93,6 +186,51 @@ impl LogReader {
         }
         Ok(log)
     }
+
+    fn decode(
+        &self,
+        log: &mut Log,
+        channels: &std::collections::HashMap<u16, String>,
+        header: &mcap::records::MessageHeader,
+        data: &[u8],
+    ) -> Result<(), RecorderError> {
+        let topic = channels.get(&header.channel_id).map(String::as_str).unwrap_or("");
+        let decode_err = |problem: String| RecorderError::Decode {
+            path: self.path.clone(),
+            channel: topic.to_string(),
+            sequence: header.sequence,
+            problem,
+        };
+        if topic.is_empty() {
+            // its channel record was in a skipped chunk
+            log.unknown_messages += 1;
+            return Ok(());
+        }
+        let v: Value = serde_json::from_slice(data).map_err(|e| decode_err(e.to_string()))?;
+        match topic {
+            "frames" => log.frames.push(SensorFrame::from_json(&v).map_err(decode_err)?),
+            "estimates" => log
+                .estimates
+                .push(EstimateFrame::from_json(&v).map_err(decode_err)?),
+            "events" => log
+                .events
+                .push(LeakEventFrame::from_json(&v).map_err(decode_err)?),
+            "health" => log.health.push(HealthFrame::from_json(&v).map_err(decode_err)?),
+            "stats" => log.stats.push(StatsFrame::from_json(&v).map_err(decode_err)?),
+            GAPS_CHANNEL => log.gaps.push(GapRecord::from_json(&v).map_err(decode_err)?),
+            _ => log.unknown_messages += 1,
+        }
+        Ok(())
+    }
+}
+
+/// The length of the top-level record at byte `at` of `data` (opcode, length
+/// field and body), for reporting where a chunk is; 0 past the end.
+fn record_len(data: &[u8], at: usize) -> usize {
+    data.get(at + 1..at + 9)
+        .and_then(|b| <[u8; 8]>::try_from(b).ok())
+        .map(|b| 9usize.saturating_add(u64::from_le_bytes(b) as usize))
+        .unwrap_or(0)
 }
 
 impl GapRecord {

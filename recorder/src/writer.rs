@@ -32,6 +32,8 @@ pub struct WriterOptions {
     pub compression: Option<mcap::Compression>,
     /// Metadata written into the file (`leakwatch` record): rig id, command line, ...
     pub metadata: BTreeMap<String, String>,
+    /// Replace an existing log file (`--force`); a symbolic link is never followed.
+    pub overwrite: bool,
 }
 
 impl Default for WriterOptions {
@@ -42,6 +44,7 @@ impl Default for WriterOptions {
             queue_len: 8_192,
             compression: Some(mcap::Compression::Zstd),
             metadata: BTreeMap::new(),
+            overwrite: false,
         }
     }
 }
@@ -91,11 +94,13 @@ fn add_channel<R: Record>(
 }
 
 impl LogWriter {
-    /// Creates `path` (overwriting it), writes the header, schemas and
-    /// channels, and starts the writer thread.
+    /// Creates `path` (an existing file only with `options.overwrite`; never
+    /// through a symbolic link), writes the header, schemas and channels, and
+    /// starts the writer thread.
     pub fn create(path: &Path, options: WriterOptions) -> Result<LogWriter, RecorderError> {
         let mcap_err = |e: mcap::McapError| RecorderError::Mcap(path.to_path_buf(), e.to_string());
-        let file = File::create(path).map_err(|e| RecorderError::Io(path.to_path_buf(), e))?;
+        let file = dataset::output::create_file(path, options.overwrite, &[])
+            .map_err(|e| RecorderError::Io(path.to_path_buf(), e))?;
         let mut w = mcap::WriteOptions::new()
             .compression(options.compression)
             .chunk_size(Some(options.chunk_size))

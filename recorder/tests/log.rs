@@ -7,6 +7,7 @@ use recorder::{export_csv, Entry, GapRecord, LogReader, LogWriter, WriterOptions
 
 fn dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("recorder-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -217,6 +218,97 @@ fn a_truncated_file_reads_up_to_its_last_complete_chunk() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// Byte offsets of the top-level chunk records (opcode 0x06) of an MCAP file.
+fn chunk_offsets(bytes: &[u8]) -> Vec<usize> {
+    let mut at = 8;
+    let mut out = Vec::new();
+    while at + 9 <= bytes.len() {
+        let op = bytes[at];
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if op == 0x06 {
+            out.push(at);
+        }
+        if op == 0x0F {
+            break; // data end
+        }
+        at += 9 + len;
+    }
+    out
+}
+
+#[test]
+fn a_chunk_declaring_a_false_uncompressed_size_is_skipped_not_decompressed() {
+    let d = dir("chunks");
+    let path = d.join("full.mcap");
+    let options = WriterOptions {
+        chunk_size: 32 * 1024,
+        ..WriterOptions::default()
+    };
+    write_sample_log(&path, 3000, options);
+    let bytes = std::fs::read(&path).unwrap();
+    let full = LogReader::open(&path).unwrap().read().unwrap();
+    assert_eq!(full.frames.len(), 3000);
+    assert!(full.chunks_skipped.is_empty() && full.frames_lost == 0);
+    let chunks = chunk_offsets(&bytes);
+    assert!(chunks.len() >= 6, "{} chunks", chunks.len());
+    // the uncompressed size sits after opcode, length, start and end time
+    let size_at = |c: usize| c + 9 + 16;
+    let declared = |c: usize| u64::from_le_bytes(bytes[size_at(c)..size_at(c) + 8].try_into().unwrap());
+    for (name, which, value, why) in [
+        (
+            "one",
+            0,
+            1u64,
+            "declares 1 bytes uncompressed, but the data holds more",
+        ),
+        (
+            "huge",
+            0,
+            1u64 << 62,
+            "declares 4611686018427387904 bytes uncompressed, more than the 67108864 accepted",
+        ),
+        ("short", 3, 0, "holds more"),
+        ("long", 3, declared(chunks[3]) + 100, "but the data holds"),
+    ] {
+        let mut b = bytes.clone();
+        b[size_at(chunks[which])..size_at(chunks[which]) + 8].copy_from_slice(&value.to_le_bytes());
+        let p = d.join(format!("{name}.mcap"));
+        std::fs::write(&p, &b).unwrap();
+        let started = std::time::Instant::now();
+        let log = LogReader::open(&p).unwrap().read().unwrap();
+        assert!(
+            started.elapsed().as_secs_f64() < 5.0,
+            "{name}: {:?}",
+            started.elapsed()
+        );
+        assert_eq!(log.chunks_skipped.len(), 1, "{name}: {:?}", log.chunks_skipped);
+        let msg = &log.chunks_skipped[0];
+        assert!(
+            msg.starts_with(&format!("chunk at byte {}: ", chunks[which])) && msg.contains(why),
+            "{name}: {msg}"
+        );
+        // every other chunk is read; the frames of the skipped one are counted as lost
+        let lost = full.frames.len() - log.frames.len();
+        if which == 0 {
+            // the first chunk holds the channel records: the others still decode
+            // (channels from the summary)
+            assert!(log.frames.len() > 2500, "{name}: {} frames", log.frames.len());
+        } else {
+            assert!(lost >= 20, "{name}: {lost}");
+            assert_eq!(log.frames_lost, lost as u64, "{name}");
+        }
+        let mut k = 0;
+        for f in &log.frames {
+            while full.frames[k].seq != f.seq {
+                k += 1;
+            }
+            assert_eq!(bits(f), bits(&full.frames[k]));
+        }
+        assert!(log.truncated.is_none(), "{name}");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
 #[test]
 fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     let d = dir("csv");
@@ -224,8 +316,27 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     write_sample_log(&path, 50, WriterOptions::default());
     let log = LogReader::open(&path).unwrap().read().unwrap();
     let out = d.join("csv");
-    let files = export_csv(&log, &out).unwrap();
+    let files = export_csv(&log, &out, false).unwrap();
     assert_eq!(files.len(), 7);
+    // a second export into the same directory replaces nothing without overwrite
+    let e = export_csv(&log, &out, false).unwrap_err().to_string();
+    assert!(e.contains("frames.csv: exists: not overwritten"), "{e}");
+    assert_eq!(export_csv(&log, &out, true).unwrap().len(), 7);
+    // and a second log over the first one neither
+    let e = LogWriter::create(&path, WriterOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("x.mcap: exists: not overwritten"), "{e}");
+    // a symbolic link as the log is never followed, even with overwrite
+    let link = d.join("link.mcap");
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    let options = WriterOptions {
+        overwrite: true,
+        ..WriterOptions::default()
+    };
+    let e = LogWriter::create(&link, options).err().unwrap().to_string();
+    assert!(e.contains("link.mcap: is a symbolic link"), "{e}");
     let frames_csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let mut lines = frames_csv.lines();
     assert_eq!(

@@ -69,6 +69,7 @@ impl Run {
     fn new(tag: &str) -> Run {
         let prefix = format!("p{}{tag}", std::process::id());
         let dir = std::env::temp_dir().join(format!("rec-proc-{prefix}"));
+        let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         Run { prefix, dir }
     }
@@ -211,7 +212,7 @@ fn acquisition_to_recorder_loses_nothing_and_matches_the_simulation() {
     assert_eq!(acq_stats.frames_out, 3000);
     // the dataset export reads back through the dataset crate
     let csv_dir = run.dir.join("csv");
-    recorder::export_csv(&log, &csv_dir).unwrap();
+    recorder::export_csv(&log, &csv_dir, false).unwrap();
     let mut reader =
         dataset::CsvReader::open(&csv_dir.join("dataset.csv"), dataset::Limits::default()).unwrap();
     let mut n = 0;
