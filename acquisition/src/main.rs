@@ -18,7 +18,7 @@ use acquisition::{Acquired, CsvSource, SimSource, Source};
 use bus::{monotonic_ns, Bus, BusConfig, Pacer, StageStats};
 use clap::Parser;
 use frames::{sensor_flags, SensorFrame, StatsFrame};
-use model::{ActuatorParams, Fault, FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 use serde::Deserialize;
 
 /// Publish rig samples on the leakwatch bus.
@@ -123,34 +123,23 @@ fn build_source(args: &Args) -> Result<Box<dyn Source>, String> {
     Ok(Box::new(SimSource::new(sim, seconds)))
 }
 
-/// The frame of a sample (seq, time stamp and end-of-stream are set at publishing).
-fn to_frame(s: &Sample, flags: u32) -> SensorFrame {
-    SensorFrame {
-        seq: 0,
-        acq_mono_ns: 0,
-        t_s: s.t_s,
-        u_v: s.u_v,
-        x_m: s.x_m,
-        p1_pa: s.p1_pa,
-        p2_pa: s.p2_pa,
-        x_sp_m: s.x_sp_m,
-        f_load_n: s.f_load_n,
-        ref_m: s.ref_m,
-        q_leak_lpm: s.q_leak_lpm,
-        flags,
-        _pad: 0,
-    }
-}
-
 /// The next usable sample as a frame; unusable rows are reported on stderr,
 /// counted, and flag the following frame as after a gap.
 fn next_frame(src: &mut dyn Source, unusable: &mut u64) -> Option<SensorFrame> {
     let mut flags = 0;
     loop {
         match src.next_item()? {
-            Acquired::Sample(s) => return Some(to_frame(&s, flags)),
+            Acquired::Sample(s) => {
+                return Some(SensorFrame {
+                    flags,
+                    ..SensorFrame::from(&s)
+                })
+            }
             Acquired::AfterGap { sample, .. } => {
-                return Some(to_frame(&sample, flags | sensor_flags::AFTER_GAP))
+                return Some(SensorFrame {
+                    flags: flags | sensor_flags::AFTER_GAP,
+                    ..SensorFrame::from(&sample)
+                })
             }
             Acquired::Unusable(why) => {
                 *unusable += 1;

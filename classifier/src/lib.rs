@@ -10,9 +10,10 @@
 //!   max(`threshold_sigma`·spread, `min_size_lpm`) and stays there for
 //!   `confirm_s`. The rise is measured from a healthy baseline that follows
 //!   the estimate slowly (time constant `baseline_tau_s`, frozen while a leak
-//!   is reported): an off-nominal rig makes the healthy estimate wander with
-//!   the operating point over tens of seconds, a leak steps or ramps in
-//!   seconds. Whatever the baseline has absorbed since the warm-up is judged
+//!   is reported, and while a rise is past `baseline_hold` of its threshold once
+//!   the baseline has settled): an off-nominal rig makes the healthy estimate
+//!   wander with the operating point over tens of seconds, a leak steps or
+//!   ramps in seconds. Whatever the baseline has absorbed since the warm-up is judged
 //!   against the larger `slow_leak_lpm`, so a leak that grows over minutes is
 //!   still reported (detail `slowly growing`). Isolation: the kind whose rise
 //!   is largest relative to its threshold. Size: the rise above the baseline,
@@ -32,6 +33,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+
+pub mod wire;
 use serde::{Deserialize, Serialize};
 
 /// Half-width of the band the valve command must swing through to count as a reversal, V.

@@ -13,12 +13,9 @@ use std::time::Duration;
 
 use bus::{monotonic_ns, Bus, BusConfig, StageStats, WaitMode};
 use clap::Parser;
-use classifier::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
-use estimator::{Estimate, StageEstimate, MAX_STATES};
-use frames::{
-    estimate_flags, event_kind, event_phase, health_status, EstimateFrame, Frame, HealthFrame,
-    LeakEventFrame, StatsFrame,
-};
+use classifier::{Classifier, ClassifierConfig, LeakEvent, Phase};
+use estimator::StageEstimate;
+use frames::{health_status, EstimateFrame, Frame, HealthFrame, LeakEventFrame, StatsFrame};
 use serde::Deserialize;
 
 #[derive(Parser)]
@@ -56,84 +53,6 @@ fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
     let cfg: StageConfig =
         toml::from_str(&text).map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))?;
     Ok(cfg.classifier)
-}
-
-fn flags_of(f: u32) -> u32 {
-    let mut out = 0;
-    if f & estimate_flags::RESET != 0 {
-        out |= estimator::FLAG_RESET;
-    }
-    if f & estimate_flags::SKIPPED != 0 {
-        out |= estimator::FLAG_SKIPPED;
-    }
-    if f & estimate_flags::CLAMPED != 0 {
-        out |= estimator::FLAG_CLAMPED;
-    }
-    if f & estimate_flags::CONVERGING != 0 {
-        out |= estimator::FLAG_CONVERGING;
-    }
-    if f & estimate_flags::AFTER_GAP != 0 {
-        out |= estimator::FLAG_AFTER_GAP;
-    }
-    out
-}
-
-/// The two filters' estimates carried by one frame.
-fn stage_estimate(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
-    let leak = Estimate {
-        t_s: f.t_s,
-        n_states: f.n_states,
-        flags: flags_of(f.flags),
-        measured: f.measured,
-        u_v: f.u_v,
-        state: f.state,
-        sigma: f.state_sigma,
-        residual: f.residual,
-        innovation: f.innovation,
-        innovation_sigma: f.innovation_sigma,
-        mae_pa: f.mae_pa,
-        nis: f.nis,
-    };
-    let mut th_state = [f64::NAN; MAX_STATES];
-    th_state[..f.th_state.len()].copy_from_slice(&f.th_state);
-    let thesis = Estimate {
-        n_states: f.th_state.len() as u32,
-        flags: flags_of(f.th_flags),
-        state: th_state,
-        sigma: [f64::NAN; MAX_STATES],
-        residual: f.th_residual,
-        innovation: f.th_innovation,
-        innovation_sigma: [f64::NAN; 3],
-        mae_pa: f.th_mae_pa,
-        nis: f.th_nis,
-        ..leak
-    };
-    StageEstimate {
-        leak,
-        thesis,
-        missing_before,
-    }
-}
-
-fn kind_code(k: EventKind) -> u32 {
-    match k {
-        EventKind::Ext1 => event_kind::EXT1,
-        EventKind::Ext2 => event_kind::EXT2,
-        EventKind::Int => event_kind::INTERNAL,
-        EventKind::EstimatorReset => event_kind::ESTIMATOR_RESET,
-        EventKind::SensorStuck => event_kind::SENSOR_STUCK,
-        EventKind::SensorSaturated => event_kind::SENSOR_SATURATED,
-        EventKind::SensorDead => event_kind::SENSOR_DEAD,
-        EventKind::NotArmed => event_kind::NOT_ARMED,
-    }
-}
-
-fn phase_code(p: Phase) -> u32 {
-    match p {
-        Phase::Raised => event_phase::RAISED,
-        Phase::Updated => event_phase::UPDATED,
-        Phase::Cleared => event_phase::CLEARED,
-    }
 }
 
 /// Events found while handling one estimate (at most a few; no allocation).
@@ -184,7 +103,7 @@ fn run(args: Args) -> Result<(), String> {
             stats.record_latency_ns(input.recv_mono_ns - input.acq_mono_ns);
         }
         let t0 = monotonic_ns();
-        let se = stage_estimate(&input.frame, input.missing_before);
+        let se = StageEstimate::from_frame(&input.frame, input.missing_before);
         let last_t = se.leak.t_s;
         pending.n = 0;
         cls.on_stage(&se, |ev| {
@@ -204,7 +123,7 @@ fn run(args: Args) -> Result<(), String> {
                     Phase::Updated => {}
                 }
             }
-            let frame = event_frame(&ev, input.seq, input.acq_mono_ns, done);
+            let frame = ev.to_frame(input.seq, input.acq_mono_ns, done);
             events_tx.send(&frame).map_err(e)?;
             stats.frames_out += 1;
         }
@@ -236,7 +155,7 @@ fn run(args: Args) -> Result<(), String> {
         }
         if input.is_end_of_stream() {
             cls.finish(last_t, |ev| {
-                let frame = event_frame(&ev, input.seq, input.acq_mono_ns, monotonic_ns());
+                let frame = ev.to_frame(input.seq, input.acq_mono_ns, monotonic_ns());
                 let _ = events_tx.send(&frame);
             });
             if args.exit_at_end {
@@ -251,23 +170,6 @@ fn run(args: Args) -> Result<(), String> {
         stats.frames_in, stats.frames_out, stats.seq_gaps
     );
     Ok(())
-}
-
-fn event_frame(ev: &LeakEvent, seq: u64, acq_mono_ns: u64, done_ns: u64) -> LeakEventFrame {
-    LeakEventFrame {
-        seq,
-        acq_mono_ns,
-        cls_done_mono_ns: done_ns,
-        event_id: ev.event_id,
-        kind: kind_code(ev.kind),
-        phase: phase_code(ev.phase),
-        t_detect_s: ev.t_detect_s,
-        t_onset_s: ev.t_onset_s,
-        size_lpm: ev.size_lpm,
-        size_lpm_sigma: ev.size_lpm_sigma,
-        confidence: ev.confidence,
-        detector: frames::detector_bytes(&ev.detector),
-    }
 }
 
 fn main() -> ExitCode {

@@ -328,10 +328,12 @@ fn an_open_loop_drift_into_the_end_stop_raises_no_leak() {
 }
 
 #[test]
-fn a_leak_growing_over_minutes_is_reported_as_slowly_growing() {
-    // 0.6 L/min reached over 300 s: too slow for the rise above the adapting
-    // baseline (τ = 15 s lags it by 0.03 L/min), caught by the baseline's drift
-    // since the warm-up once that passes `slow_leak_lpm` (0.5 L/min).
+fn a_leak_growing_over_minutes_is_caught_by_the_held_baseline() {
+    // 0.6 L/min reached over 300 s. The adapting baseline (τ = 15 s) would lag such a
+    // slow ramp by only 0.03 L/min; once the rise passes half its threshold the
+    // baseline holds, so the leak is raised as an ordinary rise while it is still
+    // small (here before it reaches 0.15 L/min), not only when the baseline's drift
+    // since the warm-up passes `slow_leak_lpm` (0.5 L/min).
     let (onset, ramp, size) = (20.0, 300.0, 0.6);
     let spec = format!("ext1:{size}lpm@{onset}s,ramp={ramp}");
     let events = run("closed-loop-sine", 330.0, Some(&spec), 31, off_nominal_rig());
@@ -339,10 +341,14 @@ fn a_leak_growing_over_minutes_is_reported_as_slowly_growing() {
     assert_eq!(r.len(), 1, "{events:#?}");
     let ev = &r[0];
     assert_eq!(ev.kind, EventKind::Ext1, "{ev:?}");
-    assert!(ev.detail.contains("slowly growing"), "{ev:?}");
     let scheduled = size * ((ev.t_detect_s - onset) / ramp).min(1.0);
     assert!(
-        ev.size_nominal_lpm > 0.5 && (ev.size_nominal_lpm - scheduled).abs() <= 0.25 * scheduled,
+        scheduled < 0.15,
+        "raised at {} s, when {scheduled} L/min leaked",
+        ev.t_detect_s
+    );
+    assert!(
+        (ev.size_nominal_lpm - scheduled).abs() <= 0.3 * scheduled,
         "nominal size {} L/min against {scheduled} scheduled at {} s",
         ev.size_nominal_lpm,
         ev.t_detect_s

@@ -20,19 +20,24 @@ pub use mae::MovingMae;
 pub use stage::{EstimatorStage, StageEstimate};
 pub use tuning::{Init, Tuning};
 
+pub mod wire;
+
 /// Largest number of states any layout has (the 11-state leak model with spool bias).
 pub const MAX_STATES: usize = 11;
 
+// The flag bits are the wire's (`frames::estimate_flags`): one definition, no recoding.
 /// Flag bit: the filter was reset at this sample (see [`Estimate::flags`]).
-pub const FLAG_RESET: u32 = 1;
+pub const FLAG_RESET: u32 = frames::estimate_flags::RESET;
 /// Flag bit: the sample could not be used (no measurement update).
-pub const FLAG_SKIPPED: u32 = 2;
+pub const FLAG_SKIPPED: u32 = frames::estimate_flags::SKIPPED;
 /// Flag bit: the prediction had to be clamped to the physical range.
-pub const FLAG_CLAMPED: u32 = 4;
+pub const FLAG_CLAMPED: u32 = frames::estimate_flags::CLAMPED;
 /// Flag bit: the filter is still inside its initial convergence time.
-pub const FLAG_CONVERGING: u32 = 8;
+pub const FLAG_CONVERGING: u32 = frames::estimate_flags::CONVERGING;
 /// Flag bit: samples were missing just before this one (bridged or re-anchored).
-pub const FLAG_AFTER_GAP: u32 = 16;
+pub const FLAG_AFTER_GAP: u32 = frames::estimate_flags::AFTER_GAP;
+/// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
+pub const FLAGS_ALL: u32 = FLAG_RESET | FLAG_SKIPPED | FLAG_CLAMPED | FLAG_CONVERGING | FLAG_AFTER_GAP;
 
 /// What the estimator reports for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]

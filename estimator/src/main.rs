@@ -10,8 +10,8 @@ use std::process::ExitCode;
 
 use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
 use clap::Parser;
-use estimator::{EstimatorStage, StageEstimate, Tuning};
-use frames::{estimate_flags, EstimateFrame, SensorFrame, THESIS_STATES};
+use estimator::{EstimatorStage, Tuning};
+use frames::{EstimateFrame, SensorFrame};
 use model::{ActuatorParams, Sample};
 use serde::Deserialize;
 
@@ -63,65 +63,6 @@ fn load(path: Option<&Path>) -> Result<StageConfig, String> {
     toml::from_str(&text).map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))
 }
 
-/// The sample a sensor frame carries.
-fn sample_of(f: &SensorFrame) -> Sample {
-    Sample {
-        t_s: f.t_s,
-        u_v: f.u_v,
-        x_m: f.x_m,
-        p1_pa: f.p1_pa,
-        p2_pa: f.p2_pa,
-        x_sp_m: f.x_sp_m,
-        f_load_n: f.f_load_n,
-        ref_m: f.ref_m,
-        q_leak_lpm: f.q_leak_lpm,
-    }
-}
-
-fn flags_of(f: u32) -> u32 {
-    let mut out = 0;
-    if f & estimator::FLAG_RESET != 0 {
-        out |= estimate_flags::RESET;
-    }
-    if f & estimator::FLAG_SKIPPED != 0 {
-        out |= estimate_flags::SKIPPED;
-    }
-    if f & estimator::FLAG_CLAMPED != 0 {
-        out |= estimate_flags::CLAMPED;
-    }
-    if f & estimator::FLAG_CONVERGING != 0 {
-        out |= estimate_flags::CONVERGING;
-    }
-    if f & estimator::FLAG_AFTER_GAP != 0 {
-        out |= estimate_flags::AFTER_GAP;
-    }
-    out
-}
-
-/// Fills an estimate frame (in shared memory) from the stage's output.
-fn fill(out: &mut EstimateFrame, e: &StageEstimate) {
-    let l = &e.leak;
-    let t = &e.thesis;
-    out.t_s = l.t_s;
-    out.n_states = l.n_states;
-    out.flags = flags_of(l.flags);
-    out.state = l.state;
-    out.state_sigma = l.sigma;
-    out.residual = l.residual;
-    out.innovation = l.innovation;
-    out.innovation_sigma = l.innovation_sigma;
-    out.measured = l.measured;
-    out.u_v = l.u_v;
-    out.nis = l.nis;
-    out.mae_pa = l.mae_pa;
-    out.th_flags = flags_of(t.flags);
-    out.th_state.copy_from_slice(&t.state[..THESIS_STATES]);
-    out.th_residual = t.residual;
-    out.th_innovation = t.innovation;
-    out.th_mae_pa = t.mae_pa;
-    out.th_nis = t.nis;
-}
-
 fn run(args: Args) -> Result<(), String> {
     let cfg = load(args.config.as_deref())?;
     let mut stage = EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)?;
@@ -132,11 +73,11 @@ fn run(args: Args) -> Result<(), String> {
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
     opts.exit_on_end_of_stream = args.exit_at_end;
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        let e = stage.on_sample(&sample_of(&input.frame));
+        let e = stage.on_sample(&Sample::from(&input.frame));
         out.seq = input.seq;
         out.acq_mono_ns = input.acq_mono_ns;
         out.est_recv_mono_ns = input.recv_mono_ns;
-        fill(out, &e);
+        e.write_frame(out);
         out.est_done_mono_ns = bus::monotonic_ns();
         true
     })

@@ -194,11 +194,15 @@ pub struct EstimateFrame {
 
 /// Length of [`LeakEventFrame::detector`], bytes.
 pub const DETECTOR_NAME_LEN: usize = 16;
+/// Length of [`LeakEventFrame::channel`], bytes.
+pub const CHANNEL_NAME_LEN: usize = 8;
+/// Length of [`LeakEventFrame::detail`], bytes (UTF-8, cut at a character boundary).
+pub const DETAIL_LEN: usize = 192;
 
 /// A leak or fault event from the classifier (raised, updated, cleared).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.LeakEventFrame.v1")]
+#[type_name("leakwatch.LeakEventFrame.v2")]
 pub struct LeakEventFrame {
     /// Sequence number of the estimate that triggered the event.
     pub seq: u64,
@@ -224,6 +228,18 @@ pub struct LeakEventFrame {
     pub confidence: f64,
     /// Name of the detector, ASCII, NUL-padded (see [`detector_name`]).
     pub detector: [u8; DETECTOR_NAME_LEN],
+    /// The same leak at the nominal pressure drop p_s/2, L/min (NaN if not sized).
+    pub size_nominal_lpm: f64,
+    /// Leak coefficient of the square-root law q = k·√Δp, m³/(s·√Pa) (NaN if not sized).
+    pub coefficient_m3_s_sqrt_pa: f64,
+    /// Decision statistic, in healthy spreads (NaN where not applicable).
+    pub statistic: f64,
+    /// Threshold of the statistic, in healthy spreads (NaN where not applicable).
+    pub threshold: f64,
+    /// Sensor events: the channel (`x`, `p1`, `p2`), ASCII, NUL-padded; empty otherwise.
+    pub channel: [u8; CHANNEL_NAME_LEN],
+    /// Human-readable detail, UTF-8, NUL-padded, cut to [`DETAIL_LEN`] bytes (see [`text`]).
+    pub detail: [u8; DETAIL_LEN],
 }
 
 /// The classifier's summary of the actuator (10 Hz).
@@ -435,6 +451,12 @@ impl Default for LeakEventFrame {
             size_lpm_sigma: f64::NAN,
             confidence: f64::NAN,
             detector: [0; DETECTOR_NAME_LEN],
+            size_nominal_lpm: f64::NAN,
+            coefficient_m3_s_sqrt_pa: f64::NAN,
+            statistic: f64::NAN,
+            threshold: f64::NAN,
+            channel: [0; CHANNEL_NAME_LEN],
+            detail: [0; DETAIL_LEN],
         }
     }
 }
@@ -490,8 +512,69 @@ pub fn detector_bytes(name: &str) -> [u8; DETECTOR_NAME_LEN] {
 /// The detector name of a NUL-padded field: the bytes before the first NUL
 /// (non-UTF-8 content gives `"?"`).
 pub fn detector_name(field: &[u8; DETECTOR_NAME_LEN]) -> &str {
-    let end = field.iter().position(|&b| b == 0).unwrap_or(DETECTOR_NAME_LEN);
+    text(field)
+}
+
+/// A UTF-8 text as a NUL-padded field of `N` bytes: cut at the last character
+/// boundary that fits, NUL characters left out.
+pub fn text_bytes<const N: usize>(text: &str) -> [u8; N] {
+    let mut out = [0u8; N];
+    let mut n = 0;
+    for c in text.chars().filter(|c| *c != '\0') {
+        let len = c.len_utf8();
+        if n + len > N {
+            break;
+        }
+        c.encode_utf8(&mut out[n..n + len]);
+        n += len;
+    }
+    out
+}
+
+/// The text of a NUL-padded field: the bytes before the first NUL (non-UTF-8
+/// content gives `"?"`).
+pub fn text<const N: usize>(field: &[u8; N]) -> &str {
+    let end = field.iter().position(|&b| b == 0).unwrap_or(N);
     core::str::from_utf8(&field[..end]).unwrap_or("?")
+}
+
+/// The sample a sensor frame carries (sequence, clock and flags stay on the wire).
+impl From<&SensorFrame> for model::Sample {
+    fn from(f: &SensorFrame) -> Self {
+        model::Sample {
+            t_s: f.t_s,
+            u_v: f.u_v,
+            x_m: f.x_m,
+            p1_pa: f.p1_pa,
+            p2_pa: f.p2_pa,
+            x_sp_m: f.x_sp_m,
+            f_load_n: f.f_load_n,
+            ref_m: f.ref_m,
+            q_leak_lpm: f.q_leak_lpm,
+        }
+    }
+}
+
+/// A sensor frame carrying `s`, with sequence 0, clock 0 and no flags (the
+/// publisher sets those).
+impl From<&model::Sample> for SensorFrame {
+    fn from(s: &model::Sample) -> Self {
+        SensorFrame {
+            seq: 0,
+            acq_mono_ns: 0,
+            t_s: s.t_s,
+            u_v: s.u_v,
+            x_m: s.x_m,
+            p1_pa: s.p1_pa,
+            p2_pa: s.p2_pa,
+            x_sp_m: s.x_sp_m,
+            f_load_n: s.f_load_n,
+            ref_m: s.ref_m,
+            q_leak_lpm: s.q_leak_lpm,
+            flags: 0,
+            _pad: 0,
+        }
+    }
 }
 
 /// The five topics of a rig.
@@ -620,6 +703,6 @@ pub fn wake_service_name(rig: &RigId, topic: Topic) -> String {
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 96);
 const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 488);
-const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 96);
+const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 328);
 const _: () = assert!(core::mem::size_of::<HealthFrame>() == 80);
 const _: () = assert!(core::mem::size_of::<StatsFrame>() == 112);

@@ -14,8 +14,8 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
-use classifier::{EventKind, LeakEvent, Phase};
-use frames::{event_kind, event_phase, LeakEventFrame, StatsFrame};
+use classifier::{LeakEvent, Phase};
+use frames::{LeakEventFrame, StatsFrame};
 use serde::Serialize;
 
 use crate::config::Config;
@@ -121,37 +121,6 @@ pub fn stage_binaries() -> Result<BTreeMap<&'static str, PathBuf>, String> {
         out.insert(n, p);
     }
     Ok(out)
-}
-
-/// Turns an event frame back into the event it reports.
-pub fn event_of(f: &LeakEventFrame) -> LeakEvent {
-    let kind = match f.kind {
-        event_kind::EXT1 => EventKind::Ext1,
-        event_kind::EXT2 => EventKind::Ext2,
-        event_kind::INTERNAL => EventKind::Int,
-        event_kind::ESTIMATOR_RESET => EventKind::EstimatorReset,
-        event_kind::SENSOR_STUCK => EventKind::SensorStuck,
-        event_kind::SENSOR_SATURATED => EventKind::SensorSaturated,
-        event_kind::SENSOR_DEAD => EventKind::SensorDead,
-        _ => EventKind::NotArmed,
-    };
-    let phase = match f.phase {
-        event_phase::RAISED => Phase::Raised,
-        event_phase::UPDATED => Phase::Updated,
-        _ => Phase::Cleared,
-    };
-    let mut ev = LeakEvent::plain(
-        kind,
-        phase,
-        frames::detector_name(&f.detector),
-        f.event_id,
-        f.t_detect_s,
-        f.t_onset_s,
-    );
-    ev.size_lpm = f.size_lpm;
-    ev.size_lpm_sigma = f.size_lpm_sigma;
-    ev.confidence = f.confidence;
-    ev
 }
 
 /// Latency and counts of one stage, from its stats frames.
@@ -422,11 +391,15 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let deadline = Duration::from_secs_f64(seconds + 30.0);
     loop {
         while let Ok(Some(f)) = events_rx.try_receive() {
-            let ev = event_of(&f.frame);
-            if !quiet {
-                print_event(&ev)?;
+            match LeakEvent::try_from(&f.frame) {
+                Ok(ev) => {
+                    if !quiet {
+                        print_event(&ev)?;
+                    }
+                    events.push(ev);
+                }
+                Err(e) => eprintln!("leakwatch run: an event frame was not understood ({e}); left out"),
             }
-            events.push(ev);
         }
         while let Ok(Some(st)) = stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
@@ -503,7 +476,10 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         accs.entry(st.stage).or_default().push(&st.frame);
     }
     while let Ok(Some(f)) = events_rx.try_receive() {
-        events.push(event_of(&f.frame));
+        match LeakEvent::try_from(&f.frame) {
+            Ok(ev) => events.push(ev),
+            Err(e) => eprintln!("leakwatch run: an event frame was not understood ({e}); left out"),
+        }
     }
     let mut stages = BTreeMap::new();
     for (code, acc) in accs {

@@ -8,7 +8,7 @@
 
 use std::fmt::Write as _;
 
-use frames::{EstimateFrame, Frame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, DETECTOR_NAME_LEN};
+use frames::{EstimateFrame, Frame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame};
 use serde_json::{json, Map, Value};
 
 /// One field's encoding.
@@ -139,26 +139,26 @@ impl<const N: usize> Field for [f64; N] {
     }
 }
 
-impl Field for [u8; DETECTOR_NAME_LEN] {
+impl<const N: usize> Field for [u8; N] {
     fn to_json(&self) -> Value {
-        Value::String(frames::detector_name(self).to_string())
+        Value::String(frames::text(self).to_string())
     }
     fn from_json(v: Option<&Value>) -> Result<Self, String> {
         let v = v.ok_or("missing")?;
         let s = v
             .as_str()
             .ok_or_else(|| format!("expected a string, found {v}"))?;
-        Ok(frames::detector_bytes(s))
+        Ok(frames::text_bytes(s))
     }
     fn schema() -> Value {
-        json!({"type": "string", "maxLength": DETECTOR_NAME_LEN})
+        json!({"type": "string", "description": format!("UTF-8, at most {N} bytes")})
     }
     fn csv_names(name: &str, out: &mut Vec<String>) {
         out.push(name.to_string());
     }
     fn csv_write(&self, out: &mut String) {
         // names are ASCII without commas by convention; quote anything else
-        let s = frames::detector_name(self);
+        let s = frames::text(self);
         if s.contains([',', '"', '\n']) {
             let _ = write!(out, ",\"{}\"", s.replace('"', "\"\""));
         } else {
@@ -185,22 +185,33 @@ pub trait Record: Frame {
 
 macro_rules! record {
     ($ty:ty, $name:literal, [$($field:ident),* $(,)?]) => {
+        record!($ty, $name, [$($field),*], added []);
+    };
+    // `added`: fields a later version of the type brought; a record of an
+    // earlier version without them reads with their defaults (NaN, empty).
+    ($ty:ty, $name:literal, [$($field:ident),* $(,)?], added [$($added:ident),* $(,)?]) => {
         impl Record for $ty {
             const SCHEMA_NAME: &'static str = $name;
             fn to_json(&self) -> Value {
                 let mut m = Map::new();
                 $( m.insert(stringify!($field).into(), Field::to_json(&self.$field)); )*
+                $( m.insert(stringify!($added).into(), Field::to_json(&self.$added)); )*
                 Value::Object(m)
             }
             fn from_json(v: &Value) -> Result<Self, String> {
                 let mut f = <$ty>::default();
                 $( f.$field = Field::from_json(v.get(stringify!($field)))
                     .map_err(|e| format!("{}.{}: {e}", $name, stringify!($field)))?; )*
+                $( if let Some(v) = v.get(stringify!($added)) {
+                    f.$added = Field::from_json(Some(v))
+                        .map_err(|e| format!("{}.{}: {e}", $name, stringify!($added)))?;
+                } )*
                 Ok(f)
             }
             fn schema() -> Value {
                 let mut props = Map::new();
                 $( props.insert(stringify!($field).into(), field_schema(&<$ty>::default().$field)); )*
+                $( props.insert(stringify!($added).into(), field_schema(&<$ty>::default().$added)); )*
                 json!({
                     "$schema": "https://json-schema.org/draft/2020-12/schema",
                     "title": $name,
@@ -212,11 +223,13 @@ macro_rules! record {
             fn csv_header() -> Vec<String> {
                 let mut out = Vec::new();
                 $( field_csv_names(&<$ty>::default().$field, stringify!($field), &mut out); )*
+                $( field_csv_names(&<$ty>::default().$added, stringify!($added), &mut out); )*
                 out
             }
             fn csv_row(&self, out: &mut String) {
                 let start = out.len();
                 $( Field::csv_write(&self.$field, out); )*
+                $( Field::csv_write(&self.$added, out); )*
                 // drop the leading comma of the first cell
                 out.remove(start);
             }
@@ -280,7 +293,7 @@ record!(
 );
 record!(
     LeakEventFrame,
-    "leakwatch.LeakEventFrame.v1",
+    "leakwatch.LeakEventFrame.v2",
     [
         seq,
         acq_mono_ns,
@@ -294,6 +307,14 @@ record!(
         size_lpm_sigma,
         confidence,
         detector
+    ],
+    added [
+        size_nominal_lpm,
+        coefficient_m3_s_sqrt_pa,
+        statistic,
+        threshold,
+        channel,
+        detail
     ]
 );
 record!(

@@ -95,6 +95,12 @@ fn write_sample_log(path: &std::path::Path, n: u64, options: WriterOptions) -> V
             size_lpm_sigma: 0.03,
             confidence: 0.999,
             detector: detector_bytes("sprt"),
+            size_nominal_lpm: 0.3,
+            coefficient_m3_s_sqrt_pa: 1.9e-9,
+            statistic: 7.5,
+            threshold: 4.9,
+            channel: frames::text_bytes(""),
+            detail: frames::text_bytes("0.25 L/min at the measured pressures, k = 1.9e-9 m³/(s·√Pa)"),
         },
         20,
     ));
@@ -361,4 +367,42 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     );
     assert_eq!(dataset_csv.lines().count(), 51);
     std::fs::remove_dir_all(&d).ok();
+}
+
+/// An event record written before the event frame carried its nominal size,
+/// coefficient, statistic, threshold, channel and detail (LeakEventFrame.v1)
+/// still reads: those fields come back absent (NaN, empty).
+#[test]
+fn event_records_of_the_first_version_still_read() {
+    use recorder::Record;
+    let mut f = LeakEventFrame {
+        kind: frames::event_kind::EXT2,
+        size_lpm: 0.2,
+        statistic: 6.0,
+        detail: frames::text_bytes("x"),
+        ..LeakEventFrame::default()
+    };
+    let mut v = f.to_json();
+    let obj = v.as_object_mut().expect("an object");
+    for added in [
+        "size_nominal_lpm",
+        "coefficient_m3_s_sqrt_pa",
+        "statistic",
+        "threshold",
+        "channel",
+        "detail",
+    ] {
+        assert!(obj.remove(added).is_some(), "{added} is written");
+    }
+    let back = LeakEventFrame::from_json(&v).expect("a v1 record reads");
+    assert_eq!(back.kind, frames::event_kind::EXT2);
+    assert_eq!(back.size_lpm, 0.2);
+    assert!(back.statistic.is_nan() && back.size_nominal_lpm.is_nan());
+    assert_eq!(frames::text(&back.detail), "");
+    // a field that is there but wrong is still an error that names it
+    f.detail = frames::text_bytes("y");
+    let mut bad = f.to_json();
+    bad["statistic"] = serde_json::json!("many");
+    let e = LeakEventFrame::from_json(&bad).expect_err("a bad statistic");
+    assert!(e.contains("LeakEventFrame.v2.statistic"), "{e}");
 }

@@ -1,0 +1,184 @@
+//! The classifier's side of the wire: [`LeakEvent`] ⇄ [`LeakEventFrame`] and the
+//! codes of [`EventKind`] and [`Phase`], the one place where they are converted.
+
+use crate::{EventKind, LeakEvent, Phase};
+use frames::{event_kind, event_phase, LeakEventFrame};
+
+/// The wire code of a kind (`frames::event_kind`).
+impl From<EventKind> for u32 {
+    fn from(k: EventKind) -> u32 {
+        match k {
+            EventKind::Ext1 => event_kind::EXT1,
+            EventKind::Ext2 => event_kind::EXT2,
+            EventKind::Int => event_kind::INTERNAL,
+            EventKind::EstimatorReset => event_kind::ESTIMATOR_RESET,
+            EventKind::SensorStuck => event_kind::SENSOR_STUCK,
+            EventKind::SensorSaturated => event_kind::SENSOR_SATURATED,
+            EventKind::SensorDead => event_kind::SENSOR_DEAD,
+            EventKind::NotArmed => event_kind::NOT_ARMED,
+        }
+    }
+}
+
+/// The kind of a wire code; the error names an unknown code.
+impl TryFrom<u32> for EventKind {
+    type Error = String;
+    fn try_from(code: u32) -> Result<Self, String> {
+        Ok(match code {
+            event_kind::EXT1 => EventKind::Ext1,
+            event_kind::EXT2 => EventKind::Ext2,
+            event_kind::INTERNAL => EventKind::Int,
+            event_kind::ESTIMATOR_RESET => EventKind::EstimatorReset,
+            event_kind::SENSOR_STUCK => EventKind::SensorStuck,
+            event_kind::SENSOR_SATURATED => EventKind::SensorSaturated,
+            event_kind::SENSOR_DEAD => EventKind::SensorDead,
+            event_kind::NOT_ARMED => EventKind::NotArmed,
+            other => return Err(format!("unknown event kind code {other}")),
+        })
+    }
+}
+
+/// The wire code of a phase (`frames::event_phase`).
+impl From<Phase> for u32 {
+    fn from(p: Phase) -> u32 {
+        match p {
+            Phase::Raised => event_phase::RAISED,
+            Phase::Updated => event_phase::UPDATED,
+            Phase::Cleared => event_phase::CLEARED,
+        }
+    }
+}
+
+/// The phase of a wire code; the error names an unknown code.
+impl TryFrom<u32> for Phase {
+    type Error = String;
+    fn try_from(code: u32) -> Result<Self, String> {
+        Ok(match code {
+            event_phase::RAISED => Phase::Raised,
+            event_phase::UPDATED => Phase::Updated,
+            event_phase::CLEARED => Phase::Cleared,
+            other => return Err(format!("unknown event phase code {other}")),
+        })
+    }
+}
+
+impl LeakEvent {
+    /// The frame of this event, triggered by the estimate with sequence number
+    /// `seq` acquired at `acq_mono_ns` and decided at `done_mono_ns`
+    /// (`CLOCK_MONOTONIC`, ns). Texts longer than their field are cut.
+    pub fn to_frame(&self, seq: u64, acq_mono_ns: u64, done_mono_ns: u64) -> LeakEventFrame {
+        LeakEventFrame {
+            seq,
+            acq_mono_ns,
+            cls_done_mono_ns: done_mono_ns,
+            event_id: self.event_id,
+            kind: self.kind.into(),
+            phase: self.phase.into(),
+            t_detect_s: self.t_detect_s,
+            t_onset_s: self.t_onset_s,
+            size_lpm: self.size_lpm,
+            size_lpm_sigma: self.size_lpm_sigma,
+            confidence: self.confidence,
+            detector: frames::detector_bytes(&self.detector),
+            size_nominal_lpm: self.size_nominal_lpm,
+            coefficient_m3_s_sqrt_pa: self.coefficient_m3_s_sqrt_pa,
+            statistic: self.statistic,
+            threshold: self.threshold,
+            channel: frames::text_bytes(&self.channel),
+            detail: frames::text_bytes(&self.detail),
+        }
+    }
+}
+
+/// The frame of an event with sequence 0 and clocks 0.
+impl From<&LeakEvent> for LeakEventFrame {
+    fn from(e: &LeakEvent) -> Self {
+        e.to_frame(0, 0, 0)
+    }
+}
+
+/// The event a frame reports; the error names an unknown kind or phase code.
+impl TryFrom<&LeakEventFrame> for LeakEvent {
+    type Error = String;
+    fn try_from(f: &LeakEventFrame) -> Result<Self, String> {
+        let mut ev = LeakEvent::plain(
+            EventKind::try_from(f.kind)?,
+            Phase::try_from(f.phase)?,
+            frames::detector_name(&f.detector),
+            f.event_id,
+            f.t_detect_s,
+            f.t_onset_s,
+        );
+        ev.size_lpm = f.size_lpm;
+        ev.size_lpm_sigma = f.size_lpm_sigma;
+        ev.size_nominal_lpm = f.size_nominal_lpm;
+        ev.coefficient_m3_s_sqrt_pa = f.coefficient_m3_s_sqrt_pa;
+        ev.statistic = f.statistic;
+        ev.threshold = f.threshold;
+        ev.confidence = f.confidence;
+        ev.channel = frames::text(&f.channel).to_string();
+        ev.detail = frames::text(&f.detail).to_string();
+        Ok(ev)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_round_trip_and_unknown_codes_are_named() {
+        let kinds = [
+            EventKind::Ext1,
+            EventKind::Ext2,
+            EventKind::Int,
+            EventKind::EstimatorReset,
+            EventKind::SensorStuck,
+            EventKind::SensorSaturated,
+            EventKind::SensorDead,
+            EventKind::NotArmed,
+        ];
+        for k in kinds {
+            assert_eq!(EventKind::try_from(u32::from(k)), Ok(k));
+        }
+        for p in [Phase::Raised, Phase::Updated, Phase::Cleared] {
+            assert_eq!(Phase::try_from(u32::from(p)), Ok(p));
+        }
+        assert_eq!(u32::from(EventKind::Int), 3);
+        assert_eq!(
+            EventKind::try_from(99),
+            Err("unknown event kind code 99".to_string())
+        );
+        assert_eq!(Phase::try_from(7), Err("unknown event phase code 7".to_string()));
+    }
+
+    #[test]
+    fn events_round_trip_through_frames() {
+        let mut ev = LeakEvent::plain(EventKind::Ext2, Phase::Raised, "leak-size", 7, 12.5, 11.75);
+        ev.size_lpm = 0.231;
+        ev.size_lpm_sigma = 0.012;
+        ev.size_nominal_lpm = 0.25;
+        ev.coefficient_m3_s_sqrt_pa = 1.59e-9;
+        ev.statistic = 7.5;
+        ev.threshold = 4.9;
+        ev.confidence = 0.8;
+        ev.detail =
+            "rise 7.5 healthy spreads; 0.231 L/min at the measured pressures, k = 1.59e-9 m³/(s·√Pa)".into();
+        let f = ev.to_frame(42, 1_000, 2_000);
+        assert_eq!(
+            (f.seq, f.acq_mono_ns, f.cls_done_mono_ns, f.kind),
+            (42, 1_000, 2_000, 2)
+        );
+        assert_eq!(LeakEvent::try_from(&f), Ok(ev.clone()));
+        // a sensor event keeps its channel
+        let mut s = LeakEvent::plain(EventKind::SensorStuck, Phase::Raised, "sensors", 8, 3.0, f64::NAN);
+        s.channel = "p1".into();
+        let back = LeakEvent::try_from(&LeakEventFrame::from(&s)).expect("known codes");
+        assert_eq!(back.channel, "p1");
+        assert!(back.t_onset_s.is_nan() && back.size_lpm.is_nan());
+        // a detail longer than the field is cut at a character boundary, not lost
+        ev.detail = "√".repeat(100);
+        let back = LeakEvent::try_from(&LeakEventFrame::from(&ev)).expect("known codes");
+        assert_eq!(back.detail, "√".repeat(frames::DETAIL_LEN / 3));
+    }
+}

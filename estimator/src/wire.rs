@@ -1,0 +1,147 @@
+//! The estimator's side of the wire: [`StageEstimate`] ⇄ [`EstimateFrame`],
+//! the one place where the two are converted.
+//!
+//! The flag bits are shared ([`crate::FLAG_RESET`] … are `frames::estimate_flags`),
+//! so flags are copied, not recoded; the wire's end-of-stream bit is dropped on
+//! the way in. The thesis filter's σ and innovation σ are not carried (NaN on
+//! the way back).
+
+use crate::{Estimate, StageEstimate, FLAGS_ALL, MAX_STATES};
+use frames::{EstimateFrame, THESIS_STATES};
+
+impl StageEstimate {
+    /// Writes both filters' estimates into `out` (for example a frame in shared
+    /// memory), leaving its sequence number and clock fields alone.
+    pub fn write_frame(&self, out: &mut EstimateFrame) {
+        let (l, t) = (&self.leak, &self.thesis);
+        out.t_s = l.t_s;
+        out.n_states = l.n_states;
+        out.flags = l.flags & FLAGS_ALL;
+        out.state = l.state;
+        out.state_sigma = l.sigma;
+        out.residual = l.residual;
+        out.innovation = l.innovation;
+        out.innovation_sigma = l.innovation_sigma;
+        out.measured = l.measured;
+        out.u_v = l.u_v;
+        out.nis = l.nis;
+        out.mae_pa = l.mae_pa;
+        out.th_flags = t.flags & FLAGS_ALL;
+        out.th_state.copy_from_slice(&t.state[..THESIS_STATES]);
+        out.th_residual = t.residual;
+        out.th_innovation = t.innovation;
+        out.th_mae_pa = t.mae_pa;
+        out.th_nis = t.nis;
+    }
+
+    /// The two estimates a frame carries; `missing_before` is the number of
+    /// frames the subscriber found missing just before it.
+    pub fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
+        let leak = Estimate {
+            t_s: f.t_s,
+            n_states: f.n_states,
+            flags: f.flags & FLAGS_ALL,
+            measured: f.measured,
+            u_v: f.u_v,
+            state: f.state,
+            sigma: f.state_sigma,
+            residual: f.residual,
+            innovation: f.innovation,
+            innovation_sigma: f.innovation_sigma,
+            mae_pa: f.mae_pa,
+            nis: f.nis,
+        };
+        let mut th_state = [f64::NAN; MAX_STATES];
+        th_state[..THESIS_STATES].copy_from_slice(&f.th_state);
+        let thesis = Estimate {
+            n_states: THESIS_STATES as u32,
+            flags: f.th_flags & FLAGS_ALL,
+            state: th_state,
+            sigma: [f64::NAN; MAX_STATES],
+            residual: f.th_residual,
+            innovation: f.th_innovation,
+            innovation_sigma: [f64::NAN; 3],
+            mae_pa: f.th_mae_pa,
+            nis: f.th_nis,
+            ..leak
+        };
+        StageEstimate {
+            leak,
+            thesis,
+            missing_before,
+        }
+    }
+}
+
+/// A frame with the estimates of `e`, sequence 0 and clocks 0 (the publisher sets those).
+impl From<&StageEstimate> for EstimateFrame {
+    fn from(e: &StageEstimate) -> Self {
+        let mut f = EstimateFrame::default();
+        e.write_frame(&mut f);
+        f
+    }
+}
+
+/// The estimates of a frame, with no missing frames before it.
+impl From<&EstimateFrame> for StageEstimate {
+    fn from(f: &EstimateFrame) -> Self {
+        StageEstimate::from_frame(f, 0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{EstimatorStage, Tuning, FLAG_AFTER_GAP, FLAG_CONVERGING};
+    use model::{ActuatorParams, Sample};
+
+    /// Same floats, NaN equal to NaN.
+    fn same(a: &[f64], b: &[f64]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+
+    #[test]
+    fn estimates_round_trip_through_frames() {
+        let mut stage = EstimatorStage::new(
+            ActuatorParams::default(),
+            Tuning::sensor_derived(),
+            Tuning::thesis(),
+        )
+        .expect("stage");
+        let mut e = stage.on_sample(&Sample::new(0.0, 0.5, 0.25, 7.0e6, 6.8e6));
+        for k in 1..50 {
+            e = stage.on_sample(&Sample::new(k as f64 * 1e-3, 0.5, 0.25, 7.0e6, 6.8e6));
+        }
+        e.leak.flags |= FLAG_AFTER_GAP;
+        let mut f = EstimateFrame::from(&e);
+        f.flags |= frames::estimate_flags::END_OF_STREAM;
+        let back = StageEstimate::from_frame(&f, 3);
+        assert_eq!(back.missing_before, 3);
+        // the end-of-stream bit stays on the wire; every estimator bit comes back
+        assert_eq!(back.leak.flags, e.leak.flags);
+        assert_ne!(
+            back.leak.flags & FLAG_CONVERGING,
+            0,
+            "still converging after 50 samples"
+        );
+        let (a, b) = (&e.leak, &back.leak);
+        assert_eq!((a.t_s, a.n_states, a.u_v), (b.t_s, b.n_states, b.u_v));
+        assert!(same(&a.state, &b.state) && same(&a.sigma, &b.sigma));
+        assert!(same(&a.residual, &b.residual) && same(&a.innovation, &b.innovation));
+        assert!(same(&a.innovation_sigma, &b.innovation_sigma) && same(&a.measured, &b.measured));
+        assert!(same(&[a.nis], &[b.nis]) && same(&a.mae_pa, &b.mae_pa));
+        let (a, b) = (&e.thesis, &back.thesis);
+        assert_eq!(a.flags, b.flags);
+        assert!(same(&a.state[..THESIS_STATES], &b.state[..THESIS_STATES]));
+        assert!(same(&a.residual, &b.residual) && same(&[a.nis], &[b.nis]) && same(&a.mae_pa, &b.mae_pa));
+        assert!(b.sigma.iter().all(|s| s.is_nan()), "the thesis σ is not carried");
+        // writing into a frame keeps its sequence and clocks
+        let mut g = EstimateFrame {
+            seq: 9,
+            acq_mono_ns: 10,
+            ..EstimateFrame::default()
+        };
+        e.write_frame(&mut g);
+        assert_eq!((g.seq, g.acq_mono_ns, g.t_s), (9, 10, e.leak.t_s));
+    }
+}
