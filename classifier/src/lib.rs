@@ -311,10 +311,13 @@ pub struct ClassifierConfig {
     /// measured from, s (0 = the warm-up offset, never adapted).
     pub baseline_tau_s: f64,
     /// Leak-size detector: while any rise exceeds this fraction of its threshold the
-    /// baseline holds (a ramping leak is not absorbed on its way to the threshold);
-    /// only once the baseline has followed the estimates for `baseline_tau_s` after
-    /// arming (before that it is still settling onto the operating point).
+    /// baseline holds, for at most `baseline_hold_s` (a leak opening over seconds is
+    /// not absorbed on its way to the threshold, a drift of the operating point is
+    /// still followed); only once the baseline has followed the estimates for
+    /// `baseline_tau_s` after arming (before that it is still settling).
     pub baseline_hold: f64,
+    /// Leak-size detector: longest hold of the baseline by one rise, s.
+    pub baseline_hold_s: f64,
     /// Leak-size detector: drift of the baseline since the warm-up that is reported
     /// as a slowly growing leak, L/min (at nominal drop).
     pub slow_leak_lpm: f64,
@@ -371,6 +374,7 @@ impl Default for ClassifierConfig {
             confirm_s: 0.5,
             baseline_tau_s: 15.0,
             baseline_hold: 0.5,
+            baseline_hold_s: 5.0,
             slow_leak_lpm: 0.5,
             supply_pressure_pa: 13.8e6,
             excursion_margin: 0.05,
@@ -394,7 +398,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 27] = [
+        let fields: [(&str, f64, f64, f64, &str); 28] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -446,6 +450,7 @@ impl ClassifierConfig {
                 1e3,
                 "(fraction of the threshold)",
             ),
+            ("baseline_hold_s", self.baseline_hold_s, 0.0, 1e6, "s"),
             ("slow_leak_lpm", self.slow_leak_lpm, 0.0, 1e4, "L/min"),
             ("supply_pressure_pa", self.supply_pressure_pa, 1e4, 1e9, "Pa"),
             (
@@ -587,6 +592,8 @@ pub struct LeakSizeDetector {
     last_t_s: f64,
     /// When the detector armed, s.
     armed_at_s: f64,
+    /// Since when the baseline has been held by a rise, s.
+    hold_since_s: Option<f64>,
     above_since_s: [Option<f64>; 3],
     /// Since when the baseline's drift has exceeded `slow_leak_lpm` (lead kind, time s).
     slow_since_s: Option<(usize, f64)>,
@@ -828,6 +835,7 @@ impl LeakSizeDetector {
             baseline_low_lpm: [f64::NAN; 3],
             last_t_s: f64::NAN,
             armed_at_s: f64::NAN,
+            hold_since_s: None,
             above_since_s: [None; 3],
             slow_since_s: None,
             blind_until_s: f64::NEG_INFINITY,
@@ -1121,11 +1129,17 @@ impl LeakSizeDetector {
         if blind {
             self.blind_s += dt_s;
         }
-        // A rise past `baseline_hold` of its threshold holds the baseline: a leak that
-        // ramps in over seconds is not absorbed before it reaches the threshold.
+        // A rise past `baseline_hold` of its threshold holds the baseline for up to
+        // `baseline_hold_s`: a leak that opens over seconds is not absorbed before it
+        // reaches the threshold; a slow drift of the operating point is followed again.
         let settled = e.t_s - self.armed_at_s >= self.cfg.baseline_tau_s;
-        let holding = settled
+        let past = settled
             && (0..3).any(|k| raw[k] - self.baseline_lpm[k] > self.cfg.baseline_hold * self.threshold_lpm[k]);
+        if !past {
+            self.hold_since_s = None;
+        }
+        let since = *self.hold_since_s.get_or_insert(e.t_s);
+        let holding = past && e.t_s - since <= self.cfg.baseline_hold_s;
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
             let a = if reacquiring {
                 (dt_s / 0.5).min(1.0)

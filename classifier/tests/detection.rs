@@ -330,10 +330,10 @@ fn an_open_loop_drift_into_the_end_stop_raises_no_leak() {
 #[test]
 fn a_leak_growing_over_minutes_is_caught_by_the_held_baseline() {
     // 0.6 L/min reached over 300 s. The adapting baseline (τ = 15 s) would lag such a
-    // slow ramp by only 0.03 L/min; once the rise passes half its threshold the
-    // baseline holds, so the leak is raised as an ordinary rise while it is still
-    // small (here before it reaches 0.15 L/min), not only when the baseline's drift
-    // since the warm-up passes `slow_leak_lpm` (0.5 L/min).
+    // slow ramp by only 0.03 L/min; each time the rise passes half its threshold
+    // the baseline holds (up to 5 s at a time), so the leak is raised as an ordinary
+    // rise while it is still small (here before it reaches 0.15 L/min), not only
+    // when the baseline's drift since the warm-up passes `slow_leak_lpm` (0.5 L/min).
     let (onset, ramp, size) = (20.0, 300.0, 0.6);
     let spec = format!("ext1:{size}lpm@{onset}s,ramp={ramp}");
     let events = run("closed-loop-sine", 330.0, Some(&spec), 31, off_nominal_rig());

@@ -32,11 +32,17 @@ class LeakEventFrame(ctypes.Structure):
         ("size_lpm_sigma", ctypes.c_double),
         ("confidence", ctypes.c_double),
         ("detector", ctypes.c_uint8 * 16),
+        ("size_nominal_lpm", ctypes.c_double),
+        ("coefficient_m3_s_sqrt_pa", ctypes.c_double),
+        ("statistic", ctypes.c_double),
+        ("threshold", ctypes.c_double),
+        ("channel", ctypes.c_uint8 * 8),
+        ("detail", ctypes.c_uint8 * 192),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.LeakEventFrame.v1"
+        return "leakwatch.LeakEventFrame.v2"
 
 
 class EstimateFrame(ctypes.Structure):
@@ -116,7 +122,9 @@ def main():
             det = bytes(e.detector).rstrip(b"\0").decode()
             print(f"EVENT t={e.t_detect_s:.3f} s {det} {PHASES.get(e.phase, e.phase)} "
                   f"{KINDS.get(e.kind, e.kind)} onset={e.t_onset_s:.2f} s "
-                  f"size={e.size_lpm:.3f}±{e.size_lpm_sigma:.3f} L/min confidence={e.confidence:.2f}",
+                  f"size={e.size_lpm:.3f}±{e.size_lpm_sigma:.3f} L/min "
+                  f"(at p_s/2 {e.size_nominal_lpm:.3f}) statistic={e.statistic:.1f}/{e.threshold:.1f} "
+                  f"confidence={e.confidence:.2f}",
                   flush=True)
         while True:
             s = estimates.receive()

@@ -159,44 +159,78 @@ pub const ESTIMATES_HEADER: &str =
 spool_bias,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
 th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
 
-/// Writes one estimates.csv row (floats in shortest round-trip form).
+/// One CSV row being assembled: floats in shortest round-trip form, by `zmij`
+/// (parsing a cell gives back the exact f64; NaN is `NaN`, infinities `inf`/`-inf`).
+struct CsvLine {
+    floats: zmij::Buffer,
+    bytes: [u8; 1024],
+    len: usize,
+}
+
+impl CsvLine {
+    fn new() -> Self {
+        CsvLine {
+            floats: zmij::Buffer::new(),
+            bytes: [0; 1024],
+            len: 0,
+        }
+    }
+
+    /// Appends `v` (after a comma unless it is the first cell).
+    fn float(&mut self, v: f64) {
+        let text = self.floats.format(v).as_bytes();
+        if self.len > 0 {
+            self.bytes[self.len] = b',';
+            self.len += 1;
+        }
+        self.bytes[self.len..self.len + text.len()].copy_from_slice(text);
+        self.len += text.len();
+    }
+
+    /// Appends an integer cell.
+    fn int(&mut self, v: u32) {
+        let mut digits = itoa::Buffer::new();
+        let text = digits.format(v).as_bytes();
+        self.bytes[self.len] = b',';
+        self.bytes[self.len + 1..self.len + 1 + text.len()].copy_from_slice(text);
+        self.len += 1 + text.len();
+    }
+}
+
+/// Writes one estimates.csv row (floats in shortest round-trip form: parsing a
+/// cell gives back the exact f64).
 pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Result<()> {
     let e = &s.leak;
     let t = &s.thesis;
     let lpm = |v: f64| v * 6.0e4;
-    write!(
-        w,
-        "{:?},{:?},{:?},{:?},{:?}",
-        e.t_s, e.u_v, e.measured[0], e.measured[1], e.measured[2]
-    )?;
-    for i in 0..7 {
-        write!(w, ",{:?}", e.state[i])?;
+    // 36 floats of at most 24 bytes and two flags: well inside the row's 1024 bytes
+    let mut row = CsvLine::new();
+    for v in [e.t_s, e.u_v, e.measured[0], e.measured[1], e.measured[2]] {
+        row.float(v);
     }
-    write!(
-        w,
-        ",{:?},{:?},{:?},{:?}",
-        lpm(e.state[7]),
-        lpm(e.state[8]),
-        lpm(e.state[9]),
-        e.state[10]
-    )?;
+    for v in &e.state[..7] {
+        row.float(*v);
+    }
+    for v in [lpm(e.state[7]), lpm(e.state[8]), lpm(e.state[9]), e.state[10]] {
+        row.float(v);
+    }
     for v in e.residual.iter().chain(e.innovation.iter()) {
-        write!(w, ",{v:?}")?;
+        row.float(*v);
     }
-    write!(w, ",{:?},{}", e.nis, e.flags)?;
-    write!(
-        w,
-        ",{:?},{:?},{:?},{:?},{:?}",
-        t.state[3], t.state[1], t.state[2], t.state[4], t.state[6]
-    )?;
+    row.float(e.nis);
+    row.int(e.flags);
+    for v in [t.state[3], t.state[1], t.state[2], t.state[4], t.state[6]] {
+        row.float(v);
+    }
     for v in t.residual.iter() {
-        write!(w, ",{v:?}")?;
+        row.float(*v);
     }
-    writeln!(
-        w,
-        ",{:?},{:?},{:?},{:?},{:?},{}",
-        t.innovation[1], t.innovation[2], t.mae_pa[0], t.mae_pa[1], t.nis, t.flags
-    )
+    for v in [t.innovation[1], t.innovation[2], t.mae_pa[0], t.mae_pa[1], t.nis] {
+        row.float(v);
+    }
+    row.int(t.flags);
+    row.bytes[row.len] = b'\n';
+    w.write_all(&row.bytes[..row.len + 1])
 }
 
 /// Writes events as a JSON array (NaN becomes null); an existing file only if
