@@ -4,6 +4,7 @@
 //! A source yields [`Acquired`] items in time order: usable samples, and the
 //! problems of rows that could not be used (counted, never silently filled).
 
+pub mod shell;
 use std::path::Path;
 
 use model::sim::Simulator;

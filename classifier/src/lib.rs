@@ -34,6 +34,7 @@
 
 use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
+pub mod shell;
 pub mod wire;
 use serde::{Deserialize, Serialize};
 

@@ -8,6 +8,7 @@
 
 pub mod ekf;
 pub mod mae;
+pub mod shell;
 pub mod stage;
 pub mod tuning;
 

@@ -55,6 +55,15 @@ impl From<RigVariant> for model::FrictionPreset {
 
 #[derive(Subcommand)]
 enum Command {
+    /// One stage process of `run`, from this binary: `leakwatch stage NAME [ARGS]...` with
+    /// NAME acquisition, estimator, classifier or recorder (ARGS: `leakwatch stage NAME --help`).
+    Stage {
+        /// acquisition, estimator, classifier or recorder.
+        name: String,
+        /// The stage's own arguments.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// The built-in demonstration, in one process: the loaded scenario on a rig that
     /// differs from the model, a 0.5 L/min chamber-1 leak at 20 s, events printed as they happen.
     Demo {
@@ -72,8 +81,9 @@ enum Command {
         seed: u64,
     },
     /// Run the live pipeline: acquisition, estimator, classifier and recorder as processes over
-    /// iceoryx2. With no arguments: the loaded scenario on an off-nominal rig with a 0.5 L/min
-    /// chamber-1 leak at 20 s, events printed as they happen.
+    /// iceoryx2. Without a fault or a config (with or without `--scenario loaded-sine`): the
+    /// demonstration, an off-nominal rig with a 0.5 L/min chamber-1 leak at 20 s, events printed
+    /// as they happen. Every argument is checked before any stage starts.
     Run {
         /// Simulated seconds (default 40).
         #[arg(long)]
@@ -81,7 +91,7 @@ enum Command {
         /// Scenario (default loaded-sine).
         #[arg(long)]
         scenario: Option<String>,
-        /// Leak to inject, as in `simulate` (repeatable).
+        /// Leak to inject, as in `simulate` (repeatable); `none` for a healthy run.
         #[arg(long = "fault")]
         faults: Vec<String>,
         /// Rig id: names the services, so several rigs can run side by side.
@@ -288,6 +298,11 @@ enum BenchCommand {
 }
 
 fn main() -> ExitCode {
+    // `leakwatch stage NAME ARGS...` hands its arguments to the stage untouched.
+    let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if argv.get(1).is_some_and(|a| a == "stage") {
+        return run::stage_main(&argv[2..]);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
@@ -301,6 +316,9 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<(), String> {
     let force = cli.force;
     match cli.command {
+        Command::Stage { name, .. } => Err(format!(
+            "`stage {name}` must be the first argument (`leakwatch stage {name} ...`)"
+        )),
         Command::Demo {
             faults,
             scenario,

@@ -47,80 +47,30 @@ pub struct RunArgs {
 /// The four stage binaries.
 pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
 
-/// Finds the stage binaries next to the running executable; inside a Cargo
-/// workspace (target/<profile>/), builds the missing ones with the same profile.
-pub fn stage_binaries() -> Result<BTreeMap<&'static str, PathBuf>, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot locate the leakwatch binary: {e}"))?;
-    let dir = exe.parent().map(Path::to_path_buf).unwrap_or_default();
-    let find = |name: &str| dir.join(name);
-    let missing: Vec<&str> = STAGES.iter().copied().filter(|n| !find(n).is_file()).collect();
-    if !missing.is_empty() {
-        // target/<profile>/leakwatch (or target/<profile>/deps/... for tests): build them.
-        let profile_dir = if dir.ends_with("deps") {
-            dir.parent().map(Path::to_path_buf)
-        } else {
-            Some(dir.clone())
-        };
-        // The workspace: beside target/ by default, else where this binary was built from.
-        let built_from = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .parent()
-            .map(Path::to_path_buf);
-        let beside = profile_dir
-            .as_ref()
-            .and_then(|p| p.parent())
-            .and_then(|t| t.parent())
-            .map(Path::to_path_buf);
-        let workspace = beside.filter(|w| w.join("Cargo.toml").is_file()).or(built_from);
-        let workspace = workspace.as_deref();
-        let release = profile_dir.as_ref().is_some_and(|p| p.ends_with("release"));
-        match workspace.filter(|w| w.join("Cargo.toml").is_file()) {
-            Some(ws) => {
-                eprintln!(
-                    "leakwatch: building the stage processes ({}) once...",
-                    missing.join(", ")
-                );
-                let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-                cmd.current_dir(ws).args(["build", "-q"]);
-                if release {
-                    cmd.arg("--release");
-                }
-                for m in &missing {
-                    cmd.args(["-p", m, "--bin", m]);
-                }
-                if let Some(target) = profile_dir.as_ref().and_then(|p| p.parent()) {
-                    cmd.env("CARGO_TARGET_DIR", target);
-                }
-                let status = cmd
-                    .status()
-                    .map_err(|e| format!("cannot run cargo to build the stages: {e}"))?;
-                if !status.success() {
-                    return Err(format!("building the stage processes failed ({status})"));
-                }
-            }
-            None => {
-                return Err(format!(
-                    "stage binaries not found next to {}: {}; build them with `cargo build --release` \
-                     (it builds acquisition, estimator, classifier and recorder)",
-                    exe.display(),
-                    missing.join(", ")
-                ))
-            }
+/// Runs one stage process in this process: `args` is the stage's name followed by
+/// its own arguments (`leakwatch stage NAME ARGS...`).
+pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
+    let argv = args.iter().cloned();
+    match args.first().and_then(|n| n.to_str()) {
+        Some("acquisition") => acquisition::shell::main(argv),
+        Some("estimator") => estimator::shell::main(argv),
+        Some("classifier") => classifier::shell::main(argv),
+        Some("recorder") => recorder::shell::main(argv),
+        other => {
+            eprintln!(
+                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder",
+                other.unwrap_or("")
+            );
+            std::process::ExitCode::FAILURE
         }
     }
-    let dir = if dir.ends_with("deps") {
-        dir.parent().map(Path::to_path_buf).unwrap_or(dir)
-    } else {
-        dir
-    };
-    let mut out = BTreeMap::new();
-    for n in STAGES {
-        let p = dir.join(n);
-        if !p.is_file() {
-            return Err(format!("stage binary `{n}` not found at {}", p.display()));
-        }
-        out.insert(n, p);
-    }
-    Ok(out)
+}
+
+/// The program that runs the stages: this binary (`leakwatch stage NAME`), so an
+/// installed `leakwatch` needs nothing beside it and `run` never builds anything.
+pub fn stage_program() -> Result<PathBuf, String> {
+    std::env::current_exe()
+        .map_err(|e| format!("cannot locate the leakwatch binary to start its stages: {e}"))
 }
 
 /// Latency and counts of one stage, from its stats frames.
@@ -232,17 +182,19 @@ pub struct RunOutcome {
     pub out_dir: PathBuf,
 }
 
-fn spawn(bin: &Path, args: &[String], prefix: &str, log: &Path) -> Result<Child, String> {
+fn spawn(program: &Path, name: &str, args: &[String], prefix: &str, log: &Path) -> Result<Child, String> {
     // the outputs were checked at start (an earlier run's only with --force)
     let err = crate::out::create(log, true, &[])?;
-    Command::new(bin)
+    Command::new(program)
+        .arg("stage")
+        .arg(name)
         .args(args)
         .env(bus::PREFIX_ENV, prefix)
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(err)
         .spawn()
-        .map_err(|e| format!("cannot start {}: {e}", bin.display()))
+        .map_err(|e| format!("cannot start stage {name} ({}): {e}", program.display()))
 }
 
 fn terminate(child: &mut Child) {
@@ -253,9 +205,13 @@ fn terminate(child: &mut Child) {
     }
 }
 
+/// The scenario `run` simulates by default (with the demonstration leak when no
+/// fault or config is given).
+pub const DEFAULT_SCENARIO: &str = "loaded-sine";
+
 /// Runs the pipeline; prints events as they come; writes the outputs.
 pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
-    let bins = stage_binaries()?;
+    let program = stage_program()?;
     frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
     crate::out::dir(&out_dir)?;
@@ -271,16 +227,34 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     for name in outputs {
         crate::out::check(&out_dir.join(name), args.force, &inputs)?;
     }
-    let demo = args.scenario.is_none() && args.faults.is_empty() && args.config.is_none();
-    let scenario = args.scenario.clone().unwrap_or_else(|| "loaded-sine".into());
+    // The demonstration (a leak on an off-nominal rig) is what `run` does without
+    // faults or a config; naming the default scenario explicitly changes nothing.
+    // `--fault none` asks for a healthy run.
+    let scenario = args.scenario.clone().unwrap_or_else(|| DEFAULT_SCENARIO.into());
+    let demo = scenario == DEFAULT_SCENARIO && args.faults.is_empty() && args.config.is_none();
     let seconds = args.seconds.unwrap_or(40.0);
-    let faults = if args.faults.is_empty() && args.scenario.is_none() {
+    let faults: Vec<String> = if demo {
         vec!["ext1:0.5lpm@20s".to_string()]
     } else {
-        args.faults.clone()
+        args.faults
+            .iter()
+            .filter(|f| f.as_str() != "none")
+            .cloned()
+            .collect()
     };
     // One config for every stage: the user's, and for the demonstration an off-nominal rig.
     let mut cfg = Config::load_or_default(args.config.as_deref())?;
+    // Every argument is checked here, before any stage starts.
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3.6e6) {
+        return Err(format!(
+            "--seconds {seconds}: must be a number of seconds in (0, 3.6e6]"
+        ));
+    }
+    model::Scenario::by_name(&scenario, 0, seconds).map_err(|e| format!("--scenario {scenario}: {e}"))?;
+    for spec in &faults {
+        model::Fault::parse(spec, &cfg.model).map_err(|e| format!("--fault {spec}: {e}"))?;
+    }
+    WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
     cfg.classifier.thesis_baseline |= args.thesis_baseline;
     if demo {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
@@ -288,7 +262,6 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let cfg_path = out_dir.join("config.toml");
     let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
-    WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
     // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
     let prefix = match std::env::var(bus::PREFIX_ENV) {
         Ok(p) if !p.is_empty() => p,
@@ -373,7 +346,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
     for name in STAGES {
         let child = spawn(
-            &bins[name],
+            &program,
+            name,
             &stage_args(name),
             &prefix,
             &out_dir.join(format!("{name}.log")),
@@ -437,7 +411,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                     if name == "recorder" {
                         a[3] = out_dir.join(format!("run-{n}.mcap")).display().to_string();
                     }
-                    let c = spawn(&bins[name], &a, &prefix, &out_dir.join(format!("{name}-{n}.log")))?;
+                    let c = spawn(
+                        &program,
+                        name,
+                        &a,
+                        &prefix,
+                        &out_dir.join(format!("{name}-{n}.log")),
+                    )?;
                     children.insert(name, c);
                 }
             }

@@ -469,3 +469,55 @@ fn a_full_disk_is_an_error_and_a_closed_stdout_no_panic() {
         "leakwatch: error: cannot write /dev/full: No space left on device (os error 28)"
     );
 }
+
+/// `leakwatch stage NAME` runs a stage's own command line; an unknown stage is named.
+#[test]
+fn stages_run_from_the_leakwatch_binary() {
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["stage", "estimator", "--help"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(help.contains("--rig") && help.contains("--config"), "{help}");
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["stage", "pump"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("unknown stage \"pump\"") && err.contains("acquisition, estimator"),
+        "{err}"
+    );
+}
+
+/// `run` checks its arguments before any stage starts: a bad fault, scenario,
+/// duration or mode is named, and nothing is written.
+#[test]
+fn run_refuses_bad_arguments_before_starting_anything() {
+    let dir = std::env::temp_dir().join(format!("leakwatch-cli-runargs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for (args, needle) in [
+        (vec!["--fault", "ext9:0.5lpm@10s"], "--fault ext9:0.5lpm@10s"),
+        (vec!["--scenario", "sideways"], "--scenario sideways"),
+        (vec!["--seconds", "0"], "--seconds 0"),
+        (vec!["--mode", "hurry"], "--mode hurry"),
+    ] {
+        let out = dir.join("out");
+        let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+            .arg("run")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(
+            !out.join("config.toml").exists() && !out.join("run.mcap").exists(),
+            "{args:?}"
+        );
+    }
+}

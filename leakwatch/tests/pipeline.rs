@@ -300,3 +300,55 @@ fn the_python_example_sees_live_events_and_estimates() {
         .unwrap_or(0);
     assert!(n > 10_000, "estimates seen by Python: {n}\n{stdout}");
 }
+
+/// An installed `leakwatch` is the whole tool: a copy of the binary alone in a
+/// folder, with no cargo on PATH, runs the four stages (`leakwatch stage NAME`)
+/// and detects the leak.
+#[test]
+fn the_binary_alone_runs_the_pipeline_without_cargo() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("alone");
+    let bin_dir = d.join("bin");
+    std::fs::create_dir_all(&bin_dir).unwrap();
+    let exe = bin_dir.join("leakwatch");
+    std::fs::copy(env!("CARGO_BIN_EXE_leakwatch"), &exe).unwrap();
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let o = Command::new(&exe)
+        .args([
+            "run",
+            "--rig",
+            "e2e-alone",
+            "--scenario",
+            "loaded-sine",
+            "--seconds",
+            "16",
+        ])
+        .args(["--fault", "ext1:0.5lpm@10s", "--config"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&out)
+        .env("PATH", "/usr/bin:/bin")
+        .env_remove("CARGO")
+        .current_dir(&d)
+        .output()
+        .expect("the copied binary runs");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    assert!(
+        !stderr.contains("cargo") && !stderr.contains("building"),
+        "{stderr}"
+    );
+    let leaks = raised_leaks(&json(&out.join("events.json")));
+    assert_eq!(leaks.len(), 1, "{leaks:?}");
+    assert_eq!(leaks[0]["kind"], "ext1");
+    let t = leaks[0]["t_detect_s"].as_f64().unwrap();
+    assert!((10.0..12.0).contains(&t), "raised at {t} s");
+    // the stage logs are there: the four children were this binary's stages
+    for name in ["acquisition", "estimator", "classifier", "recorder"] {
+        assert!(out.join(format!("{name}.log")).is_file(), "{name}.log");
+    }
+}

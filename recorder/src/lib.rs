@@ -20,6 +20,7 @@ use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame
 mod export;
 mod reader;
 pub mod record;
+pub mod shell;
 mod writer;
 
 pub use export::export_csv;

@@ -1,0 +1,253 @@
+//! The acquisition process: reads a [`Source`] (the simulated rig or a CSV
+//! file) and publishes one [`SensorFrame`] per sample on
+//! `leakwatch/<rig>/frames`, paced on absolute deadlines (1 kHz by default),
+//! with its [`StatsFrame`] once a second (`lat_ns_*` = lateness of the
+//! publish instants against the schedule). The last frame carries
+//! `END_OF_STREAM`; the process then exits 0. SIGINT/SIGTERM stop it cleanly.
+//!
+//! ```text
+//! acquisition --rig rig1 --scenario closed-loop-sine --seconds 10 --fault ext1:0.25@4
+//! acquisition --rig rig1 --csv measured.csv --rate-hz 0      # as fast as possible
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use crate::{Acquired, CsvSource, SimSource, Source};
+use bus::{monotonic_ns, Bus, BusConfig, Pacer, StageStats};
+use clap::Parser;
+use frames::{sensor_flags, SensorFrame, StatsFrame};
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use serde::Deserialize;
+
+/// Publish rig samples on the leakwatch bus.
+#[derive(Debug, Parser)]
+#[command(name = "acquisition", version)]
+struct Args {
+    /// Rig id: names the services (`leakwatch/<rig>/...`), [A-Za-z0-9_-]{1,32}.
+    #[arg(long)]
+    rig: String,
+    /// Scenario of the simulated rig (ignored with --csv).
+    #[arg(long, default_value = "open-loop-sine")]
+    scenario: String,
+    /// Run length of the simulation, s (default: the scenario's own).
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Noise and reference seed of the simulation.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Fault of the simulated rig, `KIND:SIZE@ONSET[,ramp=S][,law=sqrt|linear]` (repeatable).
+    #[arg(long = "fault")]
+    faults: Vec<String>,
+    /// Replay this CSV file (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) instead of simulating.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Publishing rate, Hz (0 = as fast as possible).
+    #[arg(long, default_value_t = 1000.0)]
+    rate_hz: f64,
+    /// Configuration file (TOML, the `leakwatch` format); its [rig] (or [model]),
+    /// [sensors] and [sim] sections set up the simulated rig.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Wait until this many subscribers are on the frames topic before
+    /// publishing (at most --wait-timeout-s).
+    #[arg(long, default_value_t = 0)]
+    wait_subscribers: usize,
+    /// Longest wait for --wait-subscribers, s.
+    #[arg(long, default_value_t = 10.0)]
+    wait_timeout_s: f64,
+    /// Spin this long before each deadline instead of sleeping, µs (less jitter, more CPU).
+    #[arg(long, default_value_t = 0)]
+    spin_us: u64,
+    /// Stay alive this long after the last frame so subscribers can drain, ms.
+    #[arg(long, default_value_t = 300)]
+    linger_ms: u64,
+}
+
+/// The parts of the leakwatch configuration file the simulated rig needs.
+/// Unknown sections are ignored (they belong to other stages).
+#[derive(Debug, Default, Deserialize)]
+#[serde(default)]
+struct RigConfig {
+    model: ActuatorParams,
+    rig: Option<ActuatorParams>,
+    sensors: SensorParams,
+    sim: SimSettings,
+}
+
+impl RigConfig {
+    fn load(path: Option<&Path>) -> Result<RigConfig, String> {
+        let Some(path) = path else {
+            return Ok(RigConfig::default());
+        };
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
+        let cfg: RigConfig = toml::from_str(&text)
+            .map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))?;
+        cfg.model
+            .validate()
+            .map_err(|e| format!("config {}: [model] {e}", path.display()))?;
+        if let Some(rig) = &cfg.rig {
+            rig.validate()
+                .map_err(|e| format!("config {}: [rig] {e}", path.display()))?;
+        }
+        Ok(cfg)
+    }
+}
+
+fn build_source(args: &Args) -> Result<Box<dyn Source>, String> {
+    let cfg = RigConfig::load(args.config.as_deref())?;
+    let rig = cfg.rig.clone().unwrap_or_else(|| cfg.model.clone());
+    if let Some(csv) = &args.csv {
+        let limits = dataset::Limits::for_model(&rig, cfg.sim.sample_period_s);
+        let src = CsvSource::open(csv, limits).map_err(|e| e.to_string())?;
+        return Ok(Box::new(src));
+    }
+    let max_seconds = args.seconds.unwrap_or(60.0);
+    let scenario = Scenario::by_name(&args.scenario, args.seed, max_seconds).map_err(|e| e.to_string())?;
+    let seconds = args.seconds.unwrap_or(scenario.default_seconds);
+    if !(seconds > 0.0 && seconds.is_finite()) {
+        return Err(format!(
+            "--seconds {seconds} must be a positive number of seconds"
+        ));
+    }
+    let mut schedule = FaultSchedule::default();
+    for spec in &args.faults {
+        schedule
+            .faults
+            .push(Fault::parse(spec, &rig).map_err(|e| format!("--fault {spec}: {e}"))?);
+    }
+    let sim = Simulator::new(rig, cfg.sensors, cfg.sim, scenario, schedule, args.seed)
+        .map_err(|e| e.to_string())?;
+    Ok(Box::new(SimSource::new(sim, seconds)))
+}
+
+/// The next usable sample as a frame; unusable rows are reported on stderr,
+/// counted, and flag the following frame as after a gap.
+fn next_frame(src: &mut dyn Source, unusable: &mut u64) -> Option<SensorFrame> {
+    let mut flags = 0;
+    loop {
+        match src.next_item()? {
+            Acquired::Sample(s) => {
+                return Some(SensorFrame {
+                    flags,
+                    ..SensorFrame::from(&s)
+                })
+            }
+            Acquired::AfterGap { sample, .. } => {
+                return Some(SensorFrame {
+                    flags: flags | sensor_flags::AFTER_GAP,
+                    ..SensorFrame::from(&sample)
+                })
+            }
+            Acquired::Unusable(why) => {
+                *unusable += 1;
+                if *unusable <= 10 {
+                    eprintln!("acquisition: skipped {why}");
+                }
+                flags |= sensor_flags::AFTER_GAP;
+            }
+        }
+    }
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    if !(args.rate_hz >= 0.0 && args.rate_hz.is_finite()) {
+        return Err(format!(
+            "--rate-hz {} must be ≥ 0 (0 = as fast as possible)",
+            args.rate_hz
+        ));
+    }
+    let mut source = build_source(args)?;
+    let stop = bus::stop_on_signals();
+    let bus =
+        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let mut tx = bus.publisher::<SensorFrame>().map_err(|e| e.to_string())?;
+    let mut stats_tx = bus.publisher::<StatsFrame>().map_err(|e| e.to_string())?;
+    if args.wait_subscribers > 0 {
+        let timeout = Duration::from_secs_f64(args.wait_timeout_s.max(0.0));
+        if !tx.wait_for_subscribers(args.wait_subscribers, timeout, stop) {
+            return Err(format!(
+                "{} subscriber(s) on leakwatch/{}/frames expected, {} after {} s",
+                args.wait_subscribers,
+                bus.rig(),
+                tx.subscriber_count(),
+                args.wait_timeout_s
+            ));
+        }
+    }
+    eprintln!(
+        "acquisition: {} on rig {} at {} Hz",
+        source.describe(),
+        bus.rig(),
+        args.rate_hz
+    );
+
+    let period_ns = if args.rate_hz > 0.0 {
+        (1e9 / args.rate_hz).round() as u64
+    } else {
+        0
+    };
+    let mut pacer = Pacer::new(period_ns, args.spin_us * 1000);
+    let mut stats = StageStats::new(frames::stage::ACQUISITION);
+    let mut unusable = 0u64;
+    let mut current = next_frame(source.as_mut(), &mut unusable);
+    let mut following = next_frame(source.as_mut(), &mut unusable);
+    let mut seq = 0u64;
+    let mut next_stats = monotonic_ns() + 1_000_000_000;
+
+    while let Some(mut frame) = current {
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            eprintln!("acquisition: stopped by signal after {seq} frames");
+            break;
+        }
+        let tick = pacer.wait();
+        stats.record_latency_ns(tick.late_ns);
+        stats.deadline_misses += tick.missed as u64;
+        frame.seq = seq;
+        if following.is_none() {
+            frame.flags |= sensor_flags::END_OF_STREAM;
+        }
+        frame.acq_mono_ns = monotonic_ns();
+        tx.send(&frame).map_err(|e| e.to_string())?;
+        seq += 1;
+        stats.frames_out += 1;
+        // produce the frame after next now, off the publish instant
+        let t0 = monotonic_ns();
+        current = following;
+        following = next_frame(source.as_mut(), &mut unusable);
+        let now = monotonic_ns();
+        stats.record_proc_ns(now - t0);
+        if now >= next_stats {
+            stats_tx.send(&stats.take_frame()).map_err(|e| e.to_string())?;
+            next_stats += 1_000_000_000;
+        }
+    }
+    stats_tx.send(&stats.take_frame()).map_err(|e| e.to_string())?;
+    eprintln!(
+        "acquisition: {seq} frames, {unusable} unusable rows skipped, {} deadline misses\n  schedule lateness: {}\n  sample production: {}",
+        stats.deadline_misses,
+        stats.latency_total(),
+        stats.proc_total()
+    );
+    // let subscribers take the last frames before the publisher goes away
+    let linger_end = monotonic_ns() + args.linger_ms * 1_000_000;
+    while monotonic_ns() < linger_end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    Ok(())
+}
+
+/// Runs the acquisition process with command-line arguments `args` (the first is the
+/// program name, as from `std::env::args_os`); the exit code says whether it succeeded.
+pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
+    let args = Args::parse_from(args);
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("acquisition: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

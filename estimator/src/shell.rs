@@ -1,0 +1,99 @@
+//! The `estimator` process: sensor frames in, estimate frames out, over
+//! iceoryx2 (a thin shell around [`estimator::EstimatorStage`]).
+//!
+//! ```text
+//! estimator --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use crate::{EstimatorStage, Tuning};
+use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
+use clap::Parser;
+use frames::{EstimateFrame, SensorFrame};
+use model::{ActuatorParams, Sample};
+use serde::Deserialize;
+
+#[derive(Parser)]
+#[command(
+    name = "estimator",
+    about = "leakwatch estimator stage: sensor frames -> EKF estimates over iceoryx2"
+)]
+struct Args {
+    /// Rig id (service names are namespaced by it).
+    #[arg(long, default_value = "rig1")]
+    rig: String,
+    /// leakwatch configuration file ([model], [estimator], [leak_filter] are used).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// How to wait for frames: event, low-latency or busy-poll.
+    #[arg(long, default_value = "event")]
+    mode: String,
+    /// Exit when the sensor stream ends (default: wait for the next stream).
+    #[arg(long)]
+    exit_at_end: bool,
+}
+
+/// The sections of the configuration this stage reads; the rest belongs to others.
+#[derive(Debug, Deserialize)]
+#[serde(default)]
+struct StageConfig {
+    model: ActuatorParams,
+    estimator: Tuning,
+    leak_filter: Tuning,
+}
+
+impl Default for StageConfig {
+    fn default() -> Self {
+        StageConfig {
+            model: ActuatorParams::default(),
+            estimator: Tuning::thesis(),
+            leak_filter: Tuning::sensor_derived(),
+        }
+    }
+}
+
+fn load(path: Option<&Path>) -> Result<StageConfig, String> {
+    let Some(path) = path else {
+        return Ok(StageConfig::default());
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
+    toml::from_str(&text).map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))
+}
+
+fn run(args: Args) -> Result<(), String> {
+    let cfg = load(args.config.as_deref())?;
+    let mut stage = EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)?;
+    let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
+    let stop = bus::stop_on_signals();
+    let bus =
+        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
+    opts.exit_on_end_of_stream = args.exit_at_end;
+    let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
+        let e = stage.on_sample(&Sample::from(&input.frame));
+        out.seq = input.seq;
+        out.acq_mono_ns = input.acq_mono_ns;
+        out.est_recv_mono_ns = input.recv_mono_ns;
+        e.write_frame(out);
+        out.est_done_mono_ns = bus::monotonic_ns();
+        true
+    })
+    .map_err(|e| e.to_string())?;
+    eprintln!("estimator: {report}");
+    Ok(())
+}
+
+/// Runs the estimator process with command-line arguments `args` (the first is the
+/// program name, as from `std::env::args_os`); the exit code says whether it succeeded.
+pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
+    match run(Args::parse_from(args)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("estimator: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

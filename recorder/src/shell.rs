@@ -1,0 +1,212 @@
+//! The recording process: subscribes to every topic of a rig and writes them
+//! into one MCAP log (see the `recorder` library).
+//!
+//! ```text
+//! recorder --rig rig1 --out run.mcap
+//! ```
+//!
+//! It stops cleanly on SIGINT/SIGTERM, or after the frames stream ends
+//! (`END_OF_STREAM`) once the other topics have been quiet for the grace
+//! period (the estimator and classifier have drained). `--keep-running`
+//! records one stream after another until a signal. The recorder publishes
+//! its own stats (stage 3): frames in = messages received, out = queued for
+//! the writer, deadline misses = messages dropped because the disk stalled.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use crate::{Entry, GapRecord, LogWriter, WriterOptions};
+use bus::{monotonic_ns, Bus, BusConfig, Received, StageStats, Subscriber, WaitMode};
+use clap::Parser;
+use frames::{EstimateFrame, Frame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame};
+
+/// Record every topic of a rig into an MCAP file.
+#[derive(Debug, Parser)]
+#[command(name = "recorder", version)]
+struct Args {
+    /// Rig id ([A-Za-z0-9_-]{1,32}).
+    #[arg(long)]
+    rig: String,
+    /// The log file to write (MCAP; an existing file only with --force; never through a symbolic link).
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing log file.
+    #[arg(long)]
+    force: bool,
+    /// After the frames stream ended, stop once no frame, estimate, event or
+    /// health message came for this long, ms.
+    #[arg(long, default_value_t = 1000)]
+    grace_ms: u64,
+    /// Do not stop at the end of a stream; record until SIGINT/SIGTERM.
+    #[arg(long)]
+    keep_running: bool,
+    /// Target uncompressed chunk size, KiB (a killed recorder loses at most one chunk).
+    #[arg(long, default_value_t = 256)]
+    chunk_kib: u64,
+    /// Time between two drains of every topic, ms. The recorder needs no low
+    /// latency: waking once per batch instead of once per frame keeps it off the
+    /// CPU at the instant the estimator wakes for the same frame. Must stay well
+    /// below the subscriber buffer (256 frames = 256 ms at 1 kHz).
+    #[arg(long, default_value_t = 10)]
+    batch_ms: u64,
+}
+
+/// One subscription and how its frames become log entries.
+struct Topic<T: Frame> {
+    rx: Subscriber<T>,
+    entry: fn(T, u64) -> Entry,
+}
+
+impl<T: Frame> Topic<T> {
+    fn new(bus: &Bus, entry: fn(T, u64) -> Entry) -> Result<Self, String> {
+        // the recorder drains every topic once per batch; it never waits on one
+        Ok(Topic {
+            rx: bus.subscriber::<T>(WaitMode::Event).map_err(|e| e.to_string())?,
+            entry,
+        })
+    }
+
+    /// Queues one received frame (and the gap before it, if any).
+    fn log(&self, r: &Received<T>, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(), String> {
+        stats.frames_in += 1;
+        if r.missing_before > 0 {
+            stats.seq_gaps += r.missing_before;
+            let got = r.seq().unwrap_or(0);
+            let gap = GapRecord {
+                topic: T::TOPIC,
+                expected_seq: got - r.missing_before,
+                got_seq: got,
+                missing: r.missing_before,
+                recv_mono_ns: r.recv_mono_ns,
+            };
+            queue(writer, stats, Entry::Gap(gap))?;
+        }
+        if let Some(acq) = r.acq_mono_ns() {
+            if acq > 0 && r.recv_mono_ns >= acq {
+                stats.record_latency_ns(r.recv_mono_ns - acq);
+            }
+        }
+        queue(writer, stats, (self.entry)(r.frame, r.recv_mono_ns))
+    }
+
+    /// Logs everything buffered; returns how many frames and whether one ended its stream.
+    fn drain(&mut self, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(u64, bool), String> {
+        let mut n = 0;
+        let mut eos = false;
+        while let Some(r) = self.rx.try_receive().map_err(|e| e.to_string())? {
+            self.log(&r, writer, stats)?;
+            eos |= r.is_end_of_stream();
+            n += 1;
+        }
+        Ok((n, eos))
+    }
+}
+
+fn queue(writer: &mut LogWriter, stats: &mut StageStats, entry: Entry) -> Result<(), String> {
+    if writer.write(entry).map_err(|e| e.to_string())? {
+        stats.frames_out += 1;
+    } else {
+        stats.deadline_misses += 1;
+    }
+    Ok(())
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    let stop = bus::stop_on_signals();
+    let bus =
+        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let mut frames_t = Topic::<SensorFrame>::new(&bus, Entry::Frame)?;
+    let mut estimates_t = Topic::<EstimateFrame>::new(&bus, Entry::Estimate)?;
+    let mut events_t = Topic::<LeakEventFrame>::new(&bus, Entry::Event)?;
+    let mut health_t = Topic::<HealthFrame>::new(&bus, Entry::Health)?;
+    let mut stats_t = Topic::<StatsFrame>::new(&bus, Entry::Stats)?;
+    let mut stats_tx = bus.publisher::<StatsFrame>().map_err(|e| e.to_string())?;
+
+    let metadata = BTreeMap::from([
+        ("rig".to_string(), bus.rig().to_string()),
+        ("recorder_pid".to_string(), std::process::id().to_string()),
+        (
+            "command".to_string(),
+            std::env::args().collect::<Vec<_>>().join(" "),
+        ),
+    ]);
+    let options = WriterOptions {
+        chunk_size: args.chunk_kib.max(1) * 1024,
+        metadata,
+        overwrite: args.force,
+        ..WriterOptions::default()
+    };
+    let mut writer = LogWriter::create(&args.out, options).map_err(|e| e.to_string())?;
+    eprintln!("recorder: rig {} -> {}", bus.rig(), args.out.display());
+
+    let mut stats = StageStats::new(frames::stage::RECORDER);
+    let mut next_stats = monotonic_ns() + 1_000_000_000;
+    let mut ended_at: Option<u64> = None;
+    let mut last_data = monotonic_ns();
+    let grace_ns = args.grace_ms * 1_000_000;
+    if args.batch_ms == 0 || args.batch_ms > 100 {
+        return Err(format!("--batch-ms {}: must be 1 to 100 ms", args.batch_ms));
+    }
+    let batch = Duration::from_millis(args.batch_ms);
+    let reason = loop {
+        if stop.load(Ordering::Relaxed) {
+            break "signal";
+        }
+        // sleep one batch, then take everything buffered on every topic
+        std::thread::sleep(batch);
+        let t0 = monotonic_ns();
+        let (mut n, eos) = frames_t.drain(&mut writer, &mut stats)?;
+        n += estimates_t.drain(&mut writer, &mut stats)?.0;
+        n += events_t.drain(&mut writer, &mut stats)?.0;
+        n += health_t.drain(&mut writer, &mut stats)?.0;
+        stats_t.drain(&mut writer, &mut stats)?;
+        let now = monotonic_ns();
+        if n > 0 {
+            stats.record_proc_ns(now - t0);
+            last_data = now;
+        }
+        if eos && !args.keep_running {
+            ended_at.get_or_insert(now);
+        }
+        if now >= next_stats {
+            stats_tx.send(&stats.take_frame()).map_err(|e| e.to_string())?;
+            next_stats += 1_000_000_000;
+        }
+        if ended_at.is_some() && now.saturating_sub(last_data) >= grace_ns {
+            break "end of stream";
+        }
+    };
+    // the last stats frame goes into the log too
+    let last = stats.take_frame();
+    stats_tx.send(&last).map_err(|e| e.to_string())?;
+    writer
+        .write(Entry::Stats(last, monotonic_ns()))
+        .map_err(|e| e.to_string())?;
+    let summary = writer.finish().map_err(|e| e.to_string())?;
+    eprintln!(
+        "recorder: stopped by {reason}; {} bytes, messages {:?}, {} dropped, {} missing from sequences\n  \
+         latency since acquisition: {}",
+        summary.bytes,
+        summary.messages,
+        summary.dropped,
+        stats.seq_gaps,
+        stats.latency_total()
+    );
+    Ok(())
+}
+
+/// Runs the recorder process with command-line arguments `args` (the first is the
+/// program name, as from `std::env::args_os`); the exit code says whether it succeeded.
+pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
+    let args = Args::parse_from(args);
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("recorder: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
