@@ -227,7 +227,7 @@ mod tests {
         let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
         let mut leaves = Vec::new();
         numeric_leaves(&base, &mut Vec::new(), &mut leaves);
-        assert_eq!(leaves.len(), 120, "numeric fields");
+        assert_eq!(leaves.len(), 121, "numeric fields"); // 120 + [classifier] baseline_hold
         let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
         let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
         let (mut refused, mut accepted) = (0, 0);

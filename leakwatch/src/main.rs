@@ -4,6 +4,8 @@
 mod benches;
 mod commission;
 mod config;
+#[cfg(test)]
+mod config_fuzz;
 mod demo;
 mod latency;
 mod out;
