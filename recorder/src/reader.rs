@@ -223,6 +223,7 @@ where
     let mut truncated = None;
     let mut offset = 8usize; // after the magic
     let mut any = false;
+    let mut footer = false;
     for item in records {
         let record = match item {
             Ok(r) => r,
@@ -253,11 +254,19 @@ where
                     }
                 }
             }
+            mcap::records::Record::Footer(_) => footer = true,
             r => any |= visit_record(r, &mut visit)?,
         }
     }
     if !any && truncated.is_none() && !data.ends_with(MAGIC) {
         truncated = Some("no complete chunk".into());
+    }
+    if truncated.is_none() && !footer {
+        // cut at a record boundary (a recorder killed right after a flush)
+        truncated = Some(format!(
+            "no summary or footer: the file ends after byte {} (was its recorder killed?)",
+            data.len()
+        ));
     }
     Ok(truncated)
 }
