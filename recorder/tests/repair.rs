@@ -129,7 +129,13 @@ fn a_killed_recorders_log_reads_and_repairs() {
     let d = dir("killed");
     let path = d.join("killed.mcap");
     let mut child = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "child_writer", "--ignored", "--nocapture", "--test-threads=1"])
+        .args([
+            "--exact",
+            "child_writer",
+            "--ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
         .env(CHILD_ENV, &path)
         .stdout(std::process::Stdio::null())
         .spawn()
