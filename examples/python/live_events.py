@@ -32,11 +32,17 @@ class LeakEventFrame(ctypes.Structure):
         ("size_lpm_sigma", ctypes.c_double),
         ("confidence", ctypes.c_double),
         ("detector", ctypes.c_uint8 * 16),
+        ("size_nominal_lpm", ctypes.c_double),
+        ("coefficient_m3_s_sqrt_pa", ctypes.c_double),
+        ("statistic", ctypes.c_double),
+        ("threshold", ctypes.c_double),
+        ("channel", ctypes.c_uint8 * 8),
+        ("detail", ctypes.c_uint8 * 192),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.LeakEventFrame.v1"
+        return "leakwatch.LeakEventFrame.v2"
 
 
 class EstimateFrame(ctypes.Structure):
