@@ -319,6 +319,13 @@ impl Bus {
         })
     }
 
+    /// A [`TopicWatch`] of topic `T`: its publishers counted without subscribing.
+    pub fn topic_watch<T: Frame>(&self) -> Result<TopicWatch<T>, BusError> {
+        Ok(TopicWatch {
+            service: self.pubsub::<T>()?,
+        })
+    }
+
     /// A subscriber of `T` on its topic, waiting in `mode`.
     pub fn subscriber<T: Frame>(&self, mode: WaitMode) -> Result<Subscriber<T>, BusError> {
         let service = self.pubsub::<T>()?;
@@ -345,6 +352,62 @@ impl Bus {
             restarts: 0,
             schedule: ArrivalSchedule::default(),
         })
+    }
+}
+
+/// Counts the publishers of one topic without subscribing to it (see
+/// [`Bus::topic_watch`]): a publisher more than the pipeline's own is another
+/// process of this user publishing on the topic (docs/security.md).
+pub struct TopicWatch<T: Frame> {
+    service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+}
+
+impl<T: Frame> TopicWatch<T> {
+    /// Publishers currently connected to the topic (iceoryx2's dynamic service state).
+    pub fn publisher_count(&self) -> usize {
+        self.service.dynamic_config().number_of_publishers()
+    }
+}
+
+/// Decides when a topic has more publishers than it should and says so once:
+/// an excess must be seen on two checks in a row (a restarted stage's dead
+/// publisher is removed by iceoryx2 when the new one starts), and is reported
+/// again only if it grows, or after the count went back to normal.
+#[derive(Debug, Clone)]
+pub struct PublisherWatch {
+    topic: Topic,
+    expected: usize,
+    last: usize,
+    warned_at: usize,
+}
+
+impl PublisherWatch {
+    /// A watch of `topic`, which should have at most `expected` publishers.
+    pub fn new(topic: Topic, expected: usize) -> Self {
+        PublisherWatch {
+            topic,
+            expected,
+            last: 0,
+            warned_at: 0,
+        }
+    }
+
+    /// Takes one count of the topic's publishers; returns the warning to show, if any.
+    pub fn observe(&mut self, count: usize) -> Option<String> {
+        let previous = std::mem::replace(&mut self.last, count);
+        if count <= self.expected {
+            self.warned_at = 0;
+            return None;
+        }
+        if previous <= self.expected || count <= self.warned_at {
+            return None;
+        }
+        self.warned_at = count;
+        Some(format!(
+            "{count} publishers on topic {} (expected {}): another process of this user is publishing \
+             on it; its frames are mixed with the pipeline's (see docs/security.md)",
+            self.topic, self.expected
+        ))
     }
 }
 

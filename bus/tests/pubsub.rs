@@ -176,3 +176,36 @@ impl Last for SensorFrame {
         self.flags & sensor_flags::END_OF_STREAM != 0
     }
 }
+
+#[test]
+fn a_second_publisher_on_a_topic_is_counted_and_warned_about_once() {
+    use bus::PublisherWatch;
+    let cfg = config("pubcount");
+    let bus = Bus::open("rig1", cfg.clone()).unwrap();
+    let watch = bus.topic_watch::<SensorFrame>().unwrap();
+    assert_eq!(watch.publisher_count(), 0);
+    let mut w = PublisherWatch::new(frames::Topic::Frames, 1);
+    let own = bus.publisher::<SensorFrame>().unwrap();
+    assert_eq!(watch.publisher_count(), 1);
+    assert_eq!(w.observe(watch.publisher_count()), None);
+    // another node (as another process of the same user would have) publishes too
+    let other = Bus::open("rig1", cfg.clone()).unwrap();
+    let intruder = other.publisher::<SensorFrame>().unwrap();
+    assert_eq!(watch.publisher_count(), 2);
+    // seen twice in a row before a warning, then said once
+    assert_eq!(w.observe(watch.publisher_count()), None);
+    let msg = w.observe(watch.publisher_count()).expect("a warning");
+    assert!(
+        msg.starts_with("2 publishers on topic frames (expected 1)"),
+        "{msg}"
+    );
+    assert_eq!(w.observe(watch.publisher_count()), None);
+    drop(intruder);
+    assert_eq!(watch.publisher_count(), 1);
+    assert_eq!(w.observe(watch.publisher_count()), None);
+    // a single count above (a restarted stage's dead publisher) is not reported
+    assert_eq!(w.observe(2), None);
+    assert_eq!(w.observe(1), None);
+    drop((own, other, watch, bus));
+    cfg.remove_isolated_files().unwrap();
+}

@@ -106,12 +106,17 @@ pub enum IssueKind {
     },
     /// A value is outside its physical range ([`Limits`]); the row is skipped.
     OutOfRange,
+    /// The line is not UTF-8 text; the row is skipped.
+    NotText,
+    /// The file could not be read further (an I/O error, a damaged gzip
+    /// stream); the rest of the file is not read.
+    ReadError,
 }
 
 impl IssueKind {
     /// A short name of the kind, used as a key in replay's summary.json
     /// (`not_a_number`, `non_finite`, `wrong_cell_count`, `time_not_increasing`,
-    /// `step_too_short`, `gap`, `out_of_range`).
+    /// `step_too_short`, `gap`, `out_of_range`, `not_text`, `read_error`).
     pub fn name(&self) -> &'static str {
         match self {
             IssueKind::NotANumber => "not_a_number",
@@ -121,6 +126,8 @@ impl IssueKind {
             IssueKind::StepTooShort => "step_too_short",
             IssueKind::Gap { .. } => "gap",
             IssueKind::OutOfRange => "out_of_range",
+            IssueKind::NotText => "not_text",
+            IssueKind::ReadError => "read_error",
         }
     }
 }
@@ -301,7 +308,9 @@ pub fn check_bad_fraction(rows: u64, skipped: u64, max_fraction: f64) -> Result<
 
 /// A streaming reader of samples from a CSV file.
 pub struct CsvReader<R: BufRead> {
-    lines: std::io::Lines<R>,
+    reader: R,
+    line: Vec<u8>,
+    ended: bool,
     path: PathBuf,
     map: [Option<usize>; 9],
     n_cols: usize,
@@ -342,18 +351,16 @@ impl CsvReader<FileSource> {
 
 impl<R: BufRead> CsvReader<R> {
     /// Reads the header from `reader`; `path` is used in messages.
-    pub fn new(reader: R, path: &Path, limits: Limits) -> Result<Self, DatasetError> {
-        let mut lines = reader.lines();
-        let header = match lines.next() {
-            Some(Ok(h)) => h,
-            Some(Err(source)) => {
-                return Err(DatasetError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })
-            }
-            None => String::new(),
-        };
+    pub fn new(mut reader: R, path: &Path, limits: Limits) -> Result<Self, DatasetError> {
+        let mut line = Vec::new();
+        reader
+            .read_until(b'\n', &mut line)
+            .map_err(|source| DatasetError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        // a header that is not UTF-8 names no known column: MissingColumn shows it
+        let header = String::from_utf8_lossy(&line);
         let header = header.trim_start_matches('\u{feff}').trim().to_string();
         let names: Vec<&str> = header.split(',').map(|s| s.trim()).collect();
         let mut map = [None; 9];
@@ -378,7 +385,9 @@ impl<R: BufRead> CsvReader<R> {
             }
         }
         Ok(CsvReader {
-            lines,
+            reader,
+            line,
+            ended: false,
             path: path.to_path_buf(),
             map,
             n_cols: names.len(),
@@ -416,40 +425,73 @@ impl<R: BufRead> CsvReader<R> {
         }
     }
 
-    /// The next row, or `None` at the end of the file.
+    /// The next row, or `None` at the end of the file. A read error (an I/O
+    /// error, a damaged gzip stream) is reported once as a skipped row of kind
+    /// [`IssueKind::ReadError`] and ends the file.
     pub fn next_row(&mut self) -> Option<Row> {
         loop {
-            let line = match self.lines.next()? {
-                Ok(l) => l,
-                Err(e) => {
+            if self.ended {
+                return None;
+            }
+            let mut buf = std::mem::take(&mut self.line);
+            buf.clear();
+            let read = self.reader.read_until(b'\n', &mut buf);
+            let row = match read {
+                Ok(0) => {
+                    self.ended = true;
+                    None
+                }
+                Ok(_) => {
                     self.line_no += 1;
-                    let issue = self.issue(None, IssueKind::NotANumber, format!("read error: {e}"), true);
-                    return Some(Row::Skipped(issue));
+                    self.row(&buf)
+                }
+                Err(e) => {
+                    // the reader cannot go on: report it once, at the line it broke
+                    // (a reader that fails again and again would never end otherwise)
+                    self.ended = true;
+                    self.line_no += 1;
+                    self.rows += 1;
+                    let msg = format!("read error, the rest of the file is not read: {e}");
+                    Some(Row::Skipped(self.issue(None, IssueKind::ReadError, msg, true)))
                 }
             };
-            self.line_no += 1;
-            let line = line.trim();
-            if line.is_empty() {
-                continue;
+            self.line = buf;
+            if row.is_some() {
+                return row;
             }
-            self.rows += 1;
-            let parsed = self.parse_row(line);
-            if let Ok((s, _)) = &parsed {
-                for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm]
-                    .into_iter()
-                    .enumerate()
-                {
-                    if v.is_nan() && self.map[5 + k].is_some() {
-                        self.absent[k] += 1;
-                    }
+        }
+    }
+
+    /// The row of one line (with its end of line); `None` for an empty line.
+    fn row(&mut self, bytes: &[u8]) -> Option<Row> {
+        let line = match std::str::from_utf8(bytes) {
+            Ok(l) => l.trim(),
+            Err(e) => {
+                self.rows += 1;
+                let msg = format!("not UTF-8 text (byte {} of the line)", e.valid_up_to() + 1);
+                return Some(Row::Skipped(self.issue(None, IssueKind::NotText, msg, true)));
+            }
+        };
+        if line.is_empty() {
+            return None;
+        }
+        self.rows += 1;
+        let parsed = self.parse_row(line);
+        if let Ok((s, _)) = &parsed {
+            for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm]
+                .into_iter()
+                .enumerate()
+            {
+                if v.is_nan() && self.map[5 + k].is_some() {
+                    self.absent[k] += 1;
                 }
             }
-            return Some(match parsed {
-                Ok((sample, None)) => Row::Sample(sample),
-                Ok((sample, Some(issue))) => Row::AfterGap(sample, issue),
-                Err(issue) => Row::Skipped(issue),
-            });
         }
+        Some(match parsed {
+            Ok((sample, None)) => Row::Sample(sample),
+            Ok((sample, Some(issue))) => Row::AfterGap(sample, issue),
+            Err(issue) => Row::Skipped(issue),
+        })
     }
 
     fn parse_row(&mut self, line: &str) -> Result<(Sample, Option<Issue>), Issue> {

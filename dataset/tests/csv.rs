@@ -274,3 +274,68 @@ fn u_of_1e300_in_every_row_gives_no_usable_sample() {
         "{m}"
     );
 }
+
+/// A source that gives `text` and then fails on every read, as a damaged disk
+/// or gzip stream does.
+struct FailsAfter {
+    text: std::io::Cursor<Vec<u8>>,
+}
+
+impl std::io::Read for FailsAfter {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.text.read(buf)?;
+        if n > 0 {
+            return Ok(n);
+        }
+        Err(std::io::Error::other("disk on fire"))
+    }
+}
+
+#[test]
+fn a_read_error_is_reported_once_and_ends_the_file() {
+    // (the reader used to report a persistent read error as one skipped row
+    // after another, forever)
+    let text = b"t,u,x,p1,p2\n0.0,0.5,0.3,6.9e6,6.8e6\n0.001,0.5,0.3,6.9e6,6.8e6\n0.002,0.5".to_vec();
+    let src = std::io::BufReader::new(FailsAfter {
+        text: std::io::Cursor::new(text),
+    });
+    let mut r = CsvReader::new(src, Path::new("fire.csv"), Limits::default()).unwrap();
+    let mut rows = Vec::new();
+    while let Some(row) = r.next_row() {
+        rows.push(row);
+        assert!(rows.len() < 10, "does not end: {rows:?}");
+    }
+    assert_eq!(rows.len(), 3, "{rows:?}");
+    assert!(matches!(rows[0], Row::Sample(_)) && matches!(rows[1], Row::Sample(_)));
+    let Row::Skipped(issue) = &rows[2] else {
+        panic!("{:?}", rows[2])
+    };
+    assert_eq!((issue.line, issue.kind.clone()), (4, IssueKind::ReadError));
+    assert!(issue.message.contains("disk on fire"), "{}", issue.message);
+    assert_eq!((r.rows, r.skipped), (3, 1));
+}
+
+#[test]
+fn a_line_that_is_not_utf8_is_one_skipped_row_and_counted() {
+    let text =
+        b"t,u,x,p1,p2\n0.0,0.5,0.3,6.9e6,6.8e6\n0.001,\xff\xfe,0.3,6.9e6,6.8e6\n0.002,0.5,0.3,6.9e6,6.8e6\n";
+    let mut r = CsvReader::new(&text[..], Path::new("bytes.csv"), Limits::default()).unwrap();
+    let mut kinds = Vec::new();
+    while let Some(row) = r.next_row() {
+        kinds.push(match row {
+            Row::Sample(_) => "sample".to_string(),
+            Row::AfterGap(..) => "gap".to_string(),
+            Row::Skipped(i) => format!("{} at {}: {}", i.kind.name(), i.line, i.message),
+        });
+    }
+    assert_eq!(
+        kinds,
+        [
+            "sample",
+            "not_text at 3: not UTF-8 text (byte 7 of the line)",
+            "gap"
+        ]
+    );
+    // rows and skipped agree (a read error used to be skipped without being a row)
+    assert_eq!((r.rows, r.skipped), (3, 1));
+}

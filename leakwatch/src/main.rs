@@ -4,6 +4,8 @@
 mod benches;
 mod commission;
 mod config;
+#[cfg(test)]
+mod config_fuzz;
 mod demo;
 mod latency;
 mod out;
@@ -117,6 +119,16 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         csv: PathBuf,
+    },
+    /// Repair a recorded log (MCAP) whose recorder was killed (no summary, a cut
+    /// last chunk) or that has damaged chunks: every intact message is written
+    /// into a complete MCAP file that any MCAP reader opens.
+    Repair {
+        /// The damaged log.
+        log: PathBuf,
+        /// The repaired log to write (never the input; an existing file only with --force).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Find where the model and measured data disagree, name the missing effect, fit it, show the gap shrink.
     Calibrate {
@@ -350,6 +362,31 @@ fn run(cli: Cli) -> Result<(), String> {
             for f in files {
                 eprintln!("wrote {}", f.display());
             }
+            Ok(())
+        }
+        Command::Repair { log, out } => {
+            let r = recorder::repair(&log, &out, force).map_err(|e| e.to_string())?;
+            if let Some(why) = &r.truncated {
+                eprintln!("{}: ends early ({why}); kept everything before", log.display());
+            }
+            for c in &r.chunks_skipped {
+                eprintln!("{}: damaged {c}; skipped", log.display());
+            }
+            if r.messages_without_channel > 0 {
+                eprintln!(
+                    "{}: {} messages dropped: their channel record was lost",
+                    log.display(),
+                    r.messages_without_channel
+                );
+            }
+            let total: u64 = r.messages.values().sum();
+            let per: Vec<String> = r.messages.iter().map(|(t, n)| format!("{t} {n}")).collect();
+            eprintln!(
+                "wrote {} ({} bytes): {total} messages ({})",
+                out.display(),
+                r.bytes,
+                per.join(", ")
+            );
             Ok(())
         }
         Command::Commission { input, config, out } => commission::run(&input, config.as_deref(), &out, force),

@@ -88,7 +88,8 @@ pub struct Summary {
     /// Rows of the input that could not be used (skipped, each reported).
     pub rows_skipped: u64,
     /// The skipped rows by reason (`not_a_number`, `non_finite`, `out_of_range`,
-    /// `time_not_increasing`, `step_too_short`, `wrong_cell_count`).
+    /// `time_not_increasing`, `step_too_short`, `wrong_cell_count`, `not_text`,
+    /// `read_error`).
     pub rows_rejected: BTreeMap<String, u64>,
     /// Largest fraction of skipped rows accepted (0 to 1, `--max-bad-rows`).
     pub max_bad_fraction: f64,

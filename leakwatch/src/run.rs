@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
 use classifier::{LeakEvent, Phase};
-use frames::{LeakEventFrame, StatsFrame};
+use frames::{LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use serde::Serialize;
 
 use crate::config::Config;
@@ -279,6 +279,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut stats_rx = bus
         .subscriber::<StatsFrame>(WaitMode::Event)
         .map_err(|e| e.to_string())?;
+    // Only acquisition publishes frames and only the classifier events: another
+    // publisher is another process of this user feeding the pipeline (docs/security.md).
+    let frames_watch = bus.topic_watch::<SensorFrame>().map_err(|e| e.to_string())?;
+    let events_watch = bus.topic_watch::<LeakEventFrame>().map_err(|e| e.to_string())?;
+    let mut frames_pubs = bus::PublisherWatch::new(Topic::Frames, 1);
+    let mut events_pubs = bus::PublisherWatch::new(Topic::Events, 1);
+    let mut last_watch = Instant::now();
     let stop = bus::stop_on_signals();
 
     let s = |v: &str| v.to_string();
@@ -378,6 +385,15 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
         while let Ok(Some(st)) = stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
+        }
+        if last_watch.elapsed() >= Duration::from_secs(1) {
+            last_watch = Instant::now();
+            let counts = [frames_watch.publisher_count(), events_watch.publisher_count()];
+            for (watch, count) in [&mut frames_pubs, &mut events_pubs].into_iter().zip(counts) {
+                if let Some(w) = watch.observe(count) {
+                    eprintln!("leakwatch run: warning: {w}");
+                }
+            }
         }
         if stop.load(Ordering::Relaxed) {
             eprintln!("leakwatch run: stopping (signal)");
@@ -482,6 +498,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     )?;
     drop(events_rx);
     drop(stats_rx);
+    drop((frames_watch, events_watch));
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
     Ok(RunOutcome {

@@ -521,3 +521,79 @@ fn run_refuses_bad_arguments_before_starting_anything() {
         );
     }
 }
+
+#[test]
+fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
+    let d = tmpdir("repair");
+    let full = d.join("full.mcap");
+    let options = recorder::WriterOptions {
+        chunk_size: 4096,
+        ..recorder::WriterOptions::default()
+    };
+    let mut w = recorder::LogWriter::create(&full, options).unwrap();
+    for i in 0..1500u64 {
+        let f = frames::SensorFrame {
+            seq: i,
+            t_s: i as f64 * 1e-3,
+            x_m: 0.3,
+            p1_pa: 6.9e6,
+            p2_pa: 6.8e6,
+            ..frames::SensorFrame::default()
+        };
+        assert!(w.write(recorder::Entry::Frame(f, i)).unwrap());
+    }
+    w.finish().unwrap();
+    // a recorder killed mid-chunk: no summary, a cut last chunk
+    let bytes = std::fs::read(&full).unwrap();
+    let killed = d.join("killed.mcap");
+    std::fs::write(&killed, &bytes[..bytes.len() * 6 / 10]).unwrap();
+    let kept = recorder::LogReader::open(&killed).unwrap().read().unwrap();
+    assert!(kept.truncated.is_some() && kept.frames.len() > 100 && kept.frames.len() < 1500);
+    let fixed = d.join("fixed.mcap");
+    let o = leakwatch(&[
+        "repair",
+        killed.to_str().unwrap(),
+        "--out",
+        fixed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("killed.mcap: ends early"), "{err}");
+    assert!(
+        err.contains(&format!("messages (frames {})", kept.frames.len())),
+        "{err}"
+    );
+    // the repaired file is complete; export reads every frame of it without a warning
+    let csv = d.join("csv");
+    let o = leakwatch(&["export", fixed.to_str().unwrap(), "--csv", csv.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    let dataset = std::fs::read_to_string(csv.join("dataset.csv")).unwrap();
+    assert_eq!(dataset.lines().count(), kept.frames.len() + 1);
+    // not over an existing file without --force, never over the input
+    let o = leakwatch(&[
+        "repair",
+        killed.to_str().unwrap(),
+        "--out",
+        fixed.to_str().unwrap(),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("exists"),
+        "{}",
+        stderr(&o)
+    );
+    let o = leakwatch(&[
+        "repair",
+        killed.to_str().unwrap(),
+        "--out",
+        killed.to_str().unwrap(),
+        "--force",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("is the input"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(&killed).unwrap(), &bytes[..bytes.len() * 6 / 10]);
+    std::fs::remove_dir_all(&d).ok();
+}

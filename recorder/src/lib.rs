@@ -8,6 +8,8 @@
 //!   leaves a file readable up to its last complete chunk.
 //! - [`LogReader`]: every channel back into the frame types, bit for bit;
 //!   a truncated file yields everything up to its last complete chunk.
+//! - [`repair`]: a killed recorder's file (no summary, a cut last chunk) or a
+//!   damaged one rewritten as a complete MCAP file with what is intact.
 //! - [`export_csv`]: one CSV per channel, and the frames again in the
 //!   dataset format (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak`) that
 //!   `leakwatch replay` reads.
@@ -20,12 +22,14 @@ use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame
 mod export;
 mod reader;
 pub mod record;
+mod repair;
 pub mod shell;
 mod writer;
 
 pub use export::export_csv;
 pub use reader::{Log, LogReader};
 pub use record::Record;
+pub use repair::{repair, RepairSummary};
 pub use writer::{LogWriter, WriterOptions, WriterSummary};
 
 /// The MCAP channel of [`GapRecord`]s.

@@ -105,84 +105,37 @@ impl LogReader {
     /// an error naming the channel and message.
     pub fn read(&self) -> Result<Log, RecorderError> {
         let mut log = Log::default();
-        let records = mcap::read::LinearReader::new_with_options(
-            &self.data,
-            mcap::read::Options::IgnoreEndMagic.into(),
-        )
-        .map_err(|e| RecorderError::Mcap(self.path.clone(), e.to_string()))?;
         // The channels, from the summary at the end when there is one (a damaged
         // first chunk then loses its messages, not the channels of all others).
-        let mut channels: std::collections::HashMap<u16, String> = match mcap::read::Summary::read(&self.data)
-        {
-            Ok(Some(summary)) => summary
+        let mut channels: std::collections::HashMap<u16, String> = match summary(&self.data) {
+            Some(summary) => summary
                 .channels
                 .iter()
                 .map(|(id, c)| (*id, c.topic.clone()))
                 .collect(),
-            _ => std::collections::HashMap::new(),
+            None => std::collections::HashMap::new(),
         };
         // where in `log.frames` each skipped chunk was
         let mut skipped_at: Vec<usize> = Vec::new();
-        let mut offset = 8usize; // after the magic
-        let mut any = false;
-        for item in records {
-            let record = match item {
-                Ok(r) => r,
-                Err(e) if any || self.data.len() > 8 && self.data.starts_with(b"\x89MCAP0\r\n") => {
-                    log.truncated = Some(e.to_string());
-                    break;
-                }
-                Err(e) => return Err(RecorderError::Mcap(self.path.clone(), e.to_string())),
-            };
-            let at = offset;
-            offset += record_len(&self.data, at);
-            match record {
-                mcap::records::Record::Channel(c) => {
+        log.truncated = walk(&self.path, &self.data, |item| {
+            match item {
+                Item::Channel(c) => {
                     channels.insert(c.id, c.topic);
                 }
-                mcap::records::Record::Message { header, data } => {
-                    any = true;
-                    self.decode(&mut log, &channels, &header, &data)?;
+                Item::Message(header, data) => self.decode(&mut log, &channels, &header, data)?,
+                Item::ChunkSkipped(why) => {
+                    log.chunks_skipped.push(why);
+                    skipped_at.push(log.frames.len());
                 }
-                mcap::records::Record::Chunk { header, data } => {
-                    let bytes = match decompress_chunk(&header, &data) {
-                        Ok(b) => b,
-                        Err(why) => {
-                            log.chunks_skipped.push(format!("chunk at byte {at}: {why}"));
-                            skipped_at.push(log.frames.len());
-                            continue;
-                        }
-                    };
-                    for inner in mcap::read::LinearReader::sans_magic(&bytes) {
-                        match inner {
-                            Ok(mcap::records::Record::Channel(c)) => {
-                                channels.insert(c.id, c.topic);
-                            }
-                            Ok(mcap::records::Record::Message { header, data }) => {
-                                any = true;
-                                self.decode(&mut log, &channels, &header, &data)?;
-                            }
-                            Ok(_) => {}
-                            Err(e) => {
-                                log.chunks_skipped
-                                    .push(format!("chunk at byte {at}: record: {e}"));
-                                skipped_at.push(log.frames.len());
-                                break;
-                            }
-                        }
-                    }
-                }
-                _ => {}
+                Item::Schema(..) | Item::Metadata(_) => {}
             }
-        }
+            Ok(())
+        })?;
         for p in skipped_at {
             if p > 0 && p < log.frames.len() {
                 let gap = log.frames[p].seq.saturating_sub(log.frames[p - 1].seq);
                 log.frames_lost += gap.saturating_sub(1);
             }
-        }
-        if !any && log.truncated.is_none() && !self.data.ends_with(b"\x89MCAP0\r\n") {
-            log.truncated = Some("no complete chunk".into());
         }
         Ok(log)
     }
@@ -231,6 +184,110 @@ fn record_len(data: &[u8], at: usize) -> usize {
         .and_then(|b| <[u8; 8]>::try_from(b).ok())
         .map(|b| 9usize.saturating_add(u64::from_le_bytes(b) as usize))
         .unwrap_or(0)
+}
+
+/// The summary section of an MCAP file, if it has one that reads.
+pub(crate) fn summary(data: &[u8]) -> Option<mcap::read::Summary> {
+    mcap::read::Summary::read(data).ok().flatten()
+}
+
+/// One intact item of an MCAP file, in file order, as [`walk`] finds it.
+pub(crate) enum Item<'a> {
+    /// A schema record and its data.
+    Schema(mcap::records::SchemaHeader, &'a [u8]),
+    /// A channel record.
+    Channel(mcap::records::Channel),
+    /// A message and its data.
+    Message(mcap::records::MessageHeader, &'a [u8]),
+    /// A metadata record.
+    Metadata(mcap::records::Metadata),
+    /// A damaged chunk was skipped: where and why.
+    ChunkSkipped(String),
+}
+
+/// Walks the records of an MCAP file (`data`, read from `path`), handing every
+/// intact schema, channel, message and metadata record to `visit`, in file
+/// order, chunks decompressed with their declared size as a hard bound (see
+/// [`MAX_CHUNK_BYTES`]); a damaged chunk is skipped and reported as
+/// [`Item::ChunkSkipped`]. Returns `Some(reason)` if the file ends early (no
+/// footer, a partial record: everything before it was visited); a file that is
+/// not MCAP is an error, and so is an error of `visit`.
+pub(crate) fn walk<F>(path: &Path, data: &[u8], mut visit: F) -> Result<Option<String>, RecorderError>
+where
+    F: FnMut(Item<'_>) -> Result<(), RecorderError>,
+{
+    const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+    let records =
+        mcap::read::LinearReader::new_with_options(data, mcap::read::Options::IgnoreEndMagic.into())
+            .map_err(|e| RecorderError::Mcap(path.to_path_buf(), e.to_string()))?;
+    let mut truncated = None;
+    let mut offset = 8usize; // after the magic
+    let mut any = false;
+    let mut footer = false;
+    for item in records {
+        let record = match item {
+            Ok(r) => r,
+            Err(e) if any || data.len() > 8 && data.starts_with(MAGIC) => {
+                truncated = Some(e.to_string());
+                break;
+            }
+            Err(e) => return Err(RecorderError::Mcap(path.to_path_buf(), e.to_string())),
+        };
+        let at = offset;
+        offset = offset.saturating_add(record_len(data, at));
+        match record {
+            mcap::records::Record::Chunk { header, data } => {
+                let bytes = match decompress_chunk(&header, &data) {
+                    Ok(b) => b,
+                    Err(why) => {
+                        visit(Item::ChunkSkipped(format!("chunk at byte {at}: {why}")))?;
+                        continue;
+                    }
+                };
+                for inner in mcap::read::LinearReader::sans_magic(&bytes) {
+                    match inner {
+                        Ok(r) => any |= visit_record(r, &mut visit)?,
+                        Err(e) => {
+                            visit(Item::ChunkSkipped(format!("chunk at byte {at}: record: {e}")))?;
+                            break;
+                        }
+                    }
+                }
+            }
+            mcap::records::Record::Footer(_) => footer = true,
+            r => any |= visit_record(r, &mut visit)?,
+        }
+    }
+    if !any && truncated.is_none() && !data.ends_with(MAGIC) {
+        truncated = Some("no complete chunk".into());
+    }
+    if truncated.is_none() && !footer {
+        // cut at a record boundary (a recorder killed right after a flush)
+        truncated = Some(format!(
+            "no summary or footer: the file ends after byte {} (was its recorder killed?)",
+            data.len()
+        ));
+    }
+    Ok(truncated)
+}
+
+/// Hands one record to `visit`; true if it was a message.
+fn visit_record<F>(record: mcap::records::Record<'_>, visit: &mut F) -> Result<bool, RecorderError>
+where
+    F: FnMut(Item<'_>) -> Result<(), RecorderError>,
+{
+    use mcap::records::Record;
+    match record {
+        Record::Schema { header, data } => visit(Item::Schema(header, &data))?,
+        Record::Channel(c) => visit(Item::Channel(c))?,
+        Record::Message { header, data } => {
+            visit(Item::Message(header, &data))?;
+            return Ok(true);
+        }
+        Record::Metadata(m) => visit(Item::Metadata(m))?,
+        _ => {}
+    }
+    Ok(false)
 }
 
 impl GapRecord {
