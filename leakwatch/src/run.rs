@@ -8,6 +8,7 @@
 //! (`LEAKWATCH_IOX_PREFIX`), so runs and tests never see each other.
 
 use std::collections::BTreeMap;
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::Ordering;
@@ -186,8 +187,19 @@ pub struct RunOutcome {
 fn spawn(program: &Path, name: &str, args: &[String], prefix: &str, log: &Path) -> Result<Child, String> {
     // the outputs were checked at start (an earlier run's only with --force)
     let err = crate::out::create(log, true, &[])?;
-    Command::new(program)
-        .arg("stage")
+    let mut cmd = Command::new(program);
+    // The stage dies with its supervisor (SIGTERM when the supervisor's thread
+    // that spawned it ends, whatever the cause, SIGKILL included).
+    // SAFETY: prctl is async-signal-safe and touches no memory of the parent.
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM as libc::c_ulong, 0, 0, 0) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    cmd.arg("stage")
         .arg(name)
         .args(args)
         .env(bus::PREFIX_ENV, prefix)
@@ -371,6 +383,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let started = Instant::now();
     let mut ended_at: Option<Instant> = None;
     let deadline = Duration::from_secs_f64(seconds + 30.0);
+    // A failure ends the run, but what was gathered is still written.
+    let mut failure: Option<String> = None;
     loop {
         while let Ok(Some(f)) = events_rx.try_receive() {
             match LeakEvent::try_from(&f.frame) {
@@ -408,7 +422,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             if let Ok(Some(status)) = child.try_wait() {
                 if name == "acquisition" {
                     if !status.success() {
-                        return Err(format!(
+                        failure = Some(format!(
                             "acquisition failed ({status}); see {}",
                             out_dir.join("acquisition.log").display()
                         ));
@@ -419,25 +433,36 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                     *n += 1;
                     eprintln!("leakwatch run: stage {name} exited ({status}); restarting it (restart {n})");
                     if *n > 5 {
-                        return Err(format!(
+                        failure = Some(format!(
                             "stage {name} keeps failing; see {}",
                             out_dir.join(format!("{name}.log")).display()
                         ));
+                        break;
                     }
                     let mut a = stage_args(name);
                     if name == "recorder" {
                         a[3] = out_dir.join(format!("run-{n}.mcap")).display().to_string();
                     }
-                    let c = spawn(
+                    match spawn(
                         &program,
                         name,
                         &a,
                         &prefix,
                         &out_dir.join(format!("{name}-{n}.log")),
-                    )?;
-                    children.insert(name, c);
+                    ) {
+                        Ok(c) => {
+                            children.insert(name, c);
+                        }
+                        Err(e) => {
+                            failure = Some(e);
+                            break;
+                        }
+                    }
                 }
             }
+        }
+        if failure.is_some() {
+            break;
         }
         if acquisition_done {
             children.remove("acquisition");
@@ -501,6 +526,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     drop((frames_watch, events_watch));
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
+    if let Some(f) = failure {
+        return Err(format!(
+            "{f} (events.json and latency.json in {} hold what the run gathered)",
+            out_dir.display()
+        ));
+    }
     Ok(RunOutcome {
         events,
         latency,

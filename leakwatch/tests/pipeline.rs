@@ -352,3 +352,70 @@ fn the_binary_alone_runs_the_pipeline_without_cargo() {
         assert!(out.join(format!("{name}.log")).is_file(), "{name}.log");
     }
 }
+
+/// Waits for a stage process of `rig` to appear; returns its pid.
+fn wait_for_stage(stage: &str, rig: &str) -> i32 {
+    let t0 = Instant::now();
+    loop {
+        if let Some(p) = pids_of(&["stage", stage, "--rig", rig]).first() {
+            return *p;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(60), "{stage} never started");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// The stages die with their supervisor: after a SIGKILL of `leakwatch run`,
+/// no stage of the run is alive 2 s later.
+#[test]
+fn the_stages_die_with_a_killed_supervisor() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("orphans");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let mut child = start_run("e2e-orphans", "60", None, &out, &cfg);
+    for stage in ["acquisition", "estimator", "classifier", "recorder"] {
+        wait_for_stage(stage, "e2e-orphans");
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    let alive = pids_of(&["stage", "--rig", "e2e-orphans"]);
+    assert!(alive.is_empty(), "stages still alive: {alive:?}");
+}
+
+/// A crashed acquisition ends the run with an error that names it, and
+/// events.json and latency.json still hold what the run gathered.
+#[test]
+fn a_crashed_acquisition_still_leaves_the_events_and_latency() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("acq-crash");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let child = start_run("e2e-acq-crash", "60", Some("ext1:0.5lpm@10s"), &out, &cfg);
+    let pid = wait_for_stage("acquisition", "e2e-acq-crash");
+    std::thread::sleep(Duration::from_secs(13));
+    unsafe {
+        libc::kill(pid, libc::SIGKILL);
+    }
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("acquisition failed"), "{stderr}");
+    let events = json(&out.join("events.json"));
+    let leaks = raised_leaks(&events);
+    assert_eq!(
+        leaks.len(),
+        1,
+        "the leak raised before the crash is kept: {events:#}"
+    );
+    let lat = json(&out.join("latency.json"));
+    assert!(
+        lat["stages"]["estimator"]["frames_in"].as_u64().unwrap() > 5_000,
+        "{lat:#}"
+    );
+    // and no stage is left behind
+    std::thread::sleep(Duration::from_secs(1));
+    assert!(pids_of(&["stage", "--rig", "e2e-acq-crash"]).is_empty());
+}
