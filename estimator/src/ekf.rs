@@ -309,7 +309,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             let k = self.s * phi * a;
             let resid = nu[i] - h.dot(&dz);
             dz += k * resid;
-            self.s -= k * phi.transpose() * gamma;
+            // S ← S − γ k φᵀ, a rank-one update in place (no N×N temporary)
+            self.s.ger(-gamma, &k, &phi, 1.0);
         }
         for j in 0..N {
             self.x[j] += dz[j] * self.x_scale[j];
