@@ -31,6 +31,7 @@ use frames::{Frame, RigId, Topic};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
+use iceoryx2::service::header::payload_header::PayloadHeader;
 
 pub mod clock;
 mod schedule;
@@ -497,6 +498,10 @@ pub struct Received<T> {
     pub missing_before: u64,
     /// True if the sequence went backwards: a new publisher (restart).
     pub restarted: bool,
+    /// Process id of the node that published the frame, from the sample header
+    /// iceoryx2 writes (not from the payload, which any publisher fills as it
+    /// likes); 0 if unknown.
+    pub publisher_pid: u32,
 }
 
 impl<T> std::ops::Deref for Received<T> {
@@ -560,6 +565,12 @@ impl<T: Frame> Subscriber<T> {
             return Ok(None);
         };
         let frame = *sample.payload();
+        let publisher_pid = sample
+            .header()
+            .node_id()
+            .pid::<ipc::Service>()
+            .map(|p| u32::try_from(p.value()).unwrap_or(0))
+            .unwrap_or(0);
         drop(sample);
         let now = monotonic_ns();
         self.received += 1;
@@ -584,6 +595,7 @@ impl<T: Frame> Subscriber<T> {
             recv_mono_ns: now,
             missing_before: missing,
             restarted,
+            publisher_pid,
         }))
     }
 

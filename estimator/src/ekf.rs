@@ -197,20 +197,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 }
             }
         }
-        match p.cholesky() {
-            Some(c) => self.s = c.unpack(),
-            None => {
-                let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
-                lower_triangularise(&mut w1, &mut w2);
-                self.s = w1;
-            }
-        }
-        self.x = x_pred;
-        if self.is_finite() {
-            Ok(())
-        } else {
-            Err(EkfError::NotFinite)
-        }
+        self.finish_predict(x_pred, p, w1)
     }
 
     /// The time update as first written (the dense product W·Wᵀ), kept as the
@@ -227,11 +214,23 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 fz[(i, j)] *= self.ratio[(i, j)];
             }
         }
-        let mut w1 = fz * self.s;
+        let w1 = fz * self.s;
         let mut p = w1 * w1.transpose();
         for i in 0..N {
             p[(i, i)] += self.q_sqrt[i] * self.q_sqrt[i];
         }
+        self.finish_predict(x_pred, p, w1)
+    }
+
+    /// Ends a time update: S⁻ = the Cholesky factor of `p` (P⁻, lower triangle), or,
+    /// should that fail to rounding, the triangularised [`w1` = F·S, Q^½]; the state
+    /// becomes `x_pred`.
+    fn finish_predict(
+        &mut self,
+        x_pred: SVector<f64, N>,
+        p: SMatrix<f64, N, N>,
+        mut w1: SMatrix<f64, N, N>,
+    ) -> Result<(), EkfError> {
         match p.cholesky() {
             Some(c) => self.s = c.unpack(),
             None => {

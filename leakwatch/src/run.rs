@@ -385,16 +385,15 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let deadline = Duration::from_secs_f64(seconds + 30.0);
     // A failure ends the run, but what was gathered is still written.
     let mut failure: Option<String> = None;
+    // Events published by anything but this run's classifier are left out.
+    let mut foreign_events = 0u64;
     loop {
         while let Ok(Some(f)) = events_rx.try_receive() {
-            match LeakEvent::try_from(&f.frame) {
-                Ok(ev) => {
-                    if !quiet {
-                        print_event(&ev)?;
-                    }
-                    events.push(ev);
+            if let Some(ev) = own_event(&f, &children, &mut foreign_events) {
+                if !quiet {
+                    print_event(&ev)?;
                 }
-                Err(e) => eprintln!("leakwatch run: an event frame was not understood ({e}); left out"),
+                events.push(ev);
             }
         }
         while let Ok(Some(st)) = stats_rx.try_receive() {
@@ -480,6 +479,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
         std::thread::sleep(Duration::from_millis(10));
     }
+    // the classifier's pid, for the events still queued once it has stopped
+    let classifier_pids: BTreeMap<&str, u32> = children
+        .iter()
+        .filter(|(n, _)| **n == "classifier")
+        .map(|(n, c)| (*n, c.id()))
+        .collect();
     for (_, c) in children.iter_mut() {
         terminate(c);
     }
@@ -498,9 +503,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         accs.entry(st.stage).or_default().push(&st.frame);
     }
     while let Ok(Some(f)) = events_rx.try_receive() {
-        match LeakEvent::try_from(&f.frame) {
-            Ok(ev) => events.push(ev),
-            Err(e) => eprintln!("leakwatch run: an event frame was not understood ({e}); left out"),
+        if let Some(ev) = own_event(&f, &classifier_pids, &mut foreign_events) {
+            events.push(ev);
         }
     }
     let mut stages = BTreeMap::new();
@@ -537,6 +541,52 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         latency,
         out_dir,
     })
+}
+
+/// The classifier's process id in `children` (a map of running children, or of pids).
+trait ClassifierPid {
+    fn classifier_pid(&self) -> Option<u32>;
+}
+
+impl ClassifierPid for BTreeMap<&str, Child> {
+    fn classifier_pid(&self) -> Option<u32> {
+        self.get("classifier").map(Child::id)
+    }
+}
+
+impl ClassifierPid for BTreeMap<&str, u32> {
+    fn classifier_pid(&self) -> Option<u32> {
+        self.get("classifier").copied()
+    }
+}
+
+/// The event of a frame if this run's classifier published it (iceoryx2's sample
+/// header names the publishing process); a frame from any other publisher, or one
+/// not understood, is reported on stderr, counted in `foreign` and left out.
+fn own_event(
+    f: &bus::Received<LeakEventFrame>,
+    children: &impl ClassifierPid,
+    foreign: &mut u64,
+) -> Option<LeakEvent> {
+    let own = children.classifier_pid();
+    if f.publisher_pid != 0 && own.is_some_and(|pid| pid != f.publisher_pid) {
+        *foreign += 1;
+        if *foreign <= 10 {
+            eprintln!(
+                "leakwatch run: warning: an event from process {} (not this run's classifier, process {}) was left out",
+                f.publisher_pid,
+                own.unwrap_or(0)
+            );
+        }
+        return None;
+    }
+    match LeakEvent::try_from(&f.frame) {
+        Ok(ev) => Some(ev),
+        Err(e) => {
+            eprintln!("leakwatch run: an event frame was not understood ({e}); left out");
+            None
+        }
+    }
 }
 
 fn print_event(ev: &LeakEvent) -> Result<(), String> {

@@ -419,3 +419,68 @@ fn a_crashed_acquisition_still_leaves_the_events_and_latency() {
     std::thread::sleep(Duration::from_secs(1));
     assert!(pids_of(&["stage", "--rig", "e2e-acq-crash"]).is_empty());
 }
+
+/// A leak event published on the run's service by another process (here the
+/// test itself) is told from the classifier's by the publishing process that
+/// iceoryx2 writes into each sample's header: it is left out of the output and
+/// warned about, never printed or recorded as a leak.
+#[test]
+fn a_forged_event_from_another_process_is_left_out() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("forge");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let prefix = format!("forge{}", std::process::id());
+    let child = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args([
+            "run",
+            "--rig",
+            "e2e-forge",
+            "--scenario",
+            "loaded-sine",
+            "--seconds",
+            "12",
+        ])
+        .args(["--fault", "none", "--config"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&out)
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("leakwatch runs");
+    wait_for_stage("classifier", "e2e-forge");
+    std::thread::sleep(Duration::from_secs(4));
+    let bus = bus::Bus::open(
+        "e2e-forge",
+        bus::BusConfig {
+            iox_prefix: Some(prefix.clone()),
+            ..bus::BusConfig::default()
+        },
+    )
+    .expect("the run's bus opens");
+    let mut forger = bus
+        .publisher::<frames::LeakEventFrame>()
+        .expect("a second publisher");
+    let fake = frames::LeakEventFrame {
+        kind: frames::event_kind::EXT1,
+        phase: frames::event_phase::RAISED,
+        event_id: 99,
+        t_detect_s: 5.0,
+        size_lpm: 111.0,
+        detector: frames::detector_bytes("leak-size"),
+        ..frames::LeakEventFrame::default()
+    };
+    for _ in 0..3 {
+        forger.send(&fake).expect("sent");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let o = finish(child);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("not this run's classifier"), "{stderr}");
+    assert!(!stdout.contains("111.000"), "{stdout}");
+    let events = json(&out.join("events.json"));
+    assert!(raised_leaks(&events).is_empty(), "{events:#}");
+}
