@@ -1139,8 +1139,7 @@ impl LeakSizeDetector {
         if !past {
             self.hold_since_s = None;
         }
-        let since = *self.hold_since_s.get_or_insert(e.t_s);
-        let holding = past && e.t_s - since <= self.cfg.baseline_hold_s;
+        let holding = past && e.t_s - *self.hold_since_s.get_or_insert(e.t_s) <= self.cfg.baseline_hold_s;
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
             let a = if reacquiring {
                 (dt_s / 0.5).min(1.0)

@@ -239,17 +239,7 @@ impl Limits {
     /// [`COLUMNS`], kind, message); `None` if every value is usable. NaN in an
     /// optional column means "absent" and passes.
     pub fn check(&self, s: &Sample) -> Option<(usize, IssueKind, String)> {
-        let values = [
-            s.t_s,
-            s.u_v,
-            s.x_m,
-            s.p1_pa,
-            s.p2_pa,
-            s.x_sp_m,
-            s.f_load_n,
-            s.ref_m,
-            s.q_leak_lpm,
-        ];
+        let values = s.columns();
         for (j, v) in values.into_iter().enumerate() {
             let optional = j >= REQUIRED.len();
             if optional && v.is_nan() {

@@ -179,17 +179,7 @@ fn check_reader<R: std::io::BufRead>(
             last_line = line;
         }
         if let Some(s) = sample {
-            let values = [
-                s.t_s,
-                s.u_v,
-                s.x_m,
-                s.p1_pa,
-                s.p2_pa,
-                s.x_sp_m,
-                s.f_load_n,
-                s.ref_m,
-                s.q_leak_lpm,
-            ];
+            let values = s.columns();
             for (j, v) in values.iter().enumerate() {
                 let absent = j >= REQUIRED.len() && v.is_nan();
                 if !absent && !v.is_finite() {

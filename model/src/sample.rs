@@ -41,6 +41,22 @@ impl Sample {
         }
     }
 
+    /// Every channel in the CSV column order `t,u,x,p1,p2,x_sp,f_load,ref,q_leak`
+    /// (s, V, m, Pa, Pa, m, N, m, L/min).
+    pub fn columns(&self) -> [f64; 9] {
+        [
+            self.t_s,
+            self.u_v,
+            self.x_m,
+            self.p1_pa,
+            self.p2_pa,
+            self.x_sp_m,
+            self.f_load_n,
+            self.ref_m,
+            self.q_leak_lpm,
+        ]
+    }
+
     /// The measurement vector of the estimator, [x (m), p1 (Pa), p2 (Pa)].
     pub fn measurement(&self) -> [f64; 3] {
         [self.x_m, self.p1_pa, self.p2_pa]

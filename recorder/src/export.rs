@@ -87,17 +87,7 @@ pub fn export_csv(log: &Log, dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>
     let mut w = BufWriter::new(create(&path, overwrite)?);
     dataset::write_header(&mut w).map_err(io)?;
     for f in &log.frames {
-        let s = Sample {
-            t_s: f.t_s,
-            u_v: f.u_v,
-            x_m: f.x_m,
-            p1_pa: f.p1_pa,
-            p2_pa: f.p2_pa,
-            x_sp_m: f.x_sp_m,
-            f_load_n: f.f_load_n,
-            ref_m: f.ref_m,
-            q_leak_lpm: f.q_leak_lpm,
-        };
+        let s = Sample::from(f);
         dataset::write_row(&mut w, &s).map_err(io)?;
     }
     w.flush().map_err(io)?;
