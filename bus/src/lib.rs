@@ -162,6 +162,74 @@ impl BusConfig {
     }
 }
 
+impl BusConfig {
+    /// The iceoryx2 file prefix in `/dev/shm` (`lw_<prefix>_`, or iceoryx2's `iox2_`)
+    /// and the root directory of its other files.
+    fn file_prefix_and_root(&self) -> (String, String) {
+        match &self.iox_prefix {
+            Some(p) => (format!("lw_{p}_"), format!("/tmp/iceoryx2/lw_{p}")),
+            None => ("iox2_".to_string(), "/tmp/iceoryx2".to_string()),
+        }
+    }
+
+    /// Why a node of this prefix may fail to start, read off the files: a global
+    /// management segment (`/dev/shm/<prefix>*.global_mgmt`) of another user or of a
+    /// size other than iceoryx2's own, or a root directory of another user; with
+    /// the way out. `None` when nothing looks wrong (or nothing can be read).
+    pub fn diagnose_blocked_start(&self) -> Option<String> {
+        use std::os::unix::fs::MetadataExt;
+        let (start, root) = self.file_prefix_and_root();
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        let me = unsafe { libc::geteuid() };
+        let env = match &self.iox_prefix {
+            Some(p) => format!("prefix {p:?}"),
+            None => "iceoryx2's default prefix".to_string(),
+        };
+        let way_out = format!(
+            "once no process of this prefix runs, remove its files (rm -rf {root} /dev/shm/{start}*) or start \
+             with another prefix (LEAKWATCH_IOX_PREFIX=...); see docs/security.md"
+        );
+        let mut found = Vec::new();
+        for entry in std::fs::read_dir("/dev/shm").ok()?.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if !(name.starts_with(&start) && name.ends_with(".global_mgmt")) {
+                continue;
+            }
+            let Ok(meta) = entry.metadata() else { continue };
+            if meta.uid() != me {
+                found.push(format!(
+                    "the management segment /dev/shm/{name} of {env} belongs to another user (uid {}, mode {:o})",
+                    meta.uid(),
+                    meta.mode() & 0o7777
+                ));
+            } else if meta.len() < GLOBAL_MGMT_MIN_BYTES {
+                found.push(format!(
+                    "the management segment /dev/shm/{name} of {env} is damaged ({} bytes, iceoryx2 writes {GLOBAL_MGMT_MIN_BYTES})",
+                    meta.len()
+                ));
+            }
+        }
+        if let Ok(meta) = std::fs::metadata(&root) {
+            if meta.uid() != me {
+                found.push(format!(
+                    "{root} belongs to another user (uid {}, mode {:o})",
+                    meta.uid(),
+                    meta.mode() & 0o7777
+                ));
+            }
+        }
+        if found.is_empty() {
+            None
+        } else {
+            Some(format!("{}: {way_out}", found.join("; ")))
+        }
+    }
+}
+
+/// Size of the global management segment iceoryx2 0.10 writes, bytes (the node id
+/// counter); a smaller file of that name is damaged.
+const GLOBAL_MGMT_MIN_BYTES: u64 = 16;
+
 fn validate_prefix(p: &str) -> Result<(), BusError> {
     if p.is_empty()
         || p.len() > 32
@@ -235,7 +303,13 @@ impl Bus {
             .config(&iox)
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<ipc::Service>()
-            .map_err(|e| BusError::new("cannot create the iceoryx2 node", e))?;
+            .map_err(|e| {
+                let mut m = BusError::new("cannot create the iceoryx2 node", e);
+                if let Some(why) = config.diagnose_blocked_start() {
+                    m.0.push_str(&format!("; {why}"));
+                }
+                m
+            })?;
         node.try_cleanup_dead_nodes();
         Ok(Bus { node, rig, config })
     }

@@ -209,3 +209,48 @@ fn a_second_publisher_on_a_topic_is_counted_and_warned_about_once() {
     drop((own, other, watch, bus));
     cfg.remove_isolated_files().unwrap();
 }
+
+/// A damaged global management segment (a 3-byte file where iceoryx2 keeps its
+/// node id counter, as another local user could plant one) stops a node from
+/// starting; the error says which file, what is wrong with it, and the way out.
+#[test]
+fn a_damaged_management_segment_is_named_with_the_way_out() {
+    let cfg = config("mgmt");
+    cfg.remove_isolated_files().expect("clean");
+    // a first node creates the segment; then it is damaged
+    drop(Bus::open("rig1", cfg.clone()).expect("first node"));
+    let prefix = format!("lw_{}_", cfg.iox_prefix.as_deref().expect("prefix"));
+    let segment = std::fs::read_dir("/dev/shm")
+        .expect("/dev/shm")
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| {
+            let n = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            n.starts_with(&prefix) && n.ends_with(".global_mgmt")
+        })
+        .expect("the prefix's management segment");
+    assert_eq!(
+        cfg.diagnose_blocked_start(),
+        None,
+        "an intact segment is not reported"
+    );
+    std::fs::write(&segment, b"bad").expect("damage it");
+    let e = Bus::open("rig1", cfg.clone())
+        .err()
+        .expect("a damaged segment must stop the node")
+        .0;
+    assert!(e.starts_with("cannot create the iceoryx2 node"), "{e}");
+    assert!(e.contains(&format!("{} of prefix", segment.display())), "{e}");
+    assert!(e.contains("is damaged (3 bytes"), "{e}");
+    assert!(
+        e.contains("LEAKWATCH_IOX_PREFIX") && e.contains("rm -rf /tmp/iceoryx2/lw_"),
+        "{e}"
+    );
+    // the way out works: with the prefix's files removed a node starts again
+    cfg.remove_isolated_files().expect("clean");
+    drop(Bus::open("rig1", cfg.clone()).expect("a node after the clean-up"));
+    cfg.remove_isolated_files().expect("clean");
+}

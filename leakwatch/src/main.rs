@@ -202,7 +202,7 @@ enum Command {
         /// Configuration file (TOML); defaults apply to everything it leaves out.
         #[arg(long)]
         config: Option<PathBuf>,
-        /// Output CSV file.
+        /// Output CSV file (`-`: standard output).
         #[arg(long)]
         out: PathBuf,
     },
@@ -494,7 +494,11 @@ fn run(cli: Cli) -> Result<(), String> {
                 rig_variant: rig_variant.map(Into::into),
             };
             let n = simulate::run(&cfg, &req, &out, force, config.as_deref())?;
-            eprintln!("wrote {n} samples to {}", out.display());
+            if out.as_os_str() == "-" {
+                eprintln!("wrote {n} samples to standard output");
+            } else {
+                eprintln!("wrote {n} samples to {}", out.display());
+            }
             Ok(())
         }
         Command::Plot { input, out } => {

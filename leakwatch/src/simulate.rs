@@ -69,8 +69,9 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
     Ok((sim, seconds))
 }
 
-/// Runs the request and writes the CSV to `out` (an existing file only if `force`,
-/// never the `config` file or through a symbolic link); returns the number of samples.
+/// Runs the request and writes the CSV to `out` (`-`: standard output; an existing
+/// file only if `force`, never the `config` file or through a symbolic link);
+/// returns the number of samples.
 pub fn run(
     cfg: &Config,
     req: &SimulateRequest,
@@ -79,17 +80,28 @@ pub fn run(
     config: Option<&Path>,
 ) -> Result<usize, String> {
     let (mut sim, seconds) = build(cfg, req)?;
+    if out == Path::new("-") {
+        let samples = sim.run(seconds);
+        let mut w = std::io::BufWriter::new(std::io::stdout().lock());
+        return write_csv(&mut w, &samples)
+            .map_err(|e| format!("cannot write the CSV to standard output: {e}"));
+    }
     // fail on an unwritable or refused path before spending time simulating
     let inputs: Vec<&Path> = config.into_iter().collect();
     let file = crate::out::create(out, force, &inputs)?;
     let samples = sim.run(seconds);
-    let io = |e: std::io::Error| dataset::output::message(out, &e);
     let mut w = std::io::BufWriter::new(file);
-    dataset::write_header(&mut w).map_err(io)?;
-    for s in &samples {
-        dataset::write_row(&mut w, s).map_err(io)?;
+    write_csv(&mut w, &samples).map_err(|e| dataset::output::message(out, &e))
+}
+
+/// Writes `samples` as a leakwatch CSV (header and rows) to `w` and flushes it;
+/// returns the number of samples.
+fn write_csv(w: &mut impl std::io::Write, samples: &[model::Sample]) -> std::io::Result<usize> {
+    dataset::write_header(&mut *w)?;
+    for s in samples {
+        dataset::write_row(&mut *w, s)?;
     }
-    std::io::Write::flush(&mut w).map_err(io)?;
+    w.flush()?;
     Ok(samples.len())
 }
 

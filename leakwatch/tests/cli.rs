@@ -52,6 +52,60 @@ fn simulate_writes_the_documented_csv() {
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
 }
 
+/// `--out -` writes the CSV to standard output (the same bytes as the file); a
+/// reader that stops early (`| head`) ends it with a named error, not a panic.
+#[test]
+fn simulate_writes_to_standard_output_and_names_a_closed_pipe() {
+    use std::io::Read;
+    let d = tmpdir("sim-stdout");
+    let file = d.join("run.csv");
+    let args = |out: &str| {
+        [
+            "simulate",
+            "--scenario",
+            "loaded-sine",
+            "--seconds",
+            "2",
+            "--out",
+            out,
+        ]
+        .map(str::to_string)
+        .to_vec()
+    };
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(args(file.to_str().unwrap()))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(args("-"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(o.stdout, std::fs::read(&file).unwrap());
+    assert_eq!(stderr(&o).trim(), "wrote 2000 samples to standard output");
+    assert!(
+        !std::path::Path::new("-").exists(),
+        "no file named '-' is written"
+    );
+    // the reader takes 100 bytes and closes the pipe
+    let mut child = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(args("-"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 100];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(first.starts_with(b"t,u,x,p1,p2"));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).trim(),
+        "leakwatch: error: cannot write the CSV to standard output: Broken pipe (os error 32)"
+    );
+}
+
 #[test]
 fn bad_input_gets_one_clear_error_and_nonzero_exit() {
     let d = tmpdir("bad");
