@@ -226,6 +226,63 @@ impl BusConfig {
     }
 }
 
+/// A prefix owned by one run: an exclusive lock (`flock`) on
+/// `$TMPDIR/leakwatch-prefix-<prefix>.lock`, released when it is dropped or the
+/// process ends (however it ends). The file holds the owner's process id.
+#[derive(Debug)]
+pub struct PrefixLock {
+    _file: std::fs::File,
+    /// The lock file.
+    pub path: std::path::PathBuf,
+}
+
+impl BusConfig {
+    /// Takes the ownership of this config's prefix for one run: a second run with
+    /// the same prefix is refused (naming the owner's process id) instead of sharing,
+    /// and later deleting, the first one's shared memory. Without a prefix there is
+    /// nothing to own (an error: a run always has one).
+    pub fn lock_prefix(&self) -> Result<PrefixLock, BusError> {
+        use std::io::{Read, Seek, Write};
+        use std::os::unix::fs::OpenOptionsExt;
+        use std::os::unix::io::AsRawFd;
+        let Some(p) = &self.iox_prefix else {
+            return Err(BusError("a run needs an isolation prefix to own".into()));
+        };
+        validate_prefix(p)?;
+        let path = std::env::temp_dir().join(format!("leakwatch-prefix-{p}.lock"));
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .mode(0o600)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&path)
+            .map_err(|e| BusError(format!("cannot open the prefix lock {}: {e}", path.display())))?;
+        // SAFETY: flock on an open descriptor we own; no memory is passed.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let mut owner = String::new();
+            let _ = file.read_to_string(&mut owner);
+            return Err(BusError(format!(
+                "the iceoryx2 prefix {p:?} is in use by another leakwatch run (process {}, lock {}): \
+                 two runs on one prefix would share and then delete each other's shared memory; \
+                 use another LEAKWATCH_IOX_PREFIX, or leave it unset for a private one",
+                owner.trim(),
+                path.display()
+            )));
+        }
+        let pid = std::process::id();
+        let write = |f: &mut std::fs::File| -> std::io::Result<()> {
+            f.set_len(0)?;
+            f.rewind()?;
+            writeln!(f, "{pid}")
+        };
+        write(&mut file)
+            .map_err(|e| BusError(format!("cannot write the prefix lock {}: {e}", path.display())))?;
+        Ok(PrefixLock { _file: file, path })
+    }
+}
+
 /// Size of the global management segment iceoryx2 0.10 writes, bytes (the node id
 /// counter); a smaller file of that name is damaged.
 const GLOBAL_MGMT_MIN_BYTES: u64 = 16;

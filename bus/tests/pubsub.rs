@@ -254,3 +254,33 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
     drop(Bus::open("rig1", cfg.clone()).expect("a node after the clean-up"));
     cfg.remove_isolated_files().expect("clean");
 }
+
+/// One run per prefix: a second lock on a prefix is refused with the owner's process
+/// id; once the first is dropped the prefix can be taken again.
+#[test]
+fn a_prefix_is_owned_by_one_run_at_a_time() {
+    let cfg = config("lock");
+    let first = cfg.lock_prefix().expect("first owner");
+    assert_eq!(
+        std::fs::read_to_string(&first.path).unwrap().trim(),
+        std::process::id().to_string()
+    );
+    let e = cfg.lock_prefix().expect_err("a second owner is refused").0;
+    assert!(
+        e.contains(&format!(
+            "in use by another leakwatch run (process {}",
+            std::process::id()
+        )),
+        "{e}"
+    );
+    assert!(e.contains("LEAKWATCH_IOX_PREFIX"), "{e}");
+    // another prefix is free
+    drop(config("lock2").lock_prefix().expect("another prefix"));
+    drop(first);
+    let again = cfg.lock_prefix().expect("free again after the first is dropped");
+    let _ = std::fs::remove_file(&again.path);
+    assert!(
+        BusConfig::default().lock_prefix().is_err(),
+        "no prefix, nothing to own"
+    );
+}

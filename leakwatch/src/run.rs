@@ -272,9 +272,6 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     if demo {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
     }
-    let cfg_path = out_dir.join("config.toml");
-    let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
-    crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
     // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
     let prefix = match std::env::var(bus::PREFIX_ENV) {
         Ok(p) if !p.is_empty() => p,
@@ -284,6 +281,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         iox_prefix: Some(prefix.clone()),
         ..BusConfig::default()
     };
+    // The run owns its prefix until it ends: a second run on it is refused here,
+    // before it could touch the first one's shared memory.
+    let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
+    let cfg_path = out_dir.join("config.toml");
+    let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
+    crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
     let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
     let mut events_rx = bus
         .subscriber::<LeakEventFrame>(WaitMode::Event)

@@ -153,6 +153,36 @@ fn a_leak_is_detected_and_every_frame_is_estimated_and_recorded() {
         "{:?}",
         log.events
     );
+
+    // Live and offline are one chain: the log replayed with the run's own config
+    // gives the same events at the same samples, with the same sizes, bit for bit.
+    let rep = d.join("replayed");
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["replay", out.join("run.mcap").to_str().unwrap(), "--config"])
+        .arg(out.join("config.toml"))
+        .arg("--out")
+        .arg(&rep)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let key = |v: &serde_json::Value| -> Vec<(String, String, Option<u64>, Option<u64>, u64)> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|e| {
+                (
+                    e["kind"].as_str().unwrap().to_string(),
+                    e["phase"].as_str().unwrap().to_string(),
+                    e["t_detect_s"].as_f64().map(f64::to_bits),
+                    e["size_lpm"].as_f64().map(f64::to_bits),
+                    e["event_id"].as_u64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (live, replayed) = (key(&events), key(&json(&rep.join("events.json"))));
+    assert!(!live.is_empty());
+    assert_eq!(live, replayed, "live events vs the replay of the run's log");
 }
 
 #[test]
@@ -483,4 +513,57 @@ fn a_forged_event_from_another_process_is_left_out() {
     assert!(!stdout.contains("111.000"), "{stdout}");
     let events = json(&out.join("events.json"));
     assert!(raised_leaks(&events).is_empty(), "{events:#}");
+}
+
+/// Two runs on one user-given prefix: the second is refused before it starts a
+/// stage, naming the first; the first is not disturbed.
+#[test]
+fn a_second_run_on_the_same_prefix_is_refused() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("prefix");
+    let prefix = format!("shared{}", std::process::id());
+    let run = |out: &str, seconds: &str| {
+        Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+            .env("LEAKWATCH_IOX_PREFIX", &prefix)
+            .args([
+                "run",
+                "--rig",
+                "own",
+                "--scenario",
+                "closed-loop-sine",
+                "--seconds",
+                seconds,
+                "--out",
+            ])
+            .arg(d.join(out))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let first = run("first", "6");
+    let first_pid = first.id();
+    wait_for_stage("estimator", "own");
+    let second = run("second", "2").wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "is in use by another leakwatch run (process {first_pid}"
+        )),
+        "{err}"
+    );
+    assert!(!d.join("second").join("run.mcap").exists());
+    finish(first);
+    let lat = json(&d.join("first").join("latency.json"));
+    assert_eq!(
+        lat["stages"]["acquisition"]["frames_out"].as_u64(),
+        Some(6000),
+        "{lat:#}"
+    );
+    assert_eq!(
+        lat["stages"]["estimator"]["frames_in"].as_u64(),
+        Some(6000),
+        "{lat:#}"
+    );
 }
