@@ -165,7 +165,9 @@ fn a_leak_is_detected_and_every_frame_is_estimated_and_recorded() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let key = |v: &serde_json::Value| -> Vec<(String, String, Option<u64>, Option<u64>, u64)> {
+    // kind, phase, detection time and size (bits), event id
+    type EventKey = (String, String, Option<u64>, Option<u64>, u64);
+    let key = |v: &serde_json::Value| -> Vec<EventKey> {
         v.as_array()
             .unwrap()
             .iter()
