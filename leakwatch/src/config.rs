@@ -1,7 +1,7 @@
 //! The one TOML configuration file of leakwatch: every section and field has
 //! a default, so nothing is needed to start (`leakwatch config --print-default`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use classifier::ClassifierConfig;
 use estimator::Tuning;
@@ -9,6 +9,10 @@ use model::params::ActuatorParams;
 use model::sensors::SensorParams;
 use model::sim::SimSettings;
 use serde::{Deserialize, Serialize};
+
+/// The config file `run`, `replay`, `simulate`, `calibrate` and `commission` pick
+/// up from the working directory when no `--config` is given.
+pub const WORKING_DIR_CONFIG: &str = "leakwatch.toml";
 
 /// The whole configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -78,6 +82,23 @@ impl Config {
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
         cfg.classifier.validate()?;
         Ok(cfg)
+    }
+
+    /// The config file a command uses: `explicit` (`--config`) if given, else
+    /// [`WORKING_DIR_CONFIG`] when the working directory has one (said on stderr),
+    /// else none (the defaults).
+    pub fn pick(explicit: Option<PathBuf>) -> Option<PathBuf> {
+        if explicit.is_some() {
+            return explicit;
+        }
+        let here = Path::new(WORKING_DIR_CONFIG);
+        if here.is_file() {
+            eprintln!(
+                "leakwatch: using ./{WORKING_DIR_CONFIG} from the working directory (--config FILE to use another)"
+            );
+            return Some(here.to_path_buf());
+        }
+        None
     }
 
     /// Loads `path` if given, else the defaults.

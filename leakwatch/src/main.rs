@@ -26,7 +26,9 @@ use out::outln;
 #[command(
     name = "leakwatch",
     version,
-    about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz"
+    about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz",
+    after_help = "Configuration: `--config FILE`; without it, run, replay, simulate, calibrate and commission \
+                  use ./leakwatch.toml when the working directory has one (and say so). Benchmarks never pick it up."
 )]
 struct Cli {
     /// Replace existing output files (logs, CSVs, JSON, PNGs); without it an
@@ -351,7 +353,7 @@ fn run(cli: Cli) -> Result<(), String> {
             scenario,
             faults,
             rig,
-            config,
+            config: Config::pick(config),
             mode,
             out,
             thesis_baseline,
@@ -389,13 +391,15 @@ fn run(cli: Cli) -> Result<(), String> {
             );
             Ok(())
         }
-        Command::Commission { input, config, out } => commission::run(&input, config.as_deref(), &out, force),
+        Command::Commission { input, config, out } => {
+            commission::run(&input, Config::pick(config).as_deref(), &out, force)
+        }
         Command::Calibrate {
             input,
             config,
             out,
             effects,
-        } => calibrate_cmd(&input, config.as_deref(), &out, effects, force),
+        } => calibrate_cmd(&input, Config::pick(config).as_deref(), &out, effects, force),
         Command::Replay {
             input,
             config,
@@ -410,6 +414,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
                 ));
             }
+            let config = Config::pick(config);
             let mut cfg = Config::load_or_default(config.as_deref())?;
             cfg.classifier.thesis_baseline |= thesis_baseline;
             if let Some(m) = model {
@@ -485,6 +490,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             out,
         } => {
+            let config = Config::pick(config);
             let cfg = Config::load_or_default(config.as_deref())?;
             let req = simulate::SimulateRequest {
                 scenario,

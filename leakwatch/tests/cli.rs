@@ -106,6 +106,63 @@ fn simulate_writes_to_standard_output_and_names_a_closed_pipe() {
     );
 }
 
+/// A `leakwatch.toml` in the working directory is used when no `--config` is
+/// given, and said so; `--config` wins; a bad one is named.
+#[test]
+fn a_leakwatch_toml_in_the_working_directory_is_picked_up() {
+    let d = tmpdir("cwd-config");
+    std::fs::write(d.join("leakwatch.toml"), "[sim]\nsample_period_s = 0.002\n").unwrap();
+    let sim = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+            .current_dir(&d)
+            .args([
+                "simulate",
+                "--scenario",
+                "closed-loop-sine",
+                "--seconds",
+                "2",
+                "--force",
+                "--out",
+                "a.csv",
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = sim(&[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("using ./leakwatch.toml from the working directory"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read_to_string(d.join("a.csv")).unwrap().lines().count(),
+        1001,
+        "2 s at 2 ms"
+    );
+    std::fs::write(d.join("other.toml"), "").unwrap();
+    let o = sim(&["--config", "other.toml"]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("leakwatch.toml"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read_to_string(d.join("a.csv")).unwrap().lines().count(),
+        2001,
+        "2 s at 1 ms"
+    );
+    std::fs::write(d.join("leakwatch.toml"), "[sim]\nsample_period_s = -1\n").unwrap();
+    let o = sim(&[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("leakwatch.toml") && stderr(&o).contains("sample_period_s"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn bad_input_gets_one_clear_error_and_nonzero_exit() {
     let d = tmpdir("bad");
