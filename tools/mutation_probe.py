@@ -7,9 +7,10 @@ Classes (per command run):
   HANG      no exit within --timeout seconds (the process group is killed)
   ABORT     killed by a signal, or exit 134
   REJECTED  non-zero exit (the error line is recorded)
-  REPORTED  exit 0, but a new warning on stderr (compared with the run on the
-            unmutated input) or non-zero bad/skipped/missing counts in
-            summary.json, or damaged chunks reported
+  REPORTED  exit 0, but a new line on stderr (compared with the run on the
+            unmutated input, numbers ignored), non-zero bad/skipped/missing
+            counts or damaged chunks in summary.json, or a new input-health
+            event (detector `sensors`) in events.json
   SILENT    exit 0 and nothing said
 
 Every mutation is labelled "garbage" (must be rejected or reported) or
@@ -20,7 +21,11 @@ Every mutation is labelled "garbage" (must be rejected or reported) or
   non-finite numbers in the outputs of a command that exited 0 when the input
   had none (or in the filter's own columns whatever the input).
 
-Python 3 standard library only.  Runs one command at a time.
+Python 3 standard library only.  Runs one command at a time.  Inputs: a 3 s
+`simulate` CSV (CSV mutations), a 15 s one (config replays: long enough for the
+classifier to arm), one log recorded with `run --seconds 4` (or --base-log).
+With --with-run, `run --seconds 2 --config` on six configs (a live pipeline of
+four processes each; leftover processes of its group count as ORPHANS).
 
   python3 tools/mutation_probe.py --bin target/release/leakwatch --out report.json
   python3 tools/mutation_probe.py --only 'mcap/chunk0_usize' --keep /tmp/inputs
@@ -73,19 +78,20 @@ def run_cmd(argv, cwd, timeout, mem_limit_mb):
                              start_new_session=True, preexec_fn=preexec)
         timed_out = False
         status = None
-        rusage = None
+        hwm_kb = 0
         while True:
             pid, st, ru = os.wait4(p.pid, os.WNOHANG)
             if pid == p.pid:
-                status, rusage = st, ru
+                status = st
                 break
+            hwm_kb = max(hwm_kb, vm_hwm_kb(p.pid))
             if time.monotonic() - t0 > timeout:
                 timed_out = True
                 try:
                     os.killpg(p.pid, signal.SIGKILL)
                 except ProcessLookupError:
                     pass
-                _, status, rusage = os.wait4(p.pid, 0)
+                _, status, _ = os.wait4(p.pid, 0)
                 break
             time.sleep(0.005)
         wall = time.monotonic() - t0
@@ -115,11 +121,23 @@ def run_cmd(argv, cwd, timeout, mem_limit_mb):
         stderr = f.read(1 << 20)
     return {
         "argv": argv, "rc": rc, "signal": sig, "timed_out": timed_out,
-        "wall_s": round(wall, 3), "maxrss_mb": round(rusage.ru_maxrss / 1024, 1),
+        "wall_s": round(wall, 3), "peak_rss_mb": round(hwm_kb / 1024, 1),
         "stdout": stdout.decode("utf-8", "replace"),
         "stderr": stderr.decode("utf-8", "replace"),
         "orphans": orphans,
     }
+
+
+def vm_hwm_kb(pid):
+    """Peak resident set of a running process (polled; 0 once it has exited)."""
+    try:
+        with open("/proc/%d/status" % pid) as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except (OSError, ValueError):
+        pass
+    return 0
 
 
 NUM_RE = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?(?:µs|ms|s)?")
@@ -219,6 +237,20 @@ def nonfinite_in_csv(path, only_state_columns=False, limit_bytes=200 << 20):
         return None
 
 
+CONTROL_RE = re.compile(r"[\x00-\x08\x0b-\x1f\x7f]")
+
+
+def sensor_events(path):
+    """Input-health events (detector `sensors`) in a replay's events.json."""
+    try:
+        with open(path) as f:
+            ev = json.load(f)
+    except (OSError, ValueError):
+        return []
+    return sorted({"%s:%s" % (e.get("kind"), e.get("channel", "")) for e in ev
+                   if isinstance(e, dict) and e.get("detector") == "sensors"})
+
+
 def hash_files(paths):
     h = hashlib.sha256()
     for p in paths:
@@ -234,7 +266,7 @@ def hash_files(paths):
 # CSV mutations
 
 
-def csv_mutations(base_text, rng):
+def csv_mutations(base_text, rng, sink):
     lines = base_text.splitlines()
     header, rows = lines[0], lines[1:]
     n = len(rows)
@@ -243,8 +275,8 @@ def csv_mutations(base_text, rng):
 
     def emit(name, label, text_or_bytes, expect=None, nonfinite=False):
         data = text_or_bytes if isinstance(text_or_bytes, bytes) else text_or_bytes.encode()
-        out.append({"name": name, "label": label, "data": data, "expect": expect or [],
-                    "nonfinite_input": nonfinite})
+        out.append(sink({"name": name, "label": label, "data": data, "expect": expect or [],
+                         "nonfinite_input": nonfinite}))
 
     def join(hdr, rs):
         return hdr + "\n" + "\n".join(rs) + "\n"
@@ -391,6 +423,14 @@ def csv_mutations(base_text, rng):
         return ",".join(f)
 
     emit("csv/benign_perturbation", "benign", join(header, [perturb(r) for r in rows]))
+
+    def perturb_clamped(r):
+        f = perturb(r).split(",")
+        f[3] = repr(max(0.0, float(f[3])))
+        f[4] = repr(max(0.0, float(f[4])))
+        return ",".join(f)
+
+    emit("csv/benign_perturbation_p_clamped_at_0", "benign", join(header, [perturb_clamped(r) for r in rows]))
     emit("csv/number_formats_exp_plus", "benign",
          join(header, [",".join(("%+.9e" % float(v)) for v in r.split(",")) for r in rows]))
     rs = list(rows); rs[R] = set_col(rs[R], 1, "5e-324")
@@ -405,7 +445,7 @@ def csv_mutations(base_text, rng):
     emit("csv/x_Infinity_one_row", "garbage", join(header, rs), expect=["x"], nonfinite=True)
     rs = list(rows); rs[R] = set_col(rs[R], 3, "6,9e6")
     emit("csv/p1_decimal_comma_one_row", "garbage", join(header, rs), expect=["line"])
-    emit("csv/single_row", "garbage", join(header, rows[:1]))
+    emit("csv/single_row", "benign", join(header, rows[:1]))
     return out
 
 
@@ -454,7 +494,7 @@ def zstd_rle_bomb(total, pad_to):
     return frame + struct.pack("<II", 0x184D2A50, pad) + b"\x00" * pad
 
 
-def mcap_mutations(base, rng):
+def mcap_mutations(base, rng, sink):
     recs = parse_mcap(base)
     chunks = [r for r in recs if r["op"] == 0x06]
     by_op = {}
@@ -464,8 +504,8 @@ def mcap_mutations(base, rng):
     out = []
 
     def emit(name, label, data, note=""):
-        out.append({"name": name, "label": label, "data": bytes(data), "expect": [], "note": note,
-                    "nonfinite_input": False})
+        out.append(sink({"name": name, "label": label, "data": bytes(data), "expect": ["input.mcap"], "note": note,
+                         "nonfinite_input": False}))
 
     def flip(pos, mask=0xFF):
         b = bytearray(base)
@@ -600,22 +640,22 @@ def mcap_mutations(base, rng):
 # config mutations
 
 
-def config_mutations(default_text):
+def config_mutations(default_text, sink):
     out = []
 
     def emit(name, label, text, expect=None):
         data = text if isinstance(text, bytes) else text.encode()
-        out.append({"name": name, "label": label, "data": data, "expect": expect or [],
-                    "nonfinite_input": False})
+        out.append(sink({"name": name, "label": label, "data": data, "expect": expect or [],
+                         "nonfinite_input": False}))
 
     fields = [  # (section, key, values that are valid)
         ("model", "piston_area_m2", set()), ("model", "mass_kg", set()), ("model", "x_max_m", set()),
         ("model", "bulk_modulus_pa", set()), ("model", "supply_pressure_pa", set()),
-        ("model.friction", "static_n", {"0"}), ("model.load", "contact_m", {"0"}),
+        ("model.friction", "static_n", set()), ("model.load", "contact_m", {"0", "-1"}),
         ("sensors", "pressure_noise_pa", {"0"}), ("sensors", "pressure_full_scale_pa", set()),
         ("sim", "sample_period_s", set()), ("estimator", "r_p_pa2", {"1e12"}),
         ("estimator", "q_leak_m6_s2", {"0"}), ("estimator", "convergence_time_s", {"0"}),
-        ("leak_filter", "init_pressure_pa", {"0"}), ("classifier", "threshold_sigma", set()),
+        ("leak_filter", "init_pressure_pa", {"0"}), ("classifier", "threshold_sigma", {"0"}),
         ("classifier", "settle_s", {"0"}), ("classifier", "supply_pressure_pa", set()),
     ]
     for sec, key, ok in fields:
@@ -735,6 +775,12 @@ def main():
     if r["rc"] != 0:
         sys.exit("simulate failed: %s" % r["stderr"])
     base_csv = open(os.path.join(work, "base.csv")).read()
+    # long enough for the classifier to arm (8 s after convergence): used by the config replays
+    r = run_cmd([binary, "simulate", "--scenario", "loaded-sine", "--seconds", "15",
+                 "--fault", "ext1:0.5lpm@11s", "--out", "base_long.csv"], work, 30, 0)
+    if r["rc"] != 0:
+        sys.exit("simulate failed: %s" % r["stderr"])
+    base_long_csv = open(os.path.join(work, "base_long.csv")).read()
     r = run_cmd([binary, "config", "--print-default"], work, 30, 0)
     default_toml = r["stdout"]
     if args.base_log:
@@ -748,19 +794,31 @@ def main():
             sys.exit("run failed: rc %s %s" % (r["rc"], r["stderr"][-2000:]))
         base_log = open(os.path.join(work, "baserun", logs[0]), "rb").read()
 
-    mutations = []
-    for m in csv_mutations(base_csv, rng):
-        m["kind"] = "csv"; mutations.append(m)
-    for m in mcap_mutations(base_log, rng):
-        m["kind"] = "mcap"; mutations.append(m)
-    for m in config_mutations(default_toml):
-        m["kind"] = "config"; mutations.append(m)
-    if only:
-        mutations = [m for m in mutations if only.search(m["name"])]
-    if args.keep:
-        os.makedirs(args.keep, exist_ok=True)
-        open(os.path.join(args.keep, "base.csv"), "w").write(base_csv)
-        open(os.path.join(args.keep, "base.mcap"), "wb").write(base_log)
+    # every mutated input is written to disk at once (kept small in memory)
+    store = args.keep or os.path.join(work, "inputs")
+    os.makedirs(store, exist_ok=True)
+    open(os.path.join(store, "base.csv"), "w").write(base_csv)
+    open(os.path.join(store, "base_long.csv"), "w").write(base_long_csv)
+    open(os.path.join(store, "base.mcap"), "wb").write(base_log)
+    EXT = {"csv": ".csv", "mcap": ".mcap", "config": ".toml"}
+
+    def make_sink(kind):
+        def sink(m):
+            data = m.pop("data")
+            m["kind"] = kind
+            if only and not only.search(m["name"]):
+                return None
+            m["path"] = os.path.join(store, m["name"].replace("/", "__") + EXT[kind])
+            with open(m["path"], "wb") as f:
+                f.write(data)
+            return m
+        return sink
+
+    mutations = csv_mutations(base_csv, rng, make_sink("csv"))
+    mutations += mcap_mutations(base_log, rng, make_sink("mcap"))
+    mutations += config_mutations(default_toml, make_sink("config"))
+    mutations = [m for m in mutations if m is not None]
+    del base_log
 
     # commands per kind: (label, argv builder, output checks)
     def cmds_for(kind, inp):
@@ -773,7 +831,7 @@ def main():
         c = [("check", [binary, "config", "--check", inp]),
              ("simulate", [binary, "simulate", "--scenario", "loaded-sine", "--seconds", "3",
                            "--config", inp, "--out", "out.csv"]),
-             ("replay", [binary, "replay", "base.csv", "--config", inp, "--out", "out"])]
+             ("replay", [binary, "replay", "base_long.csv", "--config", inp, "--out", "out"])]
         return c
 
     def outputs_of(kind, cmd):
@@ -784,7 +842,8 @@ def main():
                 files.append("out/log-export/dataset.csv")
             return files, ["out/estimates.csv"] + (["out/log-export/dataset.csv"] if kind == "mcap" else [])
         if cmd == "export":
-            fs = ["out/dataset.csv", "out/frames.csv", "out/estimates.csv", "out/events.csv"]
+            fs = ["out/dataset.csv", "out/frames.csv", "out/estimates.csv", "out/events.csv",
+                  "out/health.csv", "out/stats.csv", "out/gaps.csv"]
             return fs, ["out/dataset.csv", "out/frames.csv", "out/estimates.csv"]
         if cmd == "repair":
             return ["out.mcap"], []
@@ -798,7 +857,15 @@ def main():
         res = run_cmd(argv, work, timeout or args.timeout,
                       args.mem_limit_mb if mem is None else mem)
         hashed, scan = outputs_of(kind, cmd)
-        res["out_hash"] = hash_files([os.path.join(work, f) for f in hashed]) if hashed else None
+        if cmd == "repair":
+            # the repaired file's summary order is not reproducible: compare what it says it wrote
+            wrote = [re.sub(r"\(\d+ bytes\)", "", l) for l in res["stderr"].splitlines()
+                     if l.startswith("wrote ")]
+            res["out_hash"] = hashlib.sha256("\n".join(wrote).encode()).hexdigest()[:16] if wrote else None
+        elif cmd == "check":
+            res["out_hash"] = hashlib.sha256(res["stdout"].encode()).hexdigest()[:16]
+        else:
+            res["out_hash"] = hash_files([os.path.join(work, f) for f in hashed]) if hashed else None
         nonfinite = {}
         for f in scan:
             p = os.path.join(work, f)
@@ -814,21 +881,25 @@ def main():
                 state_nf["out/estimates.csv"] = cols
         res["nonfinite_state"] = state_nf
         res["summary"] = summary_flags(os.path.join(work, "out", "summary.json")) if cmd == "replay" else []
+        res["sensor_events"] = sensor_events(os.path.join(work, "out", "events.json")) if cmd == "replay" else []
+        res["control_chars"] = bool(CONTROL_RE.search(res["stderr"]))
         return res
 
     # baselines: every command on the unmutated input
     baseline = {}
-    base_inputs = {"csv": ("input.csv", base_csv.encode()), "mcap": ("input.mcap", base_log),
-                   "config": ("input.toml", b"")}
-    open(os.path.join(work, "base.csv"), "w").write(base_csv)
-    for kind, (name, data) in base_inputs.items():
-        with open(os.path.join(work, name), "wb") as f:
-            f.write(data)
+    base_inputs = {"csv": ("input.csv", os.path.join(store, "base.csv")),
+                   "mcap": ("input.mcap", os.path.join(store, "base.mcap")), "config": ("input.toml", None)}
+    for kind, (name, src) in base_inputs.items():
+        if src:
+            shutil.copyfile(src, fresh(name))
+        else:
+            open(fresh(name), "w").close()
         for cmd, argv in cmds_for(kind, name):
             res = execute(kind, name, cmd, argv)
             subs = [(os.path.join(work, ""), "<W>/"), (name, "<IN>")]
             lines = {normalize(l, subs) for l in res["stderr"].splitlines() if l.strip()}
             baseline[(kind, cmd)] = {"lines": lines, "hash": res["out_hash"], "rc": res["rc"],
+                                     "sensor_events": set(res["sensor_events"]),
                                      "stderr": res["stderr"][-1500:]}
             if res["rc"] != 0:
                 print("WARNING: baseline %s %s exit %s: %s" % (kind, cmd, res["rc"], res["stderr"][-500:]),
@@ -838,16 +909,16 @@ def main():
     for i, m in enumerate(mutations):
         ext = {"csv": ".csv", "mcap": ".mcap", "config": ".toml"}[m["kind"]]
         name = "input" + ext
-        with open(fresh(name), "wb") as f:
-            f.write(m["data"])
-        if args.keep:
-            with open(os.path.join(args.keep, m["name"].replace("/", "__") + ext), "wb") as f:
-                f.write(m["data"])
+        shutil.copyfile(m["path"], fresh(name))
+        if not args.keep:
+            os.unlink(m["path"])
         for cmd, argv in cmds_for(m["kind"], name):
             res = execute(m["kind"], name, cmd, argv)
             b = baseline[(m["kind"], cmd)]
             subs = [(os.path.join(work, ""), "<W>/"), (name, "<IN>")]
-            cls, msg, new = classify(res, b["lines"], subs, res["summary"])
+            flags = res["summary"] + ["event %s" % e for e in res["sensor_events"]
+                                      if e not in b["sensor_events"]]
+            cls, msg, new = classify(res, b["lines"], subs, flags)
             identical = res["out_hash"] is not None and res["out_hash"] == b["hash"]
             failure = None
             if cls in ("PANIC", "HANG", "ABORT"):
@@ -866,10 +937,16 @@ def main():
                 "class": cls, "failure": failure, "message": msg,
                 "names_problem": names_problem(msg, m["expect"]) if cls == "REJECTED" else None,
                 "new_stderr": new[:5], "summary_flags": res["summary"], "rc": res["rc"],
-                "signal": res["signal"], "wall_s": res["wall_s"], "maxrss_mb": res["maxrss_mb"],
+                "signal": res["signal"], "wall_s": res["wall_s"], "peak_rss_mb": res["peak_rss_mb"],
                 "output_identical_to_base": identical, "nonfinite_output": res["nonfinite"],
+                "control_chars_in_stderr": res["control_chars"],
                 "nonfinite_state_output": res["nonfinite_state"], "orphans": res["orphans"],
                 "note": m.get("note", ""),
+                "repro": "python3 tools/mutation_probe.py --only '^%s$' --keep DIR; cd DIR && %s" % (
+                    re.escape(m["name"]), " ".join(
+                        [os.path.basename(m["path"]) if a == name else
+                         ("BASE_LONG.csv" if a == "base_long.csv" else ("LEAKWATCH" if a == binary else a))
+                         for a in argv])),
             }
             results.append(rec)
             print("%4d/%d %-7s %-55s %-8s %-9s %5.2fs %s" % (
@@ -910,7 +987,7 @@ def main():
                             "failure": failure, "message": msg, "names_problem":
                             names_problem(msg, [name.split("=")[0].split(".")[-1]]) if cls == "REJECTED" else None,
                             "new_stderr": new[:5], "summary_flags": [], "rc": res["rc"],
-                            "signal": res["signal"], "wall_s": res["wall_s"], "maxrss_mb": res["maxrss_mb"],
+                            "signal": res["signal"], "wall_s": res["wall_s"], "peak_rss_mb": res["peak_rss_mb"],
                             "output_identical_to_base": None, "nonfinite_output": {},
                             "nonfinite_state_output": {}, "orphans": res["orphans"], "note": "",
                             "stderr_tail": res["stderr"][-800:]})
@@ -928,11 +1005,15 @@ def main():
         inputs[m["kind"]] = inputs.get(m["kind"], 0) + 1
     failures = [r for r in results if r["failure"]]
     unnamed = [r for r in results if r["class"] == "REJECTED" and r["names_problem"] is False]
+    control = [r for r in results if r.get("control_chars_in_stderr")]
+    harmless = [r for r in results if r["class"] == "SILENT" and r["label"] == "garbage" and not r["failure"]]
     benign_rejected = [r for r in results if r["class"] == "REJECTED" and r["label"] == "benign"]
     report = {
         "binary": binary, "seed": args.seed, "timeout_s": args.timeout, "wall_s": round(wall, 1),
         "inputs": inputs, "table": table, "failures": failures,
         "rejected_without_naming_the_problem": unnamed, "benign_rejected": benign_rejected,
+        "raw_control_characters_on_stderr": [(r["mutation"], r["command"]) for r in control],
+        "silent_garbage_with_output_identical_to_base": [(r["mutation"], r["command"]) for r in harmless],
         "baseline": {"%s/%s" % k: {"rc": v["rc"], "stderr": v["stderr"]} for k, v in baseline.items()},
         "results": results,
     }
@@ -955,12 +1036,18 @@ def main():
             r["failure"], r["mutation"], " ".join(r["argv"]), r["label"], r["message"][:300] or "(nothing said)",
             (" — non-finite output: %s" % json.dumps(r["nonfinite_state_output"] or r["nonfinite_output"]))
             if (r["nonfinite_output"] or r["nonfinite_state_output"]) else ""))
+        if r.get("repro"):
+            md.append("  - repro: `%s`" % r["repro"])
     md += ["", "## Benign inputs rejected", ""]
     for r in benign_rejected:
         md.append("- `%s` %s: %s" % (r["mutation"], r["command"], r["message"][:300]))
     md += ["", "## Rejections that may not name the problem (heuristic)", ""]
     for r in unnamed:
         md.append("- `%s` %s: %s" % (r["mutation"], r["command"], r["message"][:300]))
+    md += ["", "## Damaged MCAP read silently with outputs identical to the undamaged log's (not failures)", ""]
+    md.append(", ".join(sorted({"`%s`" % r["mutation"] for r in harmless})) or "none")
+    md += ["", "## Raw control characters from the input echoed on stderr", ""]
+    md.append(", ".join(sorted({"`%s` (%s)" % (r["mutation"], r["command"]) for r in control})) or "none")
     md_path = args.md or os.path.splitext(args.out)[0] + ".md"
     with open(md_path, "w") as f:
         f.write("\n".join(md) + "\n")

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use classifier::{Classifier, ClassifierConfig, LeakEvent, Phase};
+use classifier::{Classifier, ClassifierConfig, LeakEvent};
 use estimator::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 use serde::Serialize;
@@ -242,7 +242,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         }
         let e = stage.on_sample(&s);
         cls.on_stage(&e, |ev| {
-            if ev.kind.is_leak() && ev.detector == "leak-size" {
+            if ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 events.push(ev)
             }
         });
@@ -264,25 +264,15 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
 pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
     let (events, samples, t_end_s) = (&run.events[..], run.samples, run.t_end_s);
     let healthy = truth.kind == "none";
-    let raised = |e: &&LeakEvent| e.phase == Phase::Raised;
-    let false_alarms = events
-        .iter()
-        .filter(raised)
-        .filter(|e| healthy || e.t_detect_s < truth.t_on_s)
-        .count() as u32;
+    let mine: Vec<&LeakEvent> = events.iter().collect();
+    let alarms = crate::alarms::read(&mine, (!healthy).then_some(truth.t_on_s));
+    let false_alarms = alarms.false_alarms;
     let clean_s = if healthy {
         t_end_s
     } else {
         truth.t_on_s.min(t_end_s)
     };
-    let first = if healthy {
-        None
-    } else {
-        events
-            .iter()
-            .filter(raised)
-            .find(|e| e.t_detect_s >= truth.t_on_s)
-    };
+    let first = alarms.first;
     let mut o = DataOutcome {
         truth,
         detected: first.is_some(),
@@ -300,16 +290,13 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         delay_after_detectable_s: f64::NAN,
     };
     if let Some(ev) = first {
-        let last = events
-            .iter()
-            .rev()
-            .find(|e| e.t_detect_s >= ev.t_detect_s && e.phase != Phase::Cleared)
-            .unwrap_or(ev);
-        o.kind_first = ev.kind.name().into();
+        let named = alarms.first_named.unwrap_or(ev);
+        let last = alarms.last.unwrap_or(ev);
+        o.kind_first = named.kind.name().into();
         o.kind_final = last.kind.name().into();
         o.delay_s = ev.t_detect_s - o.truth.t_on_s;
         o.delay_after_detectable_s = ev.t_detect_s - run.t_detectable_s.max(o.truth.t_on_s);
-        o.size_first_lpm = ev.size_lpm;
+        o.size_first_lpm = named.size_lpm;
         o.size_final_lpm = last.size_lpm;
     }
     o

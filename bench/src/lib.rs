@@ -1,6 +1,7 @@
 //! Benchmark harnesses run from `leakwatch bench ...` (BENCHMARKS.md). They
 //! print tables and return JSON-ready results; they are never timed assertions.
 
+pub mod alarms;
 pub mod detection;
 pub mod detection_data;
 pub mod speed;

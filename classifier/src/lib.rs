@@ -50,6 +50,10 @@ pub const COMMAND_RATE_WINDOW_S: f64 = 2.0;
 
 /// Time constant of the NIS average that the NIS-ratio gate compares, s.
 pub const NIS_RATIO_WINDOW_S: f64 = 5.0;
+/// While a leak's kind is pending, the rises are averaged over this time, s: the
+/// mismatch a leak leaves swings with the operating point (a sine or step period),
+/// its kind is read from the average.
+pub const KIND_AVERAGE_S: f64 = 1.0;
 
 /// Cubic metres per second in one litre per minute.
 const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
@@ -64,6 +68,10 @@ pub enum EventKind {
     Ext2,
     /// Internal (cross-piston) leak.
     Int,
+    /// A leak whose kind is not decided yet (raised as soon as the leak is clear; the
+    /// same event id is raised again with its kind once the kind has stayed the same
+    /// for `kind_confirm_s`).
+    Leak,
     /// The estimator had to restart its filter.
     EstimatorReset,
     /// A sensor's value did not change for too long.
@@ -86,6 +94,7 @@ impl EventKind {
             EventKind::Ext1 => "ext1",
             EventKind::Ext2 => "ext2",
             EventKind::Int => "int",
+            EventKind::Leak => "leak",
             EventKind::EstimatorReset => "estimator-reset",
             EventKind::SensorStuck => "sensor-stuck",
             EventKind::SensorSaturated => "sensor-saturated",
@@ -94,9 +103,14 @@ impl EventKind {
         }
     }
 
-    /// Whether this is a leak kind.
+    /// Whether this is a named leak kind (ext1, ext2, int).
     pub fn is_leak(self) -> bool {
         matches!(self, EventKind::Ext1 | EventKind::Ext2 | EventKind::Int)
+    }
+
+    /// Whether this is a leak alarm: a named leak kind or a leak whose kind is pending.
+    pub fn is_leak_alarm(self) -> bool {
+        self.is_leak() || self == EventKind::Leak
     }
 }
 
@@ -339,6 +353,10 @@ pub struct ClassifierConfig {
     pub update_relative: f64,
     /// Time another kind must explain the data clearly better before an event is re-isolated, s.
     pub reisolate_s: f64,
+    /// How long one kind must lead, clearly and above its threshold, before a leak is
+    /// named (until then it is raised as `leak`, kind pending), s. At most
+    /// `confirm_s`: the kind is named at the first alarm.
+    pub kind_confirm_s: f64,
     /// Shortest time between two `updated` events of one leak, s.
     pub update_interval_s: f64,
     /// Thesis detector: threshold as a multiple of the largest healthy MAE.
@@ -384,6 +402,7 @@ impl Default for ClassifierConfig {
             clear_s: 2.0,
             update_relative: 0.1,
             reisolate_s: 0.5,
+            kind_confirm_s: 1.5,
             update_interval_s: 1.0,
             mae_margin: 1.3,
             mae_confirm_s: 0.5,
@@ -399,7 +418,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 28] = [
+        let fields: [(&str, f64, f64, f64, &str); 29] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -478,6 +497,7 @@ impl ClassifierConfig {
                 "(relative change)",
             ),
             ("reisolate_s", self.reisolate_s, 0.0, 1e6, "s"),
+            ("kind_confirm_s", self.kind_confirm_s, 0.0, 1e6, "s"),
             ("update_interval_s", self.update_interval_s, 0.0, 1e6, "s"),
             ("mae_margin", self.mae_margin, 0.0, 1e6, "(times the healthy MAE)"),
             ("mae_confirm_s", self.mae_confirm_s, 0.0, 1e6, "s"),
@@ -620,6 +640,9 @@ pub struct LeakSizeDetector {
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
     flow_factor: [f64; 3],
     last_low_s: [f64; 3],
+    /// While a leak's kind is pending: its rise of each hypothesis averaged over
+    /// [`KIND_AVERAGE_S`] (the kind is read from the averaged mismatch), L/min.
+    pending_rise_lpm: [f64; 3],
     active: Option<Active>,
     next_id: u64,
 }
@@ -850,9 +873,15 @@ impl LeakSizeDetector {
             blind_s: 0.0,
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
+            pending_rise_lpm: [0.0; 3],
             active: None,
             next_id: 1,
         }
+    }
+
+    /// Whether a leak event (kind pending or named) is open.
+    pub fn has_active_leak(&self) -> bool {
+        self.active.is_some()
     }
 
     /// Whether the thresholds have been learned.
@@ -1207,7 +1236,9 @@ impl LeakSizeDetector {
             // The kind is decided before the alarm: the named kind must explain the
             // mismatch (what it leaves unexplained is a small part of its size).
             let clear = misfit[k] <= self.cfg.isolation_max_misfit * rise[k];
-            if k == lead && rise[k] > thr && best > 0.5 && evidence && (clear || self.active.is_some()) {
+            // (a named event is followed while its kind leads; a pending one waits for a clear kind)
+            let named = self.active.is_some_and(|a| a.kind != EventKind::Leak);
+            if k == lead && rise[k] > thr && best > 0.5 && evidence && (clear || named) {
                 self.above_since_s[k].get_or_insert(e.t_s);
             } else {
                 self.above_since_s[k] = None;
@@ -1223,17 +1254,22 @@ impl LeakSizeDetector {
                         let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
                         let id = self.next_id;
                         self.next_id += 1;
+                        // The kind is named at once only if it has led long enough;
+                        // otherwise the leak is raised with its kind pending.
+                        let decided = e.t_s - t0 >= self.cfg.kind_confirm_s;
                         let kind = EventKind::LEAKS[lead];
                         self.active = Some(Active {
-                            kind,
+                            kind: if decided { kind } else { EventKind::Leak },
                             id,
                             t_onset_s: self.last_low_s[lead],
                             last_size_lpm: rise[lead],
                             last_update_s: e.t_s,
                             below_since_s: None,
-                            other_since_s: None,
+                            // (pending: since when the kind now leading has led, on average)
+                            other_since_s: (!decided).then_some((lead, e.t_s)),
                         });
-                        *out = Some(self.event(
+                        self.pending_rise_lpm = rise;
+                        let mut ev = self.event(
                             kind,
                             Phase::Raised,
                             id,
@@ -1242,7 +1278,17 @@ impl LeakSizeDetector {
                             sigma_lpm[lead],
                             best,
                             second,
-                        ));
+                        );
+                        if !decided {
+                            ev.kind = EventKind::Leak;
+                            ev.detail = format!(
+                                "kind pending ({} leads; named once one kind has led for {} s): {}",
+                                kind.name(),
+                                self.cfg.kind_confirm_s,
+                                ev.detail
+                            );
+                        }
+                        *out = Some(ev);
                     }
                 } else if let Some((j, t0)) = self.slow_since_s {
                     if e.t_s - t0 >= self.cfg.confirm_s {
@@ -1283,6 +1329,83 @@ impl LeakSizeDetector {
                         *out = Some(ev);
                     }
                 }
+            }
+            Some(mut a) if a.kind == EventKind::Leak => {
+                // Kind pending: name it once one kind has led, clearly (it explains the
+                // mismatch) and with a rise past half its threshold, for `kind_confirm_s`
+                // (the same event id, raised again with its kind).
+                if !invalid {
+                    let w = (dt_s / KIND_AVERAGE_S).min(1.0);
+                    for k in 0..3 {
+                        self.pending_rise_lpm[k] += w * (rise[k] - self.pending_rise_lpm[k]);
+                    }
+                }
+                let avg = self.pending_rise_lpm;
+                let avg_misfit = misfits(avg);
+                let lead = (0..3)
+                    .map(|k| (k, (avg[k] - avg_misfit[k]) / self.threshold_lpm[k]))
+                    .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
+                    .0;
+                let leads = !invalid
+                    && avg[lead] > 0.5 * self.threshold_lpm[lead]
+                    && avg_misfit[lead] <= self.cfg.isolation_max_misfit * avg[lead];
+                a.other_since_s = match a.other_since_s {
+                    Some((j, t0)) if leads && j == lead => Some((j, t0)),
+                    _ if leads => Some((lead, e.t_s)),
+                    _ => None,
+                };
+                if let Some((_, t0)) = a.other_since_s {
+                    if e.t_s - t0 >= self.cfg.kind_confirm_s {
+                        a.other_since_s = None;
+                        a.kind = EventKind::LEAKS[lead];
+                        a.last_size_lpm = rise[lead];
+                        a.last_update_s = e.t_s;
+                        a.below_since_s = None;
+                        self.active = Some(a);
+                        let mut ev = self.event(
+                            a.kind,
+                            Phase::Raised,
+                            a.id,
+                            e.t_s,
+                            rise[lead],
+                            sigma_lpm[lead],
+                            best,
+                            second,
+                        );
+                        ev.detail = format!(
+                            "kind decided: {} has led for {:.1} s; names the pending leak event {}; {}",
+                            a.kind.name(),
+                            e.t_s - t0,
+                            a.id,
+                            ev.detail
+                        );
+                        *out = Some(ev);
+                        return;
+                    }
+                }
+                let low = (0..3).all(|k| rise[k] < 0.5 * self.threshold_lpm[k]);
+                if low && !invalid {
+                    let since = *a.below_since_s.get_or_insert(e.t_s);
+                    if e.t_s - since >= self.cfg.clear_s {
+                        self.active = None;
+                        let mut ev = self.event(
+                            EventKind::LEAKS[lead],
+                            Phase::Cleared,
+                            a.id,
+                            e.t_s,
+                            rise[lead],
+                            sigma_lpm[lead],
+                            0.0,
+                            0.0,
+                        );
+                        ev.kind = EventKind::Leak;
+                        *out = Some(ev);
+                        return;
+                    }
+                } else {
+                    a.below_since_s = None;
+                }
+                self.active = Some(a);
             }
             Some(mut a) => {
                 let mut k = EventKind::LEAKS.iter().position(|x| *x == a.kind).unwrap_or(0);

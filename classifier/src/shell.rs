@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
-use crate::{Classifier, ClassifierConfig, LeakEvent, Phase};
+use crate::{Classifier, ClassifierConfig, LeakEvent};
 use bus::{monotonic_ns, Bus, BusConfig, StageStats, WaitMode};
 use clap::Parser;
 use estimator::StageEstimate;
@@ -77,7 +77,6 @@ fn run(args: Args) -> Result<(), String> {
     let mut next_stats = monotonic_ns() + 1_000_000_000;
     let mut next_health_t = f64::NEG_INFINITY;
     let mut health_seq = 0;
-    let mut active: u32 = 0;
     let mut pending = Pending {
         events: [None, None, None, None],
         n: 0,
@@ -116,13 +115,6 @@ fn run(args: Args) -> Result<(), String> {
         stats.record_proc_ns(done - t0);
         for ev in pending.events.iter_mut().take(pending.n) {
             let Some(ev) = ev.take() else { continue };
-            if ev.kind.is_leak() {
-                match ev.phase {
-                    Phase::Raised => active += 1,
-                    Phase::Cleared => active = active.saturating_sub(1),
-                    Phase::Updated => {}
-                }
-            }
             let frame = ev.to_frame(input.seq, input.acq_mono_ns, done);
             events_tx.send(&frame).map_err(e)?;
             stats.frames_out += 1;
@@ -131,6 +123,7 @@ fn run(args: Args) -> Result<(), String> {
             next_health_t = se.leak.t_s + 0.1;
             health_seq += 1;
             let rise = cls.leak_size.rise_lpm(&se.leak);
+            let active = u32::from(cls.leak_size.has_active_leak());
             let status = if active > 0 {
                 health_status::LEAK
             } else if cls.leak_size.is_armed() {

@@ -51,6 +51,9 @@ pub mod event_kind {
     pub const EXT2: u32 = 2;
     /// Internal leak (chamber 1 to chamber 2 across the piston).
     pub const INTERNAL: u32 = 3;
+    /// A leak whose kind is not decided yet (the same event id is raised again with
+    /// its kind once decided).
+    pub const LEAK_PENDING: u32 = 4;
     /// The estimator reset.
     pub const ESTIMATOR_RESET: u32 = 10;
     /// A sensor is stuck (constant output).

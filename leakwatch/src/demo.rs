@@ -71,7 +71,7 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
         last_t = s.t_s;
         let e = stage.on_sample(&s);
         cls.on_stage(&e, |ev| {
-            if ev.phase == Phase::Raised && ev.kind.is_leak() && ev.detector == "leak-size" {
+            if ev.phase == Phase::Raised && ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 leak_found = true;
             }
             let size = if ev.size_lpm.is_finite() {

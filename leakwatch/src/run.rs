@@ -646,7 +646,19 @@ pub fn run(args: RunArgs) -> Result<(), String> {
                 .find(|x| x.event_id == e.event_id && x.detector == e.detector)
                 .map_or(e.size_lpm, |x| x.size_lpm)
         ),
-        None => outln!("\nno leak detected"),
+        None => match o
+            .events
+            .iter()
+            .find(|e| e.kind.is_leak_alarm() && e.phase == Phase::Raised && e.detector == "leak-size")
+        {
+            Some(e) => outln!(
+                "\ndetected: a leak at t = {:.2} s (onset {:.2} s), kind not decided yet ({})",
+                e.t_detect_s,
+                e.t_onset_s,
+                e.detail
+            ),
+            None => outln!("\nno leak detected"),
+        },
     }
     outln!(
         "wrote {}/events.json, latency.json, run.mcap",
