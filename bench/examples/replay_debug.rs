@@ -8,13 +8,23 @@ fn main() {
     let a: Vec<String> = std::env::args().collect();
     let t0: f64 = a[2].parse().expect("T0");
     let ds = dataset::read_csv(std::path::Path::new(&a[1]), dataset::Limits::default()).expect("csv");
-    let mut stage =
-        EstimatorStage::new(ActuatorParams::default(), Tuning::sensor_derived(), Tuning::thesis()).expect("stage");
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .expect("stage");
     let mut cls = Classifier::new(ClassifierConfig::default()).expect("cls");
     for (k, s) in ds.samples.iter().enumerate() {
         let e = stage.on_sample(s);
         cls.on_stage(&e, |ev| {
-            println!("EVENT t {:.3} {:?} {} size {:.3}", ev.t_detect_s, ev.phase, ev.kind.name(), ev.size_lpm)
+            println!(
+                "EVENT t {:.3} {:?} {} size {:.3}",
+                ev.t_detect_s,
+                ev.phase,
+                ev.kind.name(),
+                ev.size_lpm
+            )
         });
         if s.t_s >= t0 && k % 500 == 0 {
             let r = cls.leak_size.rise_lpm(&e.leak);

@@ -22,7 +22,12 @@ pub struct Alarms<'a> {
 pub fn read<'a>(events: &[&'a LeakEvent], t_on_s: Option<f64>) -> Alarms<'a> {
     let raised = |e: &&&LeakEvent| e.phase == Phase::Raised && e.kind.is_leak_alarm();
     let before = |e: &&&LeakEvent| t_on_s.is_none_or(|t| e.t_detect_s < t);
-    let mut ids: Vec<u64> = events.iter().filter(raised).filter(before).map(|e| e.event_id).collect();
+    let mut ids: Vec<u64> = events
+        .iter()
+        .filter(raised)
+        .filter(before)
+        .map(|e| e.event_id)
+        .collect();
     ids.sort_unstable();
     ids.dedup();
     let Some(t_on) = t_on_s else {
@@ -31,7 +36,12 @@ pub fn read<'a>(events: &[&'a LeakEvent], t_on_s: Option<f64>) -> Alarms<'a> {
             ..Alarms::default()
         };
     };
-    let after: Vec<&LeakEvent> = events.iter().filter(raised).filter(|e| e.t_detect_s >= t_on).copied().collect();
+    let after: Vec<&LeakEvent> = events
+        .iter()
+        .filter(raised)
+        .filter(|e| e.t_detect_s >= t_on)
+        .copied()
+        .collect();
     let first = after.first().copied();
     let first_named = after.iter().find(|e| e.kind.is_leak()).copied();
     let last = first.and_then(|f| {

@@ -357,6 +357,10 @@ pub struct ClassifierConfig {
     /// named (until then it is raised as `leak`, kind pending), s. At most
     /// `confirm_s`: the kind is named at the first alarm.
     pub kind_confirm_s: f64,
+    /// A rise past this many times its threshold for `confirm_s` raises a leak with
+    /// its kind pending even while no kind explains the mismatch clearly yet
+    /// (a leak that first shows on both chambers); 0 turns it off.
+    pub pending_factor: f64,
     /// Shortest time between two `updated` events of one leak, s.
     pub update_interval_s: f64,
     /// Thesis detector: threshold as a multiple of the largest healthy MAE.
@@ -403,6 +407,7 @@ impl Default for ClassifierConfig {
             update_relative: 0.1,
             reisolate_s: 0.5,
             kind_confirm_s: 1.5,
+            pending_factor: 2.0,
             update_interval_s: 1.0,
             mae_margin: 1.3,
             mae_confirm_s: 0.5,
@@ -418,7 +423,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 29] = [
+        let fields: [(&str, f64, f64, f64, &str); 30] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -498,6 +503,13 @@ impl ClassifierConfig {
             ),
             ("reisolate_s", self.reisolate_s, 0.0, 1e6, "s"),
             ("kind_confirm_s", self.kind_confirm_s, 0.0, 1e6, "s"),
+            (
+                "pending_factor",
+                self.pending_factor,
+                0.0,
+                1e6,
+                "(times the threshold)",
+            ),
             ("update_interval_s", self.update_interval_s, 0.0, 1e6, "s"),
             ("mae_margin", self.mae_margin, 0.0, 1e6, "(times the healthy MAE)"),
             ("mae_confirm_s", self.mae_confirm_s, 0.0, 1e6, "s"),
@@ -643,6 +655,9 @@ pub struct LeakSizeDetector {
     /// While a leak's kind is pending: its rise of each hypothesis averaged over
     /// [`KIND_AVERAGE_S`] (the kind is read from the averaged mismatch), L/min.
     pending_rise_lpm: [f64; 3],
+    /// Since when some hypothesis' rise has been past `pending_factor` times its
+    /// threshold (with evidence), s.
+    strong_since_s: Option<f64>,
     active: Option<Active>,
     next_id: u64,
 }
@@ -874,6 +889,7 @@ impl LeakSizeDetector {
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
             pending_rise_lpm: [0.0; 3],
+            strong_since_s: None,
             active: None,
             next_id: 1,
         }
@@ -1226,6 +1242,7 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
+        let mut strong = None;
         for k in 0..3 {
             let thr = self.threshold_lpm[k];
             if rise[k] < 0.25 * thr {
@@ -1233,6 +1250,14 @@ impl LeakSizeDetector {
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
             let evidence = !invalid && (!blind || rise[k] > self.cfg.excursion_override * thr);
+            let ratio = rise[k] / thr;
+            if evidence
+                && self.cfg.pending_factor > 0.0
+                && ratio > self.cfg.pending_factor
+                && strong.is_none_or(|(_, r)| ratio > r)
+            {
+                strong = Some((k, ratio));
+            }
             // The kind is decided before the alarm: the named kind must explain the
             // mismatch (what it leaves unexplained is a small part of its size).
             let clear = misfit[k] <= self.cfg.isolation_max_misfit * rise[k];
@@ -1244,53 +1269,73 @@ impl LeakSizeDetector {
                 self.above_since_s[k] = None;
             }
         }
+        match strong {
+            Some(_) => {
+                self.strong_since_s.get_or_insert(e.t_s);
+            }
+            None => self.strong_since_s = None,
+        }
         match self.active {
             None => {
-                if let Some(t0) = self.above_since_s[lead] {
-                    if e.t_s - t0 >= self.cfg.confirm_s {
-                        // Measure the leak from the baseline before its onset: what the
-                        // baseline absorbed while the leak rose is part of the leak.
-                        self.baseline_lpm = self.baseline_low_lpm;
-                        let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
-                        let id = self.next_id;
-                        self.next_id += 1;
-                        // The kind is named at once only if it has led long enough;
-                        // otherwise the leak is raised with its kind pending.
-                        let decided = e.t_s - t0 >= self.cfg.kind_confirm_s;
-                        let kind = EventKind::LEAKS[lead];
-                        self.active = Some(Active {
-                            kind: if decided { kind } else { EventKind::Leak },
-                            id,
-                            t_onset_s: self.last_low_s[lead],
-                            last_size_lpm: rise[lead],
-                            last_update_s: e.t_s,
-                            below_since_s: None,
-                            // (pending: since when the kind now leading has led, on average)
-                            other_since_s: (!decided).then_some((lead, e.t_s)),
-                        });
-                        self.pending_rise_lpm = rise;
-                        let mut ev = self.event(
-                            kind,
-                            Phase::Raised,
-                            id,
-                            e.t_s,
-                            rise[lead],
-                            sigma_lpm[lead],
-                            best,
-                            second,
+                // A leak is raised once one kind has explained the mismatch clearly for
+                // `confirm_s` (named if it has led for `kind_confirm_s`), or once some
+                // hypothesis' rise has been past `pending_factor` thresholds for
+                // `confirm_s` (kind pending: the mismatch shows on both chambers).
+                let clear_ready = self.above_since_s[lead].filter(|t0| e.t_s - t0 >= self.cfg.confirm_s);
+                let strong_ready = strong.filter(|_| {
+                    self.strong_since_s
+                        .is_some_and(|t0| e.t_s - t0 >= self.cfg.confirm_s)
+                });
+                let ready = match (clear_ready, strong_ready) {
+                    (Some(t0), _) => Some((lead, e.t_s - t0 >= self.cfg.kind_confirm_s)),
+                    (None, Some((k, _))) => Some((k, false)),
+                    (None, None) => None,
+                };
+                if let Some((lead, decided)) = ready {
+                    // Measure the leak from the baseline before its onset: what the
+                    // baseline absorbed while the leak rose is part of the leak.
+                    self.baseline_lpm = self.baseline_low_lpm;
+                    let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
+                    let id = self.next_id;
+                    self.next_id += 1;
+                    // The kind is named at once only if it has led long enough;
+                    // otherwise the leak is raised with its kind pending.
+                    let kind = EventKind::LEAKS[lead];
+                    self.active = Some(Active {
+                        kind: if decided { kind } else { EventKind::Leak },
+                        id,
+                        t_onset_s: self.last_low_s[lead],
+                        last_size_lpm: rise[lead],
+                        last_update_s: e.t_s,
+                        below_since_s: None,
+                        // (pending: since when the kind now leading has led, on average)
+                        other_since_s: (!decided).then_some((lead, e.t_s)),
+                    });
+                    self.pending_rise_lpm = rise;
+                    let mut ev = self.event(
+                        kind,
+                        Phase::Raised,
+                        id,
+                        e.t_s,
+                        rise[lead],
+                        sigma_lpm[lead],
+                        best,
+                        second,
+                    );
+                    if !decided {
+                        ev.kind = EventKind::Leak;
+                        ev.detail = format!(
+                            "kind pending ({} leads; named once one kind has led for {} s): {}",
+                            kind.name(),
+                            self.cfg.kind_confirm_s,
+                            ev.detail
                         );
-                        if !decided {
-                            ev.kind = EventKind::Leak;
-                            ev.detail = format!(
-                                "kind pending ({} leads; named once one kind has led for {} s): {}",
-                                kind.name(),
-                                self.cfg.kind_confirm_s,
-                                ev.detail
-                            );
-                        }
-                        *out = Some(ev);
                     }
-                } else if let Some((j, t0)) = self.slow_since_s {
+                    *out = Some(ev);
+                } else if let (true, Some((j, t0))) = (
+                    self.above_since_s[lead].is_none() && self.strong_since_s.is_none(),
+                    self.slow_since_s,
+                ) {
                     if e.t_s - t0 >= self.cfg.confirm_s {
                         // A leak that grew too slowly for the rise: measure it from the
                         // warm-up offset from now on (the baseline goes back there).

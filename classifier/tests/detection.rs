@@ -121,7 +121,11 @@ fn check_leak(scenario: &str, kind: &str, expect: EventKind, seed: u64) {
     assert_eq!(first.event_id, ev.event_id, "{events:#?}");
     let delay = first.t_detect_s - onset;
     assert!((0.0..2.0).contains(&delay), "{scenario} {spec}: delay {delay} s");
-    assert!(ev.t_detect_s - first.t_detect_s < 4.0, "{scenario} {spec}: named at {} s", ev.t_detect_s);
+    assert!(
+        ev.t_detect_s - first.t_detect_s < 4.0,
+        "{scenario} {spec}: named at {} s",
+        ev.t_detect_s
+    );
     assert!(
         (ev.t_onset_s - onset).abs() < 1.0,
         "{scenario} {spec}: onset {}",
@@ -454,7 +458,11 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
         assert!(!r.is_empty(), "{spec}: nothing raised {events:#?}");
         assert_eq!(r[0].kind, expect, "{spec}: {:?}", r[0]);
         let first = first_alarm(&events, "leak-size").unwrap();
-        assert!(first.t_detect_s <= 2.0, "{spec}: raised at {} s", first.t_detect_s);
+        assert!(
+            first.t_detect_s <= 2.0,
+            "{spec}: raised at {} s",
+            first.t_detect_s
+        );
         // Without it the same leak is never reported (it is learned as healthy).
         let events = run("closed-loop-sine", 16.0, Some(&spec), 82, off_nominal_rig());
         assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
