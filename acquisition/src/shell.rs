@@ -287,7 +287,9 @@ fn publish_live(
         frame.acq_mono_ns = monotonic_ns();
         tx.send(&frame).map_err(|e| e.to_string())?;
         if let Some(arrived) = source.arrival_mono_ns() {
+            // latency: arrival to the publish instant; processing: arrival to published
             stats.record_latency_ns(frame.acq_mono_ns.saturating_sub(arrived));
+            stats.record_proc_ns(monotonic_ns().saturating_sub(arrived));
         }
         seq += 1;
         stats.frames_out += 1;
@@ -367,13 +369,16 @@ fn run(args: &Args) -> Result<(), String> {
         publish_paced(args, source.as_mut(), &mut tx, &mut stats_tx, stop)?
     };
     stats_tx.send(&p.stats.take_frame()).map_err(|e| e.to_string())?;
-    let what = if live {
-        "receive to publish"
+    let (what, proc) = if live {
+        (
+            "datagram arrival to publish instant",
+            "datagram arrival to published",
+        )
     } else {
-        "schedule lateness"
+        ("schedule lateness", "sample production")
     };
     eprintln!(
-        "acquisition: {} frames, {} unusable rows skipped, {} samples missing, {} deadline misses\n  {what}: {}\n  sample production: {}",
+        "acquisition: {} frames, {} unusable rows skipped, {} samples missing, {} deadline misses\n  {what}: {}\n  {proc}: {}",
         p.frames,
         p.unusable,
         p.stats.seq_gaps,
