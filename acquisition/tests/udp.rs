@@ -401,3 +401,72 @@ fn udp_arguments_are_refused_with_the_reason() {
     ]);
     assert!(e.contains("--udp-idle-timeout-s"), "{e}");
 }
+
+/// A stream that ends by the idle timeout (no end-of-stream flag) is closed by
+/// one more frame: `END_OF_STREAM` at the last sample's time, every channel NaN.
+#[test]
+fn an_idle_stream_is_closed_by_an_end_frame_at_the_last_sample_time() {
+    use bus::{Bus, BusConfig, WaitMode};
+    use frames::{sensor_flags, SensorFrame};
+
+    let port = UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let prefix = format!("acqidle{}", std::process::id());
+    let cfg = BusConfig {
+        iox_prefix: Some(prefix.clone()),
+        ..BusConfig::default()
+    };
+    let bus = Bus::open("udpidle", cfg.clone()).unwrap();
+    let mut rx = bus.subscriber::<SensorFrame>(WaitMode::Event).unwrap();
+    let addr = format!("127.0.0.1:{port}");
+    let child = Command::new(env!("CARGO_BIN_EXE_acquisition"))
+        .args(["--rig", "udpidle", "--udp", &addr, "--udp-idle-timeout-s", "0.3"])
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let tx = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let stop = AtomicBool::new(false);
+    let mut got = Vec::new();
+    let t0 = Instant::now();
+    // until the process listens, the first datagram is sent again (duplicates are dropped)
+    while got.is_empty() {
+        tx.send_to(&datagram(0), &addr).unwrap();
+        if let Some(r) = rx.wait(Duration::from_millis(100), &stop).unwrap() {
+            got.push(r.frame);
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "no frame from the acquisition"
+        );
+    }
+    for seq in 1..10 {
+        tx.send_to(&datagram(seq), &addr).unwrap();
+    }
+    while let Some(r) = rx.wait(Duration::from_secs(5), &stop).unwrap() {
+        got.push(r.frame);
+        if r.flags & sensor_flags::END_OF_STREAM != 0 {
+            break;
+        }
+    }
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert_eq!(got.len(), 11, "{stderr}");
+    let end = got[10];
+    assert!(end.flags & sensor_flags::END_OF_STREAM != 0);
+    assert_eq!(end.seq, 10);
+    assert_eq!(end.t_s, got[9].t_s);
+    assert!([end.u_v, end.x_m, end.p1_pa, end.p2_pa]
+        .iter()
+        .all(|v| v.is_nan()));
+    assert!(got[..10]
+        .iter()
+        .all(|f| f.flags & sensor_flags::END_OF_STREAM == 0));
+    assert!(stderr.contains("ended by the idle timeout"), "{stderr}");
+    drop((rx, bus));
+    cfg.remove_isolated_files().unwrap();
+}
