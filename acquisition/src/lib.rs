@@ -1,11 +1,17 @@
-//! Sample sources for the acquisition stage: the simulated rig and file
-//! replay behind one [`Source`] trait (later: real DAQ boards).
+//! Sample sources for the acquisition stage: the simulated rig, file replay
+//! and a real rig's UDP sensor stream ([`udp::UdpSource`]) behind one
+//! [`Source`] trait.
 //!
 //! A source yields [`Acquired`] items in time order: usable samples, and the
 //! problems of rows that could not be used (counted, never silently filled).
+//! A *live* source ([`Source::is_live`], the UDP stream) is paced by its
+//! sender: the acquisition publishes each of its samples on arrival.
 
 pub mod shell;
+pub mod udp;
 use std::path::Path;
+
+pub use udp::{parse_udp_address, ChannelScale, UdpCounts, UdpEnd, UdpOptions, UdpScaling, UdpSource};
 
 use model::sim::Simulator;
 use model::Sample;
@@ -34,6 +40,27 @@ pub trait Source: Send {
     fn sample_period_s(&self) -> f64;
     /// A one-line description for logs.
     fn describe(&self) -> String;
+    /// Whether the sender paces the source (a live stream): the acquisition
+    /// publishes each sample as it arrives, with no pacing of its own and no
+    /// look-ahead. Default: false (the acquisition paces, e.g. at 1 kHz).
+    fn is_live(&self) -> bool {
+        false
+    }
+    /// Whether the stream has ended: the next call of [`Source::next_item`]
+    /// returns `None` (a live source that received its sender's end of stream
+    /// says so right after the last sample). Default: false (not known ahead).
+    fn ended(&self) -> bool {
+        false
+    }
+    /// `CLOCK_MONOTONIC` when the last item arrived, ns (live sources; for
+    /// the receive-to-publish latency). Default: `None`.
+    fn arrival_mono_ns(&self) -> Option<u64> {
+        None
+    }
+    /// A closing line with the source's own counts, if it keeps any. Default: `None`.
+    fn summary(&self) -> Option<String> {
+        None
+    }
 }
 
 /// The simulated rig as a source, for a fixed number of samples.

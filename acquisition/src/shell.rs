@@ -1,21 +1,32 @@
-//! The acquisition process: reads a [`Source`] (the simulated rig or a CSV
-//! file) and publishes one [`SensorFrame`] per sample on
-//! `leakwatch/<rig>/frames`, paced on absolute deadlines (1 kHz by default),
-//! with its [`StatsFrame`] once a second (`lat_ns_*` = lateness of the
-//! publish instants against the schedule). The last frame carries
-//! `END_OF_STREAM`; the process then exits 0. SIGINT/SIGTERM stop it cleanly.
+//! The acquisition process: reads a [`Source`] (the simulated rig, a CSV
+//! file or a real rig's UDP sensor stream) and publishes one [`SensorFrame`]
+//! per sample on `leakwatch/<rig>/frames`, with its [`StatsFrame`] once a
+//! second. The simulated rig and files are paced on absolute deadlines (1 kHz
+//! by default; `lat_ns_*` = lateness of the publish instants against the
+//! schedule). The UDP stream is paced by its sender: each sample is published
+//! as it arrives (`lat_ns_*` = datagram arrival to publish), and the closing
+//! line on stderr counts lost, duplicated, late, malformed and rejected
+//! datagrams ([`crate::UdpCounts`]). The last frame carries `END_OF_STREAM`;
+//! the process then exits 0. SIGINT/SIGTERM stop it cleanly.
+//!
+//! A UDP stream ends with the sender's end of stream (its last sample flagged,
+//! which is then the last frame), or with a sample-less end mark or the idle
+//! timeout: then one more frame closes the stream, `END_OF_STREAM` at the last
+//! sample's time with every channel NaN (the estimator skips it).
 //!
 //! ```text
 //! acquisition --rig rig1 --scenario closed-loop-sine --seconds 10 --fault ext1:0.25@4
 //! acquisition --rig rig1 --csv measured.csv --rate-hz 0      # as fast as possible
+//! acquisition --rig rig1 --udp 0.0.0.0:5005 --config rig.toml # a real rig's DAQ
 //! ```
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use crate::{Acquired, CsvSource, SimSource, Source};
-use bus::{monotonic_ns, Bus, BusConfig, Pacer, StageStats};
+use crate::{Acquired, CsvSource, SimSource, Source, UdpOptions, UdpScaling, UdpSource};
+use bus::{monotonic_ns, Bus, BusConfig, Pacer, Publisher, StageStats};
 use clap::Parser;
 use frames::{sensor_flags, SensorFrame, StatsFrame};
 use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
@@ -43,7 +54,15 @@ struct Args {
     /// Replay this CSV file (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) instead of simulating.
     #[arg(long)]
     csv: Option<PathBuf>,
-    /// Publishing rate, Hz (0 = as fast as possible).
+    /// Receive a real rig's UDP sensor stream on IP:PORT (format: frames/README.md,
+    /// examples/udp) instead of simulating; published as it arrives (the sender paces).
+    #[arg(long, value_name = "ADDR:PORT", conflicts_with_all = ["csv", "seconds", "faults", "scenario", "rate_hz"])]
+    udp: Option<String>,
+    /// With --udp: the stream ends when no datagram came for this long, s (counted
+    /// from the first datagram; before it the acquisition waits until stopped).
+    #[arg(long, default_value_t = 5.0)]
+    udp_idle_timeout_s: f64,
+    /// Publishing rate, Hz (0 = as fast as possible; not with --udp, whose sender paces).
     #[arg(long, default_value_t = 1000.0)]
     rate_hz: f64,
     /// Configuration file (TOML, the `leakwatch` format); its [rig] (or [model]),
@@ -65,8 +84,10 @@ struct Args {
     linger_ms: u64,
 }
 
-/// The parts of the leakwatch configuration file the simulated rig needs.
-/// Unknown sections are ignored (they belong to other stages).
+/// The parts of the leakwatch configuration file the sources need: the
+/// simulated rig, the physical ranges of measured data ([model]) and the
+/// scaling of the UDP stream ([udp]). Unknown sections are ignored (they
+/// belong to other stages).
 #[derive(Debug, Default, Deserialize)]
 #[serde(default)]
 struct RigConfig {
@@ -74,6 +95,7 @@ struct RigConfig {
     rig: Option<ActuatorParams>,
     sensors: SensorParams,
     sim: SimSettings,
+    udp: UdpScaling,
 }
 
 impl RigConfig {
@@ -92,12 +114,32 @@ impl RigConfig {
             rig.validate()
                 .map_err(|e| format!("config {}: [rig] {e}", path.display()))?;
         }
+        cfg.udp
+            .validate()
+            .map_err(|e| format!("config {}: {e}", path.display()))?;
         Ok(cfg)
     }
 }
 
-fn build_source(args: &Args) -> Result<Box<dyn Source>, String> {
+fn build_source(args: &Args, stop: &'static AtomicBool) -> Result<Box<dyn Source>, String> {
     let cfg = RigConfig::load(args.config.as_deref())?;
+    if let Some(addr) = &args.udp {
+        let idle = args.udp_idle_timeout_s;
+        if !(idle > 0.0 && idle <= 1e6) {
+            return Err(format!(
+                "--udp-idle-timeout-s {idle}: must be a number of seconds in (0, 1e6]"
+            ));
+        }
+        let addr = crate::parse_udp_address(addr).map_err(|e| format!("--udp {e}"))?;
+        // measured data: the ranges of the rig the estimator models, as for replay
+        let opts = UdpOptions {
+            scaling: cfg.udp,
+            limits: dataset::Limits::for_model(&cfg.model, cfg.sim.sample_period_s),
+            idle_timeout: Duration::from_secs_f64(idle),
+            stop: Some(stop),
+        };
+        return Ok(Box::new(UdpSource::bind(addr, opts)?));
+    }
     let rig = cfg.rig.clone().unwrap_or_else(|| cfg.model.clone());
     if let Some(csv) = &args.csv {
         let limits = dataset::Limits::for_model(&rig, cfg.sim.sample_period_s);
@@ -124,8 +166,9 @@ fn build_source(args: &Args) -> Result<Box<dyn Source>, String> {
 }
 
 /// The next usable sample as a frame; unusable rows are reported on stderr,
-/// counted, and flag the following frame as after a gap.
-fn next_frame(src: &mut dyn Source, unusable: &mut u64) -> Option<SensorFrame> {
+/// counted, and flag the following frame as after a gap; samples missing
+/// before a frame are added to `stats.seq_gaps`.
+fn next_frame(src: &mut dyn Source, unusable: &mut u64, stats: &mut StageStats) -> Option<SensorFrame> {
     let mut flags = 0;
     loop {
         match src.next_item()? {
@@ -135,11 +178,12 @@ fn next_frame(src: &mut dyn Source, unusable: &mut u64) -> Option<SensorFrame> {
                     ..SensorFrame::from(&s)
                 })
             }
-            Acquired::AfterGap { sample, .. } => {
+            Acquired::AfterGap { sample, missing } => {
+                stats.seq_gaps += missing;
                 return Some(SensorFrame {
                     flags: flags | sensor_flags::AFTER_GAP,
                     ..SensorFrame::from(&sample)
-                })
+                });
             }
             Acquired::Unusable(why) => {
                 *unusable += 1;
@@ -152,38 +196,23 @@ fn next_frame(src: &mut dyn Source, unusable: &mut u64) -> Option<SensorFrame> {
     }
 }
 
-fn run(args: &Args) -> Result<(), String> {
-    if !(args.rate_hz >= 0.0 && args.rate_hz.is_finite()) {
-        return Err(format!(
-            "--rate-hz {} must be ≥ 0 (0 = as fast as possible)",
-            args.rate_hz
-        ));
-    }
-    let mut source = build_source(args)?;
-    let stop = bus::stop_on_signals();
-    let bus =
-        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
-    let mut tx = bus.publisher::<SensorFrame>().map_err(|e| e.to_string())?;
-    let mut stats_tx = bus.publisher::<StatsFrame>().map_err(|e| e.to_string())?;
-    if args.wait_subscribers > 0 {
-        let timeout = Duration::from_secs_f64(args.wait_timeout_s.max(0.0));
-        if !tx.wait_for_subscribers(args.wait_subscribers, timeout, stop) {
-            return Err(format!(
-                "{} subscriber(s) on leakwatch/{}/frames expected, {} after {} s",
-                args.wait_subscribers,
-                bus.rig(),
-                tx.subscriber_count(),
-                args.wait_timeout_s
-            ));
-        }
-    }
-    eprintln!(
-        "acquisition: {} on rig {} at {} Hz",
-        source.describe(),
-        bus.rig(),
-        args.rate_hz
-    );
+/// What a publishing loop did.
+struct Published {
+    frames: u64,
+    unusable: u64,
+    stats: StageStats,
+}
 
+/// Publishes a source the acquisition paces (simulated rig, file): each frame
+/// on its deadline, the frame after next produced right after a publish, so
+/// that the last frame is known and carries `END_OF_STREAM`.
+fn publish_paced(
+    args: &Args,
+    source: &mut dyn Source,
+    tx: &mut Publisher<SensorFrame>,
+    stats_tx: &mut Publisher<StatsFrame>,
+    stop: &AtomicBool,
+) -> Result<Published, String> {
     let period_ns = if args.rate_hz > 0.0 {
         (1e9 / args.rate_hz).round() as u64
     } else {
@@ -192,13 +221,13 @@ fn run(args: &Args) -> Result<(), String> {
     let mut pacer = Pacer::new(period_ns, args.spin_us * 1000);
     let mut stats = StageStats::new(frames::stage::ACQUISITION);
     let mut unusable = 0u64;
-    let mut current = next_frame(source.as_mut(), &mut unusable);
-    let mut following = next_frame(source.as_mut(), &mut unusable);
+    let mut current = next_frame(source, &mut unusable, &mut stats);
+    let mut following = next_frame(source, &mut unusable, &mut stats);
     let mut seq = 0u64;
     let mut next_stats = monotonic_ns() + 1_000_000_000;
 
     while let Some(mut frame) = current {
-        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+        if stop.load(Ordering::Relaxed) {
             eprintln!("acquisition: stopped by signal after {seq} frames");
             break;
         }
@@ -216,7 +245,7 @@ fn run(args: &Args) -> Result<(), String> {
         // produce the frame after next now, off the publish instant
         let t0 = monotonic_ns();
         current = following;
-        following = next_frame(source.as_mut(), &mut unusable);
+        following = next_frame(source, &mut unusable, &mut stats);
         let now = monotonic_ns();
         stats.record_proc_ns(now - t0);
         if now >= next_stats {
@@ -224,16 +253,145 @@ fn run(args: &Args) -> Result<(), String> {
             next_stats += 1_000_000_000;
         }
     }
-    stats_tx.send(&stats.take_frame()).map_err(|e| e.to_string())?;
+    Ok(Published {
+        frames: seq,
+        unusable,
+        stats,
+    })
+}
+
+/// Publishes a live source (the UDP stream) on arrival: no pacing, no
+/// look-ahead. The sender's flagged last sample is the last frame; a stream
+/// that ends otherwise (end mark, idle timeout) is closed by an
+/// `END_OF_STREAM` frame at the last sample's time with every channel NaN; a
+/// signal stops it without one, as for the other sources.
+fn publish_live(
+    source: &mut dyn Source,
+    tx: &mut Publisher<SensorFrame>,
+    stats_tx: &mut Publisher<StatsFrame>,
+    stop: &AtomicBool,
+) -> Result<Published, String> {
+    let mut stats = StageStats::new(frames::stage::ACQUISITION);
+    let mut unusable = 0u64;
+    let mut seq = 0u64;
+    let mut last_t = f64::NAN;
+    let mut closed = false;
+    let mut next_stats = monotonic_ns() + 1_000_000_000;
+    while let Some(mut frame) = next_frame(source, &mut unusable, &mut stats) {
+        frame.seq = seq;
+        if source.ended() {
+            frame.flags |= sensor_flags::END_OF_STREAM;
+            closed = true;
+        }
+        last_t = frame.t_s;
+        frame.acq_mono_ns = monotonic_ns();
+        tx.send(&frame).map_err(|e| e.to_string())?;
+        if let Some(arrived) = source.arrival_mono_ns() {
+            // latency: arrival to the publish instant; processing: arrival to published
+            stats.record_latency_ns(frame.acq_mono_ns.saturating_sub(arrived));
+            stats.record_proc_ns(monotonic_ns().saturating_sub(arrived));
+        }
+        seq += 1;
+        stats.frames_out += 1;
+        stats.frames_in += 1;
+        if frame.acq_mono_ns >= next_stats {
+            stats_tx.send(&stats.take_frame()).map_err(|e| e.to_string())?;
+            next_stats = frame.acq_mono_ns + 1_000_000_000;
+        }
+        if closed {
+            break;
+        }
+    }
+    if stop.load(Ordering::Relaxed) {
+        eprintln!("acquisition: stopped by signal after {seq} frames");
+    } else if !closed && seq > 0 {
+        let end = SensorFrame {
+            seq,
+            t_s: last_t,
+            flags: sensor_flags::END_OF_STREAM,
+            acq_mono_ns: monotonic_ns(),
+            ..SensorFrame::default()
+        };
+        tx.send(&end).map_err(|e| e.to_string())?;
+        seq += 1;
+        stats.frames_out += 1;
+    }
+    Ok(Published {
+        frames: seq,
+        unusable,
+        stats,
+    })
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    if !(args.rate_hz >= 0.0 && args.rate_hz.is_finite()) {
+        return Err(format!(
+            "--rate-hz {} must be ≥ 0 (0 = as fast as possible)",
+            args.rate_hz
+        ));
+    }
+    let stop = bus::stop_on_signals();
+    let mut source = build_source(args, stop)?;
+    let bus =
+        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let mut tx = bus.publisher::<SensorFrame>().map_err(|e| e.to_string())?;
+    let mut stats_tx = bus.publisher::<StatsFrame>().map_err(|e| e.to_string())?;
+    if args.wait_subscribers > 0 {
+        let timeout = Duration::from_secs_f64(args.wait_timeout_s.max(0.0));
+        if !tx.wait_for_subscribers(args.wait_subscribers, timeout, stop) {
+            return Err(format!(
+                "{} subscriber(s) on leakwatch/{}/frames expected, {} after {} s",
+                args.wait_subscribers,
+                bus.rig(),
+                tx.subscriber_count(),
+                args.wait_timeout_s
+            ));
+        }
+    }
+    let live = source.is_live();
+    if live {
+        eprintln!(
+            "acquisition: {} on rig {}, published as it arrives (the sender paces); waiting for datagrams",
+            source.describe(),
+            bus.rig()
+        );
+    } else {
+        eprintln!(
+            "acquisition: {} on rig {} at {} Hz",
+            source.describe(),
+            bus.rig(),
+            args.rate_hz
+        );
+    }
+    let mut p = if live {
+        publish_live(source.as_mut(), &mut tx, &mut stats_tx, stop)?
+    } else {
+        publish_paced(args, source.as_mut(), &mut tx, &mut stats_tx, stop)?
+    };
+    stats_tx.send(&p.stats.take_frame()).map_err(|e| e.to_string())?;
+    let (what, proc) = if live {
+        (
+            "datagram arrival to publish instant",
+            "datagram arrival to published",
+        )
+    } else {
+        ("schedule lateness", "sample production")
+    };
     eprintln!(
-        "acquisition: {seq} frames, {unusable} unusable rows skipped, {} deadline misses\n  schedule lateness: {}\n  sample production: {}",
-        stats.deadline_misses,
-        stats.latency_total(),
-        stats.proc_total()
+        "acquisition: {} frames, {} unusable rows skipped, {} samples missing, {} deadline misses\n  {what}: {}\n  {proc}: {}",
+        p.frames,
+        p.unusable,
+        p.stats.seq_gaps,
+        p.stats.deadline_misses,
+        p.stats.latency_total(),
+        p.stats.proc_total()
     );
+    if let Some(summary) = source.summary() {
+        eprintln!("acquisition: {summary}");
+    }
     // let subscribers take the last frames before the publisher goes away
     let linger_end = monotonic_ns() + args.linger_ms * 1_000_000;
-    while monotonic_ns() < linger_end && !stop.load(std::sync::atomic::Ordering::Relaxed) {
+    while monotonic_ns() < linger_end && !stop.load(Ordering::Relaxed) {
         std::thread::sleep(Duration::from_millis(10));
     }
     Ok(())

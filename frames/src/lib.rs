@@ -13,10 +13,15 @@
 //! says otherwise (`_lpm` = L/min, `_ns` = nanoseconds). Times named
 //! `*_mono_ns` are `CLOCK_MONOTONIC` nanoseconds of the host; `t_s` is the
 //! sample time of the source. A float that is `NaN` means "absent".
+//!
+//! [`udp`] is the other wire format: the little-endian datagrams in which a
+//! DAQ board or PLC sends rig samples to the acquisition stage.
 
 use core::fmt;
 
 use iceoryx2::prelude::*;
+
+pub mod udp;
 
 /// Bits of [`SensorFrame::flags`].
 pub mod sensor_flags {

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use acquisition::UdpScaling;
 use classifier::ClassifierConfig;
 use estimator::Tuning;
 use model::params::ActuatorParams;
@@ -32,6 +33,9 @@ pub struct Config {
     pub leak_filter: Tuning,
     /// The detectors.
     pub classifier: ClassifierConfig,
+    /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
+    /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent).
+    pub udp: UdpScaling,
 }
 
 impl Default for Config {
@@ -44,6 +48,7 @@ impl Default for Config {
             estimator: Tuning::thesis(),
             leak_filter: Tuning::sensor_derived(),
             classifier: ClassifierConfig::default(),
+            udp: UdpScaling::default(),
         }
     }
 }
@@ -81,6 +86,7 @@ impl Config {
             .validate()
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
         cfg.classifier.validate()?;
+        cfg.udp.validate()?;
         Ok(cfg)
     }
 
@@ -125,7 +131,9 @@ impl Config {
              #        when absent the simulated rig equals [model].\n\
              # [sensors]: the simulated rig's sensors; [sim]: its integrator.\n\
              # [estimator]: the thesis filter (Q, R, P0 in SI squared units per step; see README).\n\
-             # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\n{body}"
+             # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\
+             # [udp.<channel>]: a real rig's UDP stream (u, x, p1, p2, x_sp, f_load), SI = gain * raw + offset\n\
+             #        (gain 1, offset 0: the sender sends SI).\n\n{body}"
         )
     }
 }
@@ -182,6 +190,14 @@ mod tests {
         assert_eq!(c.leak_filter.states, 11);
         assert_eq!(c.leak_filter.substeps, 2);
         assert_eq!(c.leak_filter.r_p_pa2, Tuning::sensor_derived().r_p_pa2);
+        // [udp]: raw counts to SI per channel; an unknown channel or field is named
+        let c = Config::parse("[udp.p1]\ngain = 250.0\noffset = -1.0e6\n").unwrap();
+        assert_eq!((c.udp.p1.gain, c.udp.p1.offset), (250.0, -1.0e6));
+        assert_eq!(c.udp.p2, acquisition::ChannelScale::default());
+        let e = Config::parse("[udp.p3]\ngain = 2.0\n").unwrap_err();
+        assert!(e.contains("p3"), "{e}");
+        let e = Config::parse("[udp.x]\nscale = 2.0\n").unwrap_err();
+        assert!(e.contains("scale"), "{e}");
         let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
         assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
         assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
@@ -248,7 +264,7 @@ mod tests {
         let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
         let mut leaves = Vec::new();
         numeric_leaves(&base, &mut Vec::new(), &mut leaves);
-        assert_eq!(leaves.len(), 122, "numeric fields");
+        assert_eq!(leaves.len(), 134, "numeric fields");
         let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
         let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
         let (mut refused, mut accepted) = (0, 0);
@@ -318,6 +334,14 @@ mod tests {
             (
                 "[estimator]\nmax_bridged_gap_samples = 4000000000\n",
                 "must be 0 to 3600000 samples",
+            ),
+            (
+                "[udp.p1]\ngain = 0.0\n",
+                "[udp] p1.gain = 0.0: must be a number of magnitude from 1e-12 to 1e12 Pa per raw unit",
+            ),
+            (
+                "[udp.f_load]\noffset = 1e30\n",
+                "[udp] f_load.offset = 1e30: must be a number from -1e9 to 1e9 N",
             ),
         ] {
             let e = Config::parse(text).unwrap_err();

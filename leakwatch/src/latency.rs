@@ -165,6 +165,8 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             out: Some(out.join(format!("run-{mode}"))),
             thesis_baseline: false,
             force,
+            source: None,
+            udp_idle_timeout_s: None,
         };
         eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;

@@ -87,7 +87,8 @@ enum Command {
     /// Run the live pipeline: acquisition, estimator, classifier and recorder as processes over
     /// iceoryx2. Without a fault or a config (with or without `--scenario loaded-sine`): the
     /// demonstration, an off-nominal rig with a 0.5 L/min chamber-1 leak at 20 s, events printed
-    /// as they happen. Every argument is checked before any stage starts.
+    /// as they happen. With `--source udp://IP:PORT` the samples are a real rig's UDP sensor
+    /// stream instead (README "On a real rig"). Every argument is checked before any stage starts.
     Run {
         /// Simulated seconds (default 40).
         #[arg(long)]
@@ -113,6 +114,16 @@ enum Command {
         /// Output directory (default ./leakwatch-run).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Where samples come from: `sim` (the simulated rig, default) or `udp://IP:PORT`, a
+        /// real rig's UDP sensor stream (format: frames/README.md; examples/udp has a C header
+        /// and a Python sender), published as it arrives; raw counts are scaled by the config's
+        /// [udp] section. Not with --scenario, --fault or --seconds.
+        #[arg(long, value_name = "sim|udp://IP:PORT")]
+        source: Option<String>,
+        /// With --source udp://...: the stream ends when no datagram came for this long, s
+        /// (default 5; counted from the first datagram, before which the run waits).
+        #[arg(long)]
+        udp_idle_timeout_s: Option<f64>,
     },
     /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
     Export {
@@ -348,6 +359,8 @@ fn run(cli: Cli) -> Result<(), String> {
             mode,
             out,
             thesis_baseline,
+            source,
+            udp_idle_timeout_s,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -358,6 +371,8 @@ fn run(cli: Cli) -> Result<(), String> {
             out,
             thesis_baseline,
             force,
+            source,
+            udp_idle_timeout_s,
         }),
         Command::Export { log, csv } => {
             let (files, _) = export_log(&log, &csv, force)?;

@@ -43,6 +43,58 @@ pub struct RunArgs {
     pub thesis_baseline: bool,
     /// Replace the outputs of an earlier run in the same directory (`--force`).
     pub force: bool,
+    /// Where samples come from: `sim` (default, the simulated rig) or
+    /// `udp://IP:PORT` (a real rig's UDP sensor stream).
+    pub source: Option<String>,
+    /// UDP stream: it ends when no datagram came for this long, s (default 5).
+    pub udp_idle_timeout_s: Option<f64>,
+}
+
+/// Where a run's samples come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunSource {
+    /// The simulated rig.
+    Sim,
+    /// A real rig's UDP sensor stream received on this address.
+    Udp(std::net::SocketAddr),
+}
+
+/// Parses `--source`: `sim` (or nothing) or `udp://IP:PORT`; the error names the problem.
+pub fn parse_source(text: Option<&str>) -> Result<RunSource, String> {
+    match text {
+        None | Some("sim") => Ok(RunSource::Sim),
+        Some(t) if t.starts_with("udp://") => acquisition::parse_udp_address(t)
+            .map(RunSource::Udp)
+            .map_err(|e| format!("--source {e}")),
+        Some(t) => Err(format!(
+            "--source {t}: expected `sim` (the simulated rig) or udp://IP:PORT (a rig's UDP sensor stream, \
+             e.g. udp://0.0.0.0:5005)"
+        )),
+    }
+}
+
+/// Default idle timeout of a UDP stream, s.
+pub const UDP_IDLE_TIMEOUT_S: f64 = 5.0;
+
+/// Checks the arguments of a UDP run (before anything starts): no simulation
+/// arguments, a valid idle timeout, an address this machine can listen on.
+fn check_udp_args(args: &RunArgs, addr: std::net::SocketAddr) -> Result<f64, String> {
+    if args.scenario.is_some() || !args.faults.is_empty() || args.seconds.is_some() {
+        return Err(format!(
+            "--source udp://{addr}: --scenario, --fault and --seconds are for the simulated rig; a UDP stream \
+             runs until its sender ends it or no datagram comes for --udp-idle-timeout-s"
+        ));
+    }
+    let idle = args.udp_idle_timeout_s.unwrap_or(UDP_IDLE_TIMEOUT_S);
+    if !(idle > 0.0 && idle <= 1e6) {
+        return Err(format!(
+            "--udp-idle-timeout-s {idle}: must be a number of seconds in (0, 1e6]"
+        ));
+    }
+    // the acquisition stage binds it again at once
+    std::net::UdpSocket::bind(addr)
+        .map_err(|e| format!("--source udp://{addr}: cannot listen there: {e}"))?;
+    Ok(idle)
 }
 
 /// The four stage binaries.
@@ -226,6 +278,16 @@ pub const DEFAULT_SCENARIO: &str = "loaded-sine";
 pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let program = stage_program()?;
     frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
+    let source = parse_source(args.source.as_deref())?;
+    let udp = match source {
+        RunSource::Udp(addr) => Some((addr, check_udp_args(args, addr)?)),
+        RunSource::Sim => {
+            if args.udp_idle_timeout_s.is_some() {
+                return Err("--udp-idle-timeout-s is for --source udp://IP:PORT".into());
+            }
+            None
+        }
+    };
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
     crate::out::dir(&out_dir)?;
     // An earlier run's outputs are replaced only with --force; refused before anything starts.
@@ -244,7 +306,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     // faults or a config; naming the default scenario explicitly changes nothing.
     // `--fault none` asks for a healthy run.
     let scenario = args.scenario.clone().unwrap_or_else(|| DEFAULT_SCENARIO.into());
-    let demo = scenario == DEFAULT_SCENARIO && args.faults.is_empty() && args.config.is_none();
+    let demo =
+        udp.is_none() && scenario == DEFAULT_SCENARIO && args.faults.is_empty() && args.config.is_none();
     let seconds = args.seconds.unwrap_or(40.0);
     let faults: Vec<String> = if demo {
         vec!["ext1:0.5lpm@20s".to_string()]
@@ -333,6 +396,20 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 ]
             }
             _ => {
+                if let Some((addr, idle)) = udp {
+                    return vec![
+                        s("--rig"),
+                        args.rig.clone(),
+                        s("--udp"),
+                        addr.to_string(),
+                        s("--udp-idle-timeout-s"),
+                        idle.to_string(),
+                        s("--config"),
+                        cfg_arg.clone(),
+                        s("--wait-subscribers"),
+                        s("2"),
+                    ];
+                }
                 let mut a = vec![
                     s("--rig"),
                     args.rig.clone(),
@@ -354,14 +431,23 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
     };
     if !quiet {
-        outln!(
-            "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
-            args.rig,
-            faults.join(", "),
-            args.mode,
-            if demo { ", off-nominal rig (demonstration)" } else { "" },
-            out_dir.display()
-        );
+        match udp {
+            Some((addr, idle)) => outln!(
+                "leakwatch run: rig {}, UDP sensor stream on {addr} (until the sender's end of stream or {idle} s \
+                 without datagrams), {} mode; output {}",
+                args.rig,
+                args.mode,
+                out_dir.display()
+            ),
+            None => outln!(
+                "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
+                args.rig,
+                faults.join(", "),
+                args.mode,
+                if demo { ", off-nominal rig (demonstration)" } else { "" },
+                out_dir.display()
+            ),
+        }
         if let Ok(c) = classifier::Classifier::new(cfg.classifier.clone()) {
             outln!("note: {}", c.start_note());
         }
@@ -385,7 +471,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
     let started = Instant::now();
     let mut ended_at: Option<Instant> = None;
-    let deadline = Duration::from_secs_f64(seconds + 30.0);
+    // a UDP stream lasts as long as its sender streams
+    let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
     // A failure ends the run, but what was gathered is still written.
     let mut failure: Option<String> = None;
     // Events published by anything but this run's classifier are left out.
@@ -476,7 +563,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 break;
             }
         }
-        if started.elapsed() > deadline {
+        if deadline.is_some_and(|d| started.elapsed() > d) {
             eprintln!("leakwatch run: the run did not end in time; stopping");
             break;
         }
@@ -659,6 +746,13 @@ pub fn run(args: RunArgs) -> Result<(), String> {
             ),
             None => outln!("\nno leak detected"),
         },
+    }
+    if matches!(parse_source(args.source.as_deref()), Ok(RunSource::Udp(_))) {
+        // the stream's counts (lost, duplicated, late, malformed), from the acquisition's closing line
+        let log = std::fs::read_to_string(o.out_dir.join("acquisition.log")).unwrap_or_default();
+        if let Some(line) = log.lines().find_map(|l| l.strip_prefix("acquisition: udp: ")) {
+            outln!("UDP stream: {line}");
+        }
     }
     outln!(
         "wrote {}/events.json, latency.json, run.mcap",
