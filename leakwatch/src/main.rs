@@ -375,7 +375,7 @@ fn run(cli: Cli) -> Result<(), String> {
             udp_idle_timeout_s,
         }),
         Command::Export { log, csv } => {
-            let (files, _) = export_log(&log, &csv, force)?;
+            let (files, _) = export_log(&log, &csv, force, false)?;
             for f in files {
                 eprintln!("wrote {}", f.display());
             }
@@ -444,7 +444,7 @@ fn run(cli: Cli) -> Result<(), String> {
             let input = if input.extension().is_some_and(|e| e == "mcap") {
                 out::dir(&out)?;
                 let dir = out.join("log-export");
-                log = Some(export_log(&input, &dir, force)?.1);
+                log = Some(export_log(&input, &dir, force, true)?.1);
                 protect.push(input);
                 dir.join("dataset.csv")
             } else {
@@ -639,7 +639,7 @@ fn calibrate_cmd(
     let input = if input.extension().is_some_and(|e| e == "mcap") {
         out::dir(out)?;
         let dir = out.join("log-export");
-        export_log(input, &dir, force)?;
+        export_log(input, &dir, force, true)?;
         dir.join("dataset.csv")
     } else {
         input.to_path_buf()
@@ -749,14 +749,31 @@ pub(crate) fn benches_samples(seconds: f64) -> Vec<model::Sample> {
 
 /// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv);
 /// returns the files and what reading the log skipped (damaged chunks).
+/// Exports the log `log` as CSVs into `dir`; with `need_frames`, a log without a
+/// readable sensor frame is an error naming the log (what replay and calibrate read),
+/// and any log without a single readable message is one.
 fn export_log(
     log: &std::path::Path,
     dir: &std::path::Path,
     force: bool,
+    need_frames: bool,
 ) -> Result<(Vec<PathBuf>, replay::LogDamage), String> {
     let l = recorder::LogReader::open(log)
         .and_then(|r| r.read())
         .map_err(|e| format!("{}: {e}", log.display()))?;
+    let messages = l.frames.len() + l.estimates.len() + l.events.len() + l.health.len() + l.stats.len();
+    if messages == 0 || need_frames && l.frames.is_empty() {
+        let why = match (&l.truncated, l.chunks_skipped.first()) {
+            (_, Some(c)) => format!(" ({} damaged chunks skipped; first: {c})", l.chunks_skipped.len()),
+            (Some(t), None) => format!(" ({t})"),
+            (None, None) => String::new(),
+        };
+        return Err(format!(
+            "{}: no {} could be read from the log{why}",
+            log.display(),
+            if messages == 0 { "message" } else { "sensor frame" }
+        ));
+    }
     if let Some(why) = &l.truncated {
         eprintln!("warning: {}: {why}; reading what is complete", log.display());
     }

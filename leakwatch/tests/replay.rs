@@ -419,3 +419,31 @@ fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samp
     assert_eq!(s["samples_missing"].as_u64().unwrap(), lost, "{s:#}");
     assert_eq!(s["log"]["chunks_skipped"].as_array().unwrap().len(), 1, "{s:#}");
 }
+
+/// A log with nothing readable (an 8-byte file of MCAP magic, an empty file) is an
+/// error naming the log in `export` and `replay` alike, never an empty export.
+#[test]
+fn a_log_with_nothing_readable_is_an_error_naming_it() {
+    let d = tmpdir("empty-log");
+    for (name, bytes) in [("magic.mcap", &b"\x89MCAP0\r\n"[..]), ("empty.mcap", &b""[..])] {
+        let log = d.join(name);
+        std::fs::write(&log, bytes).unwrap();
+        let log_s = log.to_str().unwrap();
+        let o = leakwatch(&[
+            "export",
+            log_s,
+            "--csv",
+            d.join(format!("{name}-csv")).to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(err.contains(log_s), "{name}: {err}");
+        let o = replay(&log, &d.join(format!("{name}-out")), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(log_s) && !err.contains("dataset.csv"),
+            "{name}: {err}"
+        );
+    }
+}

@@ -34,7 +34,8 @@ pub struct Log {
     /// each with its byte offset in the file and the reason.
     pub chunks_skipped: Vec<String>,
     /// Sensor frames lost in the skipped chunks (from the gap in the frames'
-    /// sequence numbers around each; a chunk skipped after the last frame is not counted).
+    /// sequence numbers around each; before the first frame read, from sequence 0,
+    /// where a run starts; a chunk skipped after the last frame is not counted).
     pub frames_lost: u64,
 }
 
@@ -131,10 +132,15 @@ impl LogReader {
             }
             Ok(())
         })?;
+        // (chunks skipped side by side share one gap in the frames)
+        skipped_at.dedup();
         for p in skipped_at {
             if p > 0 && p < log.frames.len() {
                 let gap = log.frames[p].seq.saturating_sub(log.frames[p - 1].seq);
                 log.frames_lost += gap.saturating_sub(1);
+            } else if p == 0 && !log.frames.is_empty() {
+                // before the first frame read: counted from sequence 0, where a run starts
+                log.frames_lost += log.frames[0].seq;
             }
         }
         Ok(log)
@@ -246,6 +252,14 @@ where
                 };
                 for inner in mcap::read::LinearReader::sans_magic(&bytes) {
                     match inner {
+                        Ok(mcap::records::Record::Unknown { opcode, .. }) => {
+                            // leakwatch writes no private records: a damaged opcode
+                            visit(Item::ChunkSkipped(format!(
+                                "chunk at byte {at}: a record with unknown opcode 0x{opcode:02x} (damaged: \
+                                 leakwatch writes none); the rest of the chunk is skipped"
+                            )))?;
+                            break;
+                        }
                         Ok(r) => any |= visit_record(r, &mut visit)?,
                         Err(e) => {
                             visit(Item::ChunkSkipped(format!("chunk at byte {at}: record: {e}")))?;
@@ -255,6 +269,14 @@ where
                 }
             }
             mcap::records::Record::Footer(_) => footer = true,
+            mcap::records::Record::Unknown { opcode, .. } => {
+                // leakwatch writes no private records: a chunk (or other record)
+                // whose opcode byte was damaged; what it held is lost
+                visit(Item::ChunkSkipped(format!(
+                    "record at byte {at}: unknown opcode 0x{opcode:02x} (a damaged chunk or record: \
+                     leakwatch writes none)"
+                )))?;
+            }
             r => any |= visit_record(r, &mut visit)?,
         }
     }

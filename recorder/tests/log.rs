@@ -297,8 +297,9 @@ fn a_chunk_declaring_a_false_uncompressed_size_is_skipped_not_decompressed() {
         let lost = full.frames.len() - log.frames.len();
         if which == 0 {
             // the first chunk holds the channel records: the others still decode
-            // (channels from the summary)
+            // (channels from the summary); its frames are counted from sequence 0
             assert!(log.frames.len() > 2500, "{name}: {} frames", log.frames.len());
+            assert_eq!(log.frames_lost, lost as u64, "{name}");
         } else {
             assert!(lost >= 20, "{name}: {lost}");
             assert_eq!(log.frames_lost, lost as u64, "{name}");
@@ -311,6 +312,25 @@ fn a_chunk_declaring_a_false_uncompressed_size_is_skipped_not_decompressed() {
             assert_eq!(bits(f), bits(&full.frames[k]));
         }
         assert!(log.truncated.is_none(), "{name}");
+    }
+    // A damaged opcode byte turns a chunk into a "private record" that MCAP readers
+    // skip silently; leakwatch writes none, so it is a damaged chunk, counted.
+    for which in [1, 3] {
+        let mut b = bytes.clone();
+        b[chunks[which]] = 0xF9;
+        let p = d.join(format!("opcode{which}.mcap"));
+        std::fs::write(&p, &b).unwrap();
+        let log = LogReader::open(&p).unwrap().read().unwrap();
+        assert_eq!(log.chunks_skipped.len(), 1, "{:?}", log.chunks_skipped);
+        assert!(
+            log.chunks_skipped[0]
+                .starts_with(&format!("record at byte {}: unknown opcode 0xf9", chunks[which])),
+            "{:?}",
+            log.chunks_skipped
+        );
+        let lost = full.frames.len() - log.frames.len();
+        assert!(lost >= 20, "{lost}");
+        assert_eq!(log.frames_lost, lost as u64, "opcode of chunk {which}");
     }
     std::fs::remove_dir_all(&d).ok();
 }
