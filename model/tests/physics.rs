@@ -335,23 +335,27 @@ fn external_leaks_drift_the_rod_towards_the_leaking_chamber() {
     assert!(ext2 > healthy + 5e-3, "ext2 {ext2} vs healthy {healthy}");
 }
 
+/// Half the rod's peak-to-peak travel after the first 3 s of an ideal-sensor
+/// open-loop sine run of `seconds` on rig `p` with `faults`, m.
+fn sine_amplitude(p: &ActuatorParams, faults: Vec<Fault>, seconds: f64) -> f64 {
+    let mut s = sim(
+        "open-loop-sine",
+        p.clone(),
+        faults,
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let st = run_truth(&mut s, seconds);
+    let tail = &st[3000..];
+    let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
+    let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
+    (xmax - xmin) / 2.0
+}
+
 #[test]
 fn internal_leak_shrinks_the_stroke() {
     let p = ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth);
-    let mk = |faults| {
-        let mut s = sim(
-            "open-loop-sine",
-            p.clone(),
-            faults,
-            SensorParams::ideal(),
-            SimSettings::default(),
-        );
-        let st = run_truth(&mut s, 6.0);
-        let tail = &st[3000..];
-        let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
-        let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
-        (xmax - xmin) / 2.0
-    };
+    let mk = |faults| sine_amplitude(&p, faults, 6.0);
     let healthy = mk(vec![]);
     let leaky = mk(vec![Fault::from_lpm(
         LeakPath::Internal,
@@ -367,20 +371,7 @@ fn internal_leak_shrinks_the_stroke() {
 
     // The thesis friction (stick-slip), a 0.5 L/min internal leak.
     let thesis = ActuatorParams::default();
-    let mk = |faults| {
-        let mut s = sim(
-            "open-loop-sine",
-            thesis.clone(),
-            faults,
-            SensorParams::ideal(),
-            SimSettings::default(),
-        );
-        let st = run_truth(&mut s, 10.0);
-        let tail = &st[3000..];
-        let xmin = tail.iter().map(|s| s[I_X]).fold(f64::MAX, f64::min);
-        let xmax = tail.iter().map(|s| s[I_X]).fold(f64::MIN, f64::max);
-        (xmax - xmin) / 2.0
-    };
+    let mk = |faults| sine_amplitude(&thesis, faults, 10.0);
     let healthy = mk(vec![]);
     let leaky = mk(vec![Fault::from_lpm(
         LeakPath::Internal,

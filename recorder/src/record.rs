@@ -19,8 +19,10 @@ pub trait Field: Sized {
     fn from_json(v: Option<&Value>) -> Result<Self, String>;
     /// The JSON Schema of the value.
     fn schema() -> Value;
-    /// CSV column names for a field called `name`.
-    fn csv_names(name: &str, out: &mut Vec<String>);
+    /// CSV column names for a field called `name` (one column, `name`, unless overridden).
+    fn csv_names(name: &str, out: &mut Vec<String>) {
+        out.push(name.to_string());
+    }
     /// Appends the CSV cells, each preceded by a comma.
     fn csv_write(&self, out: &mut String);
 }
@@ -59,9 +61,6 @@ impl Field for f64 {
     fn schema() -> Value {
         json!({"type": ["number", "null", "string"], "description": "null = NaN (absent); \"inf\"/\"-inf\" = infinities"})
     }
-    fn csv_names(name: &str, out: &mut Vec<String>) {
-        out.push(name.to_string());
-    }
     fn csv_write(&self, out: &mut String) {
         let _ = write!(out, ",{self:?}");
     }
@@ -78,9 +77,6 @@ impl Field for u64 {
     }
     fn schema() -> Value {
         json!({"type": "integer", "minimum": 0})
-    }
-    fn csv_names(name: &str, out: &mut Vec<String>) {
-        out.push(name.to_string());
     }
     fn csv_write(&self, out: &mut String) {
         let _ = write!(out, ",{self}");
@@ -99,9 +95,6 @@ impl Field for u32 {
     }
     fn schema() -> Value {
         json!({"type": "integer", "minimum": 0, "maximum": u32::MAX})
-    }
-    fn csv_names(name: &str, out: &mut Vec<String>) {
-        out.push(name.to_string());
     }
     fn csv_write(&self, out: &mut String) {
         let _ = write!(out, ",{self}");
@@ -152,9 +145,6 @@ impl<const N: usize> Field for [u8; N] {
     }
     fn schema() -> Value {
         json!({"type": "string", "description": format!("UTF-8, at most {N} bytes")})
-    }
-    fn csv_names(name: &str, out: &mut Vec<String>) {
-        out.push(name.to_string());
     }
     fn csv_write(&self, out: &mut String) {
         // names are ASCII without commas by convention; quote anything else

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use frames::{detector_bytes, EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
-use recorder::{export_csv, Entry, GapRecord, LogReader, LogWriter, WriterOptions};
+use recorder::{export_csv, Entry, GapRecord, Log, LogReader, LogWriter, WriterOptions};
 
 fn dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("recorder-{tag}-{}", std::process::id()));
@@ -190,9 +190,9 @@ fn round_trip_is_bit_identical() {
     std::fs::remove_dir_all(&d).ok();
 }
 
-#[test]
-fn a_truncated_file_reads_up_to_its_last_complete_chunk() {
-    let d = dir("trunc");
+/// Writes the sample log of 3000 frames in chunks of 32 KiB to `d/full.mcap`;
+/// returns its bytes and the log read back.
+fn small_chunk_log(d: &std::path::Path) -> (Vec<u8>, Log) {
     let path = d.join("full.mcap");
     let options = WriterOptions {
         chunk_size: 32 * 1024,
@@ -201,6 +201,13 @@ fn a_truncated_file_reads_up_to_its_last_complete_chunk() {
     write_sample_log(&path, 3000, options);
     let bytes = std::fs::read(&path).unwrap();
     let full = LogReader::open(&path).unwrap().read().unwrap();
+    (bytes, full)
+}
+
+#[test]
+fn a_truncated_file_reads_up_to_its_last_complete_chunk() {
+    let d = dir("trunc");
+    let (bytes, full) = small_chunk_log(&d);
     let mut seen_counts = Vec::new();
     for frac in [0.3, 0.55, 0.8] {
         let cut = (bytes.len() as f64 * frac) as usize;
@@ -245,14 +252,7 @@ fn chunk_offsets(bytes: &[u8]) -> Vec<usize> {
 #[test]
 fn a_chunk_declaring_a_false_uncompressed_size_is_skipped_not_decompressed() {
     let d = dir("chunks");
-    let path = d.join("full.mcap");
-    let options = WriterOptions {
-        chunk_size: 32 * 1024,
-        ..WriterOptions::default()
-    };
-    write_sample_log(&path, 3000, options);
-    let bytes = std::fs::read(&path).unwrap();
-    let full = LogReader::open(&path).unwrap().read().unwrap();
+    let (bytes, full) = small_chunk_log(&d);
     assert_eq!(full.frames.len(), 3000);
     assert!(full.chunks_skipped.is_empty() && full.frames_lost == 0);
     let chunks = chunk_offsets(&bytes);

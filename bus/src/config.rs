@@ -1,0 +1,243 @@
+//! The bus configuration ([`BusConfig`]): service sizes and the isolation
+//! prefix, with what a prefix owns (its lock, its files, why a start is blocked).
+
+use iceoryx2::prelude::*;
+
+use crate::BusError;
+
+/// The environment variable that isolates a set of processes (see [`BusConfig::from_env`]).
+pub const PREFIX_ENV: &str = "LEAKWATCH_IOX_PREFIX";
+
+/// Sizes of the services and the isolation prefix. Every process of a rig
+/// must use the same values: the first process creates the services and the
+/// others open them only if their requirements fit.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BusConfig {
+    /// Isolation prefix (`[A-Za-z0-9_-]{1,32}`): iceoryx2 files get the
+    /// prefix `lw_<prefix>_` and live under `/tmp/iceoryx2/lw_<prefix>/`.
+    /// `None`: iceoryx2's defaults (what other iceoryx2 programs, like the
+    /// Python bindings with a default config, see).
+    pub iox_prefix: Option<String>,
+    /// Frames a subscriber buffers before the oldest is overwritten (a 1 kHz
+    /// stream survives a stall of this many ms).
+    pub subscriber_buffer: usize,
+    /// Frames a late subscriber receives on connecting.
+    pub history: usize,
+    /// Publishers per service (a restarted publisher needs a free slot while
+    /// its dead predecessor is being cleaned up).
+    pub max_publishers: usize,
+    /// Subscribers per service (the next stage, the recorder, a Python
+    /// viewer, restarts).
+    pub max_subscribers: usize,
+    /// Nodes (processes) per service.
+    pub max_nodes: usize,
+}
+
+impl Default for BusConfig {
+    fn default() -> Self {
+        BusConfig {
+            iox_prefix: None,
+            subscriber_buffer: 256,
+            history: 0,
+            max_publishers: 8,
+            max_subscribers: 16,
+            max_nodes: 32,
+        }
+    }
+}
+
+impl BusConfig {
+    /// The defaults, with [`BusConfig::iox_prefix`] from `LEAKWATCH_IOX_PREFIX`
+    /// if it is set and not empty.
+    pub fn from_env() -> Result<BusConfig, BusError> {
+        let mut c = BusConfig::default();
+        match std::env::var(PREFIX_ENV) {
+            Ok(p) if !p.is_empty() => {
+                validate_prefix(&p)?;
+                c.iox_prefix = Some(p);
+            }
+            Ok(_) | Err(std::env::VarError::NotPresent) => {}
+            Err(e) => return Err(BusError(format!("{PREFIX_ENV}: {e}"))),
+        }
+        Ok(c)
+    }
+
+    /// The iceoryx2 configuration for these settings.
+    pub fn iceoryx2_config(&self) -> Result<iceoryx2::config::Config, BusError> {
+        let mut c = iceoryx2::config::Config::global_config().clone();
+        if let Some(p) = &self.iox_prefix {
+            validate_prefix(p)?;
+            c.global.prefix = FileName::new(format!("lw_{p}_").as_bytes())
+                .map_err(|e| BusError::new(format!("iceoryx2 prefix from {p:?}"), e))?;
+            let root = format!("/tmp/iceoryx2/lw_{p}/");
+            c.global
+                .set_root_path(&Path::new(root.as_bytes()).map_err(|e| BusError::new(&root, e))?);
+        }
+        Ok(c)
+    }
+}
+
+impl BusConfig {
+    /// Removes the files an isolated run leaves behind (`/tmp/iceoryx2/lw_<prefix>/`
+    /// and `/dev/shm/lw_<prefix>_*`); for tests, once every process of the
+    /// prefix has ended. Does nothing without a prefix. Returns the entries removed.
+    pub fn remove_isolated_files(&self) -> std::io::Result<usize> {
+        let Some(p) = &self.iox_prefix else {
+            return Ok(0);
+        };
+        validate_prefix(p).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.0))?;
+        let mut removed = 0;
+        let root = std::path::PathBuf::from(format!("/tmp/iceoryx2/lw_{p}"));
+        if root.exists() {
+            std::fs::remove_dir_all(&root)?;
+            removed += 1;
+        }
+        let start = format!("lw_{p}_");
+        for entry in std::fs::read_dir("/dev/shm")?.flatten() {
+            if entry.file_name().to_string_lossy().starts_with(&start) {
+                std::fs::remove_file(entry.path())?;
+                removed += 1;
+            }
+        }
+        Ok(removed)
+    }
+}
+
+impl BusConfig {
+    /// The iceoryx2 file prefix in `/dev/shm` (`lw_<prefix>_`, or iceoryx2's `iox2_`)
+    /// and the root directory of its other files.
+    fn file_prefix_and_root(&self) -> (String, String) {
+        match &self.iox_prefix {
+            Some(p) => (format!("lw_{p}_"), format!("/tmp/iceoryx2/lw_{p}")),
+            None => ("iox2_".to_string(), "/tmp/iceoryx2".to_string()),
+        }
+    }
+
+    /// Why a node of this prefix may fail to start, read off the files: a global
+    /// management segment (`/dev/shm/<prefix>*.global_mgmt`) of another user or of a
+    /// size other than iceoryx2's own, or a root directory of another user; with
+    /// the way out. `None` when nothing looks wrong (or nothing can be read).
+    pub fn diagnose_blocked_start(&self) -> Option<String> {
+        use std::os::unix::fs::MetadataExt;
+        let (start, root) = self.file_prefix_and_root();
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        let me = unsafe { libc::geteuid() };
+        let env = match &self.iox_prefix {
+            Some(p) => format!("prefix {p:?}"),
+            None => "iceoryx2's default prefix".to_string(),
+        };
+        let way_out = format!(
+            "once no process of this prefix runs, remove its files (rm -rf {root} /dev/shm/{start}*) or start \
+             with another prefix (LEAKWATCH_IOX_PREFIX=...); see docs/security.md"
+        );
+        let mut found = Vec::new();
+        for entry in std::fs::read_dir("/dev/shm").ok()?.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if !(name.starts_with(&start) && name.ends_with(".global_mgmt")) {
+                continue;
+            }
+            let Ok(meta) = entry.metadata() else { continue };
+            if meta.uid() != me {
+                found.push(format!(
+                    "the management segment /dev/shm/{name} of {env} belongs to another user (uid {}, mode {:o})",
+                    meta.uid(),
+                    meta.mode() & 0o7777
+                ));
+            } else if meta.len() < GLOBAL_MGMT_MIN_BYTES {
+                found.push(format!(
+                    "the management segment /dev/shm/{name} of {env} is damaged ({} bytes, iceoryx2 writes {GLOBAL_MGMT_MIN_BYTES})",
+                    meta.len()
+                ));
+            }
+        }
+        if let Ok(meta) = std::fs::metadata(&root) {
+            if meta.uid() != me {
+                found.push(format!(
+                    "{root} belongs to another user (uid {}, mode {:o})",
+                    meta.uid(),
+                    meta.mode() & 0o7777
+                ));
+            }
+        }
+        if found.is_empty() {
+            None
+        } else {
+            Some(format!("{}: {way_out}", found.join("; ")))
+        }
+    }
+}
+
+/// A prefix owned by one run: an exclusive lock (`flock`) on
+/// `$TMPDIR/leakwatch-prefix-<prefix>.lock`, released when it is dropped or the
+/// process ends (however it ends). The file holds the owner's process id.
+#[derive(Debug)]
+pub struct PrefixLock {
+    _file: std::fs::File,
+    /// The lock file.
+    pub path: std::path::PathBuf,
+}
+
+impl BusConfig {
+    /// Takes the ownership of this config's prefix for one run: a second run with
+    /// the same prefix is refused (naming the owner's process id) instead of sharing,
+    /// and later deleting, the first one's shared memory. Without a prefix there is
+    /// nothing to own (an error: a run always has one).
+    pub fn lock_prefix(&self) -> Result<PrefixLock, BusError> {
+        use std::io::{Read, Seek, Write};
+        use std::os::unix::fs::OpenOptionsExt;
+        use std::os::unix::io::AsRawFd;
+        let Some(p) = &self.iox_prefix else {
+            return Err(BusError("a run needs an isolation prefix to own".into()));
+        };
+        validate_prefix(p)?;
+        let path = std::env::temp_dir().join(format!("leakwatch-prefix-{p}.lock"));
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .mode(0o600)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&path)
+            .map_err(|e| BusError(format!("cannot open the prefix lock {}: {e}", path.display())))?;
+        // SAFETY: flock on an open descriptor we own; no memory is passed.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let mut owner = String::new();
+            let _ = file.read_to_string(&mut owner);
+            return Err(BusError(format!(
+                "the iceoryx2 prefix {p:?} is in use by another leakwatch run (process {}, lock {}): \
+                 two runs on one prefix would share and then delete each other's shared memory; \
+                 use another LEAKWATCH_IOX_PREFIX, or leave it unset for a private one",
+                owner.trim(),
+                path.display()
+            )));
+        }
+        let pid = std::process::id();
+        let write = |f: &mut std::fs::File| -> std::io::Result<()> {
+            f.set_len(0)?;
+            f.rewind()?;
+            writeln!(f, "{pid}")
+        };
+        write(&mut file)
+            .map_err(|e| BusError(format!("cannot write the prefix lock {}: {e}", path.display())))?;
+        Ok(PrefixLock { _file: file, path })
+    }
+}
+
+/// Size of the global management segment iceoryx2 0.10 writes, bytes (the node id
+/// counter); a smaller file of that name is damaged.
+const GLOBAL_MGMT_MIN_BYTES: u64 = 16;
+
+fn validate_prefix(p: &str) -> Result<(), BusError> {
+    if p.is_empty()
+        || p.len() > 32
+        || !p
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+    {
+        return Err(BusError(format!(
+            "invalid iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?): use 1 to 32 characters of A-Z a-z 0-9 _ -"
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! The discretisation: one sample step x(k+1) with its discrete Jacobian
+//! (forward Euler sub-steps), and the clamps that keep the state physical.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::{Guard, ProcessModel};
+
+impl ProcessModel {
+    /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
+    /// (forward Euler in `substeps` sub-steps), with the state kept physical.
+    pub fn step<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+    ) -> (SVector<f64, N>, SMatrix<f64, N, N>, Guard) {
+        let n = self.substeps.max(1);
+        let h = self.dt_s / n as f64;
+        let mut x = *s;
+        let mut jac = SMatrix::<f64, N, N>::identity();
+        for i in 0..n {
+            let lin = self.linearise(&x, u_v);
+            let step_jac = SMatrix::<f64, N, N>::identity() + lin.a * h;
+            x += lin.f * h;
+            jac = if i == 0 { step_jac } else { step_jac * jac };
+        }
+        let guard = self.keep_physical(&mut x);
+        (x, jac, guard)
+    }
+
+    /// Clamps pressures into [p_min, p_max] and the rod into its stroke plus
+    /// 1 cm; reports what was done.
+    pub fn keep_physical<const N: usize>(&self, x: &mut SVector<f64, N>) -> Guard {
+        let mut g = Guard::default();
+        for i in [1, 2] {
+            let c = x[i].clamp(self.p_min_pa, self.p_max_pa);
+            if c != x[i] || !x[i].is_finite() {
+                g.pressure_clamped = true;
+                x[i] = if x[i].is_finite() {
+                    c
+                } else {
+                    self.params.nominal_chamber_pressure_pa()
+                };
+            }
+        }
+        let (lo, hi) = (self.params.x_min_m - 0.01, self.params.x_max_m + 0.01);
+        if x[3] < lo || x[3] > hi {
+            g.position_clamped = true;
+            x[3] = x[3].clamp(lo, hi);
+        }
+        g
+    }
+}
