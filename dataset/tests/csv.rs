@@ -129,7 +129,7 @@ const HEADER: &str = "t,u,x,p1,p2,x_sp,f_load,ref,q_leak";
 #[test]
 fn values_outside_their_physical_range_are_skipped_by_column() {
     // (column index, bad value, column name, kind)
-    let cases: [(usize, &str, &str, IssueKind); 21] = [
+    let cases: [(usize, &str, &str, IssueKind); 22] = [
         (5, "inf", "x_sp", IssueKind::NonFinite),
         (5, "-inf", "x_sp", IssueKind::NonFinite),
         (5, "1e308", "x_sp", IssueKind::OutOfRange),
@@ -146,7 +146,8 @@ fn values_outside_their_physical_range_are_skipped_by_column() {
         (2, "1e308", "x", IssueKind::OutOfRange),
         (2, "-10", "x", IssueKind::OutOfRange),
         (2, "-1e308", "x", IssueKind::OutOfRange),
-        (3, "-1", "p1", IssueKind::OutOfRange),
+        (3, "-276001", "p1", IssueKind::OutOfRange),
+        (4, "-1e6", "p2", IssueKind::OutOfRange),
         (4, "20700001", "p2", IssueKind::OutOfRange),
         (3, "NaN", "p1", IssueKind::NonFinite),
         (0, "1e308", "t", IssueKind::OutOfRange),
@@ -338,4 +339,42 @@ fn a_line_that_is_not_utf8_is_one_skipped_row_and_counted() {
     );
     // rows and skipped agree (a read error used to be skipped without being a row)
     assert_eq!((r.rows, r.skipped), (3, 1));
+}
+
+#[test]
+fn pressures_slightly_below_zero_within_2_percent_of_supply_are_usable() {
+    // ±10 Pa sensor noise around tank pressure (0 Pa) in both chambers
+    let mut text = format!("{HEADER}\n");
+    let noise = ["-5.7", "3.2", "-9.9", "0", "-0.001", "9.8"];
+    for k in 0..600 {
+        let (a, b) = (noise[k % 6], noise[(k + 3) % 6]);
+        text += &row(k, &[(3, a), (4, b)]);
+        text += "\n";
+    }
+    let ds = read_str(&text).unwrap();
+    assert_eq!(
+        (ds.samples.len(), ds.issues.len()),
+        (600, 0),
+        "{:?}",
+        ds.issues.first()
+    );
+    assert_eq!(ds.samples[0].p1_pa, -5.7);
+    // the margin is 2 % of the supply pressure (13.8 MPa): -276 kPa is usable, below is not
+    let l = Limits::default();
+    assert_eq!((l.min_pressure_pa, l.max_pressure_pa), (-276_000.0, 20.7e6));
+    assert_eq!(Limits::for_supply(21.0e6).min_pressure_pa, -420_000.0);
+    let text = format!(
+        "{HEADER}\n{}\n{}\n{}\n",
+        row(0, &[(3, "-276000")]),
+        row(1, &[(4, "-276000.5")]),
+        row(2, &[])
+    );
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.samples.len(), 2);
+    assert_eq!(ds.samples[0].p1_pa, -276_000.0);
+    assert_eq!(
+        ds.issues[0].to_string(),
+        "line 3, column `p2`: pressure -276000.5 Pa is outside [-276000.0, 20700000.0] Pa \
+         (from 2 % of the supply pressure below 0 to 1.5 × the supply pressure)"
+    );
 }
