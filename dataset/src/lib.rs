@@ -3,7 +3,11 @@
 //! A header line names the columns; `t,u,x,p1,p2` (s, V, m, Pa, Pa) are
 //! required, `x_sp` (m), `f_load` (N), `ref` (m) and `q_leak` (L/min) are
 //! optional, in any order. Floats are written with Rust's shortest
-//! round-trip formatting, so a file reads back bit for bit.
+//! round-trip formatting, so a file reads back bit for bit. A header name or
+//! cell may be wrapped in one pair of double quotes (`"p1"`, `"0.0"`, as
+//! spreadsheets and pandas write with quoting on; `""` is an empty cell);
+//! nothing else of CSV quoting is read (no commas or `""` inside quotes).
+//! Messages quoting input text escape its control characters ([`shown`]).
 //!
 //! Reading streams rows one at a time. A row that cannot be used (a
 //! non-numeric cell, a NaN or infinite required value, an infinite optional
@@ -26,6 +30,28 @@ mod reader;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};
 pub use reader::{CsvReader, FileSource, Row};
+
+/// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).
+pub const SHOWN_MAX_CHARS: usize = 80;
+
+/// Input text as a message may quote it: every control or other non-printable
+/// character escaped as Rust writes it (`\u{1b}`, `\0`, `\t`, `\u{202e}`), so
+/// nothing read from a file can move the cursor or recolour a terminal, and cut
+/// after [`SHOWN_MAX_CHARS`] characters. Quotes and backslashes stay as they are.
+pub fn shown(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4 * SHOWN_MAX_CHARS));
+    for (i, c) in text.chars().enumerate() {
+        if i == SHOWN_MAX_CHARS {
+            out.push('…');
+            break;
+        }
+        match c {
+            '"' | '\'' | '\\' => out.push(c),
+            c => out.extend(c.escape_debug()),
+        }
+    }
+    out
+}
 
 /// The column names, in the order they are written.
 pub const COLUMNS: [&str; 9] = ["t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak"];

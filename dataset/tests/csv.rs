@@ -378,3 +378,87 @@ fn pressures_slightly_below_zero_within_2_percent_of_supply_are_usable() {
          (from 2 % of the supply pressure below 0 to 1.5 × the supply pressure)"
     );
 }
+
+#[test]
+fn fields_in_double_quotes_are_read_as_without() {
+    // as pandas writes with quoting=csv.QUOTE_ALL (NaN as "")
+    let text = "\"t\",\"u\",\"x\",\"p1\",\"p2\",\"ref\"\n\
+                \"0.0\",\"1.5\",\"0.3\",\"6.9e6\",\"6.8e6\",\"0.31\"\n\
+                \"0.001\",1.5,0.3,\"6.9e6\",6.8e6,\"\"\n\
+                0.002,1.5,0.3,6.9e6,6.8e6,0.31\n";
+    let p = tmp("quoted.csv");
+    std::fs::write(&p, text).unwrap();
+    let mut r = CsvReader::open(&p, Limits::default()).unwrap();
+    assert_eq!(r.has_optional(), [false, false, true, false]);
+    let mut samples = Vec::new();
+    while let Some(row) = r.next_row() {
+        let Row::Sample(s) = row else { panic!("{row:?}") };
+        samples.push(s);
+    }
+    assert_eq!(samples.len(), 3);
+    assert_eq!(
+        (samples[0].t_s, samples[0].u_v, samples[0].p1_pa),
+        (0.0, 1.5, 6.9e6)
+    );
+    assert_eq!(samples[0].ref_m, 0.31);
+    assert!(samples[1].ref_m.is_nan());
+    assert_eq!(r.absent, [0, 0, 1, 0]);
+    // anything else stays strict: one quote, quotes inside, single quotes, a quoted comma
+    for (cell, shown) in [
+        ("\"1.5", "`\"1.5` is not a number"),
+        ("1.5\"", "`1.5\"` is not a number"),
+        ("\"\"1.5\"\"", "`\"1.5\"` is not a number"),
+        ("'1.5'", "`'1.5'` is not a number"),
+        ("\" 1.5\"", "` 1.5` is not a number"),
+    ] {
+        let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(1, cell)]), row(1, &[]));
+        let ds = read_str(&text).unwrap();
+        assert_eq!(ds.issues.len(), 1, "{cell}");
+        assert_eq!(ds.issues[0].to_string(), format!("line 2, column `u`: {shown}"));
+    }
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(1, "\"1,5\"")]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.issues[0].kind, IssueKind::WrongCellCount);
+    // a required column whose quoted cell is empty is NaN, not a number to use
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(2, "\"\"")]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.issues[0].kind, IssueKind::NonFinite);
+    // a quoted header name counts as the name (and twice is still twice)
+    let e = read_str("t,u,x,p1,p2,\"x\"\n").unwrap_err();
+    assert!(e.to_string().ends_with("line 1: column `x` appears twice"), "{e}");
+}
+
+#[test]
+fn control_characters_from_the_file_are_escaped_in_messages() {
+    // ESC (a terminal colour sequence) and NUL inside a cell
+    for (cell, shown) in [
+        ("\u{1b}[31mred", "`\\u{1b}[31mred` is not a number"),
+        ("1\u{0}5", "`1\\05` is not a number"),
+        ("\u{7f}\u{9b}2J", "`\\u{7f}\\u{9b}2J` is not a number"),
+        ("\u{202e}1.5", "`\\u{202e}1.5` is not a number"),
+    ] {
+        let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(6, cell)]), row(1, &[]));
+        let ds = read_str(&text).unwrap();
+        let m = ds.issues[0].to_string();
+        assert_eq!(m, format!("line 2, column `f_load`: {shown}"));
+        assert!(!m.chars().any(|c| c.is_control()), "{m:?}");
+    }
+    // a long cell is cut
+    let long = "9".repeat(100) + "x";
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(6, &long)]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(
+        ds.issues[0].message,
+        format!("`{}…` is not a number", "9".repeat(80))
+    );
+    // a binary header: the message shows it escaped (bytes that are not UTF-8 as U+FFFD)
+    let p = tmp("binary-header.csv");
+    std::fs::write(&p, b"\x1b]0;owned\x07t,u\x00,\xff\x1b[2J\n0,0,0\n").unwrap();
+    let m = read_csv(&p, Limits::default()).unwrap_err().to_string();
+    assert!(
+        m.contains("(header: `\\u{1b}]0;owned\\u{7}t,u\\0,\u{fffd}\\u{1b}[2J`; required: t,u,x,p1,p2)"),
+        "{m}"
+    );
+    assert!(!m.chars().any(|c| c.is_control()), "{m:?}");
+    assert_eq!(shown("a\tb\r\n\"q\" \\ é"), "a\\tb\\r\\n\"q\" \\ é");
+}
