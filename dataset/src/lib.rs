@@ -34,17 +34,22 @@ pub use reader::{CsvReader, FileSource, Row};
 /// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).
 pub const SHOWN_MAX_CHARS: usize = 80;
 
-/// Input text as a message may quote it: every control or other non-printable
-/// character escaped as Rust writes it (`\u{1b}`, `\0`, `\t`, `\u{202e}`), so
-/// nothing read from a file can move the cursor or recolour a terminal, and cut
-/// after [`SHOWN_MAX_CHARS`] characters. Quotes and backslashes stay as they are.
+/// Input text as a message may quote it: [`escaped`], cut after
+/// [`SHOWN_MAX_CHARS`] characters (`…`).
 pub fn shown(text: &str) -> String {
-    let mut out = String::with_capacity(text.len().min(4 * SHOWN_MAX_CHARS));
-    for (i, c) in text.chars().enumerate() {
-        if i == SHOWN_MAX_CHARS {
-            out.push('…');
-            break;
-        }
+    match text.char_indices().nth(SHOWN_MAX_CHARS) {
+        Some((end, _)) => escaped(&text[..end]) + "…",
+        None => escaped(text),
+    }
+}
+
+/// `text` with every control or other non-printable character escaped as Rust
+/// writes it (`\u{1b}`, `\0`, `\t`, `\u{202e}`), so that nothing read from a
+/// file can move the cursor or recolour a terminal when a message quotes it.
+/// Quotes and backslashes stay as they are.
+pub fn escaped(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
         match c {
             '"' | '\'' | '\\' => out.push(c),
             c => out.extend(c.escape_debug()),
