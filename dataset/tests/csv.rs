@@ -8,7 +8,10 @@ fn tmp(name: &str) -> std::path::PathBuf {
 }
 
 fn read_str(text: &str) -> Result<Dataset, DatasetError> {
-    let p = tmp(&format!("t{}.csv", text.len()));
+    // one file per call: tests run in parallel (a name from the length collided)
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let p = tmp(&format!("t{n}.csv"));
     std::fs::write(&p, text).unwrap();
     read_csv(&p, Limits::default())
 }
