@@ -3,7 +3,11 @@
 //! A header line names the columns; `t,u,x,p1,p2` (s, V, m, Pa, Pa) are
 //! required, `x_sp` (m), `f_load` (N), `ref` (m) and `q_leak` (L/min) are
 //! optional, in any order. Floats are written with Rust's shortest
-//! round-trip formatting, so a file reads back bit for bit.
+//! round-trip formatting, so a file reads back bit for bit. A header name or
+//! cell may be wrapped in one pair of double quotes (`"p1"`, `"0.0"`, as
+//! spreadsheets and pandas write with quoting on; `""` is an empty cell);
+//! nothing else of CSV quoting is read (no commas or `""` inside quotes).
+//! Messages quoting input text escape its control characters ([`shown`]).
 //!
 //! Reading streams rows one at a time. A row that cannot be used (a
 //! non-numeric cell, a NaN or infinite required value, an infinite optional
@@ -26,6 +30,33 @@ mod reader;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};
 pub use reader::{CsvReader, FileSource, Row};
+
+/// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).
+pub const SHOWN_MAX_CHARS: usize = 80;
+
+/// Input text as a message may quote it: [`escaped`], cut after
+/// [`SHOWN_MAX_CHARS`] characters (`…`).
+pub fn shown(text: &str) -> String {
+    match text.char_indices().nth(SHOWN_MAX_CHARS) {
+        Some((end, _)) => escaped(&text[..end]) + "…",
+        None => escaped(text),
+    }
+}
+
+/// `text` with every control or other non-printable character escaped as Rust
+/// writes it (`\u{1b}`, `\0`, `\t`, `\u{202e}`), so that nothing read from a
+/// file can move the cursor or recolour a terminal when a message quotes it.
+/// Quotes and backslashes stay as they are.
+pub fn escaped(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '"' | '\'' | '\\' => out.push(c),
+            c => out.extend(c.escape_debug()),
+        }
+    }
+    out
+}
 
 /// The column names, in the order they are written.
 pub const COLUMNS: [&str; 9] = ["t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak"];

@@ -11,7 +11,7 @@ pub const DEFAULT_MAX_BAD_FRACTION: f64 = 0.01;
 /// column, from the actuator's parameters (see [`Limits::for_model`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
-    /// Lowest accepted pressure, Pa.
+    /// Lowest accepted pressure, Pa (−0.02 p_s: noise and offset near tank pressure).
     pub min_pressure_pa: f64,
     /// Highest accepted pressure, Pa (MODEL: 1.5 p_s).
     pub max_pressure_pa: f64,
@@ -43,7 +43,10 @@ impl Limits {
     /// - position x and reference within the stroke [x_min, x_max] plus 10 % of
     ///   the stroke on each side, m;
     /// - command |u| within 1.5 × the valve's ±10 V range, V;
-    /// - pressures in [0, 1.5 p_s] inclusive, Pa;
+    /// - pressures in [−0.02 p_s, 1.5 p_s] inclusive, Pa
+    ///   ([`model::ActuatorParams::measured_pressure_range_pa`], the range the
+    ///   estimator uses too): sensor noise and offset around tank pressure read
+    ///   slightly below 0, down to 2 % of the supply pressure (−0.276 MPa at 13.8 MPa);
     /// - spool |x_sp| within 2 × the opening at 10 V, m;
     /// - load |f_load| within 10 × the force of 1.5 p_s on the piston, N;
     /// - leak |q_leak| within 10 × the valve's flow at full opening and 1.5 p_s, L/min;
@@ -51,14 +54,14 @@ impl Limits {
     pub fn for_model(p: &model::ActuatorParams, sample_period_s: f64) -> Limits {
         let u_max = model::scenario::U_MAX_V;
         let stroke = p.x_max_m - p.x_min_m;
-        let p_max = 1.5 * p.supply_pressure_pa;
+        let (p_min, p_max) = p.measured_pressure_range_pa();
         let spool_open = u_max * p.spool_gain_m_per_v;
         let q_valve_m3_s = p.discharge_coefficient
             * p.area_gradient_m2_per_m
             * spool_open
             * (2.0 * p_max / p.oil_density_kg_m3).sqrt();
         Limits {
-            min_pressure_pa: 0.0,
+            min_pressure_pa: p_min,
             max_pressure_pa: p_max,
             sample_period_s: Some(sample_period_s),
             step_tolerance: 0.5,
@@ -73,7 +76,7 @@ impl Limits {
     }
 
     /// The default actuator's ranges with supply pressure `supply_pa` (pressures
-    /// in [0, 1.5 p_s], Pa), 1 kHz.
+    /// in [−0.02 p_s, 1.5 p_s], Pa), 1 kHz.
     pub fn for_supply(supply_pa: f64) -> Limits {
         let p = model::ActuatorParams {
             supply_pressure_pa: supply_pa,
@@ -116,7 +119,10 @@ impl Limits {
                     7 => "position reference",
                     _ => "leak flow",
                 };
-                let msg = format!("{what} {v:?} {unit} is outside [{lo:?}, {hi:?}] {unit}");
+                let mut msg = format!("{what} {v:?} {unit} is outside [{lo:?}, {hi:?}] {unit}");
+                if what == "pressure" {
+                    msg += " (from 2 % of the supply pressure below 0 to 1.5 × the supply pressure)";
+                }
                 return Some((j, IssueKind::OutOfRange, msg));
             }
         }

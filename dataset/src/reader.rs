@@ -63,7 +63,7 @@ impl<R: BufRead> CsvReader<R> {
         // a header that is not UTF-8 names no known column: MissingColumn shows it
         let header = String::from_utf8_lossy(&line);
         let header = header.trim_start_matches('\u{feff}').trim().to_string();
-        let names: Vec<&str> = header.split(',').map(|s| s.trim()).collect();
+        let names: Vec<&str> = header.split(',').map(|s| unquote(s.trim())).collect();
         let mut map = [None; 9];
         for (i, name) in names.iter().enumerate() {
             if let Some(j) = COLUMNS.iter().position(|c| c == name) {
@@ -81,7 +81,7 @@ impl<R: BufRead> CsvReader<R> {
                 return Err(DatasetError::MissingColumn {
                     path: path.to_path_buf(),
                     column: col,
-                    header: header.clone(),
+                    header: crate::shown(&header),
                 });
             }
         }
@@ -201,7 +201,7 @@ impl<R: BufRead> CsvReader<R> {
         let mut bad: Option<(usize, String)> = None;
         for cell in line.split(',') {
             count += 1;
-            let cell = cell.trim();
+            let cell = unquote(cell.trim());
             let v = if cell.is_empty() {
                 f64::NAN
             } else {
@@ -209,7 +209,7 @@ impl<R: BufRead> CsvReader<R> {
                     Ok(v) => v,
                     Err(_) => {
                         if bad.is_none() {
-                            bad = Some((count - 1, cell.to_string()));
+                            bad = Some((count - 1, crate::shown(cell)));
                         }
                         f64::NAN
                     }
@@ -272,6 +272,16 @@ impl<R: BufRead> CsvReader<R> {
     /// The file being read.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+/// `text` without one pair of surrounding double quotes (standard CSV quoting,
+/// `"0.0"`), if it has them; anything else as it is. Nothing inside is undone
+/// (no `""` escapes, no commas within quotes: those fields stay invalid).
+fn unquote(text: &str) -> &str {
+    match text.strip_prefix('"').and_then(|t| t.strip_suffix('"')) {
+        Some(inner) => inner,
+        None => text,
     }
 }
 

@@ -8,7 +8,10 @@ fn tmp(name: &str) -> std::path::PathBuf {
 }
 
 fn read_str(text: &str) -> Result<Dataset, DatasetError> {
-    let p = tmp(&format!("t{}.csv", text.len()));
+    // one file per call: tests run in parallel (a name from the length collided)
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let p = tmp(&format!("t{n}.csv"));
     std::fs::write(&p, text).unwrap();
     read_csv(&p, Limits::default())
 }
@@ -129,7 +132,7 @@ const HEADER: &str = "t,u,x,p1,p2,x_sp,f_load,ref,q_leak";
 #[test]
 fn values_outside_their_physical_range_are_skipped_by_column() {
     // (column index, bad value, column name, kind)
-    let cases: [(usize, &str, &str, IssueKind); 21] = [
+    let cases: [(usize, &str, &str, IssueKind); 22] = [
         (5, "inf", "x_sp", IssueKind::NonFinite),
         (5, "-inf", "x_sp", IssueKind::NonFinite),
         (5, "1e308", "x_sp", IssueKind::OutOfRange),
@@ -146,7 +149,8 @@ fn values_outside_their_physical_range_are_skipped_by_column() {
         (2, "1e308", "x", IssueKind::OutOfRange),
         (2, "-10", "x", IssueKind::OutOfRange),
         (2, "-1e308", "x", IssueKind::OutOfRange),
-        (3, "-1", "p1", IssueKind::OutOfRange),
+        (3, "-276001", "p1", IssueKind::OutOfRange),
+        (4, "-1e6", "p2", IssueKind::OutOfRange),
         (4, "20700001", "p2", IssueKind::OutOfRange),
         (3, "NaN", "p1", IssueKind::NonFinite),
         (0, "1e308", "t", IssueKind::OutOfRange),
@@ -338,4 +342,126 @@ fn a_line_that_is_not_utf8_is_one_skipped_row_and_counted() {
     );
     // rows and skipped agree (a read error used to be skipped without being a row)
     assert_eq!((r.rows, r.skipped), (3, 1));
+}
+
+#[test]
+fn pressures_slightly_below_zero_within_2_percent_of_supply_are_usable() {
+    // ±10 Pa sensor noise around tank pressure (0 Pa) in both chambers
+    let mut text = format!("{HEADER}\n");
+    let noise = ["-5.7", "3.2", "-9.9", "0", "-0.001", "9.8"];
+    for k in 0..600 {
+        let (a, b) = (noise[k % 6], noise[(k + 3) % 6]);
+        text += &row(k, &[(3, a), (4, b)]);
+        text += "\n";
+    }
+    let ds = read_str(&text).unwrap();
+    assert_eq!(
+        (ds.samples.len(), ds.issues.len()),
+        (600, 0),
+        "{:?}",
+        ds.issues.first()
+    );
+    assert_eq!(ds.samples[0].p1_pa, -5.7);
+    // the margin is 2 % of the supply pressure (13.8 MPa): -276 kPa is usable, below is not
+    let l = Limits::default();
+    assert_eq!((l.min_pressure_pa, l.max_pressure_pa), (-276_000.0, 20.7e6));
+    assert_eq!(Limits::for_supply(21.0e6).min_pressure_pa, -420_000.0);
+    let text = format!(
+        "{HEADER}\n{}\n{}\n{}\n",
+        row(0, &[(3, "-276000")]),
+        row(1, &[(4, "-276000.5")]),
+        row(2, &[])
+    );
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.samples.len(), 2);
+    assert_eq!(ds.samples[0].p1_pa, -276_000.0);
+    assert_eq!(
+        ds.issues[0].to_string(),
+        "line 3, column `p2`: pressure -276000.5 Pa is outside [-276000.0, 20700000.0] Pa \
+         (from 2 % of the supply pressure below 0 to 1.5 × the supply pressure)"
+    );
+}
+
+#[test]
+fn fields_in_double_quotes_are_read_as_without() {
+    // as pandas writes with quoting=csv.QUOTE_ALL (NaN as "")
+    let text = "\"t\",\"u\",\"x\",\"p1\",\"p2\",\"ref\"\n\
+                \"0.0\",\"1.5\",\"0.3\",\"6.9e6\",\"6.8e6\",\"0.31\"\n\
+                \"0.001\",1.5,0.3,\"6.9e6\",6.8e6,\"\"\n\
+                0.002,1.5,0.3,6.9e6,6.8e6,0.31\n";
+    let p = tmp("quoted.csv");
+    std::fs::write(&p, text).unwrap();
+    let mut r = CsvReader::open(&p, Limits::default()).unwrap();
+    assert_eq!(r.has_optional(), [false, false, true, false]);
+    let mut samples = Vec::new();
+    while let Some(row) = r.next_row() {
+        let Row::Sample(s) = row else { panic!("{row:?}") };
+        samples.push(s);
+    }
+    assert_eq!(samples.len(), 3);
+    assert_eq!(
+        (samples[0].t_s, samples[0].u_v, samples[0].p1_pa),
+        (0.0, 1.5, 6.9e6)
+    );
+    assert_eq!(samples[0].ref_m, 0.31);
+    assert!(samples[1].ref_m.is_nan());
+    assert_eq!(r.absent, [0, 0, 1, 0]);
+    // anything else stays strict: one quote, quotes inside, single quotes, a quoted comma
+    for (cell, shown) in [
+        ("\"1.5", "`\"1.5` is not a number"),
+        ("1.5\"", "`1.5\"` is not a number"),
+        ("\"\"1.5\"\"", "`\"1.5\"` is not a number"),
+        ("'1.5'", "`'1.5'` is not a number"),
+        ("\" 1.5\"", "` 1.5` is not a number"),
+    ] {
+        let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(1, cell)]), row(1, &[]));
+        let ds = read_str(&text).unwrap();
+        assert_eq!(ds.issues.len(), 1, "{cell}");
+        assert_eq!(ds.issues[0].to_string(), format!("line 2, column `u`: {shown}"));
+    }
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(1, "\"1,5\"")]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.issues[0].kind, IssueKind::WrongCellCount);
+    // a required column whose quoted cell is empty is NaN, not a number to use
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(2, "\"\"")]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(ds.issues[0].kind, IssueKind::NonFinite);
+    // a quoted header name counts as the name (and twice is still twice)
+    let e = read_str("t,u,x,p1,p2,\"x\"\n").unwrap_err();
+    assert!(e.to_string().ends_with("line 1: column `x` appears twice"), "{e}");
+}
+
+#[test]
+fn control_characters_from_the_file_are_escaped_in_messages() {
+    // ESC (a terminal colour sequence) and NUL inside a cell
+    for (cell, shown) in [
+        ("\u{1b}[31mred", "`\\u{1b}[31mred` is not a number"),
+        ("1\u{0}5", "`1\\05` is not a number"),
+        ("\u{7f}\u{9b}2J", "`\\u{7f}\\u{9b}2J` is not a number"),
+        ("\u{202e}1.5", "`\\u{202e}1.5` is not a number"),
+    ] {
+        let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(6, cell)]), row(1, &[]));
+        let ds = read_str(&text).unwrap();
+        let m = ds.issues[0].to_string();
+        assert_eq!(m, format!("line 2, column `f_load`: {shown}"));
+        assert!(!m.chars().any(|c| c.is_control()), "{m:?}");
+    }
+    // a long cell is cut
+    let long = "9".repeat(100) + "x";
+    let text = format!("{HEADER}\n{}\n{}\n", row(0, &[(6, &long)]), row(1, &[]));
+    let ds = read_str(&text).unwrap();
+    assert_eq!(
+        ds.issues[0].message,
+        format!("`{}…` is not a number", "9".repeat(80))
+    );
+    // a binary header: the message shows it escaped (bytes that are not UTF-8 as U+FFFD)
+    let p = tmp("binary-header.csv");
+    std::fs::write(&p, b"\x1b]0;owned\x07t,u\x00,\xff\x1b[2J\n0,0,0\n").unwrap();
+    let m = read_csv(&p, Limits::default()).unwrap_err().to_string();
+    assert!(
+        m.contains("(header: `\\u{1b}]0;owned\\u{7}t,u\\0,\u{fffd}\\u{1b}[2J`; required: t,u,x,p1,p2)"),
+        "{m}"
+    );
+    assert!(!m.chars().any(|c| c.is_control()), "{m:?}");
+    assert_eq!(shown("a\tb\r\n\"q\" \\ é"), "a\\tb\\r\\n\"q\" \\ é");
 }

@@ -130,6 +130,9 @@ pub struct Estimator {
     diverged_samples: u32,
     /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
     reanchor_pending: bool,
+    /// The range a measured pressure must be in to be used, Pa
+    /// ([`ActuatorParams::measured_pressure_range_pa`], as for CSV rows).
+    measured_p_range_pa: (f64, f64),
     counters: EstimatorCounters,
 }
 
@@ -147,6 +150,7 @@ impl Estimator {
     pub fn new(params: ActuatorParams, tuning: Tuning) -> Result<Self, String> {
         tuning.validate()?;
         params.validate().map_err(|e| e.to_string())?;
+        let measured_p_range_pa = params.measured_pressure_range_pa();
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
         model.substeps = tuning.substeps;
         let filter = match tuning.states {
@@ -166,6 +170,7 @@ impl Estimator {
             t0_s: 0.0,
             diverged_samples: 0,
             reanchor_pending: false,
+            measured_p_range_pa,
             counters: EstimatorCounters::default(),
         })
     }
@@ -260,7 +265,9 @@ impl Estimator {
     fn on_sample_inner(&mut self, s: &Sample) -> Estimate {
         self.counters.samples += 1;
         let mut flags = 0;
-        let limits = (self.model.p_min_pa, self.model.p_max_pa);
+        // Measured pressures slightly below 0 (noise near tank pressure) are used as
+        // they are; the predictions stay clamped at the model's own floor (p_min_pa).
+        let limits = self.measured_p_range_pa;
         let p_ok = |p: f64| p.is_finite() && p >= limits.0 && p <= limits.1;
         let use_channel = [s.x_m.is_finite(), p_ok(s.p1_pa), p_ok(s.p2_pa)];
         let usable = s.u_v.is_finite() && use_channel.iter().any(|u| *u);

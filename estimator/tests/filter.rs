@@ -383,3 +383,52 @@ fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
         "ext1 estimate went to {max_leak_after} L/min after the gap"
     );
 }
+
+/// A measured pressure slightly below 0 Pa (noise near tank pressure) within
+/// 2 % of the supply pressure is used as measured, as a CSV row with it is; one
+/// further below is left out (the channel dropped, counted), and the estimate
+/// stays finite either way.
+#[test]
+fn pressures_within_the_negative_margin_are_used_and_beyond_it_dropped() {
+    let rig = ActuatorParams::default();
+    let (lo, hi) = rig.measured_pressure_range_pa();
+    assert_eq!((lo, hi), (-276_000.0, 20.7e6));
+    let scenario = Scenario::by_name("closed-loop-sine", 5, 2.0).unwrap();
+    let mut sim = Simulator::new(
+        rig.clone(),
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        5,
+    )
+    .unwrap();
+    let mut est = Estimator::new(rig, Tuning::sensor_derived()).unwrap();
+    for _ in 0..500 {
+        est.on_sample(&sim.step());
+    }
+    let dropped = est.counters().channels_dropped;
+    // (p2 value, channel used)
+    for (p2, used) in [
+        (-5.7, true),
+        (-0.2e6, true),
+        (lo, true),
+        (-276_001.0, false),
+        (-1e6, false),
+    ] {
+        let mut s = sim.step();
+        s.p2_pa = p2;
+        let before = est.counters().channels_dropped;
+        let e = est.on_sample(&s);
+        assert_eq!(e.residual[2].is_finite(), used, "p2 = {p2} Pa: {e:?}");
+        assert_eq!(
+            est.counters().channels_dropped - before,
+            u64::from(!used),
+            "p2 = {p2} Pa"
+        );
+        assert!(e.state[..11].iter().all(|v| v.is_finite()), "p2 = {p2} Pa: {e:?}");
+        assert_eq!(e.measured[2], p2);
+    }
+    assert_eq!(est.counters().channels_dropped - dropped, 2);
+    assert_eq!(est.counters().skipped, 0);
+}

@@ -61,33 +61,50 @@ impl Config {
         Self::parse(&text).map_err(|e| format!("config {}: {e}", path.display()))
     }
 
-    /// Parses and validates config text.
+    /// Parses and validates config text. A value of the wrong type for a
+    /// numeric field (`adc_bits = 12.5`, `= -1` or too large for the field)
+    /// is named with the field's type, range and unit ([`range_hint`]).
     pub fn parse(text: &str) -> Result<Config, String> {
-        let mut cfg: Config = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
+        Self::parse_or_toml_error(text).map_err(|e| match e {
+            ParseError::Toml(e) => toml_error_line(text, &e) + &range_hint(&e),
+            ParseError::Invalid(msg) => msg,
+        })
+    }
+
+    fn parse_or_toml_error(text: &str) -> Result<Config, ParseError> {
+        let mut cfg: Config = toml::from_str(text).map_err(ParseError::Toml)?;
         // A partial [leak_filter] fills its missing fields from the leak filter's own
         // defaults (sensor-derived, 11 states), not from the thesis tuning that
         // `Tuning::default()` gives to a partial [estimator].
-        let table: toml::Table = toml::from_str(text).map_err(|e| toml_error_line(text, &e))?;
+        let table: toml::Table = toml::from_str(text).map_err(ParseError::Toml)?;
         if let Some(given) = table.get("leak_filter").and_then(|v| v.as_table()) {
-            let mut merged = toml::Table::try_from(Tuning::sensor_derived()).map_err(|e| e.to_string())?;
+            let mut merged = toml::Table::try_from(Tuning::sensor_derived())
+                .map_err(|e| ParseError::Invalid(e.to_string()))?;
             for (k, v) in given {
                 merged.insert(k.clone(), v.clone());
             }
-            cfg.leak_filter = Tuning::deserialize(merged).map_err(|e| format!("[leak_filter] {e}"))?;
+            cfg.leak_filter = Tuning::deserialize(merged).map_err(|e| {
+                ParseError::Invalid(format!("[leak_filter] {}", dataset::escaped(&e.to_string())))
+            })?;
         }
-        cfg.model.validate().map_err(|e| format!("[model] {e}"))?;
-        if let Some(rig) = &cfg.rig {
+        cfg.validate().map_err(ParseError::Invalid)?;
+        Ok(cfg)
+    }
+
+    /// Checks every section, naming the first bad field with its range and unit.
+    fn validate(&self) -> Result<(), String> {
+        self.model.validate().map_err(|e| format!("[model] {e}"))?;
+        if let Some(rig) = &self.rig {
             rig.validate().map_err(|e| format!("[rig] {e}"))?;
         }
-        cfg.sensors.validate().map_err(|e| format!("[sensors] {e}"))?;
-        cfg.sim.validate().map_err(|e| format!("[sim] {e}"))?;
-        cfg.estimator.validate()?;
-        cfg.leak_filter
+        self.sensors.validate().map_err(|e| format!("[sensors] {e}"))?;
+        self.sim.validate().map_err(|e| format!("[sim] {e}"))?;
+        self.estimator.validate()?;
+        self.leak_filter
             .validate()
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
-        cfg.classifier.validate()?;
-        cfg.udp.validate()?;
-        Ok(cfg)
+        self.classifier.validate()?;
+        self.udp.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else
@@ -138,18 +155,115 @@ impl Config {
     }
 }
 
+/// Why config text was refused.
+enum ParseError {
+    /// Not TOML, or a value the sections' types cannot hold (wrong type, unknown field).
+    Toml(toml::de::Error),
+    /// A value outside its range (the message names field, range and unit).
+    Invalid(String),
+}
+
 /// One line describing a TOML error: line, column and the parser's message.
+/// Text from the file (the line, names and values in the message) is shown
+/// with its control characters escaped ([`dataset::escaped`]).
 pub fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
-    let msg = e.message().trim().replace('\n', "; ");
+    let msg = dataset::escaped(&e.message().trim().replace('\n', "; "));
     match e.span() {
         Some(span) => {
             let before = &text[..span.start.min(text.len())];
             let line = before.matches('\n').count() + 1;
             let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
-            let src = text.lines().nth(line - 1).unwrap_or("").trim();
+            let src = dataset::shown(text.lines().nth(line - 1).unwrap_or("").trim());
             format!("line {line}, column {col} (`{src}`): {msg}")
         }
         None => msg,
+    }
+}
+
+/// For a TOML error at a numeric field of the config (a value of the wrong
+/// type, negative for an unsigned field, or too large for it): ` (`section.field`
+/// must be an integer: 1 to 24 bits)`, the range and unit from the field's own
+/// validation; empty for any other error.
+///
+/// The range is the validation's own message (no second table to keep in
+/// step): the field is set, in the default config, to values outside every
+/// range (NaN for a number; 0, then the largest u8, u16, u32 for an integer)
+/// until the validation refuses it by name.
+pub fn range_hint(e: &toml::de::Error) -> String {
+    // the dotted key path of the value the error is about (toml shows it when
+    // the error has no input text to point into)
+    let mut bare = e.clone();
+    bare.set_input(None);
+    let bare = bare.to_string();
+    let Some(keys) = bare
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
+    else {
+        return String::new();
+    };
+    let mut path: Vec<&str> = keys.split('.').collect();
+    if path.first() == Some(&"rig") {
+        path[0] = "model"; // [rig] has [model]'s fields and ranges (not in the default config)
+    }
+    let Ok(base) = toml::Table::try_from(Config::default()) else {
+        return String::new();
+    };
+    let (integer, candidates) = match leaf(&base, &path) {
+        Some(toml::Value::Integer(_)) => (
+            true,
+            [0, 255, 65_535, 4_294_967_295].map(toml::Value::Integer).to_vec(),
+        ),
+        Some(toml::Value::Float(_)) => (false, vec![toml::Value::Float(f64::NAN)]),
+        _ => return String::new(),
+    };
+    let last = path[path.len() - 1];
+    for v in candidates {
+        let mut t = base.clone();
+        if let Some(slot) = leaf_mut(&mut t, &path) {
+            *slot = v;
+        }
+        let Ok(text) = toml::to_string(&t) else { continue };
+        let Err(ParseError::Invalid(msg)) = Config::parse_or_toml_error(&text) else {
+            continue;
+        };
+        if !(msg.contains(&format!("{last}` =")) || msg.contains(&format!("{last} ="))) {
+            continue;
+        }
+        let range = msg
+            .split_once("is invalid: expected ")
+            .or_else(|| msg.split_once(": must be "))
+            .map(|(_, r)| r);
+        let path = keys;
+        match range {
+            Some(r) if !integer && r.starts_with("a number ") => return format!(" (`{path}` must be {r})"),
+            Some(r) if integer => return format!(" (`{path}` must be an integer: {r})"),
+            Some(r) => return format!(" (`{path}` must be a number: {r})"),
+            None => {}
+        }
+    }
+    String::new()
+}
+
+fn leaf<'a>(t: &'a toml::Table, path: &[&str]) -> Option<&'a toml::Value> {
+    let (first, rest) = path.split_first()?;
+    let v = t.get(*first)?;
+    match v {
+        toml::Value::Table(sub) if !rest.is_empty() => leaf(sub, rest),
+        _ if rest.is_empty() => Some(v),
+        _ => None,
+    }
+}
+
+fn leaf_mut<'a>(t: &'a mut toml::Table, path: &[&str]) -> Option<&'a mut toml::Value> {
+    let (first, rest) = path.split_first()?;
+    let v = t.get_mut(*first)?;
+    if rest.is_empty() {
+        return Some(v);
+    }
+    match v {
+        toml::Value::Table(sub) => leaf_mut(sub, rest),
+        _ => None,
     }
 }
 
@@ -264,7 +378,7 @@ mod tests {
         let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
         let mut leaves = Vec::new();
         numeric_leaves(&base, &mut Vec::new(), &mut leaves);
-        assert_eq!(leaves.len(), 134, "numeric fields");
+        assert_eq!(leaves.len(), 136, "numeric fields");
         let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
         let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
         let (mut refused, mut accepted) = (0, 0);
@@ -302,6 +416,111 @@ mod tests {
         assert!(not_finite.is_empty(), "{not_finite:#?}");
         // most absurd values are refused; the rest (zeros of noises, offsets, ...) run finite
         assert!(refused > 3 * accepted, "{refused} refused, {accepted} accepted");
+    }
+
+    #[test]
+    fn a_value_of_the_wrong_type_is_named_with_the_fields_range_and_unit() {
+        for (text, expect) in [
+            (
+                "[sensors]\nadc_bits = -1\n",
+                "line 2, column 12 (`adc_bits = -1`): invalid value: integer `-1`, expected u32 \
+                 (`sensors.adc_bits` must be an integer: 1 to 24 bits)",
+            ),
+            (
+                "[sensors]\nadc_bits = 12.5\n",
+                "line 2, column 12 (`adc_bits = 12.5`): invalid type: floating point `12.5`, expected u32 \
+                 (`sensors.adc_bits` must be an integer: 1 to 24 bits)",
+            ),
+            (
+                "[sim]\nsubsteps_per_sample = 99999999999\n",
+                "line 2, column 23 (`substeps_per_sample = 99999999999`): invalid value: integer \
+                 `99999999999`, expected u32 (`sim.substeps_per_sample` must be an integer: 1 to 10000 \
+                 sub-steps per sample)",
+            ),
+            (
+                "[rig]\nmass_kg = true\n",
+                "line 2, column 11 (`mass_kg = true`): invalid type: boolean `true`, expected f64 \
+                 (`rig.mass_kg` must be a number: a mass from 1e-3 to 1e5 kg)",
+            ),
+            (
+                "[leak_filter]\nq_p_pa2 = \"1e6 Pa²\"\n",
+                "line 2, column 11 (`q_p_pa2 = \"1e6 Pa²\"`): invalid type: string \"1e6 Pa²\", \
+                 expected f64 (`leak_filter.q_p_pa2` must be a number from 0.0 to 1e18 Pa²)",
+            ),
+            (
+                "[estimator]\nmax_bridged_gap_samples = -3\n",
+                "line 2, column 27 (`max_bridged_gap_samples = -3`): invalid value: integer `-3`, \
+                 expected u32 (`estimator.max_bridged_gap_samples` must be an integer: 0 to 3600000 \
+                 samples (an hour at 1 kHz))",
+            ),
+            (
+                "[classifier]\nstuck_samples = 1e3\n",
+                "line 2, column 17 (`stuck_samples = 1e3`): invalid type: floating point `1000.0`, \
+                 expected u32 (`classifier.stuck_samples` must be an integer: 1 to 1000000000 samples)",
+            ),
+            (
+                "[udp.p1]\noffset = \"0\"\n",
+                "line 2, column 10 (`offset = \"0\"`): invalid type: string \"0\", expected f64 \
+                 (`udp.p1.offset` must be a number from -1e9 to 1e9 Pa)",
+            ),
+            // not a numeric field: no range to give
+            (
+                "[model]\nfriction = 3\n",
+                "line 2, column 12 (`friction = 3`): invalid type: integer `3`, expected struct Friction",
+            ),
+        ] {
+            assert_eq!(Config::parse(text).unwrap_err(), expect, "{text}");
+        }
+    }
+
+    #[test]
+    fn every_numeric_field_of_the_wrong_type_is_named_with_its_range() {
+        let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
+        let mut leaves = Vec::new();
+        numeric_leaves(&base, &mut Vec::new(), &mut leaves);
+        assert_eq!(leaves.len(), 136, "numeric fields");
+        for (path, v) in &leaves {
+            let wrong = match v {
+                toml::Value::Integer(_) => [toml::Value::Float(0.5), toml::Value::Integer(-1)],
+                _ => [toml::Value::String("1 unit".into()), toml::Value::Boolean(true)],
+            };
+            for value in wrong {
+                let mut t = base.clone();
+                set(&mut t, path, value.clone());
+                let e = Config::parse(&toml::to_string(&t).unwrap()).unwrap_err();
+                let kind = if v.is_integer() {
+                    "an integer: "
+                } else {
+                    "a number"
+                };
+                let hint = format!("(`{}` must be {kind}", path.join("."));
+                assert!(e.contains(&hint), "{} = {value}: {e}", path.join("."));
+            }
+        }
+    }
+
+    #[test]
+    fn control_characters_from_the_file_are_escaped_in_messages() {
+        for (text, expect) in [
+            // an unknown key with ESC (written as a TOML escape)
+            (
+                "[model]\n\"\\u001b[31mx\" = 1\n",
+                "line 2, column 1 (`\"\\u001b[31mx\" = 1`): unknown field `\\u{1b}[31mx`, expected one of",
+            ),
+            // raw ESC and NUL in the file
+            (
+                "[model]\nmass_kg = \"\u{1b}[31m\0\"\n",
+                "line 2, column 12 (`mass_kg = \"\\u{1b}[31m\\0\"`): invalid basic string",
+            ),
+            (
+                "[model]\nmass_kg = 1\0\u{1b}[2J\n",
+                "line 2, column 14 (`mass_kg = 1\\0\\u{1b}[2J`): unexpected key or value",
+            ),
+        ] {
+            let e = Config::parse(text).unwrap_err();
+            assert!(e.starts_with(expect), "{text:?}: {e}");
+            assert!(!e.chars().any(|c| c.is_control()), "{e:?}");
+        }
     }
 
     #[test]

@@ -162,6 +162,12 @@ impl Default for ActuatorParams {
     }
 }
 
+/// How far below 0 Pa (gauge) a measured chamber pressure may read, as a
+/// fraction of the supply pressure p_s (dimensionless): 2 %, 0.276 MPa at the
+/// default 13.8 MPa. Sensor noise and offset around tank pressure read slightly
+/// negative; see [`ActuatorParams::measured_pressure_range_pa`].
+pub const PRESSURE_NEGATIVE_MARGIN: f64 = 0.02;
+
 impl ActuatorParams {
     /// The thesis' nominal parameters (same as `Default`).
     pub fn thesis() -> Self {
@@ -179,6 +185,19 @@ impl ActuatorParams {
     /// return, where leak sizes given in L/min are converted to coefficients.
     pub fn nominal_chamber_pressure_pa(&self) -> f64 {
         0.5 * (self.supply_pressure_pa + self.return_pressure_pa)
+    }
+
+    /// The range a measured chamber pressure may take, Pa (gauge), both ends
+    /// inclusive: [−[`PRESSURE_NEGATIVE_MARGIN`]·p_s, 1.5·p_s]
+    /// ([−0.276, 20.7] MPa by default). CSV rows, UDP frames and the estimator's
+    /// samples outside it are unusable. Pressures below 0 within the margin
+    /// (sensor noise near tank pressure) are used as measured; the filters'
+    /// predictions stay clamped at their own floor ([`crate::process::ProcessModel::p_min_pa`]).
+    pub fn measured_pressure_range_pa(&self) -> (f64, f64) {
+        (
+            -PRESSURE_NEGATIVE_MARGIN * self.supply_pressure_pa,
+            1.5 * self.supply_pressure_pa,
+        )
     }
 
     /// Chamber volumes (V1, V2) at rod position `x_m`, m³, never below 1 % of the dead volume.
@@ -224,6 +243,17 @@ mod tests {
         let partial: ActuatorParams = toml::from_str("mass_kg = 12.0").unwrap();
         assert_eq!(partial.mass_kg, 12.0);
         assert_eq!(partial.piston_area_m2, 6.33e-4);
+    }
+
+    #[test]
+    fn measured_pressures_may_read_2_percent_of_supply_below_zero() {
+        let p = ActuatorParams::default();
+        assert_eq!(p.measured_pressure_range_pa(), (-0.02 * 13.8e6, 1.5 * 13.8e6));
+        let p = ActuatorParams {
+            supply_pressure_pa: 21.0e6,
+            ..ActuatorParams::default()
+        };
+        assert_eq!(p.measured_pressure_range_pa(), (-420.0e3, 31.5e6));
     }
 
     #[test]
