@@ -79,9 +79,20 @@ fn channels_and_one_thread_give_identical_results_and_find_the_leak() {
         .iter()
         .filter(|e| e["phase"] == "raised" && e["detector"] == "leak-size")
         .collect();
-    assert_eq!(raised.len(), 1, "{events:#}");
+    // one leak event: raised with its kind pending (unless already clear), then
+    // raised again under the same id with its kind
+    let named: Vec<_> = raised.iter().filter(|e| e["kind"] != "leak").collect();
+    assert_eq!(named.len(), 1, "{events:#}");
+    assert!(
+        raised.iter().all(|e| e["event_id"] == named[0]["event_id"]),
+        "{events:#}"
+    );
+    assert!(
+        raised.len() <= 2 && raised[0]["kind"] == "leak" || raised.len() == 1,
+        "{events:#}"
+    );
+    assert_eq!(named[0]["kind"], "ext2");
     let ev = raised[0];
-    assert_eq!(ev["kind"], "ext2");
     for field in [
         "t_detect_s",
         "t_onset_s",
