@@ -1,0 +1,353 @@
+//! The classifier's settings and a rig's commissioning (its learned healthy state).
+
+use crate::events::nan;
+use serde::{Deserialize, Serialize};
+
+/// What a healthy commissioning run taught about the leak filter's estimates:
+/// loaded at start, it arms the detector at once, so that a leak already
+/// present when monitoring starts shows against it (`[classifier.commissioning]`,
+/// written by `leakwatch commission`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Commissioning {
+    /// Healthy offset of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
+    pub offsets_lpm: [f64; 3],
+    /// Healthy spread (standard deviation) of each, L/min at the nominal drop.
+    pub spreads_lpm: [f64; 3],
+    /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
+    pub crossings_per_s: [f64; 3],
+    /// Seconds of healthy, converged data learned from, s.
+    pub healthy_s: f64,
+    /// Mean normalised innovation squared of the healthy data (NaN: unknown).
+    #[serde(default = "nan")]
+    pub nis_mean: f64,
+    /// Where it was learned (the recording's path).
+    #[serde(default)]
+    pub source: String,
+}
+
+impl Commissioning {
+    fn validate(&self) -> Result<(), String> {
+        let all = self
+            .offsets_lpm
+            .iter()
+            .chain(&self.spreads_lpm)
+            .chain(&self.crossings_per_s)
+            .chain(std::iter::once(&self.healthy_s));
+        for v in all {
+            if !v.is_finite() {
+                return Err(format!(
+                    "[classifier.commissioning] holds {v}: every figure must be finite"
+                ));
+            }
+        }
+        if self
+            .spreads_lpm
+            .iter()
+            .chain(&self.crossings_per_s)
+            .any(|v| *v < 0.0)
+            || self.healthy_s <= 0.0
+        {
+            return Err(
+                "[classifier.commissioning] spreads, crossings and healthy_s must be ≥ 0 (healthy_s > 0)"
+                    .into(),
+            );
+        }
+        if self
+            .offsets_lpm
+            .iter()
+            .chain(&self.spreads_lpm)
+            .any(|v| v.abs() > 1e4)
+            || self.crossings_per_s.iter().any(|v| *v > 1e6)
+            || self.healthy_s > 1e9
+            || self.nis_mean.is_infinite()
+        {
+            return Err(
+                "[classifier.commissioning] offsets and spreads must be within ±1e4 L/min, crossings \
+                 at most 1e6 per s, healthy_s at most 1e9 s, nis_mean finite or NaN"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Settings of the detectors, `[classifier]` in the TOML config.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ClassifierConfig {
+    /// Time after the filter has converged before learning starts (the leak and
+    /// bias estimates settle), s.
+    pub settle_s: f64,
+    /// Healthy warm-up after settling, used to learn thresholds, s.
+    pub warmup_s: f64,
+    /// Shortest warm-up that can give thresholds, s.
+    pub min_warmup_s: f64,
+    /// Leak-size detector: the false-alarm rate asked for, per hour. The threshold
+    /// on the rise, in healthy spreads, is c = √(2 ln(N₀/rate)) (Rice's formula for
+    /// a Gaussian process with N₀ upcrossings of its mean per hour, learned in the
+    /// warm-up), never below `threshold_sigma`.
+    pub false_alarms_per_hour: f64,
+    /// Leak-size detector: least threshold in spreads of the healthy estimate.
+    pub threshold_sigma: f64,
+    /// Leak-size detector: at the first alarm, the part of the flow mismatch the
+    /// named kind leaves unexplained must be below this fraction of its size (the
+    /// kind is decided before the alarm is raised).
+    pub isolation_max_misfit: f64,
+    /// Leak-size detector: window of the measured pressures over which the real
+    /// leak flow is averaged, s.
+    pub size_window_s: f64,
+    /// Leak-size detector: after a gap, a skipped sample or a filter reset, no
+    /// evidence for this long (the filter re-converges), s.
+    pub recovery_s: f64,
+    /// Leak-size detector: a normalised innovation squared above this (an innovation
+    /// of about √nis_gate standard deviations) means the filter has lost track for
+    /// a moment: no evidence for `recovery_s` after it.
+    pub nis_gate: f64,
+    /// Leak-size detector: while the NIS averaged over the last 5 s exceeds this
+    /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
+    /// chirp), evidence does not count (0 = off).
+    pub nis_ratio_gate: f64,
+    /// Leak-size detector: while the valve command reverses faster than this (its
+    /// frequency, from swings through ±1 V over the last 2 s), evidence does not
+    /// count: the healthy model's effective load (a random walk) cannot follow the
+    /// friction reversals and the leak estimates wander (0 = off), Hz.
+    pub max_command_hz: f64,
+    /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
+    pub thesis_baseline: bool,
+    /// The healthy state learned by commissioning (absent: learned in a warm-up,
+    /// and a leak present at start cannot be seen).
+    pub commissioning: Option<Commissioning>,
+    /// Leak-size detector: smallest leak ever declared, L/min (at nominal drop).
+    pub min_size_lpm: f64,
+    /// Leak-size detector: time above threshold before a leak is declared, s.
+    pub confirm_s: f64,
+    /// Leak-size detector: time constant of the healthy baseline that the rise is
+    /// measured from, s (0 = the warm-up offset, never adapted).
+    pub baseline_tau_s: f64,
+    /// Leak-size detector: while any rise exceeds this fraction of its threshold the
+    /// baseline holds, for at most `baseline_hold_s` (a leak opening over seconds is
+    /// not absorbed on its way to the threshold, a drift of the operating point is
+    /// still followed); only once the baseline has followed the estimates for
+    /// `baseline_tau_s` after arming (before that it is still settling).
+    pub baseline_hold: f64,
+    /// Leak-size detector: longest hold of the baseline by one rise, s.
+    pub baseline_hold_s: f64,
+    /// Leak-size detector: drift of the baseline since the warm-up that is reported
+    /// as a slowly growing leak, L/min (at nominal drop).
+    pub slow_leak_lpm: f64,
+    /// Supply pressure of the rig, Pa.
+    pub supply_pressure_pa: f64,
+    /// Leak-size detector: a chamber pressure within this fraction of the supply
+    /// pressure from tank or supply is an excursion (the rod against a stop, a land
+    /// closed): no evidence is gathered and the baseline holds.
+    pub excursion_margin: f64,
+    /// Leak-size detector: time after an excursion before evidence is gathered again, s.
+    pub excursion_recovery_s: f64,
+    /// Leak-size detector: during an excursion, a rise above this many thresholds is
+    /// still evidence (a large leak itself drains the chambers towards tank).
+    pub excursion_override: f64,
+    /// Time below half the threshold before a leak is cleared, s.
+    pub clear_s: f64,
+    /// Relative change of the size that gives an `updated` event.
+    pub update_relative: f64,
+    /// Time another kind must explain the data clearly better before an event is re-isolated, s.
+    pub reisolate_s: f64,
+    /// How long one kind must lead, clearly and above its threshold, before a leak is
+    /// named (until then it is raised as `leak`, kind pending), s. At most
+    /// `confirm_s`: the kind is named at the first alarm.
+    pub kind_confirm_s: f64,
+    /// A rise past this many times its threshold for `confirm_s` raises a leak with
+    /// its kind pending even while no kind explains the mismatch clearly yet
+    /// (a leak that first shows on both chambers); 0 turns it off.
+    pub pending_factor: f64,
+    /// Shortest time between two `updated` events of one leak, s.
+    pub update_interval_s: f64,
+    /// Thesis detector: threshold as a multiple of the largest healthy MAE.
+    pub mae_margin: f64,
+    /// Thesis detector: time above threshold before a decision, s.
+    pub mae_confirm_s: f64,
+    /// Samples with the same exact value before a sensor is called stuck.
+    pub stuck_samples: u32,
+    /// Samples at the end of the range before a sensor is called saturated.
+    pub saturated_samples: u32,
+    /// Samples without a usable value before a sensor is called dead.
+    pub dead_samples: u32,
+    /// Full-scale range of the pressure transducers, Pa.
+    pub pressure_full_scale_pa: f64,
+}
+
+impl Default for ClassifierConfig {
+    fn default() -> Self {
+        ClassifierConfig {
+            settle_s: 3.0,
+            warmup_s: 5.0,
+            min_warmup_s: 3.0,
+            false_alarms_per_hour: 0.05,
+            threshold_sigma: 4.0,
+            isolation_max_misfit: 0.35,
+            size_window_s: 2.0,
+            recovery_s: 2.0,
+            nis_gate: 10000.0,
+            nis_ratio_gate: 3.0,
+            max_command_hz: 4.0,
+            thesis_baseline: false,
+            commissioning: None,
+            min_size_lpm: 0.06,
+            confirm_s: 0.5,
+            baseline_tau_s: 15.0,
+            baseline_hold: 0.5,
+            baseline_hold_s: 5.0,
+            slow_leak_lpm: 0.5,
+            supply_pressure_pa: 13.8e6,
+            excursion_margin: 0.05,
+            excursion_recovery_s: 1.0,
+            excursion_override: 4.0,
+            clear_s: 2.0,
+            update_relative: 0.1,
+            reisolate_s: 0.5,
+            kind_confirm_s: 1.5,
+            pending_factor: 2.0,
+            update_interval_s: 1.0,
+            mae_margin: 1.3,
+            mae_confirm_s: 0.5,
+            stuck_samples: 2000,
+            saturated_samples: 200,
+            dead_samples: 200,
+            pressure_full_scale_pa: 20.7e6,
+        }
+    }
+}
+
+impl ClassifierConfig {
+    /// Checks every field, naming the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        // (name, value, least, largest, unit)
+        let fields: [(&str, f64, f64, f64, &str); 30] = [
+            ("settle_s", self.settle_s, 0.0, 1e6, "s"),
+            ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
+            ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
+            (
+                "false_alarms_per_hour",
+                self.false_alarms_per_hour,
+                1e-9,
+                1e6,
+                "per hour",
+            ),
+            (
+                "threshold_sigma",
+                self.threshold_sigma,
+                0.0,
+                1e3,
+                "healthy spreads",
+            ),
+            (
+                "isolation_max_misfit",
+                self.isolation_max_misfit,
+                0.0,
+                10.0,
+                "(fraction of the size)",
+            ),
+            ("size_window_s", self.size_window_s, 0.0, 1e6, "s"),
+            ("recovery_s", self.recovery_s, 0.0, 1e6, "s"),
+            (
+                "nis_gate",
+                self.nis_gate,
+                0.0,
+                1e15,
+                "(normalised innovation squared)",
+            ),
+            (
+                "nis_ratio_gate",
+                self.nis_ratio_gate,
+                0.0,
+                1e6,
+                "(times the healthy mean NIS)",
+            ),
+            ("max_command_hz", self.max_command_hz, 0.0, 1e5, "Hz"),
+            ("min_size_lpm", self.min_size_lpm, 0.0, 1e4, "L/min"),
+            ("confirm_s", self.confirm_s, 0.0, 1e6, "s"),
+            ("baseline_tau_s", self.baseline_tau_s, 0.0, 1e8, "s"),
+            (
+                "baseline_hold",
+                self.baseline_hold,
+                0.0,
+                1e3,
+                "(fraction of the threshold)",
+            ),
+            ("baseline_hold_s", self.baseline_hold_s, 0.0, 1e6, "s"),
+            ("slow_leak_lpm", self.slow_leak_lpm, 0.0, 1e4, "L/min"),
+            ("supply_pressure_pa", self.supply_pressure_pa, 1e4, 1e9, "Pa"),
+            (
+                "excursion_margin",
+                self.excursion_margin,
+                0.0,
+                1.0,
+                "(fraction of the supply pressure)",
+            ),
+            ("excursion_recovery_s", self.excursion_recovery_s, 0.0, 1e6, "s"),
+            (
+                "excursion_override",
+                self.excursion_override,
+                0.0,
+                1e6,
+                "thresholds",
+            ),
+            ("clear_s", self.clear_s, 0.0, 1e6, "s"),
+            (
+                "update_relative",
+                self.update_relative,
+                0.0,
+                1e6,
+                "(relative change)",
+            ),
+            ("reisolate_s", self.reisolate_s, 0.0, 1e6, "s"),
+            ("kind_confirm_s", self.kind_confirm_s, 0.0, 1e6, "s"),
+            (
+                "pending_factor",
+                self.pending_factor,
+                0.0,
+                1e6,
+                "(times the threshold)",
+            ),
+            ("update_interval_s", self.update_interval_s, 0.0, 1e6, "s"),
+            ("mae_margin", self.mae_margin, 0.0, 1e6, "(times the healthy MAE)"),
+            ("mae_confirm_s", self.mae_confirm_s, 0.0, 1e6, "s"),
+            (
+                "pressure_full_scale_pa",
+                self.pressure_full_scale_pa,
+                1e5,
+                1e9,
+                "Pa",
+            ),
+        ];
+        for (name, v, lo, hi, unit) in fields {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(format!(
+                    "[classifier] {name} = {v:?}: must be a number from {lo:?} to {hi:?} {unit}"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("stuck_samples", self.stuck_samples),
+            ("saturated_samples", self.saturated_samples),
+            ("dead_samples", self.dead_samples),
+        ] {
+            if !(1..=1_000_000_000).contains(&v) {
+                return Err(format!(
+                    "[classifier] {name} = {v}: must be 1 to 1000000000 samples"
+                ));
+            }
+        }
+        if let Some(c) = &self.commissioning {
+            c.validate()?;
+        }
+        if self.min_warmup_s > self.warmup_s {
+            return Err(format!(
+                "[classifier] min_warmup_s = {} exceeds warmup_s = {}",
+                self.min_warmup_s, self.warmup_s
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,465 @@
+//! leakwatch's detector: thresholds on the rise of the estimated leak sizes above
+//! a healthy baseline, the kind decided by the chamber flows each hypothesis
+//! implies (the per-sample decision is in `step.rs`).
+
+use crate::track::{Active, Arming, Stats};
+use crate::{signatures_lpm, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
+use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+
+mod step;
+
+/// leakwatch's detector: thresholds on the estimated leak sizes.
+#[derive(Debug, Clone)]
+pub struct LeakSizeDetector {
+    cfg: ClassifierConfig,
+    arming: Arming,
+    stats: [Stats; 3],
+    /// The healthy values seen while learning.
+    record: HealthyRecord,
+    /// Threshold on the rise of each kind, in healthy spreads.
+    threshold_z: [f64; 3],
+    threshold_lpm: [f64; 3],
+    /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
+    baseline_lpm: [f64; 3],
+    /// The baseline when each rise was last low (before a possible onset), L/min.
+    baseline_low_lpm: [f64; 3],
+    /// Time of the last estimate read, s (for the baseline's time step).
+    last_t_s: f64,
+    /// When the detector armed, s.
+    armed_at_s: f64,
+    /// Since when the baseline has been held by a rise, s.
+    hold_since_s: Option<f64>,
+    above_since_s: [Option<f64>; 3],
+    /// Since when the baseline's drift has exceeded `slow_leak_lpm` (lead kind, time s).
+    slow_since_s: Option<(usize, f64)>,
+    /// No evidence is gathered before this time (an excursion and its recovery), s.
+    blind_until_s: f64,
+    /// Evidence is invalid before this time (a gap, a skipped sample, a reset, a NIS burst), s.
+    invalid_until_s: f64,
+    /// The filter restarted: no evidence until it has converged again.
+    awaiting_convergence: bool,
+    /// Mean NIS of the healthy data (NaN: unknown).
+    nis_healthy: f64,
+    /// NIS averaged over the last [`NIS_RATIO_WINDOW_S`].
+    nis_avg: f64,
+    /// Side of the ±1 V band the command was last on (−1, 0 before the first swing, +1).
+    command_side: i8,
+    /// Command reversals per second, averaged over [`COMMAND_RATE_WINDOW_S`].
+    reversals_per_s: f64,
+    /// After a stretch the model could not follow, the baseline is taken again from
+    /// this time (s) for [`REACQUIRE_S`], following the estimates quickly.
+    reacquire_after_s: f64,
+    /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
+    blind_s: f64,
+    /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
+    flow_factor: [f64; 3],
+    last_low_s: [f64; 3],
+    /// While a leak's kind is pending: its rise of each hypothesis averaged over
+    /// [`KIND_AVERAGE_S`] (the kind is read from the averaged mismatch), L/min.
+    pending_rise_lpm: [f64; 3],
+    /// Since when some hypothesis' rise has been past `pending_factor` times its
+    /// threshold (with evidence), s.
+    strong_since_s: Option<f64>,
+    active: Option<Active>,
+    next_id: u64,
+}
+
+/// The threshold in spreads for a requested false-alarm rate `rate_per_h`, with
+/// `crossings_per_s` upcrossings of the mean per second (Rice: the rate of
+/// upcrossings of level c·σ by a Gaussian process is N₀·e^(−c²/2)), at least `floor`.
+pub fn rice_threshold(crossings_per_s: f64, rate_per_h: f64, floor: f64) -> f64 {
+    let n0_per_h = crossings_per_s * 3600.0;
+    if n0_per_h > rate_per_h && rate_per_h > 0.0 {
+        (2.0 * (n0_per_h / rate_per_h).ln()).sqrt().max(floor)
+    } else {
+        floor
+    }
+}
+
+/// Healthy values of the three single-leak sizes kept every 10 ms, and their
+/// statistics: the mean as the offset, the standard deviation as the spread
+/// (the healthy estimate wanders with the operating point, which a robust
+/// spread would hide), and the rate of upcrossings of the mean.
+#[derive(Debug, Clone, Default)]
+struct HealthyRecord {
+    values: [Vec<f64>; 3],
+    next_t_s: f64,
+    learned_s: f64,
+    nis_sum: f64,
+    nis_n: f64,
+}
+
+impl HealthyRecord {
+    /// Interval between kept values, s.
+    const EVERY_S: f64 = 0.01;
+
+    fn with_capacity_s(seconds: f64) -> Self {
+        let n = (seconds / Self::EVERY_S).clamp(0.0, 1e6) as usize + 16;
+        HealthyRecord {
+            values: std::array::from_fn(|_| Vec::with_capacity(n)),
+            next_t_s: f64::NEG_INFINITY,
+            learned_s: 0.0,
+            nis_sum: 0.0,
+            nis_n: 0.0,
+        }
+    }
+
+    fn push(&mut self, t_s: f64, dt_s: f64, raw: [f64; 3], nis: f64) {
+        self.learned_s += dt_s;
+        if nis.is_finite() {
+            self.nis_sum += nis.min(1e6);
+            self.nis_n += 1.0;
+        }
+        if t_s >= self.next_t_s {
+            self.next_t_s = t_s + Self::EVERY_S;
+            for k in 0..3 {
+                self.values[k].push(raw[k]);
+            }
+        }
+    }
+
+    /// Mean NIS of the learned samples (NaN if none).
+    fn nis_mean(&self) -> f64 {
+        if self.nis_n > 0.0 {
+            self.nis_sum / self.nis_n
+        } else {
+            f64::NAN
+        }
+    }
+
+    /// (offsets, spreads, upcrossings per second of the learned time).
+    fn summary(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let mut med = [f64::NAN; 3];
+        let mut spread = [f64::NAN; 3];
+        let mut cross = [0.0; 3];
+        for k in 0..3 {
+            let v = &self.values[k];
+            if v.is_empty() {
+                continue;
+            }
+            let n = v.len() as f64;
+            let m = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+            med[k] = m;
+            spread[k] = var.sqrt();
+            let ups = v.windows(2).filter(|w| w[0] <= m && w[1] > m).count();
+            cross[k] = ups as f64 / self.learned_s.max(Self::EVERY_S);
+        }
+        (med, spread, cross)
+    }
+}
+
+/// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
+/// the offset, spread and upcrossing rate of each single-leak size after the
+/// filter has converged and settled, gaps and resets left out.
+#[derive(Debug, Clone)]
+pub struct CommissioningLearner {
+    settle_s: f64,
+    converged_at_s: Option<f64>,
+    record: HealthyRecord,
+    last_t_s: f64,
+}
+
+impl CommissioningLearner {
+    /// A learner that starts `settle_s` after the filter has converged.
+    pub fn new(settle_s: f64) -> Self {
+        CommissioningLearner {
+            settle_s,
+            converged_at_s: None,
+            record: HealthyRecord::with_capacity_s(600.0),
+            last_t_s: f64::NAN,
+        }
+    }
+
+    /// Reads one estimate of the leak filter.
+    pub fn on_estimate(&mut self, e: &Estimate) {
+        if e.n_states < 10 {
+            return;
+        }
+        let bad = FLAG_SKIPPED | FLAG_RESET | FLAG_CONVERGING | FLAG_AFTER_GAP;
+        if e.flags & bad != 0 {
+            if e.flags & (FLAG_RESET | FLAG_CONVERGING) != 0 {
+                self.converged_at_s = None;
+            }
+            self.last_t_s = f64::NAN;
+            return;
+        }
+        let t0 = *self.converged_at_s.get_or_insert(e.t_s);
+        if e.t_s - t0 < self.settle_s {
+            return;
+        }
+        let raw = LeakSizeDetector::raw_sizes(e);
+        if !raw.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        let dt_s = if self.last_t_s.is_finite() {
+            (e.t_s - self.last_t_s).clamp(0.0, 0.1)
+        } else {
+            0.0
+        };
+        self.last_t_s = e.t_s;
+        self.record.push(e.t_s, dt_s, raw, e.nis);
+    }
+
+    /// The commissioning, or why there is none (too little healthy data).
+    pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
+        let learned_s = self.record.learned_s;
+        if learned_s < min_s {
+            return Err(format!(
+                "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
+            ));
+        }
+        let (offsets_lpm, spreads_lpm, crossings_per_s) = self.record.summary();
+        Ok(Commissioning {
+            offsets_lpm,
+            spreads_lpm,
+            crossings_per_s,
+            healthy_s: learned_s,
+            nis_mean: self.record.nis_mean(),
+            source: source.to_string(),
+        })
+    }
+}
+
+impl LeakSizeDetector {
+    /// A detector with settings `cfg`.
+    pub fn new(cfg: ClassifierConfig) -> Self {
+        LeakSizeDetector {
+            record: HealthyRecord::with_capacity_s(cfg.warmup_s),
+            cfg,
+            arming: Arming::Converging,
+            stats: [Stats::default(); 3],
+            threshold_z: [f64::NAN; 3],
+            threshold_lpm: [f64::NAN; 3],
+            baseline_lpm: [f64::NAN; 3],
+            baseline_low_lpm: [f64::NAN; 3],
+            last_t_s: f64::NAN,
+            armed_at_s: f64::NAN,
+            hold_since_s: None,
+            above_since_s: [None; 3],
+            slow_since_s: None,
+            blind_until_s: f64::NEG_INFINITY,
+            invalid_until_s: f64::NEG_INFINITY,
+            awaiting_convergence: false,
+            nis_healthy: f64::NAN,
+            nis_avg: f64::NAN,
+            command_side: 0,
+            reversals_per_s: 0.0,
+            reacquire_after_s: f64::NEG_INFINITY,
+            blind_s: 0.0,
+            flow_factor: [f64::NAN; 3],
+            last_low_s: [0.0; 3],
+            pending_rise_lpm: [0.0; 3],
+            strong_since_s: None,
+            active: None,
+            next_id: 1,
+        }
+    }
+
+    /// Whether a leak event (kind pending or named) is open.
+    pub fn has_active_leak(&self) -> bool {
+        self.active.is_some()
+    }
+
+    /// Whether the thresholds have been learned.
+    pub fn is_armed(&self) -> bool {
+        self.arming == Arming::Armed
+    }
+
+    /// Whether the healthy state comes from a commissioning (a leak present at start is seen).
+    pub fn is_commissioned(&self) -> bool {
+        self.cfg.commissioning.is_some()
+    }
+
+    /// The thresholds on the rise of the ext1, ext2 and int sizes, L/min at the nominal drop (NaN before arming).
+    pub fn thresholds_lpm(&self) -> [f64; 3] {
+        self.threshold_lpm
+    }
+
+    /// The thresholds in healthy spreads (from the requested false-alarm rate; NaN before arming).
+    pub fn thresholds_sigma(&self) -> [f64; 3] {
+        self.threshold_z
+    }
+
+    /// Seconds in which no evidence was gathered after arming (gaps, resets, excursions, NIS), s.
+    pub fn blind_s(&self) -> f64 {
+        self.blind_s
+    }
+
+    /// The healthy offsets of the three hypothesis sizes learned in the warm-up, L/min.
+    pub fn offsets_lpm(&self) -> [f64; 3] {
+        [self.stats[0].mean, self.stats[1].mean, self.stats[2].mean]
+    }
+
+    /// Current rise of each hypothesis' size (ext1, ext2, int; [`signatures_lpm`])
+    /// above its healthy baseline, L/min (NaN if unknown or not armed).
+    pub fn rise_lpm(&self, e: &Estimate) -> [f64; 3] {
+        let mut r = [f64::NAN; 3];
+        if e.n_states >= 10 {
+            let raw = Self::raw_sizes(e);
+            for (k, v) in r.iter_mut().enumerate() {
+                *v = raw[k] - self.baseline_lpm[k];
+            }
+        }
+        r
+    }
+
+    /// The healthy baseline of each hypothesis' size that rises are measured from,
+    /// L/min (NaN before arming; equal to [`Self::offsets_lpm`] with `baseline_tau_s = 0`).
+    pub fn baseline_lpm(&self) -> [f64; 3] {
+        self.baseline_lpm
+    }
+
+    /// Mean √(Δp/Δp_n) of ext1, ext2 and int over the size window: the real flow
+    /// of a leak per L/min of nominal size.
+    pub fn flow_factors(&self) -> [f64; 3] {
+        self.flow_factor
+    }
+
+    /// After a filter reset: an armed detector keeps what it learned and gathers no
+    /// evidence until the filter has converged again and `recovery_s` has passed;
+    /// one not yet armed starts its warm-up again.
+    pub fn restart(&mut self) {
+        if self.is_armed() {
+            self.awaiting_convergence = true;
+            return;
+        }
+        let cfg = self.cfg.clone();
+        let id = self.next_id;
+        *self = LeakSizeDetector::new(cfg);
+        self.next_id = id;
+    }
+
+    /// After a sensor fault, whose wrong values the filter has folded into its leak
+    /// estimates: the healthy state is learned again from the estimates as they are
+    /// now (a commissioning no longer applies to them).
+    pub fn relearn(&mut self) {
+        let mut cfg = self.cfg.clone();
+        cfg.commissioning = None;
+        let id = self.next_id;
+        *self = LeakSizeDetector::new(cfg);
+        self.next_id = id;
+    }
+
+    /// The three single-leak sizes that explain the estimated leak flows, L/min
+    /// (before the healthy offsets are removed): see [`signatures_lpm`].
+    fn raw_sizes(e: &Estimate) -> [f64; 3] {
+        signatures_lpm([
+            e.state[7] / M3_S_PER_LPM,
+            e.state[8] / M3_S_PER_LPM,
+            e.state[9] / M3_S_PER_LPM,
+        ])
+    }
+
+    fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {
+        for k in 0..3 {
+            let z = rice_threshold(
+                crossings_per_s[k],
+                self.cfg.false_alarms_per_hour,
+                self.cfg.threshold_sigma,
+            );
+            self.threshold_z[k] = z;
+            self.threshold_lpm[k] = (z * spreads[k]).max(self.cfg.min_size_lpm);
+            self.last_low_s[k] = t_s;
+            self.baseline_lpm[k] = means[k];
+            self.baseline_low_lpm[k] = means[k];
+            self.stats[k].mean = means[k];
+            self.stats[k].m2 = spreads[k] * spreads[k];
+            self.stats[k].n = 2.0;
+        }
+        self.arming = Arming::Armed;
+        self.armed_at_s = t_s;
+        self.last_t_s = t_s;
+    }
+
+    /// A chamber pressure within `excursion_margin` of tank or supply.
+    fn excursion(&self, e: &Estimate) -> bool {
+        let (lo, hi) = (
+            self.cfg.excursion_margin * self.cfg.supply_pressure_pa,
+            (1.0 - self.cfg.excursion_margin) * self.cfg.supply_pressure_pa,
+        );
+        e.measured[1..].iter().any(|p| *p < lo || *p > hi)
+    }
+
+    fn update_flow_factor(&mut self, e: &Estimate, dt_s: f64) {
+        let pn = 0.5 * self.cfg.supply_pressure_pa;
+        let p = |i: usize| {
+            if e.measured[i].is_finite() {
+                e.measured[i]
+            } else {
+                e.state[i]
+            }
+        };
+        let (p1, p2) = (p(1), p(2));
+        let g = [
+            (p1.max(0.0) / pn).sqrt(),
+            (p2.max(0.0) / pn).sqrt(),
+            ((p1 - p2).abs() / pn).sqrt(),
+        ];
+        let a = (dt_s / self.cfg.size_window_s.max(1e-3)).clamp(0.0, 1.0);
+        for k in 0..3 {
+            if !g[k].is_finite() {
+                continue;
+            }
+            if self.flow_factor[k].is_finite() {
+                self.flow_factor[k] += a * (g[k] - self.flow_factor[k]);
+            } else {
+                self.flow_factor[k] = g[k];
+            }
+        }
+    }
+
+    /// An event of kind `kind` whose nominal size (at p_s/2) is `size_nominal_lpm`:
+    /// the reported size is the real flow at the measured pressures.
+    #[allow(clippy::too_many_arguments)]
+    fn event(
+        &self,
+        kind: EventKind,
+        phase: Phase,
+        id: u64,
+        t_s: f64,
+        size_nominal_lpm: f64,
+        sigma_nominal_lpm: f64,
+        score: f64,
+        second: f64,
+    ) -> LeakEvent {
+        // Confidence: how clearly the leading kind beats the others, and the threshold.
+        let margin = (score - second.max(0.0)).max(0.0);
+        let confidence = if phase == Phase::Cleared {
+            0.0
+        } else {
+            1.0 - (-margin).exp()
+        };
+        let k = EventKind::LEAKS.iter().position(|x| *x == kind).unwrap_or(0);
+        let g = self.flow_factor[k];
+        let pn = 0.5 * self.cfg.supply_pressure_pa;
+        let spread = self.stats[k].std().max(1e-12);
+        let z = size_nominal_lpm / spread;
+        let mut ev = LeakEvent::plain(
+            kind,
+            phase,
+            "leak-size",
+            id,
+            t_s,
+            self.active.map(|a| a.t_onset_s).unwrap_or(f64::NAN),
+        );
+        ev.size_lpm = size_nominal_lpm * g;
+        ev.size_lpm_sigma = sigma_nominal_lpm * g;
+        ev.size_nominal_lpm = size_nominal_lpm;
+        ev.coefficient_m3_s_sqrt_pa = size_nominal_lpm * M3_S_PER_LPM / pn.sqrt();
+        ev.statistic = z;
+        ev.threshold = self.threshold_z[k];
+        ev.confidence = confidence;
+        ev.detail = format!(
+            "rise {z:.1} healthy spreads (threshold {:.1}, for {} false alarms/h); {:.3} L/min at the measured \
+             pressures (mean over {} s), {:.3} L/min at p_s/2, k = {:.3e} m³/(s·√Pa)",
+            self.threshold_z[k],
+            self.cfg.false_alarms_per_hour,
+            ev.size_lpm,
+            self.cfg.size_window_s,
+            size_nominal_lpm,
+            ev.coefficient_m3_s_sqrt_pa
+        );
+        ev
+    }
+}

@@ -1,0 +1,220 @@
+//! The classifier stage: both detectors plus sensor and filter-health checks on
+//! the estimator's output.
+
+use crate::{ClassifierConfig, EventKind, LeakEvent, LeakSizeDetector, MaeDetector, Phase, CHANNELS};
+use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET};
+
+/// Per-channel sensor watch: stuck, saturated, dead.
+#[derive(Debug, Clone, Copy, Default)]
+struct ChannelWatch {
+    last: f64,
+    same: u32,
+    saturated: u32,
+    dead: u32,
+    raised: Option<(EventKind, u64)>,
+}
+
+/// The classifier stage: both detectors plus sensor and filter-health checks.
+#[derive(Debug, Clone)]
+pub struct Classifier {
+    cfg: ClassifierConfig,
+    /// leakwatch's detector.
+    pub leak_size: LeakSizeDetector,
+    /// The thesis' detector.
+    pub thesis: MaeDetector,
+    channels: [ChannelWatch; 3],
+    next_id: u64,
+    not_armed_reported: bool,
+    learning_since_s: Option<f64>,
+}
+
+impl Classifier {
+    /// A classifier with settings `cfg`.
+    pub fn new(cfg: ClassifierConfig) -> Result<Self, String> {
+        cfg.validate()?;
+        Ok(Classifier {
+            leak_size: LeakSizeDetector::new(cfg.clone()),
+            thesis: MaeDetector::new(cfg.clone()),
+            cfg,
+            channels: [ChannelWatch::default(); 3],
+            next_id: 1_000_000,
+            not_armed_reported: false,
+            learning_since_s: None,
+        })
+    }
+
+    /// Reads one output of the estimator stage (the leak filter's and the thesis
+    /// filter's estimates) and calls `emit` for each event it gives (usually none).
+    pub fn on_stage(&mut self, s: &estimator::StageEstimate, mut emit: impl FnMut(LeakEvent)) {
+        if s.missing_before > 0 && s.leak.flags & FLAG_AFTER_GAP == 0 {
+            // Frames lost between the estimator and the classifier: the same gate.
+            let mut leak = s.leak;
+            leak.flags |= FLAG_AFTER_GAP;
+            self.on_estimates(&leak, &s.thesis, &mut emit);
+        } else {
+            self.on_estimates(&s.leak, &s.thesis, &mut emit);
+        }
+    }
+
+    /// Whether a commissioning was loaded (else a leak present at start cannot be seen).
+    pub fn is_commissioned(&self) -> bool {
+        self.leak_size.is_commissioned()
+    }
+
+    /// The note to show at start about what the detector can see.
+    pub fn start_note(&self) -> String {
+        match &self.cfg.commissioning {
+            Some(c) => format!(
+                "commissioned from {} ({:.0} s of healthy data): a leak present at start is seen once the filter has converged",
+                if c.source.is_empty() { "a healthy recording" } else { &c.source },
+                c.healthy_s
+            ),
+            None => format!(
+                "not commissioned: the healthy state is learned in the first {:.0} s after the filter converges; a leak \
+                 present now or opening in that time cannot be seen (run `leakwatch commission HEALTHY.csv` and pass its \
+                 file with --config)",
+                self.cfg.settle_s + self.cfg.warmup_s
+            ),
+        }
+    }
+
+    /// Reads one estimate of a single filter (both detectors read it) and calls
+    /// `emit` for each event.
+    pub fn on_estimate(&mut self, e: &Estimate, mut emit: impl FnMut(LeakEvent)) {
+        self.on_estimates(e, e, &mut emit);
+    }
+
+    /// Reads the leak filter's estimate `e` and the thesis filter's `thesis`.
+    pub fn on_estimates(&mut self, e: &Estimate, thesis: &Estimate, mut emit: impl FnMut(LeakEvent)) {
+        if e.flags & FLAG_RESET != 0 {
+            // (the detector decides itself whether it keeps what it learned)
+            if std::ptr::eq(e, thesis) {
+                self.thesis.restart();
+            }
+            let detail = if self.leak_size.is_armed() {
+                "the leak filter restarted; no leak evidence until it has converged again (the learned healthy state is kept)"
+            } else {
+                "the leak filter restarted; warm-up begins again"
+            };
+            let ev = self.plain(EventKind::EstimatorReset, e.t_s, "", detail);
+            self.leak_size.restart();
+            emit(ev);
+        }
+        if thesis.flags & FLAG_RESET != 0 && !std::ptr::eq(e, thesis) {
+            self.thesis.restart();
+            let ev = self.plain(
+                EventKind::EstimatorReset,
+                e.t_s,
+                "",
+                "the thesis filter restarted; its warm-up begins again",
+            );
+            emit(ev);
+        }
+        let faulty_before = self.channels.iter().any(|c| c.raised.is_some());
+        self.check_sensors(e, &mut emit);
+        let faulty = self.channels.iter().any(|c| c.raised.is_some());
+        if faulty {
+            // A sensor fault corrupts what the filters estimate: no leak decision
+            // while it lasts, and the thresholds are learned again after it.
+            return;
+        }
+        if faulty_before {
+            self.leak_size.relearn();
+            self.thesis.restart();
+        }
+        if self.learning_since_s.is_none() && e.flags & FLAG_CONVERGING == 0 {
+            self.learning_since_s = Some(e.t_s);
+        }
+        let mut ev = None;
+        self.leak_size.on_estimate(e, &mut ev);
+        if let Some(ev) = ev.take() {
+            emit(ev);
+        }
+        if self.cfg.thesis_baseline {
+            self.thesis.on_estimate(thesis, &mut ev);
+            if let Some(ev) = ev {
+                emit(ev);
+            }
+        }
+    }
+
+    /// Ends the stream: reports a warm-up that never completed (thresholds not learned).
+    pub fn finish(&mut self, t_s: f64, mut emit: impl FnMut(LeakEvent)) {
+        if !self.leak_size.is_armed() && !self.thesis.is_armed() && !self.not_armed_reported {
+            self.not_armed_reported = true;
+            let seen = self.learning_since_s.map(|t0| t_s - t0).unwrap_or(0.0);
+            emit(self.plain(
+                EventKind::NotArmed,
+                t_s,
+                "",
+                &format!(
+                    "warm-up too short to learn thresholds: {seen:.2} s of converged healthy data, {} s needed \
+                     ({} s to settle + {} s to learn)",
+                    self.cfg.settle_s + self.cfg.warmup_s,
+                    self.cfg.settle_s,
+                    self.cfg.warmup_s
+                ),
+            ));
+        }
+    }
+
+    fn plain(&mut self, kind: EventKind, t_s: f64, channel: &str, detail: &str) -> LeakEvent {
+        let id = self.next_id;
+        self.next_id += 1;
+        let mut ev = LeakEvent::plain(kind, Phase::Raised, "sensors", id, t_s, t_s);
+        ev.channel = channel.into();
+        ev.detail = detail.into();
+        ev
+    }
+
+    fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
+        for c in 0..3 {
+            let v = e.measured[c];
+            let mut w = self.channels[c];
+            if v.is_finite() {
+                w.dead = 0;
+                w.same = if v == w.last { w.same + 1 } else { 0 };
+                w.last = v;
+                let sat = c > 0 && (v <= 0.0 || v >= self.cfg.pressure_full_scale_pa);
+                w.saturated = if sat { w.saturated + 1 } else { 0 };
+            } else {
+                w.dead += 1;
+                w.same = 0;
+                w.saturated = 0;
+            }
+            // The rod may legitimately rest (stiction): only pressures can be stuck.
+            let now = if w.dead >= self.cfg.dead_samples {
+                Some(EventKind::SensorDead)
+            } else if w.saturated >= self.cfg.saturated_samples {
+                Some(EventKind::SensorSaturated)
+            } else if c > 0 && w.same >= self.cfg.stuck_samples {
+                Some(EventKind::SensorStuck)
+            } else {
+                None
+            };
+            match (now, w.raised) {
+                (Some(k), None) => {
+                    let detail = match k {
+                        EventKind::SensorDead => {
+                            format!("no usable {} value for {} samples", CHANNELS[c], w.dead)
+                        }
+                        EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
+                        _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
+                    };
+                    let ev = self.plain(k, e.t_s, CHANNELS[c], &detail);
+                    w.raised = Some((k, ev.event_id));
+                    emit(ev);
+                }
+                (None, Some((k, id))) => {
+                    let mut ev = self.plain(k, e.t_s, CHANNELS[c], "the channel is back");
+                    ev.phase = Phase::Cleared;
+                    ev.event_id = id;
+                    w.raised = None;
+                    emit(ev);
+                }
+                _ => {}
+            }
+            self.channels[c] = w;
+        }
+    }
+}
