@@ -3,7 +3,7 @@
 
 use iceoryx2::prelude::*;
 
-use crate::{estimate_flags, Frame, Topic};
+use crate::{estimate_flags, impl_sequenced_frame, Topic};
 
 /// Number of states in [`EstimateFrame::state`]: x_sp m, p1 Pa, p2 Pa, x m,
 /// v m/s, v_sp m/s, F_e N, w1 m³/s, w2 m³/s.
@@ -67,21 +67,7 @@ pub struct EstimateFrame {
     pub th_nis: f64,
 }
 
-impl Frame for EstimateFrame {
-    const TOPIC: Topic = Topic::Estimates;
-    fn seq(&self) -> Option<u64> {
-        Some(self.seq)
-    }
-    fn acq_mono_ns(&self) -> Option<u64> {
-        Some(self.acq_mono_ns)
-    }
-    fn is_end_of_stream(&self) -> bool {
-        self.flags & estimate_flags::END_OF_STREAM != 0
-    }
-    fn mark_end_of_stream(&mut self) {
-        self.flags |= estimate_flags::END_OF_STREAM;
-    }
-}
+impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
 
 /// All-zero integers, NaN floats ("absent").
 impl Default for EstimateFrame {

@@ -26,6 +26,7 @@ pub mod udp;
 mod codes;
 mod estimate;
 mod event;
+mod fields;
 mod health;
 mod sensor;
 mod service;
@@ -58,6 +59,29 @@ pub trait Frame: fmt::Debug + Copy + Send + ZeroCopySend + Default + 'static {
     /// Marks this frame as the last of its stream (types without the flag: no-op).
     fn mark_end_of_stream(&mut self) {}
 }
+
+/// [`Frame`] for a type whose `seq` and `acq_mono_ns` fields are its sequence
+/// number and acquisition time and whose `flags` carry an end-of-stream bit.
+macro_rules! impl_sequenced_frame {
+    ($ty:ty, $topic:expr, $end_of_stream:path) => {
+        impl $crate::Frame for $ty {
+            const TOPIC: $crate::Topic = $topic;
+            fn seq(&self) -> Option<u64> {
+                Some(self.seq)
+            }
+            fn acq_mono_ns(&self) -> Option<u64> {
+                Some(self.acq_mono_ns)
+            }
+            fn is_end_of_stream(&self) -> bool {
+                self.flags & $end_of_stream != 0
+            }
+            fn mark_end_of_stream(&mut self) {
+                self.flags |= $end_of_stream;
+            }
+        }
+    };
+}
+use impl_sequenced_frame;
 
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 96);

@@ -3,7 +3,7 @@
 
 use iceoryx2::prelude::*;
 
-use crate::{sensor_flags, Frame, Topic};
+use crate::{impl_sequenced_frame, sensor_flags, Topic};
 
 /// One rig sample as published by the acquisition process (1 kHz).
 #[repr(C)]
@@ -38,21 +38,7 @@ pub struct SensorFrame {
     pub _pad: u32,
 }
 
-impl Frame for SensorFrame {
-    const TOPIC: Topic = Topic::Frames;
-    fn seq(&self) -> Option<u64> {
-        Some(self.seq)
-    }
-    fn acq_mono_ns(&self) -> Option<u64> {
-        Some(self.acq_mono_ns)
-    }
-    fn is_end_of_stream(&self) -> bool {
-        self.flags & sensor_flags::END_OF_STREAM != 0
-    }
-    fn mark_end_of_stream(&mut self) {
-        self.flags |= sensor_flags::END_OF_STREAM;
-    }
-}
+impl_sequenced_frame!(SensorFrame, Topic::Frames, sensor_flags::END_OF_STREAM);
 
 /// All-zero integers, NaN floats ("absent"), empty detector name.
 impl Default for SensorFrame {
