@@ -18,50 +18,19 @@ fn sizes_and_alignment() {
     assert_eq!(align_of::<StatsFrame>(), 8);
 }
 
+/// The offset of every field of a type, in the order of [`frame_fields!`].
+macro_rules! offsets {
+    ($ty:ident [$($f:ident),* $(,)?]) => {
+        [$(offset_of!($ty, $f)),*]
+    };
+}
+
 /// The offsets tabled in README.md (and mirrored by the Python bindings).
 #[test]
 fn field_offsets_match_the_readme_table() {
-    let s = [
-        offset_of!(SensorFrame, seq),
-        offset_of!(SensorFrame, acq_mono_ns),
-        offset_of!(SensorFrame, t_s),
-        offset_of!(SensorFrame, u_v),
-        offset_of!(SensorFrame, x_m),
-        offset_of!(SensorFrame, p1_pa),
-        offset_of!(SensorFrame, p2_pa),
-        offset_of!(SensorFrame, x_sp_m),
-        offset_of!(SensorFrame, f_load_n),
-        offset_of!(SensorFrame, ref_m),
-        offset_of!(SensorFrame, q_leak_lpm),
-        offset_of!(SensorFrame, flags),
-        offset_of!(SensorFrame, _pad),
-    ];
+    let s = frame_fields!(SensorFrame, offsets!(SensorFrame));
     assert_eq!(s, [0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 92]);
-    let e = [
-        offset_of!(EstimateFrame, seq),
-        offset_of!(EstimateFrame, acq_mono_ns),
-        offset_of!(EstimateFrame, est_recv_mono_ns),
-        offset_of!(EstimateFrame, est_done_mono_ns),
-        offset_of!(EstimateFrame, t_s),
-        offset_of!(EstimateFrame, n_states),
-        offset_of!(EstimateFrame, flags),
-        offset_of!(EstimateFrame, state),
-        offset_of!(EstimateFrame, state_sigma),
-        offset_of!(EstimateFrame, residual),
-        offset_of!(EstimateFrame, innovation),
-        offset_of!(EstimateFrame, innovation_sigma),
-        offset_of!(EstimateFrame, measured),
-        offset_of!(EstimateFrame, u_v),
-        offset_of!(EstimateFrame, nis),
-        offset_of!(EstimateFrame, mae_pa),
-        offset_of!(EstimateFrame, th_flags),
-        offset_of!(EstimateFrame, _pad),
-        offset_of!(EstimateFrame, th_state),
-        offset_of!(EstimateFrame, th_residual),
-        offset_of!(EstimateFrame, th_innovation),
-        offset_of!(EstimateFrame, th_mae_pa),
-        offset_of!(EstimateFrame, th_nis),
-    ];
+    let e = frame_fields!(EstimateFrame, offsets!(EstimateFrame));
     assert_eq!(
         e,
         [
@@ -69,57 +38,14 @@ fn field_offsets_match_the_readme_table() {
             464, 480
         ]
     );
-    let l = [
-        offset_of!(LeakEventFrame, seq),
-        offset_of!(LeakEventFrame, acq_mono_ns),
-        offset_of!(LeakEventFrame, cls_done_mono_ns),
-        offset_of!(LeakEventFrame, event_id),
-        offset_of!(LeakEventFrame, kind),
-        offset_of!(LeakEventFrame, phase),
-        offset_of!(LeakEventFrame, t_detect_s),
-        offset_of!(LeakEventFrame, t_onset_s),
-        offset_of!(LeakEventFrame, size_lpm),
-        offset_of!(LeakEventFrame, size_lpm_sigma),
-        offset_of!(LeakEventFrame, confidence),
-        offset_of!(LeakEventFrame, detector),
-        offset_of!(LeakEventFrame, size_nominal_lpm),
-        offset_of!(LeakEventFrame, coefficient_m3_s_sqrt_pa),
-        offset_of!(LeakEventFrame, statistic),
-        offset_of!(LeakEventFrame, threshold),
-        offset_of!(LeakEventFrame, channel),
-        offset_of!(LeakEventFrame, detail),
-    ];
+    let l = frame_fields!(LeakEventFrame, offsets!(LeakEventFrame));
     assert_eq!(
         l,
         [0, 8, 16, 24, 32, 36, 40, 48, 56, 64, 72, 80, 96, 104, 112, 120, 128, 136]
     );
-    let h = [
-        offset_of!(HealthFrame, seq),
-        offset_of!(HealthFrame, mono_ns),
-        offset_of!(HealthFrame, t_s),
-        offset_of!(HealthFrame, status),
-        offset_of!(HealthFrame, active_events),
-        offset_of!(HealthFrame, leak_flow_lpm),
-        offset_of!(HealthFrame, leak_flow_sigma_lpm),
-    ];
+    let h = frame_fields!(HealthFrame, offsets!(HealthFrame));
     assert_eq!(h, [0, 8, 16, 24, 28, 32, 56]);
-    let st = [
-        offset_of!(StatsFrame, mono_ns),
-        offset_of!(StatsFrame, pid),
-        offset_of!(StatsFrame, stage),
-        offset_of!(StatsFrame, frames_in),
-        offset_of!(StatsFrame, frames_out),
-        offset_of!(StatsFrame, seq_gaps),
-        offset_of!(StatsFrame, deadline_misses),
-        offset_of!(StatsFrame, proc_ns_p50),
-        offset_of!(StatsFrame, proc_ns_p99),
-        offset_of!(StatsFrame, proc_ns_max),
-        offset_of!(StatsFrame, lat_ns_p50),
-        offset_of!(StatsFrame, lat_ns_p99),
-        offset_of!(StatsFrame, lat_ns_max),
-        offset_of!(StatsFrame, cpu_fraction),
-        offset_of!(StatsFrame, rss_bytes),
-    ];
+    let st = frame_fields!(StatsFrame, offsets!(StatsFrame));
     assert_eq!(st, [0, 8, 12, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 96, 104]);
 }
 
@@ -188,8 +114,21 @@ fn samples_round_trip_through_sensor_frames() {
 
 /// (field, offset) of every field of a type, in declaration order.
 macro_rules! fields {
-    ($ty:ty, [$($f:ident),* $(,)?]) => {
+    ($ty:ident [$($f:ident),* $(,)?]) => {
         vec![$((stringify!($f).to_string(), offset_of!($ty, $f))),*]
+    };
+}
+
+/// A type's name, iceoryx2 type name, size and (field, offset) rows.
+macro_rules! layout {
+    ($ty:ident) => {
+        (
+            stringify!($ty),
+            // SAFETY: type_name only returns the type's static name
+            unsafe { $ty::type_name() },
+            size_of::<$ty>(),
+            frame_fields!($ty, fields!($ty)),
+        )
     };
 }
 
@@ -227,137 +166,11 @@ fn the_readme_tables_are_the_types() {
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).expect("README.md");
     let types = [
-        (
-            "SensorFrame",
-            // SAFETY: type_name only returns the type's static name
-            unsafe { SensorFrame::type_name() },
-            size_of::<SensorFrame>(),
-            fields!(
-                SensorFrame,
-                [
-                    seq,
-                    acq_mono_ns,
-                    t_s,
-                    u_v,
-                    x_m,
-                    p1_pa,
-                    p2_pa,
-                    x_sp_m,
-                    f_load_n,
-                    ref_m,
-                    q_leak_lpm,
-                    flags,
-                    _pad
-                ]
-            ),
-        ),
-        (
-            "EstimateFrame",
-            // SAFETY: type_name only returns the type's static name
-            unsafe { EstimateFrame::type_name() },
-            size_of::<EstimateFrame>(),
-            fields!(
-                EstimateFrame,
-                [
-                    seq,
-                    acq_mono_ns,
-                    est_recv_mono_ns,
-                    est_done_mono_ns,
-                    t_s,
-                    n_states,
-                    flags,
-                    state,
-                    state_sigma,
-                    residual,
-                    innovation,
-                    innovation_sigma,
-                    measured,
-                    u_v,
-                    nis,
-                    mae_pa,
-                    th_flags,
-                    _pad,
-                    th_state,
-                    th_residual,
-                    th_innovation,
-                    th_mae_pa,
-                    th_nis
-                ]
-            ),
-        ),
-        (
-            "LeakEventFrame",
-            // SAFETY: type_name only returns the type's static name
-            unsafe { LeakEventFrame::type_name() },
-            size_of::<LeakEventFrame>(),
-            fields!(
-                LeakEventFrame,
-                [
-                    seq,
-                    acq_mono_ns,
-                    cls_done_mono_ns,
-                    event_id,
-                    kind,
-                    phase,
-                    t_detect_s,
-                    t_onset_s,
-                    size_lpm,
-                    size_lpm_sigma,
-                    confidence,
-                    detector,
-                    size_nominal_lpm,
-                    coefficient_m3_s_sqrt_pa,
-                    statistic,
-                    threshold,
-                    channel,
-                    detail
-                ]
-            ),
-        ),
-        (
-            "HealthFrame",
-            // SAFETY: type_name only returns the type's static name
-            unsafe { HealthFrame::type_name() },
-            size_of::<HealthFrame>(),
-            fields!(
-                HealthFrame,
-                [
-                    seq,
-                    mono_ns,
-                    t_s,
-                    status,
-                    active_events,
-                    leak_flow_lpm,
-                    leak_flow_sigma_lpm
-                ]
-            ),
-        ),
-        (
-            "StatsFrame",
-            // SAFETY: type_name only returns the type's static name
-            unsafe { StatsFrame::type_name() },
-            size_of::<StatsFrame>(),
-            fields!(
-                StatsFrame,
-                [
-                    mono_ns,
-                    pid,
-                    stage,
-                    frames_in,
-                    frames_out,
-                    seq_gaps,
-                    deadline_misses,
-                    proc_ns_p50,
-                    proc_ns_p99,
-                    proc_ns_max,
-                    lat_ns_p50,
-                    lat_ns_p99,
-                    lat_ns_max,
-                    cpu_fraction,
-                    rss_bytes
-                ]
-            ),
-        ),
+        layout!(SensorFrame),
+        layout!(EstimateFrame),
+        layout!(LeakEventFrame),
+        layout!(HealthFrame),
+        layout!(StatsFrame),
     ];
     for (ty, name, size, fields) in types {
         let (doc_name, doc_size, doc_fields) = readme_section(&readme, ty);

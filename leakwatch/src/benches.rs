@@ -6,7 +6,9 @@ use bench::speed::{step_time, timer_overhead_ns};
 use bench::{detection, speed};
 use estimator::Tuning;
 
+use crate::config::Config;
 use crate::out::{self, outln};
+use crate::simulate;
 
 fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) -> Result<(), String> {
     out::dir(dir)?;
@@ -14,6 +16,64 @@ fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) ->
     let text = serde_json::to_string_pretty(value).map_err(|e| e.to_string())?;
     out::write(&p, (text + "\n").as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
+    Ok(())
+}
+
+/// The loaded scenario's samples for benchmarks, `seconds` long.
+pub(crate) fn samples(seconds: f64) -> Vec<model::Sample> {
+    bench::speed::recorded_samples(seconds)
+}
+
+/// The rig simulator's speed on the loaded scenario (median of `repeat` runs of
+/// `seconds` simulated seconds): a table, and sim.json in `out` (or the JSON on stdout).
+pub fn sim(seconds: f64, repeat: u32, out: Option<PathBuf>, force: bool) -> Result<(), String> {
+    let cfg = Config::default();
+    let req = simulate::SimulateRequest {
+        scenario: "loaded-sine".into(),
+        seconds: Some(seconds),
+        seed: 1,
+        faults: vec!["ext1:0.5lpm@20s".into()],
+        rig_variant: None,
+    };
+    let mut times = Vec::new();
+    for _ in 0..repeat.max(1) {
+        let (mut sim, secs) = simulate::build(&cfg, &req)?;
+        let t0 = std::time::Instant::now();
+        let samples = sim.run(secs);
+        times.push(t0.elapsed().as_secs_f64());
+        std::hint::black_box(samples);
+    }
+    times.sort_by(f64::total_cmp);
+    let median = times[times.len() / 2];
+    let rate = seconds / median;
+    outln!("| benchmark | simulated s | median wall s | min wall s | × real time |");
+    outln!("|---|---|---|---|---|");
+    outln!(
+        "| sim loaded-sine (RK4, {} sub-steps/ms) | {seconds} | {median:.3} | {:.3} | {rate:.0} |",
+        cfg.sim.substeps_per_sample,
+        times[0]
+    );
+    let json = serde_json::json!({
+        "benchmark": "sim",
+        "scenario": "loaded-sine",
+        "simulated_s": seconds,
+        "substeps_per_sample": cfg.sim.substeps_per_sample,
+        "wall_s": times,
+        "median_wall_s": median,
+        "real_time_factor": rate,
+    });
+    if let Some(dir) = out {
+        out::dir(&dir)?;
+        let p = dir.join("sim.json");
+        out::write(
+            &p,
+            serde_json::to_string_pretty(&json).unwrap_or_default().as_bytes(),
+            force,
+            &[],
+        )?;
+    } else {
+        outln!("{json}");
+    }
     Ok(())
 }
 

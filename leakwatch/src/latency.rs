@@ -187,7 +187,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             estimator_cpu: e.cpu_fraction,
         });
     }
-    let samples = crate::benches_samples(seconds);
+    let samples = crate::benches::samples(seconds);
     eprintln!("threads over Unix datagram sockets: {seconds} s ...");
     rows.push(threads_run(
         "threads, Unix datagram sockets",

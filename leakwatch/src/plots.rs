@@ -8,6 +8,17 @@ fn series(label: &str, x: &[f64], y: Vec<f64>) -> Series {
     Series::line(label, x, &y)
 }
 
+/// `leakwatch plot`: a replay output directory or a CSV run drawn into `out`.
+pub fn command(input: &Path, out: &Path, force: bool) -> Result<(), String> {
+    if input.is_dir() {
+        plot_replay(input, out, force)?;
+    } else {
+        plot_run_csv(input, out, force)?;
+    }
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
 /// Draws a run in the CSV format: rod position and reference, both pressures,
 /// valve command and leak flow on a shared time axis.
 pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String> {

@@ -1,6 +1,6 @@
 //! `leakwatch simulate`: run a scenario on the simulated rig and write the CSV.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use model::fault::{Fault, FaultSchedule};
 use model::params::FrictionPreset;
@@ -92,6 +92,20 @@ pub fn run(
     let samples = sim.run(seconds);
     let mut w = std::io::BufWriter::new(file);
     write_csv(&mut w, &samples).map_err(|e| dataset::output::message(out, &e))
+}
+
+/// `leakwatch simulate`: simulates `req` with the configuration `config` (or
+/// ./leakwatch.toml, or the defaults), writes the CSV to `out` and says how much.
+pub fn command(config: Option<PathBuf>, req: SimulateRequest, out: &Path, force: bool) -> Result<(), String> {
+    let config = Config::pick(config);
+    let cfg = Config::load_or_default(config.as_deref())?;
+    let n = run(&cfg, &req, out, force, config.as_deref())?;
+    if out.as_os_str() == "-" {
+        eprintln!("wrote {n} samples to standard output");
+    } else {
+        eprintln!("wrote {n} samples to {}", out.display());
+    }
+    Ok(())
 }
 
 /// Writes `samples` as a leakwatch CSV (header and rows) to `w` and flushes it;

@@ -174,6 +174,17 @@ pub trait Record: Frame {
 }
 
 macro_rules! record {
+    // `@unpadded`: the fields of `frames::frame_fields!` (the second list) are
+    // taken over into the first without the explicit padding (not written, read back as 0).
+    (@unpadded $ty:ty, $name:literal, [$($kept:ident),*] [_pad $(, $rest:ident)*]) => {
+        record!(@unpadded $ty, $name, [$($kept),*] [$($rest),*]);
+    };
+    (@unpadded $ty:ty, $name:literal, [$($kept:ident),*] [$next:ident $(, $rest:ident)*]) => {
+        record!(@unpadded $ty, $name, [$($kept,)* $next] [$($rest),*]);
+    };
+    (@unpadded $ty:ty, $name:literal, [$($kept:ident),*] []) => {
+        record!($ty, $name, [$($kept),*]);
+    };
     ($ty:ty, $name:literal, [$($field:ident),* $(,)?]) => {
         record!($ty, $name, [$($field),*], added []);
     };
@@ -235,51 +246,15 @@ fn field_csv_names<F: Field>(_: &F, name: &str, out: &mut Vec<String>) {
     F::csv_names(name, out)
 }
 
-record!(
+// The fields are the frames crate's lists (frames::frame_fields!); the
+// LeakEventFrame's are written out here, split by the version that brought them.
+frames::frame_fields!(
     SensorFrame,
-    "leakwatch.SensorFrame.v1",
-    [
-        seq,
-        acq_mono_ns,
-        t_s,
-        u_v,
-        x_m,
-        p1_pa,
-        p2_pa,
-        x_sp_m,
-        f_load_n,
-        ref_m,
-        q_leak_lpm,
-        flags
-    ]
+    record!(@unpadded SensorFrame, "leakwatch.SensorFrame.v1", [])
 );
-record!(
+frames::frame_fields!(
     EstimateFrame,
-    "leakwatch.EstimateFrame.v2",
-    [
-        seq,
-        acq_mono_ns,
-        est_recv_mono_ns,
-        est_done_mono_ns,
-        t_s,
-        n_states,
-        flags,
-        state,
-        state_sigma,
-        residual,
-        innovation,
-        innovation_sigma,
-        measured,
-        u_v,
-        nis,
-        mae_pa,
-        th_flags,
-        th_state,
-        th_residual,
-        th_innovation,
-        th_mae_pa,
-        th_nis
-    ]
+    record!(@unpadded EstimateFrame, "leakwatch.EstimateFrame.v2", [])
 );
 record!(
     LeakEventFrame,
@@ -307,37 +282,11 @@ record!(
         detail
     ]
 );
-record!(
+frames::frame_fields!(
     HealthFrame,
-    "leakwatch.HealthFrame.v1",
-    [
-        seq,
-        mono_ns,
-        t_s,
-        status,
-        active_events,
-        leak_flow_lpm,
-        leak_flow_sigma_lpm
-    ]
+    record!(@unpadded HealthFrame, "leakwatch.HealthFrame.v1", [])
 );
-record!(
+frames::frame_fields!(
     StatsFrame,
-    "leakwatch.StatsFrame.v1",
-    [
-        mono_ns,
-        pid,
-        stage,
-        frames_in,
-        frames_out,
-        seq_gaps,
-        deadline_misses,
-        proc_ns_p50,
-        proc_ns_p99,
-        proc_ns_max,
-        lat_ns_p50,
-        lat_ns_p99,
-        lat_ns_max,
-        cpu_fraction,
-        rss_bytes
-    ]
+    record!(@unpadded StatsFrame, "leakwatch.StatsFrame.v1", [])
 );

@@ -1,0 +1,84 @@
+//! The codes carried in integer fields of the frames: flag bits, event kinds
+//! and phases, health statuses and stage numbers.
+
+/// Bits of [`SensorFrame::flags`](crate::SensorFrame::flags).
+pub mod sensor_flags {
+    /// The first frame after a gap in the source (samples were missing before it).
+    pub const AFTER_GAP: u32 = 1 << 0;
+    /// The last frame of the stream: the source is exhausted.
+    pub const END_OF_STREAM: u32 = 1 << 1;
+}
+
+/// Bits of [`EstimateFrame::flags`](crate::EstimateFrame::flags).
+pub mod estimate_flags {
+    /// The filter was reset at this sample.
+    pub const RESET: u32 = 1 << 0;
+    /// The input sample was unusable and skipped (prediction only).
+    pub const SKIPPED: u32 = 1 << 1;
+    /// The prediction was clamped to physical bounds.
+    pub const CLAMPED: u32 = 1 << 2;
+    /// The input frame was the last of its stream (mirrors
+    /// [`super::sensor_flags::END_OF_STREAM`]).
+    pub const END_OF_STREAM: u32 = 1 << 3;
+    /// The filter is inside its convergence time after a (re)start.
+    pub const CONVERGING: u32 = 1 << 4;
+    /// Samples were missing just before this one (the filter bridged or re-anchored).
+    pub const AFTER_GAP: u32 = 1 << 5;
+}
+
+/// Values of [`LeakEventFrame::kind`](crate::LeakEventFrame::kind).
+pub mod event_kind {
+    /// External leak at chamber 1.
+    pub const EXT1: u32 = 1;
+    /// External leak at chamber 2.
+    pub const EXT2: u32 = 2;
+    /// Internal leak (chamber 1 to chamber 2 across the piston).
+    pub const INTERNAL: u32 = 3;
+    /// A leak whose kind is not decided yet (the same event id is raised again with
+    /// its kind once decided).
+    pub const LEAK_PENDING: u32 = 4;
+    /// The estimator reset.
+    pub const ESTIMATOR_RESET: u32 = 10;
+    /// A sensor is stuck (constant output).
+    pub const SENSOR_STUCK: u32 = 11;
+    /// A sensor is saturated (at its range limit).
+    pub const SENSOR_SATURATED: u32 = 12;
+    /// A sensor is dead (no usable output).
+    pub const SENSOR_DEAD: u32 = 13;
+    /// The warm-up was too short to learn thresholds: detection is not armed.
+    pub const NOT_ARMED: u32 = 14;
+}
+
+/// Values of [`LeakEventFrame::phase`](crate::LeakEventFrame::phase).
+pub mod event_phase {
+    /// The event was raised.
+    pub const RAISED: u32 = 0;
+    /// The event's estimate (size, confidence) was updated.
+    pub const UPDATED: u32 = 1;
+    /// The event was cleared.
+    pub const CLEARED: u32 = 2;
+}
+
+/// Values of [`HealthFrame::status`](crate::HealthFrame::status).
+pub mod health_status {
+    /// The estimator or classifier is still warming up.
+    pub const WARMING_UP: u32 = 0;
+    /// No leak and no fault.
+    pub const HEALTHY: u32 = 1;
+    /// At least one leak event is active.
+    pub const LEAK: u32 = 2;
+    /// A sensor fault is active.
+    pub const SENSOR_FAULT: u32 = 3;
+}
+
+/// Values of [`StatsFrame::stage`](crate::StatsFrame::stage).
+pub mod stage {
+    /// The acquisition process.
+    pub const ACQUISITION: u32 = 0;
+    /// The estimator process.
+    pub const ESTIMATOR: u32 = 1;
+    /// The classifier process.
+    pub const CLASSIFIER: u32 = 2;
+    /// The recorder process.
+    pub const RECORDER: u32 = 3;
+}

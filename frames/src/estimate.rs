@@ -1,0 +1,101 @@
+//! [`EstimateFrame`]: the estimator's output for one sensor frame, and the
+//! sizes of its state arrays.
+
+use iceoryx2::prelude::*;
+
+use crate::{estimate_flags, impl_sequenced_frame, Topic};
+
+/// Number of states in [`EstimateFrame::state`]: x_sp m, p1 Pa, p2 Pa, x m,
+/// v m/s, v_sp m/s, F_e N, w1 m³/s, w2 m³/s.
+pub const MAX_STATES: usize = 11;
+
+/// Number of states of the thesis filter carried in [`EstimateFrame::th_state`].
+pub const THESIS_STATES: usize = 7;
+
+/// The estimator's output for one sensor frame (1 kHz).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, ZeroCopySend)]
+#[type_name("leakwatch.EstimateFrame.v2")]
+pub struct EstimateFrame {
+    /// Sequence number of the sensor frame this estimate is for.
+    pub seq: u64,
+    /// `CLOCK_MONOTONIC` when the sensor frame was published, ns (copied).
+    pub acq_mono_ns: u64,
+    /// `CLOCK_MONOTONIC` when the estimator received the sensor frame, ns.
+    pub est_recv_mono_ns: u64,
+    /// `CLOCK_MONOTONIC` when the estimate was complete, ns.
+    pub est_done_mono_ns: u64,
+    /// Sample time, s.
+    pub t_s: f64,
+    /// Number of states in use (the first `n_states` of [`Self::state`]).
+    pub n_states: u32,
+    /// Bit set of [`estimate_flags`].
+    pub flags: u32,
+    /// The leak filter's a-posteriori state, order: x_sp m, p1 Pa, p2 Pa, x m,
+    /// v m/s, v_sp m/s, F_e N, q_e1 m³/s, q_e2 m³/s, q_i m³/s (leak sizes at the
+    /// nominal drop), spool null bias m; unused entries NaN.
+    pub state: [f64; MAX_STATES],
+    /// One standard deviation of each state, same order and units as [`Self::state`].
+    pub state_sigma: [f64; MAX_STATES],
+    /// Leak filter: a-posteriori residual y − Hx⁺: x m, p1 Pa, p2 Pa.
+    pub residual: [f64; 3],
+    /// Leak filter: innovation y − Hx⁻: x m, p1 Pa, p2 Pa.
+    pub innovation: [f64; 3],
+    /// Leak filter: standard deviation of each innovation: m, Pa, Pa.
+    pub innovation_sigma: [f64; 3],
+    /// The measurement as received: x m, p1 Pa, p2 Pa (NaN where absent).
+    pub measured: [f64; 3],
+    /// The valve command as received, V.
+    pub u_v: f64,
+    /// Leak filter: normalised innovation squared.
+    pub nis: f64,
+    /// Leak filter: mean absolute residual of p1 and p2 over the MAE window, Pa.
+    pub mae_pa: [f64; 2],
+    /// Thesis filter: bit set of [`estimate_flags`].
+    pub th_flags: u32,
+    /// Explicit padding (zero).
+    pub _pad: u32,
+    /// Thesis filter: a-posteriori state x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s, F_e N.
+    pub th_state: [f64; THESIS_STATES],
+    /// Thesis filter: a-posteriori residual: x m, p1 Pa, p2 Pa.
+    pub th_residual: [f64; 3],
+    /// Thesis filter: innovation: x m, p1 Pa, p2 Pa.
+    pub th_innovation: [f64; 3],
+    /// Thesis filter: MAE of the p1 and p2 residuals (the thesis' figure), Pa.
+    pub th_mae_pa: [f64; 2],
+    /// Thesis filter: normalised innovation squared.
+    pub th_nis: f64,
+}
+
+impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
+
+/// All-zero integers, NaN floats ("absent").
+impl Default for EstimateFrame {
+    fn default() -> Self {
+        EstimateFrame {
+            seq: 0,
+            acq_mono_ns: 0,
+            est_recv_mono_ns: 0,
+            est_done_mono_ns: 0,
+            t_s: f64::NAN,
+            n_states: 0,
+            flags: 0,
+            state: [f64::NAN; MAX_STATES],
+            state_sigma: [f64::NAN; MAX_STATES],
+            residual: [f64::NAN; 3],
+            innovation: [f64::NAN; 3],
+            innovation_sigma: [f64::NAN; 3],
+            measured: [f64::NAN; 3],
+            u_v: f64::NAN,
+            nis: f64::NAN,
+            mae_pa: [f64::NAN; 2],
+            th_flags: 0,
+            _pad: 0,
+            th_state: [f64::NAN; THESIS_STATES],
+            th_residual: [f64::NAN; 3],
+            th_innovation: [f64::NAN; 3],
+            th_mae_pa: [f64::NAN; 2],
+            th_nis: f64::NAN,
+        }
+    }
+}

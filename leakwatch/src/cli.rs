@@ -1,0 +1,305 @@
+//! The command line: the clap definitions of `leakwatch`'s commands and their arguments.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+#[derive(Parser)]
+#[command(
+    name = "leakwatch",
+    version,
+    about = "Detect, isolate and size leaks of a servovalve-driven hydraulic actuator with an EKF at 1 kHz",
+    after_help = "Configuration: `--config FILE`; without it, run, replay, simulate, calibrate and commission \
+                  use ./leakwatch.toml when the working directory has one (and say so). Benchmarks never pick it up."
+)]
+pub(crate) struct Cli {
+    /// Replace existing output files (logs, CSVs, JSON, PNGs); without it an
+    /// existing output is an error. Symbolic links and the inputs are never written.
+    #[arg(long, global = true)]
+    pub(crate) force: bool,
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+/// Friction variant of the simulated rig.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum RigVariant {
+    /// The thesis' friction as published: 30-40 Hz stick-slip.
+    Thesis,
+    /// No Stribeck drop (f_st = f_sl): smooth motion.
+    Smooth,
+}
+
+impl From<RigVariant> for model::FrictionPreset {
+    fn from(v: RigVariant) -> Self {
+        match v {
+            RigVariant::Thesis => model::FrictionPreset::Thesis,
+            RigVariant::Smooth => model::FrictionPreset::Smooth,
+        }
+    }
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// One stage process of `run`, from this binary: `leakwatch stage NAME [ARGS]...` with
+    /// NAME acquisition, estimator, classifier or recorder (ARGS: `leakwatch stage NAME --help`).
+    Stage {
+        /// acquisition, estimator, classifier or recorder.
+        name: String,
+        /// The stage's own arguments.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// The built-in demonstration, in one process: the loaded scenario on a rig that
+    /// differs from the model, a 0.5 L/min chamber-1 leak at 20 s, events printed as they happen.
+    Demo {
+        /// Leak to inject (default ext1:0.5lpm@20s).
+        #[arg(long = "fault")]
+        faults: Vec<String>,
+        /// Scenario (default loaded-sine).
+        #[arg(long, default_value = "loaded-sine")]
+        scenario: String,
+        /// Simulated seconds (default 40).
+        #[arg(long, default_value_t = 40.0)]
+        seconds: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 7)]
+        seed: u64,
+    },
+    /// Run the live pipeline: acquisition, estimator, classifier and recorder as processes over
+    /// iceoryx2. Without a fault or a config (with or without `--scenario loaded-sine`): the
+    /// demonstration, an off-nominal rig with a 0.5 L/min chamber-1 leak at 20 s, events printed
+    /// as they happen. With `--source udp://IP:PORT` the samples are a real rig's UDP sensor
+    /// stream instead (README "On a real rig"). Every argument is checked before any stage starts.
+    Run {
+        /// Simulated seconds (default 40).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Scenario (default loaded-sine).
+        #[arg(long)]
+        scenario: Option<String>,
+        /// Leak to inject, as in `simulate` (repeatable); `none` for a healthy run.
+        #[arg(long = "fault")]
+        faults: Vec<String>,
+        /// Rig id: names the services, so several rigs can run side by side.
+        #[arg(long, default_value = "rig1")]
+        rig: String,
+        /// Configuration file.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// How stages wait for input: event, low-latency or busy-poll.
+        #[arg(long, default_value = "event")]
+        mode: String,
+        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        #[arg(long)]
+        thesis_baseline: bool,
+        /// Output directory (default ./leakwatch-run).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Where samples come from: `sim` (the simulated rig, default) or `udp://IP:PORT`, a
+        /// real rig's UDP sensor stream (format: frames/README.md; examples/udp has a C header
+        /// and a Python sender), published as it arrives; raw counts are scaled by the config's
+        /// [udp] section. Not with --scenario, --fault or --seconds.
+        #[arg(long, value_name = "sim|udp://IP:PORT")]
+        source: Option<String>,
+        /// With --source udp://...: the stream ends when no datagram came for this long, s
+        /// (default 5; counted from the first datagram, before which the run waits).
+        #[arg(long)]
+        udp_idle_timeout_s: Option<f64>,
+    },
+    /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
+    Export {
+        /// The log file (run.mcap).
+        log: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        csv: PathBuf,
+    },
+    /// Repair a recorded log (MCAP) whose recorder was killed (no summary, a cut
+    /// last chunk) or that has damaged chunks: every intact message is written
+    /// into a complete MCAP file that any MCAP reader opens.
+    Repair {
+        /// The damaged log.
+        log: PathBuf,
+        /// The repaired log to write (never the input; an existing file only with --force).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Find where the model and measured data disagree, name the missing effect, fit it, show the gap shrink.
+    Calibrate {
+        /// Measured data: CSV (t,u,x,p1,p2[,x_sp,f_load,...], also .csv.gz) or a recorded log (.mcap); u drives the model.
+        input: PathBuf,
+        /// Configuration whose [model] is the starting model (default: the built-in model).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output directory: calibration.json, model.toml, report.md and plots.
+        #[arg(long)]
+        out: PathBuf,
+        /// Effects to consider, comma-separated (default: the whole library; `friction` fits
+        /// static/Coulomb, viscous per direction and the Stribeck velocity, on request only).
+        #[arg(long, value_delimiter = ',')]
+        effects: Vec<String>,
+    },
+    /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time.
+    Replay {
+        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) or a recorded log (.mcap).
+        input: PathBuf,
+        /// Configuration file (TOML; defaults for everything missing).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// States of the thesis filter: 6 (friction from the model) or 7 (estimated load F_e).
+        #[arg(long)]
+        model: Option<u32>,
+        /// Output directory: estimates.csv, events.json, summary.json.
+        #[arg(long)]
+        out: PathBuf,
+        /// Run all stages in one thread instead of over channels (same results).
+        #[arg(long)]
+        single_thread: bool,
+        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        #[arg(long)]
+        thesis_baseline: bool,
+        /// Largest fraction of unusable input rows (0 to 1) before the file is refused
+        /// with a non-zero exit (outputs are still written).
+        #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
+        max_bad_rows: f64,
+    },
+    /// Learn the healthy state of a rig from a healthy recording and write a config
+    /// that `replay`, `run` and every stage load with --config: a leak present when
+    /// monitoring starts then shows against it.
+    Commission {
+        /// A healthy recording (CSV, .csv.gz) of the rig.
+        input: PathBuf,
+        /// The rig's model (e.g. the model.toml that `calibrate` wrote); defaults otherwise.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output config file (TOML) to write; an existing file is not overwritten.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Simulate a scenario on the rig and write a CSV (t,u,x,p1,p2,x_sp,f_load,ref,q_leak).
+    Simulate {
+        /// Scenario: open-loop-sine, open-loop-chirp, closed-loop-sine, closed-loop-random, loaded-sine, loaded-random.
+        #[arg(long)]
+        scenario: String,
+        /// Run length in seconds (default: the scenario's own, 40 or 60 s).
+        #[arg(long, allow_negative_numbers = true)]
+        seconds: Option<f64>,
+        /// Noise and reference seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// A leak, KIND:SIZE@ONSET[,ramp=SECONDS][,law=sqrt|linear], e.g. ext1:0.3lpm@20s or int:k=6e-12@18s,law=linear.
+        #[arg(long = "fault")]
+        faults: Vec<String>,
+        /// Friction variant of the rig (default: as configured, the thesis' friction).
+        #[arg(long, value_enum)]
+        rig_variant: Option<RigVariant>,
+        /// Configuration file (TOML); defaults apply to everything it leaves out.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output CSV file (`-`: standard output).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Draw a run (a simulate or measured CSV) as a PNG.
+    Plot {
+        /// Input: a CSV in the dataset format, or a replay output directory (estimates.csv, events.json).
+        input: PathBuf,
+        /// Output PNG.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Show the configuration.
+    Config {
+        /// Print the full default configuration as TOML.
+        #[arg(long)]
+        print_default: bool,
+        /// Check a configuration file and print it with every default filled in.
+        #[arg(long)]
+        check: Option<PathBuf>,
+    },
+    /// Benchmarks (they print a table and write JSON).
+    Bench {
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
+}
+
+#[derive(Subcommand)]
+pub(crate) enum BenchCommand {
+    /// Time the rig simulator on the loaded scenario.
+    Sim {
+        /// Simulated seconds.
+        #[arg(long, default_value_t = 60.0)]
+        seconds: f64,
+        /// Repetitions.
+        #[arg(long, default_value_t = 5)]
+        repeat: u32,
+        /// Output directory for sim.json.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// EKF step time (median, p99 ns per predict + update) and in-process chain throughput.
+    Ekf {
+        /// Steps timed per filter (≥ 1e6 for the figures of BENCHMARKS.md).
+        #[arg(long, default_value_t = 1_000_000)]
+        steps: u64,
+        /// Output directory for ekf.json.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// The calibration workflow over its hidden-effect suites (BENCHMARKS.md §3): the smooth rig
+    /// (16 cases) and the stick-slip rig (32 cases); or a directory of cases with truth.
+    Calibration {
+        /// Run the full smooth-rig matrix (every effect under every input, 44 cases, multiple shooting).
+        #[arg(long)]
+        matrix: bool,
+        /// Score a directory laid out like ../shared/data/hidden_dev: DIR/case_*/measured.csv[.gz] + truth.json.
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Configuration whose [model] is the starting model for --data (default: the built-in model).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Print the report as JSON on stdout instead of the Markdown tables.
+        #[arg(long)]
+        json: bool,
+        /// Output directory for calibration_bench.md and .json.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Pipeline latency at 1 kHz: iceoryx2 processes (event and low-latency modes) beside the
+    /// same stages as threads over Unix sockets and over crossbeam channels.
+    Latency {
+        /// Seconds per transport.
+        #[arg(long, default_value_t = 20.0)]
+        seconds: f64,
+        /// Output directory for latency.json.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
+    Detection {
+        /// Runs per leak kind and size.
+        #[arg(long, default_value_t = 20)]
+        runs: usize,
+        /// Simulated healthy hours for the false-alarm rate.
+        #[arg(long, default_value_t = 10.0)]
+        hours: f64,
+        /// Suite seed.
+        #[arg(long, default_value_t = 2026)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Score recorded runs instead of simulating: a directory of run folders, each
+        /// with measured.csv[.gz] and truth.json (laid out like ../shared/data/leaks_dev).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Configuration file (model, filters, classifier) for the chain, with --data.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Output directory: detection.json, detection.md (and detection.png for the suite).
+        #[arg(long, default_value = "bench-detection")]
+        out: PathBuf,
+    },
+}

@@ -1,0 +1,113 @@
+//! `leakwatch replay`: the command's checks, a recorded log read through its
+//! CSV export, and the warnings and summary printed after [`replay::run`].
+
+use std::path::PathBuf;
+
+use crate::config::Config;
+use crate::logs::export_log;
+use crate::{out, replay};
+
+/// What `leakwatch replay` was asked to do: its arguments (`cli::Command::Replay`) and `--force`.
+pub struct ReplayArgs {
+    /// Input: a CSV or a recorded log (.mcap).
+    pub input: PathBuf,
+    /// Configuration file.
+    pub config: Option<PathBuf>,
+    /// States of the thesis filter (6 or 7).
+    pub model: Option<u32>,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Run all stages in one thread instead of over channels.
+    pub single_thread: bool,
+    /// Also report the thesis' MAE detector's decisions.
+    pub thesis_baseline: bool,
+    /// Largest fraction of unusable input rows (0 to 1).
+    pub max_bad_rows: f64,
+    /// Replace existing outputs.
+    pub force: bool,
+}
+
+/// `leakwatch replay`.
+pub fn run(args: ReplayArgs) -> Result<(), String> {
+    let ReplayArgs {
+        input,
+        config,
+        model,
+        out,
+        single_thread,
+        thesis_baseline,
+        max_bad_rows,
+        force,
+    } = args;
+    if !(0.0..=1.0).contains(&max_bad_rows) {
+        return Err(format!(
+            "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
+        ));
+    }
+    let config = Config::pick(config);
+    let mut cfg = Config::load_or_default(config.as_deref())?;
+    cfg.classifier.thesis_baseline |= thesis_baseline;
+    if let Some(m) = model {
+        if m != 6 && m != 7 {
+            return Err(format!("--model {m}: the thesis filter has 6 or 7 states"));
+        }
+        cfg.estimator.states = m;
+    }
+    // A recorded log is replayed through its frames, exported as dataset.csv.
+    let mut protect: Vec<PathBuf> = config.iter().cloned().collect();
+    let mut log = None;
+    let input = if input.extension().is_some_and(|e| e == "mcap") {
+        out::dir(&out)?;
+        let dir = out.join("log-export");
+        log = Some(export_log(&input, &dir, force, true)?.1);
+        protect.push(input);
+        dir.join("dataset.csv")
+    } else {
+        input
+    };
+    let req = replay::ReplayRequest {
+        input,
+        out_dir: out.clone(),
+        config: cfg,
+        wiring: if single_thread {
+            replay::Wiring::SingleThread
+        } else {
+            replay::Wiring::Channels
+        },
+        progress: true,
+        max_bad_fraction: max_bad_rows,
+        overwrite: force,
+        protect,
+        log,
+    };
+    let s = replay::run(&req)?;
+    for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
+        if f.resets * 10 > s.samples {
+            eprintln!(
+                "warning: the {name} filter was reset {} times in {} samples: its tuning does not fit \
+                 the data (its estimates are mostly NaN)",
+                f.resets, s.samples
+            );
+        }
+    }
+    for i in s.issues.iter().take(10) {
+        eprintln!("warning: {i}");
+    }
+    if s.issues.len() > 10 {
+        eprintln!(
+            "warning: ... {} more input problems in summary.json",
+            s.issues.len() - 10
+        );
+    }
+    eprintln!(
+        "replayed {} samples in {:.2} s ({:.0} samples/s); {} rows skipped, {} samples missing; {} events; wrote {}",
+        s.samples,
+        s.wall_s,
+        s.samples_per_s,
+        s.rows_skipped,
+        s.samples_missing,
+        s.events,
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,75 @@
+//! The stage processes: which they are, how this binary runs one
+//! (`leakwatch stage NAME`), and how the supervisor starts and stops them.
+
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+/// The four stage binaries.
+pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
+
+/// Runs one stage process in this process: `args` is the stage's name followed by
+/// its own arguments (`leakwatch stage NAME ARGS...`).
+pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
+    let argv = args.iter().cloned();
+    match args.first().and_then(|n| n.to_str()) {
+        Some("acquisition") => acquisition::shell::main(argv),
+        Some("estimator") => estimator::shell::main(argv),
+        Some("classifier") => classifier::shell::main(argv),
+        Some("recorder") => recorder::shell::main(argv),
+        other => {
+            eprintln!(
+                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder",
+                other.unwrap_or("")
+            );
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+/// The program that runs the stages: this binary (`leakwatch stage NAME`), so an
+/// installed `leakwatch` needs nothing beside it and `run` never builds anything.
+pub fn stage_program() -> Result<PathBuf, String> {
+    std::env::current_exe()
+        .map_err(|e| format!("cannot locate the leakwatch binary to start its stages: {e}"))
+}
+
+pub(super) fn spawn(
+    program: &Path,
+    name: &str,
+    args: &[String],
+    prefix: &str,
+    log: &Path,
+) -> Result<Child, String> {
+    // the outputs were checked at start (an earlier run's only with --force)
+    let err = crate::out::create(log, true, &[])?;
+    let mut cmd = Command::new(program);
+    // The stage dies with its supervisor (SIGTERM when the supervisor's thread
+    // that spawned it ends, whatever the cause, SIGKILL included).
+    // SAFETY: prctl is async-signal-safe and touches no memory of the parent.
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM as libc::c_ulong, 0, 0, 0) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    cmd.arg("stage")
+        .arg(name)
+        .args(args)
+        .env(bus::PREFIX_ENV, prefix)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(err)
+        .spawn()
+        .map_err(|e| format!("cannot start stage {name} ({}): {e}", program.display()))
+}
+
+pub(super) fn terminate(child: &mut Child) {
+    // SAFETY-free: kill(2) via libc with SIGTERM for a clean stop.
+    let pid = child.id() as i32;
+    unsafe {
+        libc::kill(pid, libc::SIGTERM);
+    }
+}

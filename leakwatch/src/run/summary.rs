@@ -1,0 +1,71 @@
+//! What `leakwatch run` prints at the end: the per-stage table, the leak it
+//! detected (or none), the UDP stream's counts, and the files written.
+
+use classifier::{LeakEvent, Phase};
+
+use super::args::{parse_source, RunArgs, RunSource};
+use super::supervisor::RunOutcome;
+use crate::out::outln;
+
+/// Prints the summary of the run `o` made for `args`.
+pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
+    outln!("\n| stage | frames in | frames out | missing | latency p50 µs (median 1-s p50) | worst 1-s p99 µs | max µs | proc p50 µs | CPU % | RSS MB |");
+    outln!("|---|---|---|---|---|---|---|---|---|---|");
+    for (name, f) in &o.latency.stages {
+        outln!(
+            "| {name} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+            f.frames_in,
+            f.frames_out,
+            f.seq_gaps,
+            f.latency_p50_us,
+            f.latency_worst_1s_p99_us,
+            f.latency_max_us,
+            f.proc_p50_us,
+            f.cpu_fraction * 100.0,
+            f.rss_mb
+        );
+    }
+    let leaks: Vec<&LeakEvent> = o
+        .events
+        .iter()
+        .filter(|e| e.kind.is_leak() && e.phase == Phase::Raised && e.detector == "leak-size")
+        .collect();
+    match leaks.first() {
+        Some(e) => outln!(
+            "\ndetected: {} leak at t = {:.2} s (onset {:.2} s), {:.3} L/min at the measured pressures",
+            e.kind.name(),
+            e.t_detect_s,
+            e.t_onset_s,
+            o.events
+                .iter()
+                .rev()
+                .find(|x| x.event_id == e.event_id && x.detector == e.detector)
+                .map_or(e.size_lpm, |x| x.size_lpm)
+        ),
+        None => match o
+            .events
+            .iter()
+            .find(|e| e.kind.is_leak_alarm() && e.phase == Phase::Raised && e.detector == "leak-size")
+        {
+            Some(e) => outln!(
+                "\ndetected: a leak at t = {:.2} s (onset {:.2} s), kind not decided yet ({})",
+                e.t_detect_s,
+                e.t_onset_s,
+                e.detail
+            ),
+            None => outln!("\nno leak detected"),
+        },
+    }
+    if matches!(parse_source(args.source.as_deref()), Ok(RunSource::Udp(_))) {
+        // the stream's counts (lost, duplicated, late, malformed), from the acquisition's closing line
+        let log = std::fs::read_to_string(o.out_dir.join("acquisition.log")).unwrap_or_default();
+        if let Some(line) = log.lines().find_map(|l| l.strip_prefix("acquisition: udp: ")) {
+            outln!("UDP stream: {line}");
+        }
+    }
+    outln!(
+        "wrote {}/events.json, latency.json, run.mcap",
+        o.out_dir.display()
+    );
+    Ok(())
+}

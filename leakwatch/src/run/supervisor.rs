@@ -1,0 +1,389 @@
+//! The supervisor: checks every argument, starts the four stages, restarts
+//! those that fail, gathers events and stats, and writes the outputs at the end.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Child;
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use bus::{Bus, BusConfig, WaitMode};
+use classifier::LeakEvent;
+use frames::{LeakEventFrame, SensorFrame, StatsFrame, Topic};
+
+use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
+use super::events::{own_event, print_event};
+use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
+use super::stages::{spawn, stage_program, terminate, STAGES};
+use crate::config::Config;
+use crate::out::outln;
+
+/// The result of a run.
+#[derive(Debug)]
+pub struct RunOutcome {
+    /// Every event received.
+    pub events: Vec<LeakEvent>,
+    /// Latency and counts.
+    pub latency: LatencyReport,
+    /// The output directory.
+    pub out_dir: PathBuf,
+}
+
+/// Runs the pipeline; prints events as they come; writes the outputs.
+pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
+    let program = stage_program()?;
+    frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
+    let source = parse_source(args.source.as_deref())?;
+    let udp = match source {
+        RunSource::Udp(addr) => Some((addr, check_udp_args(args, addr)?)),
+        RunSource::Sim => {
+            if args.udp_idle_timeout_s.is_some() {
+                return Err("--udp-idle-timeout-s is for --source udp://IP:PORT".into());
+            }
+            None
+        }
+    };
+    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
+    crate::out::dir(&out_dir)?;
+    // An earlier run's outputs are replaced only with --force; refused before anything starts.
+    let mut outputs = vec!["config.toml", "events.json", "latency.json", "run.mcap"];
+    outputs.extend(STAGES.iter().map(|n| match *n {
+        "recorder" => "recorder.log",
+        "classifier" => "classifier.log",
+        "estimator" => "estimator.log",
+        _ => "acquisition.log",
+    }));
+    let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
+    for name in outputs {
+        crate::out::check(&out_dir.join(name), args.force, &inputs)?;
+    }
+    // The demonstration (a leak on an off-nominal rig) is what `run` does without
+    // faults or a config; naming the default scenario explicitly changes nothing.
+    // `--fault none` asks for a healthy run.
+    let scenario = args.scenario.clone().unwrap_or_else(|| DEFAULT_SCENARIO.into());
+    let demo =
+        udp.is_none() && scenario == DEFAULT_SCENARIO && args.faults.is_empty() && args.config.is_none();
+    let seconds = args.seconds.unwrap_or(40.0);
+    let faults: Vec<String> = if demo {
+        vec!["ext1:0.5lpm@20s".to_string()]
+    } else {
+        args.faults
+            .iter()
+            .filter(|f| f.as_str() != "none")
+            .cloned()
+            .collect()
+    };
+    // One config for every stage: the user's, and for the demonstration an off-nominal rig.
+    let mut cfg = Config::load_or_default(args.config.as_deref())?;
+    // Every argument is checked here, before any stage starts.
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3.6e6) {
+        return Err(format!(
+            "--seconds {seconds}: must be a number of seconds in (0, 3.6e6]"
+        ));
+    }
+    model::Scenario::by_name(&scenario, 0, seconds).map_err(|e| format!("--scenario {scenario}: {e}"))?;
+    for spec in &faults {
+        model::Fault::parse(spec, &cfg.model).map_err(|e| format!("--fault {spec}: {e}"))?;
+    }
+    WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
+    cfg.classifier.thesis_baseline |= args.thesis_baseline;
+    if demo {
+        cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
+    }
+    // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
+    let prefix = match std::env::var(bus::PREFIX_ENV) {
+        Ok(p) if !p.is_empty() => p,
+        _ => format!("run{}", std::process::id()),
+    };
+    let bus_cfg = BusConfig {
+        iox_prefix: Some(prefix.clone()),
+        ..BusConfig::default()
+    };
+    // The run owns its prefix until it ends: a second run on it is refused here,
+    // before it could touch the first one's shared memory.
+    let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
+    let cfg_path = out_dir.join("config.toml");
+    let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
+    crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
+    let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
+    let mut events_rx = bus
+        .subscriber::<LeakEventFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
+    let mut stats_rx = bus
+        .subscriber::<StatsFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
+    // Only acquisition publishes frames and only the classifier events: another
+    // publisher is another process of this user feeding the pipeline (docs/security.md).
+    let frames_watch = bus.topic_watch::<SensorFrame>().map_err(|e| e.to_string())?;
+    let events_watch = bus.topic_watch::<LeakEventFrame>().map_err(|e| e.to_string())?;
+    let mut frames_pubs = bus::PublisherWatch::new(Topic::Frames, 1);
+    let mut events_pubs = bus::PublisherWatch::new(Topic::Events, 1);
+    let mut last_watch = Instant::now();
+    let stop = bus::stop_on_signals();
+
+    let s = |v: &str| v.to_string();
+    let cfg_arg = cfg_path.display().to_string();
+    let log = out_dir.join("run.mcap").display().to_string();
+    let stage_args = |name: &str| -> Vec<String> {
+        match name {
+            "recorder" => {
+                let mut a = vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--out"),
+                    log.clone(),
+                    s("--grace-ms"),
+                    s("1500"),
+                ];
+                if args.force {
+                    a.push(s("--force"));
+                }
+                a
+            }
+            "classifier" | "estimator" => {
+                vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--config"),
+                    cfg_arg.clone(),
+                    s("--mode"),
+                    args.mode.clone(),
+                ]
+            }
+            _ => {
+                if let Some((addr, idle)) = udp {
+                    return vec![
+                        s("--rig"),
+                        args.rig.clone(),
+                        s("--udp"),
+                        addr.to_string(),
+                        s("--udp-idle-timeout-s"),
+                        idle.to_string(),
+                        s("--config"),
+                        cfg_arg.clone(),
+                        s("--wait-subscribers"),
+                        s("2"),
+                    ];
+                }
+                let mut a = vec![
+                    s("--rig"),
+                    args.rig.clone(),
+                    s("--scenario"),
+                    scenario.clone(),
+                    s("--seconds"),
+                    seconds.to_string(),
+                    s("--config"),
+                    cfg_arg.clone(),
+                    s("--wait-subscribers"),
+                    s("2"),
+                ];
+                for f in &faults {
+                    a.push(s("--fault"));
+                    a.push(f.clone());
+                }
+                a
+            }
+        }
+    };
+    if !quiet {
+        match udp {
+            Some((addr, idle)) => outln!(
+                "leakwatch run: rig {}, UDP sensor stream on {addr} (until the sender's end of stream or {idle} s \
+                 without datagrams), {} mode; output {}",
+                args.rig,
+                args.mode,
+                out_dir.display()
+            ),
+            None => outln!(
+                "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
+                args.rig,
+                faults.join(", "),
+                args.mode,
+                if demo { ", off-nominal rig (demonstration)" } else { "" },
+                out_dir.display()
+            ),
+        }
+        if let Ok(c) = classifier::Classifier::new(cfg.classifier.clone()) {
+            outln!("note: {}", c.start_note());
+        }
+    }
+    let mut children: BTreeMap<&str, Child> = BTreeMap::new();
+    for name in STAGES {
+        let child = spawn(
+            &program,
+            name,
+            &stage_args(name),
+            &prefix,
+            &out_dir.join(format!("{name}.log")),
+        )?;
+        children.insert(name, child);
+        if name != "acquisition" {
+            std::thread::sleep(Duration::from_millis(150));
+        }
+    }
+    let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
+    let mut events = Vec::new();
+    let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
+    let started = Instant::now();
+    let mut ended_at: Option<Instant> = None;
+    // a UDP stream lasts as long as its sender streams
+    let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
+    // A failure ends the run, but what was gathered is still written.
+    let mut failure: Option<String> = None;
+    // Events published by anything but this run's classifier are left out.
+    let mut foreign_events = 0u64;
+    loop {
+        while let Ok(Some(f)) = events_rx.try_receive() {
+            if let Some(ev) = own_event(&f, &children, &mut foreign_events) {
+                if !quiet {
+                    print_event(&ev)?;
+                }
+                events.push(ev);
+            }
+        }
+        while let Ok(Some(st)) = stats_rx.try_receive() {
+            accs.entry(st.stage).or_default().push(&st.frame);
+        }
+        if last_watch.elapsed() >= Duration::from_secs(1) {
+            last_watch = Instant::now();
+            let counts = [frames_watch.publisher_count(), events_watch.publisher_count()];
+            for (watch, count) in [&mut frames_pubs, &mut events_pubs].into_iter().zip(counts) {
+                if let Some(w) = watch.observe(count) {
+                    eprintln!("leakwatch run: warning: {w}");
+                }
+            }
+        }
+        if stop.load(Ordering::Relaxed) {
+            eprintln!("leakwatch run: stopping (signal)");
+            break;
+        }
+        // Supervision.
+        let mut acquisition_done = false;
+        for name in STAGES {
+            let Some(child) = children.get_mut(name) else {
+                continue;
+            };
+            if let Ok(Some(status)) = child.try_wait() {
+                if name == "acquisition" {
+                    if !status.success() {
+                        failure = Some(format!(
+                            "acquisition failed ({status}); see {}",
+                            out_dir.join("acquisition.log").display()
+                        ));
+                    }
+                    acquisition_done = true;
+                } else if ended_at.is_none() || name != "recorder" {
+                    let n = restarts.entry(name.to_string()).or_default();
+                    *n += 1;
+                    eprintln!("leakwatch run: stage {name} exited ({status}); restarting it (restart {n})");
+                    if *n > 5 {
+                        failure = Some(format!(
+                            "stage {name} keeps failing; see {}",
+                            out_dir.join(format!("{name}.log")).display()
+                        ));
+                        break;
+                    }
+                    let mut a = stage_args(name);
+                    if name == "recorder" {
+                        a[3] = out_dir.join(format!("run-{n}.mcap")).display().to_string();
+                    }
+                    match spawn(
+                        &program,
+                        name,
+                        &a,
+                        &prefix,
+                        &out_dir.join(format!("{name}-{n}.log")),
+                    ) {
+                        Ok(c) => {
+                            children.insert(name, c);
+                        }
+                        Err(e) => {
+                            failure = Some(e);
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        if failure.is_some() {
+            break;
+        }
+        if acquisition_done {
+            children.remove("acquisition");
+            ended_at.get_or_insert_with(Instant::now);
+        }
+        if let Some(t) = ended_at {
+            // let the last frames drain and the recorder finish its file
+            if t.elapsed() > Duration::from_millis(2500) {
+                break;
+            }
+        }
+        if deadline.is_some_and(|d| started.elapsed() > d) {
+            eprintln!("leakwatch run: the run did not end in time; stopping");
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // the classifier's pid, for the events still queued once it has stopped
+    let classifier_pids: BTreeMap<&str, u32> = children
+        .iter()
+        .filter(|(n, _)| **n == "classifier")
+        .map(|(n, c)| (*n, c.id()))
+        .collect();
+    for (_, c) in children.iter_mut() {
+        terminate(c);
+    }
+    for (_, mut c) in children {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(5) {
+            if let Ok(Some(_)) = c.try_wait() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = c.kill();
+        let _ = c.wait();
+    }
+    while let Ok(Some(st)) = stats_rx.try_receive() {
+        accs.entry(st.stage).or_default().push(&st.frame);
+    }
+    while let Ok(Some(f)) = events_rx.try_receive() {
+        if let Some(ev) = own_event(&f, &classifier_pids, &mut foreign_events) {
+            events.push(ev);
+        }
+    }
+    let mut stages = BTreeMap::new();
+    for (code, acc) in accs {
+        let name = STAGE_NAMES.get(code as usize).copied().unwrap_or("unknown");
+        stages.insert(name.to_string(), acc.finish());
+    }
+    let latency = LatencyReport {
+        mode: args.mode.clone(),
+        stages,
+        restarts,
+    };
+    crate::replay::write_events(&out_dir.join("events.json"), &events, args.force, &inputs)?;
+    let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())?;
+    crate::out::write(
+        &out_dir.join("latency.json"),
+        (text + "\n").as_bytes(),
+        args.force,
+        &inputs,
+    )?;
+    drop(events_rx);
+    drop(stats_rx);
+    drop((frames_watch, events_watch));
+    drop(bus);
+    let _ = bus_cfg.remove_isolated_files();
+    if let Some(f) = failure {
+        return Err(format!(
+            "{f} (events.json and latency.json in {} hold what the run gathered)",
+            out_dir.display()
+        ));
+    }
+    Ok(RunOutcome {
+        events,
+        latency,
+        out_dir,
+    })
+}
