@@ -188,7 +188,7 @@ pub(crate) enum Command {
         /// Noise and reference seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// A leak, KIND:SIZE@ONSET[,ramp=SECONDS][,law=sqrt|linear], e.g. ext1:0.3lpm@20s or int:k=6e-12@18s,law=linear.
+        /// A leak, KIND:SIZE@ONSET[,ramp=SECONDS][,law=sqrt|linear], e.g. ext1:0.3lpm@20s or int:k=6e-12@18s,law=linear (`none`: healthy).
         #[arg(long = "fault")]
         faults: Vec<String>,
         /// Friction variant of the rig (default: as configured, the thesis' friction).

@@ -74,6 +74,13 @@ pub struct ResidualRms {
     pub mean_nis: f64,
     /// Filter resets.
     pub resets: u64,
+    /// Samples whose NIS exceeded the classifier's `nis_gate`: a value in the data
+    /// far from anything the filter expects (a spike, a glitch) or a stretch the
+    /// model does not follow; the leak detector takes no evidence after them for
+    /// `recovery_s`.
+    pub nis_outliers: u64,
+    /// Sample time of the first of them, s (NaN: none).
+    pub first_nis_outlier_s: f64,
 }
 
 /// What `summary.json` holds.
@@ -119,15 +126,35 @@ pub struct Summary {
     pub wiring: String,
 }
 
-#[derive(Default)]
 struct Acc {
     n: f64,
     sq: [f64; 5],
     nis: f64,
+    /// NIS above which a sample counts as an outlier (the classifier's `nis_gate`).
+    nis_gate: f64,
+    outliers: u64,
+    first_outlier_s: f64,
 }
 
 impl Acc {
+    fn new(nis_gate: f64) -> Acc {
+        Acc {
+            n: 0.0,
+            sq: [0.0; 5],
+            nis: 0.0,
+            nis_gate,
+            outliers: 0,
+            first_outlier_s: f64::NAN,
+        }
+    }
+
     fn push(&mut self, e: &estimator::Estimate) {
+        if e.nis > self.nis_gate {
+            if self.outliers == 0 {
+                self.first_outlier_s = e.t_s;
+            }
+            self.outliers += 1;
+        }
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
             return;
         }
@@ -150,6 +177,8 @@ impl Acc {
             innovation_p2_pa: r(4),
             mean_nis: self.nis / n,
             resets,
+            nis_outliers: self.outliers,
+            first_nis_outlier_s: self.first_outlier_s,
         }
     }
 }
@@ -282,7 +311,8 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         },
         ..Summary::default()
     };
-    let mut acc = (Acc::default(), Acc::default());
+    let gate = req.config.classifier.nis_gate;
+    let mut acc = (Acc::new(gate), Acc::new(gate));
     let mut last_t = 0.0;
     let bar = progress_bar(req.progress);
     let started = Instant::now();

@@ -80,6 +80,7 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         protect,
         log,
     };
+    let (cfg_nis_gate, cfg_recovery_s) = (req.config.classifier.nis_gate, req.config.classifier.recovery_s);
     let s = replay::run(&req)?;
     for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
         if f.resets * 10 > s.samples {
@@ -97,6 +98,14 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         eprintln!(
             "warning: ... {} more input problems in summary.json",
             s.issues.len() - 10
+        );
+    }
+    if s.leak_filter.nis_outliers > 0 {
+        eprintln!(
+            "warning: {} samples far outside what the leak filter expects (NIS above the gate {}), first at \
+             t = {:.3} s: a spike or glitch in the data, or a stretch the model does not follow; no leak \
+             evidence is taken after them for {} s",
+            s.leak_filter.nis_outliers, cfg_nis_gate, s.leak_filter.first_nis_outlier_s, cfg_recovery_s
         );
     }
     eprintln!(

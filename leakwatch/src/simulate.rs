@@ -59,7 +59,8 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
         rig = rig.with_friction_preset(v);
     }
     let mut schedule = FaultSchedule::default();
-    for spec in &req.faults {
+    // (`--fault none` asks for a healthy run, as in `run`)
+    for spec in req.faults.iter().filter(|f| f.as_str() != "none") {
         schedule
             .faults
             .push(Fault::parse(spec, &rig).map_err(|e| e.to_string())?);

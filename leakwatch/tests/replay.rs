@@ -458,3 +458,41 @@ fn a_log_with_nothing_readable_is_an_error_naming_it() {
         );
     }
 }
+
+/// A one-sample pressure spike to 0 Pa (inside the physical range, so no row check
+/// can refuse it) is not taken silently: it is counted as an innovation outlier in
+/// summary.json and warned about, and it raises no leak.
+#[test]
+fn a_one_sample_pressure_spike_is_reported_not_taken_as_a_leak() {
+    let d = tmpdir("spike");
+    let input = simulate(&d, "loaded-sine", "25", "none");
+    let text = std::fs::read_to_string(&input).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    // row of t = 15.000 s (header + 15000 rows before it): p1 (the fourth column) = 0
+    let mut cells: Vec<String> = lines[15_001].split(',').map(str::to_string).collect();
+    assert!(cells[0].starts_with("15"), "{}", lines[15_001]);
+    cells[3] = "0".into();
+    lines[15_001] = cells.join(",");
+    let spiked = d.join("spiked.csv");
+    std::fs::write(&spiked, lines.join("\n") + "\n").unwrap();
+    let out = d.join("out");
+    let o = replay(&spiked, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("far outside what the leak filter expects"), "{err}");
+    let s = json(&out.join("summary.json"));
+    assert!(s["leak_filter"]["nis_outliers"].as_u64().unwrap() >= 1, "{s:#}");
+    let t = s["leak_filter"]["first_nis_outlier_s"].as_f64().unwrap();
+    assert!((t - 15.0).abs() < 0.01, "{t}");
+    let events = json(&out.join("events.json"));
+    let leaks = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["detector"] == "leak-size" && e["phase"] == "raised")
+        .count();
+    assert_eq!(leaks, 0, "{events:#}");
+    // the same file without the spike: nothing to report
+    let o = replay(&input, &d.join("clean"), &[]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("far outside"));
+}
