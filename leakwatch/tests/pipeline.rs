@@ -378,7 +378,8 @@ fn the_binary_alone_runs_the_pipeline_without_cargo() {
     assert_eq!(leaks.len(), 1, "{leaks:?}");
     assert_eq!(leaks[0]["kind"], "ext1");
     let t = leaks[0]["t_detect_s"].as_f64().unwrap();
-    assert!((10.0..12.0).contains(&t), "raised at {t} s");
+    // named once one kind has led for 1.5 s after the (kind-pending) alarm
+    assert!((10.0..13.0).contains(&t), "raised at {t} s");
     // the stage logs are there: the four children were this binary's stages
     for name in ["acquisition", "estimator", "classifier", "recorder"] {
         assert!(out.join(format!("{name}.log")).is_file(), "{name}.log");
