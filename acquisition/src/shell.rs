@@ -9,6 +9,20 @@
 //! datagrams ([`crate::UdpCounts`]). The last frame carries `END_OF_STREAM`;
 //! the process then exits 0. SIGINT/SIGTERM stop it cleanly.
 //!
+//! A paced acquisition that could not run for longer than `--max-catch-up-ms`
+//! (stopped, starved of CPU) does not publish the samples it missed in a
+//! burst: as on a real rig, whose DAQ FIFO would have overflowed, they are
+//! lost. The source moves on over the missed time without publishing, so rig
+//! time stays wall time, and the next frame's `seq` jumps by the samples lost
+//! (downstream reads that as a gap; the frame is flagged `AFTER_GAP`).
+//!
+//! A restarted acquisition continues the stream of the one before it
+//! (`--resume-seq`, `--resume-t-s`, `--resume-mono-ns`: the last frame the
+//! supervisor saw): the source moves over the samples already published
+//! (the simulation is deterministic: same seed, same faults), the schedule
+//! continues the earlier one, and the time it was down is a gap of as many
+//! samples.
+//!
 //! A UDP stream ends with the sender's end of stream (its last sample flagged,
 //! which is then the last frame), or with a sample-less end mark or the idle
 //! timeout: then one more frame closes the stream, `END_OF_STREAM` at the last
@@ -18,6 +32,8 @@
 //! acquisition --rig rig1 --scenario closed-loop-sine --seconds 10 --fault ext1:0.25@4
 //! acquisition --rig rig1 --csv measured.csv --rate-hz 0      # as fast as possible
 //! acquisition --rig rig1 --udp 0.0.0.0:5005 --config rig.toml # a real rig's DAQ
+//! acquisition --rig rig1 --scenario loaded-sine --seconds 40 \
+//!     --resume-seq 12345 --resume-t-s 12.345 --resume-mono-ns 81234567890  # a restart
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -82,6 +98,47 @@ struct Args {
     /// Stay alive this long after the last frame so subscribers can drain, ms.
     #[arg(long, default_value_t = 300)]
     linger_ms: u64,
+    /// Lateness a paced source still catches up in a burst, ms (a DAQ FIFO's
+    /// depth in time; within a subscriber's 256-frame buffer at 1 kHz); after a
+    /// longer stall the missed samples are skipped (lost, a gap downstream).
+    #[arg(long, default_value_t = 100.0)]
+    max_catch_up_ms: f64,
+    /// Continue a stream (a restarted acquisition): the sequence number of the
+    /// last frame published before. Needs --resume-t-s and --resume-mono-ns.
+    #[arg(long, requires_all = ["resume_t_s", "resume_mono_ns"])]
+    resume_seq: Option<u64>,
+    /// With --resume-seq: that frame's sample time, s (rig time); the source
+    /// moves over every sample up to it without publishing.
+    #[arg(long, requires = "resume_seq")]
+    resume_t_s: Option<f64>,
+    /// With --resume-seq: when that frame was published, `CLOCK_MONOTONIC` ns
+    /// (its `acq_mono_ns`); the schedule continues from it.
+    #[arg(long, requires = "resume_seq")]
+    resume_mono_ns: Option<u64>,
+}
+
+/// Where a restarted acquisition takes over: the last frame published before.
+#[derive(Debug, Clone, Copy)]
+struct Resume {
+    /// Its sequence number.
+    seq: u64,
+    /// Its sample time, s.
+    t_s: f64,
+    /// Its publish instant, `CLOCK_MONOTONIC` ns.
+    mono_ns: u64,
+}
+
+impl Args {
+    fn resume(&self) -> Result<Option<Resume>, String> {
+        let (Some(seq), Some(t_s), Some(mono_ns)) = (self.resume_seq, self.resume_t_s, self.resume_mono_ns)
+        else {
+            return Ok(None);
+        };
+        if !t_s.is_finite() {
+            return Err(format!("--resume-t-s {t_s}: must be a finite sample time, s"));
+        }
+        Ok(Some(Resume { seq, t_s, mono_ns }))
+    }
 }
 
 /// The parts of the leakwatch configuration file the sources need: the
@@ -205,9 +262,12 @@ struct Published {
 
 /// Publishes a source the acquisition paces (simulated rig, file): each frame
 /// on its deadline, the frame after next produced right after a publish, so
-/// that the last frame is known and carries `END_OF_STREAM`.
+/// that the last frame is known and carries `END_OF_STREAM`. Deadlines the
+/// pacer skipped after a stall drop as many samples (the last one is always
+/// published); a resumed stream first moves over the samples published before.
 fn publish_paced(
     args: &Args,
+    resume: Option<Resume>,
     source: &mut dyn Source,
     tx: &mut Publisher<SensorFrame>,
     stats_tx: &mut Publisher<StatsFrame>,
@@ -218,22 +278,62 @@ fn publish_paced(
     } else {
         0
     };
-    let mut pacer = Pacer::new(period_ns, args.spin_us * 1000);
+    let mut pacer =
+        Pacer::new(period_ns, args.spin_us * 1000).skip_after((args.max_catch_up_ms * 1e6).round() as u64);
     let mut stats = StageStats::new(frames::stage::ACQUISITION);
     let mut unusable = 0u64;
-    let mut current = next_frame(source, &mut unusable, &mut stats);
-    let mut following = next_frame(source, &mut unusable, &mut stats);
     let mut seq = 0u64;
+    let mut current = next_frame(source, &mut unusable, &mut stats);
+    if let Some(r) = resume {
+        // the samples up to the resume point were published by the process before
+        let mut scratch = StageStats::new(frames::stage::ACQUISITION);
+        let mut scratch_unusable = 0;
+        let half_period_s = source.sample_period_s() / 2.0;
+        let mut passed = 0u64;
+        while current.as_ref().is_some_and(|f| f.t_s <= r.t_s + half_period_s) {
+            current = next_frame(source, &mut scratch_unusable, &mut scratch);
+            passed += 1;
+        }
+        eprintln!(
+            "acquisition: resuming after frame {} (t = {} s): {passed} samples moved over",
+            r.seq, r.t_s
+        );
+        seq = r.seq + 1;
+        pacer = pacer.resume_after(r.mono_ns);
+    }
+    let mut following = next_frame(source, &mut unusable, &mut stats);
     let mut next_stats = monotonic_ns() + 1_000_000_000;
+    let mut published = 0u64;
 
     while let Some(mut frame) = current {
         if stop.load(Ordering::Relaxed) {
-            eprintln!("acquisition: stopped by signal after {seq} frames");
+            eprintln!("acquisition: stopped by signal after {published} frames");
             break;
         }
         let tick = pacer.wait();
         stats.record_latency_ns(tick.late_ns);
         stats.deadline_misses += tick.missed as u64;
+        // the samples of skipped deadlines are lost (a real rig's would be)
+        let mut dropped = 0u64;
+        while dropped < tick.skipped {
+            let Some(next) = following.take() else { break };
+            frame = SensorFrame {
+                flags: next.flags | frame.flags,
+                ..next
+            };
+            following = next_frame(source, &mut unusable, &mut stats);
+            dropped += 1;
+        }
+        if dropped > 0 {
+            frame.flags |= sensor_flags::AFTER_GAP;
+            stats.seq_gaps += dropped;
+            seq += dropped;
+            eprintln!(
+                "acquisition: {} ms behind schedule (stopped, or restarted): {dropped} samples skipped, t = {:.3} s",
+                tick.skipped * period_ns / 1_000_000,
+                frame.t_s
+            );
+        }
         frame.seq = seq;
         if following.is_none() {
             frame.flags |= sensor_flags::END_OF_STREAM;
@@ -241,6 +341,7 @@ fn publish_paced(
         frame.acq_mono_ns = monotonic_ns();
         tx.send(&frame).map_err(|e| e.to_string())?;
         seq += 1;
+        published += 1;
         stats.frames_out += 1;
         // produce the frame after next now, off the publish instant
         let t0 = monotonic_ns();
@@ -254,7 +355,7 @@ fn publish_paced(
         }
     }
     Ok(Published {
-        frames: seq,
+        frames: published,
         unusable,
         stats,
     })
@@ -265,7 +366,11 @@ fn publish_paced(
 /// that ends otherwise (end mark, idle timeout) is closed by an
 /// `END_OF_STREAM` frame at the last sample's time with every channel NaN; a
 /// signal stops it without one, as for the other sources.
+///
+/// A resumed stream continues the sequence: the first frame's `seq` follows the
+/// last one before by the sample periods between their times (at least one).
 fn publish_live(
+    resume: Option<Resume>,
     source: &mut dyn Source,
     tx: &mut Publisher<SensorFrame>,
     stats_tx: &mut Publisher<StatsFrame>,
@@ -274,10 +379,25 @@ fn publish_live(
     let mut stats = StageStats::new(frames::stage::ACQUISITION);
     let mut unusable = 0u64;
     let mut seq = 0u64;
+    let mut published = 0u64;
+    let mut pending_resume = resume;
     let mut last_t = f64::NAN;
     let mut closed = false;
     let mut next_stats = monotonic_ns() + 1_000_000_000;
     while let Some(mut frame) = next_frame(source, &mut unusable, &mut stats) {
+        if let Some(r) = pending_resume.take() {
+            let steps = ((frame.t_s - r.t_s) / source.sample_period_s()).round();
+            let steps = if steps.is_finite() && steps >= 1.0 {
+                steps.min(1e12) as u64
+            } else {
+                1
+            };
+            seq = r.seq + steps;
+            if steps > 1 {
+                stats.seq_gaps += steps - 1;
+                frame.flags |= sensor_flags::AFTER_GAP;
+            }
+        }
         frame.seq = seq;
         if source.ended() {
             frame.flags |= sensor_flags::END_OF_STREAM;
@@ -292,6 +412,7 @@ fn publish_live(
             stats.record_proc_ns(monotonic_ns().saturating_sub(arrived));
         }
         seq += 1;
+        published += 1;
         stats.frames_out += 1;
         stats.frames_in += 1;
         if frame.acq_mono_ns >= next_stats {
@@ -303,8 +424,8 @@ fn publish_live(
         }
     }
     if stop.load(Ordering::Relaxed) {
-        eprintln!("acquisition: stopped by signal after {seq} frames");
-    } else if !closed && seq > 0 {
+        eprintln!("acquisition: stopped by signal after {published} frames");
+    } else if !closed && published > 0 {
         let end = SensorFrame {
             seq,
             t_s: last_t,
@@ -313,11 +434,11 @@ fn publish_live(
             ..SensorFrame::default()
         };
         tx.send(&end).map_err(|e| e.to_string())?;
-        seq += 1;
+        published += 1;
         stats.frames_out += 1;
     }
     Ok(Published {
-        frames: seq,
+        frames: published,
         unusable,
         stats,
     })
@@ -330,6 +451,13 @@ fn run(args: &Args) -> Result<(), String> {
             args.rate_hz
         ));
     }
+    if !(args.max_catch_up_ms >= 0.0 && args.max_catch_up_ms <= 3.6e6) {
+        return Err(format!(
+            "--max-catch-up-ms {}: must be a number of milliseconds in [0, 3.6e6]",
+            args.max_catch_up_ms
+        ));
+    }
+    let resume = args.resume()?;
     let stop = bus::stop_on_signals();
     let mut source = build_source(args, stop)?;
     let bus =
@@ -364,9 +492,9 @@ fn run(args: &Args) -> Result<(), String> {
         );
     }
     let mut p = if live {
-        publish_live(source.as_mut(), &mut tx, &mut stats_tx, stop)?
+        publish_live(resume, source.as_mut(), &mut tx, &mut stats_tx, stop)?
     } else {
-        publish_paced(args, source.as_mut(), &mut tx, &mut stats_tx, stop)?
+        publish_paced(args, resume, source.as_mut(), &mut tx, &mut stats_tx, stop)?
     };
     stats_tx.send(&p.stats.take_frame()).map_err(|e| e.to_string())?;
     let (what, proc) = if live {

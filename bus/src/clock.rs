@@ -54,13 +54,20 @@ pub struct Tick {
     pub now_ns: u64,
     /// How late `now_ns` is against the schedule, ns (0 if on time or early).
     pub late_ns: u64,
-    /// True if the tick is more than one period late (a deadline miss).
+    /// True if the tick is more than one period late, or deadlines were
+    /// skipped before it (a deadline miss).
     pub missed: bool,
+    /// Deadlines skipped just before this tick (see [`Pacer::skip_after`]):
+    /// the samples due then are lost, so the caller drops as many. 0 normally.
+    pub skipped: u64,
 }
 
 /// Fixed-rate pacing on absolute deadlines (`clock_nanosleep(TIMER_ABSTIME)`):
 /// no drift, a late tick does not shift the following ones (the pacer catches
 /// up, as a DAQ board with a FIFO would deliver late samples in a burst).
+/// With [`Pacer::skip_after`], a pacer further behind than that (the process
+/// was stopped or starved of CPU: a FIFO would have overflowed) skips the
+/// missed deadlines instead and reports how many ([`Tick::skipped`]).
 ///
 /// With `spin_ns > 0` the pacer sleeps until `spin_ns` before each deadline
 /// and spins the rest of the way, trading a little CPU for less jitter.
@@ -69,6 +76,8 @@ pub struct Pacer {
     period_ns: u64,
     spin_ns: u64,
     next_ns: Option<u64>,
+    /// Lateness beyond which missed deadlines are skipped, ns (`None`: never).
+    max_late_ns: Option<u64>,
 }
 
 impl Pacer {
@@ -83,7 +92,29 @@ impl Pacer {
             period_ns,
             spin_ns,
             next_ns: None,
+            max_late_ns: None,
         }
+    }
+
+    /// Skips the missed deadlines when a tick is more than `max_late_ns` late:
+    /// the tick moves to the latest deadline already past (so it is less than a
+    /// period late) and [`Tick::skipped`] says how many deadlines were passed
+    /// over. Lateness up to `max_late_ns` is still caught up in a burst (the
+    /// depth of a DAQ's FIFO, in time). No effect on an unpaced pacer.
+    pub fn skip_after(mut self, max_late_ns: u64) -> Pacer {
+        self.max_late_ns = Some(max_late_ns);
+        self
+    }
+
+    /// Continues the schedule of an earlier pacer whose last tick was at
+    /// `last_tick_ns` (`CLOCK_MONOTONIC`, ns; e.g. a restarted process taking
+    /// over a stream): the first deadline is `last_tick_ns` + one period
+    /// instead of the first call. No effect on an unpaced pacer.
+    pub fn resume_after(mut self, last_tick_ns: u64) -> Pacer {
+        if self.period_ns > 0 {
+            self.next_ns = Some(last_tick_ns.saturating_add(self.period_ns));
+        }
+        self
     }
 
     /// The period, ns (0 = unpaced).
@@ -92,17 +123,27 @@ impl Pacer {
     }
 
     /// Waits for the next deadline (the first tick is immediate and anchors
-    /// the schedule) and reports how late it returned.
+    /// the schedule, unless [`Pacer::resume_after`] set it) and reports how
+    /// late it returned and how many deadlines it skipped.
     pub fn wait(&mut self) -> Tick {
         let now = monotonic_ns();
-        let scheduled = *self.next_ns.get_or_insert(now);
+        let mut scheduled = *self.next_ns.get_or_insert(now);
         if self.period_ns == 0 {
             return Tick {
                 scheduled_ns: now,
                 now_ns: now,
                 late_ns: 0,
                 missed: false,
+                skipped: 0,
             };
+        }
+        let mut skipped = 0;
+        if let Some(max_late) = self.max_late_ns {
+            let late = now.saturating_sub(scheduled);
+            if late > max_late {
+                skipped = late / self.period_ns;
+                scheduled += skipped * self.period_ns;
+            }
         }
         if now < scheduled {
             let wake = scheduled.saturating_sub(self.spin_ns);
@@ -120,7 +161,52 @@ impl Pacer {
             scheduled_ns: scheduled,
             now_ns: now,
             late_ns: late,
-            missed: late > self.period_ns,
+            missed: late > self.period_ns || skipped > 0,
+            skipped,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    /// A pacer stalled for 30 ms skips the missed deadlines (at most 5 ms
+    /// of them are caught up) and is on schedule right after.
+    #[test]
+    fn a_stalled_pacer_skips_the_missed_deadlines() {
+        let mut p = Pacer::new(MS, 0).skip_after(5 * MS);
+        let t0 = p.wait().scheduled_ns;
+        p.wait();
+        std::thread::sleep(std::time::Duration::from_millis(30));
+        let t = p.wait();
+        assert!((28..=40).contains(&t.skipped), "{t:?}");
+        assert!(t.missed && t.late_ns < MS, "{t:?}");
+        assert_eq!(t.scheduled_ns, t0 + (2 + t.skipped) * MS);
+        let next = p.wait();
+        assert_eq!((next.skipped, next.scheduled_ns), (0, t.scheduled_ns + MS));
+        // without skip_after the same stall is caught up tick by tick
+        let mut q = Pacer::new(MS, 0);
+        q.wait();
+        std::thread::sleep(std::time::Duration::from_millis(30));
+        let t = q.wait();
+        assert_eq!(t.skipped, 0);
+        assert!(t.late_ns >= 29 * MS, "{t:?}");
+    }
+
+    /// A resumed pacer continues an earlier schedule: its first deadline is
+    /// one period after the earlier last tick, and the time since is skipped.
+    #[test]
+    fn a_resumed_pacer_continues_the_schedule() {
+        let last = monotonic_ns() - 50 * MS;
+        let mut p = Pacer::new(MS, 0).skip_after(5 * MS).resume_after(last);
+        let t = p.wait();
+        assert!((48..=60).contains(&t.skipped), "{t:?}");
+        assert_eq!(t.scheduled_ns, last + (1 + t.skipped) * MS);
+        // unpaced: nothing to resume, nothing skipped
+        let mut u = Pacer::new(0, 0).skip_after(0).resume_after(last);
+        assert_eq!(u.wait().skipped, 0);
     }
 }

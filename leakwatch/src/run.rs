@@ -2,17 +2,22 @@
 //! them, print events as they happen, and write events.json, latency.json and
 //! the log (run.mcap) at the end.
 //!
-//! The stage binaries (`acquisition`, `estimator`, `classifier`, `recorder`)
-//! are looked up next to the `leakwatch` binary; inside a Cargo workspace they
-//! are built on first use. Every run gets its own iceoryx2 prefix
-//! (`LEAKWATCH_IOX_PREFIX`), so runs and tests never see each other.
+//! The stages (`acquisition`, `estimator`, `classifier`, `recorder`) are this
+//! binary run as `leakwatch stage NAME`. A stage that exits is restarted with
+//! backoff, the acquisition continuing its stream; a stage that makes no
+//! progress is reported, and killed (so restarted) after 5 s. Every run gets
+//! its own iceoryx2 prefix (`LEAKWATCH_IOX_PREFIX`), so runs and tests never
+//! see each other.
 
 mod args;
 mod events;
 mod figures;
+mod launch;
+mod restart;
 mod stages;
 mod summary;
 mod supervisor;
+mod watchdog;
 
 pub use args::RunArgs;
 pub use stages::stage_main;

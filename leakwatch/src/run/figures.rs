@@ -71,6 +71,10 @@ impl StageAcc {
         self.cpu_sum += s.cpu_fraction;
         f.rss_mb = f.rss_mb.max(s.rss_bytes as f64 / 1e6);
     }
+    /// Frames the stage published so far, over all its processes.
+    pub(super) fn frames_out_total(&self) -> u64 {
+        self.fig.frames_out + self.last.map_or(0, |l| l.frames_out)
+    }
     pub(super) fn finish(mut self) -> StageFigures {
         let med = |v: &mut Vec<f64>| {
             if v.is_empty() {
@@ -99,8 +103,11 @@ pub struct LatencyReport {
     pub mode: String,
     /// Per stage (acquisition, estimator, classifier, recorder).
     pub stages: BTreeMap<String, StageFigures>,
-    /// Restarts of crashed stages.
+    /// Restarts of stages that exited or were killed, per stage.
     pub restarts: BTreeMap<String, u32>,
+    /// Times each stage made no progress for more than 1.5 s (stopped, hung),
+    /// the longest such time, and kills after 5 s (see `run::watchdog`).
+    pub stalls: BTreeMap<String, super::watchdog::StallFigures>,
 }
 
 pub(super) const STAGE_NAMES: [&str; 4] = ["acquisition", "estimator", "classifier", "recorder"];

@@ -25,6 +25,22 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
             f.rss_mb
         );
     }
+    let faults: Vec<String> = o
+        .latency
+        .stalls
+        .iter()
+        .map(|(name, st)| (name, st, o.latency.restarts.get(name).copied().unwrap_or(0)))
+        .filter(|(_, st, restarts)| st.count > 0 || *restarts > 0)
+        .map(|(name, st, restarts)| {
+            format!(
+                "{name}: {restarts} restarts, {} stalls (longest {:.1} s, {} killed)",
+                st.count, st.longest_s, st.killed
+            )
+        })
+        .collect();
+    if !faults.is_empty() {
+        outln!("\nsupervision: {}", faults.join("; "));
+    }
     let leaks: Vec<&LeakEvent> = o
         .events
         .iter()

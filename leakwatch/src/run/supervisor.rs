@@ -1,5 +1,8 @@
 //! The supervisor: checks every argument, starts the four stages, restarts
-//! those that fail, gathers events and stats, and writes the outputs at the end.
+//! those that exit (with backoff: [`super::restart`]; the acquisition
+//! continuing its stream after the last frame it published), watches that each
+//! makes progress ([`super::watchdog`]), gathers events and stats, and writes
+//! the outputs at the end, whatever ended the run.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -14,7 +17,10 @@ use frames::{LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
 use super::events::{own_event, print_event};
 use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
+use super::launch::{Samples, StageArgs};
+use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
 use super::stages::{spawn, stage_program, terminate, STAGES};
+use super::watchdog::{stall_cause, Alarm, Watchdog};
 use crate::config::Config;
 use crate::out::outln;
 
@@ -112,6 +118,10 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut stats_rx = bus
         .subscriber::<StatsFrame>(WaitMode::Event)
         .map_err(|e| e.to_string())?;
+    // the frames: the acquisition's progress, and where a restarted one takes over
+    let mut frames_rx = bus
+        .subscriber::<SensorFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
     // Only acquisition publishes frames and only the classifier events: another
     // publisher is another process of this user feeding the pipeline (docs/security.md).
     let frames_watch = bus.topic_watch::<SensorFrame>().map_err(|e| e.to_string())?;
@@ -121,69 +131,20 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut last_watch = Instant::now();
     let stop = bus::stop_on_signals();
 
-    let s = |v: &str| v.to_string();
-    let cfg_arg = cfg_path.display().to_string();
-    let log = out_dir.join("run.mcap").display().to_string();
-    let stage_args = |name: &str| -> Vec<String> {
-        match name {
-            "recorder" => {
-                let mut a = vec![
-                    s("--rig"),
-                    args.rig.clone(),
-                    s("--out"),
-                    log.clone(),
-                    s("--grace-ms"),
-                    s("1500"),
-                ];
-                if args.force {
-                    a.push(s("--force"));
-                }
-                a
-            }
-            "classifier" | "estimator" => {
-                vec![
-                    s("--rig"),
-                    args.rig.clone(),
-                    s("--config"),
-                    cfg_arg.clone(),
-                    s("--mode"),
-                    args.mode.clone(),
-                ]
-            }
-            _ => {
-                if let Some((addr, idle)) = udp {
-                    return vec![
-                        s("--rig"),
-                        args.rig.clone(),
-                        s("--udp"),
-                        addr.to_string(),
-                        s("--udp-idle-timeout-s"),
-                        idle.to_string(),
-                        s("--config"),
-                        cfg_arg.clone(),
-                        s("--wait-subscribers"),
-                        s("2"),
-                    ];
-                }
-                let mut a = vec![
-                    s("--rig"),
-                    args.rig.clone(),
-                    s("--scenario"),
-                    scenario.clone(),
-                    s("--seconds"),
-                    seconds.to_string(),
-                    s("--config"),
-                    cfg_arg.clone(),
-                    s("--wait-subscribers"),
-                    s("2"),
-                ];
-                for f in &faults {
-                    a.push(s("--fault"));
-                    a.push(f.clone());
-                }
-                a
-            }
-        }
+    let launch = StageArgs {
+        rig: args.rig.clone(),
+        config: cfg_path.display().to_string(),
+        mode: args.mode.clone(),
+        out_dir: out_dir.clone(),
+        force: args.force,
+        samples: match udp {
+            Some((addr, idle_s)) => Samples::Udp { addr, idle_s },
+            None => Samples::Sim {
+                scenario: scenario.clone(),
+                seconds,
+                faults: faults.clone(),
+            },
+        },
     };
     if !quiet {
         match udp {
@@ -208,20 +169,29 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
     }
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
+    let mut watchdog = Watchdog::default();
     for name in STAGES {
         let child = spawn(
             &program,
             name,
-            &stage_args(name),
+            &launch.of(name, 0, None),
             &prefix,
             &out_dir.join(format!("{name}.log")),
         )?;
         children.insert(name, child);
+        watchdog.started(name, Instant::now());
         if name != "acquisition" {
             std::thread::sleep(Duration::from_millis(150));
         }
     }
+    // a UDP stream is paced by its sender: no datagram is no stall
+    let watched = |name: &str| udp.is_none() || name != "acquisition";
     let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
+    let mut backoffs: BTreeMap<&str, Backoff> = BTreeMap::new();
+    let mut started_at: BTreeMap<&str, Instant> = STAGES.iter().map(|n| (*n, Instant::now())).collect();
+    let mut restart_at: BTreeMap<&str, Instant> = BTreeMap::new();
+    // the last frame published, where a restarted acquisition takes over
+    let mut last_frame: Option<SensorFrame> = None;
     let mut events = Vec::new();
     let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
     let started = Instant::now();
@@ -232,7 +202,14 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut failure: Option<String> = None;
     // Events published by anything but this run's classifier are left out.
     let mut foreign_events = 0u64;
+    let stall_ended = |name: &str, d: Duration| {
+        eprintln!(
+            "leakwatch run: the {name} runs again after {:.1} s without progress",
+            d.as_secs_f64()
+        );
+    };
     loop {
+        let now = Instant::now();
         while let Ok(Some(f)) = events_rx.try_receive() {
             if let Some(ev) = own_event(&f, &children, &mut foreign_events) {
                 if !quiet {
@@ -241,8 +218,29 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 events.push(ev);
             }
         }
+        while let Ok(Some(f)) = frames_rx.try_receive() {
+            last_frame = Some(f.frame);
+            if let Some(d) = watchdog
+                .progress("acquisition", now)
+                .filter(|_| watched("acquisition"))
+            {
+                stall_ended("acquisition", d);
+            }
+        }
         while let Ok(Some(st)) = stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
+            let Some(&name) = STAGE_NAMES.get(st.stage as usize) else {
+                continue;
+            };
+            // the stats of this stage's running process, against its upstream's output
+            if name == "acquisition" || children.get(name).map(Child::id) != Some(st.pid) {
+                continue;
+            }
+            let upstream = if name == "classifier" { 1 } else { 0 };
+            let up_out = accs.get(&upstream).map_or(0, StageAcc::frames_out_total);
+            if let Some(d) = watchdog.stats(name, st.pid, st.frames_in, up_out, now) {
+                stall_ended(name, d);
+            }
         }
         if last_watch.elapsed() >= Duration::from_secs(1) {
             last_watch = Instant::now();
@@ -257,60 +255,97 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             eprintln!("leakwatch run: stopping (signal)");
             break;
         }
-        // Supervision.
-        let mut acquisition_done = false;
+        // Supervision: exits, restarts with backoff, stalls.
         for name in STAGES {
-            let Some(child) = children.get_mut(name) else {
-                continue;
-            };
-            if let Ok(Some(status)) = child.try_wait() {
-                if name == "acquisition" {
-                    if !status.success() {
-                        failure = Some(format!(
-                            "acquisition failed ({status}); see {}",
-                            out_dir.join("acquisition.log").display()
-                        ));
+            if let Some(child) = children.get_mut(name) {
+                match child.try_wait() {
+                    Ok(Some(status)) => {
+                        children.remove(name);
+                        watchdog.exited(name, now);
+                        if name == "acquisition" && status.success() {
+                            // the end of the stream: let the last frames drain
+                            ended_at.get_or_insert(now);
+                            continue;
+                        }
+                        if name == "recorder" && ended_at.is_some() {
+                            // it finished its file
+                            continue;
+                        }
+                        let ran = now.saturating_duration_since(started_at[name]);
+                        let backoff = backoffs.entry(name).or_default();
+                        let log = out_dir.join(match restarts.get(name) {
+                            Some(n) => format!("{name}-{n}.log"),
+                            None => format!("{name}.log"),
+                        });
+                        match backoff.on_exit(ran) {
+                            Decision::RestartIn(delay) => {
+                                eprintln!(
+                                    "leakwatch run: stage {name} exited ({status}) after {:.1} s; restarting it in {:.1} s \
+                                     (restart {} since it last ran {} s; see {})",
+                                    ran.as_secs_f64(),
+                                    delay.as_secs_f64(),
+                                    backoff.failures(),
+                                    HEALTHY_RUN.as_secs(),
+                                    log.display()
+                                );
+                                restart_at.insert(name, now + delay);
+                            }
+                            Decision::GiveUp => {
+                                failure = Some(format!(
+                                    "stage {name} keeps failing: it exited {} times without running {} s in between \
+                                     (last: {status}); see {}",
+                                    MAX_RESTARTS + 1,
+                                    HEALTHY_RUN.as_secs(),
+                                    log.display()
+                                ));
+                                break;
+                            }
+                        }
                     }
-                    acquisition_done = true;
-                } else if ended_at.is_none() || name != "recorder" {
-                    let n = restarts.entry(name.to_string()).or_default();
-                    *n += 1;
-                    eprintln!("leakwatch run: stage {name} exited ({status}); restarting it (restart {n})");
-                    if *n > 5 {
-                        failure = Some(format!(
-                            "stage {name} keeps failing; see {}",
-                            out_dir.join(format!("{name}.log")).display()
-                        ));
+                    Ok(None) if watched(name) => match watchdog.check(name, now, name != "recorder") {
+                        Some(Alarm::Stalled(idle)) => eprintln!(
+                            "leakwatch run: warning: the {name} has made no progress for {:.1} s (process {} {})",
+                            idle.as_secs_f64(),
+                            child.id(),
+                            stall_cause(child.id())
+                        ),
+                        Some(Alarm::Kill(idle)) => {
+                            eprintln!(
+                                "leakwatch run: the {name} has made no progress for {:.1} s; killing it to restart it",
+                                idle.as_secs_f64()
+                            );
+                            let _ = child.kill();
+                        }
+                        None => {}
+                    },
+                    _ => {}
+                }
+            }
+            if restart_at.get(name).is_some_and(|t| now >= *t) {
+                restart_at.remove(name);
+                let n = restarts.entry(name.to_string()).or_default();
+                *n += 1;
+                match spawn(
+                    &program,
+                    name,
+                    &launch.of(name, *n, last_frame.as_ref()),
+                    &prefix,
+                    &out_dir.join(format!("{name}-{n}.log")),
+                ) {
+                    Ok(c) => {
+                        children.insert(name, c);
+                        started_at.insert(name, now);
+                        watchdog.started(name, now);
+                    }
+                    Err(e) => {
+                        failure = Some(e);
                         break;
-                    }
-                    let mut a = stage_args(name);
-                    if name == "recorder" {
-                        a[3] = out_dir.join(format!("run-{n}.mcap")).display().to_string();
-                    }
-                    match spawn(
-                        &program,
-                        name,
-                        &a,
-                        &prefix,
-                        &out_dir.join(format!("{name}-{n}.log")),
-                    ) {
-                        Ok(c) => {
-                            children.insert(name, c);
-                        }
-                        Err(e) => {
-                            failure = Some(e);
-                            break;
-                        }
                     }
                 }
             }
         }
         if failure.is_some() {
             break;
-        }
-        if acquisition_done {
-            children.remove("acquisition");
-            ended_at.get_or_insert_with(Instant::now);
         }
         if let Some(t) = ended_at {
             // let the last frames drain and the recorder finish its file
@@ -361,6 +396,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         mode: args.mode.clone(),
         stages,
         restarts,
+        stalls: watchdog.finish(Instant::now()),
     };
     crate::replay::write_events(&out_dir.join("events.json"), &events, args.force, &inputs)?;
     let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())?;
@@ -372,6 +408,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     )?;
     drop(events_rx);
     drop(stats_rx);
+    drop(frames_rx);
     drop((frames_watch, events_watch));
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
