@@ -48,7 +48,8 @@ pub const LEAKWATCH_METADATA: &str = "leakwatch";
 
 /// The MCAP channel of [`GapRecord`]s.
 pub const GAPS_CHANNEL: &str = "gaps";
-/// The schema name of [`GapRecord`]s.
+/// The type name of [`GapRecord`]s: their JSON Schema's name in JSON logs, and the
+/// `leakwatch_type` of the `gaps` channel (the CDR schema is `leakwatch/msg/Gap`).
 pub const GAP_SCHEMA_NAME: &str = "leakwatch.Gap.v1";
 
 /// One item for the log, with the recorder's receive time
