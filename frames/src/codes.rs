@@ -47,6 +47,19 @@ pub mod event_kind {
     pub const SENSOR_DEAD: u32 = 13;
     /// The warm-up was too short to learn thresholds: detection is not armed.
     pub const NOT_ARMED: u32 = 14;
+
+    /// Every kind with its name (the names of events.json).
+    pub const NAMES: [(u32, &str); 9] = [
+        (EXT1, "ext1"),
+        (EXT2, "ext2"),
+        (INTERNAL, "int"),
+        (LEAK_PENDING, "leak"),
+        (ESTIMATOR_RESET, "estimator-reset"),
+        (SENSOR_STUCK, "sensor-stuck"),
+        (SENSOR_SATURATED, "sensor-saturated"),
+        (SENSOR_DEAD, "sensor-dead"),
+        (NOT_ARMED, "not-armed"),
+    ];
 }
 
 /// Values of [`LeakEventFrame::phase`](crate::LeakEventFrame::phase).
@@ -57,6 +70,9 @@ pub mod event_phase {
     pub const UPDATED: u32 = 1;
     /// The event was cleared.
     pub const CLEARED: u32 = 2;
+
+    /// Every phase with its name (the names of events.json).
+    pub const NAMES: [(u32, &str); 3] = [(RAISED, "raised"), (UPDATED, "updated"), (CLEARED, "cleared")];
 }
 
 /// Values of [`HealthFrame::status`](crate::HealthFrame::status).
@@ -69,6 +85,14 @@ pub mod health_status {
     pub const LEAK: u32 = 2;
     /// A sensor fault is active.
     pub const SENSOR_FAULT: u32 = 3;
+
+    /// Every status with its name.
+    pub const NAMES: [(u32, &str); 4] = [
+        (WARMING_UP, "warming-up"),
+        (HEALTHY, "healthy"),
+        (LEAK, "leak"),
+        (SENSOR_FAULT, "sensor-fault"),
+    ];
 }
 
 /// Values of [`StatsFrame::stage`](crate::StatsFrame::stage).
@@ -81,4 +105,32 @@ pub mod stage {
     pub const CLASSIFIER: u32 = 2;
     /// The recorder process.
     pub const RECORDER: u32 = 3;
+
+    /// Every stage with its name.
+    pub const NAMES: [(u32, &str); 4] = [
+        (ACQUISITION, "acquisition"),
+        (ESTIMATOR, "estimator"),
+        (CLASSIFIER, "classifier"),
+        (RECORDER, "recorder"),
+    ];
+}
+
+/// The name of `code` in a table of codes and names (`event_kind::NAMES`, ...):
+/// its name, or the code in decimal if the table has none (a code of a later
+/// version); [`code_of`] reads either back.
+pub fn code_name(names: &[(u32, &'static str)], code: u32) -> std::borrow::Cow<'static, str> {
+    match names.iter().find(|(c, _)| *c == code) {
+        Some((_, n)) => std::borrow::Cow::Borrowed(n),
+        None => std::borrow::Cow::Owned(code.to_string()),
+    }
+}
+
+/// The code of `name` in a table of codes and names: a name of the table, or a
+/// code in decimal (as [`code_name`] writes a code the table does not name).
+pub fn code_of(names: &[(u32, &'static str)], name: &str) -> Option<u32> {
+    names
+        .iter()
+        .find(|(_, n)| *n == name)
+        .map(|(c, _)| *c)
+        .or_else(|| name.parse().ok())
 }

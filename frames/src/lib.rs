@@ -32,7 +32,9 @@ mod sensor;
 mod service;
 mod stats;
 
-pub use codes::{estimate_flags, event_kind, event_phase, health_status, sensor_flags, stage};
+pub use codes::{
+    code_name, code_of, estimate_flags, event_kind, event_phase, health_status, sensor_flags, stage,
+};
 pub use estimate::{EstimateFrame, MAX_STATES, THESIS_STATES};
 pub use event::{
     detector_bytes, detector_name, text, text_bytes, LeakEventFrame, CHANNEL_NAME_LEN, DETAIL_LEN,

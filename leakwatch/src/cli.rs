@@ -115,6 +115,17 @@ pub(crate) enum Command {
         #[arg(long)]
         csv: PathBuf,
     },
+    /// Summarise a recorded log (MCAP), in the manner of `ros2 bag info`: file, size, duration,
+    /// channels with message counts, mean rates and encodings, gaps, the events raised, damaged
+    /// chunks or truncation, and the configuration the run used (stored in the log by `run`).
+    Info {
+        /// The log file (run.mcap).
+        log: PathBuf,
+        /// Write the configuration stored in the log (TOML) to this file (`-`: standard output),
+        /// e.g. for `leakwatch replay LOG --config FILE`.
+        #[arg(long, value_name = "FILE")]
+        config_out: Option<PathBuf>,
+    },
     /// Repair a recorded log (MCAP) whose recorder was killed (no summary, a cut
     /// last chunk) or that has damaged chunks: every intact message is written
     /// into a complete MCAP file that any MCAP reader opens.
@@ -201,9 +212,10 @@ pub(crate) enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Draw a run (a simulate or measured CSV) as a PNG.
+    /// Draw a run (a simulate or measured CSV, or a recorded log) as a PNG.
     Plot {
-        /// Input: a CSV in the dataset format, or a replay output directory (estimates.csv, events.json).
+        /// Input: a CSV in the dataset format, a recorded log (.mcap), or a replay output
+        /// directory (estimates.csv, events.json).
         input: PathBuf,
         /// Output PNG.
         #[arg(long)]

@@ -1,5 +1,5 @@
-//! The recorded-log commands: `export` (a log as CSVs, also what `replay` and
-//! `calibrate` read a log through) and `repair`.
+//! The recorded-log commands: `export` (a log as CSVs, also what `replay`,
+//! `calibrate` and `plot` read a log through), `repair` and `info`.
 
 use std::path::{Path, PathBuf};
 
@@ -39,6 +39,36 @@ pub fn repair(log: &Path, out: &Path, force: bool) -> Result<(), String> {
         per.join(", ")
     );
     Ok(())
+}
+
+/// `leakwatch info`: prints what `log` holds ([`recorder::Info`]); with
+/// `config_out`, writes the configuration stored in it there (`-`: standard output).
+pub fn info(log: &Path, config_out: Option<&Path>, force: bool) -> Result<(), String> {
+    let bytes = std::fs::metadata(log)
+        .map_err(|e| format!("{}: {e}", log.display()))?
+        .len();
+    let l = recorder::LogReader::open(log)
+        .and_then(|r| r.read())
+        .map_err(|e| format!("{}: {e}", log.display()))?;
+    let info = recorder::Info::from_log(log, bytes, &l);
+    match config_out {
+        Some(out) => {
+            let toml = info.config_toml.as_deref().ok_or_else(|| {
+                format!(
+                    "{}: the log holds no configuration (logs of `leakwatch run` from this version on do)",
+                    log.display()
+                )
+            })?;
+            if out == Path::new("-") {
+                crate::out::stdout(toml)
+            } else {
+                crate::out::write(out, toml.as_bytes(), force, &[log])?;
+                eprintln!("wrote {}", out.display());
+                Ok(())
+            }
+        }
+        None => crate::out::stdout(&info.render()),
+    }
 }
 
 /// Writes every channel of a recorded log as CSV into `dir` (plus dataset.csv);

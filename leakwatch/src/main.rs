@@ -79,6 +79,7 @@ fn run(cli: Cli) -> Result<(), String> {
         }),
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),
+        Command::Info { log, config_out } => logs::info(&log, config_out.as_deref(), force),
         Command::Commission { input, config, out } => {
             commission::run(&input, Config::pick(config).as_deref(), &out, force)
         }

@@ -1,4 +1,4 @@
-//! `leakwatch plot`: figures of simulated or measured runs.
+//! `leakwatch plot`: figures of simulated or measured runs and of recorded logs.
 
 use std::path::Path;
 
@@ -8,10 +8,13 @@ fn series(label: &str, x: &[f64], y: Vec<f64>) -> Series {
     Series::line(label, x, &y)
 }
 
-/// `leakwatch plot`: a replay output directory or a CSV run drawn into `out`.
+/// `leakwatch plot`: a replay output directory, a recorded log (.mcap) or a CSV
+/// run drawn into `out`.
 pub fn command(input: &Path, out: &Path, force: bool) -> Result<(), String> {
     if input.is_dir() {
         plot_replay(input, out, force)?;
+    } else if input.extension().is_some_and(|e| e == "mcap") {
+        plot_log(input, out, force)?;
     } else {
         plot_run_csv(input, out, force)?;
     }
@@ -50,6 +53,77 @@ pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String>
         .unwrap_or_default();
     let mut fig = Figure::new(&title, "t [s]");
     fig.panels = panels;
+    crate::out::png(&fig, out, force, &[input])
+}
+
+/// Draws a recorded log: the sensor frames as [`plot_run_csv`] does (rod
+/// position and reference, pressures, valve command), the leak flows the
+/// classifier estimated (health frames, 10 Hz) beside the flow channel where
+/// the log has one, and the leak events raised.
+pub fn plot_log(input: &Path, out: &Path, force: bool) -> Result<(), String> {
+    let log = recorder::LogReader::open(input)
+        .and_then(|r| r.read())
+        .map_err(|e| format!("{}: {e}", input.display()))?;
+    if log.frames.is_empty() {
+        return Err(format!(
+            "{}: no sensor frame could be read from the log",
+            input.display()
+        ));
+    }
+    if let Some(why) = &log.truncated {
+        eprintln!("warning: {}: {why}; drawing what is complete", input.display());
+    }
+    crate::out::check(out, force, &[input])?;
+    let f = &log.frames;
+    let t: Vec<f64> = f.iter().map(|f| f.t_s).collect();
+    let col = |g: fn(&frames::SensorFrame) -> f64, k: f64| f.iter().map(|f| g(f) * k).collect::<Vec<f64>>();
+    let present = |g: fn(&frames::SensorFrame) -> f64| f.iter().any(|f| !g(f).is_nan());
+    let mut markers = Vec::new();
+    for e in log
+        .events
+        .iter()
+        .filter(|e| e.phase == frames::event_phase::RAISED)
+    {
+        let kind = frames::code_name(&frames::event_kind::NAMES, e.kind);
+        if matches!(kind.as_ref(), "ext1" | "ext2" | "int") {
+            markers.push(plot::Marker::Vertical {
+                x: e.t_detect_s,
+                label: format!("{kind} detected ({})", frames::detector_name(&e.detector)),
+            });
+        }
+    }
+    let with_markers = |mut p: Panel| {
+        for m in &markers {
+            p = p.with_marker(m.clone());
+        }
+        p
+    };
+    let mut pos =
+        Panel::new("Rod position", "x [mm]").with_series(series("measured x", &t, col(|f| f.x_m, 1e3)));
+    if present(|f| f.ref_m) {
+        pos = pos.with_series(series("reference", &t, col(|f| f.ref_m, 1e3)));
+    }
+    let pres = Panel::new("Chamber pressures", "p [MPa]")
+        .with_series(series("p1", &t, col(|f| f.p1_pa, 1e-6)))
+        .with_series(series("p2", &t, col(|f| f.p2_pa, 1e-6)));
+    let cmd = Panel::new("Valve command", "u [V]").with_series(series("u", &t, col(|f| f.u_v, 1.0)));
+    let mut leak = Panel::new("Leak flow: estimated (health frames)", "q [L/min]");
+    if present(|f| f.q_leak_lpm) {
+        leak = leak.with_series(series("q_leak channel", &t, col(|f| f.q_leak_lpm, 1.0)));
+    }
+    let th: Vec<f64> = log.health.iter().map(|h| h.t_s).collect();
+    for (i, name) in ["ext1", "ext2", "int"].iter().enumerate() {
+        let q: Vec<f64> = log.health.iter().map(|h| h.leak_flow_lpm[i]).collect();
+        if q.iter().any(|v| !v.is_nan()) {
+            leak = leak.with_series(series(&format!("{name} estimated"), &th, q));
+        }
+    }
+    let title = input
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let mut fig = Figure::new(&title, "t [s]");
+    fig.panels = vec![with_markers(pos), pres, cmd, with_markers(leak)];
     crate::out::png(&fig, out, force, &[input])
 }
 

@@ -496,3 +496,82 @@ fn a_one_sample_pressure_spike_is_reported_not_taken_as_a_leak() {
     let o = replay(&input, &d.join("clean"), &[]);
     assert!(!String::from_utf8_lossy(&o.stderr).contains("far outside"));
 }
+
+/// Writes the samples of `csv` as the sensor frames of a log (CDR, or JSON as
+/// logs were before), with a health frame at 10 Hz.
+fn log_of(csv: &Path, log: &Path, encoding: recorder::Encoding) {
+    let ds = dataset::read_csv(csv, dataset::Limits::default()).unwrap();
+    let options = recorder::WriterOptions {
+        encoding,
+        queue_len: 1 << 16,
+        ..recorder::WriterOptions::default()
+    };
+    let mut w = recorder::LogWriter::create(log, options).unwrap();
+    for (i, s) in ds.samples.iter().enumerate() {
+        let t = 1_000_000_000 + i as u64 * 1_000_000;
+        let frame = frames::SensorFrame {
+            seq: i as u64,
+            acq_mono_ns: t,
+            ..frames::SensorFrame::from(s)
+        };
+        assert!(w.write(recorder::Entry::Frame(frame, t)).unwrap());
+        if i % 100 == 0 {
+            let h = frames::HealthFrame {
+                seq: i as u64 / 100,
+                mono_ns: t,
+                t_s: s.t_s,
+                ..frames::HealthFrame::default()
+            };
+            assert!(w.write(recorder::Entry::Health(h, t)).unwrap());
+        }
+    }
+    w.finish().unwrap();
+}
+
+/// A log of the JSON encoding (what earlier versions wrote) replays, exports and
+/// plots as the CDR log of the same samples does, and as their CSV does.
+#[test]
+fn a_json_log_of_an_earlier_version_replays_like_the_cdr_log_and_the_csv() {
+    let d = tmpdir("json-log");
+    let csv = simulate(&d, "loaded-sine", "14", "ext2:0.5lpm@9s");
+    let (cdr, json_log) = (d.join("cdr.mcap"), d.join("json.mcap"));
+    log_of(&csv, &cdr, recorder::Encoding::Cdr);
+    log_of(&csv, &json_log, recorder::Encoding::Json);
+    let read = |p: &Path| recorder::LogReader::open(p).unwrap().read().unwrap();
+    assert_eq!(read(&json_log).channels["frames"].message_encoding, "json");
+    assert_eq!(read(&cdr).channels["frames"].message_encoding, "cdr");
+    let mut estimates = Vec::new();
+    for (name, input) in [("csv", &csv), ("cdr", &cdr), ("json", &json_log)] {
+        let out = d.join(format!("out-{name}"));
+        let o = replay(input, &out, &[]);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let events = json(&out.join("events.json"));
+        assert!(
+            events
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e["kind"] == "ext2" && e["phase"] == "raised"),
+            "{name}: {events:#}"
+        );
+        estimates.push((name, std::fs::read(out.join("estimates.csv")).unwrap()));
+    }
+    assert!(estimates[1].1 == estimates[0].1, "cdr log and csv replay alike");
+    assert!(estimates[2].1 == estimates[0].1, "json log and csv replay alike");
+    // export and plot read the JSON log too
+    let o = leakwatch(&[
+        "export",
+        json_log.to_str().unwrap(),
+        "--csv",
+        d.join("csv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = d.join("json.png");
+    let o = leakwatch(&["plot", json_log.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+}

@@ -1,7 +1,10 @@
 //! The leakwatch log: one MCAP file per run with a channel per topic
-//! (`frames`, `estimates`, `events`, `health`, `stats`) plus `gaps`, JSON
-//! messages described by JSON Schemas, so Foxglove and the official Python
-//! `mcap` reader open it without leakwatch.
+//! (`frames`, `estimates`, `events`, `health`, `stats`) plus `gaps`: ROS 2
+//! messages in CDR described by their ros2msg schemas ([`msg`], the `.msg`
+//! files in `recorder/msg/`), so Foxglove, rosbag2 and Python's `mcap` with
+//! `mcap-ros2-support` open it without leakwatch. Logs of earlier versions
+//! (JSON messages with JSON Schemas) still read: the reader follows each
+//! channel's `message_encoding`.
 //!
 //! - [`LogWriter`]: a writer thread fed through a bounded channel; chunked,
 //!   zstd-compressed, flushed at least once a second, so a killed recorder
@@ -20,6 +23,8 @@ use std::path::PathBuf;
 use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
 mod export;
+pub mod info;
+pub mod msg;
 mod reader;
 pub mod record;
 mod repair;
@@ -27,14 +32,24 @@ pub mod shell;
 mod writer;
 
 pub use export::export_csv;
-pub use reader::{Log, LogReader};
+pub use info::{Info, CHANNEL_ORDER};
+pub use msg::Message;
+pub use reader::{ChannelInfo, Log, LogReader};
 pub use record::Record;
 pub use repair::{repair, RepairSummary};
-pub use writer::{LogWriter, WriterOptions, WriterSummary};
+pub use writer::{Encoding, LogWriter, WriterOptions, WriterSummary};
+
+/// The name of the metadata record that holds the configuration of the run.
+pub const CONFIG_METADATA: &str = "leakwatch.config";
+/// The key of the configuration (TOML text) in the [`CONFIG_METADATA`] record.
+pub const CONFIG_KEY: &str = "toml";
+/// The name of the metadata record of the recorder (rig, command, clocks, format).
+pub const LEAKWATCH_METADATA: &str = "leakwatch";
 
 /// The MCAP channel of [`GapRecord`]s.
 pub const GAPS_CHANNEL: &str = "gaps";
-/// The schema name of [`GapRecord`]s.
+/// The type name of [`GapRecord`]s: their JSON Schema's name in JSON logs, and the
+/// `leakwatch_type` of the `gaps` channel (the CDR schema is `leakwatch/msg/Gap`).
 pub const GAP_SCHEMA_NAME: &str = "leakwatch.Gap.v1";
 
 /// One item for the log, with the recorder's receive time

@@ -1,12 +1,34 @@
-//! Reading a leakwatch MCAP log back into frames.
+//! Reading a leakwatch MCAP log back into frames: CDR messages (this
+//! version) and JSON ones (earlier versions), by each channel's `message_encoding`.
 
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
-use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame};
 use serde_json::Value;
 
+use crate::msg::{topic_of, Message};
 use crate::record::Record;
 use crate::{GapRecord, RecorderError, GAPS_CHANNEL};
+
+/// One channel of a log as read: how it is encoded and what it held.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ChannelInfo {
+    /// The channel's `message_encoding` (`cdr`, or `json` in logs of earlier versions).
+    pub message_encoding: String,
+    /// The name of its schema (`leakwatch/msg/SensorFrame`, ...; empty if its record was lost).
+    pub schema_name: String,
+    /// The encoding of its schema (`ros2msg`, or `jsonschema`).
+    pub schema_encoding: String,
+    /// The channel's metadata (`leakwatch_topic`, `leakwatch_type`).
+    pub metadata: BTreeMap<String, String>,
+    /// Messages read.
+    pub messages: u64,
+    /// The smallest `log_time` of its messages, ns (0 if none).
+    pub first_log_time: u64,
+    /// The largest `log_time` of its messages, ns (0 if none).
+    pub last_log_time: u64,
+}
 
 /// Everything in a log, per channel, in file order.
 #[derive(Debug, Clone, Default)]
@@ -37,6 +59,31 @@ pub struct Log {
     /// sequence numbers around each; before the first frame read, from sequence 0,
     /// where a run starts; a chunk skipped after the last frame is not counted).
     pub frames_lost: u64,
+    /// Every channel by topic, with its encoding and message count and times.
+    pub channels: BTreeMap<String, ChannelInfo>,
+    /// The metadata records by name (`leakwatch`: rig, command, clocks;
+    /// [`crate::CONFIG_METADATA`]: the run's configuration), in file order
+    /// (a name seen twice: the last record).
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+impl Log {
+    /// The configuration the run used (TOML), if the log holds it.
+    pub fn config_toml(&self) -> Option<&str> {
+        self.metadata
+            .get(crate::CONFIG_METADATA)
+            .and_then(|m| m.get(crate::CONFIG_KEY))
+            .map(String::as_str)
+    }
+}
+
+/// A channel of the file by id: its topic, encoding and schema id.
+#[derive(Debug, Clone)]
+struct ChannelDef {
+    topic: String,
+    encoding: String,
+    schema_id: u16,
+    metadata: BTreeMap<String, String>,
 }
 
 /// Largest uncompressed chunk accepted, bytes (64 MiB; the recorder writes 256 KiB chunks).
@@ -106,32 +153,63 @@ impl LogReader {
     /// an error naming the channel and message.
     pub fn read(&self) -> Result<Log, RecorderError> {
         let mut log = Log::default();
-        // The channels, from the summary at the end when there is one (a damaged
-        // first chunk then loses its messages, not the channels of all others).
-        let mut channels: std::collections::HashMap<u16, String> = match summary(&self.data) {
-            Some(summary) => summary
-                .channels
-                .iter()
-                .map(|(id, c)| (*id, c.topic.clone()))
-                .collect(),
-            None => std::collections::HashMap::new(),
-        };
+        // The channels and schemas, from the summary at the end when there is one
+        // (a damaged first chunk then loses its messages, not the channels of all others).
+        let mut channels: HashMap<u16, ChannelDef> = HashMap::new();
+        let mut schemas: HashMap<u16, (String, String)> = HashMap::new();
+        if let Some(summary) = summary(&self.data) {
+            for (id, c) in &summary.channels {
+                channels.insert(
+                    *id,
+                    ChannelDef {
+                        topic: c.topic.clone(),
+                        encoding: c.message_encoding.clone(),
+                        schema_id: c.schema.as_ref().map(|s| s.id).unwrap_or(0),
+                        metadata: c.metadata.clone(),
+                    },
+                );
+            }
+            for (id, sc) in &summary.schemas {
+                schemas.insert(*id, (sc.name.clone(), sc.encoding.clone()));
+            }
+        }
         // where in `log.frames` each skipped chunk was
         let mut skipped_at: Vec<usize> = Vec::new();
         log.truncated = walk(&self.path, &self.data, |item| {
             match item {
                 Item::Channel(c) => {
-                    channels.insert(c.id, c.topic);
+                    let def = ChannelDef {
+                        topic: c.topic,
+                        encoding: c.message_encoding,
+                        schema_id: c.schema_id,
+                        metadata: c.metadata,
+                    };
+                    channels.insert(c.id, def);
+                }
+                Item::Schema(h, _) => {
+                    schemas.insert(h.id, (h.name, h.encoding));
                 }
                 Item::Message(header, data) => self.decode(&mut log, &channels, &header, data)?,
                 Item::ChunkSkipped(why) => {
                     log.chunks_skipped.push(why);
                     skipped_at.push(log.frames.len());
                 }
-                Item::Schema(..) | Item::Metadata(_) => {}
+                Item::Metadata(m) => {
+                    log.metadata.insert(m.name, m.metadata);
+                }
             }
             Ok(())
         })?;
+        // every channel known, with or without messages
+        for def in channels.values() {
+            let info = log.channels.entry(def.topic.clone()).or_default();
+            info.message_encoding.clone_from(&def.encoding);
+            info.metadata.clone_from(&def.metadata);
+            if let Some((name, encoding)) = schemas.get(&def.schema_id) {
+                info.schema_name.clone_from(name);
+                info.schema_encoding.clone_from(encoding);
+            }
+        }
         // (chunks skipped side by side share one gap in the frames)
         skipped_at.dedup();
         for p in skipped_at {
@@ -149,37 +227,80 @@ impl LogReader {
     fn decode(
         &self,
         log: &mut Log,
-        channels: &std::collections::HashMap<u16, String>,
+        channels: &HashMap<u16, ChannelDef>,
         header: &mcap::records::MessageHeader,
         data: &[u8],
     ) -> Result<(), RecorderError> {
-        let topic = channels.get(&header.channel_id).map(String::as_str).unwrap_or("");
-        let decode_err = |problem: String| RecorderError::Decode {
-            path: self.path.clone(),
-            channel: topic.to_string(),
-            sequence: header.sequence,
-            problem,
-        };
-        if topic.is_empty() {
+        let Some(def) = channels.get(&header.channel_id) else {
             // its channel record was in a skipped chunk
             log.unknown_messages += 1;
             return Ok(());
-        }
-        let v: Value = serde_json::from_slice(data).map_err(|e| decode_err(e.to_string()))?;
-        match topic {
-            "frames" => log.frames.push(SensorFrame::from_json(&v).map_err(decode_err)?),
+        };
+        let decode_err = |problem: String| RecorderError::Decode {
+            path: self.path.clone(),
+            channel: def.topic.clone(),
+            sequence: header.sequence,
+            problem,
+        };
+        match def.topic.as_str() {
+            "frames" => log
+                .frames
+                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
             "estimates" => log
                 .estimates
-                .push(EstimateFrame::from_json(&v).map_err(decode_err)?),
+                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
             "events" => log
                 .events
-                .push(LeakEventFrame::from_json(&v).map_err(decode_err)?),
-            "health" => log.health.push(HealthFrame::from_json(&v).map_err(decode_err)?),
-            "stats" => log.stats.push(StatsFrame::from_json(&v).map_err(decode_err)?),
-            GAPS_CHANNEL => log.gaps.push(GapRecord::from_json(&v).map_err(decode_err)?),
-            _ => log.unknown_messages += 1,
+                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
+            "health" => log
+                .health
+                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
+            "stats" => log
+                .stats
+                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
+            GAPS_CHANNEL => log
+                .gaps
+                .push(decode_gap(&def.encoding, data).map_err(decode_err)?),
+            _ => {
+                log.unknown_messages += 1;
+                return Ok(());
+            }
         }
+        let info = log.channels.entry(def.topic.clone()).or_default();
+        if info.messages == 0 || header.log_time < info.first_log_time {
+            info.first_log_time = header.log_time;
+        }
+        info.last_log_time = info.last_log_time.max(header.log_time);
+        info.messages += 1;
         Ok(())
+    }
+}
+
+/// A frame from a message in `encoding` (`cdr` or `json`).
+fn decode_as<R: Record + Message>(encoding: &str, data: &[u8]) -> Result<R, String> {
+    match encoding {
+        "cdr" => R::from_cdr(data),
+        "json" => {
+            let v: Value = serde_json::from_slice(data).map_err(|e| e.to_string())?;
+            R::from_json(&v)
+        }
+        other => Err(format!(
+            "message encoding `{other}` is not supported (cdr or json)"
+        )),
+    }
+}
+
+/// A gap record from a message in `encoding` (`cdr` or `json`).
+fn decode_gap(encoding: &str, data: &[u8]) -> Result<GapRecord, String> {
+    match encoding {
+        "cdr" => GapRecord::from_cdr(data),
+        "json" => {
+            let v: Value = serde_json::from_slice(data).map_err(|e| e.to_string())?;
+            GapRecord::from_json(&v)
+        }
+        other => Err(format!(
+            "message encoding `{other}` is not supported (cdr or json)"
+        )),
     }
 }
 
@@ -313,7 +434,7 @@ where
 }
 
 impl GapRecord {
-    /// From its JSON object; the error names the field.
+    /// From its JSON object (the JSON encoding); the error names the field.
     pub fn from_json(v: &Value) -> Result<GapRecord, String> {
         let int = |k: &str| {
             v.get(k)
@@ -324,10 +445,7 @@ impl GapRecord {
             .get("topic")
             .and_then(Value::as_str)
             .ok_or("gap.topic: expected a string")?;
-        let topic = Topic::ALL
-            .into_iter()
-            .find(|t| t.as_str() == name)
-            .ok_or_else(|| format!("gap.topic: unknown topic {name:?}"))?;
+        let topic = topic_of(name).ok_or_else(|| format!("gap.topic: unknown topic {name:?}"))?;
         Ok(GapRecord {
             topic,
             expected_seq: int("expected_seq")?,

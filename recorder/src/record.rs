@@ -1,4 +1,6 @@
 //! How each frame type is written as JSON (with its JSON Schema) and as CSV.
+//! JSON was the log's message encoding before CDR ([`crate::msg`]): logs of
+//! that encoding are read with it, and [`crate::Encoding::Json`] still writes it.
 //!
 //! JSON numbers carry f64 exactly (shortest round-trip form, parsed with
 //! serde_json's `float_roundtrip`); NaN ("absent") is written as `null`, and

@@ -5,12 +5,19 @@
 //! recorder --rig rig1 --out run.mcap
 //! ```
 //!
+//! Every sensor frame, event, health, stats and gap record is logged; the
+//! estimates every `--estimates-every`-th sample (default 100: 10 Hz at 1 kHz)
+//! and whenever one marks a reset, a gap or the end of the stream: `leakwatch
+//! replay` of the log (with its stored `--config`) gives every estimate again,
+//! bit for bit. `--config FILE` stores the run's configuration in the log
+//! (metadata record `leakwatch.config`, key `toml`).
+//!
 //! It stops cleanly on SIGINT/SIGTERM, or after the frames stream ends
 //! (`END_OF_STREAM`) once the other topics have been quiet for the grace
 //! period (the estimator and classifier have drained). `--keep-running`
 //! records one stream after another until a signal. The recorder publishes
 //! its own stats (stage 3): frames in = messages received, out = queued for
-//! the writer, deadline misses = messages dropped because the disk stalled.
+//! the writer (not the estimates left out), deadline misses = messages dropped because the disk stalled.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -52,20 +59,37 @@ struct Args {
     /// below the subscriber buffer (256 frames = 256 ms at 1 kHz).
     #[arg(long, default_value_t = 10)]
     batch_ms: u64,
+    /// Log every N-th estimate (by sequence number; 1: every one) and every one
+    /// that marks a reset, a gap or the end of the stream. 100 is 10 Hz at 1 kHz.
+    #[arg(long, default_value_t = 100)]
+    estimates_every: u64,
+    /// The configuration of the run (TOML), stored in the log as the metadata
+    /// record `leakwatch.config` (key `toml`) for `leakwatch info` and replay.
+    #[arg(long)]
+    config: Option<PathBuf>,
 }
 
-/// One subscription and how its frames become log entries.
+/// Whether an estimate goes into the log: every `every`-th by sequence number,
+/// and every one that marks a reset, a gap or the end of its stream.
+pub fn keep_estimate(e: &EstimateFrame, every: u64) -> bool {
+    const MARKS: u32 = frames::estimate_flags::RESET
+        | frames::estimate_flags::AFTER_GAP
+        | frames::estimate_flags::END_OF_STREAM;
+    every <= 1 || e.seq.is_multiple_of(every) || e.flags & MARKS != 0
+}
+
+/// One subscription and how its frames become log entries (`None`: not logged).
 struct Topic<T: Frame> {
     rx: Subscriber<T>,
-    entry: fn(T, u64) -> Entry,
+    entry: Box<dyn Fn(T, u64) -> Option<Entry>>,
 }
 
 impl<T: Frame> Topic<T> {
-    fn new(bus: &Bus, entry: fn(T, u64) -> Entry) -> Result<Self, String> {
+    fn new(bus: &Bus, entry: impl Fn(T, u64) -> Option<Entry> + 'static) -> Result<Self, String> {
         // the recorder drains every topic once per batch; it never waits on one
         Ok(Topic {
             rx: bus.subscriber::<T>(WaitMode::Event).map_err(|e| e.to_string())?,
-            entry,
+            entry: Box::new(entry),
         })
     }
 
@@ -89,7 +113,11 @@ impl<T: Frame> Topic<T> {
                 stats.record_latency_ns(r.recv_mono_ns - acq);
             }
         }
-        queue(writer, stats, (self.entry)(r.frame, r.recv_mono_ns))
+        match (self.entry)(r.frame, r.recv_mono_ns) {
+            Some(entry) => queue(writer, stats, entry),
+            // an estimate left out by --estimates-every
+            None => Ok(()),
+        }
     }
 
     /// Logs everything buffered; returns how many frames and whether one ended its stream.
@@ -118,11 +146,21 @@ fn run(args: &Args) -> Result<(), String> {
     let stop = bus::stop_on_signals();
     let bus =
         Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
-    let mut frames_t = Topic::<SensorFrame>::new(&bus, Entry::Frame)?;
-    let mut estimates_t = Topic::<EstimateFrame>::new(&bus, Entry::Estimate)?;
-    let mut events_t = Topic::<LeakEventFrame>::new(&bus, Entry::Event)?;
-    let mut health_t = Topic::<HealthFrame>::new(&bus, Entry::Health)?;
-    let mut stats_t = Topic::<StatsFrame>::new(&bus, Entry::Stats)?;
+    if args.estimates_every == 0 {
+        return Err("--estimates-every 0: must be 1 (every estimate) or more".into());
+    }
+    let config_toml = match &args.config {
+        Some(p) => Some(std::fs::read_to_string(p).map_err(|e| format!("--config {}: {e}", p.display()))?),
+        None => None,
+    };
+    let every = args.estimates_every;
+    let mut frames_t = Topic::<SensorFrame>::new(&bus, |f, t| Some(Entry::Frame(f, t)))?;
+    let mut estimates_t = Topic::<EstimateFrame>::new(&bus, move |f, t| {
+        keep_estimate(&f, every).then_some(Entry::Estimate(f, t))
+    })?;
+    let mut events_t = Topic::<LeakEventFrame>::new(&bus, |f, t| Some(Entry::Event(f, t)))?;
+    let mut health_t = Topic::<HealthFrame>::new(&bus, |f, t| Some(Entry::Health(f, t)))?;
+    let mut stats_t = Topic::<StatsFrame>::new(&bus, |f, t| Some(Entry::Stats(f, t)))?;
     let mut stats_tx = bus.publisher::<StatsFrame>().map_err(|e| e.to_string())?;
 
     let metadata = BTreeMap::from([
@@ -132,10 +170,12 @@ fn run(args: &Args) -> Result<(), String> {
             "command".to_string(),
             std::env::args().collect::<Vec<_>>().join(" "),
         ),
+        ("estimates_every".to_string(), every.to_string()),
     ]);
     let options = WriterOptions {
         chunk_size: args.chunk_kib.max(1) * 1024,
         metadata,
+        config_toml,
         overwrite: args.force,
         ..WriterOptions::default()
     };

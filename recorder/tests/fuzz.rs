@@ -20,10 +20,13 @@ use proptest::test_runner::TestCaseError;
 use recorder::{export_csv, repair, Entry, GapRecord, LogReader, LogWriter, WriterOptions};
 
 /// Seed logs kept in the repository: a zstd log and an uncompressed one
-/// (written by this version's [`LogWriter`] with 2 KiB chunks).
-const CORPUS: [&[u8]; 2] = [
+/// written by this version's [`LogWriter`] with 2 KiB chunks (CDR messages),
+/// and the same two as the version before wrote them (JSON messages).
+const CORPUS: [&[u8]; 4] = [
     include_bytes!("corpus/small_zstd.mcap"),
     include_bytes!("corpus/small_plain.mcap"),
+    include_bytes!("corpus/json_zstd.mcap"),
+    include_bytes!("corpus/json_plain.mcap"),
 ];
 
 fn cases(default: u32) -> u32 {
@@ -293,7 +296,7 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: cases(128), ..ProptestConfig::default() })]
 
     #[test]
-    fn damaged_logs_read_or_fail_by_name_never_panic_or_hang(seed in 0..3usize, damages in damages()) {
+    fn damaged_logs_read_or_fail_by_name_never_panic_or_hang(seed in 0..5usize, damages in damages()) {
         let bytes = damage(&seeds()[seed], &damages);
         within(LIMIT, move || check_log(bytes))?;
     }
@@ -314,7 +317,18 @@ proptest! {
 
 #[test]
 fn the_corpus_reads_and_the_damage_oracle_rejects_what_it_must() {
-    // the seeds are valid logs of this version (a format change must update them)
+    // the seeds are valid logs (a format change must update them): this version's
+    // CDR ones and the JSON ones of the version before
+    let encodings: Vec<String> = seeds()
+        .iter()
+        .map(|seed| {
+            let p = fresh("mcap");
+            std::fs::write(&p, seed).unwrap();
+            let log = LogReader::open(&p).unwrap().read().unwrap();
+            log.channels["frames"].message_encoding.clone()
+        })
+        .collect();
+    assert_eq!(encodings, ["cdr", "cdr", "cdr", "json", "json"]);
     for (i, seed) in seeds().iter().enumerate() {
         let p = fresh("mcap");
         std::fs::write(&p, seed).unwrap();
@@ -337,7 +351,8 @@ fn the_corpus_reads_and_the_damage_oracle_rejects_what_it_must() {
     check_log(b"not a log".to_vec()).unwrap();
 }
 
-/// Writes the corpus files again (`cargo test -p recorder --test fuzz -- --ignored`).
+/// Writes this version's corpus files again (`cargo test -p recorder --test fuzz
+/// -- --ignored`); the JSON ones stay as the version before wrote them.
 #[test]
 #[ignore]
 fn write_corpus() {

@@ -34,6 +34,30 @@ pub fn stage_program() -> Result<PathBuf, String> {
         .map_err(|e| format!("cannot locate the leakwatch binary to start its stages: {e}"))
 }
 
+/// The recorder's arguments with `--config DIR/config.toml` added when the run
+/// wrote its configuration beside the log (`--out DIR/run.mcap`) and the
+/// arguments name none: the log then holds the configuration it was made with.
+fn with_run_config(name: &str, args: &[String]) -> Vec<String> {
+    let mut out = args.to_vec();
+    if name != "recorder" || args.iter().any(|a| a == "--config") {
+        return out;
+    }
+    let log = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1));
+    if let Some(cfg) = log
+        .and_then(|l| Path::new(l).parent())
+        .map(|d| d.join("config.toml"))
+    {
+        if cfg.is_file() {
+            out.push("--config".into());
+            out.push(cfg.display().to_string());
+        }
+    }
+    out
+}
+
 pub(super) fn spawn(
     program: &Path,
     name: &str,
@@ -41,6 +65,7 @@ pub(super) fn spawn(
     prefix: &str,
     log: &Path,
 ) -> Result<Child, String> {
+    let args = &with_run_config(name, args);
     // the outputs were checked at start (an earlier run's only with --force)
     let err = crate::out::create(log, true, &[])?;
     let mut cmd = Command::new(program);

@@ -1,0 +1,583 @@
+//! The log's message encoding: every record as a ROS 2 message, serialised
+//! as CDR (`message_encoding = "cdr"`) and described by its `.msg` definition
+//! (`schema encoding = "ros2msg"`, the files in `recorder/msg/`).
+//!
+//! Why CDR with ros2msg schemas: Foxglove, rosbag2 (`ros2 bag info/play` of an
+//! MCAP file) and Python's `mcap` + `mcap-ros2-support` decode it from the
+//! schema stored in the file, with no code generation (no protoc); the
+//! encoding is a fixed little-endian layout that is a few lines to write by
+//! hand, so the recorder needs no new dependency.
+//!
+//! CDR as written here (XCDR1, little-endian): a 4-byte encapsulation header
+//! `00 01 00 00`, then the fields in the order of the `.msg`, each aligned to
+//! its own size (1, 4 or 8 bytes) counted from the end of the header; a nested
+//! message is its fields in order; a fixed array has no length prefix; a
+//! `string` is a `uint32` length (bytes + the closing NUL), the UTF-8 bytes and
+//! a NUL. Floats are carried bit for bit (NaN = absent, the infinities).
+//!
+//! Named fields: the filter states are [`LEAK_STATE`] / [`THESIS_STATE`]
+//! messages (`state.p1_pa`, `state.q_e1_m3_s`, ...), the measurement triples
+//! `Measurement`, the leak flows `LeakFlows`; codes with names (event `kind`
+//! and `phase`, health `status`, stats `stage`, gap `topic`) are strings, the
+//! names of events.json (`ext1`, `raised`, `healthy`, ...); a code this version
+//! does not name is written as its number and read back as one.
+
+use std::borrow::Cow;
+
+use frames::{
+    code_name, code_of, event_kind, event_phase, health_status, stage, EstimateFrame, HealthFrame,
+    LeakEventFrame, SensorFrame, StatsFrame, Topic,
+};
+
+use crate::GapRecord;
+
+/// The package of the leakwatch message types (`leakwatch/msg/SensorFrame`, ...).
+pub const PACKAGE: &str = "leakwatch";
+
+/// The CDR encapsulation header of a little-endian plain-CDR message.
+pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
+
+/// The separator between the definitions of a ros2msg schema and those of the
+/// message types it uses (rosbag2's concatenated form).
+macro_rules! dependency {
+    ($name:literal) => {
+        concat!(
+            "\n================================================================================\nMSG: leakwatch/",
+            $name,
+            "\n",
+            include_str!(concat!("../msg/", $name, ".msg"))
+        )
+    };
+}
+
+/// `LeakState.msg`: the leak filter's 11 states by name, SI units.
+pub const LEAK_STATE: &str = include_str!("../msg/LeakState.msg");
+/// `ThesisState.msg`: the thesis filter's 7 states by name, SI units.
+pub const THESIS_STATE: &str = include_str!("../msg/ThesisState.msg");
+
+/// Appends a CDR message to a buffer: the encapsulation header first, then
+/// one field per call, aligned as CDR requires.
+pub struct CdrWriter<'a> {
+    buf: &'a mut Vec<u8>,
+}
+
+impl<'a> CdrWriter<'a> {
+    /// Clears `buf` and writes the little-endian encapsulation header.
+    pub fn new(buf: &'a mut Vec<u8>) -> Self {
+        buf.clear();
+        buf.extend_from_slice(&CDR_LE_HEADER);
+        CdrWriter { buf }
+    }
+
+    fn align(&mut self, n: usize) {
+        let off = (self.buf.len() - CDR_LE_HEADER.len()) % n;
+        if off != 0 {
+            self.buf.resize(self.buf.len() + n - off, 0);
+        }
+    }
+
+    /// A `uint32`.
+    pub fn u32(&mut self, v: u32) {
+        self.align(4);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// A `uint64`.
+    pub fn u64(&mut self, v: u64) {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// A `float64`.
+    pub fn f64(&mut self, v: f64) {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// Consecutive `float64`s: a fixed array `float64[N]` or a message of N `float64` fields.
+    pub fn f64s(&mut self, v: &[f64]) {
+        for x in v {
+            self.f64(*x);
+        }
+    }
+
+    /// A `string` (a NUL in `s` would end it early for C readers: NULs are left out).
+    pub fn string(&mut self, s: &str) {
+        let s: Cow<'_, str> = if s.contains('\0') {
+            Cow::Owned(s.replace('\0', ""))
+        } else {
+            Cow::Borrowed(s)
+        };
+        self.u32(s.len() as u32 + 1);
+        self.buf.extend_from_slice(s.as_bytes());
+        self.buf.push(0);
+    }
+}
+
+/// Reads a CDR message field by field; every error names the field and the byte.
+pub struct CdrReader<'a> {
+    data: &'a [u8],
+    pos: usize,
+    ty: &'static str,
+}
+
+impl<'a> CdrReader<'a> {
+    /// A reader of `data` (a message of type `ty`, for errors); refuses anything
+    /// but little-endian plain CDR.
+    pub fn new(data: &'a [u8], ty: &'static str) -> Result<Self, String> {
+        match data.get(..2) {
+            Some([0x00, 0x01]) => Ok(CdrReader { data, pos: 4, ty }),
+            Some(h) => Err(format!(
+                "{ty}: CDR encapsulation {:02x} {:02x} is not little-endian plain CDR (00 01)",
+                h[0], h[1]
+            )),
+            None => Err(format!("{ty}: {} bytes, no CDR header", data.len())),
+        }
+    }
+
+    fn take(&mut self, n: usize, field: &str) -> Result<&'a [u8], String> {
+        let off = (self.pos - CDR_LE_HEADER.len()) % n.min(8);
+        if off != 0 {
+            self.pos += n.min(8) - off;
+        }
+        match self.data.get(self.pos..self.pos + n) {
+            Some(b) => {
+                self.pos += n;
+                Ok(b)
+            }
+            None => Err(format!(
+                "{}.{field}: the message ends at byte {}, before the field",
+                self.ty,
+                self.data.len()
+            )),
+        }
+    }
+
+    /// A `uint32`.
+    pub fn u32(&mut self, field: &str) -> Result<u32, String> {
+        let b = self.take(4, field)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// A `uint64`.
+    pub fn u64(&mut self, field: &str) -> Result<u64, String> {
+        let b = self.take(8, field)?;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(b);
+        Ok(u64::from_le_bytes(a))
+    }
+
+    /// A `float64`.
+    pub fn f64(&mut self, field: &str) -> Result<f64, String> {
+        self.u64(field).map(f64::from_bits)
+    }
+
+    /// `N` consecutive `float64`s.
+    pub fn f64s<const N: usize>(&mut self, field: &str) -> Result<[f64; N], String> {
+        let mut out = [0.0; N];
+        for x in &mut out {
+            *x = self.f64(field)?;
+        }
+        Ok(out)
+    }
+
+    /// A `string`.
+    pub fn string(&mut self, field: &str) -> Result<&'a str, String> {
+        let len = self.u32(field)? as usize;
+        let end = self.pos.checked_add(len).filter(|&e| e <= self.data.len());
+        let Some(end) = end else {
+            return Err(format!(
+                "{}.{field}: a string of {len} bytes at byte {} runs past the message's {} bytes",
+                self.ty,
+                self.pos,
+                self.data.len()
+            ));
+        };
+        let bytes = &self.data[self.pos..end];
+        self.pos = end;
+        // the length counts the closing NUL; tolerate a writer that left it out
+        let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
+        std::str::from_utf8(bytes).map_err(|e| format!("{}.{field}: not UTF-8: {e}", self.ty))
+    }
+
+    /// A NUL-padded text field of `N` bytes from a `string` (cut to `N` bytes at
+    /// a character boundary, as the frames hold it).
+    pub fn text<const N: usize>(&mut self, field: &str) -> Result<[u8; N], String> {
+        self.string(field).map(frames::text_bytes)
+    }
+
+    /// A code from a `string` holding its name in `names` (or its number).
+    pub fn code(&mut self, names: &[(u32, &'static str)], field: &str) -> Result<u32, String> {
+        let s = self.string(field)?;
+        code_of(names, s).ok_or_else(|| format!("{}.{field}: unknown name {s:?}", self.ty))
+    }
+}
+
+/// A record type of the log as a ROS 2 message in CDR.
+///
+/// The messages are read leniently at the end: bytes after the last known
+/// field are ignored, so a later version may append fields.
+pub trait Message: Sized {
+    /// The ros2msg type name, the MCAP schema name (`leakwatch/msg/SensorFrame`).
+    const MSG_TYPE: &'static str;
+    /// The MCAP schema data: the `.msg` definition followed by those of the
+    /// message types it uses, in rosbag2's concatenated form.
+    const DEFINITION: &'static str;
+    /// Writes the fields (after the header) into `w`.
+    fn write_cdr(&self, w: &mut CdrWriter<'_>);
+    /// Reads the fields; the error names the field.
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String>;
+
+    /// The CDR message (header included), written into `buf` (cleared first).
+    fn to_cdr(&self, buf: &mut Vec<u8>) {
+        let mut w = CdrWriter::new(buf);
+        self.write_cdr(&mut w);
+    }
+
+    /// The record of a CDR message; the error names the field.
+    fn from_cdr(data: &[u8]) -> Result<Self, String> {
+        let mut r = CdrReader::new(data, Self::MSG_TYPE)?;
+        Self::read_cdr(&mut r)
+    }
+}
+
+impl Message for SensorFrame {
+    const MSG_TYPE: &'static str = "leakwatch/msg/SensorFrame";
+    const DEFINITION: &'static str = include_str!("../msg/SensorFrame.msg");
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        // every field by name: a field added to the frame must be added here
+        let SensorFrame {
+            seq,
+            acq_mono_ns,
+            t_s,
+            u_v,
+            x_m,
+            p1_pa,
+            p2_pa,
+            x_sp_m,
+            f_load_n,
+            ref_m,
+            q_leak_lpm,
+            flags,
+            _pad: _,
+        } = *self;
+        w.u64(seq);
+        w.u64(acq_mono_ns);
+        w.f64s(&[t_s, u_v, x_m, p1_pa, p2_pa, x_sp_m, f_load_n, ref_m, q_leak_lpm]);
+        w.u32(flags);
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        Ok(SensorFrame {
+            seq: r.u64("seq")?,
+            acq_mono_ns: r.u64("acq_mono_ns")?,
+            t_s: r.f64("t_s")?,
+            u_v: r.f64("u_v")?,
+            x_m: r.f64("x_m")?,
+            p1_pa: r.f64("p1_pa")?,
+            p2_pa: r.f64("p2_pa")?,
+            x_sp_m: r.f64("x_sp_m")?,
+            f_load_n: r.f64("f_load_n")?,
+            ref_m: r.f64("ref_m")?,
+            q_leak_lpm: r.f64("q_leak_lpm")?,
+            flags: r.u32("flags")?,
+            _pad: 0,
+        })
+    }
+}
+
+impl Message for EstimateFrame {
+    const MSG_TYPE: &'static str = "leakwatch/msg/EstimateFrame";
+    const DEFINITION: &'static str = concat!(
+        include_str!("../msg/EstimateFrame.msg"),
+        dependency!("LeakState"),
+        dependency!("Measurement"),
+        dependency!("Pressures"),
+        dependency!("ThesisState"),
+    );
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        let EstimateFrame {
+            seq,
+            acq_mono_ns,
+            est_recv_mono_ns,
+            est_done_mono_ns,
+            t_s,
+            n_states,
+            flags,
+            state,
+            state_sigma,
+            residual,
+            innovation,
+            innovation_sigma,
+            measured,
+            u_v,
+            nis,
+            mae_pa,
+            th_flags,
+            _pad: _,
+            th_state,
+            th_residual,
+            th_innovation,
+            th_mae_pa,
+            th_nis,
+        } = self;
+        w.u64(*seq);
+        w.u64(*acq_mono_ns);
+        w.u64(*est_recv_mono_ns);
+        w.u64(*est_done_mono_ns);
+        w.f64(*t_s);
+        w.u32(*n_states);
+        w.u32(*flags);
+        w.f64s(state);
+        w.f64s(state_sigma);
+        w.f64s(residual);
+        w.f64s(innovation);
+        w.f64s(innovation_sigma);
+        w.f64s(measured);
+        w.f64(*u_v);
+        w.f64(*nis);
+        w.f64s(mae_pa);
+        w.u32(*th_flags);
+        w.f64s(th_state);
+        w.f64s(th_residual);
+        w.f64s(th_innovation);
+        w.f64s(th_mae_pa);
+        w.f64(*th_nis);
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        Ok(EstimateFrame {
+            seq: r.u64("seq")?,
+            acq_mono_ns: r.u64("acq_mono_ns")?,
+            est_recv_mono_ns: r.u64("est_recv_mono_ns")?,
+            est_done_mono_ns: r.u64("est_done_mono_ns")?,
+            t_s: r.f64("t_s")?,
+            n_states: r.u32("n_states")?,
+            flags: r.u32("flags")?,
+            state: r.f64s("state")?,
+            state_sigma: r.f64s("state_sigma")?,
+            residual: r.f64s("residual")?,
+            innovation: r.f64s("innovation")?,
+            innovation_sigma: r.f64s("innovation_sigma")?,
+            measured: r.f64s("measured")?,
+            u_v: r.f64("u_v")?,
+            nis: r.f64("nis")?,
+            mae_pa: r.f64s("mae_pa")?,
+            th_flags: r.u32("th_flags")?,
+            _pad: 0,
+            th_state: r.f64s("th_state")?,
+            th_residual: r.f64s("th_residual")?,
+            th_innovation: r.f64s("th_innovation")?,
+            th_mae_pa: r.f64s("th_mae_pa")?,
+            th_nis: r.f64("th_nis")?,
+        })
+    }
+}
+
+impl Message for LeakEventFrame {
+    const MSG_TYPE: &'static str = "leakwatch/msg/LeakEventFrame";
+    const DEFINITION: &'static str = include_str!("../msg/LeakEventFrame.msg");
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        let LeakEventFrame {
+            seq,
+            acq_mono_ns,
+            cls_done_mono_ns,
+            event_id,
+            kind,
+            phase,
+            t_detect_s,
+            t_onset_s,
+            size_lpm,
+            size_lpm_sigma,
+            confidence,
+            detector,
+            size_nominal_lpm,
+            coefficient_m3_s_sqrt_pa,
+            statistic,
+            threshold,
+            channel,
+            detail,
+        } = self;
+        w.u64(*seq);
+        w.u64(*acq_mono_ns);
+        w.u64(*cls_done_mono_ns);
+        w.u64(*event_id);
+        w.string(&code_name(&event_kind::NAMES, *kind));
+        w.string(&code_name(&event_phase::NAMES, *phase));
+        w.f64s(&[*t_detect_s, *t_onset_s, *size_lpm, *size_lpm_sigma, *confidence]);
+        w.string(frames::text(detector));
+        w.f64s(&[
+            *size_nominal_lpm,
+            *coefficient_m3_s_sqrt_pa,
+            *statistic,
+            *threshold,
+        ]);
+        w.string(frames::text(channel));
+        w.string(frames::text(detail));
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        Ok(LeakEventFrame {
+            seq: r.u64("seq")?,
+            acq_mono_ns: r.u64("acq_mono_ns")?,
+            cls_done_mono_ns: r.u64("cls_done_mono_ns")?,
+            event_id: r.u64("event_id")?,
+            kind: r.code(&event_kind::NAMES, "kind")?,
+            phase: r.code(&event_phase::NAMES, "phase")?,
+            t_detect_s: r.f64("t_detect_s")?,
+            t_onset_s: r.f64("t_onset_s")?,
+            size_lpm: r.f64("size_lpm")?,
+            size_lpm_sigma: r.f64("size_lpm_sigma")?,
+            confidence: r.f64("confidence")?,
+            detector: r.text("detector")?,
+            size_nominal_lpm: r.f64("size_nominal_lpm")?,
+            coefficient_m3_s_sqrt_pa: r.f64("coefficient_m3_s_sqrt_pa")?,
+            statistic: r.f64("statistic")?,
+            threshold: r.f64("threshold")?,
+            channel: r.text("channel")?,
+            detail: r.text("detail")?,
+        })
+    }
+}
+
+impl Message for HealthFrame {
+    const MSG_TYPE: &'static str = "leakwatch/msg/HealthFrame";
+    const DEFINITION: &'static str =
+        concat!(include_str!("../msg/HealthFrame.msg"), dependency!("LeakFlows"));
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        let HealthFrame {
+            seq,
+            mono_ns,
+            t_s,
+            status,
+            active_events,
+            leak_flow_lpm,
+            leak_flow_sigma_lpm,
+        } = self;
+        w.u64(*seq);
+        w.u64(*mono_ns);
+        w.f64(*t_s);
+        w.string(&code_name(&health_status::NAMES, *status));
+        w.u32(*active_events);
+        w.f64s(leak_flow_lpm);
+        w.f64s(leak_flow_sigma_lpm);
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        Ok(HealthFrame {
+            seq: r.u64("seq")?,
+            mono_ns: r.u64("mono_ns")?,
+            t_s: r.f64("t_s")?,
+            status: r.code(&health_status::NAMES, "status")?,
+            active_events: r.u32("active_events")?,
+            leak_flow_lpm: r.f64s("leak_flow_lpm")?,
+            leak_flow_sigma_lpm: r.f64s("leak_flow_sigma_lpm")?,
+        })
+    }
+}
+
+impl Message for StatsFrame {
+    const MSG_TYPE: &'static str = "leakwatch/msg/StatsFrame";
+    const DEFINITION: &'static str = include_str!("../msg/StatsFrame.msg");
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        let StatsFrame {
+            mono_ns,
+            pid,
+            stage: stage_code,
+            frames_in,
+            frames_out,
+            seq_gaps,
+            deadline_misses,
+            proc_ns_p50,
+            proc_ns_p99,
+            proc_ns_max,
+            lat_ns_p50,
+            lat_ns_p99,
+            lat_ns_max,
+            cpu_fraction,
+            rss_bytes,
+        } = *self;
+        w.u64(mono_ns);
+        w.u32(pid);
+        w.string(&code_name(&stage::NAMES, stage_code));
+        for v in [
+            frames_in,
+            frames_out,
+            seq_gaps,
+            deadline_misses,
+            proc_ns_p50,
+            proc_ns_p99,
+            proc_ns_max,
+            lat_ns_p50,
+            lat_ns_p99,
+            lat_ns_max,
+        ] {
+            w.u64(v);
+        }
+        w.f64(cpu_fraction);
+        w.u64(rss_bytes);
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        Ok(StatsFrame {
+            mono_ns: r.u64("mono_ns")?,
+            pid: r.u32("pid")?,
+            stage: r.code(&stage::NAMES, "stage")?,
+            frames_in: r.u64("frames_in")?,
+            frames_out: r.u64("frames_out")?,
+            seq_gaps: r.u64("seq_gaps")?,
+            deadline_misses: r.u64("deadline_misses")?,
+            proc_ns_p50: r.u64("proc_ns_p50")?,
+            proc_ns_p99: r.u64("proc_ns_p99")?,
+            proc_ns_max: r.u64("proc_ns_max")?,
+            lat_ns_p50: r.u64("lat_ns_p50")?,
+            lat_ns_p99: r.u64("lat_ns_p99")?,
+            lat_ns_max: r.u64("lat_ns_max")?,
+            cpu_fraction: r.f64("cpu_fraction")?,
+            rss_bytes: r.u64("rss_bytes")?,
+        })
+    }
+}
+
+/// The topic of a gap record by its name.
+pub(crate) fn topic_of(name: &str) -> Option<Topic> {
+    Topic::ALL.into_iter().find(|t| t.as_str() == name)
+}
+
+impl Message for GapRecord {
+    const MSG_TYPE: &'static str = "leakwatch/msg/Gap";
+    const DEFINITION: &'static str = include_str!("../msg/Gap.msg");
+
+    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+        let GapRecord {
+            topic,
+            expected_seq,
+            got_seq,
+            missing,
+            recv_mono_ns,
+        } = *self;
+        w.string(topic.as_str());
+        w.u64(expected_seq);
+        w.u64(got_seq);
+        w.u64(missing);
+        w.u64(recv_mono_ns);
+    }
+
+    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+        let name = r.string("topic")?;
+        let topic =
+            topic_of(name).ok_or_else(|| format!("{}.topic: unknown topic {name:?}", Self::MSG_TYPE))?;
+        Ok(GapRecord {
+            topic,
+            expected_seq: r.u64("expected_seq")?,
+            got_seq: r.u64("got_seq")?,
+            missing: r.u64("missing")?,
+            recv_mono_ns: r.u64("recv_mono_ns")?,
+        })
+    }
+}

@@ -1,0 +1,201 @@
+//! The CDR encoding of the records: its byte layout, its names for codes, its
+//! errors, and which estimates the recorder keeps.
+
+use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use recorder::msg::CDR_LE_HEADER;
+use recorder::{GapRecord, Message};
+
+fn bits<T: Copy>(v: &T) -> Vec<u8> {
+    // SAFETY: the frames are repr(C) with explicit padding only: every byte is initialised
+    unsafe { std::slice::from_raw_parts(v as *const T as *const u8, std::mem::size_of::<T>()).to_vec() }
+}
+
+fn sensor() -> SensorFrame {
+    SensorFrame {
+        seq: 7,
+        acq_mono_ns: 123_456_789,
+        t_s: 0.007,
+        u_v: -1.5,
+        x_m: 0.3,
+        p1_pa: 6.9e6,
+        p2_pa: 4.2e6,
+        x_sp_m: f64::NAN,
+        f_load_n: f64::INFINITY,
+        ref_m: -0.0,
+        q_leak_lpm: 5e-324,
+        flags: 3,
+        _pad: 0,
+    }
+}
+
+fn estimate() -> EstimateFrame {
+    let mut e = EstimateFrame {
+        seq: 9,
+        acq_mono_ns: 1,
+        est_recv_mono_ns: 2,
+        est_done_mono_ns: 3,
+        t_s: 0.009,
+        n_states: 11,
+        flags: 17,
+        u_v: 0.25,
+        nis: 3.0,
+        th_flags: 4,
+        th_nis: 5.0,
+        ..EstimateFrame::default()
+    };
+    for k in 0..11 {
+        e.state[k] = k as f64;
+        e.state_sigma[k] = -(k as f64);
+    }
+    e.th_state = [0.5; 7];
+    e.mae_pa = [1.0, 2.0];
+    e
+}
+
+/// The sensor and estimate frames have natural alignment, so their CDR body is
+/// their wire layout (frames/README.md) byte for byte, trailing padding left out.
+#[test]
+fn the_cdr_body_of_the_1_khz_frames_is_their_wire_layout() {
+    let mut buf = Vec::new();
+    let s = sensor();
+    s.to_cdr(&mut buf);
+    assert_eq!(buf[..4], CDR_LE_HEADER);
+    assert_eq!(buf.len(), 4 + 92);
+    assert_eq!(buf[4..], bits(&s)[..92]);
+    let e = estimate();
+    e.to_cdr(&mut buf);
+    assert_eq!(buf.len(), 4 + 488);
+    let mut wire = bits(&e);
+    wire[356..360].fill(0); // _pad: CDR alignment padding, zero
+    assert_eq!(buf[4..], wire[..]);
+    assert_eq!(bits(&EstimateFrame::from_cdr(&buf).unwrap()), wire);
+}
+
+#[test]
+fn codes_are_names_and_unnamed_codes_their_number() {
+    let mut buf = Vec::new();
+    let ev = LeakEventFrame {
+        kind: frames::event_kind::SENSOR_STUCK,
+        phase: frames::event_phase::UPDATED,
+        detector: frames::detector_bytes("sensors"),
+        channel: frames::text_bytes("p2"),
+        detail: frames::text_bytes("stuck at 4.2 MPa for 2.0 s"),
+        ..LeakEventFrame::default()
+    };
+    ev.to_cdr(&mut buf);
+    // after seq, acq_mono_ns, cls_done_mono_ns, event_id: "sensor-stuck" with its NUL
+    assert_eq!(&buf[36..40], &13u32.to_le_bytes());
+    assert_eq!(&buf[40..53], b"sensor-stuck\0");
+    assert_eq!(bits(&LeakEventFrame::from_cdr(&buf).unwrap()), bits(&ev));
+    for (kind, phase) in [(99, 7), (0, 0), (u32::MAX, u32::MAX)] {
+        let x = LeakEventFrame { kind, phase, ..ev };
+        x.to_cdr(&mut buf);
+        let back = LeakEventFrame::from_cdr(&buf).unwrap();
+        assert_eq!((back.kind, back.phase), (kind, phase));
+    }
+    let h = HealthFrame {
+        status: 42,
+        ..HealthFrame::default()
+    };
+    h.to_cdr(&mut buf);
+    assert_eq!(HealthFrame::from_cdr(&buf).unwrap().status, 42);
+    for stage in [frames::stage::RECORDER, 17] {
+        let s = StatsFrame {
+            stage,
+            ..StatsFrame::default()
+        };
+        s.to_cdr(&mut buf);
+        assert_eq!(bits(&StatsFrame::from_cdr(&buf).unwrap()), bits(&s));
+    }
+    for topic in Topic::ALL {
+        let g = GapRecord {
+            topic,
+            expected_seq: 1,
+            got_seq: 4,
+            missing: 3,
+            recv_mono_ns: 9,
+        };
+        g.to_cdr(&mut buf);
+        assert_eq!(GapRecord::from_cdr(&buf).unwrap(), g);
+    }
+}
+
+#[test]
+fn a_bad_message_is_an_error_naming_the_type_and_field() {
+    let mut buf = Vec::new();
+    sensor().to_cdr(&mut buf);
+    let e = SensorFrame::from_cdr(&buf[..50]).unwrap_err();
+    assert!(
+        e.contains("leakwatch/msg/SensorFrame.p1_pa") && e.contains("ends at byte 50"),
+        "{e}"
+    );
+    let mut be = buf.clone();
+    be[1] = 0x00; // big-endian CDR
+    let e = SensorFrame::from_cdr(&be).unwrap_err();
+    assert!(e.contains("not little-endian plain CDR"), "{e}");
+    let e = SensorFrame::from_cdr(&buf[..2]).unwrap_err();
+    assert!(e.contains("SensorFrame.seq"), "{e}");
+    // a string running past the message
+    LeakEventFrame::default().to_cdr(&mut buf);
+    buf[36..40].copy_from_slice(&1000u32.to_le_bytes());
+    let e = LeakEventFrame::from_cdr(&buf).unwrap_err();
+    assert!(e.contains("LeakEventFrame.kind: a string of 1000 bytes"), "{e}");
+    // an unknown name
+    let mut g = Vec::new();
+    GapRecord {
+        topic: Topic::Frames,
+        expected_seq: 0,
+        got_seq: 0,
+        missing: 0,
+        recv_mono_ns: 0,
+    }
+    .to_cdr(&mut g);
+    g[8..14].copy_from_slice(b"framez");
+    let e = GapRecord::from_cdr(&g).unwrap_err();
+    assert!(e.contains("unknown topic \"framez\""), "{e}");
+    // bytes after the last field (a later version's) are ignored
+    sensor().to_cdr(&mut buf);
+    buf.extend_from_slice(&[0; 16]);
+    assert_eq!(bits(&SensorFrame::from_cdr(&buf).unwrap()), bits(&sensor()));
+}
+
+#[test]
+fn the_recorder_keeps_every_nth_estimate_and_the_marked_ones() {
+    use frames::estimate_flags as fl;
+    use recorder::shell::keep_estimate;
+    let at = |seq, flags| EstimateFrame {
+        seq,
+        flags,
+        ..EstimateFrame::default()
+    };
+    let kept: Vec<u64> = (0..1000).filter(|&s| keep_estimate(&at(s, 0), 100)).collect();
+    assert_eq!(kept, [0, 100, 200, 300, 400, 500, 600, 700, 800, 900]);
+    for flag in [fl::RESET, fl::AFTER_GAP, fl::END_OF_STREAM] {
+        assert!(keep_estimate(&at(37, flag | fl::CONVERGING), 100));
+    }
+    assert!(!keep_estimate(
+        &at(37, fl::CONVERGING | fl::SKIPPED | fl::CLAMPED),
+        100
+    ));
+    assert!((0..10).all(|s| keep_estimate(&at(s, 0), 1)));
+}
+
+#[test]
+fn the_schemas_name_their_types_and_dependencies() {
+    assert_eq!(EstimateFrame::MSG_TYPE, "leakwatch/msg/EstimateFrame");
+    let def = EstimateFrame::DEFINITION;
+    for dep in ["LeakState", "Measurement", "Pressures", "ThesisState"] {
+        assert!(def.contains(&format!("\nMSG: leakwatch/{dep}\n")), "{dep}");
+        assert!(def.contains(&format!("leakwatch/{dep} ")), "{dep} used");
+    }
+    assert!(recorder::msg::LEAK_STATE.contains("float64 q_e1_m3_s"));
+    assert!(HealthFrame::DEFINITION.contains("MSG: leakwatch/LeakFlows"));
+    for d in [
+        SensorFrame::DEFINITION,
+        LeakEventFrame::DEFINITION,
+        StatsFrame::DEFINITION,
+        GapRecord::DEFINITION,
+    ] {
+        assert!(!d.contains("MSG:"), "no dependencies: {d}");
+    }
+}

@@ -1,0 +1,351 @@
+//! Python's `mcap` reader with `mcap-ros2-support` (what Foxglove's and
+//! rosbag2's users have) decodes a log from its stored ros2msg schemas alone,
+//! and every field it names has the value the Rust reader gives, bit for bit.
+//!
+//! Needs python3 with `mcap` and `mcap-ros2-support` (.ci/setup installs them).
+//! CI sets LEAKWATCH_REQUIRE_PYTHON=1, so the test must run there; elsewhere it
+//! says it was skipped.
+
+use std::path::Path;
+use std::process::Command;
+
+use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use recorder::{Entry, GapRecord, LogReader, LogWriter, WriterOptions};
+use serde_json::{json, Value};
+
+/// Prints one JSON object per message, file order: topic, schema, times and the
+/// decoded message, floats as their IEEE-754 bits (exact, NaN included).
+const SCRIPT: &str = r#"
+import json, struct, sys
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+def plain(v):
+    if hasattr(v, "__slots__"):
+        return {k: plain(getattr(v, k)) for k in v.__slots__}
+    if isinstance(v, float):
+        return {"f64": struct.unpack("<Q", struct.pack("<d", v))[0]}
+    if isinstance(v, (list, tuple)):
+        return [plain(x) for x in v]
+    return v
+
+with open(sys.argv[1], "rb") as f:
+    reader = make_reader(f, decoder_factories=[DecoderFactory()])
+    for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False):
+        print(json.dumps({
+            "topic": channel.topic,
+            "encoding": channel.message_encoding,
+            "schema": schema.name,
+            "schema_encoding": schema.encoding,
+            "log_time": message.log_time,
+            "publish_time": message.publish_time,
+            "msg": plain(decoded),
+        }))
+"#;
+
+/// True if python3 with `mcap` and `mcap_ros2` runs; false (the test skips)
+/// only where Python is not required.
+fn python_mcap() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import mcap.reader, mcap_ros2.decoder"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok {
+        assert!(
+            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
+            "python3 with mcap and mcap-ros2-support is required (.ci/setup installs them)"
+        );
+        eprintln!("SKIPPED: python3 with the mcap and mcap-ros2-support packages is not installed");
+    }
+    ok
+}
+
+fn f(x: f64) -> Value {
+    json!({ "f64": x.to_bits() })
+}
+
+fn fs(names: &[&str], v: &[f64]) -> Value {
+    assert_eq!(names.len(), v.len());
+    Value::Object(names.iter().zip(v).map(|(n, x)| (n.to_string(), f(*x))).collect())
+}
+
+const LEAK_STATE: [&str; 11] = [
+    "x_sp_m",
+    "p1_pa",
+    "p2_pa",
+    "x_m",
+    "v_m_s",
+    "v_sp_m_s",
+    "f_e_n",
+    "q_e1_m3_s",
+    "q_e2_m3_s",
+    "q_i_m3_s",
+    "bias_m",
+];
+const MEASUREMENT: [&str; 3] = ["x_m", "p1_pa", "p2_pa"];
+const PRESSURES: [&str; 2] = ["p1_pa", "p2_pa"];
+const LEAK_FLOWS: [&str; 3] = ["ext1", "ext2", "internal"];
+
+/// What Python must decode for each record, by the names of the .msg files.
+fn expected_sensor(x: &SensorFrame) -> Value {
+    json!({
+        "seq": x.seq, "acq_mono_ns": x.acq_mono_ns, "t_s": f(x.t_s), "u_v": f(x.u_v), "x_m": f(x.x_m),
+        "p1_pa": f(x.p1_pa), "p2_pa": f(x.p2_pa), "x_sp_m": f(x.x_sp_m), "f_load_n": f(x.f_load_n),
+        "ref_m": f(x.ref_m), "q_leak_lpm": f(x.q_leak_lpm), "flags": x.flags,
+    })
+}
+
+fn expected_estimate(x: &EstimateFrame) -> Value {
+    json!({
+        "seq": x.seq, "acq_mono_ns": x.acq_mono_ns, "est_recv_mono_ns": x.est_recv_mono_ns,
+        "est_done_mono_ns": x.est_done_mono_ns, "t_s": f(x.t_s), "n_states": x.n_states, "flags": x.flags,
+        "state": fs(&LEAK_STATE, &x.state), "state_sigma": fs(&LEAK_STATE, &x.state_sigma),
+        "residual": fs(&MEASUREMENT, &x.residual), "innovation": fs(&MEASUREMENT, &x.innovation),
+        "innovation_sigma": fs(&MEASUREMENT, &x.innovation_sigma), "measured": fs(&MEASUREMENT, &x.measured),
+        "u_v": f(x.u_v), "nis": f(x.nis), "mae_pa": fs(&PRESSURES, &x.mae_pa), "th_flags": x.th_flags,
+        "th_state": fs(&LEAK_STATE[..7], &x.th_state), "th_residual": fs(&MEASUREMENT, &x.th_residual),
+        "th_innovation": fs(&MEASUREMENT, &x.th_innovation), "th_mae_pa": fs(&PRESSURES, &x.th_mae_pa),
+        "th_nis": f(x.th_nis),
+    })
+}
+
+fn expected_event(x: &LeakEventFrame) -> Value {
+    json!({
+        "seq": x.seq, "acq_mono_ns": x.acq_mono_ns, "cls_done_mono_ns": x.cls_done_mono_ns,
+        "event_id": x.event_id,
+        "kind": frames::code_name(&frames::event_kind::NAMES, x.kind),
+        "phase": frames::code_name(&frames::event_phase::NAMES, x.phase),
+        "t_detect_s": f(x.t_detect_s), "t_onset_s": f(x.t_onset_s), "size_lpm": f(x.size_lpm),
+        "size_lpm_sigma": f(x.size_lpm_sigma), "confidence": f(x.confidence),
+        "detector": frames::detector_name(&x.detector), "size_nominal_lpm": f(x.size_nominal_lpm),
+        "coefficient_m3_s_sqrt_pa": f(x.coefficient_m3_s_sqrt_pa), "statistic": f(x.statistic),
+        "threshold": f(x.threshold), "channel": frames::text(&x.channel), "detail": frames::text(&x.detail),
+    })
+}
+
+fn expected_health(x: &HealthFrame) -> Value {
+    json!({
+        "seq": x.seq, "mono_ns": x.mono_ns, "t_s": f(x.t_s),
+        "status": frames::code_name(&frames::health_status::NAMES, x.status),
+        "active_events": x.active_events, "leak_flow_lpm": fs(&LEAK_FLOWS, &x.leak_flow_lpm),
+        "leak_flow_sigma_lpm": fs(&LEAK_FLOWS, &x.leak_flow_sigma_lpm),
+    })
+}
+
+fn expected_stats(x: &StatsFrame) -> Value {
+    json!({
+        "mono_ns": x.mono_ns, "pid": x.pid, "stage": frames::code_name(&frames::stage::NAMES, x.stage),
+        "frames_in": x.frames_in, "frames_out": x.frames_out, "seq_gaps": x.seq_gaps,
+        "deadline_misses": x.deadline_misses, "proc_ns_p50": x.proc_ns_p50, "proc_ns_p99": x.proc_ns_p99,
+        "proc_ns_max": x.proc_ns_max, "lat_ns_p50": x.lat_ns_p50, "lat_ns_p99": x.lat_ns_p99,
+        "lat_ns_max": x.lat_ns_max, "cpu_fraction": f(x.cpu_fraction), "rss_bytes": x.rss_bytes,
+    })
+}
+
+fn expected_gap(x: &GapRecord) -> Value {
+    json!({
+        "topic": x.topic.as_str(), "expected_seq": x.expected_seq, "got_seq": x.got_seq,
+        "missing": x.missing, "recv_mono_ns": x.recv_mono_ns,
+    })
+}
+
+/// A log with every record type: distinct values in every field, NaN, the
+/// infinities, text, a kind this version does not name.
+fn write_log(path: &Path) {
+    let mut w = LogWriter::create(path, WriterOptions::default()).unwrap();
+    let mut put = |e: Entry| assert!(w.write(e).unwrap());
+    for i in 0..50u64 {
+        let t = 1_000_000_000 + i * 1_000_000;
+        put(Entry::Frame(
+            SensorFrame {
+                seq: i,
+                acq_mono_ns: t,
+                t_s: i as f64 * 1e-3,
+                u_v: (i as f64).sin(),
+                x_m: 0.3 + i as f64 * 1e-6,
+                p1_pa: 6.9e6 + i as f64,
+                p2_pa: 4.1e6 - i as f64,
+                x_sp_m: f64::NAN,
+                f_load_n: f64::NEG_INFINITY,
+                ref_m: -0.0,
+                q_leak_lpm: 5e-324,
+                flags: (i % 3) as u32,
+                _pad: 0,
+            },
+            t + 10,
+        ));
+        let mut e = EstimateFrame {
+            seq: i,
+            acq_mono_ns: t,
+            est_recv_mono_ns: t + 1,
+            est_done_mono_ns: t + 2,
+            t_s: i as f64 * 1e-3,
+            n_states: 11,
+            flags: 16,
+            u_v: 0.5,
+            nis: 1.25,
+            th_flags: 1,
+            th_nis: 2.5,
+            ..EstimateFrame::default()
+        };
+        for k in 0..11 {
+            e.state[k] = (k * 100) as f64 + i as f64;
+            e.state_sigma[k] = 1.0 / (k as f64 + 2.0);
+        }
+        for k in 0..7 {
+            e.th_state[k] = -((k * 100) as f64 + i as f64);
+        }
+        e.residual = [1.0, 2.0, 3.0];
+        e.innovation = [4.0, 5.0, 6.0];
+        e.innovation_sigma = [7.0, 8.0, 9.0];
+        e.measured = [10.0, 11.0, 12.0];
+        e.mae_pa = [13.0, 14.0];
+        e.th_residual = [15.0, 16.0, 17.0];
+        e.th_innovation = [18.0, 19.0, 20.0];
+        e.th_mae_pa = [21.0, 22.0];
+        put(Entry::Estimate(e, t + 20));
+    }
+    for (kind, phase, detector, detail) in [
+        (
+            frames::event_kind::EXT1,
+            frames::event_phase::RAISED,
+            "leak-size",
+            "0.25 L/min, k = 1.9e-9 m³/(s·√Pa)",
+        ),
+        (99, frames::event_phase::CLEARED, "sensors", ""),
+    ] {
+        put(Entry::Event(
+            LeakEventFrame {
+                seq: 30,
+                acq_mono_ns: 1_030_000_000,
+                cls_done_mono_ns: 1_030_000_500,
+                event_id: 4,
+                kind,
+                phase,
+                t_detect_s: 0.03,
+                t_onset_s: f64::NAN,
+                size_lpm: 0.25,
+                size_lpm_sigma: 0.01,
+                confidence: 0.99,
+                detector: frames::detector_bytes(detector),
+                size_nominal_lpm: 0.3,
+                coefficient_m3_s_sqrt_pa: 1.9e-9,
+                statistic: 7.5,
+                threshold: 4.9,
+                channel: frames::text_bytes("p1"),
+                detail: frames::text_bytes(detail),
+            },
+            1_030_001_000,
+        ));
+    }
+    put(Entry::Health(
+        HealthFrame {
+            seq: 3,
+            mono_ns: 1_040_000_000,
+            t_s: 0.04,
+            status: frames::health_status::SENSOR_FAULT,
+            active_events: 2,
+            leak_flow_lpm: [0.25, f64::NAN, -0.0],
+            leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+        },
+        1_040_000_100,
+    ));
+    put(Entry::Stats(
+        StatsFrame {
+            mono_ns: 1_045_000_000,
+            pid: 42,
+            stage: frames::stage::CLASSIFIER,
+            frames_in: 1,
+            frames_out: 2,
+            seq_gaps: 3,
+            deadline_misses: 4,
+            proc_ns_p50: 5,
+            proc_ns_p99: 6,
+            proc_ns_max: 7,
+            lat_ns_p50: 8,
+            lat_ns_p99: 9,
+            lat_ns_max: 10,
+            cpu_fraction: 0.031,
+            rss_bytes: u64::MAX,
+        },
+        1_045_000_100,
+    ));
+    put(Entry::Gap(GapRecord {
+        topic: Topic::Health,
+        expected_seq: 1,
+        got_seq: 3,
+        missing: 2,
+        recv_mono_ns: 1_040_000_100,
+    }));
+    w.finish().unwrap();
+}
+
+#[test]
+fn python_decodes_every_field_as_the_rust_reader_does() {
+    if !python_mcap() {
+        return;
+    }
+    let d = std::env::temp_dir().join(format!("recorder-python-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let path = d.join("log.mcap");
+    write_log(&path);
+    let log = LogReader::open(&path).unwrap().read().unwrap();
+    let o = Command::new("python3")
+        .args(["-c", SCRIPT])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<Value> = String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    // Rust's records per topic, in file order, as Python must name them
+    let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();
+    expected.insert("frames", log.frames.iter().map(expected_sensor).collect());
+    expected.insert("estimates", log.estimates.iter().map(expected_estimate).collect());
+    expected.insert("events", log.events.iter().map(expected_event).collect());
+    expected.insert("health", log.health.iter().map(expected_health).collect());
+    expected.insert("stats", log.stats.iter().map(expected_stats).collect());
+    expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
+    let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
+    for line in &lines {
+        let topic = line["topic"].as_str().unwrap();
+        assert_eq!(line["encoding"], "cdr", "{line}");
+        assert_eq!(line["schema_encoding"], "ros2msg", "{line}");
+        assert!(
+            line["schema"].as_str().unwrap().starts_with("leakwatch/msg/"),
+            "{line}"
+        );
+        // one clock: log time and publish time are the record's monotonic stamp
+        assert_eq!(line["log_time"], line["publish_time"], "{line}");
+        let i = seen.entry(topic.to_string()).or_default();
+        let want = &expected[topic][*i];
+        assert_eq!(&line["msg"], want, "{topic} message {i}");
+        *i += 1;
+    }
+    for (topic, want) in &expected {
+        assert_eq!(seen.get(*topic).copied().unwrap_or(0), want.len(), "{topic}");
+    }
+    assert_eq!(
+        (log.frames.len(), log.estimates.len(), log.events.len()),
+        (50, 50, 2)
+    );
+    // the values a user looks for, by name
+    let frame = lines.iter().find(|l| l["topic"] == "frames").unwrap();
+    assert_eq!(frame["log_time"], 1_000_000_000u64);
+    let est = lines.iter().filter(|l| l["topic"] == "estimates").nth(7).unwrap();
+    assert_eq!(est["msg"]["state"]["q_e1_m3_s"], f(707.0));
+    assert_eq!(est["msg"]["th_state"]["f_e_n"], f(-607.0));
+    let events: Vec<&Value> = lines.iter().filter(|l| l["topic"] == "events").collect();
+    assert_eq!(
+        (&events[0]["msg"]["kind"], &events[0]["msg"]["phase"]),
+        (&json!("ext1"), &json!("raised"))
+    );
+    assert_eq!(events[1]["msg"]["kind"], "99");
+    assert_eq!(log.events[1].kind, 99);
+    std::fs::remove_dir_all(&d).ok();
+}
