@@ -1,94 +1,9 @@
-//! The classifier stage: turns the estimator's output into leak events.
-//!
-//! Two detectors read the same [`estimator::Estimate`] stream:
-//!
-//! - [`LeakSizeDetector`] (leakwatch's own): the 10-state filter estimates the
-//!   three leak sizes q_e1, q_e2, q_i directly (m³/s at the nominal drop). After
-//!   a healthy warm-up has learned each estimate's offset and spread (a healthy
-//!   rig that differs from the model, e.g. a spool null bias, leaves a steady
-//!   offset), a leak is declared when one size rises above
-//!   max(`threshold_sigma`·spread, `min_size_lpm`) and stays there for
-//!   `confirm_s`. The rise is measured from a healthy baseline that follows
-//!   the estimate slowly (time constant `baseline_tau_s`, frozen while a leak
-//!   is reported, and while a rise is past `baseline_hold` of its threshold once
-//!   the baseline has settled): an off-nominal rig makes the healthy estimate
-//!   wander with the operating point over tens of seconds, a leak steps or
-//!   ramps in seconds. Whatever the baseline has absorbed since the warm-up is judged
-//!   against the larger `slow_leak_lpm`, so a leak that grows over minutes is
-//!   still reported (detail `slowly growing`). Isolation: the kind whose rise
-//!   is largest relative to its threshold. Size: the rise above the baseline,
-//!   with the filter's σ. Onset: the last time the rise was below a
-//!   quarter of the threshold.
-//! - [`MaeDetector`] (the thesis' baseline, MODEL.md §5): the moving averages of
-//!   |residual| of p1 and p2; thresholds = `margin` × the largest healthy MAE
-//!   seen in the warm-up; p1 only → ext1, p2 only → ext2, both → internal. It
-//!   cannot size a leak.
-//!
-//! Both debounce: one leak gives one `raised` event, then `updated` events as
-//! the size estimate moves, and `cleared` when it goes away. Sensor checks
-//! raise `sensor-stuck`, `sensor-saturated` and `sensor-dead` events, and a
-//! filter reset raises `estimator-reset` (and restarts the warm-up).
+//! The `classifier` process crate: the detectors are the pure [`detect`] crate
+//! (re-exported here whole, so `classifier::X` paths keep working); this crate
+//! adds the process around them ([`shell`]: iceoryx2, command line, config file)
+//! and the classifier's side of the wire ([`wire`]).
 
-// The detectors walk parallel per-kind arrays by index; iterators would hide that.
-#![allow(clippy::needless_range_loop)]
+pub use detect::*;
 
-mod config;
-mod events;
-mod leak_size;
-mod mae;
 pub mod shell;
-mod stage;
-mod track;
 pub mod wire;
-
-pub use config::{ClassifierConfig, Commissioning};
-pub use events::{EventKind, LeakEvent, Phase};
-pub use leak_size::{rice_threshold, CommissioningLearner, LeakSizeDetector};
-pub use mae::MaeDetector;
-pub use stage::Classifier;
-
-/// Half-width of the band the valve command must swing through to count as a reversal, V.
-pub const COMMAND_REVERSAL_BAND_V: f64 = 1.0;
-/// Time over which the baseline is taken again after a stretch the model could not
-/// follow (it follows the estimates with a 0.5 s time constant meanwhile, and no
-/// evidence counts), s.
-pub const REACQUIRE_S: f64 = 4.0;
-
-/// Time constant of the command reversal rate, s.
-pub const COMMAND_RATE_WINDOW_S: f64 = 2.0;
-
-/// Time constant of the NIS average that the NIS-ratio gate compares, s.
-pub const NIS_RATIO_WINDOW_S: f64 = 5.0;
-/// While a leak's kind is pending, the rises are averaged over this time, s: the
-/// mismatch a leak leaves swings with the operating point (a sine or step period),
-/// its kind is read from the average.
-pub const KIND_AVERAGE_S: f64 = 1.0;
-
-/// Cubic metres per second in one litre per minute.
-const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
-
-/// How badly each single-leak hypothesis (ext1, ext2, int) fits rises `r` =
-/// [w1, w2, (w1 − w2)/2] of the chamber flows, L/min: the part of the flow
-/// mismatch it leaves unexplained (ext1 leaves w2, ext2 leaves w1, an internal
-/// leak leaves the common part (w1 + w2)/√2).
-pub fn misfits(r: [f64; 3]) -> [f64; 3] {
-    let (w1, w2) = (r[0], r[1]);
-    [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2]
-}
-
-/// The size of each single-leak hypothesis that best explains estimated leak
-/// sizes `q_lpm` = [q_e1, q_e2, q_i] (L/min at nominal drop), judged by the
-/// flows they take from each chamber: w1 = q_e1 + q_i out of chamber 1 and
-/// w2 = q_e2 − q_i out of chamber 2. An external leak at chamber 1 is
-/// (w1, w2) = (q, 0), at chamber 2 (0, q), an internal leak (q, −q); so the
-/// sizes are [w1, w2, (w1 − w2)/2]. (The three estimates are strongly
-/// correlated, e.g. ext2 ≈ ext1 + a negative internal leak while the filter
-/// settles; the chamber flows are what the data pins down.)
-pub fn signatures_lpm(q_lpm: [f64; 3]) -> [f64; 3] {
-    let w1 = q_lpm[0] + q_lpm[2];
-    let w2 = q_lpm[1] - q_lpm[2];
-    [w1, w2, 0.5 * (w1 - w2)]
-}
-
-/// Names of the measured channels, in measurement order.
-pub const CHANNELS: [&str; 3] = ["x", "p1", "p2"];

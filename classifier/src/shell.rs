@@ -11,9 +11,11 @@ use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
+use crate::wire::EventWire;
 use crate::{Classifier, ClassifierConfig, LeakEvent};
 use bus::{monotonic_ns, Bus, BusConfig, StageStats, WaitMode};
 use clap::Parser;
+use estimator::wire::EstimateWire;
 use estimator::StageEstimate;
 use frames::{health_status, EstimateFrame, Frame, HealthFrame, LeakEventFrame, StatsFrame};
 use serde::Deserialize;

@@ -1,13 +1,35 @@
 //! The classifier's side of the wire: [`LeakEvent`] ⇄ [`LeakEventFrame`] and the
 //! codes of [`EventKind`] and [`Phase`], the one place where they are converted.
+//!
+//! The conversions are traits ([`EventWire`], [`WireCode`]): the event types live
+//! in the pure `detect` crate and the frame in `frames`, so neither may hold a
+//! `From` between them here.
 
 use crate::{EventKind, LeakEvent, Phase};
 use frames::{event_kind, event_phase, LeakEventFrame};
 
-/// The wire code of a kind (`frames::event_kind`).
-impl From<EventKind> for u32 {
-    fn from(k: EventKind) -> u32 {
-        match k {
+/// A value carried as an integer code on the wire.
+pub trait WireCode: Sized {
+    /// The wire code.
+    fn code(self) -> u32;
+    /// The value of a wire code; the error names an unknown code.
+    fn from_code(code: u32) -> Result<Self, String>;
+}
+
+/// [`LeakEvent`] ⇄ [`LeakEventFrame`].
+pub trait EventWire: Sized {
+    /// The frame of this event, triggered by the estimate with sequence number
+    /// `seq` acquired at `acq_mono_ns` and decided at `done_mono_ns`
+    /// (`CLOCK_MONOTONIC`, ns). Texts longer than their field are cut.
+    fn to_frame(&self, seq: u64, acq_mono_ns: u64, done_mono_ns: u64) -> LeakEventFrame;
+    /// The event a frame reports; the error names an unknown kind or phase code.
+    fn from_frame(f: &LeakEventFrame) -> Result<Self, String>;
+}
+
+/// The wire codes of kinds (`frames::event_kind`).
+impl WireCode for EventKind {
+    fn code(self) -> u32 {
+        match self {
             EventKind::Ext1 => event_kind::EXT1,
             EventKind::Ext2 => event_kind::EXT2,
             EventKind::Int => event_kind::INTERNAL,
@@ -19,12 +41,8 @@ impl From<EventKind> for u32 {
             EventKind::NotArmed => event_kind::NOT_ARMED,
         }
     }
-}
 
-/// The kind of a wire code; the error names an unknown code.
-impl TryFrom<u32> for EventKind {
-    type Error = String;
-    fn try_from(code: u32) -> Result<Self, String> {
+    fn from_code(code: u32) -> Result<Self, String> {
         Ok(match code {
             event_kind::EXT1 => EventKind::Ext1,
             event_kind::EXT2 => EventKind::Ext2,
@@ -40,21 +58,17 @@ impl TryFrom<u32> for EventKind {
     }
 }
 
-/// The wire code of a phase (`frames::event_phase`).
-impl From<Phase> for u32 {
-    fn from(p: Phase) -> u32 {
-        match p {
+/// The wire codes of phases (`frames::event_phase`).
+impl WireCode for Phase {
+    fn code(self) -> u32 {
+        match self {
             Phase::Raised => event_phase::RAISED,
             Phase::Updated => event_phase::UPDATED,
             Phase::Cleared => event_phase::CLEARED,
         }
     }
-}
 
-/// The phase of a wire code; the error names an unknown code.
-impl TryFrom<u32> for Phase {
-    type Error = String;
-    fn try_from(code: u32) -> Result<Self, String> {
+    fn from_code(code: u32) -> Result<Self, String> {
         Ok(match code {
             event_phase::RAISED => Phase::Raised,
             event_phase::UPDATED => Phase::Updated,
@@ -64,18 +78,15 @@ impl TryFrom<u32> for Phase {
     }
 }
 
-impl LeakEvent {
-    /// The frame of this event, triggered by the estimate with sequence number
-    /// `seq` acquired at `acq_mono_ns` and decided at `done_mono_ns`
-    /// (`CLOCK_MONOTONIC`, ns). Texts longer than their field are cut.
-    pub fn to_frame(&self, seq: u64, acq_mono_ns: u64, done_mono_ns: u64) -> LeakEventFrame {
+impl EventWire for LeakEvent {
+    fn to_frame(&self, seq: u64, acq_mono_ns: u64, done_mono_ns: u64) -> LeakEventFrame {
         LeakEventFrame {
             seq,
             acq_mono_ns,
             cls_done_mono_ns: done_mono_ns,
             event_id: self.event_id,
-            kind: self.kind.into(),
-            phase: self.phase.into(),
+            kind: self.kind.code(),
+            phase: self.phase.code(),
             t_detect_s: self.t_detect_s,
             t_onset_s: self.t_onset_s,
             size_lpm: self.size_lpm,
@@ -90,22 +101,11 @@ impl LeakEvent {
             detail: frames::text_bytes(&self.detail),
         }
     }
-}
 
-/// The frame of an event with sequence 0 and clocks 0.
-impl From<&LeakEvent> for LeakEventFrame {
-    fn from(e: &LeakEvent) -> Self {
-        e.to_frame(0, 0, 0)
-    }
-}
-
-/// The event a frame reports; the error names an unknown kind or phase code.
-impl TryFrom<&LeakEventFrame> for LeakEvent {
-    type Error = String;
-    fn try_from(f: &LeakEventFrame) -> Result<Self, String> {
+    fn from_frame(f: &LeakEventFrame) -> Result<Self, String> {
         let mut ev = LeakEvent::plain(
-            EventKind::try_from(f.kind)?,
-            Phase::try_from(f.phase)?,
+            EventKind::from_code(f.kind)?,
+            Phase::from_code(f.phase)?,
             frames::detector_name(&f.detector),
             f.event_id,
             f.t_detect_s,
@@ -142,17 +142,17 @@ mod tests {
             EventKind::NotArmed,
         ];
         for k in kinds {
-            assert_eq!(EventKind::try_from(u32::from(k)), Ok(k));
+            assert_eq!(EventKind::from_code(k.code()), Ok(k));
         }
         for p in [Phase::Raised, Phase::Updated, Phase::Cleared] {
-            assert_eq!(Phase::try_from(u32::from(p)), Ok(p));
+            assert_eq!(Phase::from_code(p.code()), Ok(p));
         }
-        assert_eq!(u32::from(EventKind::Int), 3);
+        assert_eq!(EventKind::Int.code(), 3);
         assert_eq!(
-            EventKind::try_from(99),
+            EventKind::from_code(99),
             Err("unknown event kind code 99".to_string())
         );
-        assert_eq!(Phase::try_from(7), Err("unknown event phase code 7".to_string()));
+        assert_eq!(Phase::from_code(7), Err("unknown event phase code 7".to_string()));
     }
 
     #[test]
@@ -172,16 +172,16 @@ mod tests {
             (f.seq, f.acq_mono_ns, f.cls_done_mono_ns, f.kind),
             (42, 1_000, 2_000, 2)
         );
-        assert_eq!(LeakEvent::try_from(&f), Ok(ev.clone()));
+        assert_eq!(LeakEvent::from_frame(&f), Ok(ev.clone()));
         // a sensor event keeps its channel
         let mut s = LeakEvent::plain(EventKind::SensorStuck, Phase::Raised, "sensors", 8, 3.0, f64::NAN);
         s.channel = "p1".into();
-        let back = LeakEvent::try_from(&LeakEventFrame::from(&s)).expect("known codes");
+        let back = LeakEvent::from_frame(&s.to_frame(0, 0, 0)).expect("known codes");
         assert_eq!(back.channel, "p1");
         assert!(back.t_onset_s.is_nan() && back.size_lpm.is_nan());
         // a detail longer than the field is cut at a character boundary, not lost
         ev.detail = "√".repeat(100);
-        let back = LeakEvent::try_from(&LeakEventFrame::from(&ev)).expect("known codes");
+        let back = LeakEvent::from_frame(&ev.to_frame(0, 0, 0)).expect("known codes");
         assert_eq!(back.detail, "√".repeat(frames::DETAIL_LEN / 3));
     }
 }

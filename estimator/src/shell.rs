@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use crate::wire::EstimateWire;
 use crate::{EstimatorStage, Tuning};
 use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
 use clap::Parser;

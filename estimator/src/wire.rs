@@ -1,18 +1,49 @@
 //! The estimator's side of the wire: [`StageEstimate`] ⇄ [`EstimateFrame`],
 //! the one place where the two are converted.
 //!
-//! The flag bits are shared ([`crate::FLAG_RESET`] … are `frames::estimate_flags`),
-//! so flags are copied, not recoded; the wire's end-of-stream bit is dropped on
-//! the way in. The thesis filter's σ and innovation σ are not carried (NaN on
-//! the way back).
+//! The flag bits are shared ([`crate::FLAG_RESET`] … equal `frames::estimate_flags`,
+//! checked at compile time below), so flags are copied, not recoded; the wire's
+//! end-of-stream bit is dropped on the way in. The thesis filter's σ and
+//! innovation σ are not carried (NaN on the way back).
+//!
+//! The conversions are a trait, [`EstimateWire`]: the estimate types live in the
+//! pure `filter` crate and the frame in `frames`, so neither may hold a `From`
+//! between them here.
 
 use crate::{Estimate, StageEstimate, FLAGS_ALL, MAX_STATES};
-use frames::{EstimateFrame, THESIS_STATES};
+use frames::{estimate_flags, EstimateFrame, THESIS_STATES};
 
-impl StageEstimate {
+// `filter` is pure and does not see the wire: its flag bits must be the wire's.
+const _: () = {
+    assert!(crate::FLAG_RESET == estimate_flags::RESET);
+    assert!(crate::FLAG_SKIPPED == estimate_flags::SKIPPED);
+    assert!(crate::FLAG_CLAMPED == estimate_flags::CLAMPED);
+    assert!(crate::FLAG_CONVERGING == estimate_flags::CONVERGING);
+    assert!(crate::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
+    assert!(FLAGS_ALL & estimate_flags::END_OF_STREAM == 0);
+    assert!(MAX_STATES == frames::MAX_STATES);
+};
+
+/// [`StageEstimate`] ⇄ [`EstimateFrame`].
+pub trait EstimateWire: Sized {
     /// Writes both filters' estimates into `out` (for example a frame in shared
     /// memory), leaving its sequence number and clock fields alone.
-    pub fn write_frame(&self, out: &mut EstimateFrame) {
+    fn write_frame(&self, out: &mut EstimateFrame);
+
+    /// The two estimates a frame carries; `missing_before` is the number of
+    /// frames the subscriber found missing just before it.
+    fn from_frame(f: &EstimateFrame, missing_before: u64) -> Self;
+
+    /// A frame with these estimates, sequence 0 and clocks 0 (the publisher sets those).
+    fn to_frame(&self) -> EstimateFrame {
+        let mut f = EstimateFrame::default();
+        self.write_frame(&mut f);
+        f
+    }
+}
+
+impl EstimateWire for StageEstimate {
+    fn write_frame(&self, out: &mut EstimateFrame) {
         let (l, t) = (&self.leak, &self.thesis);
         out.t_s = l.t_s;
         out.n_states = l.n_states;
@@ -34,9 +65,7 @@ impl StageEstimate {
         out.th_nis = t.nis;
     }
 
-    /// The two estimates a frame carries; `missing_before` is the number of
-    /// frames the subscriber found missing just before it.
-    pub fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
+    fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
         let leak = Estimate {
             t_s: f.t_s,
             n_states: f.n_states,
@@ -73,22 +102,6 @@ impl StageEstimate {
     }
 }
 
-/// A frame with the estimates of `e`, sequence 0 and clocks 0 (the publisher sets those).
-impl From<&StageEstimate> for EstimateFrame {
-    fn from(e: &StageEstimate) -> Self {
-        let mut f = EstimateFrame::default();
-        e.write_frame(&mut f);
-        f
-    }
-}
-
-/// The estimates of a frame, with no missing frames before it.
-impl From<&EstimateFrame> for StageEstimate {
-    fn from(f: &EstimateFrame) -> Self {
-        StageEstimate::from_frame(f, 0)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -113,7 +126,7 @@ mod tests {
             e = stage.on_sample(&Sample::new(k as f64 * 1e-3, 0.5, 0.25, 7.0e6, 6.8e6));
         }
         e.leak.flags |= FLAG_AFTER_GAP;
-        let mut f = EstimateFrame::from(&e);
+        let mut f = e.to_frame();
         f.flags |= frames::estimate_flags::END_OF_STREAM;
         let back = StageEstimate::from_frame(&f, 3);
         assert_eq!(back.missing_before, 3);

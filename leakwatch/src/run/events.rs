@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 use std::process::Child;
 
+use classifier::wire::EventWire;
 use classifier::LeakEvent;
 use frames::LeakEventFrame;
 
@@ -46,7 +47,7 @@ pub(super) fn own_event(
         }
         return None;
     }
-    match LeakEvent::try_from(&f.frame) {
+    match LeakEvent::from_frame(&f.frame) {
         Ok(ev) => Some(ev),
         Err(e) => {
             eprintln!("leakwatch run: an event frame was not understood ({e}); left out");

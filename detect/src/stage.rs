@@ -2,7 +2,7 @@
 //! the estimator's output.
 
 use crate::{ClassifierConfig, EventKind, LeakEvent, LeakSizeDetector, MaeDetector, Phase, CHANNELS};
-use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET};
+use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET};
 
 /// Per-channel sensor watch: stuck, saturated, dead.
 #[derive(Debug, Clone, Copy, Default)]
@@ -45,7 +45,7 @@ impl Classifier {
 
     /// Reads one output of the estimator stage (the leak filter's and the thesis
     /// filter's estimates) and calls `emit` for each event it gives (usually none).
-    pub fn on_stage(&mut self, s: &estimator::StageEstimate, mut emit: impl FnMut(LeakEvent)) {
+    pub fn on_stage(&mut self, s: &filter::StageEstimate, mut emit: impl FnMut(LeakEvent)) {
         if s.missing_before > 0 && s.leak.flags & FLAG_AFTER_GAP == 0 {
             // Frames lost between the estimator and the classifier: the same gate.
             let mut leak = s.leak;

@@ -4,7 +4,7 @@
 
 use crate::track::{Active, Arming, Stats};
 use crate::{signatures_lpm, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
-use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
 mod step;
 

@@ -1,6 +1,6 @@
 //! The estimator against the simulated rig and against textbook properties.
 
-use estimator::{Ekf, Estimator, Tuning, FLAG_RESET};
+use filter::{Ekf, Estimator, Tuning, FLAG_RESET};
 use model::rng::Rng;
 use model::{ActuatorParams, FaultSchedule, FrictionPreset, Scenario, SensorParams, SimSettings, Simulator};
 use nalgebra::{SMatrix, SVector};
@@ -199,7 +199,7 @@ fn healthy_run(scenario: &str, tuning: Tuning, smooth: bool, seconds: f64, pos_t
 fn converges_from_the_thesis_start_in_every_scenario() {
     const SECONDS: f64 = 5.0;
     let thesis_p0 = |t: Tuning| Tuning {
-        init: estimator::Init::Thesis,
+        init: filter::Init::Thesis,
         p0_x_sp_m2: 1e4,
         p0_p_pa2: 1e4,
         p0_x_m2: 1e4,
@@ -209,7 +209,7 @@ fn converges_from_the_thesis_start_in_every_scenario() {
         ..t
     };
     let confident = |t: Tuning| Tuning {
-        init: estimator::Init::Thesis,
+        init: filter::Init::Thesis,
         init_pressure_pa: 3.8e6,
         p0_x_sp_m2: 1e-12,
         p0_p_pa2: 1e-12,

@@ -2,8 +2,8 @@
 //! classifier. Leaks of 0.5 L/min are found, isolated and sized; healthy runs
 //! and a spring engaging mid-run raise nothing.
 
-use classifier::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
-use estimator::{Estimator, Tuning};
+use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
+use filter::{Estimator, Tuning};
 use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 
 /// A rig that differs from the model: friction +15 % extending, −10 % retracting,
@@ -232,7 +232,7 @@ fn gaps_nan_and_a_restart_raise_no_false_leak() {
         51,
     )
     .unwrap();
-    let mut stage = estimator::EstimatorStage::new(
+    let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
         Tuning::thesis(),
@@ -278,7 +278,7 @@ fn dead_and_stuck_sensors_are_reported() {
         61,
     )
     .unwrap();
-    let mut stage = estimator::EstimatorStage::new(
+    let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
         Tuning::thesis(),
@@ -388,7 +388,7 @@ fn healthy_samples(scenario: &str, seconds: f64, seed: u64) -> Vec<model::Sample
 }
 
 fn replay_events(samples: &[model::Sample], cfg: ClassifierConfig) -> Vec<LeakEvent> {
-    let mut stage = estimator::EstimatorStage::new(
+    let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
         Tuning::thesis(),
@@ -430,13 +430,13 @@ fn gaps_of_any_length_at_any_position_raise_no_leak() {
 #[test]
 fn a_leak_present_at_start_is_seen_with_a_commissioning() {
     let healthy = healthy_samples("closed-loop-sine", 30.0, 81);
-    let mut stage = estimator::EstimatorStage::new(
+    let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
         Tuning::thesis(),
     )
     .unwrap();
-    let mut learner = classifier::CommissioningLearner::new(ClassifierConfig::default().settle_s);
+    let mut learner = detect::CommissioningLearner::new(ClassifierConfig::default().settle_s);
     for s in &healthy {
         learner.on_estimate(&stage.on_sample(s).leak);
     }
@@ -444,9 +444,7 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
     assert!(c.healthy_s > 25.0 && c.healthy_s < 29.0, "{c:?}");
     assert!(c.spreads_lpm.iter().all(|s| *s > 0.0 && *s < 0.05), "{c:?}");
     // Too little healthy data is refused, not guessed.
-    assert!(classifier::CommissioningLearner::new(2.0)
-        .finish(10.0, "")
-        .is_err());
+    assert!(detect::CommissioningLearner::new(2.0).finish(10.0, "").is_err());
     for (kind, expect) in [("ext1", EventKind::Ext1), ("int", EventKind::Int)] {
         let cfg = ClassifierConfig {
             commissioning: Some(c.clone()),
@@ -506,12 +504,12 @@ fn the_thesis_baseline_is_off_unless_asked_for() {
 #[test]
 fn threshold_from_the_false_alarm_rate() {
     // 1 upcrossing of the mean per second = 3600/h; 0.05/h asks e^(-c²/2) = 0.05/3600.
-    let c = classifier::rice_threshold(1.0, 0.05, 0.0);
+    let c = detect::rice_threshold(1.0, 0.05, 0.0);
     assert!((c - (2.0f64 * 72_000.0f64.ln()).sqrt()).abs() < 1e-12, "{c}");
     assert!((c - 4.7296).abs() < 1e-3, "{c}");
     // Ten times rarer alarms ask for a higher threshold; the floor holds.
-    assert!(classifier::rice_threshold(1.0, 0.005, 0.0) > c);
-    assert_eq!(classifier::rice_threshold(1e-9, 0.05, 4.0), 4.0);
+    assert!(detect::rice_threshold(1.0, 0.005, 0.0) > c);
+    assert_eq!(detect::rice_threshold(1e-9, 0.05, 4.0), 4.0);
 }
 
 /// The open-loop chirp sweeps to 10.5 Hz: past about 4 Hz the healthy model's

@@ -3,7 +3,7 @@
 
 use crate::track::{arm_step, Active, Arming, Stats};
 use crate::{ClassifierConfig, EventKind, LeakEvent, Phase};
-use estimator::{Estimate, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_SKIPPED};
 
 /// The thesis' detector: thresholds on the MAE of the pressure residuals.
 #[derive(Debug, Clone)]

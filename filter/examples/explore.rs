@@ -1,7 +1,7 @@
 //! Exploration: run a scenario through the estimator and print figures.
 #![allow(clippy::needless_range_loop)]
-//! cargo run --release -p estimator --example explore -- SCENARIO PRESET STATES [FAULT] [smooth]
-use estimator::{Estimator, Tuning};
+//! cargo run --release -p filter --example explore -- SCENARIO PRESET STATES [FAULT] [smooth]
+use filter::{Estimator, Tuning};
 use model::{
     ActuatorParams, Fault, FaultSchedule, FrictionPreset, Scenario, SensorParams, SimSettings, Simulator,
 };

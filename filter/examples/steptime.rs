@@ -1,5 +1,5 @@
 //! Quick timing of the estimator step per layout.
-use estimator::{Estimator, Tuning};
+use filter::{Estimator, Tuning};
 use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 fn main() {
     let sc = Scenario::by_name("loaded-sine", 1, 60.0).unwrap();

@@ -8,7 +8,7 @@ use crate::{
     misfits, EventKind, LeakEvent, Phase, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, KIND_AVERAGE_S,
     M3_S_PER_LPM, NIS_RATIO_WINDOW_S, REACQUIRE_S,
 };
-use estimator::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
 impl LeakSizeDetector {
     /// Reads one estimate; pushes any event into `out` (at most one per call).

@@ -2,7 +2,7 @@
 //! running statistics of a healthy estimate.
 
 use crate::{ClassifierConfig, EventKind};
-use estimator::{Estimate, FLAG_CONVERGING, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_CONVERGING, FLAG_SKIPPED};
 
 /// Running mean and spread (Welford).
 #[derive(Debug, Clone, Copy, Default)]

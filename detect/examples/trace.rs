@@ -1,7 +1,7 @@
 //! Debug trace: thresholds and rises over a run.
-//! cargo run --release -p classifier --example trace -- SCENARIO FAULT|none SEED [offnominal]
-use classifier::{Classifier, ClassifierConfig};
-use estimator::{Estimator, Tuning};
+//! cargo run --release -p detect --example trace -- SCENARIO FAULT|none SEED [offnominal]
+use detect::{Classifier, ClassifierConfig};
+use filter::{Estimator, Tuning};
 use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 
 fn main() {

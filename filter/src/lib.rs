@@ -1,0 +1,457 @@
+//! The EKF core of the estimator stage: a square-root EKF tracking the
+//! actuator at 1 kHz against the healthy model of `model::process` (MODEL.md §4), with the
+//! residuals and moving averages the detectors read (MODEL.md §5).
+//!
+//! The stage is pure and allocation-free per sample: one [`Estimator::on_sample`]
+//! call per sensor sample returns one [`Estimate`]. The same type runs in the
+//! `estimator` process (over iceoryx2) and in `leakwatch replay` (in-process).
+//!
+//! This crate is pure (no bus, command line or config files); the `estimator`
+//! crate is the process around it and re-exports everything here.
+
+pub mod ekf;
+pub mod mae;
+pub mod stage;
+pub mod tuning;
+
+use model::process::{ProcessModel, I_FE, N_MEAS};
+use model::{ActuatorParams, Sample};
+use nalgebra::{SMatrix, SVector};
+
+pub use ekf::{Ekf, EkfError, Innovation};
+pub use mae::MovingMae;
+pub use stage::{EstimatorStage, StageEstimate};
+pub use tuning::{Init, Tuning};
+
+/// Largest number of states any layout has (the 11-state leak model with spool bias).
+pub const MAX_STATES: usize = 11;
+
+// The flag bits are the wire's (`frames::estimate_flags`), so flags are copied, not
+// recoded; `estimator::wire` checks at compile time that the two agree (this crate
+// is pure and does not depend on the wire types).
+/// Flag bit: the filter was reset at this sample (see [`Estimate::flags`]).
+pub const FLAG_RESET: u32 = 1 << 0;
+/// Flag bit: the sample could not be used (no measurement update).
+pub const FLAG_SKIPPED: u32 = 1 << 1;
+/// Flag bit: the prediction had to be clamped to the physical range.
+pub const FLAG_CLAMPED: u32 = 1 << 2;
+/// Flag bit: the filter is still inside its initial convergence time.
+pub const FLAG_CONVERGING: u32 = 1 << 4;
+/// Flag bit: samples were missing just before this one (bridged or re-anchored).
+pub const FLAG_AFTER_GAP: u32 = 1 << 5;
+/// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
+pub const FLAGS_ALL: u32 = FLAG_RESET | FLAG_SKIPPED | FLAG_CLAMPED | FLAG_CONVERGING | FLAG_AFTER_GAP;
+
+/// What the estimator reports for one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// Number of states of the filter (6, 7 or 9).
+    pub n_states: u32,
+    /// Bit set of `FLAG_*`.
+    pub flags: u32,
+    /// A-posteriori state: x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s, F_e N, and the leak
+    /// sizes at nominal drop q_e1, q_e2, q_i m³/s, and the spool null bias b m
+    /// (entries past `n_states` are NaN).
+    pub state: [f64; MAX_STATES],
+    /// Standard deviation of each state, same units (NaN past `n_states`).
+    pub sigma: [f64; MAX_STATES],
+    /// The measurement y = [x m, p1 Pa, p2 Pa] as received (NaN where absent).
+    pub measured: [f64; N_MEAS],
+    /// Valve command u, V (as received).
+    pub u_v: f64,
+    /// A-posteriori residual y − H x̂⁺: m, Pa, Pa (NaN where the channel was not used).
+    pub residual: [f64; N_MEAS],
+    /// Innovation y − H x̂⁻: m, Pa, Pa.
+    pub innovation: [f64; N_MEAS],
+    /// Standard deviation of each innovation, √diag(H P⁻ Hᵀ + R): m, Pa, Pa.
+    pub innovation_sigma: [f64; N_MEAS],
+    /// Moving average of |residual| of p1 and p2 over the MAE window, Pa.
+    pub mae_pa: [f64; 2],
+    /// Normalised innovation squared (χ² with 3 degrees of freedom when consistent).
+    pub nis: f64,
+}
+
+impl Estimate {
+    fn empty(t_s: f64, n_states: u32) -> Self {
+        Estimate {
+            t_s,
+            n_states,
+            flags: 0,
+            measured: [f64::NAN; N_MEAS],
+            u_v: f64::NAN,
+            state: [f64::NAN; MAX_STATES],
+            sigma: [f64::NAN; MAX_STATES],
+            residual: [f64::NAN; N_MEAS],
+            innovation: [f64::NAN; N_MEAS],
+            innovation_sigma: [f64::NAN; N_MEAS],
+            mae_pa: [f64::NAN; 2],
+            nis: f64::NAN,
+        }
+    }
+}
+
+/// Counters of what the stage did, for summaries.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EstimatorCounters {
+    /// Samples seen.
+    pub samples: u64,
+    /// Samples without a measurement update (unusable input).
+    pub skipped: u64,
+    /// Samples with at least one channel left out (NaN or out of range).
+    pub channels_dropped: u64,
+    /// Samples missing from the input (gaps): predicted across, or re-anchored after.
+    pub bridged: u64,
+    /// Filter resets (divergence, a non-finite step, or a gap too long to bridge).
+    pub resets: u64,
+    /// Predictions that had to be clamped to the physical range.
+    pub clamped: u64,
+}
+
+/// One of the three layouts; sizes differ, but the stage holds exactly one, inline.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+enum Filter {
+    S6(Ekf<6, 3>),
+    S7(Ekf<7, 3>),
+    S10(Ekf<10, 3>),
+    S11(Ekf<11, 3>),
+}
+
+/// The estimator stage.
+#[derive(Debug, Clone)]
+pub struct Estimator {
+    tuning: Tuning,
+    model: ProcessModel,
+    filter: Filter,
+    mae: [MovingMae; 2],
+    last_u_v: f64,
+    started: bool,
+    t0_s: f64,
+    diverged_samples: u32,
+    /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
+    reanchor_pending: bool,
+    /// The range a measured pressure must be in to be used, Pa
+    /// ([`ActuatorParams::measured_pressure_range_pa`], as for CSV rows).
+    measured_p_range_pa: (f64, f64),
+    counters: EstimatorCounters,
+}
+
+/// First state index kept across a re-anchoring (the leak sizes and the spool bias).
+const FIRST_SLOW_STATE: usize = 7;
+
+/// Typical magnitudes used to scale the filter's internal algebra.
+const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
+
+/// Samples of persistent divergence before a reset (see [`Tuning::divergence_reset_m`]).
+pub const DIVERGED_SAMPLES: u32 = 200;
+
+impl Estimator {
+    /// A stage for model parameters `params` and filter settings `tuning`.
+    pub fn new(params: ActuatorParams, tuning: Tuning) -> Result<Self, String> {
+        tuning.validate()?;
+        params.validate().map_err(|e| e.to_string())?;
+        let measured_p_range_pa = params.measured_pressure_range_pa();
+        let mut model = ProcessModel::new(params, tuning.sample_period_s);
+        model.substeps = tuning.substeps;
+        let filter = match tuning.states {
+            6 => Filter::S6(make_filter::<6>(&tuning, &model, None)),
+            7 => Filter::S7(make_filter::<7>(&tuning, &model, None)),
+            10 => Filter::S10(make_filter::<10>(&tuning, &model, None)),
+            _ => Filter::S11(make_filter::<11>(&tuning, &model, None)),
+        };
+        let w = tuning.mae_window_samples;
+        Ok(Estimator {
+            tuning,
+            model,
+            filter,
+            mae: [MovingMae::new(w), MovingMae::new(w)],
+            last_u_v: 0.0,
+            started: false,
+            t0_s: 0.0,
+            diverged_samples: 0,
+            reanchor_pending: false,
+            measured_p_range_pa,
+            counters: EstimatorCounters::default(),
+        })
+    }
+
+    /// The filter settings.
+    pub fn tuning(&self) -> &Tuning {
+        &self.tuning
+    }
+
+    /// The process model.
+    pub fn model(&self) -> &ProcessModel {
+        &self.model
+    }
+
+    /// What the stage has done so far.
+    pub fn counters(&self) -> EstimatorCounters {
+        self.counters
+    }
+
+    /// The covariance of the current estimate, row-major n×n in SI units, into `out`
+    /// (which must hold n² values); returns n.
+    pub fn covariance_into(&self, out: &mut [f64]) -> usize {
+        fn copy<const N: usize>(e: &Ekf<N, 3>, out: &mut [f64]) -> usize {
+            let p = e.covariance();
+            for i in 0..N {
+                for j in 0..N {
+                    if let Some(o) = out.get_mut(i * N + j) {
+                        *o = p[(i, j)];
+                    }
+                }
+            }
+            N
+        }
+        match &self.filter {
+            Filter::S6(e) => copy(e, out),
+            Filter::S7(e) => copy(e, out),
+            Filter::S10(e) => copy(e, out),
+            Filter::S11(e) => copy(e, out),
+        }
+    }
+
+    /// Smallest eigenvalue of the scaled covariance (a health figure: it must stay > 0).
+    pub fn min_scaled_eigenvalue(&self) -> f64 {
+        match &self.filter {
+            Filter::S6(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+            Filter::S7(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+            Filter::S10(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+            Filter::S11(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+        }
+    }
+
+    /// Tells the stage that `missing` samples were lost before the next one.
+    /// Gaps up to [`Tuning::max_bridged_gap_samples`] are bridged by prediction;
+    /// after a longer one the fast states (spool, pressures, rod, load) restart
+    /// from the next complete sample while the leak sizes and the spool bias keep
+    /// their estimate and covariance (an open-loop prediction over tens of
+    /// milliseconds of a stick-slipping rod is meaningless, and its update would
+    /// throw the mismatch into the leak states).
+    pub fn on_gap(&mut self, missing: u64) {
+        if !self.started || missing == 0 {
+            return;
+        }
+        self.counters.bridged += missing;
+        if missing > self.tuning.max_bridged_gap_samples as u64 {
+            self.reanchor_pending = true;
+            return;
+        }
+        let u = self.last_u_v;
+        for _ in 0..missing {
+            let ok = match &mut self.filter {
+                Filter::S6(e) => predict_only(e, &self.model, u),
+                Filter::S7(e) => predict_only(e, &self.model, u),
+                Filter::S10(e) => predict_only(e, &self.model, u),
+                Filter::S11(e) => predict_only(e, &self.model, u),
+            };
+            if !ok {
+                self.started = false;
+                self.counters.resets += 1;
+                return;
+            }
+        }
+    }
+
+    /// Processes one sensor sample (one sample period after the previous one).
+    pub fn on_sample(&mut self, s: &Sample) -> Estimate {
+        let mut e = self.on_sample_inner(s);
+        e.measured = [s.x_m, s.p1_pa, s.p2_pa];
+        e.u_v = s.u_v;
+        e
+    }
+
+    fn on_sample_inner(&mut self, s: &Sample) -> Estimate {
+        self.counters.samples += 1;
+        let mut flags = 0;
+        // Measured pressures slightly below 0 (noise near tank pressure) are used as
+        // they are; the predictions stay clamped at the model's own floor (p_min_pa).
+        let limits = self.measured_p_range_pa;
+        let p_ok = |p: f64| p.is_finite() && p >= limits.0 && p <= limits.1;
+        let use_channel = [s.x_m.is_finite(), p_ok(s.p1_pa), p_ok(s.p2_pa)];
+        let usable = s.u_v.is_finite() && use_channel.iter().any(|u| *u);
+        if !use_channel.iter().all(|u| *u) {
+            self.counters.channels_dropped += 1;
+        }
+        if !self.started {
+            if !(usable && use_channel.iter().all(|u| *u)) {
+                self.counters.skipped += 1;
+                let mut e = Estimate::empty(s.t_s, self.tuning.states);
+                e.flags = FLAG_SKIPPED;
+                return e;
+            }
+            let measured = [s.x_m, s.p1_pa, s.p2_pa];
+            let tuning = &self.tuning;
+            match &mut self.filter {
+                Filter::S6(e) => *e = make_filter::<6>(tuning, &self.model, Some(measured)),
+                Filter::S7(e) => *e = make_filter::<7>(tuning, &self.model, Some(measured)),
+                Filter::S10(e) => *e = make_filter::<10>(tuning, &self.model, Some(measured)),
+                Filter::S11(e) => *e = make_filter::<11>(tuning, &self.model, Some(measured)),
+            }
+            if self.counters.samples > 1 {
+                flags |= FLAG_RESET;
+            }
+            self.started = true;
+            self.t0_s = s.t_s;
+            self.diverged_samples = 0;
+            self.mae[0].clear();
+            self.mae[1].clear();
+            self.reanchor_pending = false;
+        } else if self.reanchor_pending && use_channel.iter().all(|u| *u) {
+            let measured = [s.x_m, s.p1_pa, s.p2_pa];
+            let tuning = &self.tuning;
+            match &mut self.filter {
+                Filter::S6(e) => reanchor_filter::<6>(e, tuning, &self.model, measured),
+                Filter::S7(e) => reanchor_filter::<7>(e, tuning, &self.model, measured),
+                Filter::S10(e) => reanchor_filter::<10>(e, tuning, &self.model, measured),
+                Filter::S11(e) => reanchor_filter::<11>(e, tuning, &self.model, measured),
+            }
+            self.reanchor_pending = false;
+            self.diverged_samples = 0;
+        }
+        let u = if s.u_v.is_finite() { s.u_v } else { self.last_u_v };
+        self.last_u_v = u;
+        let y = SVector::<f64, 3>::new(
+            if use_channel[0] { s.x_m } else { 0.0 },
+            if use_channel[1] { s.p1_pa } else { 0.0 },
+            if use_channel[2] { s.p2_pa } else { 0.0 },
+        );
+        let mut out = Estimate::empty(s.t_s, self.tuning.states);
+        let step = match &mut self.filter {
+            Filter::S6(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S7(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S10(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S11(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+        };
+        match step {
+            Ok(clamped) => {
+                if clamped {
+                    flags |= FLAG_CLAMPED;
+                    self.counters.clamped += 1;
+                }
+            }
+            Err(_) => {
+                // A non-finite step: restart from the next usable sample.
+                self.started = false;
+                self.counters.resets += 1;
+                out.flags = flags | FLAG_RESET | FLAG_SKIPPED;
+                return out;
+            }
+        }
+        if !usable {
+            flags |= FLAG_SKIPPED;
+            self.counters.skipped += 1;
+        }
+        for k in 0..2 {
+            let r = out.residual[k + 1];
+            out.mae_pa[k] = if r.is_finite() {
+                self.mae[k].push(r.abs())
+            } else {
+                self.mae[k].mean()
+            };
+        }
+        let diverged_limit = self.tuning.divergence_reset_m.max(20.0 * out.innovation_sigma[0]);
+        if self.tuning.divergence_reset_m > 0.0 && use_channel[0] && out.innovation[0].abs() > diverged_limit
+        {
+            self.diverged_samples += 1;
+            if self.diverged_samples >= DIVERGED_SAMPLES {
+                self.started = false;
+                self.counters.resets += 1;
+            }
+        } else {
+            self.diverged_samples = 0;
+        }
+        if s.t_s - self.t0_s < self.tuning.convergence_time_s {
+            flags |= FLAG_CONVERGING;
+        }
+        out.flags |= flags;
+        out
+    }
+}
+
+fn make_filter<const N: usize>(
+    tuning: &Tuning,
+    model: &ProcessModel,
+    measured: Option<[f64; 3]>,
+) -> Ekf<N, 3> {
+    let mut x0 = SVector::<f64, N>::zeros();
+    let p0 = tuning.p0_diag::<N>();
+    let q = tuning.q_diag::<N>();
+    let r = tuning.r_diag();
+    let scale = SVector::<f64, N>::from_fn(|i, _| SCALE[i]);
+    match (tuning.init, measured) {
+        (Init::Measured, Some([x, p1, p2])) => {
+            x0[1] = p1;
+            x0[2] = p2;
+            x0[3] = x;
+            if N >= 7 {
+                x0[I_FE] = model.params.piston_area_m2 * (p1 - p2);
+            }
+        }
+        _ => {
+            let p = tuning.init_pressure_pa;
+            x0[1] = p;
+            x0[2] = p;
+        }
+    }
+    Ekf::new(x0, &p0, &q, r, scale)
+}
+
+fn reanchor_filter<const N: usize>(
+    e: &mut Ekf<N, 3>,
+    tuning: &Tuning,
+    model: &ProcessModel,
+    measured: [f64; 3],
+) {
+    let fresh = make_filter::<N>(tuning, model, Some(measured));
+    e.reanchor(*fresh.state(), &tuning.p0_diag::<N>(), FIRST_SLOW_STATE.min(N));
+}
+
+fn predict_only<const N: usize>(e: &mut Ekf<N, 3>, model: &ProcessModel, u: f64) -> bool {
+    let (x, f, _) = model.step(e.state(), u);
+    e.predict(x, &f).is_ok()
+}
+
+/// One predict + update; fills `out`; returns whether the prediction was clamped.
+fn step_filter<const N: usize>(
+    e: &mut Ekf<N, 3>,
+    model: &ProcessModel,
+    u: f64,
+    y: &SVector<f64, 3>,
+    use_channel: [bool; 3],
+    usable: bool,
+    out: &mut Estimate,
+) -> Result<bool, EkfError> {
+    let (x_pred, f, guard) = model.step(e.state(), u);
+    e.predict(x_pred, &f)?;
+    let h: SMatrix<f64, 3, N> = ProcessModel::measurement_matrix::<N>();
+    let y_pred = ProcessModel::measure(e.state());
+    if usable {
+        let inn = e.update(y, &y_pred, &h, use_channel)?;
+        let mut x = *e.state();
+        if model.keep_physical(&mut x).any() {
+            e.set_state(x);
+        }
+        let y_post = ProcessModel::measure(e.state());
+        for k in 0..3 {
+            out.innovation[k] = if use_channel[k] { inn.nu[k] } else { f64::NAN };
+            out.innovation_sigma[k] = inn.sigma[k];
+            out.residual[k] = if use_channel[k] {
+                y[k] - y_post[k]
+            } else {
+                f64::NAN
+            };
+        }
+        out.nis = inn.nis;
+    }
+    let x = e.state();
+    let sig = e.sigma();
+    for i in 0..N {
+        out.state[i] = x[i];
+        out.sigma[i] = sig[i];
+    }
+    Ok(guard.any())
+}
