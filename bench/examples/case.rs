@@ -1,7 +1,7 @@
 //! Debug one detection-suite case: cargo run --release -p bench --example case -- SCENARIO KIND SIZE ONSET RAMP SEED
 use bench::detection::{simulator_for, Case};
-use classifier::{Classifier, ClassifierConfig};
-use estimator::{EstimatorStage, Tuning};
+use detect::{Classifier, ClassifierConfig};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 
 fn main() {

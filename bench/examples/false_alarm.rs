@@ -1,8 +1,8 @@
 //! Debug a healthy detection-suite run: prints the 4 s leading up to each raised leak event.
 //! cargo run --release -p bench --example false_alarm -- SCENARIO SEED [SECONDS]
 use bench::detection::{simulator_for, Case};
-use classifier::{Classifier, ClassifierConfig};
-use estimator::{EstimatorStage, Tuning};
+use detect::{Classifier, ClassifierConfig};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 use std::collections::VecDeque;
 
@@ -83,7 +83,7 @@ fn main() {
                     ev.confidence,
                     ev.detail
                 );
-                raised |= ev.phase == classifier::Phase::Raised;
+                raised |= ev.phase == detect::Phase::Raised;
             }
         });
         if raised {

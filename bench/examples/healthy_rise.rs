@@ -4,8 +4,8 @@
 //! smoothed, plus the largest score (rise - misfit)/floor.
 //! cargo run --release -p bench --example healthy_rise -- [HOURS] [TAU_S]
 use bench::detection::{cases, simulator_for, Case};
-use classifier::{misfits, Classifier, ClassifierConfig};
-use estimator::{EstimatorStage, Tuning};
+use detect::{misfits, Classifier, ClassifierConfig};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 
 fn run(case: &Case, tau_s: f64) -> ([f64; 3], [f64; 3]) {

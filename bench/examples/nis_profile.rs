@@ -1,7 +1,7 @@
 //! Healthy NIS of the leak filter by scenario: 5 s averages, p50 / p95 / max.
 //! cargo run --release -p bench --example nis_profile -- SECONDS SEEDS SCENARIO...
 use bench::detection::{simulator_for, Case};
-use estimator::{EstimatorStage, Tuning};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 
 fn main() {

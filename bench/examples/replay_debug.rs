@@ -1,7 +1,7 @@
 //! Prints the leak-size detector's view of a recorded run every 0.5 s from T0:
 //! cargo run --release -p bench --example replay_debug -- FILE.csv[.gz] T0
-use classifier::{misfits, Classifier, ClassifierConfig};
-use estimator::{EstimatorStage, Tuning};
+use detect::{misfits, Classifier, ClassifierConfig};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 
 fn main() {

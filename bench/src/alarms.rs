@@ -2,7 +2,7 @@
 //! be raised with its kind pending (`leak`) and raised again, under the same event
 //! id, with its kind; a false alarm is one event id, however many times it is raised.
 
-use classifier::{LeakEvent, Phase};
+use detect::{LeakEvent, Phase};
 
 /// What a run's leak alarms say about a leak with onset `t_on_s` (s).
 #[derive(Debug, Clone, Copy, Default)]

@@ -7,7 +7,7 @@
 //! size (L/min at the nominal drop p_s/2), as a step or a ramp of up to 5 s, at
 //! a random time in [15, 25] s. Healthy runs measure false alarms per hour.
 
-use classifier::EventKind;
+use detect::EventKind;
 use serde::Serialize;
 
 mod cases;
@@ -147,7 +147,7 @@ pub fn leak_kinds() -> [EventKind; 3] {
 
 #[cfg(test)]
 mod tests {
-    use classifier::{LeakEvent, Phase};
+    use detect::{LeakEvent, Phase};
 
     use super::run::score;
     use super::*;

@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use classifier::{Classifier, ClassifierConfig, LeakEvent};
-use estimator::{EstimatorStage, Tuning};
+use detect::{Classifier, ClassifierConfig, LeakEvent};
+use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
 use serde::Serialize;
 

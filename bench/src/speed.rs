@@ -2,8 +2,8 @@
 
 use std::time::Instant;
 
-use classifier::{Classifier, ClassifierConfig};
-use estimator::{Estimator, EstimatorStage, Tuning};
+use detect::{Classifier, ClassifierConfig};
+use filter::{Estimator, EstimatorStage, Tuning};
 use model::{ActuatorParams, FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
 use serde::Serialize;
 

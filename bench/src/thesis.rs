@@ -4,7 +4,7 @@
 //! sensors; the MAE of the a-posteriori pressure residuals before and after the
 //! onset, and the signed and normalised means of the innovations.
 
-use estimator::{Estimator, Tuning};
+use filter::{Estimator, Tuning};
 use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 use serde::Serialize;
 
@@ -39,7 +39,7 @@ pub struct Row {
 pub fn sensor_tuning_7() -> Tuning {
     Tuning {
         states: 7,
-        init: estimator::Init::Thesis,
+        init: filter::Init::Thesis,
         p0_x_m2: 1.0,
         ..Tuning::sensor_derived()
     }

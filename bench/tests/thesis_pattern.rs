@@ -2,7 +2,7 @@
 //! the residual patterns of the 7-state filter really show, asserted with margins.
 
 use bench::thesis::{run, sensor_tuning_7, Row};
-use estimator::Tuning;
+use filter::Tuning;
 
 fn rows(scenario: &str, name: &str, tuning: &Tuning) -> Vec<Row> {
     ["none", "ext1", "ext2", "int"]

@@ -4,8 +4,8 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use classifier::{Classifier, ClassifierConfig, LeakEvent};
-use estimator::{EstimatorStage, Tuning};
+use detect::{Classifier, ClassifierConfig, LeakEvent};
+use filter::{EstimatorStage, Tuning};
 use model::rng::Rng;
 use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 
@@ -87,7 +87,7 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
 
 /// The commissioning of a case's rig: 40 s of a healthy run of the same rig under the
 /// same scenario with another seed (the rig's noise and reference differ).
-pub fn commission_rig(case: &Case) -> Result<classifier::Commissioning, String> {
+pub fn commission_rig(case: &Case) -> Result<detect::Commissioning, String> {
     let healthy = Case {
         kind: "none".into(),
         size_lpm: 0.0,
@@ -115,7 +115,7 @@ pub fn commission_rig(case: &Case) -> Result<classifier::Commissioning, String> 
         Tuning::sensor_derived(),
         Tuning::thesis(),
     )?;
-    let mut learner = classifier::CommissioningLearner::new(ClassifierConfig::default().settle_s);
+    let mut learner = detect::CommissioningLearner::new(ClassifierConfig::default().settle_s);
     for _ in 0..40_000 {
         learner.on_estimate(&stage.on_sample(&sim.step()).leak);
     }
