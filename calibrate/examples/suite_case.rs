@@ -42,7 +42,14 @@ fn main() {
             );
         }
     }
-    match calibrate::write_outputs(&cal, std::path::Path::new(&out), true, &[]) {
+    // model.toml: the calibrated model as a config's [model] table (leakwatch adds a header)
+    let mut table = toml::Table::new();
+    table.insert(
+        "model".into(),
+        toml::Value::try_from(&cal.model_after).expect("the model is TOML"),
+    );
+    let model_file = toml::to_string(&table).expect("the model is TOML");
+    match calibrate::write_outputs(&cal, std::path::Path::new(&out), true, &[], &model_file) {
         Ok(f) => println!("wrote {}", f.report.display()),
         Err(e) => eprintln!("{e}"),
     }

@@ -1,4 +1,4 @@
-//! The inputs: reading a measured record and a model file, and checking and
+//! The inputs: reading a measured record, and checking and
 //! preparing them for a calibration (windows, fitting and validation parts).
 
 use std::path::Path;
@@ -46,26 +46,6 @@ pub fn load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError> {
     }
     let ds = dataset::read_csv(path, dataset::Limits::default())?;
     Ok(ds.samples)
-}
-
-/// Reads the `[model]` table of a leakwatch config file (other sections are
-/// ignored here); a missing table gives the default model. The model is validated.
-pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
-    let err = |message: String| CalibrateError::ModelFile {
-        path: path.to_path_buf(),
-        message,
-    };
-    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let table: toml::Table = toml::from_str(&text).map_err(|e| err(format!("not valid TOML: {e}")))?;
-    let params = match table.get("model") {
-        Some(v) => {
-            let t = toml::to_string(v).map_err(|e| err(e.to_string()))?;
-            toml::from_str::<ActuatorParams>(&t).map_err(|e| err(format!("[model]: {e}")))?
-        }
-        None => ActuatorParams::default(),
-    };
-    params.validate().map_err(|e| err(format!("[model] {e}")))?;
-    Ok(params)
 }
 
 /// Prepared inputs of a calibration.

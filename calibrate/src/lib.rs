@@ -9,14 +9,13 @@
 //! calibrate::run(measured: &[Sample], model: &ActuatorParams, opts: &CalibrateOptions)
 //!     -> Result<Calibration, CalibrateError>
 //! calibrate::run_with_progress(measured, model, opts, &|line: &str| ...)   // same, with progress lines
-//! calibrate::write_outputs(cal: &Calibration, out_dir: &Path, overwrite: bool, inputs: &[&Path]) -> Result<OutputFiles, CalibrateError>
-//!     // DIR/calibration.json, DIR/model.toml (a leakwatch config: `--config model.toml`),
-//!     // DIR/report.md + DIR/*.png
+//! calibrate::write_outputs(cal: &Calibration, out_dir: &Path, overwrite: bool, inputs: &[&Path], model_file: &str)
+//!     -> Result<OutputFiles, CalibrateError>
+//!     // DIR/calibration.json, DIR/model.toml (`model_file`, the caller's text: leakwatch
+//!     // writes a config, `--config model.toml`), DIR/report.md + DIR/*.png
 //! calibrate::fit_effect(measured, model, effect_name: &str, opts) -> Result<EffectFit, CalibrateError>
 //!     // one named effect; Err(NotIdentifiable) when the data does not excite it
 //! calibrate::load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError>   // dataset CSV, .csv.gz
-//! calibrate::load_model(path: &Path) -> Result<ActuatorParams, CalibrateError>    // [model] of a config TOML
-//! calibrate::model_toml(params: &ActuatorParams) -> Result<String, CalibrateError>
 //! calibrate::suite::bench(opts) -> BenchReport           // BENCHMARKS.md §3, smooth rig, 16 cases
 //! calibrate::suite::bench_thesis(opts) -> BenchReport    // the stick-slip rig, 32 cases
 //! calibrate::suite::bench_matrix(opts) -> BenchReport    // smooth rig, every effect under every input, 44 cases
@@ -27,8 +26,9 @@
 //! ```
 //!
 //! `leakwatch calibrate MEASURED.{csv,csv.gz,mcap} [--config FILE] --out DIR` is
-//! `load_measured` + (`load_model` or the default model) + `run_with_progress` +
-//! `write_outputs`; `leakwatch bench calibration [--data DIR] [--json] [--out DIR]`
+//! `load_measured` + (the `[model]` of the config or the default model) +
+//! `run_with_progress` + `write_outputs` (with the model as TOML; this crate is
+//! pure and reads and writes no TOML, leakwatch does); `leakwatch bench calibration [--data DIR] [--json] [--out DIR]`
 //! prints the smooth and stick-slip suites (or scores DIR).
 //!
 //! # Method
@@ -110,9 +110,9 @@ mod select;
 
 pub use effects::Effect;
 pub use error::CalibrateError;
-pub use input::{load_measured, load_model, FLAT_PRESSURE_PA, MIN_STROKE_M};
+pub use input::{load_measured, FLAT_PRESSURE_PA, MIN_STROKE_M};
 pub use options::CalibrateOptions;
-pub use output::{model_toml, write_outputs, OutputFiles};
+pub use output::{write_outputs, OutputFiles};
 pub use pipeline::{fit_effect, run, run_with_progress};
 pub use regime::RegimeBin;
 pub use result::{Calibration, CandidateScore, DataSummary, EffectFit, FoundEffect, Gap, Round, Traces};

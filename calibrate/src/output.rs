@@ -1,13 +1,12 @@
 //! Writing the results: `calibration.json`, `model.toml` (a leakwatch
 //! configuration with only its `[model]` table: `leakwatch replay|run|calibrate
-//! --config model.toml`), `report.md` and its PNG plots.
+//! --config model.toml`; its text is made by the caller, this crate writes no
+//! TOML), `report.md` and its PNG plots.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use model::params::ActuatorParams;
 use plot::{Figure, Marker, Panel, Series, Style};
-use serde::Serialize;
 
 use crate::{CalibrateError, Calibration, RegimeBin};
 
@@ -22,27 +21,6 @@ pub struct OutputFiles {
     pub report: PathBuf,
     /// The PNG plots.
     pub plots: Vec<PathBuf>,
-}
-
-#[derive(Serialize)]
-struct ModelFile<'a> {
-    model: &'a ActuatorParams,
-}
-
-/// The extended model as TOML under a `[model]` table (the leakwatch config format).
-pub fn model_toml(params: &ActuatorParams) -> Result<String, CalibrateError> {
-    let body = toml::to_string(&ModelFile { model: params })
-        .map_err(|e| CalibrateError::Serialize(e.to_string()))?;
-    Ok(format!(
-        "# Written by `leakwatch calibrate`: the calibrated actuator model, a leakwatch\n\
-         # configuration file with only its [model] table (SI units); every other\n\
-         # section keeps its default. Use it as it is:\n\
-         #   leakwatch replay MEASURED.csv --config model.toml --out replay-out\n\
-         #   leakwatch run --config model.toml\n\
-         #   leakwatch calibrate MEASURED.csv --config model.toml --out cal-out   (calibrate further)\n\
-         # (the stage binaries take the same `--config model.toml`), or paste the [model]\n\
-         # table into your own configuration file in place of its [model].\n\n{body}"
-    ))
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> CalibrateError + '_ {
@@ -80,13 +58,16 @@ const OUTPUT_NAMES: [&str; 7] = [
 ];
 
 /// Writes `calibration.json`, `model.toml`, `report.md` and the plots into `out_dir`
-/// (created if needed; not a symbolic link). An existing output is replaced only if
+/// (created if needed; not a symbolic link). `model_file` is the text of
+/// `model.toml`, `cal.model_after` in the caller's config format (`leakwatch
+/// calibrate` writes it as TOML). An existing output is replaced only if
 /// `overwrite` (`--force`); none of `inputs` is ever replaced.
 pub fn write_outputs(
     cal: &Calibration,
     out_dir: &Path,
     overwrite: bool,
     inputs: &[&Path],
+    model_file: &str,
 ) -> Result<OutputFiles, CalibrateError> {
     dataset::output::create_dir(out_dir).map_err(io(out_dir))?;
     // Refuse before writing anything, rather than leave a half-replaced set.
@@ -98,7 +79,7 @@ pub fn write_outputs(
     let text = serde_json::to_string_pretty(cal).map_err(|e| CalibrateError::Serialize(e.to_string()))?;
     write(&json, text.as_bytes(), true, inputs)?;
     let mt = out_dir.join("model.toml");
-    write(&mt, model_toml(&cal.model_after)?.as_bytes(), true, inputs)?;
+    write(&mt, model_file.as_bytes(), true, inputs)?;
 
     let mut plots = Vec::new();
     if !cal.traces.t_s.is_empty() {

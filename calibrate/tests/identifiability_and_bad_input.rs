@@ -3,9 +3,7 @@
 //! does not load, unknown effects, non-finite values) get clear messages.
 
 use calibrate::suite::{nominal_model, nuisance};
-use calibrate::{
-    fit_effect, load_measured, load_model, run, CalibrateError, CalibrateOptions, NOT_IDENTIFIABLE,
-};
+use calibrate::{fit_effect, load_measured, run, CalibrateError, CalibrateOptions, NOT_IDENTIFIABLE};
 use model::scenario::Drive;
 use model::{FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
 
@@ -269,33 +267,6 @@ fn missing_columns_are_named() {
     );
     let e = load_measured(&tmp("does_not_exist.csv")).unwrap_err();
     assert!(e.to_string().contains("does_not_exist.csv"), "{e}");
-}
-
-#[test]
-fn model_files_that_do_not_load_are_named() {
-    let cases = [
-        (
-            "unknown_field.toml",
-            "[model]\nsupply_pressure_psi = 2000.0\n",
-            "supply_pressure_psi",
-        ),
-        ("invalid_value.toml", "[model]\nmass_kg = -3.0\n", "mass_kg"),
-        ("not_toml.toml", "[model\nmass_kg = 3\n", "not valid TOML"),
-    ];
-    for (file, text, needle) in cases {
-        let p = tmp(file);
-        std::fs::write(&p, text).expect("write");
-        let e = load_model(&p).unwrap_err();
-        let msg = e.to_string();
-        assert!(matches!(e, CalibrateError::ModelFile { .. }), "{msg}");
-        assert!(msg.contains(file) && msg.contains(needle), "{msg}");
-    }
-    let e = load_model(&tmp("absent.toml")).unwrap_err();
-    assert!(e.to_string().contains("cannot read"), "{e}");
-    // other sections are left to their owners; a file without [model] gives the default
-    let p = tmp("other_sections.toml");
-    std::fs::write(&p, "[sim]\nsubsteps_per_sample = 20\n").expect("write");
-    assert_eq!(load_model(&p).expect("loads"), model::ActuatorParams::default());
 }
 
 #[test]

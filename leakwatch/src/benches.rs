@@ -266,7 +266,7 @@ pub fn calibration(
         .min(2);
     let reports: Vec<(&str, calibrate::BenchReport)> = if let Some(dir) = data {
         let model = match config {
-            Some(p) => calibrate::load_model(&p).map_err(|e| e.to_string())?,
+            Some(p) => crate::model_file::load_model(&p).map_err(|e| e.to_string())?,
             None => model::ActuatorParams::default(),
         };
         let bar = indicatif::ProgressBar::new(0);

@@ -15,7 +15,7 @@ pub fn run(
 ) -> Result<(), String> {
     let original = input;
     let model = match config {
-        Some(p) => calibrate::load_model(p).map_err(|e| e.to_string())?,
+        Some(p) => crate::model_file::load_model(p).map_err(|e| e.to_string())?,
         None => model::ActuatorParams::default(),
     };
     // A recorded log is read through its frames, exported as dataset.csv.
@@ -59,7 +59,9 @@ pub fn run(
     }
     let mut inputs = vec![original, input.as_path()];
     inputs.extend(config);
-    let files = calibrate::write_outputs(&cal, out, force, &inputs).map_err(|e| e.to_string())?;
+    let model_file = crate::model_file::model_toml(&cal.model_after).map_err(|e| e.to_string())?;
+    let files =
+        calibrate::write_outputs(&cal, out, force, &inputs, &model_file).map_err(|e| e.to_string())?;
     let g = |gap: &calibrate::Gap| {
         format!(
             "chamber 1 {:.1} kPa, chamber 2 {:.1} kPa, force {:.0} N, spool {:.2} µm per {:.0} ms window; normalised {:.3}",

@@ -583,7 +583,7 @@ mod tests {
         ] {
             m = e.apply(&m, &theta);
         }
-        let text = calibrate::model_toml(&m).unwrap();
+        let text = crate::model_file::model_toml(&m).unwrap();
         // the file says how to use it, and `--config model.toml` takes it as it is
         assert!(
             text.contains("leakwatch replay MEASURED.csv --config model.toml"),

@@ -11,6 +11,7 @@ mod config_fuzz;
 mod demo;
 mod latency;
 mod logs;
+mod model_file;
 mod out;
 mod plots;
 mod replay;
