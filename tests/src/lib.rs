@@ -1,1 +1,2 @@
-//! End-to-end tests live in tests/tests/.
+//! End-to-end and workspace tests live in tests/tests/ (`pure_crates.rs`: the
+//! pure crates depend on no process machinery).
