@@ -110,7 +110,7 @@ fn decompress_chunk(header: &mcap::records::ChunkHeader, data: &[u8]) -> Result<
                 .map_err(|e| format!("zstd: {e}"))?;
             out
         }
-        other => return Err(format!("compression `{other}` is not supported")),
+        other => return Err(format!("compression {other:?} is not supported")),
     };
     if out.len() as u64 > size {
         return Err(format!(

@@ -287,12 +287,7 @@ impl LeakSizeDetector {
                     );
                     if !decided {
                         ev.kind = EventKind::Leak;
-                        ev.detail = format!(
-                            "kind pending ({} leads; named once one kind has led for {} s): {}",
-                            kind.name(),
-                            self.cfg.kind_confirm_s,
-                            ev.detail
-                        );
+                        ev.detail = format!("kind pending, {} leads: {}", kind.name(), ev.detail);
                     }
                     *out = Some(ev);
                 } else if let (true, Some((j, t0))) = (
@@ -380,13 +375,7 @@ impl LeakSizeDetector {
                             best,
                             second,
                         );
-                        ev.detail = format!(
-                            "kind decided: {} has led for {:.1} s; names the pending leak event {}; {}",
-                            a.kind.name(),
-                            e.t_s - t0,
-                            a.id,
-                            ev.detail
-                        );
+                        ev.detail = format!("kind decided after {:.1} s: {}", e.t_s - t0, ev.detail);
                         *out = Some(ev);
                         return;
                     }
