@@ -8,16 +8,7 @@ fn main() {
     let a: Vec<String> = std::env::args().collect();
     let mut rig = ActuatorParams::default();
     if a.iter().any(|s| s == "offnominal") {
-        let mut ext = rig.friction.extend();
-        let mut ret = ext;
-        ext.static_n *= 1.15;
-        ext.slip_n *= 1.15;
-        ret.static_n *= 0.9;
-        ret.slip_n *= 0.9;
-        rig.friction.set_extend(ext);
-        rig.friction.retract = Some(ret);
-        rig.bulk_modulus_pa *= 0.8;
-        rig.spool_null_bias_m = 0.04 * 8.4e-5;
+        rig = rig.off_nominal(0.8, 0.04);
     }
     let seed: u64 = a[3].parse().unwrap();
     let scenario = Scenario::by_name(&a[1], seed, 600.0).unwrap();

@@ -9,18 +9,7 @@ use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSet
 /// A rig that differs from the model: friction +15 % extending, −10 % retracting,
 /// bulk modulus −20 %, a spool null bias of 4 % of the spool amplitude.
 fn off_nominal_rig() -> ActuatorParams {
-    let mut rig = ActuatorParams::default();
-    let mut ext = rig.friction.extend();
-    let mut ret = ext;
-    ext.static_n *= 1.15;
-    ext.slip_n *= 1.15;
-    ret.static_n *= 0.9;
-    ret.slip_n *= 0.9;
-    rig.friction.set_extend(ext);
-    rig.friction.retract = Some(ret);
-    rig.bulk_modulus_pa *= 0.8;
-    rig.spool_null_bias_m = 0.04 * 8.4e-5;
-    rig
+    ActuatorParams::default().off_nominal(0.8, 0.04)
 }
 
 fn run(scenario: &str, seconds: f64, fault: Option<&str>, seed: u64, rig: ActuatorParams) -> Vec<LeakEvent> {

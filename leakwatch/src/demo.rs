@@ -11,18 +11,7 @@ use crate::out::outln;
 /// extending and 10 % lower retracting, bulk modulus 15 % lower (air), a spool
 /// null bias of 3 % of the spool amplitude.
 pub fn off_nominal_rig(model: &model::ActuatorParams) -> model::ActuatorParams {
-    let mut rig = model.clone();
-    let mut ext = rig.friction.extend();
-    let mut ret = ext;
-    ext.static_n *= 1.15;
-    ext.slip_n *= 1.15;
-    ret.static_n *= 0.9;
-    ret.slip_n *= 0.9;
-    rig.friction.set_extend(ext);
-    rig.friction.retract = Some(ret);
-    rig.bulk_modulus_pa *= 0.85;
-    rig.spool_null_bias_m = 0.03 * 8.4e-5;
-    rig
+    model.off_nominal(0.85, 0.03)
 }
 
 /// Runs the demonstration and prints what happens.

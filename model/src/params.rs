@@ -169,6 +169,26 @@ impl Default for ActuatorParams {
 pub const PRESSURE_NEGATIVE_MARGIN: f64 = 0.02;
 
 impl ActuatorParams {
+    /// This rig made to differ from its model the way real ones do (the one
+    /// definition the demonstration, tests and benchmarks share): friction 15 %
+    /// higher extending and 10 % lower retracting, the bulk modulus times
+    /// `bulk_modulus_factor` (air: below 1), and a spool null bias of
+    /// `spool_bias_fraction` of a 3 V spool stroke (8.4e-5 m), m.
+    pub fn off_nominal(&self, bulk_modulus_factor: f64, spool_bias_fraction: f64) -> ActuatorParams {
+        let mut rig = self.clone();
+        let mut ext = rig.friction.extend();
+        let mut ret = ext;
+        ext.static_n *= 1.15;
+        ext.slip_n *= 1.15;
+        ret.static_n *= 0.9;
+        ret.slip_n *= 0.9;
+        rig.friction.set_extend(ext);
+        rig.friction.retract = Some(ret);
+        rig.bulk_modulus_pa *= bulk_modulus_factor;
+        rig.spool_null_bias_m = spool_bias_fraction * 8.4e-5;
+        rig
+    }
+
     /// The thesis' nominal parameters (same as `Default`).
     pub fn thesis() -> Self {
         Self::default()
