@@ -1,0 +1,333 @@
+//! Tests of the configuration file: defaults, ranges, messages.
+
+use super::*;
+
+#[test]
+fn default_round_trips_and_errors_name_the_problem() {
+    let text = Config::default_toml();
+    assert_eq!(Config::parse(&text).unwrap(), Config::default());
+    let e = Config::parse("[model]\nsupply_pressure_psi = 2000.0\n").unwrap_err();
+    assert!(e.contains("supply_pressure_psi"), "{e}");
+    let e = Config::parse("[model]\nsupply_pressure_pa = \"13.8 MPa\"\n").unwrap_err();
+    assert!(e.contains("supply_pressure_pa"), "{e}");
+    let e = Config::parse("[model]\nmass_kg = -3.0\n").unwrap_err();
+    assert!(e.contains("mass_kg"), "{e}");
+    // Values that would abort, hang or give NaN are refused by name.
+    for (text, field) in [
+        (
+            "[estimator]\nmae_window_samples = 1000000000000\n",
+            "mae_window_samples",
+        ),
+        ("[model]\nsupply_pressure_pa = 1e308\n", "supply_pressure_pa"),
+        ("[estimator]\nsample_period_s = 1e-300\n", "sample_period_s"),
+        ("[sensors]\nadc_bits = 0\n", "adc_bits"),
+        ("[sensors]\nadc_bits = 64\n", "adc_bits"),
+        ("[sim]\nsubsteps_per_sample = 4000000000\n", "substeps_per_sample"),
+        ("[sim]\nsample_period_s = 1e-300\n", "sample_period_s"),
+    ] {
+        let e = Config::parse(text).unwrap_err();
+        assert!(e.contains(field), "{text}: {e}");
+    }
+    let e = Config::parse("[modle]\n").unwrap_err();
+    assert!(e.contains("modle"), "{e}");
+    // A partial [leak_filter] keeps the leak filter's own defaults for the rest.
+    let c = Config::parse("[leak_filter]\nsubsteps = 2\n").unwrap();
+    assert_eq!(c.leak_filter.states, 11);
+    assert_eq!(c.leak_filter.substeps, 2);
+    assert_eq!(c.leak_filter.r_p_pa2, Tuning::sensor_derived().r_p_pa2);
+    // [udp]: raw counts to SI per channel; an unknown channel or field is named
+    let c = Config::parse("[udp.p1]\ngain = 250.0\noffset = -1.0e6\n").unwrap();
+    assert_eq!((c.udp.p1.gain, c.udp.p1.offset), (250.0, -1.0e6));
+    assert_eq!(c.udp.p2, acquisition::ChannelScale::default());
+    let e = Config::parse("[udp.p3]\ngain = 2.0\n").unwrap_err();
+    assert!(e.contains("p3"), "{e}");
+    let e = Config::parse("[udp.x]\nscale = 2.0\n").unwrap_err();
+    assert!(e.contains("scale"), "{e}");
+    let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
+    assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
+    assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
+}
+
+/// Every numeric leaf of `t` with its path (section names, then the key).
+fn numeric_leaves(t: &toml::Table, path: &mut Vec<String>, out: &mut Vec<(Vec<String>, toml::Value)>) {
+    for (k, v) in t {
+        path.push(k.clone());
+        match v {
+            toml::Value::Table(sub) => numeric_leaves(sub, path, out),
+            toml::Value::Integer(_) | toml::Value::Float(_) => out.push((path.clone(), v.clone())),
+            _ => {}
+        }
+        path.pop();
+    }
+}
+
+fn set(t: &mut toml::Table, path: &[String], v: toml::Value) {
+    if path.len() == 1 {
+        t.insert(path[0].clone(), v);
+    } else if let Some(toml::Value::Table(sub)) = t.get_mut(&path[0]) {
+        set(sub, &path[1..], v);
+    }
+}
+
+/// Runs 0.3 s of the loaded scenario on the configured rig through both filters and
+/// the classifier; every measurement and every filter state must stay finite.
+fn runs_finite(cfg: &Config, what: &str) -> Result<(), String> {
+    let req = crate::simulate::SimulateRequest {
+        scenario: "loaded-sine".into(),
+        seconds: Some(0.3),
+        seed: 1,
+        faults: vec![],
+        rig_variant: None,
+    };
+    let (mut sim, seconds) = crate::simulate::build(cfg, &req).unwrap();
+    let samples = sim.run(seconds);
+    let mut stage =
+        estimator::EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())
+            .unwrap();
+    let mut cls = classifier::Classifier::new(cfg.classifier.clone()).unwrap();
+    for s in &samples {
+        if ![s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Err(format!("{what}: sample {s:?}"));
+        }
+        let e = stage.on_sample(s);
+        for f in [&e.leak, &e.thesis] {
+            let n = f.n_states as usize;
+            if !f.state[..n].iter().all(|v| v.is_finite()) {
+                return Err(format!("{what}: t = {} s, state {:?}", f.t_s, &f.state[..n]));
+            }
+        }
+        cls.on_stage(&e, |_| {});
+    }
+    Ok(())
+}
+
+#[test]
+fn every_numeric_field_swept_with_absurd_values_is_refused_by_name_or_stays_finite() {
+    let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
+    let mut leaves = Vec::new();
+    numeric_leaves(&base, &mut Vec::new(), &mut leaves);
+    assert_eq!(leaves.len(), 136, "numeric fields");
+    let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
+    let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
+    let (mut refused, mut accepted) = (0, 0);
+    let mut not_finite = Vec::new();
+    for (path, v) in &leaves {
+        let values: Vec<toml::Value> = match v {
+            toml::Value::Float(_) => floats.iter().map(|f| toml::Value::Float(*f)).collect(),
+            _ => ints.iter().map(|i| toml::Value::Integer(*i)).collect(),
+        };
+        for value in values {
+            let mut t = base.clone();
+            set(&mut t, path, value.clone());
+            let text = toml::to_string(&t).unwrap();
+            let what = format!("[{}] = {value}", path.join("."));
+            let key = path.last().unwrap();
+            let parsed = std::panic::catch_unwind(|| Config::parse(&text));
+            match parsed {
+                Err(_) => panic!("{what}: Config::parse panicked"),
+                Ok(Err(e)) => {
+                    refused += 1;
+                    assert!(
+                        e.contains(key.as_str()),
+                        "{what}: the error does not name the field: {e}"
+                    );
+                }
+                Ok(Ok(cfg)) => {
+                    accepted += 1;
+                    if let Err(e) = runs_finite(&cfg, &what) {
+                        not_finite.push(e);
+                    }
+                }
+            }
+        }
+    }
+    assert!(not_finite.is_empty(), "{not_finite:#?}");
+    // most absurd values are refused; the rest (zeros of noises, offsets, ...) run finite
+    assert!(refused > 3 * accepted, "{refused} refused, {accepted} accepted");
+}
+
+#[test]
+fn a_value_of_the_wrong_type_is_named_with_the_fields_range_and_unit() {
+    for (text, expect) in [
+        (
+            "[sensors]\nadc_bits = -1\n",
+            "line 2, column 12 (`adc_bits = -1`): invalid value: integer `-1`, expected u32 \
+             (`sensors.adc_bits` must be an integer: 1 to 24 bits)",
+        ),
+        (
+            "[sensors]\nadc_bits = 12.5\n",
+            "line 2, column 12 (`adc_bits = 12.5`): invalid type: floating point `12.5`, expected u32 \
+             (`sensors.adc_bits` must be an integer: 1 to 24 bits)",
+        ),
+        (
+            "[sim]\nsubsteps_per_sample = 99999999999\n",
+            "line 2, column 23 (`substeps_per_sample = 99999999999`): invalid value: integer \
+             `99999999999`, expected u32 (`sim.substeps_per_sample` must be an integer: 1 to 10000 \
+             sub-steps per sample)",
+        ),
+        (
+            "[rig]\nmass_kg = true\n",
+            "line 2, column 11 (`mass_kg = true`): invalid type: boolean `true`, expected f64 \
+             (`rig.mass_kg` must be a number: a mass from 1e-3 to 1e5 kg)",
+        ),
+        (
+            "[leak_filter]\nq_p_pa2 = \"1e6 Pa²\"\n",
+            "line 2, column 11 (`q_p_pa2 = \"1e6 Pa²\"`): invalid type: string \"1e6 Pa²\", \
+             expected f64 (`leak_filter.q_p_pa2` must be a number from 0.0 to 1e18 Pa²)",
+        ),
+        (
+            "[estimator]\nmax_bridged_gap_samples = -3\n",
+            "line 2, column 27 (`max_bridged_gap_samples = -3`): invalid value: integer `-3`, \
+             expected u32 (`estimator.max_bridged_gap_samples` must be an integer: 0 to 3600000 \
+             samples (an hour at 1 kHz))",
+        ),
+        (
+            "[classifier]\nstuck_samples = 1e3\n",
+            "line 2, column 17 (`stuck_samples = 1e3`): invalid type: floating point `1000.0`, \
+             expected u32 (`classifier.stuck_samples` must be an integer: 1 to 1000000000 samples)",
+        ),
+        (
+            "[udp.p1]\noffset = \"0\"\n",
+            "line 2, column 10 (`offset = \"0\"`): invalid type: string \"0\", expected f64 \
+             (`udp.p1.offset` must be a number from -1e9 to 1e9 Pa)",
+        ),
+        // not a numeric field: no range to give
+        (
+            "[model]\nfriction = 3\n",
+            "line 2, column 12 (`friction = 3`): invalid type: integer `3`, expected struct Friction",
+        ),
+    ] {
+        assert_eq!(Config::parse(text).unwrap_err(), expect, "{text}");
+    }
+}
+
+#[test]
+fn every_numeric_field_of_the_wrong_type_is_named_with_its_range() {
+    let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
+    let mut leaves = Vec::new();
+    numeric_leaves(&base, &mut Vec::new(), &mut leaves);
+    assert_eq!(leaves.len(), 136, "numeric fields");
+    for (path, v) in &leaves {
+        let wrong = match v {
+            toml::Value::Integer(_) => [toml::Value::Float(0.5), toml::Value::Integer(-1)],
+            _ => [toml::Value::String("1 unit".into()), toml::Value::Boolean(true)],
+        };
+        for value in wrong {
+            let mut t = base.clone();
+            set(&mut t, path, value.clone());
+            let e = Config::parse(&toml::to_string(&t).unwrap()).unwrap_err();
+            let kind = if v.is_integer() {
+                "an integer: "
+            } else {
+                "a number"
+            };
+            let hint = format!("(`{}` must be {kind}", path.join("."));
+            assert!(e.contains(&hint), "{} = {value}: {e}", path.join("."));
+        }
+    }
+}
+
+#[test]
+fn control_characters_from_the_file_are_escaped_in_messages() {
+    for (text, expect) in [
+        // an unknown key with ESC (written as a TOML escape)
+        (
+            "[model]\n\"\\u001b[31mx\" = 1\n",
+            "line 2, column 1 (`\"\\u001b[31mx\" = 1`): unknown field `\\u{1b}[31mx`, expected one of",
+        ),
+        // raw ESC and NUL in the file
+        (
+            "[model]\nmass_kg = \"\u{1b}[31m\0\"\n",
+            "line 2, column 12 (`mass_kg = \"\\u{1b}[31m\\0\"`): invalid basic string",
+        ),
+        (
+            "[model]\nmass_kg = 1\0\u{1b}[2J\n",
+            "line 2, column 14 (`mass_kg = 1\\0\\u{1b}[2J`): unexpected key or value",
+        ),
+    ] {
+        let e = Config::parse(text).unwrap_err();
+        assert!(e.starts_with(expect), "{text:?}: {e}");
+        assert!(!e.chars().any(|c| c.is_control()), "{e:?}");
+    }
+}
+
+#[test]
+fn ranges_name_the_unit() {
+    for (text, expect) in [
+        (
+            "[model]\nmass_kg = 1e308\n",
+            "[model] parameter `mass_kg` = 1e308 is invalid: expected a mass from 1e-3 to 1e5 kg",
+        ),
+        (
+            "[sensors]\nadc_bits = 64\n",
+            "parameter `sensors.adc_bits` = 64 is invalid: expected 1 to 24 bits",
+        ),
+        (
+            "[sensors]\npressure_noise_pa = 1e308\n",
+            "a noise from 0 to 1e8 Pa",
+        ),
+        (
+            "[estimator]\nq_p_pa2 = 1e308\n",
+            "q_p_pa2 = 1e308: must be a number from 0.0 to 1e18 Pa²",
+        ),
+        (
+            "[leak_filter]\nr_x_m2 = 1e-300\n",
+            "[leak_filter] r_x_m2 = 1e-300: must be a number from 1e-30 to 100.0 m²",
+        ),
+        (
+            "[classifier]\nwarmup_s = 1e308\n",
+            "[classifier] warmup_s = 1e308: must be a number from 0.0 to 1000000.0 s",
+        ),
+        (
+            "[estimator]\nmax_bridged_gap_samples = 4000000000\n",
+            "must be 0 to 3600000 samples",
+        ),
+        (
+            "[udp.p1]\ngain = 0.0\n",
+            "[udp] p1.gain = 0.0: must be a number of magnitude from 1e-12 to 1e12 Pa per raw unit",
+        ),
+        (
+            "[udp.f_load]\noffset = 1e30\n",
+            "[udp] f_load.offset = 1e30: must be a number from -1e9 to 1e9 N",
+        ),
+    ] {
+        let e = Config::parse(text).unwrap_err();
+        assert!(e.contains(expect), "{text}: {e}");
+    }
+}
+
+#[test]
+fn the_model_toml_calibrate_writes_is_a_config() {
+    // a calibrated model with every kind of effect the library adds
+    let mut m = ActuatorParams::default();
+    for (e, theta) in [
+        (calibrate::Effect::FrictionAsymmetryViscous, vec![1500.0, 300.0]),
+        (calibrate::Effect::SpoolBias, vec![-5.0e-6]),
+        (calibrate::Effect::SpringLoad, vec![3.0e4, 0.3]),
+        (calibrate::Effect::EntrainedAir, vec![0.01]),
+        (calibrate::Effect::SupplySag, vec![5.0e9]),
+        (calibrate::Effect::ValveBandwidth, vec![320.0]),
+        (calibrate::Effect::LeakExt1, vec![4.0e-9]),
+    ] {
+        m = e.apply(&m, &theta);
+    }
+    let text = crate::model_file::model_toml(&m).unwrap();
+    // the file says how to use it, and `--config model.toml` takes it as it is
+    assert!(
+        text.contains("leakwatch replay MEASURED.csv --config model.toml"),
+        "{text}"
+    );
+    let cfg = Config::parse(&text).unwrap();
+    assert_eq!(cfg.model, m);
+    assert_eq!(cfg.model.spool_null_bias_m, -5.0e-6);
+    assert_eq!(cfg.model.leaks.len(), 1);
+    let r = cfg.model.friction.for_direction(-1.0);
+    assert_eq!((r.slip_n, r.viscous_n_s_per_m), (1500.0, 300.0));
+    // everything else keeps its default
+    assert_eq!(cfg.estimator, Config::default().estimator);
+    assert_eq!(cfg.classifier, Config::default().classifier);
+    assert!(cfg.rig.is_none());
+}
