@@ -117,18 +117,13 @@ impl MaeDetector {
                 }
             }
             Some(mut a) => {
-                if kind.is_none() {
-                    let since = *a.below_since_s.get_or_insert(e.t_s);
-                    if e.t_s - since >= self.cfg.clear_s {
-                        self.active = None;
-                        let mut ev =
-                            LeakEvent::plain(a.kind, Phase::Cleared, "thesis-mae", a.id, e.t_s, a.t_onset_s);
-                        ev.confidence = 0.0;
-                        *out = Some(ev);
-                        return;
-                    }
-                } else {
-                    a.below_since_s = None;
+                if a.low_for(kind.is_none(), e.t_s, self.cfg.clear_s) {
+                    self.active = None;
+                    let mut ev =
+                        LeakEvent::plain(a.kind, Phase::Cleared, "thesis-mae", a.id, e.t_s, a.t_onset_s);
+                    ev.confidence = 0.0;
+                    *out = Some(ev);
+                    return;
                 }
                 self.active = Some(a);
             }

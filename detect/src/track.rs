@@ -58,6 +58,19 @@ pub(crate) struct Active {
     pub(crate) other_since_s: Option<(usize, f64)>,
 }
 
+impl Active {
+    /// Whether the event's clearing condition, `low` now, has held for `clear_s`
+    /// (s) at sample time `t_s` (s); the timer restarts whenever it does not hold.
+    pub(crate) fn low_for(&mut self, low: bool, t_s: f64, clear_s: f64) -> bool {
+        if low {
+            t_s - *self.below_since_s.get_or_insert(t_s) >= clear_s
+        } else {
+            self.below_since_s = None;
+            false
+        }
+    }
+}
+
 pub(crate) fn arm_step(arming: &mut Arming, cfg: &ClassifierConfig, e: &Estimate) -> Option<bool> {
     // Returns Some(true) when the warm-up just ended, Some(false) while learning, None otherwise.
     match *arming {

@@ -381,26 +381,21 @@ impl LeakSizeDetector {
                     }
                 }
                 let low = (0..3).all(|k| rise[k] < 0.5 * self.threshold_lpm[k]);
-                if low && !invalid {
-                    let since = *a.below_since_s.get_or_insert(e.t_s);
-                    if e.t_s - since >= self.cfg.clear_s {
-                        self.active = None;
-                        let mut ev = self.event(
-                            EventKind::LEAKS[lead],
-                            Phase::Cleared,
-                            a.id,
-                            e.t_s,
-                            rise[lead],
-                            sigma_lpm[lead],
-                            0.0,
-                            0.0,
-                        );
-                        ev.kind = EventKind::Leak;
-                        *out = Some(ev);
-                        return;
-                    }
-                } else {
-                    a.below_since_s = None;
+                if a.low_for(low && !invalid, e.t_s, self.cfg.clear_s) {
+                    self.active = None;
+                    let mut ev = self.event(
+                        EventKind::LEAKS[lead],
+                        Phase::Cleared,
+                        a.id,
+                        e.t_s,
+                        rise[lead],
+                        sigma_lpm[lead],
+                        0.0,
+                        0.0,
+                    );
+                    ev.kind = EventKind::Leak;
+                    *out = Some(ev);
+                    return;
                 }
                 self.active = Some(a);
             }
@@ -453,24 +448,15 @@ impl LeakSizeDetector {
                     a.other_since_s = None;
                 }
                 let size = rise[k];
-                if size < 0.5 * self.threshold_lpm[k] && !invalid {
-                    let since = *a.below_since_s.get_or_insert(e.t_s);
-                    if e.t_s - since >= self.cfg.clear_s {
-                        self.active = None;
-                        *out = Some(self.event(
-                            a.kind,
-                            Phase::Cleared,
-                            a.id,
-                            e.t_s,
-                            size,
-                            sigma_lpm[k],
-                            0.0,
-                            0.0,
-                        ));
-                        return;
-                    }
-                } else {
-                    a.below_since_s = None;
+                if a.low_for(
+                    size < 0.5 * self.threshold_lpm[k] && !invalid,
+                    e.t_s,
+                    self.cfg.clear_s,
+                ) {
+                    self.active = None;
+                    *out =
+                        Some(self.event(a.kind, Phase::Cleared, a.id, e.t_s, size, sigma_lpm[k], 0.0, 0.0));
+                    return;
                 }
                 if !invalid
                     && e.t_s - a.last_update_s >= self.cfg.update_interval_s
