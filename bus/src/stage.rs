@@ -44,6 +44,10 @@ pub struct StageOptions {
     /// Return after the input frame marked end-of-stream (else keep waiting
     /// for the next stream, e.g. a restarted acquisition).
     pub exit_on_end_of_stream: bool,
+    /// The stage's previous process (before a restart) handled the input up to
+    /// this sequence number: the frames missing before the first one received
+    /// are a gap (see [`crate::Subscriber::resume_after`]). `None`: a fresh start.
+    pub resume_after_seq: Option<u64>,
 }
 
 impl StageOptions {
@@ -54,6 +58,7 @@ impl StageOptions {
             mode,
             stats_period: Duration::from_secs(1),
             exit_on_end_of_stream: false,
+            resume_after_seq: None,
         }
     }
 }
@@ -112,6 +117,9 @@ pub fn run_stage<I: Frame, O: Frame>(
     mut on_input: impl FnMut(&Received<I>, &mut O) -> bool,
 ) -> Result<StageReport, BusError> {
     let mut rx = bus.subscriber::<I>(opts.mode)?;
+    if let Some(seq) = opts.resume_after_seq {
+        rx.resume_after(seq);
+    }
     let mut tx = bus.publisher::<O>()?;
     let mut stats_tx = bus.publisher::<StatsFrame>()?;
     let mut stats = StageStats::new(opts.stage);

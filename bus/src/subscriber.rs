@@ -71,6 +71,14 @@ impl<T: Frame> Subscriber<T> {
         self.restarts
     }
 
+    /// Continues a stream another process (this stage's previous process) was
+    /// reading: the next frame expected is `seq + 1`, so the frames missing before
+    /// the first one received are counted as a gap (in [`Self::seq_gaps`] and
+    /// that frame's [`Received::missing_before`]) instead of going unnoticed.
+    pub fn resume_after(&mut self, seq: u64) {
+        self.next_seq = Some(seq.wrapping_add(1));
+    }
+
     /// The wait mode.
     pub fn mode(&self) -> WaitMode {
         self.mode

@@ -38,6 +38,12 @@ struct Args {
     /// Exit when the estimate stream ends (default: wait for the next stream).
     #[arg(long)]
     exit_at_end: bool,
+    /// This process takes over from a classifier that had read the estimates up
+    /// to this sequence number (a restart): the estimates between are counted
+    /// as a gap (in its stats and log) and its first estimate is treated as
+    /// after a gap (no evidence from it).
+    #[arg(long)]
+    resume_after_seq: Option<u64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -72,6 +78,10 @@ fn run(args: Args) -> Result<(), String> {
         Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
     let e = |e: bus::BusError| e.to_string();
     let mut rx = bus.subscriber::<EstimateFrame>(mode).map_err(e)?;
+    if let Some(seq) = args.resume_after_seq {
+        rx.resume_after(seq);
+    }
+    let mut first_after_restart = args.resume_after_seq;
     let mut events_tx = bus.publisher::<LeakEventFrame>().map_err(e)?;
     let mut health_tx = bus.publisher::<HealthFrame>().map_err(e)?;
     let mut stats_tx = bus.publisher::<StatsFrame>().map_err(e)?;
@@ -100,6 +110,12 @@ fn run(args: Args) -> Result<(), String> {
         };
         stats.frames_in += 1;
         stats.seq_gaps += input.missing_before;
+        if let Some(last) = first_after_restart.take() {
+            eprintln!(
+                "classifier: restarted after estimate {last}: {} estimates not read before estimate {} (a gap)",
+                input.missing_before, input.seq
+            );
+        }
         if input.acq_mono_ns > 0 && input.recv_mono_ns >= input.acq_mono_ns {
             stats.record_latency_ns(input.recv_mono_ns - input.acq_mono_ns);
         }

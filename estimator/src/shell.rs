@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
-use crate::{EstimatorStage, Tuning};
+use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
 use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
 use clap::Parser;
 use frames::{EstimateFrame, SensorFrame};
@@ -34,6 +34,13 @@ struct Args {
     /// Exit when the sensor stream ends (default: wait for the next stream).
     #[arg(long)]
     exit_at_end: bool,
+    /// This process takes over from an estimator that handled the stream up to
+    /// this frame sequence number (a restart): the frames between are counted as
+    /// a gap, and the first estimate is marked reset and after-gap (the filter
+    /// starts again: the classifier takes no evidence from it until it has
+    /// converged, keeping what it learned of the healthy rig).
+    #[arg(long)]
+    resume_after_seq: Option<u64>,
 }
 
 /// The sections of the configuration this stage reads; the rest belongs to others.
@@ -73,8 +80,19 @@ fn run(args: Args) -> Result<(), String> {
         Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
     opts.exit_on_end_of_stream = args.exit_at_end;
+    opts.resume_after_seq = args.resume_after_seq;
+    // a restarted estimator's first estimate says that its filter started again
+    let mut first_after_restart = args.resume_after_seq;
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        let e = stage.on_sample(&Sample::from(&input.frame));
+        let mut e = stage.on_sample(&Sample::from(&input.frame));
+        if let Some(last) = first_after_restart.take() {
+            mark_restart(&mut e);
+            eprintln!(
+                "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
+                 estimate is marked reset and after-gap",
+                input.missing_before, input.seq
+            );
+        }
         out.seq = input.seq;
         out.acq_mono_ns = input.acq_mono_ns;
         out.est_recv_mono_ns = input.recv_mono_ns;
@@ -85,6 +103,14 @@ fn run(args: Args) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     eprintln!("estimator: {report}");
     Ok(())
+}
+
+/// Marks the first estimate of a restarted estimator: both filters started
+/// again (reset) after frames they did not see (after-gap).
+fn mark_restart(e: &mut StageEstimate) {
+    for f in [&mut e.leak, &mut e.thesis] {
+        f.flags |= FLAG_RESET | FLAG_AFTER_GAP;
+    }
 }
 
 /// Runs the estimator process with command-line arguments `args` (the first is the

@@ -204,57 +204,6 @@ fn a_leak_is_detected_and_every_frame_is_estimated_and_recorded() {
 }
 
 #[test]
-fn a_killed_estimator_is_restarted_and_the_gap_is_recorded() {
-    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let d = tmpdir("kill");
-    let cfg = short_warmup_config(&d);
-    let out = d.join("out");
-    let child = start_run("e2e-kill", "14", None, &out, &cfg);
-    // Wait until the estimator runs, let it work a few seconds, then SIGKILL it.
-    let t0 = Instant::now();
-    let pid = loop {
-        if let Some(p) = pids_of(&["estimator", "--rig", "e2e-kill"]).first() {
-            break *p;
-        }
-        assert!(t0.elapsed() < Duration::from_secs(60), "estimator never started");
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    std::thread::sleep(Duration::from_secs(5));
-    unsafe {
-        libc::kill(pid, libc::SIGKILL);
-    }
-    let o = finish(child);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("stage estimator exited"), "{stderr}");
-    let lat = json(&out.join("latency.json"));
-    assert_eq!(lat["restarts"]["estimator"], 1, "{lat:#}");
-    let log = recorder::LogReader::open(&out.join("run.mcap"))
-        .unwrap()
-        .read()
-        .unwrap();
-    assert_eq!(log.frames.len(), 14_000, "the recorder kept every frame");
-    // Estimates stop and resume, with the gap recorded (the log holds every 100th
-    // estimate and the marked ones, so the count alone need not show the gap).
-    assert!(
-        (70..=150).contains(&log.estimates.len()),
-        "{}",
-        log.estimates.len()
-    );
-    let last = log.estimates.last().unwrap().seq;
-    assert!(
-        last >= 13_000,
-        "the restarted estimator carried on to the end: last seq {last}"
-    );
-    assert!(
-        log.gaps
-            .iter()
-            .any(|g| g.topic == frames::Topic::Estimates && g.missing > 0),
-        "gap recorded: {:?}",
-        log.gaps
-    );
-}
-
-#[test]
 fn two_rigs_side_by_side_do_not_see_each_other() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let d = tmpdir("two");
@@ -502,6 +451,272 @@ fn a_killed_acquisition_is_restarted_and_the_leak_after_it_is_detected() {
     eprintln!(
         "acquisition killed at about 6 s: gap {} samples, leak raised at {t:.2} s",
         gaps[0]
+    );
+}
+
+/// The leak-size alarms (a kind pending or named) raised before `t_s`: false alarms
+/// when the leak starts at `t_s`.
+fn alarms_before(events: &serde_json::Value, t_s: f64) -> Vec<serde_json::Value> {
+    events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["phase"] == "raised" && e["detector"] == "leak-size")
+        .filter(|e| e["t_detect_s"].as_f64().is_none_or(|t| t < t_s))
+        .cloned()
+        .collect()
+}
+
+/// The leak after a restart: the first alarm (kind pending or named) comes within
+/// 4 s of the onset `onset_s`, none before it, and the kind is named ext1 (once)
+/// by the end of the run. Returns when the alarm was raised and when the kind was named, s.
+fn leak_detected_after_restart(events: &serde_json::Value, onset_s: f64) -> (f64, f64) {
+    assert!(
+        alarms_before(events, onset_s).is_empty(),
+        "false alarm: {events:#}"
+    );
+    let alarm = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["phase"] == "raised" && e["detector"] == "leak-size")
+        .unwrap_or_else(|| panic!("no alarm: {events:#}"));
+    let t_alarm = alarm["t_detect_s"].as_f64().unwrap();
+    assert!(
+        (onset_s..onset_s + 4.0).contains(&t_alarm),
+        "alarm at {t_alarm} s: {events:#}"
+    );
+    let leaks = raised_leaks(events);
+    assert_eq!(leaks.len(), 1, "{events:#}");
+    assert_eq!(leaks[0]["kind"], "ext1", "{events:#}");
+    (t_alarm, leaks[0]["t_detect_s"].as_f64().unwrap())
+}
+
+/// The numbers in the line of a stage's log that starts with `prefix`.
+fn numbers_in_log(path: &Path, prefix: &str) -> Vec<u64> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("no line `{prefix}` in {}:\n{text}", path.display()));
+    line.split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect()
+}
+
+/// A SIGKILLed estimator (after the classifier has learned the healthy rig) is
+/// restarted: its downtime is a gap (counted by the new process, which takes
+/// over after its predecessor's last estimate, and in the log), its first
+/// estimate is marked reset and after-gap so the classifier takes no evidence
+/// from the new filter until it has converged (keeping the healthy state), and
+/// the leak after it is detected without a false alarm. In the same run the
+/// recorder is stopped for 2 s (SIGSTOP): noticed, not killed, the frames it
+/// missed logged as a gap.
+#[test]
+fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_noticed() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("kill");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let t0 = Instant::now();
+    let child = start_run("e2e-kill", "24", Some("ext1:0.5lpm@14s"), &out, &cfg);
+    let est = wait_for_stage("estimator", "e2e-kill");
+    let rec = wait_for_stage("recorder", "e2e-kill");
+    wait_for_stage("acquisition", "e2e-kill");
+    // armed after about 1 + 2 + 3 s of rig time
+    std::thread::sleep(Duration::from_secs(8));
+    signal(est, libc::SIGKILL);
+    std::thread::sleep(Duration::from_secs(3));
+    signal(rec, libc::SIGSTOP);
+    std::thread::sleep(Duration::from_secs(2));
+    signal(rec, libc::SIGCONT);
+    let o = finish(child);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("stage estimator exited"), "{stderr}");
+    assert!(
+        stderr.contains("the recorder has made no progress for 1.5 s (process")
+            && stderr.contains("stopped: SIGSTOP?"),
+        "{stderr}"
+    );
+    let lat = json(&out.join("latency.json"));
+    assert_eq!(lat["restarts"]["estimator"], 1, "{lat:#}");
+    assert!(lat["restarts"].get("recorder").is_none(), "{lat:#}");
+    let st = &lat["stalls"]["recorder"];
+    assert_eq!(
+        (st["count"].as_u64(), st["killed"].as_u64()),
+        (Some(1), Some(0)),
+        "{lat:#}"
+    );
+    let stall_s = st["longest_s"].as_f64().unwrap();
+    assert!(stall_s >= 1.5, "{lat:#}");
+
+    // The restarted estimator's downtime, as it reports it: the frames between
+    // its predecessor's last estimate and its own first.
+    let n = numbers_in_log(&out.join("estimator-1.log"), "estimator: restarted after frame");
+    let (last_old, missed, first_new) = (n[0], n[1], n[2]);
+    assert_eq!(first_new, last_old + missed + 1, "{n:?}");
+    // the 0.2 s backoff at least; start-up on a busy machine at most a few s
+    assert!((150..5000).contains(&missed), "{missed} frames not estimated");
+    let est_gaps = lat["stages"]["estimator"]["seq_gaps"].as_u64().unwrap();
+    assert!(est_gaps >= missed, "counted in latency.json: {lat:#}");
+
+    let log = log_of(&out);
+    // the same gap in the log, seen by the recorder on the estimates topic
+    assert!(
+        log.gaps
+            .iter()
+            .any(|g| g.topic == frames::Topic::Estimates && g.got_seq == first_new && g.missing == missed),
+        "{:?}",
+        log.gaps
+    );
+    // the new filter's first estimate: reset and after a gap, for both filters
+    let first = log
+        .estimates
+        .iter()
+        .find(|e| e.seq == first_new)
+        .expect("the marked estimate is logged");
+    let marks = frames::estimate_flags::RESET | frames::estimate_flags::AFTER_GAP;
+    assert_eq!(first.flags & marks, marks, "flags {:#x}", first.flags);
+    assert_eq!(
+        first.th_flags & marks,
+        marks,
+        "thesis flags {:#x}",
+        first.th_flags
+    );
+    assert_eq!(
+        log.estimates
+            .iter()
+            .filter(|e| e.flags & frames::estimate_flags::RESET != 0)
+            .count(),
+        1
+    );
+    // the recorder stopped 2 s: the frames its 256-frame buffer could not hold are a gap
+    let gaps = frame_gaps(&log);
+    assert_eq!(gaps.len(), 1, "{:?}", log.gaps);
+    assert!((1000..3000).contains(&gaps[0]), "{gaps:?}");
+    assert_eq!(log.frames.len() as u64 + gaps[0], 24_000);
+
+    let events = json(&out.join("events.json"));
+    // the classifier says that the filter started again, keeping what it learned
+    let resets: Vec<_> = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "estimator-reset")
+        .collect();
+    assert!(!resets.is_empty(), "{events:#}");
+    assert!(
+        resets
+            .iter()
+            .all(|e| e["t_detect_s"].as_f64() == Some(first_new as f64 * 1e-3)),
+        "{resets:?}"
+    );
+    assert!(
+        resets[0]["detail"]
+            .as_str()
+            .unwrap()
+            .contains("the learned healthy state is kept"),
+        "{resets:?}"
+    );
+    let (t_alarm, t_kind) = leak_detected_after_restart(&events, 14.0);
+    eprintln!(
+        "estimator killed at about 8 s: restarted after frame {last_old}, {missed} frames not estimated; \
+         recorder stopped 2 s: stall {stall_s:.1} s, {} frames lost from the log; leak (onset 14 s) alarm at \
+         {t_alarm:.2} s, named ext1 at {t_kind:.2} s; test took {:.1} s",
+        gaps[0],
+        t0.elapsed().as_secs_f64()
+    );
+}
+
+/// A SIGKILLed classifier is restarted: it takes over after the last estimate
+/// its predecessor read, so the estimates it missed are a gap (its log, its
+/// stats), learns the healthy rig again, and detects the leak after it with no
+/// false alarm. In the same run a SIGKILLed recorder is restarted and continues
+/// the log in `run-1.mcap`: the frames in neither part (its last unflushed
+/// chunk, its downtime) are recorded there as one gap, and every frame of the
+/// run is in a part or in that gap.
+#[test]
+fn a_killed_classifier_and_a_killed_recorder_are_restarted_with_their_gaps() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("kill-cls-rec");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let t0 = Instant::now();
+    let child = start_run("e2e-kill2", "22", Some("ext1:0.5lpm@13s"), &out, &cfg);
+    let cls = wait_for_stage("classifier", "e2e-kill2");
+    let rec = wait_for_stage("recorder", "e2e-kill2");
+    wait_for_stage("acquisition", "e2e-kill2");
+    std::thread::sleep(Duration::from_secs(4));
+    signal(cls, libc::SIGKILL);
+    std::thread::sleep(Duration::from_secs(4));
+    signal(rec, libc::SIGKILL);
+    let o = finish(child);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    for stage in ["classifier", "recorder"] {
+        assert!(stderr.contains(&format!("stage {stage} exited")), "{stderr}");
+    }
+    assert!(
+        stdout.contains("run.mcap, run-1.mcap"),
+        "the parts are named: {stdout}"
+    );
+    let lat = json(&out.join("latency.json"));
+    assert_eq!(lat["restarts"]["classifier"], 1, "{lat:#}");
+    assert_eq!(lat["restarts"]["recorder"], 1, "{lat:#}");
+
+    // The estimates the restarted classifier did not read: a gap, counted.
+    let n = numbers_in_log(
+        &out.join("classifier-1.log"),
+        "classifier: restarted after estimate",
+    );
+    let (last_old, missed, first_new) = (n[0], n[1], n[2]);
+    assert_eq!(first_new, last_old + missed + 1, "{n:?}");
+    assert!((150..5000).contains(&missed), "{missed} estimates not read");
+    let cls_gaps = lat["stages"]["classifier"]["seq_gaps"].as_u64().unwrap();
+    assert!(cls_gaps >= missed, "{lat:#}");
+
+    // The log in two parts: the killed recorder's (read up to its last complete
+    // chunk) and the restarted one's, which records the frames in neither.
+    let part0 = log_of(&out);
+    let part1 = recorder::LogReader::open(&out.join("run-1.mcap"))
+        .unwrap()
+        .read()
+        .unwrap();
+    assert!(part0.truncated.is_some(), "the killed recorder's part ends early");
+    assert!(part1.truncated.is_none());
+    assert!(frame_gaps(&part0).is_empty(), "{:?}", part0.gaps);
+    let last0 = part0.frames.last().unwrap().seq;
+    let first1 = part1.frames.first().unwrap().seq;
+    let cont: Vec<_> = part1
+        .gaps
+        .iter()
+        .filter(|g| g.topic == frames::Topic::Frames)
+        .collect();
+    assert_eq!(cont.len(), 1, "{:?}", part1.gaps);
+    assert_eq!(
+        (cont[0].expected_seq, cont[0].got_seq, cont[0].missing),
+        (last0 + 1, first1, first1 - last0 - 1)
+    );
+    // at least the backoff; at most the unflushed chunk (flushed once a second) and a slow start
+    assert!((150..6000).contains(&cont[0].missing), "{:?}", cont[0]);
+    let all: Vec<u64> = part0.frames.iter().chain(&part1.frames).map(|f| f.seq).collect();
+    assert!(all.windows(2).all(|w| w[1] > w[0]), "the parts do not overlap");
+    assert_eq!(all.len() as u64 + cont[0].missing, 22_000);
+    assert_eq!(*all.last().unwrap(), 21_999);
+
+    let events = json(&out.join("events.json"));
+    let (t_alarm, t_kind) = leak_detected_after_restart(&events, 13.0);
+    assert!(
+        part1.events.iter().any(|e| e.kind == frames::event_kind::EXT1),
+        "the leak is in the second part: {:?}",
+        part1.events
+    );
+    eprintln!(
+        "classifier killed at about 4 s: {missed} estimates not read; recorder killed at about 8 s: \
+         part 0 ends at frame {last0}, part 1 starts at {first1} ({} frames in no part); leak (onset 13 s) \
+         alarm at {t_alarm:.2} s, named ext1 at {t_kind:.2} s; test took {:.1} s",
+        cont[0].missing,
+        t0.elapsed().as_secs_f64()
     );
 }
 

@@ -13,6 +13,8 @@
 //!   a truncated file yields everything up to its last complete chunk.
 //! - [`repair`]: a killed recorder's file (no summary, a cut last chunk) or a
 //!   damaged one rewritten as a complete MCAP file with what is intact.
+//! - [`resume`]: a restarted recorder continues the log in a numbered part,
+//!   the frames in no part recorded as a gap.
 //! - [`export_csv`]: one CSV per channel, and the frames again in the
 //!   dataset format (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak`) that
 //!   `leakwatch replay` reads.
@@ -28,6 +30,7 @@ pub mod msg;
 mod reader;
 pub mod record;
 mod repair;
+pub mod resume;
 pub mod shell;
 mod writer;
 

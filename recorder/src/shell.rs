@@ -25,6 +25,7 @@ use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
+use crate::resume::{existing_parts, Continuation};
 use crate::{Entry, GapRecord, LogWriter, WriterOptions};
 use bus::{monotonic_ns, Bus, BusConfig, Received, StageStats, Subscriber, WaitMode};
 use clap::Parser;
@@ -67,6 +68,11 @@ struct Args {
     /// record `leakwatch.config` (key `toml`) for `leakwatch info` and replay.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// An earlier part of this run's log, written by a recorder that was killed
+    /// (repeat, earliest first): this part continues it, and the frames in no
+    /// part are recorded as a gap (see `recorder::resume`).
+    #[arg(long = "continues", value_name = "PART")]
+    continues: Vec<PathBuf>,
 }
 
 /// Whether an estimate goes into the log: every `every`-th by sequence number,
@@ -82,6 +88,8 @@ pub fn keep_estimate(e: &EstimateFrame, every: u64) -> bool {
 struct Topic<T: Frame> {
     rx: Subscriber<T>,
     entry: Box<dyn Fn(T, u64) -> Option<Entry>>,
+    /// The first frame received: sequence number and receive time, ns.
+    first: Option<(u64, u64)>,
 }
 
 impl<T: Frame> Topic<T> {
@@ -90,12 +98,16 @@ impl<T: Frame> Topic<T> {
         Ok(Topic {
             rx: bus.subscriber::<T>(WaitMode::Event).map_err(|e| e.to_string())?,
             entry: Box::new(entry),
+            first: None,
         })
     }
 
     /// Queues one received frame (and the gap before it, if any).
-    fn log(&self, r: &Received<T>, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(), String> {
+    fn log(&mut self, r: &Received<T>, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(), String> {
         stats.frames_in += 1;
+        if self.first.is_none() {
+            self.first = r.seq().map(|s| (s, r.recv_mono_ns));
+        }
         if r.missing_before > 0 {
             stats.seq_gaps += r.missing_before;
             let got = r.seq().unwrap_or(0);
@@ -142,6 +154,19 @@ fn queue(writer: &mut LogWriter, stats: &mut StageStats, entry: Entry) -> Result
     Ok(())
 }
 
+/// Logs the frames a continued log lost (in no part) as a gap.
+fn log_continuation_gap(
+    gap: Option<GapRecord>,
+    writer: &mut LogWriter,
+    stats: &mut StageStats,
+) -> Result<(), String> {
+    if let Some(g) = gap {
+        stats.seq_gaps += g.missing;
+        queue(writer, stats, Entry::Gap(g))?;
+    }
+    Ok(())
+}
+
 fn run(args: &Args) -> Result<(), String> {
     let stop = bus::stop_on_signals();
     let bus =
@@ -181,6 +206,11 @@ fn run(args: &Args) -> Result<(), String> {
     };
     let mut writer = LogWriter::create(&args.out, options).map_err(|e| e.to_string())?;
     eprintln!("recorder: rig {} -> {}", bus.rig(), args.out.display());
+    let mut continuation = if args.continues.is_empty() {
+        None
+    } else {
+        Some(Continuation::start(existing_parts(&args.continues, &args.out))?)
+    };
 
     let mut stats = StageStats::new(frames::stage::RECORDER);
     let mut next_stats = monotonic_ns() + 1_000_000_000;
@@ -203,6 +233,10 @@ fn run(args: &Args) -> Result<(), String> {
         n += events_t.drain(&mut writer, &mut stats)?.0;
         n += health_t.drain(&mut writer, &mut stats)?.0;
         stats_t.drain(&mut writer, &mut stats)?;
+        if let Some(gap) = continuation.as_mut().and_then(|c| c.gap(frames_t.first, false)) {
+            continuation = None;
+            log_continuation_gap(gap, &mut writer, &mut stats)?;
+        }
         let now = monotonic_ns();
         if n > 0 {
             stats.record_proc_ns(now - t0);
@@ -219,6 +253,9 @@ fn run(args: &Args) -> Result<(), String> {
             break "end of stream";
         }
     };
+    if let Some(gap) = continuation.as_mut().and_then(|c| c.gap(frames_t.first, true)) {
+        log_continuation_gap(gap, &mut writer, &mut stats)?;
+    }
     // the last stats frame goes into the log too
     let last = stats.take_frame();
     stats_tx.send(&last).map_err(|e| e.to_string())?;

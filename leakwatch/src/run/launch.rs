@@ -1,7 +1,6 @@
 //! The command lines of the stages a run starts, and of their restarts.
 
 use std::net::SocketAddr;
-use std::path::Path;
 
 use frames::SensorFrame;
 
@@ -37,28 +36,54 @@ pub(super) struct StageArgs {
 /// publishes: the estimator, the recorder and the supervisor.
 pub(super) const FRAME_SUBSCRIBERS: usize = 3;
 
+/// Where a restarted stage takes over.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Resume {
+    /// The last sensor frame the supervisor received (a restarted acquisition goes on after it).
+    pub(super) last_frame: Option<SensorFrame>,
+    /// The last estimate the stage's previous process handled, as far as the
+    /// supervisor knows (a restarted estimator or classifier counts the estimates
+    /// after it as a gap).
+    pub(super) after_estimate: Option<u64>,
+}
+
 impl StageArgs {
+    /// The log part the recorder's `restart`-th process writes: `run.mcap`, then
+    /// `run-1.mcap`, `run-2.mcap`, ...
+    pub(super) fn log_part(&self, restart: u32) -> std::path::PathBuf {
+        self.out_dir.join(if restart == 0 {
+            "run.mcap".to_string()
+        } else {
+            format!("run-{restart}.mcap")
+        })
+    }
+
     /// The arguments of `stage`'s `restart`-th restart (0: the first start). A
-    /// restarted recorder writes `run-N.mcap`; a restarted acquisition continues
-    /// the stream after `last_frame` (the last frame the supervisor received).
-    pub(super) fn of(&self, stage: &str, restart: u32, last_frame: Option<&SensorFrame>) -> Vec<String> {
+    /// restarted recorder writes `run-N.mcap`, continuing the earlier parts; a
+    /// restarted acquisition continues the stream after `resume.last_frame` (the
+    /// last frame the supervisor received); a restarted estimator or classifier
+    /// takes over after the estimate `resume.after_estimate` (its predecessor's
+    /// last, as the supervisor saw it), so what it missed is a gap.
+    pub(super) fn of(&self, stage: &str, restart: u32, resume: &Resume) -> Vec<String> {
         let s = |v: &str| v.to_string();
         let mut a = vec![s("--rig"), self.rig.clone()];
         match stage {
             "recorder" => {
-                let log = if restart == 0 {
-                    s("run.mcap")
-                } else {
-                    format!("run-{restart}.mcap")
-                };
-                let log = Path::new(&self.out_dir).join(log).display().to_string();
+                let log = self.log_part(restart).display().to_string();
                 a.extend([s("--out"), log, s("--grace-ms"), s("1500")]);
+                for part in 0..restart {
+                    a.push(s("--continues"));
+                    a.push(self.log_part(part).display().to_string());
+                }
                 if self.force {
                     a.push(s("--force"));
                 }
             }
             "classifier" | "estimator" => {
                 a.extend([s("--config"), self.config.clone(), s("--mode"), self.mode.clone()]);
+                if let Some(seq) = resume.after_estimate.filter(|_| restart > 0) {
+                    a.extend([s("--resume-after-seq"), seq.to_string()]);
+                }
             }
             _ => {
                 match &self.samples {
@@ -90,7 +115,7 @@ impl StageArgs {
                     s("--wait-subscribers"),
                     FRAME_SUBSCRIBERS.to_string(),
                 ]);
-                if let Some(f) = last_frame.filter(|_| restart > 0) {
+                if let Some(f) = resume.last_frame.as_ref().filter(|_| restart > 0) {
                     // f64 and u64 print in a form that parses back to the same value
                     a.extend([
                         s("--resume-seq"),
@@ -131,9 +156,13 @@ mod tests {
             acq_mono_ns: 987_654_321,
             ..SensorFrame::default()
         };
-        let first = args.of("acquisition", 0, Some(&f));
+        let resume = Resume {
+            last_frame: Some(f),
+            after_estimate: Some(6100),
+        };
+        let first = args.of("acquisition", 0, &resume);
         assert!(!first.iter().any(|a| a.starts_with("--resume")), "{first:?}");
-        let again = args.of("acquisition", 1, Some(&f)).join(" ");
+        let again = args.of("acquisition", 1, &resume).join(" ");
         assert!(
             again.ends_with(
                 "--wait-subscribers 3 --resume-seq 6123 --resume-t-s 6.123 --resume-mono-ns 987654321"
@@ -141,7 +170,16 @@ mod tests {
             "{again}"
         );
         assert!(again.contains("--fault ext1:0.5lpm@12s"), "{again}");
-        let rec = args.of("recorder", 2, None).join(" ");
-        assert!(rec.contains("--out out/run-2.mcap"), "{rec}");
+        let rec = args.of("recorder", 2, &resume).join(" ");
+        assert!(
+            rec.contains("--out out/run-2.mcap")
+                && rec.ends_with("--continues out/run.mcap --continues out/run-1.mcap"),
+            "{rec}"
+        );
+        for stage in ["estimator", "classifier"] {
+            assert!(!args.of(stage, 0, &resume).join(" ").contains("--resume"));
+            let again = args.of(stage, 1, &resume).join(" ");
+            assert!(again.ends_with("--resume-after-seq 6100"), "{again}");
+        }
     }
 }

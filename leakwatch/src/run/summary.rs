@@ -79,9 +79,20 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
             outln!("UDP stream: {line}");
         }
     }
+    // a restarted recorder continues the log in run-1.mcap, run-2.mcap, ...
+    let parts = (1..=o.latency.restarts.get("recorder").copied().unwrap_or(0))
+        .map(|n| format!("run-{n}.mcap"))
+        .filter(|p| o.out_dir.join(p).is_file());
+    let log: Vec<String> = std::iter::once("run.mcap".to_string()).chain(parts).collect();
     outln!(
-        "wrote {}/events.json, latency.json, run.mcap",
-        o.out_dir.display()
+        "wrote {}/events.json, latency.json, {}{}",
+        o.out_dir.display(),
+        log.join(", "),
+        if log.len() > 1 {
+            " (the recorder was restarted: the log continues part after part, the frames in none recorded as a gap)"
+        } else {
+            ""
+        }
     );
     Ok(())
 }

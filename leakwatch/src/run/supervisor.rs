@@ -12,12 +12,12 @@ use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
 use classifier::LeakEvent;
-use frames::{LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
 use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
 use super::events::{own_event, print_event};
 use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
-use super::launch::{Samples, StageArgs};
+use super::launch::{Resume, Samples, StageArgs};
 use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
 use super::stages::{spawn, stage_program, terminate, STAGES};
 use super::watchdog::{stall_cause, Alarm, Watchdog};
@@ -122,6 +122,10 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut frames_rx = bus
         .subscriber::<SensorFrame>(WaitMode::Event)
         .map_err(|e| e.to_string())?;
+    // the estimates: where a restarted estimator or classifier takes over
+    let mut estimates_rx = bus
+        .subscriber::<EstimateFrame>(WaitMode::Event)
+        .map_err(|e| e.to_string())?;
     // Only acquisition publishes frames and only the classifier events: another
     // publisher is another process of this user feeding the pipeline (docs/security.md).
     let frames_watch = bus.topic_watch::<SensorFrame>().map_err(|e| e.to_string())?;
@@ -174,7 +178,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         let child = spawn(
             &program,
             name,
-            &launch.of(name, 0, None),
+            &launch.of(name, 0, &Resume::default()),
             &prefix,
             &out_dir.join(format!("{name}.log")),
         )?;
@@ -192,6 +196,9 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut restart_at: BTreeMap<&str, Instant> = BTreeMap::new();
     // the last frame published, where a restarted acquisition takes over
     let mut last_frame: Option<SensorFrame> = None;
+    // the last estimate published, and where a stage that exited had read the estimates to
+    let mut last_estimate: Option<u64> = None;
+    let mut read_to_at_exit: BTreeMap<&str, Option<u64>> = BTreeMap::new();
     let mut events = Vec::new();
     let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
     let started = Instant::now();
@@ -226,6 +233,9 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             {
                 stall_ended("acquisition", d);
             }
+        }
+        while let Ok(Some(e)) = estimates_rx.try_receive() {
+            last_estimate = Some(e.seq);
         }
         while let Ok(Some(st)) = stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
@@ -262,6 +272,9 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                     Ok(Some(status)) => {
                         children.remove(name);
                         watchdog.exited(name, now);
+                        // the classifier had read the estimates up to about here (the estimator's
+                        // last is known once it is down: the last published)
+                        read_to_at_exit.insert(name, last_estimate);
                         if name == "acquisition" && status.success() {
                             // the end of the stream: let the last frames drain
                             ended_at.get_or_insert(now);
@@ -328,7 +341,17 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 match spawn(
                     &program,
                     name,
-                    &launch.of(name, *n, last_frame.as_ref()),
+                    &launch.of(
+                        name,
+                        *n,
+                        &Resume {
+                            last_frame,
+                            after_estimate: match name {
+                                "classifier" => read_to_at_exit.get(name).copied().flatten(),
+                                _ => last_estimate,
+                            },
+                        },
+                    ),
                     &prefix,
                     &out_dir.join(format!("{name}-{n}.log")),
                 ) {
@@ -409,6 +432,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     drop(events_rx);
     drop(stats_rx);
     drop(frames_rx);
+    drop(estimates_rx);
     drop((frames_watch, events_watch));
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
