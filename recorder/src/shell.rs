@@ -15,7 +15,10 @@
 //! It stops cleanly on SIGINT/SIGTERM, or after the frames stream ends
 //! (`END_OF_STREAM`) once the other topics have been quiet for the grace
 //! period (the estimator and classifier have drained). `--keep-running`
-//! records one stream after another until a signal. The recorder publishes
+//! records one stream after another until a signal. `--continues PART`
+//! (given by `leakwatch run` to a restarted recorder, which writes
+//! `run-N.mcap`) names the earlier parts of the log: the frames in none of
+//! them are logged as one gap (see [`crate::resume`]). The recorder publishes
 //! its own stats (stage 3): frames in = messages received, out = queued for
 //! the writer (not the estimates left out), deadline misses = messages dropped because the disk stalled.
 
