@@ -1,9 +1,12 @@
 //! The `classifier` process crate: the detectors are the pure [`detect`] crate
 //! (re-exported here whole, so `classifier::X` paths keep working); this crate
-//! adds the process around them ([`shell`]: iceoryx2, command line, config file)
-//! and the classifier's side of the wire ([`wire`]).
+//! adds the process around them ([`shell`]: iceoryx2, command line, config file;
+//! [`node`]: its work on each estimate), the estimator and classifier fused in
+//! one process ([`fused`]) and the classifier's side of the wire ([`wire`]).
 
 pub use detect::*;
 
+pub mod fused;
+pub mod node;
 pub mod shell;
 pub mod wire;

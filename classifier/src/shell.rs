@@ -11,13 +11,11 @@ use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
-use crate::wire::EventWire;
-use crate::{Classifier, ClassifierConfig, LeakEvent};
-use bus::{monotonic_ns, Bus, BusConfig, StageStats, WaitMode};
+use crate::node::ClassifierNode;
+use crate::ClassifierConfig;
+use bus::{monotonic_ns, Bus, BusConfig, WaitMode};
 use clap::Parser;
-use estimator::wire::EstimateWire;
-use estimator::StageEstimate;
-use frames::{health_status, EstimateFrame, Frame, HealthFrame, LeakEventFrame, StatsFrame};
+use frames::{EstimateFrame, Frame};
 use serde::Deserialize;
 
 #[derive(Parser)]
@@ -52,7 +50,8 @@ struct StageConfig {
     classifier: ClassifierConfig,
 }
 
-fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
+/// The `[classifier]` settings of the configuration file `path` (the defaults without one).
+pub(crate) fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
     let Some(path) = path else {
         return Ok(ClassifierConfig::default());
     };
@@ -63,15 +62,8 @@ fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
     Ok(cfg.classifier)
 }
 
-/// Events found while handling one estimate (at most a few; no allocation).
-struct Pending {
-    events: [Option<LeakEvent>; 4],
-    n: usize,
-}
-
 fn run(args: Args) -> Result<(), String> {
     let cfg = load(args.config.as_deref())?;
-    let mut cls = Classifier::new(cfg)?;
     let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
     let stop = bus::stop_on_signals();
     let bus =
@@ -81,105 +73,25 @@ fn run(args: Args) -> Result<(), String> {
     if let Some(seq) = args.resume_after_seq {
         rx.resume_after(seq);
     }
-    let mut first_after_restart = args.resume_after_seq;
-    let mut events_tx = bus.publisher::<LeakEventFrame>().map_err(e)?;
-    let mut health_tx = bus.publisher::<HealthFrame>().map_err(e)?;
-    let mut stats_tx = bus.publisher::<StatsFrame>().map_err(e)?;
-    let mut stats = StageStats::new(frames::stage::CLASSIFIER);
-    let mut next_stats = monotonic_ns() + 1_000_000_000;
-    let mut next_health_t = f64::NEG_INFINITY;
-    let mut health_seq = 0;
-    let mut pending = Pending {
-        events: [None, None, None, None],
-        n: 0,
-    };
+    let mut node = ClassifierNode::new(&bus, cfg, args.resume_after_seq)?;
     loop {
         let now = monotonic_ns();
-        if now >= next_stats {
-            stats_tx.send(&stats.take_frame()).map_err(e)?;
-            next_stats = (next_stats + 1_000_000_000).max(now + 1);
-        }
-        let Some(input) = rx
-            .wait(Duration::from_nanos(next_stats.saturating_sub(now)), stop)
-            .map_err(e)?
-        else {
+        node.tick(now).map_err(e)?;
+        let timeout = Duration::from_nanos(node.next_stats_ns().saturating_sub(now));
+        let Some(input) = rx.wait(timeout, stop).map_err(e)? else {
             if stop.load(Ordering::Relaxed) {
                 break;
             }
             continue;
         };
-        stats.frames_in += 1;
-        stats.seq_gaps += input.missing_before;
-        if let Some(last) = first_after_restart.take() {
-            eprintln!(
-                "classifier: restarted after estimate {last}: {} estimates not read before estimate {} (a gap)",
-                input.missing_before, input.seq
-            );
-        }
-        if input.acq_mono_ns > 0 && input.recv_mono_ns >= input.acq_mono_ns {
-            stats.record_latency_ns(input.recv_mono_ns - input.acq_mono_ns);
-        }
-        let t0 = monotonic_ns();
-        let se = StageEstimate::from_frame(&input.frame, input.missing_before);
-        let last_t = se.leak.t_s;
-        pending.n = 0;
-        cls.on_stage(&se, |ev| {
-            if pending.n < pending.events.len() {
-                pending.events[pending.n] = Some(ev);
-                pending.n += 1;
-            }
-        });
-        let done = monotonic_ns();
-        stats.record_proc_ns(done - t0);
-        for ev in pending.events.iter_mut().take(pending.n) {
-            let Some(ev) = ev.take() else { continue };
-            let frame = ev.to_frame(input.seq, input.acq_mono_ns, done);
-            events_tx.send(&frame).map_err(e)?;
-            stats.frames_out += 1;
-        }
-        if se.leak.t_s >= next_health_t {
-            next_health_t = se.leak.t_s + 0.1;
-            health_seq += 1;
-            let rise = cls.leak_size.rise_lpm(&se.leak);
-            let active = u32::from(cls.leak_size.has_active_leak());
-            let status = if active > 0 {
-                health_status::LEAK
-            } else if cls.leak_size.is_armed() {
-                health_status::HEALTHY
-            } else {
-                health_status::WARMING_UP
-            };
-            let h = HealthFrame {
-                seq: health_seq,
-                mono_ns: monotonic_ns(),
-                t_s: se.leak.t_s,
-                status,
-                active_events: active,
-                leak_flow_lpm: rise,
-                leak_flow_sigma_lpm: [
-                    se.leak.sigma[7] * 6e4,
-                    se.leak.sigma[8] * 6e4,
-                    se.leak.sigma[9] * 6e4,
-                ],
-            };
-            health_tx.send(&h).map_err(e)?;
-        }
-        if input.is_end_of_stream() {
-            cls.finish(last_t, |ev| {
-                let frame = ev.to_frame(input.seq, input.acq_mono_ns, monotonic_ns());
-                let _ = events_tx.send(&frame);
-            });
-            if args.exit_at_end {
-                break;
-            }
-            cls = Classifier::new(load(args.config.as_deref())?)?;
+        let eos = input.is_end_of_stream();
+        node.on_estimate(&input.frame, input.missing_before, input.recv_mono_ns, eos)?;
+        if eos && args.exit_at_end {
+            break;
         }
     }
-    stats_tx.send(&stats.take_frame()).map_err(e)?;
-    eprintln!(
-        "classifier: {} estimates in, {} events out, {} missing",
-        stats.frames_in, stats.frames_out, stats.seq_gaps
-    );
+    let (read, events, missing) = node.finish()?;
+    eprintln!("classifier: {read} estimates in, {events} events out, {missing} missing");
     Ok(())
 }
 

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
 use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
-use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
+use bus::{run_stage, Bus, BusConfig, Received, StageOptions, WaitMode};
 use clap::Parser;
 use frames::{EstimateFrame, SensorFrame};
 use model::{ActuatorParams, Sample};
@@ -62,6 +62,41 @@ impl Default for StageConfig {
     }
 }
 
+/// The estimator stage the configuration file `path` describes (`[model]`,
+/// `[estimator]`, `[leak_filter]`; the defaults without a file).
+pub fn load_stage(path: Option<&Path>) -> Result<EstimatorStage, String> {
+    let cfg = load(path)?;
+    EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)
+}
+
+/// The estimator's work on one sensor frame, whichever process runs it: the
+/// estimate of `input` written into `out` (sequence number, clocks, both filters).
+/// `restarted_after` is the frame the stage's previous process handled last, while
+/// this process has not yet estimated a frame: the first estimate of a restarted
+/// estimator is marked reset and after-gap (and said so on stderr, once).
+#[inline]
+pub fn estimate_frame(
+    stage: &mut EstimatorStage,
+    input: &Received<SensorFrame>,
+    out: &mut EstimateFrame,
+    restarted_after: &mut Option<u64>,
+) {
+    let mut e = stage.on_sample(&Sample::from(&input.frame));
+    if let Some(last) = restarted_after.take() {
+        mark_restart(&mut e);
+        eprintln!(
+            "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
+             estimate is marked reset and after-gap",
+            input.missing_before, input.seq
+        );
+    }
+    out.seq = input.seq;
+    out.acq_mono_ns = input.acq_mono_ns;
+    out.est_recv_mono_ns = input.recv_mono_ns;
+    e.write_frame(out);
+    out.est_done_mono_ns = bus::monotonic_ns();
+}
+
 fn load(path: Option<&Path>) -> Result<StageConfig, String> {
     let Some(path) = path else {
         return Ok(StageConfig::default());
@@ -72,8 +107,7 @@ fn load(path: Option<&Path>) -> Result<StageConfig, String> {
 }
 
 fn run(args: Args) -> Result<(), String> {
-    let cfg = load(args.config.as_deref())?;
-    let mut stage = EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)?;
+    let mut stage = load_stage(args.config.as_deref())?;
     let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
     let stop = bus::stop_on_signals();
     let bus =
@@ -84,20 +118,7 @@ fn run(args: Args) -> Result<(), String> {
     // a restarted estimator's first estimate says that its filter started again
     let mut first_after_restart = args.resume_after_seq;
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        let mut e = stage.on_sample(&Sample::from(&input.frame));
-        if let Some(last) = first_after_restart.take() {
-            mark_restart(&mut e);
-            eprintln!(
-                "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
-                 estimate is marked reset and after-gap",
-                input.missing_before, input.seq
-            );
-        }
-        out.seq = input.seq;
-        out.acq_mono_ns = input.acq_mono_ns;
-        out.est_recv_mono_ns = input.recv_mono_ns;
-        e.write_frame(out);
-        out.est_done_mono_ns = bus::monotonic_ns();
+        estimate_frame(&mut stage, input, out, &mut first_after_restart);
         true
     })
     .map_err(|e| e.to_string())?;

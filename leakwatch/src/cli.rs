@@ -106,6 +106,10 @@ pub(crate) enum Command {
         /// (default 5; counted from the first datagram, before which the run waits).
         #[arg(long)]
         udp_idle_timeout_s: Option<f64>,
+        /// Where the stages run: `split` (a process each, default) or `estimator+classifier`
+        /// (those two in one process: one iceoryx2 hop fewer, the same events).
+        #[arg(long, value_name = "split|estimator+classifier")]
+        placement: Option<String>,
     },
     /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
     Export {

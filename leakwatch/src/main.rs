@@ -65,6 +65,7 @@ fn run(cli: Cli) -> Result<(), String> {
             thesis_baseline,
             source,
             udp_idle_timeout_s,
+            placement,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -77,6 +78,7 @@ fn run(cli: Cli) -> Result<(), String> {
             force,
             source,
             udp_idle_timeout_s,
+            placement,
         }),
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),

@@ -13,6 +13,7 @@ mod args;
 mod events;
 mod figures;
 mod launch;
+mod placement;
 mod restart;
 mod stages;
 mod summary;

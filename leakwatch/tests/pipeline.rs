@@ -25,6 +25,18 @@ fn short_warmup_config(dir: &Path) -> PathBuf {
 }
 
 fn start_run(rig: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Path) -> Child {
+    start_run_with(rig, seconds, fault, out, cfg, &[])
+}
+
+/// [`start_run`] with `extra` arguments.
+fn start_run_with(
+    rig: &str,
+    seconds: &str,
+    fault: Option<&str>,
+    out: &Path,
+    cfg: &Path,
+    extra: &[&str],
+) -> Child {
     let mut args = vec![
         "run".to_string(),
         "--rig".into(),
@@ -42,6 +54,7 @@ fn start_run(rig: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Pa
         args.push("--fault".into());
         args.push(f.into());
     }
+    args.extend(extra.iter().map(|a| a.to_string()));
     Command::new(env!("CARGO_BIN_EXE_leakwatch"))
         .args(&args)
         .stdout(Stdio::piped())
@@ -59,6 +72,26 @@ fn finish(child: Child) -> Output {
         String::from_utf8_lossy(&o.stderr)
     );
     o
+}
+
+/// Kind, phase, detection time and size (bits), event id.
+type EventKey = (String, String, Option<u64>, Option<u64>, u64);
+
+/// The key of each event of an events.json, in order.
+fn event_keys(v: &serde_json::Value) -> Vec<EventKey> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["kind"].as_str().unwrap().to_string(),
+                e["phase"].as_str().unwrap().to_string(),
+                e["t_detect_s"].as_f64().map(f64::to_bits),
+                e["size_lpm"].as_f64().map(f64::to_bits),
+                e["event_id"].as_u64().unwrap(),
+            )
+        })
+        .collect()
 }
 
 fn json(path: &Path) -> serde_json::Value {
@@ -181,24 +214,7 @@ fn a_leak_is_detected_and_every_frame_is_estimated_and_recorded() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // kind, phase, detection time and size (bits), event id
-    type EventKey = (String, String, Option<u64>, Option<u64>, u64);
-    let key = |v: &serde_json::Value| -> Vec<EventKey> {
-        v.as_array()
-            .unwrap()
-            .iter()
-            .map(|e| {
-                (
-                    e["kind"].as_str().unwrap().to_string(),
-                    e["phase"].as_str().unwrap().to_string(),
-                    e["t_detect_s"].as_f64().map(f64::to_bits),
-                    e["size_lpm"].as_f64().map(f64::to_bits),
-                    e["event_id"].as_u64().unwrap(),
-                )
-            })
-            .collect()
-    };
-    let (live, replayed) = (key(&events), key(&json(&rep.join("events.json"))));
+    let (live, replayed) = (event_keys(&events), event_keys(&json(&rep.join("events.json"))));
     assert!(!live.is_empty());
     assert_eq!(live, replayed, "live events vs the replay of the run's log");
 }
@@ -997,5 +1013,81 @@ fn a_second_run_on_the_same_prefix_is_refused() {
         lat["stages"]["estimator"]["frames_in"].as_u64(),
         Some(6000),
         "{lat:#}"
+    );
+}
+
+/// The estimator and the classifier in one process (`--placement
+/// estimator+classifier`, one iceoryx2 hop fewer) give the events of the split
+/// placement (a process each) for the same run: same kinds, phases, ids,
+/// detection samples and sizes, bit for bit. Every frame is estimated and
+/// classified, and the log is the same shape (every frame, the estimates at 10 Hz).
+#[test]
+fn the_fused_placement_gives_the_events_of_the_split_one() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("placement");
+    let cfg = short_warmup_config(&d);
+    let t0 = Instant::now();
+    let mut keys = Vec::new();
+    let mut lat_p50_us = Vec::new();
+    for placement in ["split", "estimator+classifier"] {
+        let out = d.join(placement);
+        let o = finish(start_run_with(
+            "e2e-place",
+            "14",
+            Some("ext1:0.5lpm@8s"),
+            &out,
+            &cfg,
+            &["--placement", placement],
+        ));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        let fused = placement != "split";
+        assert_eq!(
+            stdout.contains("estimator+classifier in one process"),
+            fused,
+            "{stdout}"
+        );
+        for (log, present) in [
+            ("estimator+classifier.log", fused),
+            ("estimator.log", !fused),
+            ("classifier.log", !fused),
+        ] {
+            assert_eq!(out.join(log).is_file(), present, "{placement}: {log}");
+        }
+        let lat = json(&out.join("latency.json"));
+        for stage in ["estimator", "classifier"] {
+            let st = &lat["stages"][stage];
+            assert_eq!(st["frames_in"].as_u64(), Some(14_000), "{placement}: {lat:#}");
+            assert_eq!(st["seq_gaps"].as_u64(), Some(0), "{placement}: {lat:#}");
+        }
+        assert!(lat["restarts"].as_object().unwrap().is_empty(), "{lat:#}");
+        let log = log_of(&out);
+        assert_eq!(log.frames.len(), 14_000, "{placement}");
+        assert!(
+            (140..=150).contains(&log.estimates.len()),
+            "{placement}: {}",
+            log.estimates.len()
+        );
+        let events = json(&out.join("events.json"));
+        let leaks = raised_leaks(&events);
+        assert_eq!(leaks.len(), 1, "{placement}: {events:#}");
+        assert_eq!(leaks[0]["kind"], "ext1");
+        assert!(alarms_before(&events, 8.0).is_empty(), "{placement}: {events:#}");
+        assert_eq!(
+            log.events.len(),
+            events.as_array().unwrap().len(),
+            "{placement}: the log has them too"
+        );
+        keys.push(event_keys(&events));
+        lat_p50_us.push(lat["stages"]["classifier"]["latency_p50_us"].as_f64().unwrap());
+    }
+    assert!(!keys[0].is_empty());
+    assert_eq!(keys[0], keys[1], "split vs estimator+classifier in one process");
+    eprintln!(
+        "{} events, identical; classifier input latency since acquisition, p50 of the 1-s p50s: split {:.1} µs, \
+         fused {:.1} µs; test took {:.1} s",
+        keys[0].len(),
+        lat_p50_us[0],
+        lat_p50_us[1],
+        t0.elapsed().as_secs_f64()
     );
 }

@@ -28,6 +28,9 @@ pub struct RunArgs {
     pub source: Option<String>,
     /// UDP stream: it ends when no datagram came for this long, s (default 5).
     pub udp_idle_timeout_s: Option<f64>,
+    /// Where the stages run: `split` (default, a process each) or
+    /// `estimator+classifier` (those two in one process).
+    pub placement: Option<String>,
 }
 
 /// Where a run's samples come from.

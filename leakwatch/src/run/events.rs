@@ -8,6 +8,7 @@ use classifier::wire::EventWire;
 use classifier::LeakEvent;
 use frames::LeakEventFrame;
 
+use super::stages::FUSED;
 use crate::out::outln;
 
 /// The classifier's process id in `children` (a map of running children, or of pids).
@@ -17,13 +18,13 @@ pub(super) trait ClassifierPid {
 
 impl ClassifierPid for BTreeMap<&str, Child> {
     fn classifier_pid(&self) -> Option<u32> {
-        self.get("classifier").map(Child::id)
+        self.get("classifier").or_else(|| self.get(FUSED)).map(Child::id)
     }
 }
 
 impl ClassifierPid for BTreeMap<&str, u32> {
     fn classifier_pid(&self) -> Option<u32> {
-        self.get("classifier").copied()
+        self.get("classifier").or_else(|| self.get(FUSED)).copied()
     }
 }
 

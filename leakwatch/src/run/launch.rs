@@ -79,7 +79,7 @@ impl StageArgs {
                     a.push(s("--force"));
                 }
             }
-            "classifier" | "estimator" => {
+            "classifier" | "estimator" | super::stages::FUSED => {
                 a.extend([s("--config"), self.config.clone(), s("--mode"), self.mode.clone()]);
                 if let Some(seq) = resume.after_estimate.filter(|_| restart > 0) {
                     a.extend([s("--resume-after-seq"), seq.to_string()]);

@@ -5,8 +5,10 @@ use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
-/// The four stage binaries.
+/// The four stage processes of the split placement, in the order they start.
 pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
+/// The estimator and the classifier in one process (`--placement estimator+classifier`).
+pub const FUSED: &str = "estimator+classifier";
 
 /// Runs one stage process in this process: `args` is the stage's name followed by
 /// its own arguments (`leakwatch stage NAME ARGS...`).
@@ -16,10 +18,12 @@ pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Some("acquisition") => acquisition::shell::main(argv),
         Some("estimator") => estimator::shell::main(argv),
         Some("classifier") => classifier::shell::main(argv),
+        Some(FUSED) => classifier::fused::main(argv),
         Some("recorder") => recorder::shell::main(argv),
         other => {
             eprintln!(
-                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder",
+                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder \
+                 (and estimator+classifier, the two in one process)",
                 other.unwrap_or("")
             );
             std::process::ExitCode::FAILURE

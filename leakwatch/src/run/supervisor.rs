@@ -18,8 +18,9 @@ use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCEN
 use super::events::{own_event, print_event};
 use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
 use super::launch::{Resume, Samples, StageArgs};
+use super::placement::Placement;
 use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
-use super::stages::{spawn, stage_program, terminate, STAGES};
+use super::stages::{spawn, stage_program, terminate, FUSED};
 use super::watchdog::{stall_cause, Alarm, Watchdog};
 use crate::config::Config;
 use crate::out::outln;
@@ -40,6 +41,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let program = stage_program()?;
     frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
     let source = parse_source(args.source.as_deref())?;
+    let placement = Placement::parse(args.placement.as_deref())?;
+    let processes = placement.processes();
     let udp = match source {
         RunSource::Udp(addr) => Some((addr, check_udp_args(args, addr)?)),
         RunSource::Sim => {
@@ -52,13 +55,10 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
     crate::out::dir(&out_dir)?;
     // An earlier run's outputs are replaced only with --force; refused before anything starts.
-    let mut outputs = vec!["config.toml", "events.json", "latency.json", "run.mcap"];
-    outputs.extend(STAGES.iter().map(|n| match *n {
-        "recorder" => "recorder.log",
-        "classifier" => "classifier.log",
-        "estimator" => "estimator.log",
-        _ => "acquisition.log",
-    }));
+    let mut outputs: Vec<String> = ["config.toml", "events.json", "latency.json", "run.mcap"]
+        .map(String::from)
+        .into();
+    outputs.extend(processes.iter().map(|n| format!("{n}.log")));
     let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
     for name in outputs {
         crate::out::check(&out_dir.join(name), args.force, &inputs)?;
@@ -160,10 +160,14 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 out_dir.display()
             ),
             None => outln!(
-                "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}; output {}",
+                "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}{}; output {}",
                 args.rig,
                 faults.join(", "),
                 args.mode,
+                match placement {
+                    Placement::Split => String::new(),
+                    p => format!(", {} in one process", p.name()),
+                },
                 if demo { ", off-nominal rig (demonstration)" } else { "" },
                 out_dir.display()
             ),
@@ -174,7 +178,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     }
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
     let mut watchdog = Watchdog::default();
-    for name in STAGES {
+    for &name in processes {
         let child = spawn(
             &program,
             name,
@@ -192,7 +196,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let watched = |name: &str| udp.is_none() || name != "acquisition";
     let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
     let mut backoffs: BTreeMap<&str, Backoff> = BTreeMap::new();
-    let mut started_at: BTreeMap<&str, Instant> = STAGES.iter().map(|n| (*n, Instant::now())).collect();
+    let mut started_at: BTreeMap<&str, Instant> = processes.iter().map(|n| (*n, Instant::now())).collect();
     let mut restart_at: BTreeMap<&str, Instant> = BTreeMap::new();
     // the last frame published, where a restarted acquisition takes over
     let mut last_frame: Option<SensorFrame> = None;
@@ -239,14 +243,19 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
         while let Ok(Some(st)) = stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
-            let Some(&name) = STAGE_NAMES.get(st.stage as usize) else {
+            let Some(&stage) = STAGE_NAMES.get(st.stage as usize) else {
                 continue;
             };
             // the stats of this stage's running process, against its upstream's output
-            if name == "acquisition" || children.get(name).map(Child::id) != Some(st.pid) {
+            // (the fused process: its estimator's, the first of the two)
+            let name = placement.process_of(stage);
+            if stage == "acquisition"
+                || (name == FUSED && stage == "classifier")
+                || children.get(name).map(Child::id) != Some(st.pid)
+            {
                 continue;
             }
-            let upstream = if name == "classifier" { 1 } else { 0 };
+            let upstream = if stage == "classifier" { 1 } else { 0 };
             let up_out = accs.get(&upstream).map_or(0, StageAcc::frames_out_total);
             if let Some(d) = watchdog.stats(name, st.pid, st.frames_in, up_out, now) {
                 stall_ended(name, d);
@@ -266,7 +275,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             break;
         }
         // Supervision: exits, restarts with backoff, stalls.
-        for name in STAGES {
+        for &name in processes {
             if let Some(child) = children.get_mut(name) {
                 match child.try_wait() {
                     Ok(Some(status)) => {
@@ -385,7 +394,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     // the classifier's pid, for the events still queued once it has stopped
     let classifier_pids: BTreeMap<&str, u32> = children
         .iter()
-        .filter(|(n, _)| **n == "classifier")
+        .filter(|(n, _)| **n == "classifier" || **n == FUSED)
         .map(|(n, c)| (*n, c.id()))
         .collect();
     for (_, c) in children.iter_mut() {

@@ -1,0 +1,104 @@
+//! The estimator and the classifier in one process (`leakwatch stage
+//! estimator+classifier`, `leakwatch run --placement estimator+classifier`):
+//! sensor frames in; estimates, events, health and both stages' stats out.
+//! One iceoryx2 hop fewer between a sample and its event.
+//!
+//! ```text
+//! leakwatch stage estimator+classifier --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
+//! ```
+//!
+//! It runs the estimator's loop ([`bus::run_stage`], sensor frames to estimate
+//! frames, with [`estimator::shell::estimate_frame`]) and hands each estimate,
+//! still in its wire form, to the [`ClassifierNode`] the classifier process
+//! runs: the events are those of the split placement, sample for sample. The
+//! estimates are still published (the recorder logs them). The classifier's
+//! stats frame gives as its latency the time from acquisition to the estimate
+//! being ready, and counts as missing the frames the estimator missed.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use crate::node::ClassifierNode;
+use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
+use clap::Parser;
+use frames::{EstimateFrame, Frame, SensorFrame};
+
+#[derive(Parser)]
+#[command(
+    name = "estimator+classifier",
+    about = "leakwatch estimator and classifier in one process: sensor frames -> estimates and leak events over iceoryx2"
+)]
+struct Args {
+    /// Rig id (service names are namespaced by it).
+    #[arg(long, default_value = "rig1")]
+    rig: String,
+    /// leakwatch configuration file ([model], [estimator], [leak_filter], [classifier] are used).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// How to wait for frames: event, low-latency or busy-poll.
+    #[arg(long, default_value = "event")]
+    mode: String,
+    /// Exit when the sensor stream ends (default: wait for the next stream).
+    #[arg(long)]
+    exit_at_end: bool,
+    /// This process takes over from one that handled the stream up to this frame
+    /// sequence number (a restart): the frames between are a gap, the first
+    /// estimate is marked reset and after-gap, and the classifier learns the
+    /// healthy rig again (unless commissioned).
+    #[arg(long)]
+    resume_after_seq: Option<u64>,
+}
+
+fn run(args: Args) -> Result<(), String> {
+    let mut stage = estimator::shell::load_stage(args.config.as_deref())?;
+    let cfg = crate::shell::load(args.config.as_deref())?;
+    let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
+    let stop = bus::stop_on_signals();
+    let bus =
+        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let mut node = ClassifierNode::new(&bus, cfg, None)?;
+    let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
+    opts.exit_on_end_of_stream = args.exit_at_end;
+    opts.resume_after_seq = args.resume_after_seq;
+    let mut restarted_after = args.resume_after_seq;
+    // the first failure of the classifier's side ends the process (after the loop's next wait)
+    let mut failed: Option<String> = None;
+    let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
+        estimator::shell::estimate_frame(&mut stage, input, out, &mut restarted_after);
+        if failed.is_none() {
+            let ready = out.est_done_mono_ns;
+            let done = node
+                .tick(ready)
+                .map_err(|e| e.to_string())
+                .and_then(|()| node.on_estimate(out, input.missing_before, ready, input.is_end_of_stream()));
+            if let Err(e) = done {
+                failed = Some(e);
+                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        true
+    })
+    .map_err(|e| e.to_string())?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let (read, events, missing) = node.finish()?;
+    eprintln!(
+        "estimator+classifier: estimator {report}\n  classifier: {read} estimates read, {events} events out, {missing} \
+         missing"
+    );
+    Ok(())
+}
+
+/// Runs the fused estimator+classifier process with command-line arguments
+/// `args` (the first is the program name, as from `std::env::args_os`); the exit
+/// code says whether it succeeded.
+pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
+    match run(Args::parse_from(args)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("estimator+classifier: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
