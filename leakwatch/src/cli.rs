@@ -42,9 +42,10 @@ impl From<RigVariant> for model::FrictionPreset {
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// One stage process of `run`, from this binary: `leakwatch stage NAME [ARGS]...` with
-    /// NAME acquisition, estimator, classifier or recorder (ARGS: `leakwatch stage NAME --help`).
+    /// NAME acquisition, estimator, classifier, recorder, or estimator+classifier (those two in one
+    /// process) (ARGS: `leakwatch stage NAME --help`).
     Stage {
-        /// acquisition, estimator, classifier or recorder.
+        /// acquisition, estimator, classifier, recorder or estimator+classifier.
         name: String,
         /// The stage's own arguments.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
