@@ -1,5 +1,6 @@
 //! `leakwatch bench latency`: the pipeline at 1 kHz over iceoryx2 (event and
-//! low-latency modes, real processes), and the same stages as threads over
+//! low-latency modes, real processes; and in event mode with the estimator and
+//! the classifier in one process), and the same stages as threads over
 //! Unix domain sockets and over crossbeam channels, side by side in one run.
 
 use std::os::unix::net::UnixDatagram;
@@ -25,7 +26,8 @@ pub struct Row {
     pub end_to_end_us: [f64; 4],
     /// Frames published and received by the classifier.
     pub frames: [u64; 2],
-    /// CPU of the estimator stage, fraction of a core.
+    /// CPU of the estimator stage, fraction of a core (of the estimator and the
+    /// classifier where they share a process).
     pub estimator_cpu: f64,
 }
 
@@ -154,28 +156,46 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     crate::out::dir(out)?;
     crate::out::check(&out.join("latency.json"), force, &[])?;
     let mut rows = Vec::new();
-    for mode in ["event", "low-latency"] {
+    // (wait mode, placement): the estimator and classifier as two processes, and as one
+    let runs = [
+        ("event", None),
+        ("low-latency", None),
+        ("event", Some("estimator+classifier")),
+    ];
+    for (mode, placement) in runs {
+        let label = match placement {
+            None => mode.to_string(),
+            Some(p) => format!("{mode}, {p} in one process"),
+        };
+        let dir = match placement {
+            None => format!("run-{mode}"),
+            Some(_) => format!("run-{mode}-fused"),
+        };
         let args = crate::run::RunArgs {
             seconds: Some(seconds),
             scenario: Some("loaded-sine".into()),
             faults: Vec::new(),
-            rig: format!("bench-{}", mode.replace('-', "")),
+            rig: format!(
+                "bench-{}{}",
+                mode.replace('-', ""),
+                if placement.is_some() { "-fused" } else { "" }
+            ),
             config: None,
             mode: mode.into(),
-            out: Some(out.join(format!("run-{mode}"))),
+            out: Some(out.join(dir)),
             thesis_baseline: false,
             force,
             source: None,
             udp_idle_timeout_s: None,
-            placement: None,
+            placement: placement.map(String::from),
         };
-        eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
+        eprintln!("iceoryx2, {label}: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;
         let st = &o.latency.stages;
         let get = |s: &str| st.get(s).cloned().unwrap_or_default();
         let (e, c, a) = (get("estimator"), get("classifier"), get("acquisition"));
         rows.push(Row {
-            transport: format!("iceoryx2 processes, {mode}"),
+            transport: format!("iceoryx2 processes, {label}"),
             hop_us: [e.latency_p50_us, e.latency_worst_1s_p99_us, e.latency_max_us],
             // classifier input latency + its processing: the decision time
             end_to_end_us: [
@@ -185,6 +205,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
                 c.latency_max_us,
             ],
             frames: [a.frames_out, c.frames_in],
+            // (in one process with the classifier: the CPU of both)
             estimator_cpu: e.cpu_fraction,
         });
     }
