@@ -98,6 +98,32 @@ fn sequence_gaps_are_counted() {
     assert_eq!(gaps, 4);
 }
 
+/// A subscriber that takes over from a process that read up to frame 4 counts
+/// the frames before its first one (10) as a gap: 5, on that frame and in total.
+#[test]
+fn a_resumed_subscriber_counts_the_frames_before_its_first_as_a_gap() {
+    let cfg = config("resume");
+    let bus = Bus::open("rig1", cfg.clone()).unwrap();
+    let mut rx = bus.subscriber::<SensorFrame>(WaitMode::Event).unwrap();
+    rx.resume_after(4);
+    let publisher = publish(cfg, 20, &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
+    let stop = AtomicBool::new(false);
+    let mut got = Vec::new();
+    while let Some(r) = rx.wait(Duration::from_secs(5), &stop).unwrap() {
+        got.push((r.seq, r.missing_before));
+        if r.flags & sensor_flags::END_OF_STREAM != 0 {
+            break;
+        }
+    }
+    publisher.join().unwrap();
+    assert_eq!(got.len(), 10);
+    assert_eq!(got[0], (10, 5));
+    assert!(got[1..].iter().all(|&(_, m)| m == 0), "{got:?}");
+    assert_eq!((rx.seq_gaps(), rx.restarts()), (5, 0));
+    drop((rx, bus));
+    config("resume").remove_isolated_files().unwrap();
+}
+
 #[test]
 fn run_stage_passes_frames_and_the_end_of_stream() {
     let cfg = config("stage");
