@@ -426,3 +426,35 @@ fn event_records_of_the_first_version_still_read() {
     let e = LeakEventFrame::from_json(&bad).expect_err("a bad statistic");
     assert!(e.contains("LeakEventFrame.v2.statistic"), "{e}");
 }
+
+/// A restarted recorder's view of the earlier parts: the last frame of the
+/// latest part that holds one, read up to a killed recorder's last complete
+/// chunk; a part that is not a log is named and passed over.
+#[test]
+fn the_last_logged_frame_of_the_earlier_parts_is_found() {
+    use recorder::resume::{continuation_gap, last_logged_frame};
+    let d = dir("parts");
+    let (bytes, full) = small_chunk_log(&d);
+    assert_eq!(full.frames.last().map(|f| f.seq), Some(2999));
+    let whole = d.join("full.mcap");
+    // a killed recorder's part: cut in the middle
+    let cut = d.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let held = LogReader::open(&cut).unwrap().read().unwrap().frames.len() as u64;
+    assert!((1..3000).contains(&held));
+    let junk = d.join("junk.mcap");
+    std::fs::write(&junk, b"not a log").unwrap();
+    let (last, problems) = last_logged_frame(&[whole.clone(), cut.clone()]);
+    assert_eq!((last, problems.len()), (Some(held - 1), 0));
+    let (last, problems) = last_logged_frame(&[whole, junk.clone()]);
+    assert_eq!(last, Some(2999), "an earlier part, the later one unreadable");
+    assert!(
+        problems.len() == 1 && problems[0].contains("junk.mcap"),
+        "{problems:?}"
+    );
+    assert_eq!(last_logged_frame(&[junk]).0, None);
+    // the new part starts at frame 4000: 1000 frames in no part
+    let g = continuation_gap(last, 4000, 7).unwrap();
+    assert_eq!((g.topic, g.expected_seq, g.missing), (Topic::Frames, 3000, 1000));
+    std::fs::remove_dir_all(&d).ok();
+}
