@@ -9,6 +9,7 @@ mod config;
 #[cfg(test)]
 mod config_fuzz;
 mod demo;
+mod estimates_out;
 mod latency;
 mod logs;
 mod model_file;
@@ -95,6 +96,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
@@ -103,6 +105,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
