@@ -10,6 +10,7 @@ mod config;
 mod config_fuzz;
 mod demo;
 mod estimates_out;
+mod floors;
 mod latency;
 mod logs;
 mod model_file;
