@@ -166,9 +166,12 @@ pub(crate) enum Command {
         /// States of the thesis filter: 6 (friction from the model) or 7 (estimated load F_e).
         #[arg(long)]
         model: Option<u32>,
-        /// Output directory: estimates.csv, events.json, summary.json.
+        /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
         #[arg(long)]
         out: PathBuf,
+        /// Format of the estimates file: csv (text) or parquet (columns, for pandas, polars, pyarrow; same values bit for bit).
+        #[arg(long, value_enum, default_value_t)]
+        estimates: crate::estimates_out::EstimatesFormat,
         /// Run all stages in one thread instead of over channels (same results).
         #[arg(long)]
         single_thread: bool,

@@ -9,6 +9,8 @@ mod config;
 #[cfg(test)]
 mod config_fuzz;
 mod demo;
+mod estimates_out;
+mod floors;
 mod latency;
 mod logs;
 mod model_file;
@@ -97,6 +99,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
@@ -105,6 +108,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
