@@ -36,6 +36,13 @@ pub(super) struct StageArgs {
 /// publishes: the estimator, the recorder and the supervisor.
 pub(super) const FRAME_SUBSCRIBERS: usize = 3;
 
+/// Whether `name` is a further part of a run's log (`run-N.mcap`, N ≥ 1).
+pub(super) fn is_log_part(name: &str) -> bool {
+    name.strip_prefix("run-")
+        .and_then(|n| n.strip_suffix(".mcap"))
+        .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+}
+
 /// Where a restarted stage takes over.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Resume {
@@ -176,6 +183,8 @@ mod tests {
                 && rec.ends_with("--continues out/run.mcap --continues out/run-1.mcap"),
             "{rec}"
         );
+        assert!(is_log_part("run-1.mcap") && is_log_part("run-12.mcap"));
+        assert!(!is_log_part("run.mcap") && !is_log_part("run-.mcap") && !is_log_part("run-1a.mcap"));
         for stage in ["estimator", "classifier"] {
             assert!(!args.of(stage, 0, &resume).join(" ").contains("--resume"));
             let again = args.of(stage, 1, &resume).join(" ");

@@ -17,7 +17,7 @@ use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
 use super::events::{own_event, print_event};
 use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
-use super::launch::{Resume, Samples, StageArgs};
+use super::launch::{is_log_part, Resume, Samples, StageArgs};
 use super::placement::Placement;
 use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
 use super::stages::{spawn, stage_program, terminate, FUSED};
@@ -59,6 +59,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         .map(String::from)
         .into();
     outputs.extend(processes.iter().map(|n| format!("{n}.log")));
+    // an earlier run's further log parts (its recorder was restarted): a restarted
+    // recorder of this run must not find them in its way
+    if let Ok(entries) = std::fs::read_dir(&out_dir) {
+        let names = entries.flatten().filter_map(|e| e.file_name().into_string().ok());
+        outputs.extend(names.filter(|n| is_log_part(n)));
+    }
     let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
     for name in outputs {
         crate::out::check(&out_dir.join(name), args.force, &inputs)?;
