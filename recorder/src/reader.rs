@@ -224,6 +224,37 @@ impl LogReader {
         Ok(log)
     }
 
+    /// The highest sequence number of the frames the file holds (up to the last
+    /// complete chunk of a killed recorder's file), without keeping any message:
+    /// the chunks are decompressed one at a time and only the frames' sequence
+    /// numbers decoded. `None` if it holds no frame.
+    pub fn last_frame_seq(&self) -> Result<Option<u64>, RecorderError> {
+        let mut frames_channels: Vec<(u16, String)> = Vec::new();
+        let mut last: Option<u64> = None;
+        walk(&self.path, &self.data, |item| {
+            match item {
+                Item::Channel(c) if c.topic == "frames" => frames_channels.push((c.id, c.message_encoding)),
+                Item::Message(header, data) => {
+                    if let Some((_, encoding)) =
+                        frames_channels.iter().find(|(id, _)| *id == header.channel_id)
+                    {
+                        let f: SensorFrame =
+                            decode_as(encoding, data).map_err(|problem| RecorderError::Decode {
+                                path: self.path.clone(),
+                                channel: "frames".into(),
+                                sequence: header.sequence,
+                                problem,
+                            })?;
+                        last = last.max(Some(f.seq));
+                    }
+                }
+                _ => {}
+            }
+            Ok(())
+        })?;
+        Ok(last)
+    }
+
     fn decode(
         &self,
         log: &mut Log,

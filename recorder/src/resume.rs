@@ -18,17 +18,15 @@ use crate::{GapRecord, LogReader};
 /// The highest frame sequence number held by the log parts `parts` (earliest
 /// first; a later part is looked at first, an earlier one only if the later
 /// holds no frame), read up to the last complete chunk of a killed
-/// recorder's file. `None` if no part could be read or none holds a frame;
+/// recorder's file ([`LogReader::last_frame_seq`]: a part is held in memory
+/// while it is read, its messages are not). `None` if no part could be read or none holds a frame;
 /// the parts that could not be read are named in the second value.
 pub fn last_logged_frame(parts: &[PathBuf]) -> (Option<u64>, Vec<String>) {
     let mut problems = Vec::new();
     for part in parts.iter().rev() {
-        match LogReader::open(part).and_then(|r| r.read()) {
-            Ok(log) => {
-                if let Some(seq) = log.frames.iter().map(|f| f.seq).max() {
-                    return (Some(seq), problems);
-                }
-            }
+        match LogReader::open(part).and_then(|r| r.last_frame_seq()) {
+            Ok(Some(seq)) => return (Some(seq), problems),
+            Ok(None) => {}
             Err(e) => problems.push(e.to_string()),
         }
     }
