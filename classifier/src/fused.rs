@@ -60,11 +60,11 @@ fn run(args: Args) -> Result<(), String> {
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
     opts.exit_on_end_of_stream = args.exit_at_end;
     opts.resume_after_seq = args.resume_after_seq;
-    let mut restarted_after = args.resume_after_seq;
+    let mut join = estimator::shell::Join::new(args.resume_after_seq);
     // the first failure of the classifier's side ends the process (after the loop's next wait)
     let mut failed: Option<String> = None;
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        estimator::shell::estimate_frame(&mut stage, input, out, &mut restarted_after);
+        estimator::shell::estimate_frame(&mut stage, input, out, &mut join);
         if failed.is_none() {
             let ready = out.est_done_mono_ns;
             let done = node

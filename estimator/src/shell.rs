@@ -69,26 +69,53 @@ pub fn load_stage(path: Option<&Path>) -> Result<EstimatorStage, String> {
     EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)
 }
 
+/// Where an estimator process joins its sensor stream.
+#[derive(Debug, Clone, Copy)]
+pub struct Join {
+    /// No frame estimated yet.
+    first: bool,
+    /// The frame the stage's previous process handled last (a restart).
+    resumed_after: Option<u64>,
+}
+
+impl Join {
+    /// A process that takes over after frame `resumed_after` (a restart), or
+    /// starts afresh (`None`).
+    pub fn new(resumed_after: Option<u64>) -> Join {
+        Join {
+            first: true,
+            resumed_after,
+        }
+    }
+}
+
 /// The estimator's work on one sensor frame, whichever process runs it: the
 /// estimate of `input` written into `out` (sequence number, clocks, both filters).
-/// `restarted_after` is the frame the stage's previous process handled last, while
-/// this process has not yet estimated a frame: the first estimate of a restarted
-/// estimator is marked reset and after-gap (and said so on stderr, once).
+/// The first estimate of a process that joins a stream already running (a
+/// restart, `join` resumed; or a first frame after frame 0: a stage swapped by
+/// hand) is marked reset and after-gap, as its filter starts again without the
+/// frames before (said so on stderr, once).
 #[inline]
 pub fn estimate_frame(
     stage: &mut EstimatorStage,
     input: &Received<SensorFrame>,
     out: &mut EstimateFrame,
-    restarted_after: &mut Option<u64>,
+    join: &mut Join,
 ) {
     let mut e = stage.on_sample(&Sample::from(&input.frame));
-    if let Some(last) = restarted_after.take() {
+    if std::mem::take(&mut join.first) && (join.resumed_after.is_some() || input.seq > 0) {
         mark_restart(&mut e);
-        eprintln!(
-            "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
-             estimate is marked reset and after-gap",
-            input.missing_before, input.seq
-        );
+        match join.resumed_after {
+            Some(last) => eprintln!(
+                "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
+                 estimate is marked reset and after-gap",
+                input.missing_before, input.seq
+            ),
+            None => eprintln!(
+                "estimator: joined the stream at frame {}: its estimate is marked reset and after-gap",
+                input.seq
+            ),
+        }
     }
     out.seq = input.seq;
     out.acq_mono_ns = input.acq_mono_ns;
@@ -115,10 +142,10 @@ fn run(args: Args) -> Result<(), String> {
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
     opts.exit_on_end_of_stream = args.exit_at_end;
     opts.resume_after_seq = args.resume_after_seq;
-    // a restarted estimator's first estimate says that its filter started again
-    let mut first_after_restart = args.resume_after_seq;
+    // the first estimate of one that joins a running stream says that its filter started again
+    let mut join = Join::new(args.resume_after_seq);
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        estimate_frame(&mut stage, input, out, &mut first_after_restart);
+        estimate_frame(&mut stage, input, out, &mut join);
         true
     })
     .map_err(|e| e.to_string())?;
