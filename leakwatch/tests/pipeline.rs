@@ -37,6 +37,20 @@ fn start_run_with(
     cfg: &Path,
     extra: &[&str],
 ) -> Child {
+    run_command(rig, seconds, fault, out, cfg, extra)
+        .spawn()
+        .expect("leakwatch runs")
+}
+
+/// The command of [`start_run_with`], not started.
+fn run_command(
+    rig: &str,
+    seconds: &str,
+    fault: Option<&str>,
+    out: &Path,
+    cfg: &Path,
+    extra: &[&str],
+) -> Command {
     let mut args = vec![
         "run".to_string(),
         "--rig".into(),
@@ -55,12 +69,43 @@ fn start_run_with(
         args.push(f.into());
     }
     args.extend(extra.iter().map(|a| a.to_string()));
-    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
-        .args(&args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("leakwatch runs")
+    let mut c = Command::new(env!("CARGO_BIN_EXE_leakwatch"));
+    c.args(&args).stdout(Stdio::piped()).stderr(Stdio::piped());
+    c
+}
+
+/// The health topic of the run on iceoryx2 prefix `prefix` and rig `rig`, read by the test.
+struct Health {
+    rx: bus::Subscriber<frames::HealthFrame>,
+    _bus: bus::Bus,
+}
+
+impl Health {
+    fn open(prefix: &str, rig: &str) -> Health {
+        let cfg = bus::BusConfig {
+            iox_prefix: Some(prefix.to_string()),
+            ..bus::BusConfig::default()
+        };
+        let bus = bus::Bus::open(rig, cfg).expect("the run's bus opens");
+        let rx = bus.subscriber(bus::WaitMode::Event).expect("a health subscriber");
+        Health { rx, _bus: bus }
+    }
+
+    /// Waits (up to 60 s) for a classifier process other than `not_pid` to say it
+    /// has learned the healthy rig; returns the rig time of that health frame, s,
+    /// and the process id.
+    fn wait_until_armed(&mut self, not_pid: u32) -> (f64, u32) {
+        let stop = std::sync::atomic::AtomicBool::new(false);
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(60) {
+            if let Some(h) = self.rx.wait(Duration::from_millis(200), &stop).unwrap() {
+                if h.status == frames::health_status::HEALTHY && h.publisher_pid != not_pid {
+                    return (h.t_s, h.publisher_pid);
+                }
+            }
+        }
+        panic!("the classifier never said it was armed");
+    }
 }
 
 fn finish(child: Child) -> Output {
@@ -520,7 +565,8 @@ fn numbers_in_log(path: &Path, prefix: &str) -> Vec<u64> {
         .collect()
 }
 
-/// A SIGKILLed estimator (after the classifier has learned the healthy rig) is
+/// A SIGKILLed estimator (1 s after the classifier's health frames say it has
+/// learned the healthy rig) is
 /// restarted: its downtime is a gap (counted by the new process, which takes
 /// over after its predecessor's last estimate, and in the log), its first
 /// estimate is marked reset and after-gap so the classifier takes no evidence
@@ -535,12 +581,17 @@ fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_notice
     let cfg = short_warmup_config(&d);
     let out = d.join("out");
     let t0 = Instant::now();
-    let child = start_run("e2e-kill", "24", Some("ext1:0.5lpm@14s"), &out, &cfg);
+    let prefix = format!("kill{}", std::process::id());
+    let child = run_command("e2e-kill", "24", Some("ext1:0.5lpm@14s"), &out, &cfg, &[])
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .spawn()
+        .expect("leakwatch runs");
     let est = wait_for_stage("estimator", "e2e-kill");
     let rec = wait_for_stage("recorder", "e2e-kill");
-    wait_for_stage("acquisition", "e2e-kill");
-    // armed after about 1 + 2 + 3 s of rig time
-    std::thread::sleep(Duration::from_secs(8));
+    let mut health = Health::open(&prefix, "e2e-kill");
+    // once the classifier has learned the healthy rig (about 1 + 2 + 3 s of rig time)
+    let (armed_s, _) = health.wait_until_armed(0);
+    std::thread::sleep(Duration::from_secs(1));
     signal(est, libc::SIGKILL);
     std::thread::sleep(Duration::from_secs(3));
     signal(rec, libc::SIGSTOP);
@@ -624,7 +675,7 @@ fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_notice
     assert!(
         resets
             .iter()
-            .all(|e| e["t_detect_s"].as_f64() == Some(first_new as f64 * 1e-3)),
+            .all(|e| (e["t_detect_s"].as_f64().unwrap() - first_new as f64 * 1e-3).abs() < 1e-9),
         "{resets:?}"
     );
     assert!(
@@ -636,7 +687,8 @@ fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_notice
     );
     let (t_alarm, t_kind) = leak_detected_after_restart(&events, 14.0);
     eprintln!(
-        "estimator killed at about 8 s: restarted after frame {last_old}, {missed} frames not estimated; \
+        "classifier armed at {armed_s:.2} s; estimator killed about 1 s later: restarted after frame {last_old}, \
+         {missed} frames not estimated; \
          recorder stopped 2 s: stall {stall_s:.1} s, {} frames lost from the log; leak (onset 14 s) alarm at \
          {t_alarm:.2} s, named ext1 at {t_kind:.2} s; test took {:.1} s",
         gaps[0],
@@ -646,8 +698,8 @@ fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_notice
 
 /// A SIGKILLed classifier is restarted: it takes over after the last estimate
 /// its predecessor read, so the estimates it missed are a gap (its log, its
-/// stats), learns the healthy rig again, and detects the leak after it with no
-/// false alarm. In the same run a SIGKILLed recorder is restarted and continues
+/// stats), learns the healthy rig again (its health frames say when, before the
+/// leak), and detects the leak after it with no false alarm. In the same run a SIGKILLed recorder is restarted and continues
 /// the log in `run-1.mcap`: the frames in neither part (its last unflushed
 /// chunk, its downtime) are recorded there as one gap, and every frame of the
 /// run is in a part or in that gap.
@@ -658,13 +710,24 @@ fn a_killed_classifier_and_a_killed_recorder_are_restarted_with_their_gaps() {
     let cfg = short_warmup_config(&d);
     let out = d.join("out");
     let t0 = Instant::now();
-    let child = start_run("e2e-kill2", "22", Some("ext1:0.5lpm@13s"), &out, &cfg);
+    let prefix = format!("kill2{}", std::process::id());
+    let child = run_command("e2e-kill2", "22", Some("ext1:0.5lpm@13s"), &out, &cfg, &[])
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .spawn()
+        .expect("leakwatch runs");
     let cls = wait_for_stage("classifier", "e2e-kill2");
     let rec = wait_for_stage("recorder", "e2e-kill2");
+    let mut health = Health::open(&prefix, "e2e-kill2");
     wait_for_stage("acquisition", "e2e-kill2");
     std::thread::sleep(Duration::from_secs(4));
     signal(cls, libc::SIGKILL);
-    std::thread::sleep(Duration::from_secs(4));
+    // the restarted classifier learns the healthy rig again, before the leak
+    let (rearmed_s, new_pid) = health.wait_until_armed(cls as u32);
+    assert!(
+        rearmed_s < 13.0,
+        "re-armed at {rearmed_s} s, after the leak's onset"
+    );
+    assert_ne!(new_pid, 0);
     signal(rec, libc::SIGKILL);
     let o = finish(child);
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -728,7 +791,8 @@ fn a_killed_classifier_and_a_killed_recorder_are_restarted_with_their_gaps() {
         part1.events
     );
     eprintln!(
-        "classifier killed at about 4 s: {missed} estimates not read; recorder killed at about 8 s: \
+        "classifier killed at about 4 s: {missed} estimates not read, re-armed at {rearmed_s:.2} s; recorder \
+         killed then: \
          part 0 ends at frame {last0}, part 1 starts at {first1} ({} frames in no part); leak (onset 13 s) \
          alarm at {t_alarm:.2} s, named ext1 at {t_kind:.2} s; test took {:.1} s",
         cont[0].missing,
