@@ -54,7 +54,7 @@ fn run_command(
     let mut args = vec![
         "run".to_string(),
         "--rig".into(),
-        rig.into(),
+        rig_id(rig),
         "--scenario".into(),
         "loaded-sine".into(),
         "--seconds".into(),
@@ -86,7 +86,7 @@ impl Health {
             iox_prefix: Some(prefix.to_string()),
             ..bus::BusConfig::default()
         };
-        let bus = bus::Bus::open(rig, cfg).expect("the run's bus opens");
+        let bus = bus::Bus::open(&rig_id(rig), cfg).expect("the run's bus opens");
         let rx = bus.subscriber(bus::WaitMode::Event).expect("a health subscriber");
         Health { rx, _bus: bus }
     }
@@ -154,8 +154,18 @@ fn raised_leaks(events: &serde_json::Value) -> Vec<serde_json::Value> {
         .collect()
 }
 
-/// PIDs of processes whose command line contains every needle.
-fn pids_of(needles: &[&str]) -> Vec<i32> {
+/// The rig id a test with this tag runs on: this test process's id and the tag
+/// (`-` as `_`), so that the stages of two test runs on one machine (another
+/// checkout's, say, which may look for the plain tag in command lines) are never
+/// taken for each other.
+fn rig_id(tag: &str) -> String {
+    format!("t{}-{}", std::process::id(), tag.replace('-', "_"))
+}
+
+/// PIDs of the stage processes (`leakwatch stage NAME ...`; `stage`: that NAME,
+/// or any) of the rig of test tag `tag`, matched argument by argument.
+fn stage_pids(stage: Option<&str>, tag: &str) -> Vec<i32> {
+    let rig = rig_id(tag);
     let mut out = Vec::new();
     for entry in std::fs::read_dir("/proc").unwrap().flatten() {
         let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
@@ -164,8 +174,13 @@ fn pids_of(needles: &[&str]) -> Vec<i32> {
         let Ok(cmd) = std::fs::read(entry.path().join("cmdline")) else {
             continue;
         };
-        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
-        if needles.iter().all(|n| cmd.contains(n)) {
+        let args: Vec<&[u8]> = cmd.split(|b| *b == 0).collect();
+        let is_stage =
+            args.get(1) == Some(&&b"stage"[..]) && stage.is_none_or(|s| args.get(2) == Some(&s.as_bytes()));
+        let on_rig = args
+            .windows(2)
+            .any(|w| w[0] == b"--rig" && w[1] == rig.as_bytes());
+        if is_stage && on_rig {
             out.push(pid);
         }
     }
@@ -417,7 +432,7 @@ fn the_binary_alone_runs_the_pipeline_without_cargo() {
 fn wait_for_stage(stage: &str, rig: &str) -> i32 {
     let t0 = Instant::now();
     loop {
-        if let Some(p) = pids_of(&["stage", stage, "--rig", rig]).first() {
+        if let Some(p) = stage_pids(Some(stage), rig).first() {
             return *p;
         }
         assert!(t0.elapsed() < Duration::from_secs(60), "{stage} never started");
@@ -441,7 +456,7 @@ fn the_stages_die_with_a_killed_supervisor() {
     child.kill().unwrap();
     child.wait().unwrap();
     std::thread::sleep(Duration::from_secs(2));
-    let alive = pids_of(&["stage", "--rig", "e2e-orphans"]);
+    let alive = stage_pids(None, "e2e-orphans");
     assert!(alive.is_empty(), "stages still alive: {alive:?}");
 }
 
@@ -840,7 +855,7 @@ fn a_stage_that_keeps_failing_ends_the_run_and_leaves_the_events_and_latency() {
     );
     // and no stage is left behind
     std::thread::sleep(Duration::from_secs(1));
-    assert!(pids_of(&["stage", "--rig", "e2e-give-up"]).is_empty());
+    assert!(stage_pids(None, "e2e-give-up").is_empty());
     eprintln!("gave up after {:.1} s", t0.elapsed().as_secs_f64());
 }
 
@@ -923,7 +938,7 @@ fn a_stopped_estimator_or_classifier_is_noticed_without_a_false_alarm() {
     }
     signal(est, libc::SIGSTOP);
     let t0 = Instant::now();
-    while pids_of(&["stage", "estimator", "--rig", "e2e-stop"]).contains(&est) {
+    while stage_pids(Some("estimator"), "e2e-stop").contains(&est) {
         assert!(
             t0.elapsed() < Duration::from_secs(10),
             "the stopped estimator was not killed"
@@ -977,7 +992,7 @@ fn a_forged_event_from_another_process_is_left_out() {
         .args([
             "run",
             "--rig",
-            "e2e-forge",
+            &rig_id("e2e-forge"),
             "--scenario",
             "loaded-sine",
             "--seconds",
@@ -995,7 +1010,7 @@ fn a_forged_event_from_another_process_is_left_out() {
     wait_for_stage("classifier", "e2e-forge");
     std::thread::sleep(Duration::from_secs(4));
     let bus = bus::Bus::open(
-        "e2e-forge",
+        &rig_id("e2e-forge"),
         bus::BusConfig {
             iox_prefix: Some(prefix.clone()),
             ..bus::BusConfig::default()
@@ -1040,7 +1055,7 @@ fn a_second_run_on_the_same_prefix_is_refused() {
             .args([
                 "run",
                 "--rig",
-                "own",
+                &rig_id("sole"),
                 "--scenario",
                 "closed-loop-sine",
                 "--seconds",
@@ -1055,7 +1070,7 @@ fn a_second_run_on_the_same_prefix_is_refused() {
     };
     let first = run("first", "6");
     let first_pid = first.id();
-    wait_for_stage("estimator", "own");
+    wait_for_stage("estimator", "sole");
     let second = run("second", "2").wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&second.stderr);
     assert_eq!(second.status.code(), Some(1), "{err}");
