@@ -297,6 +297,20 @@ pub(crate) enum BenchCommand {
         #[arg(long)]
         out: PathBuf,
     },
+    /// N rigs side by side on this host (each a whole `run`: four stage processes and a
+    /// supervisor), for each N: CPU per rig, latency medians and tails, frames lost, and the
+    /// capacity that implies for this host and (an estimate) a 16-core rig PC.
+    Scale {
+        /// Numbers of rigs to run side by side, one after the other.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
+        rigs: Vec<usize>,
+        /// Seconds per run.
+        #[arg(long, default_value_t = 20.0)]
+        seconds: f64,
+        /// Output directory for scale.json and the runs' outputs.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.

@@ -19,6 +19,7 @@ mod plots;
 mod replay;
 mod replay_cmd;
 mod run;
+mod scale;
 mod simulate;
 
 use std::process::ExitCode;
@@ -154,6 +155,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 out,
             } => benches::calibration(matrix, data, config, json, out, force),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
+            BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
             BenchCommand::Detection {
                 threads,
                 data: Some(data),
