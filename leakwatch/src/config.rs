@@ -11,6 +11,9 @@ use model::sensors::SensorParams;
 use model::sim::SimSettings;
 use serde::{Deserialize, Serialize};
 
+mod run_settings;
+pub use run_settings::RunSettings;
+
 /// The config file `run`, `replay`, `simulate`, `calibrate` and `commission` pick
 /// up from the working directory when no `--config` is given.
 pub const WORKING_DIR_CONFIG: &str = "leakwatch.toml";
@@ -36,6 +39,8 @@ pub struct Config {
     /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
     /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent).
     pub udp: UdpScaling,
+    /// How `run` places its stage processes: CPU pinning, the low-latency spin.
+    pub run: RunSettings,
 }
 
 impl Default for Config {
@@ -49,6 +54,7 @@ impl Default for Config {
             leak_filter: Tuning::sensor_derived(),
             classifier: ClassifierConfig::default(),
             udp: UdpScaling::default(),
+            run: RunSettings::default(),
         }
     }
 }
@@ -104,7 +110,8 @@ impl Config {
             .validate()
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
         self.classifier.validate()?;
-        self.udp.validate()
+        self.udp.validate()?;
+        self.run.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else

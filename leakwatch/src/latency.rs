@@ -158,31 +158,52 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     // the machine's floors first, on an otherwise idle machine
     let floors = crate::floors::measure(seconds.min(10.0))?;
     let mut rows = Vec::new();
-    // (wait mode, placement): the estimator and classifier as two processes, and as one
-    let runs = [
-        ("event", None),
-        ("low-latency", None),
-        ("event", Some("estimator+classifier")),
+    // (wait mode, placement, pinned): the estimator and classifier as two processes,
+    // and as one; the low-latency configuration of issue 15 pins the acquisition
+    // and the fused estimator+classifier to different CPUs ([run] cpus).
+    let cpus = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let mut runs = vec![
+        ("event", None, false),
+        ("low-latency", None, false),
+        ("event", Some("estimator+classifier"), false),
+        ("low-latency", Some("estimator+classifier"), false),
     ];
-    for (mode, placement) in runs {
+    if cpus >= 2 {
+        runs.push(("low-latency", Some("estimator+classifier"), true));
+    }
+    for (mode, placement, pinned) in runs {
         let label = match placement {
             None => mode.to_string(),
             Some(p) => format!("{mode}, {p} in one process"),
+        } + if pinned {
+            ", pinned (acquisition and recorder CPU 0, the fused stage CPU 1)"
+        } else {
+            ""
         };
         let dir = match placement {
             None => format!("run-{mode}"),
             Some(_) => format!("run-{mode}-fused"),
+        } + if pinned { "-pinned" } else { "" };
+        let config = if pinned {
+            crate::out::dir(out)?;
+            let p = out.join("pinned.toml");
+            let text = "[run]\ncpus = { acquisition = 0, recorder = 0, \"estimator+classifier\" = 1 }\n";
+            crate::out::write(&p, text.as_bytes(), true, &[])?;
+            Some(p)
+        } else {
+            None
         };
         let args = crate::run::RunArgs {
             seconds: Some(seconds),
             scenario: Some("loaded-sine".into()),
             faults: Vec::new(),
             rig: format!(
-                "bench-{}{}",
+                "bench-{}{}{}",
                 mode.replace('-', ""),
-                if placement.is_some() { "-fused" } else { "" }
+                if placement.is_some() { "-fused" } else { "" },
+                if pinned { "-pin" } else { "" }
             ),
-            config: None,
+            config,
             mode: mode.into(),
             out: Some(out.join(dir)),
             thesis_baseline: false,

@@ -109,7 +109,7 @@ fn every_numeric_field_swept_with_absurd_values_is_refused_by_name_or_stays_fini
     let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
     let mut leaves = Vec::new();
     numeric_leaves(&base, &mut Vec::new(), &mut leaves);
-    assert_eq!(leaves.len(), 136, "numeric fields");
+    assert_eq!(leaves.len(), 137, "numeric fields");
     let floats = [0.0, -1.0, 1e308, -1e308, 1e-300, -1e-300, 1e30];
     let ints = [0i64, -1, 4_000_000_000, 1_000_000_000_000, i64::MAX];
     let (mut refused, mut accepted) = (0, 0);
@@ -209,7 +209,7 @@ fn every_numeric_field_of_the_wrong_type_is_named_with_its_range() {
     let base: toml::Table = toml::from_str(&Config::default_toml()).unwrap();
     let mut leaves = Vec::new();
     numeric_leaves(&base, &mut Vec::new(), &mut leaves);
-    assert_eq!(leaves.len(), 136, "numeric fields");
+    assert_eq!(leaves.len(), 137, "numeric fields");
     for (path, v) in &leaves {
         let wrong = match v {
             toml::Value::Integer(_) => [toml::Value::Float(0.5), toml::Value::Integer(-1)],
@@ -330,4 +330,24 @@ fn the_model_toml_calibrate_writes_is_a_config() {
     assert_eq!(cfg.estimator, Config::default().estimator);
     assert_eq!(cfg.classifier, Config::default().classifier);
     assert!(cfg.rig.is_none());
+}
+
+#[test]
+fn run_cpus_name_known_stages_and_existing_cpus() {
+    let ok = Config::parse("[run]\ncpus = { acquisition = 0, \"estimator+classifier\" = 0 }\n").unwrap();
+    assert_eq!(ok.run.cpu_of("acquisition"), Some(0));
+    assert_eq!(ok.run.cpu_of("recorder"), None);
+    assert_eq!(ok.run.low_latency_spin_us, 60);
+    let err = Config::parse("[run]\ncpus = { estimatr = 0 }\n").unwrap_err();
+    assert!(
+        err.contains("[run] cpus") && err.contains("\"estimatr\""),
+        "{err}"
+    );
+    let err = Config::parse("[run]\ncpus = { estimator = 4096 }\n").unwrap_err();
+    assert!(
+        err.contains("cpus.estimator = 4096") && err.contains("CPUs 0 to"),
+        "{err}"
+    );
+    let err = Config::parse("[run]\nlow_latency_spin_us = 1000\n").unwrap_err();
+    assert!(err.contains("low_latency_spin_us = 1000"), "{err}");
 }

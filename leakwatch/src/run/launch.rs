@@ -30,6 +30,8 @@ pub(super) struct StageArgs {
     /// Replace an earlier run's log (`--force`).
     pub(super) force: bool,
     pub(super) samples: Samples,
+    /// The acquisition pacer's spin before each deadline, µs (0: sleep only).
+    pub(super) spin_us: u64,
 }
 
 /// Subscribers of the frames topic the acquisition waits for before it
@@ -122,6 +124,9 @@ impl StageArgs {
                     s("--wait-subscribers"),
                     FRAME_SUBSCRIBERS.to_string(),
                 ]);
+                if self.spin_us > 0 {
+                    a.extend([s("--spin-us"), self.spin_us.to_string()]);
+                }
                 if let Some(f) = resume.last_frame.as_ref().filter(|_| restart > 0) {
                     // f64 and u64 print in a form that parses back to the same value
                     a.extend([
@@ -156,7 +161,17 @@ mod tests {
                 seconds: 20.0,
                 faults: vec!["ext1:0.5lpm@12s".into()],
             },
+            spin_us: 60,
         };
+        // the acquisition's pacer spins (low-latency mode); no other stage has a pacer
+        assert!(args
+            .of("acquisition", 0, &Resume::default())
+            .join(" ")
+            .contains("--spin-us 60"));
+        assert!(!args
+            .of("estimator", 0, &Resume::default())
+            .join(" ")
+            .contains("--spin-us"));
         let f = SensorFrame {
             seq: 6123,
             t_s: 6.123,
@@ -172,7 +187,7 @@ mod tests {
         let again = args.of("acquisition", 1, &resume).join(" ");
         assert!(
             again.ends_with(
-                "--wait-subscribers 3 --resume-seq 6123 --resume-t-s 6.123 --resume-mono-ns 987654321"
+                "--wait-subscribers 3 --spin-us 60 --resume-seq 6123 --resume-t-s 6.123 --resume-mono-ns 987654321"
             ),
             "{again}"
         );

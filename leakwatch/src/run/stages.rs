@@ -68,6 +68,7 @@ pub(super) fn spawn(
     args: &[String],
     prefix: &str,
     log: &Path,
+    cpu: Option<usize>,
 ) -> Result<Child, String> {
     let args = &with_run_config(name, args);
     // the outputs were checked at start (an earlier run's only with --force)
@@ -76,10 +77,20 @@ pub(super) fn spawn(
     // The stage dies with its supervisor (SIGTERM when the supervisor's thread
     // that spawned it ends, whatever the cause, SIGKILL included).
     // SAFETY: prctl is async-signal-safe and touches no memory of the parent.
+    // Pinned to `cpu` ([run] cpus) before it starts, so every thread it makes is too.
+    // SAFETY: prctl and sched_setaffinity are async-signal-safe system calls and
+    // touch no memory of the parent (the CPU set is built on the child's stack).
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM as libc::c_ulong, 0, 0, 0) != 0 {
                 return Err(std::io::Error::last_os_error());
+            }
+            if let Some(cpu) = cpu {
+                let mut set: libc::cpu_set_t = std::mem::zeroed();
+                libc::CPU_SET(cpu, &mut set);
+                if libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
             }
             Ok(())
         });

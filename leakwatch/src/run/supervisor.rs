@@ -147,6 +147,11 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         mode: args.mode.clone(),
         out_dir: out_dir.clone(),
         force: args.force,
+        spin_us: if args.mode.starts_with("low-latency") || args.mode == "busy-poll" {
+            cfg.run.low_latency_spin_us
+        } else {
+            0
+        },
         samples: match udp {
             Some((addr, idle_s)) => Samples::Udp { addr, idle_s },
             None => Samples::Sim {
@@ -191,6 +196,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             &launch.of(name, 0, &Resume::default()),
             &prefix,
             &out_dir.join(format!("{name}.log")),
+            cfg.run.cpu_of(name),
         )?;
         children.insert(name, child);
         watchdog.started(name, Instant::now());
@@ -369,6 +375,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                     ),
                     &prefix,
                     &out_dir.join(format!("{name}-{n}.log")),
+                    cfg.run.cpu_of(name),
                 ) {
                     Ok(c) => {
                         children.insert(name, c);
