@@ -36,6 +36,10 @@ pub struct Config {
     /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
     /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent).
     pub udp: UdpScaling,
+    /// The Foxglove WebSocket live view (`run --live-view`), off by default.
+    pub live_view: live::LiveViewConfig,
+    /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
+    pub zenoh: live::ZenohConfig,
 }
 
 impl Default for Config {
@@ -49,6 +53,8 @@ impl Default for Config {
             leak_filter: Tuning::sensor_derived(),
             classifier: ClassifierConfig::default(),
             udp: UdpScaling::default(),
+            live_view: live::LiveViewConfig::default(),
+            zenoh: live::ZenohConfig::default(),
         }
     }
 }
@@ -104,7 +110,9 @@ impl Config {
             .validate()
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
         self.classifier.validate()?;
-        self.udp.validate()
+        self.udp.validate()?;
+        self.live_view.validate()?;
+        self.zenoh.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else
@@ -150,7 +158,9 @@ impl Config {
              # [estimator]: the thesis filter (Q, R, P0 in SI squared units per step; see README).\n\
              # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\
              # [udp.<channel>]: a real rig's UDP stream (u, x, p1, p2, x_sp, f_load), SI = gain * raw + offset\n\
-             #        (gain 1, offset 0: the sender sends SI).\n\n{body}"
+             #        (gain 1, offset 0: the sender sends SI).\n\
+             # [live_view]: the Foxglove WebSocket live view (run --live-view), rates in Hz.\n\
+             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\n{body}"
         )
     }
 }

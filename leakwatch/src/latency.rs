@@ -167,6 +167,9 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             force,
             source: None,
             udp_idle_timeout_s: None,
+            live_view: None,
+            zenoh: false,
+            zenoh_connect: Vec::new(),
         };
         eprintln!("iceoryx2, {mode} mode: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;

@@ -18,6 +18,7 @@ mod replay;
 mod replay_cmd;
 mod run;
 mod simulate;
+mod watch;
 
 use std::process::ExitCode;
 
@@ -65,6 +66,9 @@ fn run(cli: Cli) -> Result<(), String> {
             thesis_baseline,
             source,
             udp_idle_timeout_s,
+            live_view,
+            zenoh,
+            zenoh_connect,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -77,7 +81,16 @@ fn run(cli: Cli) -> Result<(), String> {
             force,
             source,
             udp_idle_timeout_s,
+            live_view,
+            zenoh,
+            zenoh_connect,
         }),
+        Command::Watch {
+            listen,
+            connect,
+            seconds,
+            config,
+        } => watch::command(listen, connect, seconds, config.as_deref()),
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),
         Command::Info { log, config_out } => logs::info(&log, config_out.as_deref(), force),

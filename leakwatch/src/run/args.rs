@@ -28,6 +28,12 @@ pub struct RunArgs {
     pub source: Option<String>,
     /// UDP stream: it ends when no datagram came for this long, s (default 5).
     pub udp_idle_timeout_s: Option<f64>,
+    /// `--live-view [PORT]`: serve the live view (0: the configured port, default 8765).
+    pub live_view: Option<u16>,
+    /// `--zenoh`: run the Zenoh gateway.
+    pub zenoh: bool,
+    /// `--zenoh-connect`: the gateway's endpoints instead of the config's.
+    pub zenoh_connect: Vec<String>,
 }
 
 /// Where a run's samples come from.

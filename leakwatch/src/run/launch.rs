@@ -60,6 +60,7 @@ impl StageArgs {
             "classifier" | "estimator" => {
                 a.extend([s("--config"), self.config.clone(), s("--mode"), self.mode.clone()]);
             }
+            "liveview" | "gateway" => a.extend([s("--config"), self.config.clone()]),
             _ => {
                 match &self.samples {
                     Samples::Udp { addr, idle_s } => a.extend([

@@ -8,6 +8,21 @@ use std::process::{Child, Command, Stdio};
 /// The four stage binaries.
 pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
 
+/// The stages of a run in the order they start: the four of [`STAGES`], with the
+/// live view and the Zenoh gateway (unsupervised by the watchdog: they publish no
+/// stats) before the acquisition when asked for.
+pub(super) fn run_stages(live_view: bool, zenoh: bool) -> Vec<&'static str> {
+    let mut v = STAGES[..3].to_vec();
+    if live_view {
+        v.push("liveview");
+    }
+    if zenoh {
+        v.push("gateway");
+    }
+    v.push(STAGES[3]);
+    v
+}
+
 /// Runs one stage process in this process: `args` is the stage's name followed by
 /// its own arguments (`leakwatch stage NAME ARGS...`).
 pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
@@ -17,9 +32,12 @@ pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Some("estimator") => estimator::shell::main(argv),
         Some("classifier") => classifier::shell::main(argv),
         Some("recorder") => recorder::shell::main(argv),
+        Some("liveview") => live::shell::liveview_main(argv),
+        Some("gateway") => live::shell::gateway_main(argv),
         other => {
             eprintln!(
-                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder",
+                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder, \
+                 liveview, gateway",
                 other.unwrap_or("")
             );
             std::process::ExitCode::FAILURE
