@@ -38,10 +38,7 @@ pub fn open_session(cfg: &ZenohConfig) -> Result<Session, String> {
     let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
     let settings = [
         ("mode", "\"peer\"".to_string()),
-        (
-            "scouting/multicast/enabled",
-            cfg.multicast_scouting.to_string(),
-        ),
+        ("scouting/multicast/enabled", cfg.multicast_scouting.to_string()),
         ("listen/endpoints", list(&cfg.listen)),
         ("connect/endpoints", list(&cfg.connect)),
     ];

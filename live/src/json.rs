@@ -327,9 +327,21 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                 ("leak_ext1_lpm", Num, "chamber-1 external leak at p_s/2, L/min"),
                 ("leak_ext2_lpm", Num, "chamber-2 external leak at p_s/2, L/min"),
                 ("leak_int_lpm", Num, "internal leak at p_s/2, L/min"),
-                ("leak_ext1_sigma_lpm", Num, "one standard deviation of leak_ext1_lpm, L/min"),
-                ("leak_ext2_sigma_lpm", Num, "one standard deviation of leak_ext2_lpm, L/min"),
-                ("leak_int_sigma_lpm", Num, "one standard deviation of leak_int_lpm, L/min"),
+                (
+                    "leak_ext1_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_ext1_lpm, L/min",
+                ),
+                (
+                    "leak_ext2_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_ext2_lpm, L/min",
+                ),
+                (
+                    "leak_int_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_int_lpm, L/min",
+                ),
                 ("measured_x_m", Num, "measured rod position, m"),
                 ("measured_p1_pa", Num, "measured chamber-1 pressure, Pa"),
                 ("measured_p2_pa", Num, "measured chamber-2 pressure, Pa"),
@@ -338,18 +350,38 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                 ("residual_p2_pa", Num, "p2 residual, Pa"),
                 ("nis", Num, "normalised innovation squared"),
                 ("thesis_f_e_n", Num, "thesis filter: effective load, N"),
-                ("thesis_mae_p1_pa", Num, "thesis filter: MAE of the p1 residual, Pa"),
-                ("thesis_mae_p2_pa", Num, "thesis filter: MAE of the p2 residual, Pa"),
+                (
+                    "thesis_mae_p1_pa",
+                    Num,
+                    "thesis filter: MAE of the p1 residual, Pa",
+                ),
+                (
+                    "thesis_mae_p2_pa",
+                    Num,
+                    "thesis filter: MAE of the p2 residual, Pa",
+                ),
                 ("reset", Bool, "the filter was reset at this sample"),
                 ("converging", Bool, "the filter is still converging"),
-                ("flags", Int, "estimate flags: 1 reset, 2 skipped, 4 clamped, 16 converging, 32 after a gap"),
+                (
+                    "flags",
+                    Int,
+                    "estimate flags: 1 reset, 2 skipped, 4 clamped, 16 converging, 32 after a gap",
+                ),
             ],
         ),
         T::Events => schema(
             "leakwatch.LeakEvent",
             &[
-                ("event_id", Int, "the event's id (same for raised, updated, cleared)"),
-                ("kind", Str, "ext1, ext2, int, leak (kind pending), sensor-stuck, ..."),
+                (
+                    "event_id",
+                    Int,
+                    "the event's id (same for raised, updated, cleared)",
+                ),
+                (
+                    "kind",
+                    Str,
+                    "ext1, ext2, int, leak (kind pending), sensor-stuck, ...",
+                ),
                 ("phase", Str, "raised, updated or cleared"),
                 ("detector", Str, "the detector that decided"),
                 ("t_detect_s", Num, "sample time of the decision, s"),
@@ -375,9 +407,21 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                 ("leak_ext1_lpm", Num, "chamber-1 external leak flow, L/min"),
                 ("leak_ext2_lpm", Num, "chamber-2 external leak flow, L/min"),
                 ("leak_int_lpm", Num, "internal leak flow, L/min"),
-                ("leak_ext1_sigma_lpm", Num, "one standard deviation of leak_ext1_lpm, L/min"),
-                ("leak_ext2_sigma_lpm", Num, "one standard deviation of leak_ext2_lpm, L/min"),
-                ("leak_int_sigma_lpm", Num, "one standard deviation of leak_int_lpm, L/min"),
+                (
+                    "leak_ext1_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_ext1_lpm, L/min",
+                ),
+                (
+                    "leak_ext2_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_ext2_lpm, L/min",
+                ),
+                (
+                    "leak_int_sigma_lpm",
+                    Num,
+                    "one standard deviation of leak_int_lpm, L/min",
+                ),
             ],
         ),
     }
@@ -420,10 +464,22 @@ mod tests {
             ..SensorFrame::default()
         };
         let msgs = [
-            (LiveTopic::Frames, serde_json::to_value(FrameMsg::from(&f)).unwrap()),
-            (LiveTopic::Estimates, serde_json::to_value(EstimateMsg::from(&e)).unwrap()),
-            (LiveTopic::Events, serde_json::to_value(EventMsg::from(&ev)).unwrap()),
-            (LiveTopic::Health, serde_json::to_value(HealthMsg::from(&h)).unwrap()),
+            (
+                LiveTopic::Frames,
+                serde_json::to_value(FrameMsg::from(&f)).unwrap(),
+            ),
+            (
+                LiveTopic::Estimates,
+                serde_json::to_value(EstimateMsg::from(&e)).unwrap(),
+            ),
+            (
+                LiveTopic::Events,
+                serde_json::to_value(EventMsg::from(&ev)).unwrap(),
+            ),
+            (
+                LiveTopic::Health,
+                serde_json::to_value(HealthMsg::from(&h)).unwrap(),
+            ),
         ];
         for (topic, msg) in &msgs {
             assert_eq!(keys(msg), keys(&schema_of(*topic)["properties"]), "{topic:?}");

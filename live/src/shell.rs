@@ -120,7 +120,8 @@ fn liveview(args: ViewArgs) -> Result<(), String> {
     // port 0 (any free port) only from the command line
     let port = args.port.unwrap_or(cfg.port);
     cfg.port = port.max(1);
-    cfg.validate().map_err(|e| format!("{e} (command line or config)"))?;
+    cfg.validate()
+        .map_err(|e| format!("{e} (command line or config)"))?;
     let batch = check_batch(args.batch_ms)?;
     let bus = open_bus(&args.rig)?;
     let mut tap = Tap::open(&bus, cfg.frames_hz, cfg.estimates_hz)?;
@@ -150,7 +151,8 @@ fn gateway(args: GatewayArgs) -> Result<(), String> {
         cfg.connect = args.connect;
     }
     cfg.estimates_hz = args.estimates_hz.unwrap_or(cfg.estimates_hz);
-    cfg.validate().map_err(|e| format!("{e} (command line or config)"))?;
+    cfg.validate()
+        .map_err(|e| format!("{e} (command line or config)"))?;
     let batch = check_batch(args.batch_ms)?;
     let bus = open_bus(&args.rig)?;
     let mut tap = Tap::open(&bus, 1.0, cfg.estimates_hz)?;

@@ -155,30 +155,50 @@ impl Tap {
             n += 1;
             self.counts.missing[0] += r.missing_before;
             let keep = self.frames_dec.keep(r.t_s) || r.is_end_of_stream();
-            pass(&mut self.counts, &mut self.buf, sink, LiveTopic::Frames, keep, || {
-                FrameMsg::from(&r.frame)
-            })?;
+            pass(
+                &mut self.counts,
+                &mut self.buf,
+                sink,
+                LiveTopic::Frames,
+                keep,
+                || FrameMsg::from(&r.frame),
+            )?;
         }
         while let Some(r) = self.estimates.try_receive().map_err(|e| e.to_string())? {
             n += 1;
             self.counts.missing[1] += r.missing_before;
             let keep = self.estimates_dec.keep(r.t_s);
-            pass(&mut self.counts, &mut self.buf, sink, LiveTopic::Estimates, keep, || {
-                EstimateMsg::from(&r.frame)
-            })?;
+            pass(
+                &mut self.counts,
+                &mut self.buf,
+                sink,
+                LiveTopic::Estimates,
+                keep,
+                || EstimateMsg::from(&r.frame),
+            )?;
         }
         while let Some(r) = self.events.try_receive().map_err(|e| e.to_string())? {
             n += 1;
-            pass(&mut self.counts, &mut self.buf, sink, LiveTopic::Events, true, || {
-                EventMsg::from(&r.frame)
-            })?;
+            pass(
+                &mut self.counts,
+                &mut self.buf,
+                sink,
+                LiveTopic::Events,
+                true,
+                || EventMsg::from(&r.frame),
+            )?;
         }
         while let Some(r) = self.health.try_receive().map_err(|e| e.to_string())? {
             n += 1;
             self.counts.missing[3] += r.missing_before;
-            pass(&mut self.counts, &mut self.buf, sink, LiveTopic::Health, true, || {
-                HealthMsg::from(&r.frame)
-            })?;
+            pass(
+                &mut self.counts,
+                &mut self.buf,
+                sink,
+                LiveTopic::Health,
+                true,
+                || HealthMsg::from(&r.frame),
+            )?;
         }
         Ok(n)
     }
@@ -211,9 +231,7 @@ mod tests {
     #[test]
     fn a_1_khz_stream_decimated_to_50_hz_keeps_every_20th_sample() {
         let mut d = Decimator::new(50.0);
-        let kept: Vec<u64> = (0..10_000u64)
-            .filter(|i| d.keep(*i as f64 * 0.001))
-            .collect();
+        let kept: Vec<u64> = (0..10_000u64).filter(|i| d.keep(*i as f64 * 0.001)).collect();
         assert_eq!(kept.len(), 500);
         assert!(kept.windows(2).all(|w| w[1] - w[0] == 20), "{:?}", &kept[..5]);
         // a new stream (time back to 0) is followed at once

@@ -1,5 +1,6 @@
-//! The live view: Foxglove's WebSocket protocol (`foxglove.websocket.v1`)
-//! served by the official `foxglove` crate, one channel per topic
+//! The live view: Foxglove's WebSocket protocol, version 1, served by the
+//! official `foxglove` crate (which names the subprotocol `foxglove.sdk.v1`,
+//! the v1 protocol formerly announced as `foxglove.websocket.v1`), one channel per topic
 //! (`/leakwatch/<rig>/frames`, `estimates`, `events`, `health`), JSON messages
 //! with JSON Schemas ([`crate::json`]). Foxglove (app or web) connects with
 //! "Open connection → Foxglove WebSocket → ws://HOST:8765".
@@ -15,8 +16,9 @@ use foxglove::{ChannelBuilder, Context, RawChannel, Schema, WebSocketServer, Web
 
 use crate::{LiveTopic, Sink};
 
-/// The WebSocket subprotocol Foxglove speaks.
-pub const SUBPROTOCOL: &str = "foxglove.websocket.v1";
+/// The WebSocket subprotocol the server accepts (the `foxglove` crate's name of
+/// Foxglove's v1 protocol, `foxglove.websocket.v1` before).
+pub const SUBPROTOCOL: &str = "foxglove.sdk.v1";
 
 /// A running live view.
 pub struct LiveView {
@@ -45,7 +47,10 @@ impl LiveView {
         }
         let info = [
             ("rig".to_string(), rig.to_string()),
-            ("units".to_string(), "SI; names end in their unit (_pa, _m, _n, _lpm, _s)".to_string()),
+            (
+                "units".to_string(),
+                "SI; names end in their unit (_pa, _m, _n, _lpm, _s)".to_string(),
+            ),
         ];
         let server = WebSocketServer::new()
             .name(format!("leakwatch {rig}"))

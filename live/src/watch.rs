@@ -109,13 +109,8 @@ pub fn watch(
             "health" => {
                 let status = text(&msg, "status");
                 if status != r.status {
-                    writeln!(
-                        out,
-                        "{rig:<12} t = {:8.3} s  status {}",
-                        num(&msg, "t_s"),
-                        status
-                    )
-                    .map_err(w)?;
+                    writeln!(out, "{rig:<12} t = {:8.3} s  status {}", num(&msg, "t_s"), status)
+                        .map_err(w)?;
                     r.status = status.to_string();
                 }
             }
@@ -140,7 +135,10 @@ mod tests {
             "size_lpm_sigma": 0.02, "t_onset_s": 20.0, "confidence": 0.9, "detector": "leak-size", "event_id": 3});
         let l = event_line("rig2", &e);
         assert!(l.starts_with("rig2         t =   21.500 s  raised   ext1"), "{l}");
-        assert!(l.contains("size 0.512 ± 0.020 L/min  onset 20.00 s  confidence 0.90  (leak-size, event 3)"), "{l}");
+        assert!(
+            l.contains("size 0.512 ± 0.020 L/min  onset 20.00 s  confidence 0.90  (leak-size, event 3)"),
+            "{l}"
+        );
         // absent fields print as such, without a panic
         let l = event_line("r", &serde_json::json!({"kind": 5}));
         assert!(l.contains("?"), "{l}");

@@ -455,8 +455,12 @@ fn live_stages(
     let v = &cfg.live_view;
     if v.enabled {
         // the live view binds it again at once
-        std::net::TcpListener::bind((v.bind.as_str(), v.port))
-            .map_err(|e| format!("--live-view {}: cannot listen on {}:{}: {e}", v.port, v.bind, v.port))?;
+        std::net::TcpListener::bind((v.bind.as_str(), v.port)).map_err(|e| {
+            format!(
+                "--live-view {}: cannot listen on {}:{}: {e}",
+                v.port, v.bind, v.port
+            )
+        })?;
     }
     if v.enabled && !quiet {
         outln!(
