@@ -26,6 +26,7 @@ pub use model::Sample;
 
 mod limits;
 pub mod output;
+pub mod parquet;
 mod reader;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};

@@ -16,7 +16,7 @@ pub mod tuning;
 
 use model::process::{ProcessModel, I_FE, N_MEAS};
 use model::{ActuatorParams, Sample};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 
 pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
@@ -427,10 +427,9 @@ fn step_filter<const N: usize>(
 ) -> Result<bool, EkfError> {
     let (x_pred, f, guard) = model.step(e.state(), u);
     e.predict(x_pred, &f)?;
-    let h: SMatrix<f64, 3, N> = ProcessModel::measurement_matrix::<N>();
     let y_pred = ProcessModel::measure(e.state());
     if usable {
-        let inn = e.update(y, &y_pred, &h, use_channel)?;
+        let inn = e.update_selected(y, &y_pred, ProcessModel::MEASURED_STATES, use_channel)?;
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);

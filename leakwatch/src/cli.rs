@@ -193,9 +193,12 @@ pub(crate) enum Command {
         /// States of the thesis filter: 6 (friction from the model) or 7 (estimated load F_e).
         #[arg(long)]
         model: Option<u32>,
-        /// Output directory: estimates.csv, events.json, summary.json.
+        /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
         #[arg(long)]
         out: PathBuf,
+        /// Format of the estimates file: csv (text) or parquet (columns, for pandas, polars, pyarrow; same values bit for bit).
+        #[arg(long, value_enum, default_value_t)]
+        estimates: crate::estimates_out::EstimatesFormat,
         /// Run all stages in one thread instead of over channels (same results).
         #[arg(long)]
         single_thread: bool,
@@ -318,6 +321,20 @@ pub(crate) enum BenchCommand {
         #[arg(long, default_value_t = 20.0)]
         seconds: f64,
         /// Output directory for latency.json.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// N rigs side by side on this host (each a whole `run`: four stage processes and a
+    /// supervisor), for each N: CPU per rig, latency medians and tails, frames lost, and the
+    /// capacity that implies for this host and (an estimate) a 16-core rig PC.
+    Scale {
+        /// Numbers of rigs to run side by side, one after the other.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
+        rigs: Vec<usize>,
+        /// Seconds per run.
+        #[arg(long, default_value_t = 20.0)]
+        seconds: f64,
+        /// Output directory for scale.json and the runs' outputs.
         #[arg(long)]
         out: PathBuf,
     },

@@ -153,6 +153,8 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     }
     crate::out::dir(out)?;
     crate::out::check(&out.join("latency.json"), force, &[])?;
+    // the machine's floors first, on an otherwise idle machine
+    let floors = crate::floors::measure(seconds.min(10.0))?;
     let mut rows = Vec::new();
     for mode in ["event", "low-latency"] {
         let args = crate::run::RunArgs {
@@ -239,8 +241,11 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             f(r.estimator_cpu * 100.0)
         );
     }
+    outln!("");
+    crate::floors::print(&floors)?;
     let p = out.join("latency.json");
-    let text = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())? + "\n";
+    let json = serde_json::json!({ "pipeline": rows, "floors": floors });
+    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())? + "\n";
     crate::out::write(&p, text.as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())

@@ -9,6 +9,8 @@ mod config;
 #[cfg(test)]
 mod config_fuzz;
 mod demo;
+mod estimates_out;
+mod floors;
 mod latency;
 mod logs;
 mod model_file;
@@ -17,6 +19,7 @@ mod plots;
 mod replay;
 mod replay_cmd;
 mod run;
+mod scale;
 mod simulate;
 mod watch;
 
@@ -108,6 +111,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
@@ -116,6 +120,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
+            estimates,
             single_thread,
             thesis_baseline,
             max_bad_rows,
@@ -161,6 +166,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 out,
             } => benches::calibration(matrix, data, config, json, out, force),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
+            BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
             BenchCommand::Detection {
                 threads,
                 data: Some(data),

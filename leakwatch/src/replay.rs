@@ -3,7 +3,6 @@
 //! thread; both give the same output bit for bit).
 
 use std::collections::BTreeMap;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -14,6 +13,7 @@ use model::Sample;
 use serde::Serialize;
 
 use crate::config::Config;
+use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 
 /// How the stages are connected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -46,6 +46,8 @@ pub struct ReplayRequest {
     pub protect: Vec<PathBuf>,
     /// When the input was exported from a recorded log: what reading it skipped.
     pub log: Option<LogDamage>,
+    /// Format of the estimates file (estimates.csv or estimates.parquet).
+    pub estimates: EstimatesFormat,
 }
 
 /// What reading a recorded log (MCAP) skipped, reported in summary.json.
@@ -183,86 +185,6 @@ impl Acc {
     }
 }
 
-/// Header of estimates.csv.
-pub const ESTIMATES_HEADER: &str =
-    "t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm,q_e2_lpm,q_i_lpm,\
-spool_bias,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
-th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
-
-/// One CSV row being assembled: floats in shortest round-trip form, by `zmij`
-/// (parsing a cell gives back the exact f64; NaN is `NaN`, infinities `inf`/`-inf`).
-struct CsvLine {
-    floats: zmij::Buffer,
-    bytes: [u8; 1024],
-    len: usize,
-}
-
-impl CsvLine {
-    fn new() -> Self {
-        CsvLine {
-            floats: zmij::Buffer::new(),
-            bytes: [0; 1024],
-            len: 0,
-        }
-    }
-
-    /// Appends `v` (after a comma unless it is the first cell).
-    fn float(&mut self, v: f64) {
-        let text = self.floats.format(v).as_bytes();
-        if self.len > 0 {
-            self.bytes[self.len] = b',';
-            self.len += 1;
-        }
-        self.bytes[self.len..self.len + text.len()].copy_from_slice(text);
-        self.len += text.len();
-    }
-
-    /// Appends an integer cell.
-    fn int(&mut self, v: u32) {
-        let mut digits = itoa::Buffer::new();
-        let text = digits.format(v).as_bytes();
-        self.bytes[self.len] = b',';
-        self.bytes[self.len + 1..self.len + 1 + text.len()].copy_from_slice(text);
-        self.len += 1 + text.len();
-    }
-}
-
-/// Writes one estimates.csv row (floats in shortest round-trip form: parsing a
-/// cell gives back the exact f64).
-pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Result<()> {
-    let e = &s.leak;
-    let t = &s.thesis;
-    let lpm = |v: f64| v * 6.0e4;
-    // 36 floats of at most 24 bytes and two flags: well inside the row's 1024 bytes
-    let mut row = CsvLine::new();
-    for v in [e.t_s, e.u_v, e.measured[0], e.measured[1], e.measured[2]] {
-        row.float(v);
-    }
-    for v in &e.state[..7] {
-        row.float(*v);
-    }
-    for v in [lpm(e.state[7]), lpm(e.state[8]), lpm(e.state[9]), e.state[10]] {
-        row.float(v);
-    }
-    for v in e.residual.iter().chain(e.innovation.iter()) {
-        row.float(*v);
-    }
-    row.float(e.nis);
-    row.int(e.flags);
-    for v in [t.state[3], t.state[1], t.state[2], t.state[4], t.state[6]] {
-        row.float(v);
-    }
-    for v in t.residual.iter() {
-        row.float(*v);
-    }
-    for v in [t.innovation[1], t.innovation[2], t.mae_pa[0], t.mae_pa[1], t.nis] {
-        row.float(v);
-    }
-    row.int(t.flags);
-    row.bytes[row.len] = b'\n';
-    w.write_all(&row.bytes[..row.len + 1])
-}
-
 /// Writes events as a JSON array (NaN becomes null); an existing file only if
 /// `force`, none of `inputs` ever (see [`crate::out::write`]).
 pub fn write_events(path: &Path, events: &[LeakEvent], force: bool, inputs: &[&Path]) -> Result<(), String> {
@@ -277,12 +199,12 @@ enum Batch {
 
 const BATCH: usize = 2048;
 
-/// Runs a replay and writes estimates.csv, events.json and summary.json into the output directory.
+/// Runs a replay and writes estimates.csv (or .parquet), events.json and summary.json into the output directory.
 pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     crate::out::dir(&req.out_dir)?;
     let mut inputs: Vec<&Path> = vec![req.input.as_path()];
     inputs.extend(req.protect.iter().map(|p| p.as_path()));
-    let est_path = req.out_dir.join("estimates.csv");
+    let est_path = req.out_dir.join(req.estimates.file_name());
     let events_path = req.out_dir.join("events.json");
     let summary_path = req.out_dir.join("summary.json");
     // Refuse before reading or writing anything.
@@ -293,8 +215,8 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
     let file = crate::out::create(&est_path, req.overwrite, &inputs)?;
-    let mut out = BufWriter::with_capacity(1 << 20, file);
-    writeln!(out, "{ESTIMATES_HEADER}").map_err(|e| format!("{}: {e}", est_path.display()))?;
+    let mut out =
+        EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{}: {e}", est_path.display()))?;
 
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     let mut cls = Classifier::new(cfg.classifier.clone())?;
@@ -326,7 +248,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         acc.1.push(&s.thesis);
         cls.on_stage(s, |ev| events.push(ev));
         if write_err.is_none() {
-            if let Err(e) = write_estimate_row(&mut out, s) {
+            if let Err(e) = out.write(s) {
                 write_err = Some(format!("{}: {e}", est_path.display()));
             }
         }
@@ -434,7 +356,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     if let Some(e) = write_err {
         return Err(e);
     }
-    out.flush().map_err(|e| format!("{}: {e}", est_path.display()))?;
+    out.finish().map_err(|e| format!("{}: {e}", est_path.display()))?;
     summary.wall_s = started.elapsed().as_secs_f64();
     summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
     summary.samples_missing = stage.missing_samples();

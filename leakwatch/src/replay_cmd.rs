@@ -17,6 +17,8 @@ pub struct ReplayArgs {
     pub model: Option<u32>,
     /// Output directory.
     pub out: PathBuf,
+    /// Format of the estimates file.
+    pub estimates: crate::estimates_out::EstimatesFormat,
     /// Run all stages in one thread instead of over channels.
     pub single_thread: bool,
     /// Also report the thesis' MAE detector's decisions.
@@ -34,6 +36,7 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         config,
         model,
         out,
+        estimates,
         single_thread,
         thesis_baseline,
         max_bad_rows,
@@ -79,6 +82,7 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         overwrite: force,
         protect,
         log,
+        estimates,
     };
     let (cfg_nis_gate, cfg_recovery_s) = (req.config.classifier.nis_gate, req.config.classifier.recovery_s);
     let s = replay::run(&req)?;

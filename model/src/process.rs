@@ -114,6 +114,10 @@ impl ProcessModel {
         SVector::<f64, N_MEAS>::new(s[3], s[1], s[2])
     }
 
+    /// The states the measurement y = [x, p1, p2] reads, in its order (H is
+    /// the selector of these states).
+    pub const MEASURED_STATES: [usize; N_MEAS] = [3, 1, 2];
+
     /// The measurement matrix H (selects x, p1, p2).
     pub fn measurement_matrix<const N: usize>() -> SMatrix<f64, N_MEAS, N> {
         let mut h = SMatrix::<f64, N_MEAS, N>::zeros();

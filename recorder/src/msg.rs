@@ -241,50 +241,58 @@ pub trait Message: Sized {
     }
 }
 
+/// Writes and reads a record type's fields in the order listed, each with its
+/// codec: `u32`, `u64`, `f64`, `f64s` (a fixed array), `text` (a fixed byte
+/// buffer as a string), `code(NAMES)` (a code as its name) or `zero` (padding,
+/// not on the wire, read as 0). Reading builds the struct literally, so a field
+/// added to the type and not listed here does not compile.
+macro_rules! cdr_fields {
+    ($ty:ident { $($field:ident: $codec:ident $(($names:expr))?),* $(,)? }) => {
+        fn write_cdr(&self, w: &mut CdrWriter<'_>) {
+            $( cdr_fields!(@write w, self.$field, $codec $(($names))?); )*
+        }
+
+        fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
+            Ok($ty {
+                $( $field: cdr_fields!(@read r, stringify!($field), $codec $(($names))?), )*
+            })
+        }
+    };
+    (@write $w:ident, $v:expr, u32) => { $w.u32($v) };
+    (@write $w:ident, $v:expr, u64) => { $w.u64($v) };
+    (@write $w:ident, $v:expr, f64) => { $w.f64($v) };
+    (@write $w:ident, $v:expr, f64s) => { $w.f64s(&$v) };
+    (@write $w:ident, $v:expr, text) => { $w.string(frames::text(&$v)) };
+    (@write $w:ident, $v:expr, code($names:expr)) => { $w.string(&code_name(&$names, $v)) };
+    (@write $w:ident, $v:expr, zero) => { let _ = $v; };
+    (@read $r:ident, $name:expr, u32) => { $r.u32($name)? };
+    (@read $r:ident, $name:expr, u64) => { $r.u64($name)? };
+    (@read $r:ident, $name:expr, f64) => { $r.f64($name)? };
+    (@read $r:ident, $name:expr, f64s) => { $r.f64s($name)? };
+    (@read $r:ident, $name:expr, text) => { $r.text($name)? };
+    (@read $r:ident, $name:expr, code($names:expr)) => { $r.code(&$names, $name)? };
+    (@read $r:ident, $name:expr, zero) => { Default::default() };
+}
+
 impl Message for SensorFrame {
     const MSG_TYPE: &'static str = "leakwatch/msg/SensorFrame";
     const DEFINITION: &'static str = include_str!("../msg/SensorFrame.msg");
 
-    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
-        // every field by name: a field added to the frame must be added here
-        let SensorFrame {
-            seq,
-            acq_mono_ns,
-            t_s,
-            u_v,
-            x_m,
-            p1_pa,
-            p2_pa,
-            x_sp_m,
-            f_load_n,
-            ref_m,
-            q_leak_lpm,
-            flags,
-            _pad: _,
-        } = *self;
-        w.u64(seq);
-        w.u64(acq_mono_ns);
-        w.f64s(&[t_s, u_v, x_m, p1_pa, p2_pa, x_sp_m, f_load_n, ref_m, q_leak_lpm]);
-        w.u32(flags);
-    }
-
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
-        Ok(SensorFrame {
-            seq: r.u64("seq")?,
-            acq_mono_ns: r.u64("acq_mono_ns")?,
-            t_s: r.f64("t_s")?,
-            u_v: r.f64("u_v")?,
-            x_m: r.f64("x_m")?,
-            p1_pa: r.f64("p1_pa")?,
-            p2_pa: r.f64("p2_pa")?,
-            x_sp_m: r.f64("x_sp_m")?,
-            f_load_n: r.f64("f_load_n")?,
-            ref_m: r.f64("ref_m")?,
-            q_leak_lpm: r.f64("q_leak_lpm")?,
-            flags: r.u32("flags")?,
-            _pad: 0,
-        })
-    }
+    cdr_fields!(SensorFrame {
+        seq: u64,
+        acq_mono_ns: u64,
+        t_s: f64,
+        u_v: f64,
+        x_m: f64,
+        p1_pa: f64,
+        p2_pa: f64,
+        x_sp_m: f64,
+        f_load_n: f64,
+        ref_m: f64,
+        q_leak_lpm: f64,
+        flags: u32,
+        _pad: zero,
+    });
 }
 
 impl Message for EstimateFrame {
@@ -297,150 +305,57 @@ impl Message for EstimateFrame {
         dependency!("ThesisState"),
     );
 
-    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
-        let EstimateFrame {
-            seq,
-            acq_mono_ns,
-            est_recv_mono_ns,
-            est_done_mono_ns,
-            t_s,
-            n_states,
-            flags,
-            state,
-            state_sigma,
-            residual,
-            innovation,
-            innovation_sigma,
-            measured,
-            u_v,
-            nis,
-            mae_pa,
-            th_flags,
-            _pad: _,
-            th_state,
-            th_residual,
-            th_innovation,
-            th_mae_pa,
-            th_nis,
-        } = self;
-        w.u64(*seq);
-        w.u64(*acq_mono_ns);
-        w.u64(*est_recv_mono_ns);
-        w.u64(*est_done_mono_ns);
-        w.f64(*t_s);
-        w.u32(*n_states);
-        w.u32(*flags);
-        w.f64s(state);
-        w.f64s(state_sigma);
-        w.f64s(residual);
-        w.f64s(innovation);
-        w.f64s(innovation_sigma);
-        w.f64s(measured);
-        w.f64(*u_v);
-        w.f64(*nis);
-        w.f64s(mae_pa);
-        w.u32(*th_flags);
-        w.f64s(th_state);
-        w.f64s(th_residual);
-        w.f64s(th_innovation);
-        w.f64s(th_mae_pa);
-        w.f64(*th_nis);
-    }
-
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
-        Ok(EstimateFrame {
-            seq: r.u64("seq")?,
-            acq_mono_ns: r.u64("acq_mono_ns")?,
-            est_recv_mono_ns: r.u64("est_recv_mono_ns")?,
-            est_done_mono_ns: r.u64("est_done_mono_ns")?,
-            t_s: r.f64("t_s")?,
-            n_states: r.u32("n_states")?,
-            flags: r.u32("flags")?,
-            state: r.f64s("state")?,
-            state_sigma: r.f64s("state_sigma")?,
-            residual: r.f64s("residual")?,
-            innovation: r.f64s("innovation")?,
-            innovation_sigma: r.f64s("innovation_sigma")?,
-            measured: r.f64s("measured")?,
-            u_v: r.f64("u_v")?,
-            nis: r.f64("nis")?,
-            mae_pa: r.f64s("mae_pa")?,
-            th_flags: r.u32("th_flags")?,
-            _pad: 0,
-            th_state: r.f64s("th_state")?,
-            th_residual: r.f64s("th_residual")?,
-            th_innovation: r.f64s("th_innovation")?,
-            th_mae_pa: r.f64s("th_mae_pa")?,
-            th_nis: r.f64("th_nis")?,
-        })
-    }
+    cdr_fields!(EstimateFrame {
+        seq: u64,
+        acq_mono_ns: u64,
+        est_recv_mono_ns: u64,
+        est_done_mono_ns: u64,
+        t_s: f64,
+        n_states: u32,
+        flags: u32,
+        state: f64s,
+        state_sigma: f64s,
+        residual: f64s,
+        innovation: f64s,
+        innovation_sigma: f64s,
+        measured: f64s,
+        u_v: f64,
+        nis: f64,
+        mae_pa: f64s,
+        th_flags: u32,
+        _pad: zero,
+        th_state: f64s,
+        th_residual: f64s,
+        th_innovation: f64s,
+        th_mae_pa: f64s,
+        th_nis: f64,
+    });
 }
 
 impl Message for LeakEventFrame {
     const MSG_TYPE: &'static str = "leakwatch/msg/LeakEventFrame";
     const DEFINITION: &'static str = include_str!("../msg/LeakEventFrame.msg");
 
-    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
-        let LeakEventFrame {
-            seq,
-            acq_mono_ns,
-            cls_done_mono_ns,
-            event_id,
-            kind,
-            phase,
-            t_detect_s,
-            t_onset_s,
-            size_lpm,
-            size_lpm_sigma,
-            confidence,
-            detector,
-            size_nominal_lpm,
-            coefficient_m3_s_sqrt_pa,
-            statistic,
-            threshold,
-            channel,
-            detail,
-        } = self;
-        w.u64(*seq);
-        w.u64(*acq_mono_ns);
-        w.u64(*cls_done_mono_ns);
-        w.u64(*event_id);
-        w.string(&code_name(&event_kind::NAMES, *kind));
-        w.string(&code_name(&event_phase::NAMES, *phase));
-        w.f64s(&[*t_detect_s, *t_onset_s, *size_lpm, *size_lpm_sigma, *confidence]);
-        w.string(frames::text(detector));
-        w.f64s(&[
-            *size_nominal_lpm,
-            *coefficient_m3_s_sqrt_pa,
-            *statistic,
-            *threshold,
-        ]);
-        w.string(frames::text(channel));
-        w.string(frames::text(detail));
-    }
-
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
-        Ok(LeakEventFrame {
-            seq: r.u64("seq")?,
-            acq_mono_ns: r.u64("acq_mono_ns")?,
-            cls_done_mono_ns: r.u64("cls_done_mono_ns")?,
-            event_id: r.u64("event_id")?,
-            kind: r.code(&event_kind::NAMES, "kind")?,
-            phase: r.code(&event_phase::NAMES, "phase")?,
-            t_detect_s: r.f64("t_detect_s")?,
-            t_onset_s: r.f64("t_onset_s")?,
-            size_lpm: r.f64("size_lpm")?,
-            size_lpm_sigma: r.f64("size_lpm_sigma")?,
-            confidence: r.f64("confidence")?,
-            detector: r.text("detector")?,
-            size_nominal_lpm: r.f64("size_nominal_lpm")?,
-            coefficient_m3_s_sqrt_pa: r.f64("coefficient_m3_s_sqrt_pa")?,
-            statistic: r.f64("statistic")?,
-            threshold: r.f64("threshold")?,
-            channel: r.text("channel")?,
-            detail: r.text("detail")?,
-        })
-    }
+    cdr_fields!(LeakEventFrame {
+        seq: u64,
+        acq_mono_ns: u64,
+        cls_done_mono_ns: u64,
+        event_id: u64,
+        kind: code(event_kind::NAMES),
+        phase: code(event_phase::NAMES),
+        t_detect_s: f64,
+        t_onset_s: f64,
+        size_lpm: f64,
+        size_lpm_sigma: f64,
+        confidence: f64,
+        detector: text,
+        size_nominal_lpm: f64,
+        coefficient_m3_s_sqrt_pa: f64,
+        statistic: f64,
+        threshold: f64,
+        channel: text,
+        detail: text,
+    });
 }
 
 impl Message for HealthFrame {
@@ -448,100 +363,38 @@ impl Message for HealthFrame {
     const DEFINITION: &'static str =
         concat!(include_str!("../msg/HealthFrame.msg"), dependency!("LeakFlows"));
 
-    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
-        let HealthFrame {
-            seq,
-            mono_ns,
-            t_s,
-            status,
-            active_events,
-            leak_flow_lpm,
-            leak_flow_sigma_lpm,
-        } = self;
-        w.u64(*seq);
-        w.u64(*mono_ns);
-        w.f64(*t_s);
-        w.string(&code_name(&health_status::NAMES, *status));
-        w.u32(*active_events);
-        w.f64s(leak_flow_lpm);
-        w.f64s(leak_flow_sigma_lpm);
-    }
-
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
-        Ok(HealthFrame {
-            seq: r.u64("seq")?,
-            mono_ns: r.u64("mono_ns")?,
-            t_s: r.f64("t_s")?,
-            status: r.code(&health_status::NAMES, "status")?,
-            active_events: r.u32("active_events")?,
-            leak_flow_lpm: r.f64s("leak_flow_lpm")?,
-            leak_flow_sigma_lpm: r.f64s("leak_flow_sigma_lpm")?,
-        })
-    }
+    cdr_fields!(HealthFrame {
+        seq: u64,
+        mono_ns: u64,
+        t_s: f64,
+        status: code(health_status::NAMES),
+        active_events: u32,
+        leak_flow_lpm: f64s,
+        leak_flow_sigma_lpm: f64s,
+    });
 }
 
 impl Message for StatsFrame {
     const MSG_TYPE: &'static str = "leakwatch/msg/StatsFrame";
     const DEFINITION: &'static str = include_str!("../msg/StatsFrame.msg");
 
-    fn write_cdr(&self, w: &mut CdrWriter<'_>) {
-        let StatsFrame {
-            mono_ns,
-            pid,
-            stage: stage_code,
-            frames_in,
-            frames_out,
-            seq_gaps,
-            deadline_misses,
-            proc_ns_p50,
-            proc_ns_p99,
-            proc_ns_max,
-            lat_ns_p50,
-            lat_ns_p99,
-            lat_ns_max,
-            cpu_fraction,
-            rss_bytes,
-        } = *self;
-        w.u64(mono_ns);
-        w.u32(pid);
-        w.string(&code_name(&stage::NAMES, stage_code));
-        for v in [
-            frames_in,
-            frames_out,
-            seq_gaps,
-            deadline_misses,
-            proc_ns_p50,
-            proc_ns_p99,
-            proc_ns_max,
-            lat_ns_p50,
-            lat_ns_p99,
-            lat_ns_max,
-        ] {
-            w.u64(v);
-        }
-        w.f64(cpu_fraction);
-        w.u64(rss_bytes);
-    }
-
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, String> {
-        Ok(StatsFrame {
-            mono_ns: r.u64("mono_ns")?,
-            pid: r.u32("pid")?,
-            stage: r.code(&stage::NAMES, "stage")?,
-            frames_in: r.u64("frames_in")?,
-            frames_out: r.u64("frames_out")?,
-            seq_gaps: r.u64("seq_gaps")?,
-            deadline_misses: r.u64("deadline_misses")?,
-            proc_ns_p50: r.u64("proc_ns_p50")?,
-            proc_ns_p99: r.u64("proc_ns_p99")?,
-            proc_ns_max: r.u64("proc_ns_max")?,
-            lat_ns_p50: r.u64("lat_ns_p50")?,
-            lat_ns_p99: r.u64("lat_ns_p99")?,
-            lat_ns_max: r.u64("lat_ns_max")?,
-            cpu_fraction: r.f64("cpu_fraction")?,
-            rss_bytes: r.u64("rss_bytes")?,
-        })
-    }
+    cdr_fields!(StatsFrame {
+        mono_ns: u64,
+        pid: u32,
+        stage: code(stage::NAMES),
+        frames_in: u64,
+        frames_out: u64,
+        seq_gaps: u64,
+        deadline_misses: u64,
+        proc_ns_p50: u64,
+        proc_ns_p99: u64,
+        proc_ns_max: u64,
+        lat_ns_p50: u64,
+        lat_ns_p99: u64,
+        lat_ns_max: u64,
+        cpu_fraction: f64,
+        rss_bytes: u64,
+    });
 }
 
 /// The topic of a gap record by its name.

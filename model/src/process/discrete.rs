@@ -19,8 +19,13 @@ impl ProcessModel {
         let mut jac = SMatrix::<f64, N, N>::identity();
         for i in 0..n {
             let lin = self.linearise(&x, u_v);
-            let step_jac = SMatrix::<f64, N, N>::identity() + lin.a * h;
             x += lin.f * h;
+            // I + A·h, built in place (A is sparse: most entries stay 0 or 1).
+            let mut step_jac = lin.a;
+            step_jac *= h;
+            for d in 0..N {
+                step_jac[(d, d)] += 1.0;
+            }
             jac = if i == 0 { step_jac } else { step_jac * jac };
         }
         let guard = self.keep_physical(&mut x);

@@ -1,0 +1,149 @@
+//! `leakwatch replay --estimates parquet`: the columnar estimates file holds
+//! the same values as estimates.csv, bit for bit, and pyarrow (what pandas
+//! and polars use) reads it with its column names and types; the events do
+//! not depend on the format.
+//!
+//! Needs python3 with `pyarrow` (.ci/setup installs it). CI sets
+//! LEAKWATCH_REQUIRE_PYTHON=1, so the test must run there; elsewhere it says
+//! it was skipped.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn leakwatch(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(args)
+        .output()
+        .expect("the leakwatch binary runs")
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("leakwatch-parquet-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Reads the Parquet file with pyarrow, compares every cell with the CSV
+/// (parsed as f64; NaN equals NaN) and prints a JSON summary.
+const SCRIPT: &str = r#"
+import csv, json, math, sys
+import pyarrow.parquet as pq
+f = pq.ParquetFile(sys.argv[1])
+table = f.read()
+cols = {n: table.column(n).to_pylist() for n in table.column_names}
+with open(sys.argv[2]) as fh:
+    rows = csv.reader(fh)
+    header = next(rows)
+    mismatches = 0
+    n = 0
+    for i, row in enumerate(rows):
+        n += 1
+        for j, name in enumerate(header):
+            a, b = float(row[j]), cols[name][i]
+            if not (a == b or (math.isnan(a) and math.isnan(b))):
+                mismatches += 1
+print(json.dumps({
+    "names": table.column_names,
+    "csv_header": header,
+    "rows": table.num_rows,
+    "csv_rows": n,
+    "row_groups": f.num_row_groups,
+    "types": {n: str(table.schema.field(n).type) for n in ("t", "p1", "q_e1_lpm", "flags", "th_flags")},
+    "mismatches": mismatches,
+    "t_last": cols["t"][-1],
+}))
+"#;
+
+fn pyarrow() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import pyarrow.parquet"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok {
+        assert!(
+            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
+            "python3 with pyarrow is required (.ci/setup installs it)"
+        );
+        eprintln!("SKIPPED: python3 with pyarrow is not installed");
+    }
+    ok
+}
+
+fn replay(input: &Path, out: &Path, format: &str) {
+    let o = leakwatch(&[
+        "replay",
+        input.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--estimates",
+        format,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
+    let d = tmpdir("roundtrip");
+    let input = d.join("in.csv");
+    // 70 s at 1 kHz: 70,000 rows, more than one row group of 65,536
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "closed-loop-sine",
+        "--seconds",
+        "70",
+        "--fault",
+        "ext1:0.5lpm@40s",
+        "--out",
+        input.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (csv_dir, pq_dir) = (d.join("csv"), d.join("parquet"));
+    replay(&input, &csv_dir, "csv");
+    replay(&input, &pq_dir, "parquet");
+    assert!(!pq_dir.join("estimates.csv").exists());
+    let pq_file = pq_dir.join("estimates.parquet");
+    let bytes = std::fs::read(&pq_file).unwrap();
+    assert_eq!(&bytes[..4], b"PAR1");
+    assert_eq!(&bytes[bytes.len() - 4..], b"PAR1");
+    // 36 f64 and 2 i32 columns of 70,000 values, plus headers and footer
+    let values = 70_000 * (36 * 8 + 2 * 4);
+    assert!(
+        bytes.len() > values && bytes.len() < values + 20_000,
+        "{} bytes",
+        bytes.len()
+    );
+    // the events do not depend on the estimates' format, and the leak is found
+    let events = |dir: &Path| std::fs::read_to_string(dir.join("events.json")).unwrap();
+    assert_eq!(events(&csv_dir), events(&pq_dir));
+    assert!(events(&pq_dir).contains("\"ext1\""), "{}", events(&pq_dir));
+
+    if !pyarrow() {
+        return;
+    }
+    let o = Command::new("python3")
+        .args([
+            "-c",
+            SCRIPT,
+            pq_file.to_str().unwrap(),
+            csv_dir.join("estimates.csv").to_str().unwrap(),
+        ])
+        .output()
+        .expect("python3 runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["names"], v["csv_header"]);
+    assert_eq!(v["names"].as_array().unwrap().len(), 38);
+    assert_eq!(v["rows"], 70_000);
+    assert_eq!(v["csv_rows"], 70_000);
+    assert_eq!(v["row_groups"], 2);
+    assert_eq!(v["mismatches"], 0, "{v}");
+    assert_eq!(v["types"]["t"], "double");
+    assert_eq!(v["types"]["q_e1_lpm"], "double");
+    assert_eq!(v["types"]["flags"], "int32");
+    assert_eq!(v["types"]["th_flags"], "int32");
+    assert!((v["t_last"].as_f64().unwrap() - 69.999).abs() < 1e-9, "{v}");
+    let _ = std::fs::remove_dir_all(&d);
+}
