@@ -46,6 +46,8 @@ async def main():
     ap.add_argument("--min", type=int, default=1, help="messages per channel for --until-all")
     ap.add_argument("--until-all", action="store_true")
     ap.add_argument("--connect-timeout", type=float, default=20.0)
+    ap.add_argument("--stall", action="store_true",
+                    help="subscribe, then stop reading (a slow client: the server must drop, not wait)")
     args = ap.parse_args()
 
     try:
@@ -82,6 +84,10 @@ async def main():
                         }
                         subs.append({"id": sub_id, "channelId": ch["id"]})
                     await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+                    if args.stall:
+                        # read nothing more: the socket buffers fill, the server's backlog drops
+                        await asyncio.sleep(max(0.0, args.seconds - (time.monotonic() - start)))
+                        break
                 continue
             if len(raw) < 13 or raw[0] != OP_MESSAGE_DATA:
                 out["bad"] += 1

@@ -287,6 +287,61 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     assert!((15_000..=16_000).contains(&frames_in), "{log}");
 }
 
+/// A client that subscribes to everything at 1 kHz and then reads nothing
+/// does not slow the pipeline: the live view drops what the client cannot
+/// take, the estimator and classifier miss no frame, and the live view keeps
+/// up with the bus (no frame missing from its own subscriptions).
+#[test]
+fn a_stalled_live_view_client_costs_the_pipeline_nothing() {
+    if !python_with("websockets") {
+        return;
+    }
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmpdir("stall");
+    let cfg = short_warmup_config(&dir, "[live_view]\nframes_hz = 1000.0\nestimates_hz = 1000.0\n");
+    let out = dir.join("run");
+    let port = free_port().to_string();
+    let run = Command::new(BIN)
+        .args(["run", "--rig", "lv2", "--seconds", "12", "--fault", "none"])
+        .args(["--live-view", &port, "--config"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let client = Command::new("python3")
+        .arg(example("liveview/foxglove_client.py"))
+        .arg(format!("ws://127.0.0.1:{port}"))
+        .args(["--seconds", "16", "--stall"])
+        .output()
+        .unwrap();
+    let run = run.wait_with_output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        client.status.success(),
+        "{}",
+        String::from_utf8_lossy(&client.stderr)
+    );
+    let lat = json(&out.join("latency.json"));
+    for stage in ["estimator", "classifier"] {
+        let s = &lat["stages"][stage];
+        assert_eq!(s["frames_in"], 12_000, "{stage}: {s}");
+        assert_eq!(s["seq_gaps"], 0, "{stage}: {s}");
+    }
+    let log = std::fs::read_to_string(out.join("liveview.log")).unwrap();
+    assert!(log.contains("missing frames 0, estimates 0"), "{log}");
+    // it did send (to the client's socket and backlog) at 1 kHz while subscribed
+    let sent: u64 = log
+        .split("sent frames ")
+        .nth(1)
+        .and_then(|s| s.split(',').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {log}"));
+    assert!(sent > 5_000, "{log}");
+}
+
 fn publish_health(h: &mut bus::Publisher<HealthFrame>, seq: &mut u64, status: u32, leak: [f64; 3]) {
     *seq += 1;
     h.send(&HealthFrame {
