@@ -219,7 +219,18 @@ pub fn bench_thesis(opts: &CalibrateOptions) -> BenchReport {
 
 /// Runs `list` on `threads` threads (at least one) and collects the table, rows in the order of `list`.
 pub fn bench_cases(list: &[SuiteCase], opts: &CalibrateOptions, threads: usize) -> BenchReport {
+    bench_cases_with_progress(list, opts, threads, &|_, _| {})
+}
+
+/// [`bench_cases`], calling `progress(done, total)` as each case finishes (from the worker threads).
+pub fn bench_cases_with_progress(
+    list: &[SuiteCase],
+    opts: &CalibrateOptions,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> BenchReport {
     let t0 = Instant::now();
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let threads = threads.clamp(1, list.len().max(1));
     let next = std::sync::atomic::AtomicUsize::new(0);
     let mut rows: Vec<(usize, CaseResult)> = std::thread::scope(|s| {
@@ -231,6 +242,8 @@ pub fn bench_cases(list: &[SuiteCase], opts: &CalibrateOptions, threads: usize) 
                         let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                         let Some(c) = list.get(i) else { break };
                         out.push((i, run_case(c, opts)));
+                        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                        progress(d, list.len());
                     }
                     out
                 })

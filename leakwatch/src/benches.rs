@@ -200,6 +200,9 @@ pub fn detection(
         force,
         &[],
     )?;
+    for name in ["detection.md", "detection.png"] {
+        eprintln!("wrote {}", out.join(name).display());
+    }
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     write_json(out, "detection.json", &json, force)
 }
@@ -242,6 +245,7 @@ pub fn detection_data(
         force,
         &inputs,
     )?;
+    eprintln!("wrote {}", out.join("detection.md").display());
     let json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     write_json(out, "detection.json", &json, force)
 }
@@ -278,15 +282,21 @@ pub fn calibration(
         bar.finish_and_clear();
         vec![("data", r)]
     } else if matrix {
+        let shooting = calibrate::CalibrateOptions::shooting();
         vec![(
             "matrix",
-            calibrate::suite::bench_matrix(&calibrate::CalibrateOptions::shooting()),
+            suite_with_bar("smooth-rig matrix", &calibrate::suite::matrix_cases(), &shooting),
         )]
     } else {
-        eprintln!("smooth rig (16 cases), then the stick-slip rig (32 cases) ...");
         vec![
-            ("smooth", calibrate::suite::bench(&opts)),
-            ("thesis", calibrate::suite::bench_thesis(&opts)),
+            (
+                "smooth",
+                suite_with_bar("smooth rig", &calibrate::suite::cases(), &opts),
+            ),
+            (
+                "thesis",
+                suite_with_bar("stick-slip rig", &calibrate::suite::thesis_cases(), &opts),
+            ),
         ]
     };
     if json {
@@ -314,4 +324,21 @@ pub fn calibration(
         }
     }
     Ok(())
+}
+
+/// One calibration suite on two threads, with a progress bar of its cases on stderr.
+fn suite_with_bar(
+    name: &str,
+    cases: &[calibrate::suite::SuiteCase],
+    opts: &calibrate::CalibrateOptions,
+) -> calibrate::BenchReport {
+    let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg}: {bar:30} {pos}/{len} cases  {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message(name.to_string());
+    let r = calibrate::suite::bench_cases_with_progress(cases, opts, 2, &|d, _| bar.set_position(d as u64));
+    bar.finish();
+    r
 }

@@ -42,10 +42,10 @@ impl From<RigVariant> for model::FrictionPreset {
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// One stage process of `run`, from this binary: `leakwatch stage NAME [ARGS]...` with
-    /// NAME acquisition, estimator, classifier, recorder, or estimator+classifier (those two in one
-    /// process) (ARGS: `leakwatch stage NAME --help`).
+    /// NAME acquisition, estimator, classifier, recorder, estimator+classifier (those two in one
+    /// process), liveview or gateway (ARGS: `leakwatch stage NAME --help`).
     Stage {
-        /// acquisition, estimator, classifier, recorder or estimator+classifier.
+        /// acquisition, estimator, classifier, recorder, estimator+classifier, liveview or gateway.
         name: String,
         /// The stage's own arguments.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
@@ -111,6 +111,37 @@ pub(crate) enum Command {
         /// (those two in one process: one iceoryx2 hop fewer, the same events).
         #[arg(long, value_name = "split|estimator+classifier")]
         placement: Option<String>,
+        /// Serve the live view (Foxglove WebSocket, ws://127.0.0.1:PORT; default port 8765, or
+        /// [live_view] port; also on with [live_view] enabled = true). Off by default.
+        #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "0")]
+        live_view: Option<u16>,
+        /// Publish the rig's events, health and estimates on Zenoh (leakwatch/<rig>/<topic>)
+        /// through the gateway stage, connecting to the [zenoh] endpoints (default
+        /// tcp/127.0.0.1:7447: a `leakwatch watch` on this machine); also on with [zenoh] enabled.
+        #[arg(long)]
+        zenoh: bool,
+        /// Zenoh endpoint the gateway connects to instead of [zenoh] connect (repeatable;
+        /// implies --zenoh), e.g. tcp/10.0.0.5:7447.
+        #[arg(long, value_name = "ENDPOINT")]
+        zenoh_connect: Vec<String>,
+    },
+    /// Print the events of every rig reachable over Zenoh as they happen (the rigs' `run --zenoh`
+    /// gateways publish them under leakwatch/<rig>/...), and each rig's health status when it
+    /// changes, until Ctrl-C or --seconds.
+    Watch {
+        /// Zenoh endpoint to listen on, where gateways connect (repeatable; default
+        /// tcp/127.0.0.1:7447 when no --connect is given; tcp/0.0.0.0:7447 for other machines).
+        #[arg(long, value_name = "ENDPOINT")]
+        listen: Vec<String>,
+        /// Zenoh endpoint to connect to: a gateway or router that listens (repeatable).
+        #[arg(long, value_name = "ENDPOINT")]
+        connect: Vec<String>,
+        /// Stop after this many seconds (default: until Ctrl-C).
+        #[arg(long)]
+        seconds: Option<f64>,
+        /// Configuration file: its [zenoh] multicast_scouting.
+        #[arg(long)]
+        config: Option<PathBuf>,
     },
     /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
     Export {

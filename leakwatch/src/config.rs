@@ -41,6 +41,10 @@ pub struct Config {
     pub udp: UdpScaling,
     /// How `run` places its stage processes: CPU pinning, the low-latency spin.
     pub run: RunSettings,
+    /// The Foxglove WebSocket live view (`run --live-view`), off by default.
+    pub live_view: live::LiveViewConfig,
+    /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
+    pub zenoh: live::ZenohConfig,
 }
 
 impl Default for Config {
@@ -55,6 +59,8 @@ impl Default for Config {
             classifier: ClassifierConfig::default(),
             udp: UdpScaling::default(),
             run: RunSettings::default(),
+            live_view: live::LiveViewConfig::default(),
+            zenoh: live::ZenohConfig::default(),
         }
     }
 }
@@ -111,7 +117,9 @@ impl Config {
             .map_err(|e| e.replace("[estimator]", "[leak_filter]"))?;
         self.classifier.validate()?;
         self.udp.validate()?;
-        self.run.validate()
+        self.run.validate()?;
+        self.live_view.validate()?;
+        self.zenoh.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else
@@ -157,7 +165,9 @@ impl Config {
              # [estimator]: the thesis filter (Q, R, P0 in SI squared units per step; see README).\n\
              # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\
              # [udp.<channel>]: a real rig's UDP stream (u, x, p1, p2, x_sp, f_load), SI = gain * raw + offset\n\
-             #        (gain 1, offset 0: the sender sends SI).\n\n{body}"
+             #        (gain 1, offset 0: the sender sends SI).\n\
+             # [live_view]: the Foxglove WebSocket live view (run --live-view), rates in Hz.\n\
+             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\n{body}"
         )
     }
 }

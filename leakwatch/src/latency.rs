@@ -211,6 +211,9 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             source: None,
             udp_idle_timeout_s: None,
             placement: placement.map(String::from),
+            live_view: None,
+            zenoh: false,
+            zenoh_connect: Vec::new(),
         };
         eprintln!("iceoryx2, {label}: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;

@@ -21,6 +21,7 @@ mod replay_cmd;
 mod run;
 mod scale;
 mod simulate;
+mod watch;
 
 use std::process::ExitCode;
 
@@ -69,6 +70,9 @@ fn run(cli: Cli) -> Result<(), String> {
             source,
             udp_idle_timeout_s,
             placement,
+            live_view,
+            zenoh,
+            zenoh_connect,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -82,7 +86,16 @@ fn run(cli: Cli) -> Result<(), String> {
             source,
             udp_idle_timeout_s,
             placement,
+            live_view,
+            zenoh,
+            zenoh_connect,
         }),
+        Command::Watch {
+            listen,
+            connect,
+            seconds,
+            config,
+        } => watch::command(listen, connect, seconds, config.as_deref()),
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),
         Command::Info { log, config_out } => logs::info(&log, config_out.as_deref(), force),

@@ -31,6 +31,12 @@ pub struct RunArgs {
     /// Where the stages run: `split` (default, a process each) or
     /// `estimator+classifier` (those two in one process).
     pub placement: Option<String>,
+    /// `--live-view [PORT]`: serve the live view (0: the configured port, default 8765).
+    pub live_view: Option<u16>,
+    /// `--zenoh`: run the Zenoh gateway.
+    pub zenoh: bool,
+    /// `--zenoh-connect`: the gateway's endpoints instead of the config's.
+    pub zenoh_connect: Vec<String>,
 }
 
 /// Where a run's samples come from.

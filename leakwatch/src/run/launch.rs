@@ -94,6 +94,7 @@ impl StageArgs {
                     a.extend([s("--resume-after-seq"), seq.to_string()]);
                 }
             }
+            "liveview" | "gateway" => a.extend([s("--config"), self.config.clone()]),
             _ => {
                 match &self.samples {
                     Samples::Udp { addr, idle_s } => a.extend([

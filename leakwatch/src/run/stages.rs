@@ -10,6 +10,25 @@ pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisiti
 /// The estimator and the classifier in one process (`--placement estimator+classifier`).
 pub const FUSED: &str = "estimator+classifier";
 
+/// The stages of a run in the order they start: the placement's processes, with the
+/// live view and the Zenoh gateway (unsupervised by the watchdog: they publish no
+/// stats) before the acquisition when asked for.
+pub(super) fn run_stages(processes: &[&'static str], live_view: bool, zenoh: bool) -> Vec<&'static str> {
+    // the placement's processes end with the acquisition, which starts last
+    let (last, first) = processes
+        .split_last()
+        .map_or((None, processes), |(l, f)| (Some(*l), f));
+    let mut v = first.to_vec();
+    if live_view {
+        v.push("liveview");
+    }
+    if zenoh {
+        v.push("gateway");
+    }
+    v.extend(last);
+    v
+}
+
 /// Runs one stage process in this process: `args` is the stage's name followed by
 /// its own arguments (`leakwatch stage NAME ARGS...`).
 pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
@@ -20,10 +39,12 @@ pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Some("classifier") => classifier::shell::main(argv),
         Some(FUSED) => classifier::fused::main(argv),
         Some("recorder") => recorder::shell::main(argv),
+        Some("liveview") => live::shell::liveview_main(argv),
+        Some("gateway") => live::shell::gateway_main(argv),
         other => {
             eprintln!(
-                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder \
-                 (and estimator+classifier, the two in one process)",
+                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder, \
+                 liveview, gateway (and estimator+classifier, the two in one process)",
                 other.unwrap_or("")
             );
             std::process::ExitCode::FAILURE

@@ -102,6 +102,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     if demo {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
     }
+    let stages = live_stages(args, &mut cfg, &out_dir, &inputs, quiet, processes)?;
     // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
     let prefix = match std::env::var(bus::PREFIX_ENV) {
         Ok(p) if !p.is_empty() => p,
@@ -189,7 +190,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     }
     let mut children: BTreeMap<&str, Child> = BTreeMap::new();
     let mut watchdog = Watchdog::default();
-    for &name in processes {
+    for &name in &stages {
         let child = spawn(
             &program,
             name,
@@ -205,10 +206,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
     }
     // a UDP stream is paced by its sender: no datagram is no stall
-    let watched = |name: &str| udp.is_none() || name != "acquisition";
+    // (the live view and the gateway publish no stats: restarted when they exit, not watched)
+    let watched =
+        |name: &str| !["liveview", "gateway"].contains(&name) && (udp.is_none() || name != "acquisition");
     let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
     let mut backoffs: BTreeMap<&str, Backoff> = BTreeMap::new();
-    let mut started_at: BTreeMap<&str, Instant> = processes.iter().map(|n| (*n, Instant::now())).collect();
+    let mut started_at: BTreeMap<&str, Instant> = stages.iter().map(|n| (*n, Instant::now())).collect();
     let mut restart_at: BTreeMap<&str, Instant> = BTreeMap::new();
     // the last frame published, where a restarted acquisition takes over
     let mut last_frame: Option<SensorFrame> = None;
@@ -287,7 +290,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             break;
         }
         // Supervision: exits, restarts with backoff, stalls.
-        for &name in processes {
+        for &name in &stages {
             if let Some(child) = children.get_mut(name) {
                 match child.try_wait() {
                     Ok(Some(status)) => {
@@ -469,4 +472,63 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         latency,
         out_dir,
     })
+}
+
+/// The stages of the run ([`super::stages::run_stages`]): the live view
+/// (`--live-view [PORT]` or `[live_view] enabled`) and the Zenoh gateway
+/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) set in `cfg` for the
+/// stages to read, checked (the live view's port free), and said on the console.
+fn live_stages(
+    args: &RunArgs,
+    cfg: &mut Config,
+    out_dir: &Path,
+    inputs: &[&Path],
+    quiet: bool,
+    processes: &[&'static str],
+) -> Result<Vec<&'static str>, String> {
+    if let Some(port) = args.live_view {
+        cfg.live_view.enabled = true;
+        if port != 0 {
+            cfg.live_view.port = port;
+        }
+    }
+    if args.zenoh || !args.zenoh_connect.is_empty() {
+        cfg.zenoh.enabled = true;
+    }
+    if !args.zenoh_connect.is_empty() {
+        cfg.zenoh.connect = args.zenoh_connect.clone();
+    }
+    cfg.live_view.validate()?;
+    cfg.zenoh.validate()?;
+    let v = &cfg.live_view;
+    if v.enabled {
+        // the live view binds it again at once
+        std::net::TcpListener::bind((v.bind.as_str(), v.port)).map_err(|e| {
+            format!(
+                "--live-view {}: cannot listen on {}:{}: {e}",
+                v.port, v.bind, v.port
+            )
+        })?;
+    }
+    if v.enabled && !quiet {
+        outln!(
+            "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
+            v.bind,
+            v.port,
+            v.frames_hz,
+            v.estimates_hz
+        );
+    }
+    if cfg.zenoh.enabled && !quiet {
+        outln!(
+            "zenoh: publishing leakwatch/{}/{{events,health,estimates}}, connecting to [{}]",
+            args.rig,
+            cfg.zenoh.connect.join(", ")
+        );
+    }
+    let stages = super::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
+    for name in stages.iter().filter(|n| ["liveview", "gateway"].contains(n)) {
+        crate::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
+    }
+    Ok(stages)
 }
