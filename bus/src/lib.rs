@@ -34,6 +34,7 @@ mod publisher;
 mod schedule;
 pub mod signals;
 pub mod stage;
+mod stage_args;
 pub mod stats;
 mod subscriber;
 
@@ -44,6 +45,7 @@ pub use publisher::{Publisher, PublisherWatch, TopicWatch};
 pub use schedule::ArrivalSchedule;
 pub use signals::stop_on_signals;
 pub use stage::{run_stage, StageOptions, StageReport, StopReason};
+pub use stage_args::StageArgs;
 pub use stats::{Percentiles, StageStats};
 pub use subscriber::{Received, Subscriber};
 

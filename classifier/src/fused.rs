@@ -15,11 +15,10 @@
 //! stats frame gives as its latency the time from acquisition to the estimate
 //! being ready, and counts as missing the frames the estimator missed.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::node::ClassifierNode;
-use bus::{run_stage, Bus, BusConfig, StageOptions, WaitMode};
+use bus::{run_stage, StageOptions};
 use clap::Parser;
 use frames::{EstimateFrame, Frame, SensorFrame};
 
@@ -29,38 +28,21 @@ use frames::{EstimateFrame, Frame, SensorFrame};
     about = "leakwatch estimator and classifier in one process: sensor frames -> estimates and leak events over iceoryx2"
 )]
 struct Args {
-    /// Rig id (service names are namespaced by it).
-    #[arg(long, default_value = "rig1")]
-    rig: String,
-    /// leakwatch configuration file ([model], [estimator], [leak_filter], [classifier] are used).
-    #[arg(long)]
-    config: Option<PathBuf>,
-    /// How to wait for frames: event, low-latency or busy-poll.
-    #[arg(long, default_value = "event")]
-    mode: String,
-    /// Exit when the sensor stream ends (default: wait for the next stream).
-    #[arg(long)]
-    exit_at_end: bool,
-    /// This process takes over from one that handled the stream up to this frame
-    /// sequence number (a restart): the frames between are a gap, the first
-    /// estimate is marked reset and after-gap, and the classifier learns the
-    /// healthy rig again (unless commissioned).
-    #[arg(long)]
-    resume_after_seq: Option<u64>,
+    #[command(flatten)]
+    stage: bus::StageArgs,
 }
 
 fn run(args: Args) -> Result<(), String> {
-    let mut stage = estimator::shell::load_stage(args.config.as_deref())?;
-    let cfg = crate::shell::load(args.config.as_deref())?;
-    let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
+    let mut stage = estimator::shell::load_stage(args.stage.config.as_deref())?;
+    let cfg = crate::shell::load(args.stage.config.as_deref())?;
+    let mode = args.stage.wait_mode()?;
     let stop = bus::stop_on_signals();
-    let bus =
-        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let bus = args.stage.open_bus()?;
     let mut node = ClassifierNode::new(&bus, cfg, None)?;
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
-    opts.exit_on_end_of_stream = args.exit_at_end;
-    opts.resume_after_seq = args.resume_after_seq;
-    let mut join = estimator::shell::Join::new(args.resume_after_seq);
+    opts.exit_on_end_of_stream = args.stage.exit_at_end;
+    opts.resume_after_seq = args.stage.resume_after_seq;
+    let mut join = estimator::shell::Join::new(args.stage.resume_after_seq);
     // the first failure of the classifier's side ends the process (after the loop's next wait)
     let mut failed: Option<String> = None;
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {

@@ -6,14 +6,14 @@
 //! classifier --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use crate::node::ClassifierNode;
 use crate::ClassifierConfig;
-use bus::{monotonic_ns, Bus, BusConfig, WaitMode};
+use bus::monotonic_ns;
 use clap::Parser;
 use frames::{EstimateFrame, Frame};
 use serde::Deserialize;
@@ -24,24 +24,8 @@ use serde::Deserialize;
     about = "leakwatch classifier stage: estimates -> leak events over iceoryx2"
 )]
 struct Args {
-    /// Rig id (service names are namespaced by it).
-    #[arg(long, default_value = "rig1")]
-    rig: String,
-    /// leakwatch configuration file ([classifier] is used).
-    #[arg(long)]
-    config: Option<PathBuf>,
-    /// How to wait for estimates: event, low-latency or busy-poll.
-    #[arg(long, default_value = "event")]
-    mode: String,
-    /// Exit when the estimate stream ends (default: wait for the next stream).
-    #[arg(long)]
-    exit_at_end: bool,
-    /// This process takes over from a classifier that had read the estimates up
-    /// to this sequence number (a restart): the estimates between are counted
-    /// as a gap (in its stats and log) and its first estimate is treated as
-    /// after a gap (no evidence from it).
-    #[arg(long)]
-    resume_after_seq: Option<u64>,
+    #[command(flatten)]
+    stage: bus::StageArgs,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -63,17 +47,16 @@ pub(crate) fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
 }
 
 fn run(args: Args) -> Result<(), String> {
-    let cfg = load(args.config.as_deref())?;
-    let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
+    let cfg = load(args.stage.config.as_deref())?;
+    let mode = args.stage.wait_mode()?;
     let stop = bus::stop_on_signals();
-    let bus =
-        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let bus = args.stage.open_bus()?;
     let e = |e: bus::BusError| e.to_string();
     let mut rx = bus.subscriber::<EstimateFrame>(mode).map_err(e)?;
-    if let Some(seq) = args.resume_after_seq {
+    if let Some(seq) = args.stage.resume_after_seq {
         rx.resume_after(seq);
     }
-    let mut node = ClassifierNode::new(&bus, cfg, args.resume_after_seq)?;
+    let mut node = ClassifierNode::new(&bus, cfg, args.stage.resume_after_seq)?;
     loop {
         let now = monotonic_ns();
         node.tick(now).map_err(e)?;
@@ -86,7 +69,7 @@ fn run(args: Args) -> Result<(), String> {
         };
         let eos = input.is_end_of_stream();
         node.on_estimate(&input.frame, input.missing_before, input.recv_mono_ns, eos)?;
-        if eos && args.exit_at_end {
+        if eos && args.stage.exit_at_end {
             break;
         }
     }

@@ -5,12 +5,12 @@
 //! estimator --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
 use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
-use bus::{run_stage, Bus, BusConfig, Received, StageOptions, WaitMode};
+use bus::{run_stage, Received, StageOptions};
 use clap::Parser;
 use frames::{EstimateFrame, SensorFrame};
 use model::{ActuatorParams, Sample};
@@ -22,25 +22,8 @@ use serde::Deserialize;
     about = "leakwatch estimator stage: sensor frames -> EKF estimates over iceoryx2"
 )]
 struct Args {
-    /// Rig id (service names are namespaced by it).
-    #[arg(long, default_value = "rig1")]
-    rig: String,
-    /// leakwatch configuration file ([model], [estimator], [leak_filter] are used).
-    #[arg(long)]
-    config: Option<PathBuf>,
-    /// How to wait for frames: event, low-latency or busy-poll.
-    #[arg(long, default_value = "event")]
-    mode: String,
-    /// Exit when the sensor stream ends (default: wait for the next stream).
-    #[arg(long)]
-    exit_at_end: bool,
-    /// This process takes over from an estimator that handled the stream up to
-    /// this frame sequence number (a restart): the frames between are counted as
-    /// a gap, and the first estimate is marked reset and after-gap (the filter
-    /// starts again: the classifier takes no evidence from it until it has
-    /// converged, keeping what it learned of the healthy rig).
-    #[arg(long)]
-    resume_after_seq: Option<u64>,
+    #[command(flatten)]
+    stage: bus::StageArgs,
 }
 
 /// The sections of the configuration this stage reads; the rest belongs to others.
@@ -134,16 +117,15 @@ fn load(path: Option<&Path>) -> Result<StageConfig, String> {
 }
 
 fn run(args: Args) -> Result<(), String> {
-    let mut stage = load_stage(args.config.as_deref())?;
-    let mode = WaitMode::parse(&args.mode).map_err(|e| e.to_string())?;
+    let mut stage = load_stage(args.stage.config.as_deref())?;
+    let mode = args.stage.wait_mode()?;
     let stop = bus::stop_on_signals();
-    let bus =
-        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let bus = args.stage.open_bus()?;
     let mut opts = StageOptions::new(frames::stage::ESTIMATOR, mode);
-    opts.exit_on_end_of_stream = args.exit_at_end;
-    opts.resume_after_seq = args.resume_after_seq;
+    opts.exit_on_end_of_stream = args.stage.exit_at_end;
+    opts.resume_after_seq = args.stage.resume_after_seq;
     // the first estimate of one that joins a running stream says that its filter started again
-    let mut join = Join::new(args.resume_after_seq);
+    let mut join = Join::new(args.stage.resume_after_seq);
     let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
         estimate_frame(&mut stage, input, out, &mut join);
         true

@@ -1,0 +1,138 @@
+//! Tests of the square-root EKF: the triangularisation, agreement with the
+//! covariance form, and the lean step against the dense reference.
+
+use super::*;
+use model::rng::Rng;
+
+#[test]
+fn triangularisation_preserves_the_product() {
+    let mut rng = Rng::new(7);
+    for _ in 0..50 {
+        let mut a = SMatrix::<f64, 5, 5>::zeros();
+        let mut b = SMatrix::<f64, 5, 5>::zeros();
+        for v in a.iter_mut().chain(b.iter_mut()) {
+            *v = rng.normal() * 10f64.powi((rng.uniform() * 6.0) as i32 - 3);
+        }
+        let want = a * a.transpose() + b * b.transpose();
+        lower_triangularise(&mut a, &mut b);
+        let got = a * a.transpose();
+        for i in 0..5 {
+            for j in 0..5 {
+                assert!(
+                    (got[(i, j)] - want[(i, j)]).abs() <= 1e-10 * want.abs().max(),
+                    "{i},{j}"
+                );
+                if j > i {
+                    assert_eq!(a[(i, j)], 0.0);
+                }
+            }
+        }
+        assert_eq!(b, SMatrix::<f64, 5, 5>::zeros());
+    }
+}
+
+/// The square-root filter agrees with the textbook covariance-form EKF on a
+/// linear system.
+#[test]
+fn matches_the_covariance_form_on_a_linear_system() {
+    let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
+    let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let q = SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3);
+    let r = SVector::<f64, 2>::new(1e-2, 4e-2);
+    let p0 = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
+    let x0 = SVector::<f64, 3>::new(0.1, -0.2, 0.3);
+    let scale = SVector::<f64, 3>::new(1.0, 10.0, 0.1);
+    let mut ekf = Ekf::<3, 2>::new(x0, &p0, &q, r, scale);
+    let mut x = x0;
+    let mut p = SMatrix::<f64, 3, 3>::from_diagonal(&p0);
+    let mut rng = Rng::new(3);
+    for _ in 0..200 {
+        x = f * x;
+        p = f * p * f.transpose() + SMatrix::from_diagonal(&q);
+        ekf.predict(f * ekf.state(), &f).unwrap();
+        let y = SVector::<f64, 2>::new(rng.normal(), rng.normal());
+        let nu = y - h * x;
+        let s = h * p * h.transpose() + SMatrix::from_diagonal(&r);
+        let k = p * h.transpose() * s.try_inverse().unwrap();
+        x += k * nu;
+        p = (SMatrix::identity() - k * h) * p;
+        let inn = ekf.update(&y, &(h * ekf.state()), &h, [true, true]).unwrap();
+        assert!((inn.nis - nu.dot(&(s.try_inverse().unwrap() * nu))).abs() < 1e-9 * (1.0 + inn.nis));
+        assert!((ekf.state() - x).norm() < 1e-9 * (1.0 + x.norm()));
+        assert!((ekf.covariance() - p).norm() < 1e-9 * p.norm());
+    }
+}
+
+/// The lean time update and the selector update give the reference's result
+/// (dense W·Wᵀ, dense H) to 1e-12 of each state's scale over a long run (a sparse 11-state Jacobian of the actuator's shape,
+/// three selector measurements, states spanning twenty orders of magnitude).
+#[test]
+fn the_lean_predict_equals_the_reference_over_a_long_run() {
+    const N: usize = 11;
+    let scale =
+        SVector::<f64, N>::from_column_slice(&[1e-4, 1e7, 1e7, 0.1, 0.1, 1e-2, 1e3, 1e-6, 1e-6, 1e-6, 1e-5]);
+    let mut f = SMatrix::<f64, N, N>::identity();
+    let mut rng = Rng::new(11);
+    // couplings where the actuator has them: spool <-> pressures, pressures <-> rod, rod <-> load, leaks -> pressures
+    for (i, j) in [
+        (1, 0),
+        (2, 0),
+        (0, 5),
+        (5, 0),
+        (1, 4),
+        (2, 4),
+        (3, 4),
+        (4, 1),
+        (4, 2),
+        (4, 6),
+        (1, 7),
+        (2, 8),
+        (1, 9),
+        (2, 9),
+        (0, 10),
+        (1, 3),
+        (2, 3),
+    ] {
+        f[(i, j)] = 1e-3 * rng.normal() * scale[i] / scale[j];
+    }
+    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
+    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
+    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
+    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
+    let mut h = SMatrix::<f64, 3, N>::zeros();
+    h[(0, 3)] = 1.0;
+    h[(1, 1)] = 1.0;
+    h[(2, 2)] = 1.0;
+    let (mut lean, mut reference) = (
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+    );
+    for k in 0..20_000 {
+        let xl = f * lean.state();
+        lean.predict(xl, &f).expect("lean predict");
+        let xr = f * reference.state();
+        reference.predict_reference(xr, &f).expect("reference predict");
+        let y = SVector::<f64, 3>::new(
+            0.1 + 1e-5 * rng.normal(),
+            1e7 + 5e4 * rng.normal(),
+            1e7 + 5e4 * rng.normal(),
+        );
+        if k % 3 != 2 {
+            lean.update_selected(&y, &(h * lean.state()), [3, 1, 2], [true, true, k % 5 != 0])
+                .expect("lean update");
+            reference
+                .update(&y, &(h * reference.state()), &h, [true, true, k % 5 != 0])
+                .expect("reference update");
+        }
+        for i in 0..N {
+            let d = (lean.state()[i] - reference.state()[i]).abs() / scale[i];
+            assert!(d <= 1e-12, "step {k}, state {i}: {d:e} of scale");
+        }
+    }
+    let (pl, pr) = (lean.scaled_covariance(), reference.scaled_covariance());
+    assert!(
+        (pl - pr).abs().max() <= 1e-12 * pr.abs().max(),
+        "{:e}",
+        (pl - pr).abs().max()
+    );
+}
