@@ -298,25 +298,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         for i in 0..M {
             c[(i, i)] += self.r[i];
         }
-        let mut sigma = SVector::<f64, M>::zeros();
-        for i in 0..M {
-            sigma[i] = c[(i, i)].max(0.0).sqrt();
-        }
-        // NIS over the channels in use (others replaced by unit rows).
-        let mut cu = c;
-        let mut nu_u = nu;
-        for i in 0..M {
-            if !use_channel[i] {
-                nu_u[i] = 0.0;
-                for j in 0..M {
-                    cu[(i, j)] = 0.0;
-                    cu[(j, i)] = 0.0;
-                }
-                cu[(i, i)] = 1.0;
-            }
-        }
-        let chol = cu.cholesky().ok_or(EkfError::SingularInnovation)?;
-        let nis = nu_u.dot(&chol.solve(&nu_u));
+        let (sigma, nis) = innovation_statistics(&c, &nu, use_channel)?;
 
         // Potter's update, one scalar measurement at a time.
         let mut dz = SVector::<f64, N>::zeros(); // scaled state correction so far
@@ -377,36 +359,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             }
             c[(i, i)] += self.r[i];
         }
-        let mut sigma = SVector::<f64, M>::zeros();
-        for i in 0..M {
-            sigma[i] = c[(i, i)].max(0.0).sqrt();
-        }
-        // NIS = |L⁻¹ν|² with C = L·Lᵀ over the channels in use (others replaced
-        // by unit rows).
-        let mut cu = [[0.0; M]; M];
-        let mut z = [0.0; M];
-        for i in 0..M {
-            for j in 0..=i {
-                cu[i][j] = if use_channel[i] && use_channel[j] {
-                    c[(i, j)]
-                } else {
-                    f64::from(u8::from(i == j))
-                };
-            }
-            z[i] = if use_channel[i] { nu[i] } else { 0.0 };
-        }
-        if !cholesky_rows(&mut cu) {
-            return Err(EkfError::SingularInnovation);
-        }
-        let mut nis = 0.0;
-        for i in 0..M {
-            let mut v = z[i];
-            for j in 0..i {
-                v -= cu[i][j] * z[j];
-            }
-            z[i] = v / cu[i][i];
-            nis += z[i] * z[i];
-        }
+        let (sigma, nis) = innovation_statistics(&c, &nu, use_channel)?;
 
         // Potter's update, one scalar measurement at a time; φ = Sᵀh is a row of S.
         let mut dz = SVector::<f64, N>::zeros();
@@ -453,6 +406,41 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         }
         Ok(Innovation { nu, sigma, nis })
     }
+}
+
+/// The σ of each innovation (√ of C's diagonal) and the NIS νᵀC⁻¹ν over the
+/// channels in use (the others replaced by unit rows), as |L⁻¹ν|² with C = L·Lᵀ.
+fn innovation_statistics<const M: usize>(
+    c: &SMatrix<f64, M, M>,
+    nu: &SVector<f64, M>,
+    use_channel: [bool; M],
+) -> Result<(SVector<f64, M>, f64), EkfError> {
+    let sigma = SVector::<f64, M>::from_fn(|i, _| c[(i, i)].max(0.0).sqrt());
+    let mut cu = [[0.0; M]; M];
+    let mut z = [0.0; M];
+    for i in 0..M {
+        for j in 0..=i {
+            cu[i][j] = if use_channel[i] && use_channel[j] {
+                c[(i, j)]
+            } else {
+                f64::from(u8::from(i == j))
+            };
+        }
+        z[i] = if use_channel[i] { nu[i] } else { 0.0 };
+    }
+    if !cholesky_rows(&mut cu) {
+        return Err(EkfError::SingularInnovation);
+    }
+    let mut nis = 0.0;
+    for i in 0..M {
+        let mut v = z[i];
+        for j in 0..i {
+            v -= cu[i][j] * z[j];
+        }
+        z[i] = v / cu[i][i];
+        nis += z[i] * z[i];
+    }
+    Ok((sigma, nis))
 }
 
 /// The dot product of two rows, in four independent partial sums (a single
