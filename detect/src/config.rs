@@ -118,10 +118,19 @@ pub struct ClassifierConfig {
     /// The healthy state learned by commissioning (absent: learned in a warm-up,
     /// and a leak present at start cannot be seen).
     pub commissioning: Option<Commissioning>,
+    /// Leak-size detector: once this much healthy evidence has been seen after arming
+    /// (no leak, every rise below `baseline_hold` of its threshold), the thresholds
+    /// are taken from the spread of the rises since arming, refined every second
+    /// (0 = keep the warm-up's); not with a commissioning, s.
+    pub refine_after_s: f64,
     /// Leak-size detector: smallest leak ever declared, L/min (at nominal drop).
     pub min_size_lpm: f64,
-    /// Leak-size detector: time above threshold before a leak is declared, s.
+    /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
     pub confirm_s: f64,
+    /// Leak-size detector: a rise r thresholds high counts min(r, this) seconds of
+    /// evidence per second towards `confirm_s` (1 = plain time above threshold; a
+    /// leak far above its threshold is confirmed sooner).
+    pub confirm_gain_cap: f64,
     /// Leak-size detector: time constant of the healthy baseline that the rise is
     /// measured from, s (0 = the warm-up offset, never adapted).
     pub baseline_tau_s: f64,
@@ -190,11 +199,13 @@ impl Default for ClassifierConfig {
             recovery_s: 2.0,
             nis_gate: 10000.0,
             nis_ratio_gate: 3.0,
-            max_command_hz: 4.0,
+            max_command_hz: 3.0,
             thesis_baseline: false,
             commissioning: None,
             min_size_lpm: 0.06,
+            refine_after_s: 5.0,
             confirm_s: 0.5,
+            confirm_gain_cap: 2.0,
             baseline_tau_s: 15.0,
             baseline_hold: 0.5,
             baseline_hold_s: 5.0,
@@ -223,7 +234,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 30] = [
+        let fields: [(&str, f64, f64, f64, &str); 32] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -266,6 +277,14 @@ impl ClassifierConfig {
             ),
             ("max_command_hz", self.max_command_hz, 0.0, 1e5, "Hz"),
             ("min_size_lpm", self.min_size_lpm, 0.0, 1e4, "L/min"),
+            ("refine_after_s", self.refine_after_s, 0.0, 1e6, "s"),
+            (
+                "confirm_gain_cap",
+                self.confirm_gain_cap,
+                1.0,
+                100.0,
+                "(thresholds)",
+            ),
             ("confirm_s", self.confirm_s, 0.0, 1e6, "s"),
             ("baseline_tau_s", self.baseline_tau_s, 0.0, 1e8, "s"),
             (

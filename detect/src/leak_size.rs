@@ -16,6 +16,14 @@ pub struct LeakSizeDetector {
     stats: [Stats; 3],
     /// The healthy values seen while learning.
     record: HealthyRecord,
+    /// The healthy rises seen since arming (no leak, valid evidence, every rise
+    /// low): the spread the thresholds are refined from.
+    refine: RunningSpread,
+    /// When the thresholds are next refined, s.
+    next_refine_s: f64,
+    /// The thresholds (L/min, spreads) and spreads (L/min) the detector armed with:
+    /// refining only ever lowers a threshold below these.
+    armed_thresholds: ([f64; 3], [f64; 3], [f64; 3]),
     /// Threshold on the rise of each kind, in healthy spreads.
     threshold_z: [f64; 3],
     threshold_lpm: [f64; 3],
@@ -30,6 +38,9 @@ pub struct LeakSizeDetector {
     /// Since when the baseline has been held by a rise, s.
     hold_since_s: Option<f64>,
     above_since_s: [Option<f64>; 3],
+    /// Evidence gathered since `above_since_s`: the time above the threshold, each
+    /// second counted `min(rise/threshold, confirm_gain_cap)` times, s.
+    above_evidence_s: [f64; 3],
     /// Since when the baseline's drift has exceeded `slow_leak_lpm` (lead kind, time s).
     slow_since_s: Option<(usize, f64)>,
     /// No evidence is gathered before this time (an excursion and its recovery), s.
@@ -149,6 +160,48 @@ impl HealthyRecord {
     }
 }
 
+/// Running statistics of the healthy rises of the three single-leak sizes,
+/// kept every 10 ms without storing them: mean and spread (Welford) and the
+/// upcrossings of the running mean, over all the time learned.
+#[derive(Debug, Clone, Copy, Default)]
+struct RunningSpread {
+    n: f64,
+    mean: [f64; 3],
+    m2: [f64; 3],
+    ups: [f64; 3],
+    above: [bool; 3],
+    next_t_s: f64,
+    learned_s: f64,
+}
+
+impl RunningSpread {
+    fn push(&mut self, t_s: f64, dt_s: f64, v: [f64; 3]) {
+        self.learned_s += dt_s;
+        if self.n > 0.0 && t_s < self.next_t_s {
+            return;
+        }
+        self.next_t_s = t_s + HealthyRecord::EVERY_S;
+        self.n += 1.0;
+        for k in 0..3 {
+            let d = v[k] - self.mean[k];
+            self.mean[k] += d / self.n;
+            self.m2[k] += d * (v[k] - self.mean[k]);
+            let above = v[k] > self.mean[k];
+            if above && !self.above[k] && self.n > 1.0 {
+                self.ups[k] += 1.0;
+            }
+            self.above[k] = above;
+        }
+    }
+
+    /// (spreads, upcrossings per second of the learned time).
+    fn summary(&self) -> ([f64; 3], [f64; 3]) {
+        let spread = std::array::from_fn(|k| (self.m2[k] / (self.n - 1.0).max(1.0)).sqrt());
+        let cross = std::array::from_fn(|k| self.ups[k] / self.learned_s.max(HealthyRecord::EVERY_S));
+        (spread, cross)
+    }
+}
+
 /// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
 /// the offset, spread and upcrossing rate of each single-leak size after the
 /// filter has converged and settled, gaps and resets left out.
@@ -226,6 +279,9 @@ impl LeakSizeDetector {
     pub fn new(cfg: ClassifierConfig) -> Self {
         LeakSizeDetector {
             record: HealthyRecord::with_capacity_s(cfg.warmup_s),
+            refine: RunningSpread::default(),
+            next_refine_s: f64::NEG_INFINITY,
+            armed_thresholds: ([f64::NAN; 3], [f64::NAN; 3], [f64::NAN; 3]),
             cfg,
             arming: Arming::Converging,
             stats: [Stats::default(); 3],
@@ -237,6 +293,7 @@ impl LeakSizeDetector {
             armed_at_s: f64::NAN,
             hold_since_s: None,
             above_since_s: [None; 3],
+            above_evidence_s: [0.0; 3],
             slow_since_s: None,
             blind_until_s: f64::NEG_INFINITY,
             invalid_until_s: f64::NEG_INFINITY,
@@ -352,6 +409,22 @@ impl LeakSizeDetector {
     }
 
     fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {
+        self.set_thresholds(spreads, crossings_per_s);
+        self.armed_thresholds = (self.threshold_lpm, self.threshold_z, spreads);
+        for k in 0..3 {
+            self.last_low_s[k] = t_s;
+            self.baseline_lpm[k] = means[k];
+            self.baseline_low_lpm[k] = means[k];
+            self.stats[k].mean = means[k];
+        }
+        self.arming = Arming::Armed;
+        self.armed_at_s = t_s;
+        self.last_t_s = t_s;
+    }
+
+    /// The thresholds (spreads and L/min) for healthy spreads `spreads` (L/min) with
+    /// `crossings_per_s` upcrossings of the mean per second.
+    fn set_thresholds(&mut self, spreads: [f64; 3], crossings_per_s: [f64; 3]) {
         for k in 0..3 {
             let z = rice_threshold(
                 crossings_per_s[k],
@@ -360,16 +433,36 @@ impl LeakSizeDetector {
             );
             self.threshold_z[k] = z;
             self.threshold_lpm[k] = (z * spreads[k]).max(self.cfg.min_size_lpm);
-            self.last_low_s[k] = t_s;
-            self.baseline_lpm[k] = means[k];
-            self.baseline_low_lpm[k] = means[k];
-            self.stats[k].mean = means[k];
             self.stats[k].m2 = spreads[k] * spreads[k];
             self.stats[k].n = 2.0;
         }
-        self.arming = Arming::Armed;
-        self.armed_at_s = t_s;
-        self.last_t_s = t_s;
+    }
+
+    /// Learns the healthy spread on from the rises `rise` (L/min) of a sample that is
+    /// healthy evidence, and every second, once `refine_after_s` of it has been
+    /// learned, takes the thresholds from it where they are lower than the warm-up's:
+    /// the warm-up is short and holds the
+    /// filter's start-up transient, the time since arming is long and ordinary.
+    fn refine_thresholds(&mut self, t_s: f64, dt_s: f64, rise: [f64; 3]) {
+        if self.cfg.refine_after_s <= 0.0 || self.cfg.commissioning.is_some() {
+            return;
+        }
+        self.refine.push(t_s, dt_s, rise);
+        if self.refine.learned_s >= self.cfg.refine_after_s && t_s >= self.next_refine_s {
+            self.next_refine_s = t_s + 1.0;
+            let (spreads, crossings) = self.refine.summary();
+            self.set_thresholds(spreads, crossings);
+            // Only ever lower: a leak growing too slowly to pass the threshold adds
+            // its rise to the spread learned meanwhile and must not lift it.
+            let (thr, z, spread) = self.armed_thresholds;
+            for k in 0..3 {
+                if self.threshold_lpm[k].is_nan() || self.threshold_lpm[k] > thr[k] {
+                    self.threshold_lpm[k] = thr[k];
+                    self.threshold_z[k] = z[k];
+                    self.stats[k].m2 = spread[k] * spread[k];
+                }
+            }
+        }
     }
 
     /// A chamber pressure within `excursion_margin` of tank or supply.

@@ -10,8 +10,11 @@
 //!   a healthy warm-up has learned each estimate's offset and spread (a healthy
 //!   rig that differs from the model, e.g. a spool null bias, leaves a steady
 //!   offset), a leak is declared when one size rises above
-//!   max(`threshold_sigma`·spread, `min_size_lpm`) and stays there for
-//!   `confirm_s`. The rise is measured from a healthy baseline that follows
+//!   max(c·spread, `min_size_lpm` of real flow at the measured pressures)
+//!   (c from `false_alarms_per_hour`, at least `threshold_sigma`) for
+//!   `confirm_s` of evidence. The spreads are refined from the healthy time
+//!   after arming (`refine_after_s`; only ever lowered), and only a mismatch
+//!   that leak coefficients ≥ 0 can make counts ([`leak_can_make`]). The rise is measured from a healthy baseline that follows
 //!   the estimate slowly (time constant `baseline_tau_s`, frozen while a leak
 //!   is reported, and while a rise is past `baseline_hold` of its threshold once
 //!   the baseline has settled): an off-nominal rig makes the healthy estimate
@@ -89,6 +92,17 @@ pub fn signatures_lpm(q_lpm: [f64; 3]) -> [f64; 3] {
     let w1 = q_lpm[0] + q_lpm[2];
     let w2 = q_lpm[1] - q_lpm[2];
     [w1, w2, 0.5 * (w1 - w2)]
+}
+
+/// Whether rises `rise` = [w1, w2, (w1 − w2)/2] of the chamber flows (L/min,
+/// [`signatures_lpm`]) are a pattern that leaks can make, within one threshold
+/// `threshold_lpm` (ext1, ext2, int; L/min) of it. Every leak coefficient is ≥ 0:
+/// leaks take flow out of chamber 1 or none (w1 = q_e1 + q_i ≥ 0) and out of the
+/// two chambers together (w1 + w2 = q_e1 + q_e2 ≥ 0). A pattern far outside that
+/// cone (the filter's internal-leak estimate relaxing after its start makes
+/// w1 fall while w2 rises) is model error, not a leak.
+pub fn leak_can_make(rise: [f64; 3], threshold_lpm: [f64; 3]) -> bool {
+    rise[0] >= -threshold_lpm[0] && rise[0] + rise[1] >= -threshold_lpm[0].max(threshold_lpm[1])
 }
 
 /// Names of the measured channels, in measurement order.

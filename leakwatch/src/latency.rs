@@ -29,6 +29,23 @@ pub struct Row {
     /// CPU of the estimator stage, fraction of a core (of the estimator and the
     /// classifier where they share a process).
     pub estimator_cpu: f64,
+    /// Lateness of the acquisition's publish instants against its 1 kHz schedule
+    /// over the whole run, µs: p50, p99, p99.9, max (NaN for the thread rows).
+    pub pacer_whole_run_us: [f64; 4],
+}
+
+/// The whole-run schedule lateness (p50, p99, p99.9, max, µs) from an acquisition's
+/// closing line `schedule lateness: n=… p50=…µs p99=…µs p99.9=…µs max=…µs`.
+pub fn pacer_lateness_us(acquisition_log: &str) -> Option<[f64; 4]> {
+    let line = acquisition_log
+        .lines()
+        .rev()
+        .find(|l| l.contains("schedule lateness:"))?;
+    let value = |key: &str| -> Option<f64> {
+        let rest = line.split(' ').find_map(|w| w.strip_prefix(key))?;
+        rest.trim_end_matches("µs").parse().ok()
+    };
+    Some([value("p50=")?, value("p99=")?, value("p99.9=")?, value("max=")?])
 }
 
 fn q(h: &Histogram<u64>, p: f64) -> f64 {
@@ -128,6 +145,7 @@ fn threads_run<S: Send + 'static, R: Send + 'static>(
         ],
         frames: [n, got],
         estimator_cpu: cpu / 2.0, // two threads in the process: report per stage roughly
+        pacer_whole_run_us: [f64::NAN; 4],
     }
 }
 
@@ -205,7 +223,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             ),
             config,
             mode: mode.into(),
-            out: Some(out.join(dir)),
+            out: Some(out.join(&dir)),
             thesis_baseline: false,
             force,
             source: None,
@@ -217,6 +235,8 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
         };
         eprintln!("iceoryx2, {label}: {seconds} s ...");
         let o = crate::run::run_pipeline(&args, true)?;
+        let log = std::fs::read_to_string(out.join(&dir).join("acquisition.log")).unwrap_or_default();
+        let pacer_whole_run_us = pacer_lateness_us(&log).unwrap_or([f64::NAN; 4]);
         let st = &o.latency.stages;
         let get = |s: &str| st.get(s).cloned().unwrap_or_default();
         let (e, c, a) = (get("estimator"), get("classifier"), get("acquisition"));
@@ -233,6 +253,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             frames: [a.frames_out, c.frames_in],
             // (in one process with the classifier: the CPU of both)
             estimator_cpu: e.cpu_fraction,
+            pacer_whole_run_us,
         });
     }
     let samples = crate::benches::samples(seconds);
@@ -285,6 +306,21 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
         );
     }
     outln!("");
+    outln!("Acquisition pacer: lateness of the publish instants against the 1 kHz schedule, whole run");
+    outln!("| run | p50 µs | p99 µs | p99.9 µs | max µs |");
+    outln!("|---|---|---|---|---|");
+    for r in rows.iter().filter(|r| r.pacer_whole_run_us[0].is_finite()) {
+        let p = r.pacer_whole_run_us;
+        outln!(
+            "| {} | {} | {} | {} | {} |",
+            r.transport,
+            f(p[0]),
+            f(p[1]),
+            f(p[2]),
+            f(p[3])
+        );
+    }
+    outln!("");
     crate::floors::print(&floors)?;
     let p = out.join("latency.json");
     let json = serde_json::json!({ "pipeline": rows, "floors": floors });
@@ -292,4 +328,19 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     crate::out::write(&p, text.as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pacer_lateness_us;
+
+    #[test]
+    fn the_whole_run_pacer_lateness_is_read_from_the_acquisition_log() {
+        let log = "acquisition: simulated rig, scenario loaded-sine, 15 s on rig r at 1000 Hz\n\
+                   acquisition: 15000 frames, 0 unusable rows skipped, 0 samples missing, 23 deadline misses\n  \
+                   schedule lateness: n=15000 p50=0.0µs p99=5.1µs p99.9=1539.1µs max=3641.3µs\n  \
+                   sample production: n=15000 p50=5.8µs p99=7.3µs p99.9=19.1µs max=26.6µs\n";
+        assert_eq!(pacer_lateness_us(log), Some([0.0, 5.1, 1539.1, 3641.3]));
+        assert_eq!(pacer_lateness_us("acquisition: error: no rig\n"), None);
+    }
 }

@@ -10,6 +10,10 @@ use crate::{
 };
 use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
+/// Least real flow per L/min of nominal size that the `min_size_lpm` floor is
+/// divided by (a drop of 1 % of p_s/2): below it a hypothesis is not testable.
+const MIN_FLOW_FACTOR: f64 = 0.1;
+
 impl LeakSizeDetector {
     /// Reads one estimate; pushes any event into `out` (at most one per call).
     pub fn on_estimate(&mut self, e: &Estimate, out: &mut Option<LeakEvent>) {
@@ -27,6 +31,11 @@ impl LeakSizeDetector {
         let recover = e.t_s + self.cfg.recovery_s;
         if e.flags & (FLAG_SKIPPED | FLAG_AFTER_GAP | FLAG_RESET) != 0 {
             self.invalid_until_s = self.invalid_until_s.max(recover);
+            if e.flags & (FLAG_AFTER_GAP | FLAG_RESET) != 0 {
+                // The filter re-anchored its fast states and the leak sizes move while
+                // they settle again: the baseline is taken again once it is over.
+                self.reacquire_after_s = self.invalid_until_s;
+            }
         }
         if e.flags & FLAG_SKIPPED != 0 {
             return;
@@ -183,7 +192,26 @@ impl LeakSizeDetector {
             0.5 * (sigma_q[0].powi(2) + sigma_q[1].powi(2) + 4.0 * sigma_q[2].powi(2)).sqrt(),
         ];
         let sigma_lpm: [f64; 3] = std::array::from_fn(|k| sigma_filter[k].hypot(self.stats[k].std()));
-        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / self.threshold_lpm[k]);
+        if self.active.is_none()
+            && !blind
+            && self.strong_since_s.is_none()
+            && (0..3).all(|k| rise[k] < self.cfg.baseline_hold * self.threshold_lpm[k])
+        {
+            self.refine_thresholds(e.t_s, dt_s, rise);
+        }
+        // The smallest leak declared is a real flow of `min_size_lpm` at the measured
+        // pressures: where a hypothesis' drop is small (an internal leak while
+        // p1 ≈ p2), its size at p_s/2 is poorly pinned down and must rise further.
+        let thr: [f64; 3] = std::array::from_fn(|k| {
+            let g = self.flow_factor[k];
+            let floor = if g.is_finite() {
+                self.cfg.min_size_lpm / g.max(MIN_FLOW_FACTOR)
+            } else {
+                self.cfg.min_size_lpm
+            };
+            self.threshold_lpm[k].max(floor)
+        });
+        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
         let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
         let drift_misfit = misfits(drift);
@@ -205,14 +233,15 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
+        let physical = crate::leak_can_make(rise, self.threshold_lpm);
         let mut strong = None;
         for k in 0..3 {
-            let thr = self.threshold_lpm[k];
+            let thr = thr[k];
             if rise[k] < 0.25 * thr {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
-            let evidence = !invalid && (!blind || rise[k] > self.cfg.excursion_override * thr);
+            let evidence = !invalid && physical && (!blind || rise[k] > self.cfg.excursion_override * thr);
             let ratio = rise[k] / thr;
             if evidence
                 && self.cfg.pending_factor > 0.0
@@ -227,7 +256,12 @@ impl LeakSizeDetector {
             // (a named event is followed while its kind leads; a pending one waits for a clear kind)
             let named = self.active.is_some_and(|a| a.kind != EventKind::Leak);
             if k == lead && rise[k] > thr && best > 0.5 && evidence && (clear || named) {
-                self.above_since_s[k].get_or_insert(e.t_s);
+                if self.above_since_s[k].is_none() {
+                    self.above_since_s[k] = Some(e.t_s);
+                    self.above_evidence_s[k] = 0.0;
+                } else {
+                    self.above_evidence_s[k] += dt_s * ratio.min(self.cfg.confirm_gain_cap).max(1.0);
+                }
             } else {
                 self.above_since_s[k] = None;
             }
@@ -244,7 +278,8 @@ impl LeakSizeDetector {
                 // `confirm_s` (named if it has led for `kind_confirm_s`), or once some
                 // hypothesis' rise has been past `pending_factor` thresholds for
                 // `confirm_s` (kind pending: the mismatch shows on both chambers).
-                let clear_ready = self.above_since_s[lead].filter(|t0| e.t_s - t0 >= self.cfg.confirm_s);
+                let clear_ready =
+                    self.above_since_s[lead].filter(|_| self.above_evidence_s[lead] >= self.cfg.confirm_s);
                 let strong_ready = strong.filter(|_| {
                     self.strong_since_s
                         .is_some_and(|t0| e.t_s - t0 >= self.cfg.confirm_s)

@@ -1,0 +1,83 @@
+//! Debug one healthy suite case (with its gaps): the leak-size events, the gaps
+//! and the thresholds. cargo run --release -p bench --example fa_case -- SCENARIO SEED [gaps]
+use bench::detection::{simulator_for, Case};
+use detect::{Classifier, ClassifierConfig};
+use filter::{EstimatorStage, Tuning};
+use model::rng::Rng;
+use model::ActuatorParams;
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let case = Case {
+        scenario: a[1].clone(),
+        kind: "none".into(),
+        size_lpm: 0.0,
+        onset_s: f64::NAN,
+        ramp_s: 0.0,
+        seed: a[2].parse().expect("seed"),
+        seconds: 300.0,
+        variant: a.get(3).cloned().unwrap_or_default(),
+    };
+    let mut sim = simulator_for(&case).expect("sim");
+    let mut stage = EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .expect("stage");
+    let mut cfg = ClassifierConfig::default();
+    if let Some(hz) = std::env::var("MAX_COMMAND_HZ").ok().and_then(|v| v.parse().ok()) {
+        cfg.max_command_hz = hz;
+    }
+    let mut cls = Classifier::new(cfg).expect("cls");
+    let mut gaps = Rng::new(case.seed ^ 0x9e37_79b9_7f4a_7c15);
+    let mut next_gap_s = gaps.uniform_in(10.0, 30.0);
+    let mut skip = 0u64;
+    let mut last_thr = [0.0; 3];
+    for _ in 0..300_000 {
+        let s = sim.step();
+        if case.variant == "gaps" {
+            if s.t_s >= next_gap_s {
+                skip = 1 + (gaps.uniform() * 2000.0) as u64;
+                println!("gap at {:.3} s of {skip} samples", s.t_s);
+                next_gap_s = s.t_s + skip as f64 * 1e-3 + gaps.uniform_in(10.0, 30.0);
+            }
+            if skip > 0 {
+                skip -= 1;
+                continue;
+            }
+        }
+        let e = stage.on_sample(&s);
+        let thr = cls.leak_size.thresholds_lpm();
+        if let (Some(a), Some(b)) = (
+            std::env::var("FROM").ok().and_then(|v| v.parse::<f64>().ok()),
+            std::env::var("TO").ok().and_then(|v| v.parse::<f64>().ok()),
+        ) {
+            let i = (s.t_s * 1000.0).round() as u64;
+            if s.t_s >= a && s.t_s <= b && i.is_multiple_of(250) {
+                let r = cls.leak_size.rise_lpm(&e.leak);
+                let base = cls.leak_size.baseline_lpm();
+                println!(
+                    "t {:7.2} x {:.3} p1 {:5.2} p2 {:5.2} rise {:7.3} {:7.3} {:7.3} base {:7.3} {:7.3} {:7.3} nis {:.1} flags {}",
+                    s.t_s, s.x_m, s.p1_pa / 1e6, s.p2_pa / 1e6, r[0], r[1], r[2], base[0], base[1], base[2], e.leak.nis, e.leak.flags
+                );
+            }
+        }
+        if thr.iter().zip(&last_thr).any(|(a, b)| (a - b).abs() > 0.01) {
+            println!("t {:.1} thresholds {:.3?}", s.t_s, thr);
+            last_thr = thr;
+        }
+        cls.on_stage(&e, |ev| {
+            if ev.detector == "leak-size" {
+                println!(
+                    "EVENT t {:.3} onset {:.3} {:?} {} {}",
+                    ev.t_detect_s,
+                    ev.t_onset_s,
+                    ev.phase,
+                    ev.kind.name(),
+                    ev.detail
+                );
+            }
+        });
+    }
+}
