@@ -120,10 +120,13 @@ pub struct ClassifierConfig {
     pub commissioning: Option<Commissioning>,
     /// Leak-size detector: once this much healthy evidence has been seen after arming
     /// (no leak, every rise below `baseline_hold` of its threshold), the thresholds
-    /// are taken from the spread of the rises since arming, refined every second
-    /// (0 = keep the warm-up's); not with a commissioning, s.
+    /// are taken from the spread of the rises since arming, refined every second,
+    /// where lower than the warm-up's (0 = keep the warm-up's); not with a
+    /// commissioning, s.
     pub refine_after_s: f64,
-    /// Leak-size detector: smallest leak ever declared, L/min (at nominal drop).
+    /// Leak-size detector: smallest leak ever declared, L/min of real flow at the
+    /// measured pressures (each kind's threshold at p_s/2 is at least this divided
+    /// by √(Δp/(p_s/2)) averaged over `size_window_s`).
     pub min_size_lpm: f64,
     /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
     pub confirm_s: f64,
