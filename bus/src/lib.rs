@@ -44,7 +44,7 @@ pub use frames;
 pub use publisher::{Publisher, PublisherWatch, TopicWatch};
 pub use schedule::ArrivalSchedule;
 pub use signals::stop_on_signals;
-pub use stage::{run_stage, StageOptions, StageReport, StopReason};
+pub use stage::{run_stage, run_stage_with, StageOptions, StageReport, StopReason};
 pub use stage_args::StageArgs;
 pub use stats::{Percentiles, StageStats};
 pub use subscriber::{Received, Subscriber};

@@ -116,6 +116,27 @@ pub fn run_stage<I: Frame, O: Frame>(
     stop: &AtomicBool,
     mut on_input: impl FnMut(&Received<I>, &mut O) -> bool,
 ) -> Result<StageReport, BusError> {
+    run_stage_with(
+        bus,
+        opts,
+        stop,
+        &mut (),
+        |_, input, out| on_input(input, out),
+        |_| {},
+    )
+}
+
+/// [`run_stage`] over a state `state` that `on_input` and `warm_up` share:
+/// in low-latency mode `warm_up` runs once before each expected frame, after
+/// the wait's sleep ([`crate::Subscriber::wait_then`]), off the frame's path.
+pub fn run_stage_with<I: Frame, O: Frame, S>(
+    bus: &Bus,
+    opts: &StageOptions,
+    stop: &AtomicBool,
+    state: &mut S,
+    mut on_input: impl FnMut(&mut S, &Received<I>, &mut O) -> bool,
+    mut warm_up: impl FnMut(&mut S),
+) -> Result<StageReport, BusError> {
     let mut rx = bus.subscriber::<I>(opts.mode)?;
     if let Some(seq) = opts.resume_after_seq {
         rx.resume_after(seq);
@@ -133,7 +154,7 @@ pub fn run_stage<I: Frame, O: Frame>(
             next_stats = (next_stats + period_ns).max(now + 1);
         }
         let timeout = Duration::from_nanos(next_stats.saturating_sub(now));
-        let Some(input) = rx.wait(timeout, stop)? else {
+        let Some(input) = rx.wait_then(timeout, stop, &mut || warm_up(state))? else {
             if stop.load(Ordering::Relaxed) {
                 break StopReason::Stopped;
             }
@@ -150,7 +171,7 @@ pub fn run_stage<I: Frame, O: Frame>(
         let mut proc_ns = 0;
         let sent = tx.send_with(|out| {
             let t0 = monotonic_ns();
-            let publish = on_input(&input, out);
+            let publish = on_input(state, &input, out);
             proc_ns = monotonic_ns() - t0;
             if publish && eos {
                 out.mark_end_of_stream();

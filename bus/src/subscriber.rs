@@ -137,6 +137,20 @@ impl<T: Frame> Subscriber<T> {
     /// Waits up to `timeout` for the next frame in this subscriber's mode.
     /// `Ok(None)` on timeout or when `stop` is set.
     pub fn wait(&mut self, timeout: Duration, stop: &AtomicBool) -> Result<Option<Received<T>>, BusError> {
+        self.wait_then(timeout, stop, &mut || {})
+    }
+
+    /// [`Self::wait`], and in low-latency mode calls `before_frame` once when it
+    /// wakes from its sleep, the lead before the next frame is due, while no frame
+    /// is there yet: the place for a throw-away step that brings the caches back
+    /// after the sleep (the other modes never call it).
+    pub fn wait_then(
+        &mut self,
+        timeout: Duration,
+        stop: &AtomicBool,
+        before_frame: &mut dyn FnMut(),
+    ) -> Result<Option<Received<T>>, BusError> {
+        let mut slept = false;
         let deadline = monotonic_ns().saturating_add(timeout.as_nanos().min(u64::MAX as u128) as u64);
         let mut spins = 0u32;
         loop {
@@ -163,8 +177,15 @@ impl<T: Frame> Subscriber<T> {
                         return Ok(None);
                     }
                     match self.schedule.poll_window(now, lead_us as u64 * 1000) {
-                        schedule::Window::SleepUntil(t) => sleep_until_ns(t.min(deadline), true),
+                        schedule::Window::SleepUntil(t) => {
+                            sleep_until_ns(t.min(deadline), true);
+                            slept = true;
+                        }
                         schedule::Window::Poll => {
+                            if std::mem::take(&mut slept) && !self.subscriber.has_samples().unwrap_or(true) {
+                                before_frame();
+                                continue;
+                            }
                             // poll a bounded number of times, then re-evaluate the window
                             for _ in 0..POLL_CHECK_EVERY {
                                 if self.subscriber.has_samples().unwrap_or(true) {

@@ -310,3 +310,50 @@ fn a_prefix_is_owned_by_one_run_at_a_time() {
         "no prefix, nothing to own"
     );
 }
+
+/// In low-latency mode `wait_then` calls its warm-up once per frame it slept
+/// for, before the frame is there (the frame's arrival time is later than the
+/// warm-up's); in event mode never.
+#[test]
+fn the_warm_up_runs_before_frames_in_low_latency_mode_only() {
+    for (i, mode) in [WaitMode::LOW_LATENCY, WaitMode::Event].into_iter().enumerate() {
+        let tag = format!("warm{i}");
+        let cfg = config(&tag);
+        let bus = Bus::open("rig1", cfg.clone()).unwrap();
+        let mut rx = bus.subscriber::<SensorFrame>(mode).unwrap();
+        let publisher = publish(cfg, 400, &[]);
+        let stop = AtomicBool::new(false);
+        let (mut frames, mut warmed, mut warmed_before_publish) = (0u64, 0u64, 0u64);
+        loop {
+            let mut warm_at = None;
+            let r = rx
+                .wait_then(Duration::from_secs(5), &stop, &mut || {
+                    warm_at = Some(bus::monotonic_ns());
+                })
+                .unwrap()
+                .expect("a frame");
+            frames += 1;
+            if let Some(t) = warm_at {
+                warmed += 1;
+                warmed_before_publish += (t < r.acq_mono_ns) as u64;
+            }
+            if r.flags & sensor_flags::END_OF_STREAM != 0 {
+                break;
+            }
+        }
+        publisher.join().unwrap();
+        drop((rx, bus));
+        config(&tag).remove_isolated_files().unwrap();
+        assert_eq!(frames, 400, "{mode:?}");
+        if mode == WaitMode::Event {
+            assert_eq!(warmed, 0);
+        } else {
+            // (the schedule is learned from the first frames; a late wake-up skips one)
+            assert!(warmed >= 300, "{mode:?}: warmed up before {warmed} of 400 frames");
+            assert!(
+                warmed_before_publish >= warmed * 9 / 10,
+                "{warmed_before_publish} of {warmed}"
+            );
+        }
+    }
+}

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
 use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
-use bus::{run_stage, Received, StageOptions};
+use bus::{run_stage_with, Received, StageOptions};
 use clap::Parser;
 use frames::{EstimateFrame, SensorFrame};
 use model::{ActuatorParams, Sample};
@@ -126,10 +126,19 @@ fn run(args: Args) -> Result<(), String> {
     opts.resume_after_seq = args.stage.resume_after_seq;
     // the first estimate of one that joins a running stream says that its filter started again
     let mut join = Join::new(args.stage.resume_after_seq);
-    let report = run_stage::<SensorFrame, EstimateFrame>(&bus, &opts, stop, |input, out| {
-        estimate_frame(&mut stage, input, out, &mut join);
-        true
-    })
+    // (in low-latency mode both filters take a throw-away step after each sleep,
+    // just before the frame is due: the frame's own step finds them in the caches)
+    let report = run_stage_with::<SensorFrame, EstimateFrame, _>(
+        &bus,
+        &opts,
+        stop,
+        &mut stage,
+        |stage, input, out| {
+            estimate_frame(stage, input, out, &mut join);
+            true
+        },
+        EstimatorStage::warm_up,
+    )
     .map_err(|e| e.to_string())?;
     eprintln!("estimator: {report}");
     Ok(())

@@ -125,6 +125,8 @@ pub struct Estimator {
     tuning: Tuning,
     model: ProcessModel,
     filter: Filter,
+    /// A copy of `filter` that [`Estimator::warm_up`] steps and throws away.
+    warm: Filter,
     mae: [MovingMae; 2],
     last_u_v: f64,
     started: bool,
@@ -165,6 +167,7 @@ impl Estimator {
         Ok(Estimator {
             tuning,
             model,
+            warm: filter.clone(),
             filter,
             mae: [MovingMae::new(w), MovingMae::new(w)],
             last_u_v: 0.0,
@@ -175,6 +178,37 @@ impl Estimator {
             measured_p_range_pa,
             counters: EstimatorCounters::default(),
         })
+    }
+
+    /// One throw-away step on a copy of the filter (the estimate is unchanged): run
+    /// just before a frame is due, after the wait's sleep in low-latency mode, it
+    /// brings the filter's matrices, the model and the step's code back into the
+    /// caches, so the frame's own step does not pay for them. Allocates nothing.
+    pub fn warm_up(&mut self) {
+        fn step<const N: usize>(
+            w: &mut Ekf<N, 3>,
+            f: &Ekf<N, 3>,
+            model: &ProcessModel,
+            u: f64,
+            out: &mut Estimate,
+        ) {
+            w.clone_from(f);
+            let y = ProcessModel::measure(w.state());
+            // (the result is thrown away with the copy)
+            let _ = step_filter(w, model, u, &y, [true; 3], true, out);
+        }
+        if !self.started {
+            return;
+        }
+        let mut out = Estimate::empty(self.t0_s, self.tuning.states);
+        let (model, u) = (&self.model, self.last_u_v);
+        match (&mut self.warm, &self.filter) {
+            (Filter::S6(w), Filter::S6(f)) => step(w, f, model, u, &mut out),
+            (Filter::S7(w), Filter::S7(f)) => step(w, f, model, u, &mut out),
+            (Filter::S10(w), Filter::S10(f)) => step(w, f, model, u, &mut out),
+            (Filter::S11(w), Filter::S11(f)) => step(w, f, model, u, &mut out),
+            (w, f) => w.clone_from(f),
+        }
     }
 
     /// The filter settings.

@@ -64,6 +64,13 @@ impl EstimatorStage {
         self.missing
     }
 
+    /// A throw-away step of both filters before the next sample is due (see
+    /// [`crate::Estimator::warm_up`]); nothing they estimate changes.
+    pub fn warm_up(&mut self) {
+        self.leak.warm_up();
+        self.thesis.warm_up();
+    }
+
     /// Processes one sample.
     #[inline]
     pub fn on_sample(&mut self, s: &Sample) -> StageEstimate {
