@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+use crate::stats::quantile;
 use detect::{Classifier, ClassifierConfig, LeakEvent};
 use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
@@ -300,14 +301,6 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         o.size_final_lpm = last.size_lpm;
     }
     o
-}
-
-fn quantile(v: &mut [f64], p: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() as f64 - 1.0) * p).round() as usize]
 }
 
 /// Scores every `run_*`-like folder (any folder holding a truth.json) of `dir`,

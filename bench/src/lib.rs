@@ -5,4 +5,5 @@ pub mod alarms;
 pub mod detection;
 pub mod detection_data;
 pub mod speed;
+pub mod stats;
 pub mod thesis;

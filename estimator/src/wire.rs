@@ -20,6 +20,7 @@ const _: () = {
     assert!(crate::FLAG_CLAMPED == estimate_flags::CLAMPED);
     assert!(crate::FLAG_CONVERGING == estimate_flags::CONVERGING);
     assert!(crate::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
+    assert!(crate::FLAG_END_STOP == estimate_flags::END_STOP);
     assert!(FLAGS_ALL & estimate_flags::END_OF_STREAM == 0);
     assert!(MAX_STATES == frames::MAX_STATES);
 };

@@ -39,8 +39,16 @@ pub const FLAG_CLAMPED: u32 = 1 << 2;
 pub const FLAG_CONVERGING: u32 = 1 << 4;
 /// Flag bit: samples were missing just before this one (bridged or re-anchored).
 pub const FLAG_AFTER_GAP: u32 = 1 << 5;
+/// Flag bit: the estimated rod position is within [`END_STOP_MARGIN_M`] of an end of
+/// its stroke. The end stops are springs far stiffer than a 1 kHz step can follow
+/// (1e8 N/m on a few kg rings at kHz), so the model does not track the contact.
+pub const FLAG_END_STOP: u32 = 1 << 6;
 /// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
-pub const FLAGS_ALL: u32 = FLAG_RESET | FLAG_SKIPPED | FLAG_CLAMPED | FLAG_CONVERGING | FLAG_AFTER_GAP;
+pub const FLAGS_ALL: u32 =
+    FLAG_RESET | FLAG_SKIPPED | FLAG_CLAMPED | FLAG_CONVERGING | FLAG_AFTER_GAP | FLAG_END_STOP;
+/// Distance from either end of the stroke within which an estimate carries
+/// [`FLAG_END_STOP`], m (an encoder count or two, plus the bounce of a stop).
+pub const END_STOP_MARGIN_M: f64 = 2e-3;
 
 /// What the estimator reports for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -400,6 +408,11 @@ impl Estimator {
         }
         if s.t_s - self.t0_s < self.tuning.convergence_time_s {
             flags |= FLAG_CONVERGING;
+        }
+        let (x_min_m, x_max_m) = (self.model.params.x_min_m, self.model.params.x_max_m);
+        let x_m = out.state[3];
+        if x_m < x_min_m + END_STOP_MARGIN_M || x_m > x_max_m - END_STOP_MARGIN_M {
+            flags |= FLAG_END_STOP;
         }
         out.flags |= flags;
         out

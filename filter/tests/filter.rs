@@ -1,6 +1,6 @@
 //! The estimator against the simulated rig and against textbook properties.
 
-use filter::{Ekf, Estimator, Tuning, FLAG_RESET};
+use filter::{Ekf, Estimator, Tuning, END_STOP_MARGIN_M, FLAG_END_STOP, FLAG_RESET};
 use model::rng::Rng;
 use model::{ActuatorParams, FaultSchedule, FrictionPreset, Scenario, SensorParams, SimSettings, Simulator};
 use nalgebra::{SMatrix, SVector};
@@ -431,6 +431,63 @@ fn pressures_within_the_negative_margin_are_used_and_beyond_it_dropped() {
     }
     assert_eq!(est.counters().channels_dropped - dropped, 2);
     assert_eq!(est.counters().skipped, 0);
+}
+
+/// An open-loop sine whose spool bias walks the rod into the far end of its stroke:
+/// the estimates carry the end-stop flag while the rod is within the margin of the
+/// stop (the measured rod at the stop is always flagged), and nowhere else.
+#[test]
+fn the_end_stop_flag_marks_the_rod_at_the_end_of_its_stroke() {
+    let rig = ActuatorParams {
+        spool_null_bias_m: 3.5e-6,
+        ..ActuatorParams::default()
+    };
+    let x_max_m = rig.x_max_m;
+    let scenario = Scenario::by_name("open-loop-sine", 51, 40.0).unwrap();
+    let mut sim = Simulator::new(
+        rig.clone(),
+        SensorParams::default(),
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        51,
+    )
+    .unwrap();
+    let mut est = Estimator::new(rig, Tuning::sensor_derived()).unwrap();
+    let (mut flagged, mut at_stop) = (0, 0);
+    for _ in 0..40_000 {
+        let s = sim.step();
+        let e = est.on_sample(&s);
+        let flag = e.flags & FLAG_END_STOP != 0;
+        assert_eq!(
+            flag,
+            e.state[3] > x_max_m - END_STOP_MARGIN_M,
+            "t {} s: {e:?}",
+            s.t_s
+        );
+        // (the estimate is within a few encoder counts of the measurement)
+        if flag {
+            assert!(
+                s.x_m > x_max_m - END_STOP_MARGIN_M - 2e-4,
+                "t {} s: x {} m",
+                s.t_s,
+                s.x_m
+            );
+            flagged += 1;
+        }
+        if s.x_m > x_max_m - 1e-4 {
+            assert!(
+                flag,
+                "t {} s: the rod at the stop ({} m) is not flagged",
+                s.t_s, s.x_m
+            );
+            at_stop += 1;
+        }
+    }
+    assert!(
+        at_stop > 500 && flagged > at_stop,
+        "{at_stop} samples at the stop, {flagged} flagged"
+    );
 }
 
 /// The warm-up step before each sample (low-latency mode) changes nothing the

@@ -24,6 +24,9 @@ pub mod estimate_flags {
     pub const CONVERGING: u32 = 1 << 4;
     /// Samples were missing just before this one (the filter bridged or re-anchored).
     pub const AFTER_GAP: u32 = 1 << 5;
+    /// The estimated rod position is at an end of its stroke (the stop's contact is
+    /// not tracked by the model).
+    pub const END_STOP: u32 = 1 << 6;
 }
 
 /// Values of [`LeakEventFrame::kind`](crate::LeakEventFrame::kind).

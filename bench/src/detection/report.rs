@@ -2,14 +2,7 @@
 //! table and the detection-probability figure.
 
 use super::{Cell, Outcome, RunResult, SuiteResult, DETECTORS, FROM_START, GAPS, MID_RUN, SIZES_LPM};
-
-fn quantile(v: &mut [f64], p: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() as f64 - 1.0) * p).round() as usize]
-}
+use crate::stats::quantile;
 
 /// Turns runs into the per-cell figures.
 pub fn summarise(runs: Vec<RunResult>, wall_s: f64) -> SuiteResult {
