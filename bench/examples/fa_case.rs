@@ -1,9 +1,8 @@
 //! Debug one healthy suite case (with its gaps): the leak-size events, the gaps
 //! and the thresholds. cargo run --release -p bench --example fa_case -- SCENARIO SEED [gaps]
-use bench::detection::{simulator_for, Case};
+use bench::detection::{simulator_for, Case, GapSchedule, GapStep};
 use detect::{Classifier, ClassifierConfig};
 use filter::{EstimatorStage, Tuning};
-use model::rng::Rng;
 use model::ActuatorParams;
 
 fn main() {
@@ -30,21 +29,18 @@ fn main() {
         cfg.max_command_hz = hz;
     }
     let mut cls = Classifier::new(cfg).expect("cls");
-    let mut gaps = Rng::new(case.seed ^ 0x9e37_79b9_7f4a_7c15);
-    let mut next_gap_s = gaps.uniform_in(10.0, 30.0);
-    let mut skip = 0u64;
+    let mut gaps = GapSchedule::new(case.seed);
     let mut last_thr = [0.0; 3];
     for _ in 0..300_000 {
         let s = sim.step();
         if case.variant == "gaps" {
-            if s.t_s >= next_gap_s {
-                skip = 1 + (gaps.uniform() * 2000.0) as u64;
-                println!("gap at {:.3} s of {skip} samples", s.t_s);
-                next_gap_s = s.t_s + skip as f64 * 1e-3 + gaps.uniform_in(10.0, 30.0);
-            }
-            if skip > 0 {
-                skip -= 1;
-                continue;
+            match gaps.step(s.t_s) {
+                GapStep::Kept => {}
+                GapStep::Starts(n) => {
+                    println!("gap at {:.3} s of {n} samples", s.t_s);
+                    continue;
+                }
+                GapStep::Lost => continue,
             }
         }
         let e = stage.on_sample(&s);

@@ -14,7 +14,7 @@ mod cases;
 mod report;
 mod run;
 
-pub use cases::{cases, draw_rig, simulator_for};
+pub use cases::{cases, draw_rig, simulator_for, GapSchedule, GapStep};
 pub use report::{markdown, poisson_upper95, probability_figure, summarise};
 pub use run::{commission_rig, run_case, run_suite};
 
@@ -173,6 +173,33 @@ mod tests {
             .all(|c| (15.0..=25.0).contains(&c.onset_s)));
         // Seeded: the same suite twice.
         assert_eq!(format!("{:?}", cases(2, 0.25, 1)), format!("{c:?}"));
+    }
+
+    #[test]
+    fn gaps_are_1_to_2000_samples_every_10_to_30_s() {
+        let mut g = GapSchedule::new(7);
+        let (mut starts, mut lost, mut announced) = (Vec::new(), 0u64, 0u64);
+        for i in 0..600_000u64 {
+            let t_s = i as f64 * 1e-3;
+            match g.step(t_s) {
+                GapStep::Kept => {}
+                GapStep::Starts(n) => {
+                    assert!((1..=2000).contains(&n), "{n}");
+                    starts.push(t_s);
+                    announced += n;
+                    lost += 1;
+                }
+                GapStep::Lost => lost += 1,
+            }
+        }
+        assert!((10.0..30.0).contains(&starts[0]), "{starts:?}");
+        // (10-30 s apart, plus the gap itself)
+        assert!(
+            starts.windows(2).all(|w| (10.0..32.0).contains(&(w[1] - w[0]))),
+            "{starts:?}"
+        );
+        assert!(starts.len() >= 18 && starts.len() <= 60, "{}", starts.len());
+        assert!(announced >= lost && announced - lost < 2000, "{announced} {lost}");
     }
 
     #[test]

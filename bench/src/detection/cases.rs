@@ -115,3 +115,48 @@ pub fn simulator_for(case: &Case) -> Result<Simulator, String> {
     )
     .map_err(|e| e.to_string())
 }
+
+/// What happens to one sample of a `gaps` case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GapStep {
+    /// The sample arrives.
+    Kept,
+    /// A gap of this many samples starts here: this sample is lost.
+    Starts(u64),
+    /// The sample is lost inside a gap.
+    Lost,
+}
+
+/// The gaps of a `gaps` case, drawn from its seed: a run of 1-2000 lost samples
+/// every 10-30 s of rig time.
+#[derive(Debug, Clone)]
+pub struct GapSchedule {
+    rng: Rng,
+    next_s: f64,
+    left: u64,
+}
+
+impl GapSchedule {
+    /// The schedule of the case whose seed is `seed`.
+    pub fn new(seed: u64) -> Self {
+        let mut rng = Rng::new(seed ^ 0x9e37_79b9_7f4a_7c15);
+        let next_s = rng.uniform_in(10.0, 30.0);
+        GapSchedule { rng, next_s, left: 0 }
+    }
+
+    /// Whether the sample at `t_s` (s, 1 kHz, in order) arrives.
+    pub fn step(&mut self, t_s: f64) -> GapStep {
+        let mut started = None;
+        if t_s >= self.next_s {
+            let n = 1 + (self.rng.uniform() * 2000.0) as u64;
+            self.left = n;
+            self.next_s = t_s + n as f64 * 1e-3 + self.rng.uniform_in(10.0, 30.0);
+            started = Some(n);
+        }
+        if self.left == 0 {
+            return GapStep::Kept;
+        }
+        self.left -= 1;
+        started.map_or(GapStep::Lost, GapStep::Starts)
+    }
+}

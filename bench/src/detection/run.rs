@@ -10,8 +10,8 @@ use model::rng::Rng;
 use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 
 use super::{
-    draw_rig, simulator_for, summarise, Case, Outcome, RunResult, SuiteResult, DETECTORS, FROM_START, GAPS,
-    MID_RUN,
+    draw_rig, simulator_for, summarise, Case, GapSchedule, GapStep, Outcome, RunResult, SuiteResult,
+    DETECTORS, FROM_START, GAPS, MID_RUN,
 };
 
 /// Runs one case through the rig, the estimator stage and the classifier.
@@ -33,24 +33,15 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
     let mut events: Vec<LeakEvent> = Vec::new();
     let n = (case.seconds / sim.sample_period_s()).round() as u64;
     let (mut flow, mut flow_n) = (0.0f64, 0.0f64);
-    let mut gaps = Rng::new(case.seed ^ 0x9e37_79b9_7f4a_7c15);
-    let mut next_gap_s = gaps.uniform_in(10.0, 30.0);
-    let mut skip = 0u64;
+    let mut gaps = GapSchedule::new(case.seed);
     for _ in 0..n {
         let s = sim.step();
         if s.t_s >= case.onset_s + case.ramp_s {
             flow += s.q_leak_lpm.abs();
             flow_n += 1.0;
         }
-        if case.variant == GAPS {
-            if s.t_s >= next_gap_s {
-                skip = 1 + (gaps.uniform() * 2000.0) as u64;
-                next_gap_s = s.t_s + skip as f64 * 1e-3 + gaps.uniform_in(10.0, 30.0);
-            }
-            if skip > 0 {
-                skip -= 1;
-                continue;
-            }
+        if case.variant == GAPS && gaps.step(s.t_s) != GapStep::Kept {
+            continue;
         }
         let e = stage.on_sample(&s);
         cls.on_stage(&e, |ev| {
