@@ -207,7 +207,7 @@ impl Default for ClassifierConfig {
             commissioning: None,
             min_size_lpm: 0.06,
             refine_after_s: 5.0,
-            confirm_s: 0.5,
+            confirm_s: 0.2,
             confirm_gain_cap: 2.0,
             baseline_tau_s: 15.0,
             baseline_hold: 0.5,
