@@ -168,6 +168,23 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         .unwrap();
     let run = run.wait_with_output().unwrap();
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    // the summary names every file the run left beside its log, the live view's own log too
+    let summary = String::from_utf8_lossy(&run.stdout);
+    let beside = summary
+        .lines()
+        .find_map(|l| l.strip_prefix("beside them: "))
+        .unwrap_or_else(|| panic!("{summary}"));
+    for f in [
+        "acquisition.log",
+        "estimator.log",
+        "classifier.log",
+        "recorder.log",
+        "liveview.log",
+        "config.toml",
+    ] {
+        assert!(beside.contains(f), "{f} missing: {beside}");
+        assert!(out.join(f).is_file(), "{f}");
+    }
     let stdout = String::from_utf8_lossy(&client.stdout);
     assert!(
         client.status.success(),

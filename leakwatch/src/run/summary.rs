@@ -94,5 +94,21 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
             ""
         }
     );
+    // the processes' own logs (live view and gateway included, when they ran) and the config
+    let mut beside: Vec<String> = std::fs::read_dir(&o.out_dir)
+        .map(|dir| {
+            dir.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.ends_with(".log"))
+                .collect()
+        })
+        .unwrap_or_default();
+    beside.sort();
+    if o.out_dir.join("config.toml").is_file() {
+        beside.push("config.toml".into());
+    }
+    if !beside.is_empty() {
+        outln!("beside them: {}", beside.join(", "));
+    }
     Ok(())
 }
