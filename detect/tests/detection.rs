@@ -4,21 +4,7 @@
 
 use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
 use filter::{Estimator, Tuning};
-use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
-
-/// The simulated rig `rig` under `scenario` with `faults`, default sensors and
-/// settings, seeded by `seed`.
-fn simulator(rig: ActuatorParams, scenario: Scenario, faults: FaultSchedule, seed: u64) -> Simulator {
-    Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        faults,
-        seed,
-    )
-    .unwrap()
-}
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, Simulator};
 
 /// A rig that differs from the model: friction +15 % extending, −10 % retracting,
 /// bulk modulus −20 %, a spool null bias of 4 % of the spool amplitude.
@@ -45,7 +31,7 @@ fn run_flow(
     if let Some(f) = fault {
         sched.faults.push(Fault::parse(f, &rig).unwrap());
     }
-    let mut sim = simulator(rig, scenario, sched, seed);
+    let mut sim = Simulator::with_default_sensors(rig, scenario, sched, seed).unwrap();
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
     let mut cls = Classifier::new(cfg).unwrap();
     let mut events = Vec::new();
@@ -180,7 +166,7 @@ fn a_spring_engaging_mid_run_raises_no_leak() {
         ..Default::default()
     };
     let scenario = Scenario::by_name("closed-loop-sine", 41, 40.0).unwrap();
-    let mut sim = simulator(rig, scenario, FaultSchedule::default(), 41);
+    let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), 41).unwrap();
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
     let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
     let mut events = Vec::new();
@@ -208,7 +194,8 @@ fn too_short_a_warm_up_is_reported_not_guessed() {
 #[test]
 fn gaps_nan_and_a_restart_raise_no_false_leak() {
     let scenario = Scenario::by_name("closed-loop-sine", 51, 40.0).unwrap();
-    let mut sim = simulator(off_nominal_rig(), scenario, FaultSchedule::default(), 51);
+    let mut sim =
+        Simulator::with_default_sensors(off_nominal_rig(), scenario, FaultSchedule::default(), 51).unwrap();
     let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
@@ -246,7 +233,9 @@ fn gaps_nan_and_a_restart_raise_no_false_leak() {
 #[test]
 fn dead_and_stuck_sensors_are_reported() {
     let scenario = Scenario::by_name("closed-loop-sine", 61, 30.0).unwrap();
-    let mut sim = simulator(ActuatorParams::default(), scenario, FaultSchedule::default(), 61);
+    let mut sim =
+        Simulator::with_default_sensors(ActuatorParams::default(), scenario, FaultSchedule::default(), 61)
+            .unwrap();
     let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),
@@ -359,7 +348,8 @@ fn a_leak_growing_over_minutes_is_caught_by_the_held_baseline() {
 /// Healthy closed-loop samples of an off-nominal rig (seeded), `seconds` long.
 fn healthy_samples(scenario: &str, seconds: f64, seed: u64) -> Vec<model::Sample> {
     let scenario = Scenario::by_name(scenario, seed, seconds).unwrap();
-    let mut sim = simulator(off_nominal_rig(), scenario, FaultSchedule::default(), seed);
+    let mut sim =
+        Simulator::with_default_sensors(off_nominal_rig(), scenario, FaultSchedule::default(), seed).unwrap();
     (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect()
 }
 
@@ -520,7 +510,7 @@ fn a_rod_drifting_into_its_end_stop_raises_no_leak() {
     let mut rig = ActuatorParams::default().off_nominal(0.7, 0.0);
     rig.spool_null_bias_m = 3.5e-6;
     let scenario = Scenario::by_name("open-loop-sine", 51, 70.0).unwrap();
-    let mut sim = simulator(rig, scenario, FaultSchedule::default(), 51);
+    let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), 51).unwrap();
     let params = ActuatorParams::default();
     let mut est = Estimator::new(params.clone(), Tuning::sensor_derived()).unwrap();
     let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();

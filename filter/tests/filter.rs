@@ -2,22 +2,8 @@
 
 use filter::{Ekf, Estimator, Tuning, END_STOP_MARGIN_M, FLAG_END_STOP, FLAG_RESET};
 use model::rng::Rng;
-use model::{ActuatorParams, FaultSchedule, FrictionPreset, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, FaultSchedule, FrictionPreset, Scenario, Simulator};
 use nalgebra::{SMatrix, SVector};
-
-/// The simulated rig `rig` under `scenario` with `faults`, default sensors and
-/// settings, seeded by `seed`.
-fn simulator(rig: ActuatorParams, scenario: Scenario, faults: FaultSchedule, seed: u64) -> Simulator {
-    Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        faults,
-        seed,
-    )
-    .unwrap()
-}
 
 /// The covariance factor keeps P symmetric positive definite over 1e6 steps of
 /// random commands and random measurements, from the thesis' P0 = 1e4·I (the
@@ -137,7 +123,7 @@ fn healthy_run(scenario: &str, tuning: Tuning, smooth: bool, seconds: f64, pos_t
         model = model.with_friction_preset(FrictionPreset::Smooth);
     }
     let sc = Scenario::by_name(scenario, 3, seconds).unwrap();
-    let mut sim = simulator(rig, sc, FaultSchedule::default(), 3);
+    let mut sim = Simulator::with_default_sensors(rig, sc, FaultSchedule::default(), 3).unwrap();
     let mut est = Estimator::new(model, tuning).unwrap();
     let (mut converged_p_s, mut converged_x_s) = (0.0, 0.0);
     let (mut sq, mut fe_sq, mut n) = ([0.0; 2], 0.0, 0.0);
@@ -336,7 +322,7 @@ fn a_long_gap_reanchors_the_fast_states_and_keeps_the_leak_sizes() {
     let mut faults = FaultSchedule::default();
     faults.faults.push(Fault::parse("ext1:0.5lpm@0s", &rig).unwrap());
     let scenario = Scenario::by_name("closed-loop-sine", 5, 12.0).unwrap();
-    let mut sim = simulator(rig, scenario, faults, 5);
+    let mut sim = Simulator::with_default_sensors(rig, scenario, faults, 5).unwrap();
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
     let mut before = [0.0; 3];
     let mut cov_before = [0.0; 121];
@@ -392,7 +378,8 @@ fn pressures_within_the_negative_margin_are_used_and_beyond_it_dropped() {
     let (lo, hi) = rig.measured_pressure_range_pa();
     assert_eq!((lo, hi), (-276_000.0, 20.7e6));
     let scenario = Scenario::by_name("closed-loop-sine", 5, 2.0).unwrap();
-    let mut sim = simulator(rig.clone(), scenario, FaultSchedule::default(), 5);
+    let mut sim =
+        Simulator::with_default_sensors(rig.clone(), scenario, FaultSchedule::default(), 5).unwrap();
     let mut est = Estimator::new(rig, Tuning::sensor_derived()).unwrap();
     for _ in 0..500 {
         est.on_sample(&sim.step());
@@ -434,7 +421,8 @@ fn the_end_stop_flag_marks_the_rod_at_the_end_of_its_stroke() {
     };
     let x_max_m = rig.x_max_m;
     let scenario = Scenario::by_name("open-loop-sine", 51, 40.0).unwrap();
-    let mut sim = simulator(rig.clone(), scenario, FaultSchedule::default(), 51);
+    let mut sim =
+        Simulator::with_default_sensors(rig.clone(), scenario, FaultSchedule::default(), 51).unwrap();
     let mut est = Estimator::new(rig, Tuning::sensor_derived()).unwrap();
     let (mut flagged, mut at_stop) = (0, 0);
     for _ in 0..40_000 {
@@ -483,7 +471,7 @@ fn the_warm_up_step_changes_no_estimate() {
         .faults
         .push(model::Fault::parse("int:0.3lpm@2s", &rig).unwrap());
     let scenario = Scenario::by_name("loaded-sine", 7, 5.0).unwrap();
-    let mut sim = simulator(rig, scenario, faults, 7);
+    let mut sim = Simulator::with_default_sensors(rig, scenario, faults, 7).unwrap();
     let new = || {
         filter::EstimatorStage::new(
             ActuatorParams::default(),

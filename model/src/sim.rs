@@ -102,6 +102,24 @@ pub struct Simulator {
 }
 
 impl Simulator {
+    /// [`Simulator::new`] with the default sensors and settings (the encoder,
+    /// pressure channels and integrator of MODEL.md).
+    pub fn with_default_sensors(
+        rig: ActuatorParams,
+        scenario: Scenario,
+        faults: FaultSchedule,
+        seed: u64,
+    ) -> Result<Simulator, InvalidParam> {
+        Simulator::new(
+            rig,
+            SensorParams::default(),
+            SimSettings::default(),
+            scenario,
+            faults,
+            seed,
+        )
+    }
+
     /// A rig with parameters `rig` (whose load is replaced by the scenario's
     /// spring), sensors, settings, scenario, faults and noise seed, at rest at
     /// the scenario's initial position with both chambers at the mean pressure.

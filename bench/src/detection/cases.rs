@@ -2,7 +2,7 @@
 //! drawn from its own seed, and the simulator of its rig, fault and scenario.
 
 use model::rng::Rng;
-use model::{ActuatorParams, Fault, FaultSchedule, LeakPath, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, Fault, FaultSchedule, LeakPath, Scenario, Simulator};
 
 use super::{Case, AFTER_ONSET_S, FROM_START, GAPS, HEALTHY_RUN_S, MID_RUN, SCENARIOS, SIZES_LPM};
 
@@ -105,15 +105,7 @@ pub fn simulator_for(case: &Case) -> Result<Simulator, String> {
             .push(Fault::parse(&spec, &rig).map_err(|e| e.to_string())?);
     }
     let scenario = Scenario::by_name(&case.scenario, case.seed, case.seconds).map_err(|e| e.to_string())?;
-    Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        faults,
-        case.seed,
-    )
-    .map_err(|e| e.to_string())
+    Simulator::with_default_sensors(rig, scenario, faults, case.seed).map_err(|e| e.to_string())
 }
 
 /// What happens to one sample of a `gaps` case.
