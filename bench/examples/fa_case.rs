@@ -1,5 +1,6 @@
 //! Debug one healthy suite case (with its gaps): the leak-size events, the gaps
 //! and the thresholds. cargo run --release -p bench --example fa_case -- SCENARIO SEED [gaps]
+//! (env: MAX_COMMAND_HZ, MIN_SIZE_LPM override the detector; FROM and TO (s) print a trace)
 use bench::detection::{simulator_for, Case, GapSchedule, GapStep};
 use detect::{Classifier, ClassifierConfig};
 use filter::{EstimatorStage, Tuning};
@@ -28,6 +29,9 @@ fn main() {
     if let Some(hz) = std::env::var("MAX_COMMAND_HZ").ok().and_then(|v| v.parse().ok()) {
         cfg.max_command_hz = hz;
     }
+    if let Some(m) = std::env::var("MIN_SIZE_LPM").ok().and_then(|v| v.parse().ok()) {
+        cfg.min_size_lpm = m;
+    }
     let mut cls = Classifier::new(cfg).expect("cls");
     let mut gaps = GapSchedule::new(case.seed);
     let mut last_thr = [0.0; 3];
@@ -54,8 +58,9 @@ fn main() {
                 let r = cls.leak_size.rise_lpm(&e.leak);
                 let base = cls.leak_size.baseline_lpm();
                 println!(
-                    "t {:7.2} x {:.3} p1 {:5.2} p2 {:5.2} rise {:7.3} {:7.3} {:7.3} base {:7.3} {:7.3} {:7.3} nis {:.1} flags {}",
-                    s.t_s, s.x_m, s.p1_pa / 1e6, s.p2_pa / 1e6, r[0], r[1], r[2], base[0], base[1], base[2], e.leak.nis, e.leak.flags
+                    "t {:7.2} x {:.3} p1 {:5.2} p2 {:5.2} rise {:7.3} {:7.3} {:7.3} base {:7.3} {:7.3} {:7.3} nis {:.1} flags {} sig {:.4} {:.4} {:.4}",
+                    s.t_s, s.x_m, s.p1_pa / 1e6, s.p2_pa / 1e6, r[0], r[1], r[2], base[0], base[1], base[2], e.leak.nis, e.leak.flags,
+                    e.leak.sigma[7] * 6e4, e.leak.sigma[8] * 6e4, e.leak.sigma[9] * 6e4
                 );
             }
         }

@@ -1,5 +1,5 @@
 //! Prints the leak-size detector's view of a recorded run every 0.5 s from T0:
-//! cargo run --release -p bench --example replay_debug -- FILE.csv[.gz] T0
+//! cargo run --release -p bench --example replay_debug -- FILE.csv[.gz] T0 (env EVERY: samples between lines, 500)
 use detect::{misfits, Classifier, ClassifierConfig};
 use filter::{EstimatorStage, Tuning};
 use model::ActuatorParams;
@@ -26,11 +26,15 @@ fn main() {
                 ev.size_lpm
             )
         });
-        if s.t_s >= t0 && k % 500 == 0 {
+        let every: usize = std::env::var("EVERY")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(500);
+        if s.t_s >= t0 && k % every == 0 {
             let r = cls.leak_size.rise_lpm(&e.leak);
             let m = misfits(r);
             println!(
-                "t {:6.2} rise {:7.3} {:7.3} {:7.3} misfit {:6.3} {:6.3} {:6.3} thr {:?} q_leak {:.3}",
+                "t {:6.2} rise {:7.3} {:7.3} {:7.3} misfit {:6.3} {:6.3} {:6.3} thr {:?} g {:.2?} q_leak {:.3}",
                 s.t_s,
                 r[0],
                 r[1],
@@ -39,6 +43,7 @@ fn main() {
                 m[1],
                 m[2],
                 cls.leak_size.thresholds_lpm(),
+                cls.leak_size.flow_factors(),
                 s.q_leak_lpm
             );
         }

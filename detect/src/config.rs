@@ -124,10 +124,15 @@ pub struct ClassifierConfig {
     /// where lower than the warm-up's (0 = keep the warm-up's); not with a
     /// commissioning, s.
     pub refine_after_s: f64,
-    /// Leak-size detector: smallest leak ever declared, L/min of real flow at the
-    /// measured pressures (each kind's threshold at p_s/2 is at least this divided
-    /// by √(Δp/(p_s/2)) averaged over `size_window_s`).
+    /// Leak-size detector: smallest external leak (ext1, ext2) ever declared, L/min
+    /// of real flow at the measured pressures (its threshold at p_s/2 is at least
+    /// this divided by √(Δp/(p_s/2)) averaged over `size_window_s`).
     pub min_size_lpm: f64,
+    /// Leak-size detector: smallest internal leak ever declared, L/min of real flow
+    /// at the measured pressures (as `min_size_lpm`). Higher than the external
+    /// floor: one chamber losing what the other gains is also what a spool null
+    /// error or a rod held by stiction makes the healthy model show.
+    pub min_internal_size_lpm: f64,
     /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
     pub confirm_s: f64,
     /// Leak-size detector: a rise r thresholds high counts min(r, this) seconds of
@@ -205,7 +210,8 @@ impl Default for ClassifierConfig {
             max_command_hz: 3.0,
             thesis_baseline: false,
             commissioning: None,
-            min_size_lpm: 0.06,
+            min_size_lpm: 0.04,
+            min_internal_size_lpm: 0.06,
             refine_after_s: 5.0,
             confirm_s: 0.2,
             confirm_gain_cap: 2.0,
@@ -237,7 +243,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 32] = [
+        let fields: [(&str, f64, f64, f64, &str); 33] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -280,6 +286,13 @@ impl ClassifierConfig {
             ),
             ("max_command_hz", self.max_command_hz, 0.0, 1e5, "Hz"),
             ("min_size_lpm", self.min_size_lpm, 0.0, 1e4, "L/min"),
+            (
+                "min_internal_size_lpm",
+                self.min_internal_size_lpm,
+                0.0,
+                1e4,
+                "L/min",
+            ),
             ("refine_after_s", self.refine_after_s, 0.0, 1e6, "s"),
             (
                 "confirm_gain_cap",

@@ -432,7 +432,7 @@ impl LeakSizeDetector {
                 self.cfg.threshold_sigma,
             );
             self.threshold_z[k] = z;
-            self.threshold_lpm[k] = (z * spreads[k]).max(self.cfg.min_size_lpm);
+            self.threshold_lpm[k] = (z * spreads[k]).max(self.min_size_of(k));
             self.stats[k].m2 = spreads[k] * spreads[k];
             self.stats[k].n = 2.0;
         }
@@ -462,6 +462,15 @@ impl LeakSizeDetector {
                     self.stats[k].m2 = spread[k] * spread[k];
                 }
             }
+        }
+    }
+
+    /// The smallest real flow declared for hypothesis `k` (ext1, ext2, int), L/min.
+    fn min_size_of(&self, k: usize) -> f64 {
+        if k == 2 {
+            self.cfg.min_internal_size_lpm
+        } else {
+            self.cfg.min_size_lpm
         }
     }
 

@@ -10,7 +10,8 @@
 //!   a healthy warm-up has learned each estimate's offset and spread (a healthy
 //!   rig that differs from the model, e.g. a spool null bias, leaves a steady
 //!   offset), a leak is declared when one size rises above
-//!   max(c·spread, `min_size_lpm` of real flow at the measured pressures)
+//!   max(c·spread, `min_size_lpm` (external) or `min_internal_size_lpm` of real
+//!   flow at the measured pressures)
 //!   (c from `false_alarms_per_hour`, at least `threshold_sigma`) for
 //!   `confirm_s` of evidence. The spreads are refined from the healthy time
 //!   after arming (`refine_after_s`; only ever lowered), and only a mismatch

@@ -10,8 +10,9 @@ use crate::{
 };
 use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_END_STOP, FLAG_RESET, FLAG_SKIPPED};
 
-/// Least real flow per L/min of nominal size that the `min_size_lpm` floor is
-/// divided by (a drop of 1 % of p_s/2): below it a hypothesis is not testable.
+/// Least real flow per L/min of nominal size that the `min_size_lpm` (or
+/// `min_internal_size_lpm`) floor is divided by (a drop of 1 % of p_s/2): below
+/// it a hypothesis is not testable.
 const MIN_FLOW_FACTOR: f64 = 0.1;
 
 impl LeakSizeDetector {
@@ -31,9 +32,12 @@ impl LeakSizeDetector {
         let recover = e.t_s + self.cfg.recovery_s;
         if e.flags & (FLAG_SKIPPED | FLAG_AFTER_GAP | FLAG_RESET) != 0 {
             self.invalid_until_s = self.invalid_until_s.max(recover);
-            if e.flags & (FLAG_AFTER_GAP | FLAG_RESET) != 0 {
-                // The filter re-anchored its fast states and the leak sizes move while
-                // they settle again: the baseline is taken again once it is over.
+            if e.flags & FLAG_RESET != 0 {
+                // The filter started again from its initial leak sizes: the baseline
+                // is taken again once it has settled. (After a gap the filter keeps
+                // its leak sizes and only re-anchors its fast states, so the baseline
+                // holds: taken again at one operating point, it would not be the
+                // average over all of them the thresholds were learned against.)
                 self.reacquire_after_s = self.invalid_until_s;
             }
         }
@@ -205,15 +209,17 @@ impl LeakSizeDetector {
         {
             self.refine_thresholds(e.t_s, dt_s, rise);
         }
-        // The smallest leak declared is a real flow of `min_size_lpm` at the measured
-        // pressures: where a hypothesis' drop is small (an internal leak while
-        // p1 ≈ p2), its size at p_s/2 is poorly pinned down and must rise further.
+        // The smallest leak declared is a real flow of `min_size_lpm` (external) or
+        // `min_internal_size_lpm` at the measured pressures: where a hypothesis'
+        // drop is small (an internal leak while p1 ≈ p2), its size at p_s/2 is
+        // poorly pinned down and must rise further.
         let thr: [f64; 3] = std::array::from_fn(|k| {
             let g = self.flow_factor[k];
+            let m = self.min_size_of(k);
             let floor = if g.is_finite() {
-                self.cfg.min_size_lpm / g.max(MIN_FLOW_FACTOR)
+                m / g.max(MIN_FLOW_FACTOR)
             } else {
-                self.cfg.min_size_lpm
+                m
             };
             self.threshold_lpm[k].max(floor)
         });
