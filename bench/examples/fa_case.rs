@@ -1,6 +1,6 @@
 //! Debug one healthy suite case (with its gaps): the leak-size events, the gaps
 //! and the thresholds. cargo run --release -p bench --example fa_case -- SCENARIO SEED [gaps]
-//! (env: MAX_COMMAND_HZ, MIN_SIZE_LPM override the detector; FROM and TO (s) print a trace)
+//! (env: MAX_COMMAND_HZ, MIN_SIZE_LPM, MIN_INTERNAL_SIZE_LPM override the detector; FROM and TO (s) print a trace)
 use bench::detection::{simulator_for, Case, GapSchedule, GapStep};
 use detect::{Classifier, ClassifierConfig};
 use filter::{EstimatorStage, Tuning};
@@ -31,6 +31,12 @@ fn main() {
     }
     if let Some(m) = std::env::var("MIN_SIZE_LPM").ok().and_then(|v| v.parse().ok()) {
         cfg.min_size_lpm = m;
+    }
+    if let Some(m) = std::env::var("MIN_INTERNAL_SIZE_LPM")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        cfg.min_internal_size_lpm = m;
     }
     let mut cls = Classifier::new(cfg).expect("cls");
     let mut gaps = GapSchedule::new(case.seed);

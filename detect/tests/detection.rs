@@ -436,6 +436,55 @@ fn a_leak_opening_inside_a_gap_is_reported_after_it() {
     );
 }
 
+/// An external leak of 0.05 L/min (nominal) is declared as ext2 with the default
+/// floors; its floor is `min_size_lpm`: raised to 0.1 L/min of real flow it hides
+/// the leak, while the internal leak's floor raised as much does not.
+#[test]
+fn a_small_external_leak_is_governed_by_the_external_floor() {
+    let mut found = 0;
+    for seed in [101, 102, 103] {
+        let run = |cfg: ClassifierConfig| {
+            let (events, _) = run_flow(
+                "closed-loop-sine",
+                45.0,
+                Some("ext2:0.05lpm@20s"),
+                seed,
+                off_nominal_rig(),
+                cfg,
+            );
+            raised(&events, "leak-size")
+        };
+        let cfg = ClassifierConfig::default();
+        let named = |r: &[LeakEvent]| r.iter().find(|e| e.kind != EventKind::Leak).map(|e| e.kind);
+        let by_default = run(cfg.clone());
+        if by_default.is_empty() {
+            continue;
+        }
+        found += 1;
+        assert!(by_default[0].t_detect_s > 20.0, "seed {seed}: {by_default:#?}");
+        assert_eq!(
+            named(&by_default),
+            Some(EventKind::Ext2),
+            "seed {seed}: {by_default:#?}"
+        );
+        let high_internal = run(ClassifierConfig {
+            min_internal_size_lpm: 0.1,
+            ..cfg.clone()
+        });
+        assert_eq!(
+            named(&high_internal),
+            Some(EventKind::Ext2),
+            "seed {seed}: {high_internal:#?}"
+        );
+        let high_external = run(ClassifierConfig {
+            min_size_lpm: 0.1,
+            ..cfg
+        });
+        assert!(high_external.is_empty(), "seed {seed}: {high_external:#?}");
+    }
+    assert!(found >= 2, "{found} of 3 declared");
+}
+
 /// With a commissioning learned on a healthy recording of the rig, a 0.5 L/min leak
 /// present from t = 0 is reported within 2 s of the start, as the right kind.
 #[test]
