@@ -186,20 +186,13 @@ impl Source for VecSource {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings};
+    use model::{ActuatorParams, FaultSchedule, Scenario};
 
     #[test]
     fn sim_source_counts_and_csv_source_matches() {
         let sc = Scenario::by_name("open-loop-sine", 1, 1.0).unwrap();
-        let sim = Simulator::new(
-            ActuatorParams::default(),
-            SensorParams::default(),
-            SimSettings::default(),
-            sc,
-            FaultSchedule::default(),
-            3,
-        )
-        .unwrap();
+        let sim = Simulator::with_default_sensors(ActuatorParams::default(), sc, FaultSchedule::default(), 3)
+            .unwrap();
         let mut src = SimSource::new(sim, 0.25);
         let mut samples = Vec::new();
         while let Some(Acquired::Sample(s)) = src.next_item() {

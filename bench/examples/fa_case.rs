@@ -1,6 +1,7 @@
 //! Debug one healthy suite case (with its gaps): the leak-size events, the gaps
 //! and the thresholds. cargo run --release -p bench --example fa_case -- SCENARIO SEED [gaps]
-//! (env: MAX_COMMAND_HZ, MIN_SIZE_LPM, MIN_INTERNAL_SIZE_LPM override the detector; FROM and TO (s) print a trace)
+//! (env: MAX_COMMAND_HZ, MIN_SIZE_LPM, MIN_INTERNAL_SIZE_LPM override the detector; SUBSTEPS the leak
+//! filter's Euler steps per sample; FROM and TO (s) print a trace every EVERY samples, 250)
 use bench::detection::{simulator_for, Case, GapSchedule, GapStep};
 use detect::{Classifier, ClassifierConfig};
 use filter::{EstimatorStage, Tuning};
@@ -19,12 +20,12 @@ fn main() {
         variant: a.get(3).cloned().unwrap_or_default(),
     };
     let mut sim = simulator_for(&case).expect("sim");
-    let mut stage = EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .expect("stage");
+    let mut leak_tuning = Tuning::sensor_derived();
+    if let Some(n) = std::env::var("SUBSTEPS").ok().and_then(|v| v.parse().ok()) {
+        leak_tuning.substeps = n;
+    }
+    let mut stage =
+        EstimatorStage::new(ActuatorParams::default(), leak_tuning, Tuning::thesis()).expect("stage");
     let mut cfg = ClassifierConfig::default();
     if let Some(hz) = std::env::var("MAX_COMMAND_HZ").ok().and_then(|v| v.parse().ok()) {
         cfg.max_command_hz = hz;
@@ -60,7 +61,15 @@ fn main() {
             std::env::var("TO").ok().and_then(|v| v.parse::<f64>().ok()),
         ) {
             let i = (s.t_s * 1000.0).round() as u64;
-            if s.t_s >= a && s.t_s <= b && i.is_multiple_of(250) {
+            if s.t_s >= a
+                && s.t_s <= b
+                && i.is_multiple_of(
+                    std::env::var("EVERY")
+                        .ok()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(250),
+                )
+            {
                 let r = cls.leak_size.rise_lpm(&e.leak);
                 let base = cls.leak_size.baseline_lpm();
                 println!(

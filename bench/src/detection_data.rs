@@ -68,8 +68,10 @@ pub struct DataOutcome {
     pub thresholds_sigma: [f64; 3],
     /// Seconds without evidence after arming (gaps, excursions, NIS), s.
     pub blind_s: f64,
-    /// Delay of the first alarm from the time the real flow reached
-    /// [`DETECTABLE_LPM`], s (NaN if none; the onset for a step).
+    /// Delay of the first alarm from the time the real flow reached the
+    /// detector's floor for the leak's kind (`min_size_lpm` for an external leak,
+    /// `min_internal_size_lpm` for an internal one), s (NaN if none; the onset for a step).
+    /// Negative if the alarm came before the real flow reached the floor.
     pub delay_after_detectable_s: f64,
 }
 
@@ -89,14 +91,13 @@ pub struct FileRun {
     /// Seconds without evidence after arming, s.
     pub blind_s: f64,
     /// First time the logged leak flow (`q_leak`, never shown to the detector)
-    /// reached [`DETECTABLE_LPM`], s (NaN if never or not logged).
-    pub t_detectable_s: f64,
+    /// reached the detector's floor for an external leak and for an internal one
+    /// (`min_size_lpm`, `min_internal_size_lpm`), s (NaN if never or not logged).
+    /// A ramping leak cannot be declared before its flow gets there.
+    pub t_detectable_s: [f64; 2],
+    /// The two floors, L/min (external, internal).
+    pub detectable_lpm: [f64; 2],
 }
-
-/// Leak flow from which the delay "after detectable" is counted, L/min: the
-/// detector's smallest declared size (`min_size_lpm`). A ramping leak cannot be
-/// seen before its flow gets there, whatever the detector.
-pub const DETECTABLE_LPM: f64 = 0.06;
 
 /// Totals over a directory.
 #[derive(Debug, Clone, Serialize)]
@@ -129,7 +130,7 @@ pub struct SizeRow {
     pub delay_median_s: f64,
     /// 95th-percentile delay, s.
     pub delay_p95_s: f64,
-    /// Median delay from the time the real flow reached [`DETECTABLE_LPM`], s.
+    /// Median delay from the time the real flow reached the detector's floor for the kind, s.
     pub delay_after_detectable_median_s: f64,
     /// Median |size − real flow| / real flow at the first alarm (right kind only).
     pub size_error_first_median: f64,
@@ -230,7 +231,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
     )?;
     let mut cls = Classifier::new(set.classifier.clone())?;
     let mut events = Vec::new();
-    let (mut n, mut t_end, mut t_detectable) = (0u64, 0.0, f64::NAN);
+    let floors = [set.classifier.min_size_lpm, set.classifier.min_internal_size_lpm];
+    let (mut n, mut t_end, mut t_detectable) = (0u64, 0.0, [f64::NAN; 2]);
     while let Some(row) = reader.next_row() {
         let s = match row {
             dataset::Row::Sample(s) | dataset::Row::AfterGap(s, _) => s,
@@ -238,8 +240,10 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         };
         n += 1;
         t_end = s.t_s;
-        if t_detectable.is_nan() && s.q_leak_lpm.abs() >= DETECTABLE_LPM {
-            t_detectable = s.t_s;
+        for (t, floor) in t_detectable.iter_mut().zip(floors) {
+            if t.is_nan() && s.q_leak_lpm.abs() >= floor {
+                *t = s.t_s;
+            }
         }
         let e = stage.on_sample(&s);
         cls.on_stage(&e, |ev| {
@@ -258,6 +262,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         thresholds_sigma: cls.leak_size.thresholds_sigma(),
         blind_s: cls.leak_size.blind_s(),
         t_detectable_s: t_detectable,
+        detectable_lpm: floors,
     })
 }
 
@@ -296,7 +301,8 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         o.kind_first = named.kind.name().into();
         o.kind_final = last.kind.name().into();
         o.delay_s = ev.t_detect_s - o.truth.t_on_s;
-        o.delay_after_detectable_s = ev.t_detect_s - run.t_detectable_s.max(o.truth.t_on_s);
+        let t_floor = run.t_detectable_s[usize::from(o.truth.kind == "int")];
+        o.delay_after_detectable_s = ev.t_detect_s - t_floor.max(o.truth.t_on_s);
         o.size_first_lpm = named.size_lpm;
         o.size_final_lpm = last.size_lpm;
     }
@@ -493,7 +499,8 @@ pub fn data_markdown(r: &DataSummary) -> String {
     s.push_str(&format!(
         "\nFalse alarms: {} in {:.2} clean hours (healthy runs and pre-onset time). Sizes are scored against \
          the flow the rig really lost after the ramp. Delays are counted from the onset, and also from \
-         the time the real flow reached {DETECTABLE_LPM} L/min (a ramping leak cannot be seen earlier).\n",
+         the time the real flow reached the detector's floor for its kind (`min_size_lpm` for an external \
+         leak, `min_internal_size_lpm` for an internal one): a ramping leak cannot be declared earlier.\n",
         r.false_alarms, r.clean_hours
     ));
     s

@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use detect::{Classifier, ClassifierConfig};
 use filter::{Estimator, EstimatorStage, Tuning};
-use model::{ActuatorParams, FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, FaultSchedule, Sample, Scenario, Simulator};
 use serde::Serialize;
 
 /// Throughput of the in-process chain.
@@ -31,14 +31,7 @@ pub fn recorded_samples(seconds: f64) -> Vec<Sample> {
         Ok(s) => s,
         Err(_) => return Vec::new(),
     };
-    match Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        faults,
-        1,
-    ) {
+    match Simulator::with_default_sensors(rig, sc, faults, 1) {
         Ok(mut sim) => sim.run(seconds),
         Err(_) => Vec::new(),
     }

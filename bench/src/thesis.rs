@@ -5,7 +5,7 @@
 //! onset, and the signed and normalised means of the innovations.
 
 use filter::{Estimator, Tuning};
-use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, Simulator};
 use serde::Serialize;
 
 /// Figures of one channel pair over one window.
@@ -57,15 +57,7 @@ pub fn run(scenario: &str, tuning_name: &str, tuning: &Tuning, kind: &str) -> Re
             .faults
             .push(Fault::parse(&format!("{kind}:0.5lpm@{onset}s"), &rig).map_err(|e| e.to_string())?);
     }
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        faults,
-        1,
-    )
-    .map_err(|e| e.to_string())?;
+    let mut sim = Simulator::with_default_sensors(rig, sc, faults, 1).map_err(|e| e.to_string())?;
     let mut est = Estimator::new(ActuatorParams::default(), tuning.clone())?;
     let mut acc = [[0.0f64; 5]; 2];
     let mut mae = [[0.0f64; 2]; 2];

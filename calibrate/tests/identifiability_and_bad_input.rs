@@ -5,7 +5,7 @@
 use calibrate::suite::{nominal_model, nuisance};
 use calibrate::{fit_effect, load_measured, run, CalibrateError, CalibrateOptions, NOT_IDENTIFIABLE};
 use model::scenario::Drive;
-use model::{FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
+use model::{FaultSchedule, Sample, Scenario, Simulator};
 
 /// 10 s of a rod held at 0.3 m by the position controller: nothing moves.
 fn held_rod() -> Vec<Sample> {
@@ -16,15 +16,9 @@ fn held_rod() -> Vec<Sample> {
     sc.drive = Drive::ClosedLoopSteps {
         levels: vec![(0.0, 0.3)],
     };
-    let mut sim = Simulator::new(
-        nuisance(&nominal_model()),
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        5,
-    )
-    .expect("valid rig");
+    let mut sim =
+        Simulator::with_default_sensors(nuisance(&nominal_model()), sc, FaultSchedule::default(), 5)
+            .expect("valid rig");
     sim.run(10.0)
 }
 
@@ -75,15 +69,7 @@ fn a_rod_that_only_extends_does_not_show_retracting_friction() {
         phase_rad: std::f64::consts::FRAC_PI_2,
     };
     let rig = calibrate::Effect::FrictionAsymmetry.apply(&nuisance(&nominal_model()), &[1600.0]);
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        6,
-    )
-    .expect("valid rig");
+    let mut sim = Simulator::with_default_sensors(rig, sc, FaultSchedule::default(), 6).expect("valid rig");
     let data = sim.run(8.0);
     assert!(
         data.windows(2).all(|w| w[1].x_m >= w[0].x_m - 1e-4),
@@ -143,15 +129,7 @@ fn a_spring_the_rod_never_reaches_is_not_identifiable() {
     };
     sc.initial_position_m = 0.2;
     let rig = calibrate::Effect::SpringLoad.apply(&nuisance(&nominal_model()), &[2.0e4, 0.40]);
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        7,
-    )
-    .expect("valid rig");
+    let mut sim = Simulator::with_default_sensors(rig, sc, FaultSchedule::default(), 7).expect("valid rig");
     let data = sim.run(10.0);
     let x_max = data.iter().map(|s| s.x_m).fold(f64::NEG_INFINITY, f64::max);
     let x_min = data.iter().map(|s| s.x_m).fold(f64::INFINITY, f64::min);
@@ -173,15 +151,9 @@ fn a_rod_on_its_end_stop_does_not_excite_leaks_or_spool_bias() {
         freq_hz: 0.0,
         phase_rad: std::f64::consts::FRAC_PI_2,
     };
-    let mut sim = Simulator::new(
-        nuisance(&nominal_model()),
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        8,
-    )
-    .expect("valid rig");
+    let mut sim =
+        Simulator::with_default_sensors(nuisance(&nominal_model()), sc, FaultSchedule::default(), 8)
+            .expect("valid rig");
     let data: Vec<Sample> = sim.run(10.0).into_iter().filter(|s| s.t_s >= 4.0).collect();
     assert!(
         data.iter().all(|s| s.x_m.abs() < 1e-3 && s.p1_pa < 0.2e6),

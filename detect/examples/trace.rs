@@ -2,7 +2,7 @@
 //! cargo run --release -p detect --example trace -- SCENARIO FAULT|none SEED [offnominal]
 use detect::{Classifier, ClassifierConfig};
 use filter::{Estimator, Tuning};
-use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, Fault, FaultSchedule, Scenario, Simulator};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -17,15 +17,7 @@ fn main() {
     if a[2] != "none" {
         sched.faults.push(Fault::parse(&a[2], &rig).unwrap());
     }
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        sched,
-        seed,
-    )
-    .unwrap();
+    let mut sim = Simulator::with_default_sensors(rig, scenario, sched, seed).unwrap();
     let mut tuning = Tuning::sensor_derived();
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
     if let Some(v) = env("QL") {

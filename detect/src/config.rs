@@ -135,6 +135,13 @@ pub struct ClassifierConfig {
     pub min_internal_size_lpm: f64,
     /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
     pub confirm_s: f64,
+    /// Leak-size detector: evidence before an external leak is declared while it
+    /// alone explains the mismatch clearly (one chamber loses flow, the other does
+    /// not), s; at most `confirm_s`. A transient of the rod or the spool (a
+    /// breakaway from stiction, a reference step) moves both chambers' flows at
+    /// once, in opposite directions: the pattern of an internal leak or of both
+    /// kinds together, which keeps `confirm_s`.
+    pub confirm_external_s: f64,
     /// Leak-size detector: a rise r thresholds high counts min(r, this) seconds of
     /// evidence per second towards `confirm_s` (1 = plain time above threshold; a
     /// leak far above its threshold is confirmed sooner).
@@ -214,6 +221,7 @@ impl Default for ClassifierConfig {
             min_internal_size_lpm: 0.06,
             refine_after_s: 5.0,
             confirm_s: 0.2,
+            confirm_external_s: 0.1,
             confirm_gain_cap: 2.0,
             baseline_tau_s: 15.0,
             baseline_hold: 0.5,
@@ -243,7 +251,7 @@ impl ClassifierConfig {
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 33] = [
+        let fields: [(&str, f64, f64, f64, &str); 34] = [
             ("settle_s", self.settle_s, 0.0, 1e6, "s"),
             ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
             ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
@@ -302,6 +310,7 @@ impl ClassifierConfig {
                 "(thresholds)",
             ),
             ("confirm_s", self.confirm_s, 0.0, 1e6, "s"),
+            ("confirm_external_s", self.confirm_external_s, 0.0, 1e6, "s"),
             ("baseline_tau_s", self.baseline_tau_s, 0.0, 1e8, "s"),
             (
                 "baseline_hold",

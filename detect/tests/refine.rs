@@ -143,3 +143,53 @@ fn only_patterns_leaks_can_make_are_evidence() {
     // Both chambers gaining flow: a negative external leak.
     assert!(!leak_can_make(signatures_lpm([-0.1, -0.1, 0.0]), thr));
 }
+
+/// Time from a step of leak sizes `step_lpm` (q_e1, q_e2, q_i at the nominal
+/// drop) at 20 s to the first alarm, s, on a healthy stream of spread 0.01 L/min
+/// with the chambers at 9.9 and 3.0 MPa (every kind's drop near p_s/2).
+fn delay_of_step(cfg: &ClassifierConfig, step_lpm: [f64; 3]) -> f64 {
+    let mut det = LeakSizeDetector::new(cfg.clone());
+    let mut noise = Noise(0x2545_f491_4f6c_dd1d);
+    let mut held = [0.0; 3];
+    for i in 0..25_000 {
+        let t = i as f64 * 1e-3;
+        if i % 20 == 0 {
+            held = [0.01 * noise.gauss(), 0.01 * noise.gauss(), 0.0];
+        }
+        let on = if t >= 20.0 { 1.0 } else { 0.0 };
+        let mut e = estimate(t, std::array::from_fn(|k| held[k] + on * step_lpm[k]));
+        (e.state[1], e.state[2]) = (9.9e6, 3.0e6);
+        (e.measured[1], e.measured[2]) = (9.9e6, 3.0e6);
+        let mut out = None;
+        det.on_estimate(&e, &mut out);
+        if let Some(ev) = out.filter(|ev| ev.phase == Phase::Raised) {
+            assert!(t >= 20.0, "a false alarm at {t} s: {ev:?}");
+            return t - 20.0;
+        }
+    }
+    f64::INFINITY
+}
+
+#[test]
+fn an_external_leak_that_alone_explains_the_mismatch_is_confirmed_sooner() {
+    // A step far above the threshold counts 2 s of evidence per second: an external
+    // leak needs 0.1 s of evidence (0.05 s), an internal one 0.2 s (0.1 s).
+    let cfg = ClassifierConfig::default();
+    assert_eq!(
+        (cfg.confirm_s, cfg.confirm_external_s, cfg.confirm_gain_cap),
+        (0.2, 0.1, 2.0)
+    );
+    for step in [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0]] {
+        let d = delay_of_step(&cfg, step);
+        assert!((0.045..0.06).contains(&d), "external {step:?}: {d} s");
+    }
+    let d = delay_of_step(&cfg, [0.0, 0.0, 0.5]);
+    assert!((0.095..0.11).contains(&d), "internal: {d} s");
+    // With the external confirmation as long as the rest, it waits as long.
+    let same = ClassifierConfig {
+        confirm_external_s: 0.2,
+        ..cfg
+    };
+    let d = delay_of_step(&same, [0.5, 0.0, 0.0]);
+    assert!((0.095..0.11).contains(&d), "external at 0.2 s: {d} s");
+}

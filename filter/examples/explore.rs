@@ -2,9 +2,7 @@
 #![allow(clippy::needless_range_loop)]
 //! cargo run --release -p filter --example explore -- SCENARIO PRESET STATES [FAULT] [smooth]
 use filter::{Estimator, Tuning};
-use model::{
-    ActuatorParams, Fault, FaultSchedule, FrictionPreset, Scenario, SensorParams, SimSettings, Simulator,
-};
+use model::{ActuatorParams, Fault, FaultSchedule, FrictionPreset, Scenario, Simulator};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -40,15 +38,7 @@ fn main() {
         onset = f.onset_s;
         sched.faults.push(f);
     }
-    let mut sim = Simulator::new(
-        rig.clone(),
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        sched,
-        1,
-    )
-    .unwrap();
+    let mut sim = Simulator::with_default_sensors(rig.clone(), scenario, sched, 1).unwrap();
     let mut tuning = Tuning::preset(preset).unwrap();
     tuning.states = states;
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());

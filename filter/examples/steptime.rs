@@ -1,17 +1,10 @@
 //! Quick timing of the estimator step per layout.
 use filter::{Estimator, Tuning};
-use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
 fn main() {
     let sc = Scenario::by_name("loaded-sine", 1, 60.0).unwrap();
-    let mut sim = Simulator::new(
-        ActuatorParams::default(),
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        1,
-    )
-    .unwrap();
+    let mut sim =
+        Simulator::with_default_sensors(ActuatorParams::default(), sc, FaultSchedule::default(), 1).unwrap();
     let samples = sim.run(60.0);
     for (name, mut t) in [("thesis", Tuning::thesis()), ("sensor", Tuning::sensor_derived())] {
         for n in [6, 7, 10, 11] {

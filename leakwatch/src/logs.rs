@@ -1,5 +1,10 @@
 //! The recorded-log commands: `export` (a log as CSVs, also what `replay`,
 //! `calibrate` and `plot` read a log through), `repair` and `info`.
+//!
+//! A run whose recorder was restarted has its log in parts: `run.mcap`, then
+//! `run-1.mcap`, `run-2.mcap`, ... beside it. `export`, `replay`, `calibrate`,
+//! `plot` and `info` given the first part read them all as one log
+//! ([`log_parts`]); given a later part, that part alone.
 
 use std::path::{Path, PathBuf};
 
@@ -41,15 +46,57 @@ pub fn repair(log: &Path, out: &Path, force: bool) -> Result<(), String> {
     Ok(())
 }
 
+/// The parts of the run's log that `first` starts: `first`, then the
+/// `<stem>-1.mcap`, `<stem>-2.mcap`, ... beside it that restarted recorders
+/// wrote, as many as follow one another without a missing number.
+pub fn log_parts(first: &Path) -> Vec<PathBuf> {
+    let mut parts = vec![first.to_path_buf()];
+    let (Some(stem), Some("mcap")) = (
+        first.file_stem().and_then(|s| s.to_str()),
+        first.extension().and_then(|e| e.to_str()),
+    ) else {
+        return parts;
+    };
+    for n in 1.. {
+        let p = first.with_file_name(format!("{stem}-{n}.mcap"));
+        if !p.is_file() {
+            break;
+        }
+        parts.push(p);
+    }
+    parts
+}
+
+/// Reads the run's log that `log` starts, every part of it ([`log_parts`]) in
+/// order, as one; returns it, the parts and their total size in bytes. A part
+/// that cannot be read is an error naming it.
+pub(crate) fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64), String> {
+    let parts = log_parts(log);
+    let mut whole: Option<recorder::Log> = None;
+    let mut bytes = 0;
+    for p in &parts {
+        bytes += std::fs::metadata(p)
+            .map_err(|e| format!("{}: {e}", p.display()))?
+            .len();
+        let l = recorder::LogReader::open(p)
+            .and_then(|r| r.read())
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+        match whole.as_mut() {
+            None => whole = Some(l),
+            Some(w) => w.append(l, &p.display().to_string()),
+        }
+    }
+    if parts.len() > 1 {
+        let names: Vec<String> = parts.iter().map(|p| p.display().to_string()).collect();
+        eprintln!("reading the log in {} parts: {}", parts.len(), names.join(", "));
+    }
+    Ok((whole.unwrap_or_default(), parts, bytes))
+}
+
 /// `leakwatch info`: prints what `log` holds ([`recorder::Info`]); with
 /// `config_out`, writes the configuration stored in it there (`-`: standard output).
 pub fn info(log: &Path, config_out: Option<&Path>, force: bool) -> Result<(), String> {
-    let bytes = std::fs::metadata(log)
-        .map_err(|e| format!("{}: {e}", log.display()))?
-        .len();
-    let l = recorder::LogReader::open(log)
-        .and_then(|r| r.read())
-        .map_err(|e| format!("{}: {e}", log.display()))?;
+    let (l, _, bytes) = read_log(log)?;
     let info = recorder::Info::from_log(log, bytes, &l);
     match config_out {
         Some(out) => {
@@ -82,9 +129,7 @@ pub fn export_log(
     force: bool,
     need_frames: bool,
 ) -> Result<(Vec<PathBuf>, replay::LogDamage), String> {
-    let l = recorder::LogReader::open(log)
-        .and_then(|r| r.read())
-        .map_err(|e| format!("{}: {e}", log.display()))?;
+    let (l, _, _) = read_log(log)?;
     let messages = l.frames.len() + l.estimates.len() + l.events.len() + l.health.len() + l.stats.len();
     if messages == 0 || need_frames && l.frames.is_empty() {
         let why = match (&l.truncated, l.chunks_skipped.first()) {
@@ -118,4 +163,36 @@ pub fn export_log(
         frames_lost: l.frames_lost,
     };
     Ok((files, damage))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::log_parts;
+
+    #[test]
+    fn the_parts_of_a_log_follow_one_another_without_a_hole() {
+        let d = std::env::temp_dir().join(format!("leakwatch-parts-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        for name in [
+            "run.mcap",
+            "run-1.mcap",
+            "run-2.mcap",
+            "run-4.mcap",
+            "other-1.mcap",
+        ] {
+            std::fs::write(d.join(name), b"").unwrap();
+        }
+        let names = |first: &str| -> Vec<String> {
+            log_parts(&d.join(first))
+                .iter()
+                .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+                .collect()
+        };
+        assert_eq!(names("run.mcap"), ["run.mcap", "run-1.mcap", "run-2.mcap"]);
+        assert_eq!(names("run-1.mcap"), ["run-1.mcap"], "a later part alone");
+        assert_eq!(names("other.mcap"), ["other.mcap", "other-1.mcap"]);
+        assert_eq!(names("data.csv"), ["data.csv"]);
+        std::fs::remove_dir_all(&d).ok();
+    }
 }

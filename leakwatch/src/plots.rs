@@ -61,9 +61,7 @@ pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String>
 /// classifier estimated (health frames, 10 Hz) beside the flow channel where
 /// the log has one, and the leak events raised.
 pub fn plot_log(input: &Path, out: &Path, force: bool) -> Result<(), String> {
-    let log = recorder::LogReader::open(input)
-        .and_then(|r| r.read())
-        .map_err(|e| format!("{}: {e}", input.display()))?;
+    let (log, _, _) = crate::logs::read_log(input)?;
     if log.frames.is_empty() {
         return Err(format!(
             "{}: no sensor frame could be read from the log",

@@ -797,6 +797,27 @@ fn a_killed_classifier_and_a_killed_recorder_are_restarted_with_their_gaps() {
     assert!(all.windows(2).all(|w| w[1] > w[0]), "the parts do not overlap");
     assert_eq!(all.len() as u64 + cont[0].missing, 22_000);
     assert_eq!(*all.last().unwrap(), 21_999);
+    // `export` (what replay, calibrate and plot read a log through) given the
+    // first part reads both: every frame of either part is a row of dataset.csv.
+    let csv = d.join("export");
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args([
+            "export",
+            out.join("run.mcap").to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let export_err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{export_err}");
+    assert!(export_err.contains("in 2 parts"), "{export_err}");
+    let rows = std::fs::read_to_string(csv.join("dataset.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert_eq!(rows, all.len(), "{export_err}");
 
     let events = json(&out.join("events.json"));
     let (t_alarm, t_kind) = leak_detected_after_restart(&events, 13.0);

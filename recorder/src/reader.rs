@@ -68,6 +68,63 @@ pub struct Log {
 }
 
 impl Log {
+    /// Appends `later`, the next part of the same run's log (the `run-N.mcap` a
+    /// restarted recorder writes, continuing after the frames this part holds):
+    /// every channel's messages after this part's, sensor frames this part already
+    /// holds (sequence number not above its last) left out; the damage of both
+    /// (`truncated` names the part it comes from); channel counts summed and their
+    /// time spans joined; metadata records of both (this part's where both have one).
+    pub fn append(&mut self, later: Log, later_name: &str) {
+        let last_seq = self.frames.last().map(|f| f.seq);
+        self.frames.extend(
+            later
+                .frames
+                .into_iter()
+                .filter(|f| last_seq.is_none_or(|l| f.seq > l)),
+        );
+        self.estimates.extend(later.estimates);
+        self.events.extend(later.events);
+        self.health.extend(later.health);
+        self.stats.extend(later.stats);
+        self.gaps.extend(later.gaps);
+        self.unknown_messages += later.unknown_messages;
+        if let Some(t) = later.truncated {
+            let t = format!("{later_name}: {t}");
+            self.truncated = Some(match self.truncated.take() {
+                Some(mine) => format!("{mine}; {t}"),
+                None => t,
+            });
+        }
+        self.chunks_skipped.extend(
+            later
+                .chunks_skipped
+                .into_iter()
+                .map(|c| format!("{later_name}: {c}")),
+        );
+        self.frames_lost += later.frames_lost;
+        for (topic, c) in later.channels {
+            match self.channels.get_mut(&topic) {
+                Some(mine) => {
+                    if c.messages > 0 {
+                        mine.first_log_time = if mine.messages > 0 {
+                            mine.first_log_time.min(c.first_log_time)
+                        } else {
+                            c.first_log_time
+                        };
+                        mine.last_log_time = mine.last_log_time.max(c.last_log_time);
+                    }
+                    mine.messages += c.messages;
+                }
+                None => {
+                    self.channels.insert(topic, c);
+                }
+            }
+        }
+        for (name, record) in later.metadata {
+            self.metadata.entry(name).or_insert(record);
+        }
+    }
+
     /// The configuration the run used (TOML), if the log holds it.
     pub fn config_toml(&self) -> Option<&str> {
         self.metadata

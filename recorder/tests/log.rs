@@ -458,3 +458,64 @@ fn the_last_logged_frame_of_the_earlier_parts_is_found() {
     assert_eq!((g.topic, g.expected_seq, g.missing), (Topic::Frames, 3000, 1000));
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn a_later_part_appends_after_the_frames_the_earlier_holds() {
+    let d = dir("append");
+    let write = |name: &str, seqs: std::ops::Range<u64>, with_config: &str| {
+        let p = d.join(name);
+        let options = WriterOptions {
+            config_toml: Some(with_config.to_string()),
+            // small chunks, so that a part cut in half keeps some of them
+            chunk_size: 4096,
+            ..WriterOptions::default()
+        };
+        let mut w = LogWriter::create(&p, options).unwrap();
+        for i in seqs {
+            assert!(w.write(Entry::Frame(sensor(i), 1_000 + i)).unwrap());
+        }
+        w.finish().unwrap();
+        LogReader::open(&p).unwrap().read().unwrap()
+    };
+    let mut first = write("run.mcap", 0..1500, "first");
+    // the restarted recorder's part overlaps the earlier one by 100 frames
+    let later = write("run-1.mcap", 1400..3000, "second");
+    let (first_time, later_last) = (
+        first.channels["frames"].first_log_time,
+        later.channels["frames"].last_log_time,
+    );
+    first.append(later, "run-1.mcap");
+    let seqs: Vec<u64> = first.frames.iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, (0..3000).collect::<Vec<_>>(), "every frame once, in order");
+    let c = &first.channels["frames"];
+    assert_eq!(
+        (c.messages, c.first_log_time, c.last_log_time),
+        (3100, first_time, later_last)
+    );
+    assert_eq!(
+        first.config_toml(),
+        Some("first"),
+        "the first part's record is kept"
+    );
+    assert!(first.truncated.is_none() && first.chunks_skipped.is_empty());
+    // a damaged later part: what is wrong names it
+    let bytes = std::fs::read(d.join("run-1.mcap")).unwrap();
+    std::fs::write(d.join("run-2.mcap"), &bytes[..bytes.len() / 2]).unwrap();
+    let cut = LogReader::open(&d.join("run-2.mcap")).unwrap().read().unwrap();
+    assert!(cut.truncated.is_some());
+    first.append(cut, "run-2.mcap");
+    assert!(
+        first
+            .truncated
+            .as_deref()
+            .is_some_and(|t| t.starts_with("run-2.mcap: ")),
+        "{:?}",
+        first.truncated
+    );
+    assert_eq!(
+        first.frames.len(),
+        3000,
+        "the cut part's frames were all held already"
+    );
+    std::fs::remove_dir_all(&d).ok();
+}

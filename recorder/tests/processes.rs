@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use acquisition::{Acquired, SimSource, Source};
-use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
 use recorder::LogReader;
 
 const RECORDER: &str = env!("CARGO_BIN_EXE_recorder");
@@ -120,15 +120,7 @@ fn simulate(seed: u64, seconds: f64, fault: &str) -> Vec<model::Sample> {
     let mut schedule = FaultSchedule::default();
     schedule.faults.push(model::Fault::parse(fault, &rig).unwrap());
     let scenario = Scenario::by_name("closed-loop-sine", seed, seconds).unwrap();
-    let sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        schedule,
-        seed,
-    )
-    .unwrap();
+    let sim = Simulator::with_default_sensors(rig, scenario, schedule, seed).unwrap();
     let mut src = SimSource::new(sim, seconds);
     let mut out = Vec::new();
     while let Some(item) = src.next_item() {

@@ -7,7 +7,7 @@ use std::sync::Mutex;
 use detect::{Classifier, ClassifierConfig, LeakEvent};
 use filter::{EstimatorStage, Tuning};
 use model::rng::Rng;
-use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
 
 use super::{
     draw_rig, simulator_for, summarise, Case, GapSchedule, GapStep, Outcome, RunResult, SuiteResult,
@@ -92,15 +92,8 @@ pub fn commission_rig(case: &Case) -> Result<detect::Commissioning, String> {
     let rig = draw_rig(&mut rng);
     let scenario =
         Scenario::by_name(&healthy.scenario, case.seed ^ 1, healthy.seconds).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        FaultSchedule::default(),
-        case.seed ^ 1,
-    )
-    .map_err(|e| e.to_string())?;
+    let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), case.seed ^ 1)
+        .map_err(|e| e.to_string())?;
     let mut stage = EstimatorStage::new(
         ActuatorParams::default(),
         Tuning::sensor_derived(),

@@ -2,7 +2,7 @@
 //! cases, the rig each simulates and its data.
 
 use model::params::{ActuatorParams, FrictionPreset};
-use model::{FaultSchedule, Sample, Scenario, SensorParams, SimSettings, Simulator};
+use model::{FaultSchedule, Sample, Scenario, Simulator};
 
 use crate::effects::Effect;
 
@@ -279,14 +279,7 @@ pub fn generate(case: &SuiteCase) -> Vec<Sample> {
         Ok(s) => s,
         Err(_) => return Vec::new(),
     };
-    match Simulator::new(
-        rig,
-        SensorParams::default(),
-        SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        case.seed,
-    ) {
+    match Simulator::with_default_sensors(rig, sc, FaultSchedule::default(), case.seed) {
         Ok(mut sim) => sim.run(case.seconds),
         Err(_) => Vec::new(),
     }

@@ -287,11 +287,18 @@ impl LeakSizeDetector {
         match self.active {
             None => {
                 // A leak is raised once one kind has explained the mismatch clearly for
-                // `confirm_s` (named if it has led for `kind_confirm_s`), or once some
+                // `confirm_s` (`confirm_external_s` for an external leak; named if it has
+                // led for `kind_confirm_s`), or once some
                 // hypothesis' rise has been past `pending_factor` thresholds for
                 // `confirm_s` (kind pending: the mismatch shows on both chambers).
-                let clear_ready =
-                    self.above_since_s[lead].filter(|_| self.above_evidence_s[lead] >= self.cfg.confirm_s);
+                // (an external leak that alone explains the mismatch needs less: a
+                // transient of the rod or spool does not make that pattern)
+                let need_s = if lead < 2 {
+                    self.cfg.confirm_external_s.min(self.cfg.confirm_s)
+                } else {
+                    self.cfg.confirm_s
+                };
+                let clear_ready = self.above_since_s[lead].filter(|_| self.above_evidence_s[lead] >= need_s);
                 let strong_ready = strong.filter(|_| {
                     self.strong_since_s
                         .is_some_and(|t0| e.t_s - t0 >= self.cfg.confirm_s)
