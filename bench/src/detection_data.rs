@@ -95,8 +95,6 @@ pub struct FileRun {
     /// (`min_size_lpm`, `min_internal_size_lpm`), s (NaN if never or not logged).
     /// A ramping leak cannot be declared before its flow gets there.
     pub t_detectable_s: [f64; 2],
-    /// The two floors, L/min (external, internal).
-    pub detectable_lpm: [f64; 2],
 }
 
 /// Totals over a directory.
@@ -262,7 +260,6 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         thresholds_sigma: cls.leak_size.thresholds_sigma(),
         blind_s: cls.leak_size.blind_s(),
         t_detectable_s: t_detectable,
-        detectable_lpm: floors,
     })
 }
 
