@@ -46,6 +46,17 @@ pub fn repair(log: &Path, out: &Path, force: bool) -> Result<(), String> {
     Ok(())
 }
 
+/// The file name of part `n` of the log whose first part is `<stem>.mcap`:
+/// `<stem>.mcap` for 0, then `<stem>-1.mcap`, `<stem>-2.mcap`, ... (what a
+/// restarted recorder writes, and what [`log_parts`] looks for).
+pub fn part_name(stem: &str, n: u32) -> String {
+    if n == 0 {
+        format!("{stem}.mcap")
+    } else {
+        format!("{stem}-{n}.mcap")
+    }
+}
+
 /// The parts of the run's log that `first` starts: `first`, then the
 /// `<stem>-1.mcap`, `<stem>-2.mcap`, ... beside it that restarted recorders
 /// wrote, as many as follow one another without a missing number.
@@ -58,7 +69,7 @@ pub fn log_parts(first: &Path) -> Vec<PathBuf> {
         return parts;
     };
     for n in 1.. {
-        let p = first.with_file_name(format!("{stem}-{n}.mcap"));
+        let p = first.with_file_name(part_name(stem, n));
         if !p.is_file() {
             break;
         }

@@ -60,11 +60,7 @@ impl StageArgs {
     /// The log part the recorder's `restart`-th process writes: `run.mcap`, then
     /// `run-1.mcap`, `run-2.mcap`, ...
     pub(super) fn log_part(&self, restart: u32) -> std::path::PathBuf {
-        self.out_dir.join(if restart == 0 {
-            "run.mcap".to_string()
-        } else {
-            format!("run-{restart}.mcap")
-        })
+        self.out_dir.join(crate::logs::part_name("run", restart))
     }
 
     /// The arguments of `stage`'s `restart`-th restart (0: the first start). A
