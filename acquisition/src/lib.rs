@@ -199,8 +199,7 @@ mod tests {
             samples.push(s);
         }
         assert_eq!(samples.len(), 250);
-        let dir = std::env::temp_dir().join(format!("acq-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = scratch::ScratchDir::new("acquisition-csv");
         let p = dir.join("a.csv");
         dataset::write_csv(&p, &samples, true).unwrap();
         let mut csv = CsvSource::open(&p, dataset::Limits::default()).unwrap();

@@ -169,12 +169,34 @@ impl BusConfig {
 
 /// A prefix owned by one run: an exclusive lock (`flock`) on
 /// `$TMPDIR/leakwatch-prefix-<prefix>.lock`, released when it is dropped or the
-/// process ends (however it ends). The file holds the owner's process id.
+/// process ends (however it ends). The file holds the owner's process id. A
+/// dropped lock removes its file (a killed run leaves it, and the next run on
+/// the prefix takes it over).
 #[derive(Debug)]
 pub struct PrefixLock {
-    _file: std::fs::File,
+    file: std::fs::File,
     /// The lock file.
     pub path: std::path::PathBuf,
+}
+
+impl Drop for PrefixLock {
+    fn drop(&mut self) {
+        // Removed while still locked: a run that opened this file before the
+        // removal finds, once it has the lock, that the path no longer names its
+        // file, and opens the path again (see `lock_prefix`).
+        if same_file(&self.file, &self.path) {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
+}
+
+/// Whether `path` names the open `file` (same device and inode).
+fn same_file(file: &std::fs::File, path: &std::path::Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), std::fs::symlink_metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
 }
 
 impl BusConfig {
@@ -191,27 +213,43 @@ impl BusConfig {
         };
         validate_prefix(p)?;
         let path = std::env::temp_dir().join(format!("leakwatch-prefix-{p}.lock"));
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .mode(0o600)
-            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
-            .open(&path)
-            .map_err(|e| BusError(format!("cannot open the prefix lock {}: {e}", path.display())))?;
-        // SAFETY: flock on an open descriptor we own; no memory is passed.
-        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-            let mut owner = String::new();
-            let _ = file.read_to_string(&mut owner);
-            return Err(BusError(format!(
-                "the iceoryx2 prefix {p:?} is in use by another leakwatch run (process {}, lock {}): \
-                 two runs on one prefix would share and then delete each other's shared memory; \
-                 use another LEAKWATCH_IOX_PREFIX, or leave it unset for a private one",
-                owner.trim(),
-                path.display()
-            )));
-        }
+        // A lock taken on a file its owner removed on release is not the prefix's
+        // lock: open the path again (a few times; each retry means another run
+        // released the prefix meanwhile).
+        let mut tries = 0;
+        let mut file = loop {
+            let mut file = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .mode(0o600)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+                .open(&path)
+                .map_err(|e| BusError(format!("cannot open the prefix lock {}: {e}", path.display())))?;
+            // SAFETY: flock on an open descriptor we own; no memory is passed.
+            if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+                let mut owner = String::new();
+                let _ = file.read_to_string(&mut owner);
+                return Err(BusError(format!(
+                    "the iceoryx2 prefix {p:?} is in use by another leakwatch run (process {}, lock {}): \
+                     two runs on one prefix would share and then delete each other's shared memory; \
+                     use another LEAKWATCH_IOX_PREFIX, or leave it unset for a private one",
+                    owner.trim(),
+                    path.display()
+                )));
+            }
+            if same_file(&file, &path) {
+                break file;
+            }
+            tries += 1;
+            if tries >= 10 {
+                return Err(BusError(format!(
+                    "the prefix lock {} keeps being removed and made again by other runs",
+                    path.display()
+                )));
+            }
+        };
         let pid = std::process::id();
         let write = |f: &mut std::fs::File| -> std::io::Result<()> {
             f.set_len(0)?;
@@ -220,7 +258,7 @@ impl BusConfig {
         };
         write(&mut file)
             .map_err(|e| BusError(format!("cannot write the prefix lock {}: {e}", path.display())))?;
-        Ok(PrefixLock { _file: file, path })
+        Ok(PrefixLock { file, path })
     }
 }
 

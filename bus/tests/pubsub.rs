@@ -282,7 +282,7 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
 }
 
 /// One run per prefix: a second lock on a prefix is refused with the owner's process
-/// id; once the first is dropped the prefix can be taken again.
+/// id; once the first is dropped its file is gone and the prefix can be taken again.
 #[test]
 fn a_prefix_is_owned_by_one_run_at_a_time() {
     let cfg = config("lock");
@@ -302,9 +302,18 @@ fn a_prefix_is_owned_by_one_run_at_a_time() {
     assert!(e.contains("LEAKWATCH_IOX_PREFIX"), "{e}");
     // another prefix is free
     drop(config("lock2").lock_prefix().expect("another prefix"));
+    let path = first.path.clone();
     drop(first);
-    let again = cfg.lock_prefix().expect("free again after the first is dropped");
-    let _ = std::fs::remove_file(&again.path);
+    assert!(!path.exists(), "a released lock leaves no file");
+    // a killed run leaves its file, unlocked: the next run takes it over
+    std::fs::write(&path, "999999999\n").unwrap();
+    let again = cfg.lock_prefix().expect("free again, a left file taken over");
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap().trim(),
+        std::process::id().to_string()
+    );
+    drop(again);
+    assert!(!path.exists(), "a released lock leaves no file");
     assert!(
         BusConfig::default().lock_prefix().is_err(),
         "no prefix, nothing to own"

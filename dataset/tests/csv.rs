@@ -1,17 +1,10 @@
 use dataset::*;
 use std::path::Path;
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("leakwatch-dataset-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
 fn read_str(text: &str) -> Result<Dataset, DatasetError> {
-    // one file per call: tests run in parallel (a name from the length collided)
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let p = tmp(&format!("t{n}.csv"));
+    // one folder per call: tests run in parallel
+    let d = scratch::ScratchDir::new("dataset");
+    let p = d.join("t.csv");
     std::fs::write(&p, text).unwrap();
     read_csv(&p, Limits::default())
 }
@@ -32,7 +25,8 @@ fn round_trip_is_bit_exact() {
             q_leak_lpm: 1e-300 * rng.uniform(),
         })
         .collect();
-    let p = tmp("round.csv");
+    let d = scratch::ScratchDir::new("dataset");
+    let p = d.join("round.csv");
     write_csv(&p, &samples, true).unwrap();
     let back = read_csv(&p, Limits::default()).unwrap();
     assert!(back.issues.is_empty(), "{:?}", back.issues.first());
@@ -185,7 +179,8 @@ fn values_outside_their_physical_range_are_skipped_by_column() {
     let ds = read_str(&text).unwrap();
     assert_eq!((ds.samples.len(), ds.issues.len()), (3, 0), "{:?}", ds.issues);
     // NaN or empty in an optional column means absent: kept, and counted
-    let p = tmp("absent.csv");
+    let d = scratch::ScratchDir::new("dataset");
+    let p = d.join("absent.csv");
     let text = format!(
         "{HEADER}\n{}\n{}\n{}\n",
         row(0, &[(7, "NaN")]),
@@ -389,7 +384,8 @@ fn fields_in_double_quotes_are_read_as_without() {
                 \"0.0\",\"1.5\",\"0.3\",\"6.9e6\",\"6.8e6\",\"0.31\"\n\
                 \"0.001\",1.5,0.3,\"6.9e6\",6.8e6,\"\"\n\
                 0.002,1.5,0.3,6.9e6,6.8e6,0.31\n";
-    let p = tmp("quoted.csv");
+    let d = scratch::ScratchDir::new("dataset");
+    let p = d.join("quoted.csv");
     std::fs::write(&p, text).unwrap();
     let mut r = CsvReader::open(&p, Limits::default()).unwrap();
     assert_eq!(r.has_optional(), [false, false, true, false]);
@@ -455,7 +451,8 @@ fn control_characters_from_the_file_are_escaped_in_messages() {
         format!("`{}…` is not a number", "9".repeat(80))
     );
     // a binary header: the message shows it escaped (bytes that are not UTF-8 as U+FFFD)
-    let p = tmp("binary-header.csv");
+    let d = scratch::ScratchDir::new("dataset");
+    let p = d.join("binary-header.csv");
     std::fs::write(&p, b"\x1b]0;owned\x07t,u\x00,\xff\x1b[2J\n0,0,0\n").unwrap();
     let m = read_csv(&p, Limits::default()).unwrap_err().to_string();
     assert!(

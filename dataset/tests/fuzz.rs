@@ -270,9 +270,8 @@ proptest! {
             gz[at % n] ^= x;
         }
         gz.truncate(gz.len() - cut % (gz.len() / 2 + 1));
-        let dir = std::env::temp_dir().join(format!("leakwatch-fuzz-gz-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join(format!("{:?}.csv.gz", std::thread::current().id()));
+        let dir = scratch::ScratchDir::new("fuzz-gz");
+        let path = dir.join("case.csv.gz");
         std::fs::write(&path, &gz).unwrap();
         // damaged deflate data decodes to anything: at most 1032 bytes per
         // compressed byte (deflate's largest expansion), so at most that many lines

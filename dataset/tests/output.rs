@@ -3,13 +3,10 @@
 
 use dataset::output::{create_dir, create_file, write_file};
 use std::io::ErrorKind;
-use std::path::PathBuf;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-output-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("output-{name}"))
 }
 
 #[test]

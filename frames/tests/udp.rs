@@ -115,8 +115,7 @@ fn header() -> PathBuf {
 /// encoder writes.
 #[test]
 fn the_c_header_encodes_the_same_bytes() {
-    let dir = std::env::temp_dir().join(format!("lwud-c-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::ScratchDir::new("udp-c");
     let src = dir.join("encode.c");
     let exe = dir.join("encode");
     std::fs::write(
@@ -216,5 +215,4 @@ int main(void)
         .map(|i| u8::from_str_radix(&c_hex[2 * i..2 * i + 2], 16).unwrap())
         .collect();
     assert_eq!(UdpDatagram::try_from(&bytes[..]).unwrap(), d);
-    let _ = std::fs::remove_dir_all(&dir);
 }

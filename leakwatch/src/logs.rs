@@ -182,9 +182,7 @@ mod tests {
 
     #[test]
     fn the_parts_of_a_log_follow_one_another_without_a_hole() {
-        let d = std::env::temp_dir().join(format!("leakwatch-parts-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
+        let d = scratch::ScratchDir::new("parts");
         for name in [
             "run.mcap",
             "run-1.mcap",
@@ -204,6 +202,5 @@ mod tests {
         assert_eq!(names("run-1.mcap"), ["run-1.mcap"], "a later part alone");
         assert_eq!(names("other.mcap"), ["other.mcap", "other-1.mcap"]);
         assert_eq!(names("data.csv"), ["data.csv"]);
-        std::fs::remove_dir_all(&d).ok();
     }
 }

@@ -57,14 +57,10 @@ mod tests {
     use calibrate::suite::{cases, generate, nominal_model};
     use calibrate::{run, write_outputs, CalibrateOptions};
 
-    fn tmp(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("leakwatch-model-file-{}", std::process::id()));
-        std::fs::create_dir_all(&d).expect("tmp dir");
-        d.join(name)
-    }
-
     #[test]
     fn model_files_that_do_not_load_are_named() {
+        let d = scratch::ScratchDir::new("model-file");
+        let tmp = |name: &str| d.join(name);
         let cases = [
             (
                 "unknown_field.toml",
@@ -92,6 +88,8 @@ mod tests {
 
     #[test]
     fn the_written_model_loads_back() {
+        let d = scratch::ScratchDir::new("model-file");
+        let tmp = |name: &str| d.join(name);
         let c = cases().into_iter().find(|c| c.name == "leak-ext1").expect("case");
         let data = generate(&c);
         let cal = run(&data, &nominal_model(), &CalibrateOptions::default()).expect("runs");

@@ -1,6 +1,5 @@
 //! The command line as a user meets it: real runs of the built binary.
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn leakwatch(args: &[&str]) -> Output {
@@ -10,11 +9,9 @@ fn leakwatch(args: &[&str]) -> Output {
         .expect("the leakwatch binary runs")
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("cli-{name}"))
 }
 
 fn stderr(o: &Output) -> String {
@@ -607,8 +604,7 @@ fn stages_run_from_the_leakwatch_binary() {
 /// duration or mode is named, and nothing is written.
 #[test]
 fn run_refuses_bad_arguments_before_starting_anything() {
-    let dir = std::env::temp_dir().join(format!("leakwatch-cli-runargs-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = tmpdir("runargs");
     for (args, needle) in [
         (vec!["--fault", "ext9:0.5lpm@10s"], "--fault ext9:0.5lpm@10s"),
         (vec!["--scenario", "sideways"], "--scenario sideways"),

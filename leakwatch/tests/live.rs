@@ -23,11 +23,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_leakwatch");
 /// The tests that run a pipeline share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-live-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("live-{name}"))
 }
 
 fn example(path: &str) -> PathBuf {

@@ -7,7 +7,7 @@
 //! LEAKWATCH_REQUIRE_PYTHON=1, so the test must run there; elsewhere it says
 //! it was skipped.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn leakwatch(args: &[&str]) -> Output {
@@ -17,11 +17,9 @@ fn leakwatch(args: &[&str]) -> Output {
         .expect("the leakwatch binary runs")
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-parquet-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("parquet-{name}"))
 }
 
 /// Reads the Parquet file with pyarrow, compares every cell with the CSV

@@ -10,11 +10,9 @@ use std::time::{Duration, Instant};
 /// The runs share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-pipeline-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("pipeline-{name}"))
 }
 
 /// A config whose classifier learns its thresholds in time for a leak at 10 s.

@@ -12,11 +12,9 @@ fn leakwatch(args: &[&str]) -> Output {
         .expect("the leakwatch binary runs")
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leakwatch-replay-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("replay-{name}"))
 }
 
 fn simulate(dir: &Path, scenario: &str, seconds: &str, fault: &str) -> PathBuf {

@@ -7,8 +7,8 @@ use std::process::Command;
 
 #[test]
 fn two_rigs_run_side_by_side_and_lose_no_frame() {
-    let d = std::env::temp_dir().join(format!("leakwatch-scale-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
+    let scratch = scratch::ScratchDir::new("scale");
+    let d = scratch.join("out");
     let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
         .args(["bench", "scale", "--rigs", "1,2", "--seconds", "5", "--out"])
         .arg(&d)
@@ -31,5 +31,4 @@ fn two_rigs_run_side_by_side_and_lose_no_frame() {
     }
     // each rig wrote its own run directory
     assert!(d.join("rigs-2").join("rig1").join("latency.json").exists());
-    let _ = std::fs::remove_dir_all(&d);
 }

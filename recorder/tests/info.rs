@@ -2,18 +2,15 @@
 //! events, the stored configuration, truncation.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use frames::{EstimateFrame, LeakEventFrame, SensorFrame, Topic};
 use recorder::{Entry, GapRecord, Info, LogReader, LogWriter, WriterOptions};
 
 const CONFIG: &str = "[model]\nmass_kg = 10.0\n\n[classifier]\nwarmup_s = 8.0\n";
 
-fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("recorder-info-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn dir(tag: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("recorder-info-{tag}"))
 }
 
 /// 2 s at 1 kHz with frames 501..=505 missing (and their gap record), the

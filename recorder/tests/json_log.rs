@@ -233,9 +233,7 @@ fn the_json_log_of_the_version_before_reads_bit_for_bit() {
 
 #[test]
 fn a_json_log_exports_repairs_and_summarises() {
-    let d = std::env::temp_dir().join(format!("recorder-json-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+    let d = scratch::ScratchDir::new("recorder-json");
     let log = LogReader::open(&fixture()).unwrap().read().unwrap();
     // CSV export, the dataset file included
     let files = recorder::export_csv(&log, &d.join("csv"), false).unwrap();
@@ -271,8 +269,8 @@ fn a_json_log_exports_repairs_and_summarises() {
 /// The JSON writer (kept for such logs) still writes what the fixture holds.
 #[test]
 fn the_json_writer_writes_what_the_fixture_holds() {
-    let p = std::env::temp_dir().join(format!("recorder-json-writer-{}.mcap", std::process::id()));
-    let _ = std::fs::remove_file(&p);
+    let d = scratch::ScratchDir::new("recorder-json-writer");
+    let p = d.join("log.mcap");
     let options = WriterOptions {
         encoding: recorder::Encoding::Json,
         ..WriterOptions::default()

@@ -1,15 +1,11 @@
 //! The log file on its own: round trip, truncation, CSV export.
 
-use std::path::PathBuf;
-
 use frames::{detector_bytes, EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use recorder::{export_csv, Entry, GapRecord, Log, LogReader, LogWriter, WriterOptions};
 
-fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("recorder-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn dir(tag: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("recorder-{tag}"))
 }
 
 fn sensor(i: u64) -> SensorFrame {

@@ -62,15 +62,13 @@ fn acquisition_bin() -> &'static Path {
 
 struct Run {
     prefix: String,
-    dir: PathBuf,
+    dir: scratch::ScratchDir,
 }
 
 impl Run {
     fn new(tag: &str) -> Run {
         let prefix = format!("p{}{tag}", std::process::id());
-        let dir = std::env::temp_dir().join(format!("rec-proc-{prefix}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = scratch::ScratchDir::new(&format!("rec-proc-{tag}"));
         Run { prefix, dir }
     }
 
@@ -87,7 +85,6 @@ impl Run {
 
 impl Drop for Run {
     fn drop(&mut self) {
-        std::fs::remove_dir_all(&self.dir).ok();
         let cfg = bus::BusConfig {
             iox_prefix: Some(self.prefix.clone()),
             ..bus::BusConfig::default()

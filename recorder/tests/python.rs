@@ -286,9 +286,7 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
     if !python_mcap() {
         return;
     }
-    let d = std::env::temp_dir().join(format!("recorder-python-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+    let d = scratch::ScratchDir::new("recorder-python");
     let path = d.join("log.mcap");
     write_log(&path);
     let log = LogReader::open(&path).unwrap().read().unwrap();

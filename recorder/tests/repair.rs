@@ -1,7 +1,7 @@
 //! A log whose recorder was killed: read up to its last complete chunk, and
 //! repaired into a complete MCAP file with the same messages.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use frames::{HealthFrame, SensorFrame};
@@ -10,11 +10,9 @@ use recorder::{repair, Entry, Log, LogReader, LogWriter, WriterOptions};
 /// Set in the child process that writes a log until it is killed.
 const CHILD_ENV: &str = "RECORDER_TEST_KILLED_WRITER";
 
-fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("recorder-repair-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh folder for one test, removed when the test passes.
+fn dir(tag: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("recorder-repair-{tag}"))
 }
 
 fn frame(i: u64) -> SensorFrame {
