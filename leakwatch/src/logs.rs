@@ -107,8 +107,9 @@ pub(crate) fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64),
 /// `leakwatch info`: prints what `log` holds ([`recorder::Info`]); with
 /// `config_out`, writes the configuration stored in it there (`-`: standard output).
 pub fn info(log: &Path, config_out: Option<&Path>, force: bool) -> Result<(), String> {
-    let (l, _, bytes) = read_log(log)?;
-    let info = recorder::Info::from_log(log, bytes, &l);
+    let (l, parts, bytes) = read_log(log)?;
+    let mut info = recorder::Info::from_log(log, bytes, &l);
+    info.later_parts = parts.into_iter().skip(1).collect();
     match config_out {
         Some(out) => {
             let toml = info.config_toml.as_deref().ok_or_else(|| {

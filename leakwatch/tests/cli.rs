@@ -702,7 +702,6 @@ fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
         stderr(&o)
     );
     assert_eq!(std::fs::read(&killed).unwrap(), &bytes[..bytes.len() * 6 / 10]);
-    std::fs::remove_dir_all(&d).ok();
 }
 
 /// A log like `run`'s: 3 s of frames with the configuration stored, a leak raised.

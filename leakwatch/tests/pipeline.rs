@@ -816,6 +816,18 @@ fn a_killed_classifier_and_a_killed_recorder_are_restarted_with_their_gaps() {
         .count()
         - 1;
     assert_eq!(rows, all.len(), "{export_err}");
+    // `info` names the later part beside the first
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["info", out.join("run.mcap").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        info.lines()
+            .any(|l| l.starts_with("Later parts:") && l.ends_with("run-1.mcap")),
+        "{info}"
+    );
 
     let events = json(&out.join("events.json"));
     let (t_alarm, t_kind) = leak_detected_after_restart(&events, 13.0);

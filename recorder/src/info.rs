@@ -42,7 +42,10 @@ pub struct GapCount {
 pub struct Info {
     /// The file.
     pub path: PathBuf,
-    /// Its size, bytes.
+    /// The later parts read with it (a restarted recorder's `run-1.mcap`, ...;
+    /// empty for a log of one file).
+    pub later_parts: Vec<PathBuf>,
+    /// Its size, bytes (all parts).
     pub bytes: u64,
     /// The first and last `log_time` of any message, ns (`None`: no message).
     pub span_ns: Option<(u64, u64)>,
@@ -140,6 +143,7 @@ impl Info {
         }
         Info {
             path: path.to_path_buf(),
+            later_parts: Vec::new(),
             bytes,
             span_ns: span,
             wall_offset_ns,
@@ -177,6 +181,10 @@ impl Info {
     pub fn render(&self) -> String {
         let mut o = String::new();
         let _ = writeln!(o, "File:        {}", self.path.display());
+        if !self.later_parts.is_empty() {
+            let names: Vec<String> = self.later_parts.iter().map(|p| p.display().to_string()).collect();
+            let _ = writeln!(o, "Later parts: {}", names.join(", "));
+        }
         let _ = writeln!(
             o,
             "Size:        {} ({} bytes){}",

@@ -72,16 +72,20 @@ impl Log {
     /// restarted recorder writes, continuing after the frames this part holds):
     /// every channel's messages after this part's, sensor frames this part already
     /// holds (sequence number not above its last) left out; the damage of both
-    /// (`truncated` names the part it comes from); channel counts summed and their
-    /// time spans joined; metadata records of both (this part's where both have one).
+    /// (`truncated` names the part it comes from); channel counts summed (the
+    /// frames left out not counted again) and their time spans joined; metadata records of both (this part's where both have one).
     pub fn append(&mut self, later: Log, later_name: &str) {
         let last_seq = self.frames.last().map(|f| f.seq);
+        let held_before = self.frames.len();
+        let offered = later.frames.len();
         self.frames.extend(
             later
                 .frames
                 .into_iter()
                 .filter(|f| last_seq.is_none_or(|l| f.seq > l)),
         );
+        // (the frames left out are not counted twice on their channel)
+        let repeated = offered - (self.frames.len() - held_before);
         self.estimates.extend(later.estimates);
         self.events.extend(later.events);
         self.health.extend(later.health);
@@ -113,7 +117,11 @@ impl Log {
                         };
                         mine.last_log_time = mine.last_log_time.max(c.last_log_time);
                     }
-                    mine.messages += c.messages;
+                    mine.messages += if topic == "frames" {
+                        c.messages.saturating_sub(repeated as u64)
+                    } else {
+                        c.messages
+                    };
                 }
                 None => {
                     self.channels.insert(topic, c);

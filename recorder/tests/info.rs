@@ -143,7 +143,6 @@ fn info_names_the_channels_gaps_events_and_config() {
     assert!(text.contains("Truncated:   yes: "), "{text}");
     // the config record comes first: a cut log still has it
     assert!(text.contains("Config:      stored"), "{text}");
-    std::fs::remove_dir_all(&d).ok();
 }
 
 #[test]
@@ -161,5 +160,4 @@ fn a_log_without_config_or_messages_says_so() {
     assert!(text.contains("Messages:    0"), "{text}");
     assert!(text.contains("Config:      not stored in the log"), "{text}");
     assert!(text.contains("Events:      none raised"), "{text}");
-    std::fs::remove_dir_all(&d).ok();
 }

@@ -263,7 +263,6 @@ fn a_json_log_exports_repairs_and_summarises() {
         "{text}"
     );
     assert!(text.contains("Config:      not stored in the log"), "{text}");
-    std::fs::remove_dir_all(&d).ok();
 }
 
 /// The JSON writer (kept for such logs) still writes what the fixture holds.
