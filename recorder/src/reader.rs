@@ -73,7 +73,8 @@ impl Log {
     /// every channel's messages after this part's, sensor frames this part already
     /// holds (sequence number not above its last) left out; the damage of both
     /// (`truncated` names the part it comes from); channel counts summed (the
-    /// frames left out not counted again) and their time spans joined; metadata records of both (this part's where both have one).
+    /// frames left out not counted again) and their time spans joined; metadata
+    /// records of both (this part's where both have one).
     pub fn append(&mut self, later: Log, later_name: &str) {
         let last_seq = self.frames.last().map(|f| f.seq);
         let held_before = self.frames.len();
