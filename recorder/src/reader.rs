@@ -118,7 +118,7 @@ impl Log {
                         };
                         mine.last_log_time = mine.last_log_time.max(c.last_log_time);
                     }
-                    mine.messages += if topic == "frames" {
+                    mine.messages += if topic == frames::Topic::Frames.as_str() {
                         c.messages.saturating_sub(repeated as u64)
                     } else {
                         c.messages
