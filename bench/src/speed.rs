@@ -149,7 +149,7 @@ pub fn chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
     std::hint::black_box(events);
     let wall = t0.elapsed().as_secs_f64();
     Throughput {
-        chain: "estimator stage (11-state leak filter + 7-state thesis filter) + classifier".into(),
+        chain: "estimator stage (12-state leak filter + 7-state thesis filter) + classifier".into(),
         samples: n,
         wall_s: wall,
         samples_per_s: n as f64 / wall.max(1e-12),

@@ -43,6 +43,8 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         flags: 0,
         state,
         sigma,
+        bulk_scale: f64::NAN,
+        bulk_scale_sigma: f64::NAN,
         measured: [0.3, 6.9e6, 6.9e6],
         u_v: 0.0,
         residual: [0.0; 3],

@@ -75,6 +75,9 @@ impl EstimateWire for StageEstimate {
             u_v: f.u_v,
             state: f.state,
             sigma: f.state_sigma,
+            // (not on the wire)
+            bulk_scale: f64::NAN,
+            bulk_scale_sigma: f64::NAN,
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,

@@ -14,7 +14,7 @@ pub mod mae;
 pub mod stage;
 pub mod tuning;
 
-use model::process::{ProcessModel, I_FE, N_MEAS};
+use model::process::{ProcessModel, I_BULK, I_FE, N_MEAS};
 use model::{ActuatorParams, Sample};
 use nalgebra::SVector;
 
@@ -23,8 +23,12 @@ pub use mae::MovingMae;
 pub use stage::{EstimatorStage, StageEstimate};
 pub use tuning::{Init, Tuning};
 
-/// Largest number of states any layout has (the 11-state leak model with spool bias).
+/// Number of states an [`Estimate`] carries in [`Estimate::state`] (the 11-state
+/// leak model with spool bias; the 12th state of the 12-state layout, the oil's
+/// stiffness, has its own fields).
 pub const MAX_STATES: usize = 11;
+/// Largest number of states any layout has (the leak model with spool bias and oil stiffness).
+pub const MAX_LAYOUT_STATES: usize = 12;
 
 // The flag bits are the wire's (`frames::estimate_flags`), so flags are copied, not
 // recoded; `estimator::wire` checks at compile time that the two agree (this crate
@@ -56,7 +60,7 @@ pub const END_STOP_MARGIN_M: f64 = 2e-3;
 pub struct Estimate {
     /// Sample time, s.
     pub t_s: f64,
-    /// Number of states of the filter (6, 7 or 9).
+    /// Number of entries of [`Self::state`] in use: the filter's states (6, 7, 10 or 11; the 12-state layout fills 11 and [`Self::bulk_scale`]).
     pub n_states: u32,
     /// Bit set of `FLAG_*`.
     pub flags: u32,
@@ -66,6 +70,11 @@ pub struct Estimate {
     pub state: [f64; MAX_STATES],
     /// Standard deviation of each state, same units (NaN past `n_states`).
     pub sigma: [f64; MAX_STATES],
+    /// 12-state layout: the oil's stiffness as a multiple of the model's effective
+    /// bulk modulus θ (1); NaN for the other layouts.
+    pub bulk_scale: f64,
+    /// One standard deviation of [`Self::bulk_scale`] (1); NaN for the other layouts.
+    pub bulk_scale_sigma: f64,
     /// The measurement y = [x m, p1 Pa, p2 Pa] as received (NaN where absent).
     pub measured: [f64; N_MEAS],
     /// Valve command u, V (as received).
@@ -86,12 +95,14 @@ impl Estimate {
     fn empty(t_s: f64, n_states: u32) -> Self {
         Estimate {
             t_s,
-            n_states,
+            n_states: n_states.min(MAX_STATES as u32),
             flags: 0,
             measured: [f64::NAN; N_MEAS],
             u_v: f64::NAN,
             state: [f64::NAN; MAX_STATES],
             sigma: [f64::NAN; MAX_STATES],
+            bulk_scale: f64::NAN,
+            bulk_scale_sigma: f64::NAN,
             residual: [f64::NAN; N_MEAS],
             innovation: [f64::NAN; N_MEAS],
             innovation_sigma: [f64::NAN; N_MEAS],
@@ -126,6 +137,7 @@ enum Filter {
     S7(Ekf<7, 3>),
     S10(Ekf<10, 3>),
     S11(Ekf<11, 3>),
+    S12(Ekf<12, 3>),
 }
 
 /// The estimator stage.
@@ -153,7 +165,7 @@ pub struct Estimator {
 const FIRST_SLOW_STATE: usize = 7;
 
 /// Typical magnitudes used to scale the filter's internal algebra.
-const SCALE: [f64; MAX_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6];
+const SCALE: [f64; MAX_LAYOUT_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6, 1.0];
 
 /// Samples of persistent divergence before a reset (see [`Tuning::divergence_reset_m`]).
 pub const DIVERGED_SAMPLES: u32 = 200;
@@ -170,7 +182,8 @@ impl Estimator {
             6 => Filter::S6(make_filter::<6>(&tuning, &model, None)),
             7 => Filter::S7(make_filter::<7>(&tuning, &model, None)),
             10 => Filter::S10(make_filter::<10>(&tuning, &model, None)),
-            _ => Filter::S11(make_filter::<11>(&tuning, &model, None)),
+            11 => Filter::S11(make_filter::<11>(&tuning, &model, None)),
+            _ => Filter::S12(make_filter::<12>(&tuning, &model, None)),
         };
         let w = tuning.mae_window_samples;
         Ok(Estimator {
@@ -216,6 +229,7 @@ impl Estimator {
             (Filter::S7(w), Filter::S7(f)) => step(w, f, model, u, &mut out),
             (Filter::S10(w), Filter::S10(f)) => step(w, f, model, u, &mut out),
             (Filter::S11(w), Filter::S11(f)) => step(w, f, model, u, &mut out),
+            (Filter::S12(w), Filter::S12(f)) => step(w, f, model, u, &mut out),
             (w, f) => w.clone_from(f),
         }
     }
@@ -254,6 +268,7 @@ impl Estimator {
             Filter::S7(e) => copy(e, out),
             Filter::S10(e) => copy(e, out),
             Filter::S11(e) => copy(e, out),
+            Filter::S12(e) => copy(e, out),
         }
     }
 
@@ -264,6 +279,7 @@ impl Estimator {
             Filter::S7(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
             Filter::S10(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
             Filter::S11(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
+            Filter::S12(e) => e.scaled_covariance().symmetric_eigenvalues().min(),
         }
     }
 
@@ -290,6 +306,7 @@ impl Estimator {
                 Filter::S7(e) => predict_only(e, &self.model, u),
                 Filter::S10(e) => predict_only(e, &self.model, u),
                 Filter::S11(e) => predict_only(e, &self.model, u),
+                Filter::S12(e) => predict_only(e, &self.model, u),
             };
             if !ok {
                 self.started = false;
@@ -333,6 +350,7 @@ impl Estimator {
                 Filter::S7(e) => *e = make_filter::<7>(tuning, &self.model, Some(measured)),
                 Filter::S10(e) => *e = make_filter::<10>(tuning, &self.model, Some(measured)),
                 Filter::S11(e) => *e = make_filter::<11>(tuning, &self.model, Some(measured)),
+                Filter::S12(e) => *e = make_filter::<12>(tuning, &self.model, Some(measured)),
             }
             if self.counters.samples > 1 {
                 flags |= FLAG_RESET;
@@ -351,6 +369,7 @@ impl Estimator {
                 Filter::S7(e) => reanchor_filter::<7>(e, tuning, &self.model, measured),
                 Filter::S10(e) => reanchor_filter::<10>(e, tuning, &self.model, measured),
                 Filter::S11(e) => reanchor_filter::<11>(e, tuning, &self.model, measured),
+                Filter::S12(e) => reanchor_filter::<12>(e, tuning, &self.model, measured),
             }
             self.reanchor_pending = false;
             self.diverged_samples = 0;
@@ -368,6 +387,7 @@ impl Estimator {
             Filter::S7(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
             Filter::S10(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
             Filter::S11(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S12(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
         };
         match step {
             Ok(clamped) => {
@@ -438,11 +458,17 @@ fn make_filter<const N: usize>(
             if N >= 7 {
                 x0[I_FE] = model.params.piston_area_m2 * (p1 - p2);
             }
+            if N == 12 {
+                x0[I_BULK] = 1.0;
+            }
         }
         _ => {
             let p = tuning.init_pressure_pa;
             x0[1] = p;
             x0[2] = p;
+            if N == 12 {
+                x0[I_BULK] = 1.0;
+            }
         }
     }
     Ekf::new(x0, &p0, &q, r, scale)
@@ -496,9 +522,13 @@ fn step_filter<const N: usize>(
     }
     let x = e.state();
     let sig = e.sigma();
-    for i in 0..N {
+    for i in 0..N.min(MAX_STATES) {
         out.state[i] = x[i];
         out.sigma[i] = sig[i];
+    }
+    if N == 12 {
+        out.bulk_scale = x[I_BULK];
+        out.bulk_scale_sigma = sig[I_BULK];
     }
     Ok(guard.any())
 }

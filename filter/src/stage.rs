@@ -1,8 +1,9 @@
 //! The estimator stage as the pipeline runs it: two filters side by side on
 //! the same samples, and time kept from the sample stamps.
 //!
-//! - the **leak filter** (default: 11 states, sensor-derived tuning) estimates
-//!   the three leak sizes and the spool bias for leakwatch's detector;
+//! - the **leak filter** (default: 12 states, sensor-derived tuning) estimates
+//!   the three leak sizes, the spool bias and the oil's stiffness for
+//!   leakwatch's detector;
 //! - the **thesis filter** (default: 7 states, the thesis' tuning) gives the
 //!   residuals and MAE of MODEL.md §5 for the baseline detector.
 //!

@@ -23,8 +23,9 @@ pub enum Init {
 #[serde(default, deny_unknown_fields)]
 pub struct Tuning {
     /// Number of states: 6 (friction and load from the parameters), 7 (plus the
-    /// effective load F_e), 10 (plus the three leak sizes q_e1, q_e2, q_i) or 11
-    /// (plus the spool null bias b).
+    /// effective load F_e), 10 (plus the three leak sizes q_e1, q_e2, q_i), 11
+    /// (plus the spool null bias b) or 12 (plus the oil's stiffness θ, a multiple
+    /// of the model's bulk modulus).
     pub states: u32,
     /// Sample period T, s.
     pub sample_period_s: f64,
@@ -50,6 +51,8 @@ pub struct Tuning {
     pub q_leak_m6_s2: f64,
     /// Q of the spool null bias (its random walk), m².
     pub q_bias_m2: f64,
+    /// Q of the oil-stiffness scale θ (its random walk), 1 (dimensionless, squared).
+    pub q_bulk_scale: f64,
     /// R of the rod position, m².
     pub r_x_m2: f64,
     /// R of each chamber pressure, Pa².
@@ -70,6 +73,8 @@ pub struct Tuning {
     pub p0_leak_m6_s2: f64,
     /// P0 of the spool null bias, m².
     pub p0_bias_m2: f64,
+    /// P0 of the oil-stiffness scale θ (which starts at 1), 1 (dimensionless, squared).
+    pub p0_bulk_scale: f64,
     /// Window of the moving average of |residual| (the thesis' MAE), samples.
     pub mae_window_samples: usize,
     /// Longest run of missing samples bridged by prediction; after a longer gap the
@@ -107,6 +112,7 @@ impl Tuning {
             q_f_e_n2: 1e2,
             q_leak_m6_s2: 1e-16,
             q_bias_m2: 1e-20,
+            q_bulk_scale: 0.0,
             r_x_m2: 1e-4,
             r_p_pa2: 1e6,
             p0_x_sp_m2: 1e4,
@@ -117,6 +123,7 @@ impl Tuning {
             p0_f_e_n2: 1e4,
             p0_leak_m6_s2: 1e4,
             p0_bias_m2: 1e4,
+            p0_bulk_scale: 1e-2,
             mae_window_samples: 4000,
             max_bridged_gap_samples: 5,
             convergence_time_s: 2.0,
@@ -127,11 +134,11 @@ impl Tuning {
     /// A tuning derived from the sensors and the model's known errors:
     /// R from the encoder quantum (3e-5 m) and the pressure channel (12-bit ADC
     /// over 20.7 MPa plus 5 kPa noise, about 5.2 kPa RMS); Q from the flow and
-    /// force errors the healthy model makes; 10 states (leak model);
+    /// force errors the healthy model makes; 12 states (leak model with spool bias and the oil's stiffness);
     /// initial state from the first sample.
     pub fn sensor_derived() -> Self {
         Tuning {
-            states: 11,
+            states: 12,
             init: Init::Measured,
             q_x_sp_m2: 1e-14,
             q_p_pa2: 1e6,
@@ -151,6 +158,10 @@ impl Tuning {
             p0_leak_m6_s2: 1e-10,
             q_bias_m2: 1e-20,
             p0_bias_m2: 1e-11,
+            // θ starts at the model's stiffness, ±20 % (a rig's oil is 0-30 % softer
+            // than the data sheet's), and may wander by 0.3 %/√s (temperature, air).
+            q_bulk_scale: 1e-10,
+            p0_bulk_scale: 0.04,
             divergence_reset_m: 0.02,
             // The leak sizes converge within 0.2 s of a start (a leak present at start included).
             convergence_time_s: 1.0,
@@ -169,9 +180,9 @@ impl Tuning {
 
     /// Checks every field, naming the first bad one.
     pub fn validate(&self) -> Result<(), String> {
-        if ![6, 7, 10, 11].contains(&self.states) {
+        if ![6, 7, 10, 11, 12].contains(&self.states) {
             return Err(format!(
-                "[estimator] states = {}: must be 6, 7, 10 or 11",
+                "[estimator] states = {}: must be 6, 7, 10, 11 or 12",
                 self.states
             ));
         }
@@ -180,7 +191,7 @@ impl Tuning {
         // 1 GPa, 10 m, 100 m/s, 10 MN, 0.01 m³/s); P0 up to the thesis' 1e4 in
         // every state; P0 > 0 (a zero initial variance makes the square-root
         // factor singular).
-        let ranges: [(&str, f64, f64, f64, &str); 22] = [
+        let ranges: [(&str, f64, f64, f64, &str); 24] = [
             ("r_x_m2", self.r_x_m2, 1e-30, 100.0, "m²"),
             ("r_p_pa2", self.r_p_pa2, 1e-30, 1e18, "Pa²"),
             ("init_pressure_pa", self.init_pressure_pa, 0.0, 1e9, "Pa"),
@@ -192,6 +203,7 @@ impl Tuning {
             ("q_f_e_n2", self.q_f_e_n2, 0.0, 1e14, "N²"),
             ("q_leak_m6_s2", self.q_leak_m6_s2, 0.0, 1e-4, "m⁶/s²"),
             ("q_bias_m2", self.q_bias_m2, 0.0, 1e-4, "m²"),
+            ("q_bulk_scale", self.q_bulk_scale, 0.0, 1.0, "(dimensionless)²"),
             ("p0_x_sp_m2", self.p0_x_sp_m2, 1e-30, 1e4, "m²"),
             ("p0_p_pa2", self.p0_p_pa2, 1e-30, 1e18, "Pa²"),
             ("p0_x_m2", self.p0_x_m2, 1e-30, 1e4, "m²"),
@@ -200,6 +212,13 @@ impl Tuning {
             ("p0_f_e_n2", self.p0_f_e_n2, 1e-30, 1e14, "N²"),
             ("p0_leak_m6_s2", self.p0_leak_m6_s2, 1e-30, 1e4, "m⁶/s²"),
             ("p0_bias_m2", self.p0_bias_m2, 1e-30, 1e4, "m²"),
+            (
+                "p0_bulk_scale",
+                self.p0_bulk_scale,
+                1e-30,
+                1.0,
+                "(dimensionless)²",
+            ),
             ("convergence_time_s", self.convergence_time_s, 0.0, 1e6, "s"),
             ("divergence_reset_m", self.divergence_reset_m, 0.0, 100.0, "m"),
             ("sample_period_s", self.sample_period_s, 1e-5, 1.0, "s"),
@@ -232,8 +251,10 @@ impl Tuning {
         Ok(())
     }
 
-    fn per_state(v: [f64; 8]) -> [f64; 11] {
-        [v[0], v[1], v[1], v[2], v[3], v[4], v[5], v[6], v[6], v[6], v[7]]
+    fn per_state(v: [f64; 9]) -> [f64; 12] {
+        [
+            v[0], v[1], v[1], v[2], v[3], v[4], v[5], v[6], v[6], v[6], v[7], v[8],
+        ]
     }
 
     /// diag(Q) for an `N`-state layout, SI squared units.
@@ -247,6 +268,7 @@ impl Tuning {
             self.q_f_e_n2,
             self.q_leak_m6_s2,
             self.q_bias_m2,
+            self.q_bulk_scale,
         ]);
         SVector::<f64, N>::from_fn(|i, _| all[i])
     }
@@ -262,6 +284,7 @@ impl Tuning {
             self.p0_f_e_n2,
             self.p0_leak_m6_s2,
             self.p0_bias_m2,
+            self.p0_bulk_scale,
         ]);
         SVector::<f64, N>::from_fn(|i, _| all[i])
     }

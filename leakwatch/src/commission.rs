@@ -20,7 +20,7 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     if cfg.leak_filter.states < 10 {
         return Err(format!(
-            "[leak_filter] states = {}: commissioning needs the leak filter (10 or 11 states)",
+            "[leak_filter] states = {}: commissioning needs the leak filter (10, 11 or 12 states)",
             cfg.leak_filter.states
         ));
     }

@@ -32,7 +32,7 @@ pub struct Config {
     pub sim: SimSettings,
     /// The thesis filter (baseline detector): by default the thesis' 7-state tuning (MODEL.md §4).
     pub estimator: Tuning,
-    /// The leak filter (leakwatch's detector): by default 11 states, tuning from the sensors.
+    /// The leak filter (leakwatch's detector): by default 12 states, tuning from the sensors.
     pub leak_filter: Tuning,
     /// The detectors.
     pub classifier: ClassifierConfig,
@@ -86,7 +86,7 @@ impl Config {
     fn parse_or_toml_error(text: &str) -> Result<Config, ParseError> {
         let mut cfg: Config = toml::from_str(text).map_err(ParseError::Toml)?;
         // A partial [leak_filter] fills its missing fields from the leak filter's own
-        // defaults (sensor-derived, 11 states), not from the thesis tuning that
+        // defaults (sensor-derived, 12 states), not from the thesis tuning that
         // `Tuning::default()` gives to a partial [estimator].
         let table: toml::Table = toml::from_str(text).map_err(ParseError::Toml)?;
         if let Some(given) = table.get("leak_filter").and_then(|v| v.as_table()) {

@@ -44,7 +44,7 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
         );
     }
     outln!(
-        "  estimator: 11-state leak filter + the thesis' 7-state filter; classifier warm-up {} s",
+        "  estimator: 12-state leak filter + the thesis' 7-state filter; classifier warm-up {} s",
         cfg.classifier.warmup_s
     );
     let mut sim = Simulator::new(rig, cfg.sensors, cfg.sim, sc, schedule, seed).map_err(|e| e.to_string())?;

@@ -10,6 +10,7 @@
 //! | 7 | the 6 plus F_e N, the whole effective load (friction + environment) as a random walk |
 //! | 10 | the 7 plus q_e1, q_e2, q_i m³/s: the three leak sizes (random walks) |
 //! | 11 | the 10 plus b m: the spool's null bias (a random walk) |
+//! | 12 | the 11 plus θ (1): the oil's stiffness as a multiple of the model's effective bulk modulus (a random walk; entrained air and a soft hose make a rig's oil 0-30 % softer than the data sheet's, and that error otherwise shows as leaks) |
 //!
 //! The 10-state "leak" layout is leakwatch's own: a leak is a flow the healthy
 //! model lacks, so the filter estimates the three leaks directly, each as its
@@ -36,8 +37,12 @@ pub const I_QE1: usize = 7;
 pub const I_QE2: usize = 8;
 /// Index of q_i, the internal leak at nominal drop (m³/s), in the 10-state layout.
 pub const I_QI: usize = 9;
-/// Index of the spool null bias b (m) in the 11-state layout.
+/// Index of the spool null bias b (m) in the 11- and 12-state layouts.
 pub const I_BIAS: usize = 10;
+/// Index of θ, the oil stiffness as a multiple of the model's effective bulk modulus (1), in the 12-state layout.
+pub const I_BULK: usize = 11;
+/// Range θ is kept in by [`ProcessModel::keep_physical`] (1): from a fifth of the model's stiffness to twice it.
+pub const BULK_SCALE_RANGE: (f64, f64) = (0.2, 2.0);
 /// Number of measurements: rod position (m) and the two chamber pressures (Pa).
 pub const N_MEAS: usize = 3;
 
@@ -53,12 +58,14 @@ pub struct Guard {
     pub pressure_clamped: bool,
     /// The rod position was pulled back into the stroke (± the end-stop margin).
     pub position_clamped: bool,
+    /// The oil-stiffness scale θ was pulled back into [`BULK_SCALE_RANGE`].
+    pub bulk_clamped: bool,
 }
 
 impl Guard {
     /// Whether anything was clamped.
     pub fn any(&self) -> bool {
-        self.pressure_clamped || self.position_clamped
+        self.pressure_clamped || self.position_clamped || self.bulk_clamped
     }
 }
 

@@ -50,7 +50,8 @@ macro_rules! dependency {
     };
 }
 
-/// `LeakState.msg`: the leak filter's 11 states by name, SI units.
+/// `LeakState.msg`: the leak filter's first 11 states by name, SI units (the
+/// 12th, the oil-stiffness scale θ, is not on the wire).
 pub const LEAK_STATE: &str = include_str!("../msg/LeakState.msg");
 /// `ThesisState.msg`: the thesis filter's 7 states by name, SI units.
 pub const THESIS_STATE: &str = include_str!("../msg/ThesisState.msg");

@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{Guard, ProcessModel};
+use super::{Guard, ProcessModel, BULK_SCALE_RANGE, I_BULK};
 
 impl ProcessModel {
     /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
@@ -32,8 +32,9 @@ impl ProcessModel {
         (x, jac, guard)
     }
 
-    /// Clamps pressures into [p_min, p_max] and the rod into its stroke plus
-    /// 1 cm; reports what was done.
+    /// Clamps pressures into [p_min, p_max], the rod into its stroke plus
+    /// 1 cm and the oil-stiffness scale θ (12 states) into [`BULK_SCALE_RANGE`];
+    /// reports what was done.
     pub fn keep_physical<const N: usize>(&self, x: &mut SVector<f64, N>) -> Guard {
         let mut g = Guard::default();
         for i in [1, 2] {
@@ -51,6 +52,17 @@ impl ProcessModel {
         if x[3] < lo || x[3] > hi {
             g.position_clamped = true;
             x[3] = x[3].clamp(lo, hi);
+        }
+        if N == 12 {
+            let (lo, hi) = BULK_SCALE_RANGE;
+            if !(lo..=hi).contains(&x[I_BULK]) {
+                g.bulk_clamped = true;
+                x[I_BULK] = if x[I_BULK].is_finite() {
+                    x[I_BULK].clamp(lo, hi)
+                } else {
+                    1.0
+                };
+            }
         }
         g
     }

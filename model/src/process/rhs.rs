@@ -4,7 +4,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::{Linearisation, ProcessModel, I_BIAS, I_FE, I_QE1, I_QE2, I_QI, MIN_SLOPE_DROP_PA};
+use super::{Linearisation, ProcessModel, I_BIAS, I_BULK, I_FE, I_QE1, I_QE2, I_QI, MIN_SLOPE_DROP_PA};
 use crate::dynamics::{effective_bulk_modulus_pa, valve_flows};
 use crate::friction::{friction_dv, friction_force_n};
 use crate::params::ActuatorParams;
@@ -17,11 +17,11 @@ fn sqrt_slope(dp_pa: f64) -> f64 {
 
 impl ProcessModel {
     /// The continuous dynamics f(x, u) and ∂f/∂x for a layout of `N` states
-    /// (6, 7, 10 or 11), command `u_v` in V.
+    /// (6, 7, 10, 11 or 12), command `u_v` in V.
     pub fn linearise<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> Linearisation<N> {
         assert!(
-            N == 6 || N == 7 || N == 10 || N == 11,
-            "process layouts have 6, 7, 10 or 11 states"
+            N == 6 || N == 7 || N == 10 || N == 11 || N == 12,
+            "process layouts have 6, 7, 10, 11 or 12 states"
         );
         let p = &self.params;
         let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
@@ -32,10 +32,10 @@ impl ProcessModel {
         let wn = p.spool_natural_freq_rad_s;
         f[0] = v_sp;
         a[(0, 5)] = 1.0;
-        let bias = p.spool_null_bias_m + if N == 11 { s[I_BIAS] } else { 0.0 };
+        let bias = p.spool_null_bias_m + if N >= 11 { s[I_BIAS] } else { 0.0 };
         f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - bias)
             + p.spool_gain_m_per_v * wn * wn * u_v;
-        if N == 11 {
+        if N >= 11 {
             a[(5, I_BIAS)] = wn * wn;
         }
         a[(5, 0)] = -wn * wn;
@@ -51,10 +51,12 @@ impl ProcessModel {
         // Chambers.
         let area = p.piston_area_m2;
         let (v1, v2) = p.chamber_volumes_m3(x);
-        let b1 = effective_bulk_modulus_pa(p, p1);
-        let b2 = effective_bulk_modulus_pa(p, p2);
-        let db1 = bulk_slope(p, p1, b1);
-        let db2 = bulk_slope(p, p2, b2);
+        // The 12-state layout scales the oil's stiffness by its estimate θ.
+        let theta = if N == 12 { s[I_BULK] } else { 1.0 };
+        let (b1_model, b2_model) = (effective_bulk_modulus_pa(p, p1), effective_bulk_modulus_pa(p, p2));
+        let (b1, b2) = (theta * b1_model, theta * b2_model);
+        let db1 = theta * bulk_slope(p, p1, b1_model);
+        let db2 = theta * bulk_slope(p, p2, b2_model);
         // Estimated leaks (10 states): q = q_n·ssqrt(Δp)/√Δp_n.
         let pr = p.return_pressure_pa;
         let inv_sqrt_n = 1.0 / self.nominal_drop_pa().sqrt();
@@ -73,6 +75,10 @@ impl ProcessModel {
         let net2 = area * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
         f[1] = b1 / v1 * net1;
         f[2] = b2 / v2 * net2;
+        if N == 12 {
+            a[(1, I_BULK)] = b1_model / v1 * net1;
+            a[(2, I_BULK)] = b2_model / v2 * net2;
+        }
         // ∂/∂x_sp, ∂/∂p1, ∂/∂p2
         a[(1, 0)] = b1 / v1 * dq1[0];
         a[(1, 1)] = b1 / v1 * (dq1[1] - dl.int[0] - dl.ext1) + db1 / v1 * net1;

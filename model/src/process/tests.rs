@@ -99,8 +99,11 @@ fn random_state<const N: usize>(
             s[i] = rng.uniform_in(0.0, 2e-5);
         }
     }
-    if N == 11 {
+    if N >= 11 {
         s[I_BIAS] = rng.uniform_in(-1e-5, 1e-5);
+    }
+    if N == 12 {
+        s[I_BULK] = rng.uniform_in(0.6, 1.2);
     }
     s
 }
@@ -145,7 +148,7 @@ fn back_flow<const N: usize>(m: &ProcessModel, s: &SVector<f64, N>) -> bool {
 /// Typical magnitude of each state, SI: the Jacobians are compared in these units
 /// (entry (r, c) times SCALE[c]/SCALE[r]), so that a row's entries are comparable
 /// whatever their units.
-const SCALE: [f64; 11] = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5, 1e-5, 1e-6];
+const SCALE: [f64; 12] = [1e-5, 1e6, 1e6, 0.1, 0.1, 0.01, 1e3, 1e-5, 1e-5, 1e-5, 1e-6, 1.0];
 
 /// Worst ratio of |an − fd| to what the comparison allows, both in scaled units:
 /// `tol` relative to the entry or to 1e-3 of its row's largest entry, plus
@@ -214,6 +217,16 @@ fn jacobians_match_central_differences_on_every_branch() {
     assert!(check_jacobian::<7>(&m, Band::Sliding, inside, 3).0 > 250);
     assert!(check_jacobian::<10>(&m, Band::Sliding, inside, 4).0 > 250);
     assert!(check_jacobian::<11>(&m, Band::Sliding, inside, 7).0 > 250);
+    assert!(check_jacobian::<12>(&m, Band::Sliding, inside, 8).0 > 250);
+    // Entrained air: the oil's stiffness depends on pressure, and θ scales it.
+    let airy = ProcessModel::new(
+        ActuatorParams {
+            entrained_air_fraction: 0.01,
+            ..p.clone()
+        },
+        1e-3,
+    );
+    assert!(check_jacobian::<12>(&airy, Band::Sliding, inside, 9).0 > 250);
     // A chamber above supply: back-flow through the supply land in every state.
     for (n, (checked, reversed)) in [
         (
@@ -249,6 +262,10 @@ fn jacobians_match_central_differences_on_every_branch() {
         (
             11,
             check_jacobian::<11>(&m, Band::Sliding, Pressures::NearTank, 25),
+        ),
+        (
+            12,
+            check_jacobian::<12>(&m, Band::Sliding, Pressures::NearTank, 26),
         ),
     ] {
         assert!(checked > 200, "{n} states near tank: {checked} checked");
@@ -299,7 +316,9 @@ fn jacobians_match_central_differences_on_every_branch() {
 }
 
 /// Steps of [`fd_step_jacobian`], per state.
-const STEP_FD_STEPS: [f64; 11] = [1e-9, 1.0, 1.0, 1e-7, 1e-7, 1e-7, 1e-2, 1e-10, 1e-10, 1e-10, 1e-10];
+const STEP_FD_STEPS: [f64; 12] = [
+    1e-9, 1.0, 1.0, 1e-7, 1e-7, 1e-7, 1e-2, 1e-10, 1e-10, 1e-10, 1e-10, 1e-7,
+];
 
 /// [`worst_ratio`] with the rounding floor of a central difference of x(k+1)
 /// taken over `substeps` sub-steps, ε·n·|x(k+1)_r|/h_c.
@@ -386,6 +405,10 @@ fn discrete_step_jacobian_matches_central_differences_of_the_step() {
             (
                 11,
                 check_step_jacobian::<11>(&m, Band::Sliding, Pressures::Inside, 55),
+            ),
+            (
+                12,
+                check_step_jacobian::<12>(&m, Band::Sliding, Pressures::Inside, 56),
             ),
         ];
         for (n, (checked, one_step_fails)) in runs {
