@@ -382,25 +382,34 @@ fn commissioning_calibrate_a_healthy_record_then_replay_a_leak_with_the_model() 
     let nominal = summary("nominal", &[]);
     let model = cal.join("model.toml");
     let calibrated = summary("calibrated", &["--config", model.to_str().unwrap()]);
-    let f = |s: &serde_json::Value, k: &str| s["leak_filter"][k].as_f64().unwrap();
+    let f = |s: &serde_json::Value, filter: &str, k: &str| s[filter][k].as_f64().unwrap();
     eprintln!("nominal {nominal:#}\ncalibrated {calibrated:#}");
-    // the calibrated model explains the rig: the leak filter's normalised
-    // innovations and pressure residuals drop (measured: NIS 96 -> 13,
-    // p1 residual 21 -> 8 kPa)
+    // the calibrated model explains the rig: the thesis filter, whose model is
+    // fixed, innovates less (measured: mean NIS 85 -> 63, p1 innovation RMS
+    // 279 -> 196 kPa, p2 288 -> 136 kPa)
+    let ratio = |k: &str| f(&calibrated, "thesis_filter", k) / f(&nominal, "thesis_filter", k);
+    assert!(ratio("mean_nis") < 0.85, "thesis NIS ratio {}", ratio("mean_nis"));
     assert!(
-        f(&calibrated, "mean_nis") < 0.3 * f(&nominal, "mean_nis"),
-        "NIS {} vs {}",
-        f(&calibrated, "mean_nis"),
-        f(&nominal, "mean_nis")
+        ratio("innovation_p1_pa") < 0.85,
+        "p1 innovation ratio {}",
+        ratio("innovation_p1_pa")
     );
-    for k in ["p1_pa", "p2_pa"] {
-        assert!(
-            f(&calibrated, k) < 0.6 * f(&nominal, k),
-            "{k}: {} vs {}",
-            f(&calibrated, k),
-            f(&nominal, k)
-        );
-    }
+    assert!(
+        ratio("innovation_p2_pa") < 0.6,
+        "p2 innovation ratio {}",
+        ratio("innovation_p2_pa")
+    );
+    // the leak filter estimates the spool bias and the oil's stiffness itself, so
+    // the nominal model serves it as well as the calibrated one (measured: mean
+    // NIS 10.97 and 11.08; 96 and 13 before it estimated the stiffness)
+    let (nis_nominal, nis_calibrated) = (
+        f(&nominal, "leak_filter", "mean_nis"),
+        f(&calibrated, "leak_filter", "mean_nis"),
+    );
+    assert!(
+        (nis_nominal - nis_calibrated).abs() < 0.1 * nis_calibrated && nis_nominal < 20.0,
+        "leak filter NIS {nis_nominal} (nominal model) vs {nis_calibrated} (calibrated)"
+    );
 }
 
 #[test]
