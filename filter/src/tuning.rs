@@ -146,7 +146,7 @@ impl Tuning {
             q_v_m2_s2: 1e-6,
             q_v_sp_m2_s2: 1e-8,
             q_f_e_n2: 1e4,
-            q_leak_m6_s2: 1e-18,
+            q_leak_m6_s2: 2e-18,
             r_x_m2: 1e-10,
             r_p_pa2: 2.7e7,
             p0_x_sp_m2: 1e-10,
