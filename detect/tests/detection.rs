@@ -436,9 +436,11 @@ fn a_leak_opening_inside_a_gap_is_reported_after_it() {
     );
 }
 
-/// An external leak of 0.05 L/min (nominal) is declared as ext2 with the default
+/// An external leak of 0.08 L/min (nominal) is declared as ext2 with the default
 /// floors; its floor is `min_size_lpm`: raised to 0.1 L/min of real flow it hides
-/// the leak, while the internal leak's floor raised as much does not.
+/// the leak, while the internal leak's floor raised as much does not. (The leak
+/// was 0.05 L/min until q_leak went to 2e-18: the stick-slipping sine rig's
+/// learned thresholds are 0.05-0.06 L/min since, above the external floor.)
 #[test]
 fn a_small_external_leak_is_governed_by_the_external_floor() {
     let mut found = 0;
@@ -447,7 +449,7 @@ fn a_small_external_leak_is_governed_by_the_external_floor() {
             let (events, _) = run_flow(
                 "closed-loop-sine",
                 45.0,
-                Some("ext2:0.05lpm@20s"),
+                Some("ext2:0.08lpm@20s"),
                 seed,
                 off_nominal_rig(),
                 cfg,

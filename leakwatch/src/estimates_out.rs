@@ -48,7 +48,13 @@ fn for_each_cell(s: &StageEstimate, mut cell: impl FnMut(Cell)) {
     for v in &e.state[..7] {
         cell(Cell::F64(*v));
     }
-    for v in [lpm(e.state[7]), lpm(e.state[8]), lpm(e.state[9]), e.state[10]] {
+    for v in [
+        lpm(e.state[7]),
+        lpm(e.state[8]),
+        lpm(e.state[9]),
+        e.state[10],
+        e.bulk_scale,
+    ] {
         cell(Cell::F64(v));
     }
     for v in e.residual.iter().chain(e.innovation.iter()) {
@@ -137,7 +143,7 @@ impl EstimatesWriter {
 /// Header of estimates.csv.
 pub const ESTIMATES_HEADER: &str =
     "t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm,q_e2_lpm,q_i_lpm,\
-spool_bias,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
+spool_bias,bulk_scale,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
 th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
 
 /// One CSV row being assembled: floats in shortest round-trip form, by `zmij`
@@ -181,7 +187,7 @@ impl CsvLine {
 /// Writes one estimates.csv row (floats in shortest round-trip form: parsing a
 /// cell gives back the exact f64).
 pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Result<()> {
-    // 36 floats of at most 24 bytes and two flags: well inside the row's 1024 bytes
+    // 37 floats of at most 24 bytes and two flags: well inside the row's 1024 bytes
     let mut row = CsvLine::new();
     for_each_cell(s, |c| match c {
         Cell::F64(v) => row.float(v),

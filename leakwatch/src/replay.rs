@@ -83,6 +83,12 @@ pub struct ResidualRms {
     pub nis_outliers: u64,
     /// Sample time of the first of them, s (NaN: none).
     pub first_nis_outlier_s: f64,
+    /// The oil's stiffness θ at the last estimate, as a multiple of the model's
+    /// bulk modulus (1; NaN for a filter without that state): well below 1, the
+    /// rig's oil is softer than the model's (entrained air, hoses).
+    pub bulk_scale: f64,
+    /// One standard deviation of [`Self::bulk_scale`] (1; NaN without that state).
+    pub bulk_scale_sigma: f64,
 }
 
 /// What `summary.json` holds.
@@ -136,6 +142,8 @@ struct Acc {
     nis_gate: f64,
     outliers: u64,
     first_outlier_s: f64,
+    /// θ and its σ at the last estimate that had them.
+    bulk_scale: (f64, f64),
 }
 
 impl Acc {
@@ -147,6 +155,7 @@ impl Acc {
             nis_gate,
             outliers: 0,
             first_outlier_s: f64::NAN,
+            bulk_scale: (f64::NAN, f64::NAN),
         }
     }
 
@@ -156,6 +165,9 @@ impl Acc {
                 self.first_outlier_s = e.t_s;
             }
             self.outliers += 1;
+        }
+        if e.bulk_scale.is_finite() {
+            self.bulk_scale = (e.bulk_scale, e.bulk_scale_sigma);
         }
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
             return;
@@ -181,6 +193,8 @@ impl Acc {
             resets,
             nis_outliers: self.outliers,
             first_nis_outlier_s: self.first_outlier_s,
+            bulk_scale: self.bulk_scale.0,
+            bulk_scale_sigma: self.bulk_scale.1,
         }
     }
 }

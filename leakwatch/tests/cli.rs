@@ -410,6 +410,19 @@ fn commissioning_calibrate_a_healthy_record_then_replay_a_leak_with_the_model() 
         (nis_nominal - nis_calibrated).abs() < 0.1 * nis_calibrated && nis_nominal < 20.0,
         "leak filter NIS {nis_nominal} (nominal model) vs {nis_calibrated} (calibrated)"
     );
+    // ...and says how soft the oil is against each model: 4.8e8 of 6.89e8 Pa
+    // (0.70) against the nominal one, about 1 against the calibrated one
+    let theta = |s: &serde_json::Value| f(s, "leak_filter", "bulk_scale");
+    assert!(
+        (theta(&nominal) - 4.8 / 6.89).abs() < 0.04,
+        "θ {}",
+        theta(&nominal)
+    );
+    assert!(
+        (theta(&calibrated) * beta / 4.8e8 - 1.0).abs() < 0.06,
+        "θ {} against the calibrated {beta:e} Pa",
+        theta(&calibrated)
+    );
 }
 
 #[test]

@@ -106,8 +106,8 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
     let bytes = std::fs::read(&pq_file).unwrap();
     assert_eq!(&bytes[..4], b"PAR1");
     assert_eq!(&bytes[bytes.len() - 4..], b"PAR1");
-    // 36 f64 and 2 i32 columns of 70,000 values, plus headers and footer
-    let values = 70_000 * (36 * 8 + 2 * 4);
+    // 37 f64 and 2 i32 columns of 70,000 values, plus headers and footer
+    let values = 70_000 * (37 * 8 + 2 * 4);
     assert!(
         bytes.len() > values && bytes.len() < values + 20_000,
         "{} bytes",
@@ -133,7 +133,7 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["names"], v["csv_header"]);
-    assert_eq!(v["names"].as_array().unwrap().len(), 38);
+    assert_eq!(v["names"].as_array().unwrap().len(), 39);
     assert_eq!(v["rows"], 70_000);
     assert_eq!(v["csv_rows"], 70_000);
     assert_eq!(v["row_groups"], 2);
