@@ -147,7 +147,7 @@ pub fn oil_stiffness_line(theta: f64, sigma: f64, model_bulk_modulus_pa: f64) ->
         ""
     };
     Some(format!(
-        "oil stiffness: {theta:.2} ± {sigma:.2} of the model's bulk modulus ({:.0} of {:.0} MPa){hint}",
+        "oil stiffness: {theta:.3} ± {sigma:.3} of the model's bulk modulus ({:.0} of {:.0} MPa){hint}",
         theta * model_bulk_modulus_pa / 1e6,
         model_bulk_modulus_pa / 1e6
     ))
@@ -162,7 +162,7 @@ mod tests {
         assert_eq!(oil_stiffness_line(f64::NAN, f64::NAN, 6.89e8), None);
         assert_eq!(
             oil_stiffness_line(0.98, 0.004, 6.89e8).unwrap(),
-            "oil stiffness: 0.98 ± 0.00 of the model's bulk modulus (675 of 689 MPa)"
+            "oil stiffness: 0.980 ± 0.004 of the model's bulk modulus (675 of 689 MPa)"
         );
         let soft = oil_stiffness_line(0.74, 0.01, 6.89e8).unwrap();
         assert!(
