@@ -167,7 +167,7 @@ mod tests {
         let soft = oil_stiffness_line(0.74, 0.01, 6.89e8).unwrap();
         assert!(
             soft.starts_with(
-                "oil stiffness: 0.74 ± 0.01 of the model's bulk modulus (510 of 689 MPa): softer"
+                "oil stiffness: 0.740 ± 0.010 of the model's bulk modulus (510 of 689 MPa): softer"
             ),
             "{soft}"
         );
