@@ -81,6 +81,9 @@ fn run(args: Args) -> Result<(), String> {
         "estimator+classifier: estimator {report}\n  classifier: {read} estimates read, {events} events out, {missing} \
          missing"
     );
+    if let Some(line) = estimator::shell::oil_stiffness(&stage) {
+        eprintln!("estimator+classifier: {line}");
+    }
     Ok(())
 }
 

@@ -107,6 +107,14 @@ pub fn estimate_frame(
     out.est_done_mono_ns = bus::monotonic_ns();
 }
 
+/// What the leak filter of `stage` makes of the oil's stiffness now, as a line for
+/// the process log (printed at exit); `None` if it does not estimate it.
+pub fn oil_stiffness(stage: &EstimatorStage) -> Option<String> {
+    let leak = stage.leak();
+    let (theta, sigma) = leak.bulk_scale()?;
+    crate::oil_stiffness_line(theta, sigma, leak.model().params.bulk_modulus_pa)
+}
+
 fn load(path: Option<&Path>) -> Result<StageConfig, String> {
     let Some(path) = path else {
         return Ok(StageConfig::default());
@@ -141,6 +149,9 @@ fn run(args: Args) -> Result<(), String> {
     )
     .map_err(|e| e.to_string())?;
     eprintln!("estimator: {report}");
+    if let Some(line) = oil_stiffness(&stage) {
+        eprintln!("estimator: {line}");
+    }
     Ok(())
 }
 

@@ -530,6 +530,8 @@ fn soft_rig_run(scenario: &str, bulk_factor: f64, states: u32, seed: u64) -> (f6
             }
         }
     }
+    // the stage reports the same θ as its last estimate (the estimator process prints it at exit)
+    assert_eq!(est.bulk_scale().map(|b| b.0), theta.is_finite().then_some(theta));
     (theta, worst)
 }
 

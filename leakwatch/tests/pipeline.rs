@@ -1163,6 +1163,21 @@ fn the_fused_placement_gives_the_events_of_the_split_one() {
         ] {
             assert_eq!(out.join(log).is_file(), present, "{placement}: {log}");
         }
+        // the estimating process says at exit how stiff the oil is (the simulated
+        // rig's is the model's: θ about 1)
+        let est_log = if fused {
+            "estimator+classifier.log"
+        } else {
+            "estimator.log"
+        };
+        let text = std::fs::read_to_string(out.join(est_log)).unwrap();
+        let theta: f64 = text
+            .split("oil stiffness: ")
+            .nth(1)
+            .and_then(|rest| rest.split(' ').next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{placement}: no oil stiffness in {est_log}:\n{text}"));
+        assert!((theta - 1.0).abs() < 0.05, "{placement}: θ {theta}");
         let lat = json(&out.join("latency.json"));
         for stage in ["estimator", "classifier"] {
             let st = &lat["stages"][stage];
