@@ -468,18 +468,16 @@ fn make_filter<const N: usize>(
             if N >= 7 {
                 x0[I_FE] = model.params.piston_area_m2 * (p1 - p2);
             }
-            if N == 12 {
-                x0[I_BULK] = 1.0;
-            }
         }
         _ => {
             let p = tuning.init_pressure_pa;
             x0[1] = p;
             x0[2] = p;
-            if N == 12 {
-                x0[I_BULK] = 1.0;
-            }
         }
+    }
+    // the oil's stiffness starts at the model's, whatever the start
+    if N == 12 {
+        x0[I_BULK] = 1.0;
     }
     Ekf::new(x0, &p0, &q, r, scale)
 }
