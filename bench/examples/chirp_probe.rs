@@ -1,7 +1,7 @@
 //! Probe: the leak filter's leak estimates (L/min at p_s/2) and spool bias (µm)
 //! over a suite case, as 1-s means ± spreads, with the mean NIS. From the
 //! environment: Q_FE, Q_LEAK, Q_V override the sensor tuning; TRUE_BETA,
-//! TRUE_FRICTION, TRUE_BIAS give the filter the rig's own value; KIND, SIZE,
+//! NOMINAL_RIG simulates the model's own parameters; SUBSTEPS sets the leak filter's Euler sub-steps; TRUE_FRICTION, TRUE_BIAS give the filter the rig's own value; KIND, SIZE,
 //! ONSET add a step leak.
 //! cargo run --release -p bench --example chirp_probe -- SCENARIO SEED [SECONDS]
 use bench::detection::{simulator_for, Case};
@@ -27,7 +27,18 @@ fn main() {
         seconds,
         variant: String::new(),
     };
-    let mut sim = simulator_for(&case).expect("sim");
+    let mut sim = if std::env::var("NOMINAL_RIG").is_ok() {
+        let scenario = model::Scenario::by_name(&case.scenario, case.seed, seconds).expect("scenario");
+        model::Simulator::with_default_sensors(
+            ActuatorParams::default(),
+            scenario,
+            Default::default(),
+            case.seed,
+        )
+        .expect("sim")
+    } else {
+        simulator_for(&case).expect("sim")
+    };
     let mut t = Tuning::sensor_derived();
     if let Some(v) = std::env::var("Q_FE").ok().and_then(|v| v.parse().ok()) {
         t.q_f_e_n2 = v;
@@ -37,6 +48,9 @@ fn main() {
     }
     if let Some(v) = std::env::var("Q_V").ok().and_then(|v| v.parse().ok()) {
         t.q_v_m2_s2 = v;
+    }
+    if let Some(v) = std::env::var("SUBSTEPS").ok().and_then(|v| v.parse().ok()) {
+        t.substeps = v;
     }
     let mut model = ActuatorParams::default();
     if std::env::var("TRUE_BETA").is_ok() {

@@ -337,6 +337,7 @@ impl Estimator {
     fn on_sample_inner(&mut self, s: &Sample) -> Estimate {
         self.counters.samples += 1;
         let mut flags = 0;
+        let just_started = !self.started;
         // Measured pressures slightly below 0 (noise near tank pressure) are used as
         // they are; the predictions stay clamped at the model's own floor (p_min_pa).
         let limits = self.measured_p_range_pa;
@@ -384,8 +385,11 @@ impl Estimator {
             self.reanchor_pending = false;
             self.diverged_samples = 0;
         }
-        let u = if s.u_v.is_finite() { s.u_v } else { self.last_u_v };
-        self.last_u_v = u;
+        // The command of a sample is held until the next one (a zero-order hold): the
+        // interval that ends at this sample was driven by the previous sample's command.
+        let u_now = if s.u_v.is_finite() { s.u_v } else { self.last_u_v };
+        let u = if just_started { u_now } else { self.last_u_v };
+        self.last_u_v = u_now;
         let y = SVector::<f64, 3>::new(
             if use_channel[0] { s.x_m } else { 0.0 },
             if use_channel[1] { s.p1_pa } else { 0.0 },
