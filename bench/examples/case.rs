@@ -38,6 +38,11 @@ fn main() {
     }
     let mut stage = EstimatorStage::new(ActuatorParams::default(), lt, Tuning::thesis()).unwrap();
     let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    // the printed window and stride (T_FROM, T_TO s; EVERY samples)
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
+    let t_from = env("T_FROM").unwrap_or(case.onset_s.min(10.0) - 3.0);
+    let t_to = env("T_TO").unwrap_or(30.0);
+    let every = env("EVERY").map(|v| v as usize).unwrap_or(500).max(1);
     for k in 0..(seconds * 1000.0) as usize {
         let s = sim.step();
         let e = stage.on_sample(&s);
@@ -51,7 +56,7 @@ fn main() {
                 ev.size_lpm
             )
         });
-        if k % 500 == 0 && s.t_s > case.onset_s.min(10.0) - 3.0 && s.t_s < 30.0 {
+        if k % every == 0 && s.t_s > t_from && s.t_s < t_to {
             let r = cls.leak_size.rise_lpm(&e.leak);
             println!(
                 "t {:6.2} q {:7.3} {:7.3} {:7.3} rise {:7.3} {:7.3} {:7.3} thr {:?} bias {:.2e} leak {:.3} x {:.3} p1 {:.2} p2 {:.2}",

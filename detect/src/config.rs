@@ -110,8 +110,10 @@ pub struct ClassifierConfig {
     pub nis_ratio_gate: f64,
     /// Leak-size detector: while the valve command reverses faster than this (its
     /// frequency, from swings through ±1 V over the last 2 s), evidence does not
-    /// count: the healthy model's effective load (a random walk) cannot follow the
-    /// friction reversals and the leak estimates wander (0 = off), Hz.
+    /// count (0 = off, the default), Hz. For a rig whose model is known not to
+    /// follow fast inputs; leakwatch's own model follows the 10.5 Hz chirp since
+    /// the filters hold each command over the interval after its sample
+    /// (2026-11-25; the gate was 3 Hz before).
     pub max_command_hz: f64,
     /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
     pub thesis_baseline: bool,
@@ -214,7 +216,7 @@ impl Default for ClassifierConfig {
             recovery_s: 2.0,
             nis_gate: 10000.0,
             nis_ratio_gate: 3.0,
-            max_command_hz: 3.0,
+            max_command_hz: 0.0,
             thesis_baseline: false,
             commissioning: None,
             min_size_lpm: 0.04,

@@ -44,9 +44,9 @@ pub const FLAG_CONVERGING: u32 = 1 << 4;
 /// Flag bit: samples were missing just before this one (bridged or re-anchored).
 pub const FLAG_AFTER_GAP: u32 = 1 << 5;
 /// Flag bit: the estimated rod position is within [`END_STOP_MARGIN_M`] of an end of
-/// its stroke. The end stops are springs stiffer than a 1 kHz step can follow
-/// (1e8 N/m on the 10 kg rod rings at 500 Hz: ω·T = 3.2, past forward Euler's
-/// limit of 2), so the model does not track the contact.
+/// its stroke (for the record: the model has the stops, stepped in
+/// [`model::process::STOP_SUBSTEPS`] sub-steps while the rod is in one, and the
+/// detector takes evidence there as anywhere else).
 pub const FLAG_END_STOP: u32 = 1 << 6;
 /// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
 pub const FLAGS_ALL: u32 =

@@ -181,9 +181,6 @@ pub struct Forces {
 /// the plain Karnopp form, MODEL.md §4.)
 pub const STICK_VELOCITY_DECAY_S: f64 = 5.0e-4;
 
-/// The continuous right-hand side dx/dt for state `s`, command `u_v` (V) and
-/// leaks `leaks`; returns the derivative and the forces and flows behind it.
-#[inline]
 /// Force of the end stops on the rod at position `x` m and velocity `v` m/s, N
 /// (a stiff spring-damper beyond each end of the stroke, 0 inside it).
 pub fn end_stop_force_n(p: &ActuatorParams, x: f64, v: f64) -> f64 {
@@ -196,6 +193,21 @@ pub fn end_stop_force_n(p: &ActuatorParams, x: f64, v: f64) -> f64 {
     }
 }
 
+/// The slopes of [`end_stop_force_n`]: (∂F/∂x N/m, ∂F/∂v N·s/m); zero inside the stroke.
+pub fn end_stop_slopes(p: &ActuatorParams, x: f64, v: f64) -> (f64, f64) {
+    let (k, c) = (p.end_stop_stiffness_n_per_m, p.end_stop_damping_n_s_per_m);
+    if x < p.x_min_m {
+        (-k, if v < 0.0 { -c } else { 0.0 })
+    } else if x > p.x_max_m {
+        (-k, if v > 0.0 { -c } else { 0.0 })
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// The continuous right-hand side dx/dt for state `s`, command `u_v` (V) and
+/// leaks `leaks`; returns the derivative and the forces and flows behind it.
+#[inline]
 pub fn derivative(p: &ActuatorParams, s: &State, u_v: f64, leaks: &LeakSet) -> (State, Forces) {
     let [x_sp, p1, p2, x, v, v_sp] = *s;
     let wn = p.spool_natural_freq_rad_s;

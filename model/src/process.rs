@@ -25,6 +25,7 @@ use crate::dynamics::LeakSet;
 use crate::params::ActuatorParams;
 
 mod discrete;
+pub use discrete::STOP_SUBSTEPS;
 mod rhs;
 #[cfg(test)]
 mod tests;

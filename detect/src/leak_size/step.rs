@@ -8,7 +8,7 @@ use crate::{
     misfits, EventKind, LeakEvent, Phase, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, KIND_AVERAGE_S,
     M3_S_PER_LPM, NIS_RATIO_WINDOW_S, REACQUIRE_S,
 };
-use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_END_STOP, FLAG_RESET, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
 /// Least real flow per L/min of nominal size that the `min_size_lpm` (or
 /// `min_internal_size_lpm`) floor is divided by (a drop of 1 % of p_s/2): below
@@ -87,12 +87,6 @@ impl LeakSizeDetector {
                 // relax slowly afterwards: take the baseline again once it is over.
                 self.reacquire_after_s = self.invalid_until_s;
             }
-        }
-        if e.flags & FLAG_END_STOP != 0 {
-            // The rod at a stop: the model does not track the contact and the leak
-            // estimates move while it lasts; the baseline is taken again after it.
-            self.invalid_until_s = self.invalid_until_s.max(e.t_s + self.cfg.excursion_recovery_s);
-            self.reacquire_after_s = self.invalid_until_s;
         }
         if self.awaiting_convergence {
             if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {

@@ -5,7 +5,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::{Linearisation, ProcessModel, I_BIAS, I_BULK, I_FE, I_QE1, I_QE2, I_QI, MIN_SLOPE_DROP_PA};
-use crate::dynamics::{effective_bulk_modulus_pa, valve_flows};
+use crate::dynamics::{effective_bulk_modulus_pa, end_stop_force_n, end_stop_slopes, valve_flows};
 use crate::friction::{friction_dv, friction_force_n};
 use crate::params::ActuatorParams;
 
@@ -112,10 +112,16 @@ impl ProcessModel {
         f[3] = v;
         a[(3, 4)] = 1.0;
         let m = p.mass_kg;
+        // The end stops, as the rig has them: a stiff spring-damper beyond each end
+        // of the stroke ([`ProcessModel::step`] sub-steps while the rod is in one).
+        let stop = end_stop_force_n(p, x, v);
+        let (dstop_dx, dstop_dv) = end_stop_slopes(p, x, v);
         if N >= 7 {
-            f[4] = (area * (p1 - p2) - s[I_FE]) / m;
+            f[4] = (area * (p1 - p2) - s[I_FE] + stop) / m;
             a[(4, 1)] = area / m;
             a[(4, 2)] = -area / m;
+            a[(4, 3)] = dstop_dx / m;
+            a[(4, 4)] = dstop_dv / m;
             a[(4, I_FE)] = -1.0 / m;
         } else {
             let load = p.load.force_n(x, v);
@@ -128,21 +134,21 @@ impl ProcessModel {
             } else {
                 (0.0, 0.0)
             };
-            let drive = area * (p1 - p2) - load;
+            let drive = area * (p1 - p2) - load + stop;
             let friction = friction_force_n(&p.friction, v, drive);
             f[4] = (drive - friction) / m;
             if v.abs() > p.friction.zero_velocity_m_s {
                 // sliding: Stribeck + viscous
                 a[(4, 1)] = area / m;
                 a[(4, 2)] = -area / m;
-                a[(4, 3)] = -dload_dx / m;
-                a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
+                a[(4, 3)] = (dstop_dx - dload_dx) / m;
+                a[(4, 4)] = (dstop_dv - dload_dv - friction_dv(&p.friction, v)) / m;
             } else if friction != drive {
                 // breaking away: friction saturated at ±f_st
                 a[(4, 1)] = area / m;
                 a[(4, 2)] = -area / m;
-                a[(4, 3)] = -dload_dx / m;
-                a[(4, 4)] = -dload_dv / m;
+                a[(4, 3)] = (dstop_dx - dload_dx) / m;
+                a[(4, 4)] = (dstop_dv - dload_dv) / m;
             }
             // stuck: friction balances the drive, dv/dt = 0 and its row is zero
         }

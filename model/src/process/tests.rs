@@ -494,3 +494,81 @@ fn guard_clamps_unphysical_pressures() {
     assert_eq!(s[2], m.params.nominal_chamber_pressure_pa());
     assert!((s[3] - (m.params.x_max_m + 0.01)).abs() < 1e-12);
 }
+
+/// The end stops are in the model as the rig has them (a spring-damper beyond
+/// each end of the stroke): pressed δ into a stop and moving in at 1 mm/s, the
+/// rod's acceleration is (A(p1 − p2) − F_e ∓ (k·δ + c·|v|))/m with its slopes
+/// −k/m and −c/m in A; the step there takes [`STOP_SUBSTEPS`] sub-steps, and its
+/// Jacobian matches central differences of the step to 0.1 % (7 and 12 states;
+/// both stops; the stiff stop makes the differences themselves that coarse).
+/// A single 1 ms Euler step could not follow the stop: its modes are near −3000 1/s.
+#[test]
+fn the_end_stops_are_in_the_model_and_stepped_finely() {
+    fn check<const N: usize>() {
+        let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
+        let p = &m.params;
+        let (k, c, area, mass) = (
+            p.end_stop_stiffness_n_per_m,
+            p.end_stop_damping_n_s_per_m,
+            p.piston_area_m2,
+            p.mass_kg,
+        );
+        // pressed in as far as the pressures push it (k·δ = A·Δp − F_e), still moving in at 1 mm/s
+        let depth = (area * 6.0e6 - 500.0) / k;
+        for (x, v, p1, p2, push) in [
+            (p.x_max_m + depth, 1e-3, 9.0e6, 3.0e6, -1.0),
+            (p.x_min_m - depth, -1e-3, 3.0e6, 9.0e6, 1.0),
+        ] {
+            let mut s = SVector::<f64, N>::zeros();
+            s[1] = p1;
+            s[2] = p2;
+            s[3] = x;
+            s[4] = v;
+            s[I_FE] = 500.0;
+            // the spool held 0.2 V open (off its sign switch at null, where the valve law has a kink)
+            s[0] = 0.2 * p.spool_gain_m_per_v;
+            if N == 12 {
+                s[I_BULK] = 1.0;
+            }
+            let lin = m.linearise(&s, 0.2);
+            let expected = (area * (p1 - p2) - 500.0 + push * (k * depth + c * 1e-3)) / mass;
+            assert!((lin.f[4] - expected).abs() < 1e-9 * expected.abs(), "{N}: {} vs {expected}", lin.f[4]);
+            assert_eq!(lin.a[(4, 3)], -k / mass);
+            assert_eq!(lin.a[(4, 4)], -c / mass);
+            // The step's Jacobian, on a stop without its damper (the damper acts only
+            // while the rod moves into the stop: a kink at v = 0, which the rod
+            // crosses within the step as it settles)
+            let undamped = ProcessModel::new(
+                ActuatorParams {
+                    end_stop_damping_n_s_per_m: 0.0,
+                    ..p.clone()
+                },
+                1e-3,
+            );
+            let (next, an, guard) = undamped.step(&s, 0.2);
+            assert!(!guard.any(), "{guard:?} {next:?}");
+            let fd = fd_step_jacobian(&undamped, &s, 0.2);
+            let ratio = worst_step_ratio(&an, &fd, &next, STOP_SUBSTEPS, 1e-3);
+            assert!(ratio <= 1.0, "N={N} at x {x}: error {ratio} times the allowed\n{an:e}\n{fd:e}");
+            // one Euler step of 1 ms would put I + T·A's position-velocity block far
+            // outside the unit circle (T²·k/m = 10)
+            let single = SMatrix::<f64, N, N>::identity() + lin.a * m.dt_s;
+            assert!(single[(4, 3)].abs() * m.dt_s > 5.0, "{single:e}");
+            // and its position-velocity block (complex eigenvalues, |λ|² = det = 5) would
+            // more than double an error every sample
+            let block = single.fixed_view::<2, 2>(3, 3).into_owned();
+            assert!(block.determinant().abs() > 4.0, "{block}");
+        }
+        // inside the stroke the stop adds nothing
+        let mut s = SVector::<f64, N>::zeros();
+        s[3] = 0.3;
+        s[4] = 0.1;
+        if N == 12 {
+            s[I_BULK] = 1.0;
+        }
+        let lin = m.linearise(&s, 0.0);
+        assert_eq!((lin.a[(4, 3)], lin.a[(4, 4)]), (0.0, 0.0));
+    }
+    check::<7>();
+    check::<12>();
+}
