@@ -614,7 +614,8 @@ fn a_leak_is_raised_while_the_rod_sits_at_its_stop() {
     };
     // the rod is at its stop from before the onset to the end of the run
     let scenario = Scenario::by_name("open-loop-chirp", 41, 30.0).unwrap();
-    let mut sim = Simulator::with_default_sensors(rig.clone(), scenario, FaultSchedule::default(), 41).unwrap();
+    let mut sim =
+        Simulator::with_default_sensors(rig.clone(), scenario, FaultSchedule::default(), 41).unwrap();
     let x_min_after_15_s = (0..30_000)
         .map(|_| sim.step())
         .filter(|s| s.t_s >= 15.0)

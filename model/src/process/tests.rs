@@ -532,7 +532,11 @@ fn the_end_stops_are_in_the_model_and_stepped_finely() {
             }
             let lin = m.linearise(&s, 0.2);
             let expected = (area * (p1 - p2) - 500.0 + push * (k * depth + c * 1e-3)) / mass;
-            assert!((lin.f[4] - expected).abs() < 1e-9 * expected.abs(), "{N}: {} vs {expected}", lin.f[4]);
+            assert!(
+                (lin.f[4] - expected).abs() < 1e-9 * expected.abs(),
+                "{N}: {} vs {expected}",
+                lin.f[4]
+            );
             assert_eq!(lin.a[(4, 3)], -k / mass);
             assert_eq!(lin.a[(4, 4)], -c / mass);
             // The step's Jacobian, on a stop without its damper (the damper acts only
@@ -549,7 +553,10 @@ fn the_end_stops_are_in_the_model_and_stepped_finely() {
             assert!(!guard.any(), "{guard:?} {next:?}");
             let fd = fd_step_jacobian(&undamped, &s, 0.2);
             let ratio = worst_step_ratio(&an, &fd, &next, STOP_SUBSTEPS, 1e-3);
-            assert!(ratio <= 1.0, "N={N} at x {x}: error {ratio} times the allowed\n{an:e}\n{fd:e}");
+            assert!(
+                ratio <= 1.0,
+                "N={N} at x {x}: error {ratio} times the allowed\n{an:e}\n{fd:e}"
+            );
             // one Euler step of 1 ms would put I + T·A's position-velocity block far
             // outside the unit circle (T²·k/m = 10)
             let single = SMatrix::<f64, N, N>::identity() + lin.a * m.dt_s;
