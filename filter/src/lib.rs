@@ -44,7 +44,7 @@ pub const FLAG_CONVERGING: u32 = 1 << 4;
 /// Flag bit: samples were missing just before this one (bridged or re-anchored).
 pub const FLAG_AFTER_GAP: u32 = 1 << 5;
 /// Flag bit: the estimated rod position is within [`END_STOP_MARGIN_M`] of an end of
-/// its stroke (for the record: the model has the stops, stepped in
+/// its stroke (for the record: the leak filter's model has the stops, stepped in
 /// [`model::process::STOP_SUBSTEPS`] sub-steps while the rod is in one, and the
 /// detector takes evidence there as anywhere else).
 pub const FLAG_END_STOP: u32 = 1 << 6;

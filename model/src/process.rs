@@ -17,6 +17,12 @@
 //! size at the nominal pressure drop Δp_n = p_s/2 under the square-root law:
 //! q = q_n · sgn(Δp)·√(|Δp| / Δp_n), with Δp = p1 − p_r, p2 − p_r and p1 − p2.
 //!
+//! The 10-, 11- and 12-state layouts have the end stops as the rig has them
+//! (a stiff spring-damper beyond each end, [`STOP_SUBSTEPS`] Euler sub-steps
+//! while the rod is in one); the thesis' 6- and 7-state layouts have none, as
+//! published. A sample step uses the command it is given over the whole
+//! interval: the filters pass the command of the sample the interval starts at.
+//!
 //! Measurements are y = [x, p1, p2] (m, Pa, Pa).
 
 use nalgebra::{SMatrix, SVector};

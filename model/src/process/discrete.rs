@@ -19,8 +19,8 @@ impl ProcessModel {
     ) -> (SVector<f64, N>, SMatrix<f64, N, N>, Guard) {
         // In an end stop (a 1e8 N/m spring on a 10 kg rod, damped: its modes are
         // near −3000 1/s, past forward Euler's reach at 1 ms) the step is taken in
-        // [`STOP_SUBSTEPS`] sub-steps.
-        let in_stop = s[3] < self.params.x_min_m || s[3] > self.params.x_max_m;
+        // [`STOP_SUBSTEPS`] sub-steps (the layouts with stops: 10 states and more).
+        let in_stop = N >= 10 && (s[3] < self.params.x_min_m || s[3] > self.params.x_max_m);
         let n = if in_stop {
             self.substeps.max(STOP_SUBSTEPS)
         } else {

@@ -112,10 +112,16 @@ impl ProcessModel {
         f[3] = v;
         a[(3, 4)] = 1.0;
         let m = p.mass_kg;
-        // The end stops, as the rig has them: a stiff spring-damper beyond each end
-        // of the stroke ([`ProcessModel::step`] sub-steps while the rod is in one).
-        let stop = end_stop_force_n(p, x, v);
-        let (dstop_dx, dstop_dv) = end_stop_slopes(p, x, v);
+        // The end stops, as the rig has them, in leakwatch's own layouts (10 states
+        // and more): a stiff spring-damper beyond each end of the stroke
+        // ([`ProcessModel::step`] sub-steps while the rod is in one). The thesis'
+        // layouts (6, 7) keep the thesis' model, which has none: their start from the
+        // thesis' P0 (1e4 m² on the rod position) would throw the rod deep into a stop.
+        let (stop, (dstop_dx, dstop_dv)) = if N >= 10 {
+            (end_stop_force_n(p, x, v), end_stop_slopes(p, x, v))
+        } else {
+            (0.0, (0.0, 0.0))
+        };
         if N >= 7 {
             f[4] = (area * (p1 - p2) - s[I_FE] + stop) / m;
             a[(4, 1)] = area / m;

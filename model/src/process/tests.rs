@@ -499,7 +499,7 @@ fn guard_clamps_unphysical_pressures() {
 /// each end of the stroke): pressed δ into a stop and moving in at 1 mm/s, the
 /// rod's acceleration is (A(p1 − p2) − F_e ∓ (k·δ + c·|v|))/m with its slopes
 /// −k/m and −c/m in A; the step there takes [`STOP_SUBSTEPS`] sub-steps, and its
-/// Jacobian matches central differences of the step to 0.1 % (7 and 12 states;
+/// Jacobian matches central differences of the step to 0.1 % (10 and 12 states;
 /// both stops; the stiff stop makes the differences themselves that coarse).
 /// A single 1 ms Euler step could not follow the stop: its modes are near −3000 1/s.
 #[test]
@@ -576,6 +576,13 @@ fn the_end_stops_are_in_the_model_and_stepped_finely() {
         let lin = m.linearise(&s, 0.0);
         assert_eq!((lin.a[(4, 3)], lin.a[(4, 4)]), (0.0, 0.0));
     }
-    check::<7>();
+    check::<10>();
     check::<12>();
+    // the thesis' 7-state layout keeps the thesis' model, without stops
+    let m = ProcessModel::new(ActuatorParams::default(), 1e-3);
+    let mut s7 = SVector::<f64, 7>::zeros();
+    s7[3] = m.params.x_max_m + 1e-3;
+    s7[4] = 0.1;
+    let lin = m.linearise(&s7, 0.0);
+    assert_eq!((lin.f[4], lin.a[(4, 3)], lin.a[(4, 4)]), (0.0, 0.0, 0.0));
 }
