@@ -140,21 +140,21 @@ impl ProcessModel {
             } else {
                 (0.0, 0.0)
             };
-            let drive = area * (p1 - p2) - load + stop;
+            let drive = area * (p1 - p2) - load;
             let friction = friction_force_n(&p.friction, v, drive);
             f[4] = (drive - friction) / m;
             if v.abs() > p.friction.zero_velocity_m_s {
                 // sliding: Stribeck + viscous
                 a[(4, 1)] = area / m;
                 a[(4, 2)] = -area / m;
-                a[(4, 3)] = (dstop_dx - dload_dx) / m;
-                a[(4, 4)] = (dstop_dv - dload_dv - friction_dv(&p.friction, v)) / m;
+                a[(4, 3)] = -dload_dx / m;
+                a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
             } else if friction != drive {
                 // breaking away: friction saturated at ±f_st
                 a[(4, 1)] = area / m;
                 a[(4, 2)] = -area / m;
-                a[(4, 3)] = (dstop_dx - dload_dx) / m;
-                a[(4, 4)] = (dstop_dv - dload_dv) / m;
+                a[(4, 3)] = -dload_dx / m;
+                a[(4, 4)] = -dload_dv / m;
             }
             // stuck: friction balances the drive, dv/dt = 0 and its row is zero
         }
