@@ -604,7 +604,7 @@ fn a_fast_chirp_raises_no_leak() {
 /// it stays; a 1 L/min chamber-1 leak opens at 20 s. The filter holds the rod at
 /// the stop as a constraint (the stop takes the forces), so the leak estimates
 /// stay clean there and the leak is raised within 1 s and named ext1 first
-/// (measured 0.25 s). Until 2026-11-25 no evidence counted at a stop, and the
+/// (measured: 0.29 s, kind pending, then ext1). Until 2026-11-25 no evidence counted at a stop, and the
 /// leak was never raised.
 #[test]
 fn a_leak_is_raised_while_the_rod_sits_at_its_stop() {
@@ -631,6 +631,7 @@ fn a_leak_is_raised_while_the_rod_sits_at_its_stop() {
         ClassifierConfig::default(),
     );
     let first = first_alarm(&events, "leak-size").expect("a leak alarm");
+    eprintln!("first alarm {:.3} s: {:?}", first.t_detect_s, first.kind);
     assert!(
         first.t_detect_s > 20.0 && first.t_detect_s < 21.0,
         "{first:?}\n{events:#?}"

@@ -612,7 +612,7 @@ fn a_samples_command_drives_the_interval_after_it() {
 
 /// On the model's own rig, the open-loop chirp is tracked as well at 8.5-10.5 Hz
 /// as at 1.5-3 Hz: the mean NIS of the 12-state filter over 30-40 s of the sweep
-/// is within 1.4 times that over 4-10 s (measured 15.3 and 14.4), and the leak
+/// is within 1.4 times that over 4-10 s (measured 14.9 and 14.2), and the leak
 /// sizes hold still within each second (the largest 1-s spread of the three
 /// below 0.005 L/min; measured 0.0026). With the command one sample early (the
 /// filter before 2026-11-25) the NIS rose from 15 to 44 along the sweep and
