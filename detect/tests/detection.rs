@@ -601,11 +601,11 @@ fn a_fast_chirp_raises_no_leak() {
 
 /// A leak while the rod sits at its stop is seen: a spool null bias of 7.5 µm
 /// walks the rod of an open-loop chirp into its extended stop within 15 s, where
-/// it stays; a 1 L/min chamber-1 leak opens at 20 s. The filter holds the rod at
-/// the stop as a constraint (the stop takes the forces), so the leak estimates
-/// stay clean there and the leak is raised within 1 s and named ext1 first
-/// (measured: 0.29 s, kind pending, then ext1). Until 2026-11-25 no evidence counted at a stop, and the
-/// leak was never raised.
+/// it stays; a 1 L/min chamber-1 leak opens at 20 s. The leak filter's model has
+/// the stop as the rig has it (a stiff spring-damper, stepped in 8 sub-steps), so
+/// the leak estimates stay clean there: the leak is raised within 1 s and the
+/// first kind it is named is ext1 (measured: 0.29 s, kind pending, then ext1).
+/// Until 2026-11-25 no evidence counted at a stop, and the leak was never raised.
 #[test]
 fn a_leak_is_raised_while_the_rod_sits_at_its_stop() {
     let rig = ActuatorParams {
