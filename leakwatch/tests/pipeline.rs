@@ -670,11 +670,16 @@ fn a_killed_estimator_is_restarted_with_its_gap_and_a_stopped_recorder_is_notice
             .count(),
         1
     );
-    // the recorder stopped 2 s: the frames its 256-frame buffer could not hold are a gap
+    // the recorder stopped 2 s: the frames its 256-frame buffer could not hold are a
+    // gap, and every frame is either logged or counted in a gap. (While the woken
+    // recorder drains its full buffer the publisher may still overwrite one more
+    // frame: CI once saw the stop as gaps of 1749 and 1 frames, so the loss may
+    // come as more than one record, all within the stop's second or two.)
     let gaps = frame_gaps(&log);
-    assert_eq!(gaps.len(), 1, "{:?}", log.gaps);
-    assert!((1000..3000).contains(&gaps[0]), "{gaps:?}");
-    assert_eq!(log.frames.len() as u64 + gaps[0], 24_000);
+    let lost: u64 = gaps.iter().sum();
+    assert!((1..=3).contains(&gaps.len()), "{:?}", log.gaps);
+    assert!((1000..3000).contains(&lost), "{gaps:?}");
+    assert_eq!(log.frames.len() as u64 + lost, 24_000);
 
     let events = json(&out.join("events.json"));
     // the classifier says that the filter started again, keeping what it learned
