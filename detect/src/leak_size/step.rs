@@ -65,7 +65,8 @@ impl LeakSizeDetector {
                 self.invalid_until_s = self.invalid_until_s.max(e.t_s);
             }
         }
-        if e.u_v.is_finite() {
+        // The command's reversal rate is tracked only for the command-rate gate (off by default).
+        if self.cfg.max_command_hz > 0.0 && e.u_v.is_finite() {
             let side = if e.u_v > COMMAND_REVERSAL_BAND_V {
                 1
             } else if e.u_v < -COMMAND_REVERSAL_BAND_V {
@@ -81,7 +82,7 @@ impl LeakSizeDetector {
                 self.command_side = side;
             }
             self.reversals_per_s += (impulse - self.reversals_per_s * dt_s) / COMMAND_RATE_WINDOW_S;
-            if self.cfg.max_command_hz > 0.0 && 0.5 * self.reversals_per_s > self.cfg.max_command_hz {
+            if 0.5 * self.reversals_per_s > self.cfg.max_command_hz {
                 self.invalid_until_s = self.invalid_until_s.max(e.t_s + 1.0);
                 // The leak estimates wander while the model cannot follow the input and
                 // relax slowly afterwards: take the baseline again once it is over.
