@@ -162,7 +162,10 @@ pub struct ClassifierConfig {
     /// Leak-size detector: drift of the baseline since the warm-up that is reported
     /// as a slowly growing leak, L/min (at nominal drop).
     pub slow_leak_lpm: f64,
-    /// Supply pressure of the rig, Pa.
+    /// Supply pressure of the rig, Pa: a rig fact, not a setting. It is not read
+    /// from or written to a config file; the config loader sets it from
+    /// `[model] supply_pressure_pa` (leakwatch's `Config`), so it is written once.
+    #[serde(skip)]
     pub supply_pressure_pa: f64,
     /// Leak-size detector: a chamber pressure within this fraction of the supply
     /// pressure from tank or supply is an excursion (the rod against a stop, a land
@@ -199,7 +202,10 @@ pub struct ClassifierConfig {
     pub saturated_samples: u32,
     /// Samples without a usable value before a sensor is called dead.
     pub dead_samples: u32,
-    /// Full-scale range of the pressure transducers, Pa.
+    /// Full-scale range of the pressure transducers, Pa: a rig fact, not a
+    /// setting, set by the config loader from `[sensors] pressure_full_scale_pa`
+    /// (not read from or written to a config file).
+    #[serde(skip)]
     pub pressure_full_scale_pa: f64,
 }
 

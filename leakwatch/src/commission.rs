@@ -1,23 +1,114 @@
-//! `leakwatch commission HEALTHY.csv --out rig.toml`: learns the healthy state of
-//! the leak filter's estimates on a rig (offsets, spreads, crossing rates) and
-//! writes a config that carries it in `[classifier.commissioning]`.
+//! `leakwatch commission HEALTHY.csv --out rig.toml`: identifies the spool's
+//! null bias and learns the healthy state of the leak filter's estimates on a rig
+//! (offsets, spreads, crossing rates), and writes a config that carries both.
+//!
+//! Why the bias is identified here and then held: at chamber pressures near
+//! p_s/2 a spool null bias b and a pair of opposite external leaks (flow into
+//! chamber 1, out of chamber 2) are the same flow. A filter that estimates both
+//! cannot tell them apart; the start of a run sets them (seen on plant_dev/double:
+//! b −3 µm against a pair of ∓0.5 L/min) and the detector reads the pair as
+//! leaks. On a healthy recording the leaks are known to be zero, so b is
+//! observable there: the leak filter runs with its leak sizes held at zero and
+//! its mean b after convergence is the valve's null bias (leaks_dev's healthy
+//! runs: −8.90, 3.76, 7.34, −4.54 µm against −8.90, 3.76, 7.34, −4.53 true).
 
 use std::path::Path;
 
 use classifier::CommissioningLearner;
 use dataset::{CsvReader, Limits, Row};
-use estimator::EstimatorStage;
+use estimator::{EstimatorStage, Tuning};
+use model::process::I_BIAS;
 
 use crate::config::Config;
 
 /// Least healthy, converged data a commissioning needs, s.
 pub const MIN_HEALTHY_S: f64 = 10.0;
 
-/// Learns the commissioning of `input` under the config at `config` (or the defaults).
-pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, String> {
-    let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
+/// The smallest initial variance the leak filter takes, m² (or m⁶/s²): what
+/// "held" means for a state (σ 1e-15 in SI; the state stays where it starts).
+const HELD_VARIANCE: f64 = 1e-30;
+
+/// The spool's null bias found on a healthy recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NullBias {
+    /// Mean of the filter's bias estimate after convergence, m (to add to the model's).
+    pub bias_m: f64,
+    /// Its standard deviation over the recording, m.
+    pub spread_m: f64,
+    /// Converged time it was taken over, s.
+    pub over_s: f64,
+}
+
+/// Runs the leak filter of `cfg` with `tuning` over `input`, calling `each` with
+/// every estimate; checks the recording's share of bad rows.
+fn replay_estimates(
+    input: &Path,
+    cfg: &Config,
+    tuning: Tuning,
+    mut each: impl FnMut(&estimator::Estimate),
+) -> Result<(), String> {
+    let limits = Limits::for_model(&cfg.model, tuning.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
+    let mut stage = EstimatorStage::new(cfg.model.clone(), tuning, cfg.estimator.clone())?;
+    while let Some(row) = reader.next_row() {
+        match row {
+            Row::Sample(s) | Row::AfterGap(s, _) => each(&stage.on_sample(&s).leak),
+            Row::Skipped(_) => {}
+        }
+    }
+    dataset::check_bad_fraction(reader.rows, reader.skipped, dataset::DEFAULT_MAX_BAD_FRACTION)
+        .map_err(|e| format!("{}: cannot commission from it: {e}", input.display()))
+}
+
+/// Identifies the spool's null bias on the healthy recording `input`: the leak
+/// filter with its leak sizes held at zero, its bias estimate averaged once the
+/// filter has converged and `settle_s` more have passed.
+pub fn identify_null_bias(input: &Path, cfg: &Config) -> Result<NullBias, String> {
+    let mut tuning = cfg.leak_filter.clone();
+    tuning.q_leak_m6_s2 = 0.0;
+    tuning.p0_leak_m6_s2 = HELD_VARIANCE;
+    let settle_s = cfg.classifier.settle_s;
+    let (mut n, mut sum, mut sum2) = (0u64, 0.0, 0.0);
+    let mut converged_at = None;
+    replay_estimates(input, cfg, tuning, |e| {
+        if e.flags & estimator::FLAG_CONVERGING != 0 || e.flags & estimator::FLAG_RESET != 0 {
+            converged_at = None;
+            return;
+        }
+        let t0 = *converged_at.get_or_insert(e.t_s);
+        let b = e.state[I_BIAS];
+        if e.t_s - t0 >= settle_s && b.is_finite() {
+            n += 1;
+            sum += b;
+            sum2 += b * b;
+        }
+    })?;
+    let over_s = n as f64 * cfg.leak_filter.sample_period_s;
+    if over_s < MIN_HEALTHY_S {
+        return Err(format!(
+            "{}: cannot identify the spool's null bias: {over_s:.1} s of converged data, {MIN_HEALTHY_S} s needed",
+            input.display()
+        ));
+    }
+    let mean = sum / n as f64;
+    Ok(NullBias {
+        bias_m: mean,
+        spread_m: (sum2 / n as f64 - mean * mean).max(0.0).sqrt(),
+        over_s,
+    })
+}
+
+/// `cfg` with the identified bias put into the model and held in the leak filter.
+pub fn with_null_bias(cfg: &Config, bias: &NullBias) -> Config {
+    let mut out = cfg.clone();
+    out.model.spool_null_bias_m += bias.bias_m;
+    out.leak_filter.q_bias_m2 = 0.0;
+    out.leak_filter.p0_bias_m2 = HELD_VARIANCE;
+    out
+}
+
+/// Learns the commissioning of `input` under the config `cfg` as it is.
+pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, String> {
     if cfg.leak_filter.states < 10 {
         return Err(format!(
             "[leak_filter] states = {}: commissioning needs the leak filter (10, 11 or 12 states)",
@@ -25,17 +116,34 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
         ));
     }
     let mut learner = CommissioningLearner::new(cfg.classifier.settle_s);
-    while let Some(row) = reader.next_row() {
-        match row {
-            Row::Sample(s) | Row::AfterGap(s, _) => learner.on_estimate(&stage.on_sample(&s).leak),
-            Row::Skipped(_) => {}
-        }
-    }
-    dataset::check_bad_fraction(reader.rows, reader.skipped, dataset::DEFAULT_MAX_BAD_FRACTION)
-        .map_err(|e| format!("{}: cannot commission from it: {e}", input.display()))?;
+    replay_estimates(input, cfg, cfg.leak_filter.clone(), |e| learner.on_estimate(e))?;
     learner
         .finish(MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))
+}
+
+/// Identifies the null bias (layouts with a bias state, 11 and 12), then
+/// learns the commissioning with the bias held: the config to write.
+pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
+    let mut cfg = cfg.clone();
+    if cfg.leak_filter.states >= 11 {
+        let bias = identify_null_bias(input, &cfg)?;
+        eprintln!(
+            "spool null bias: {:+.2} µm (spread {:.2} µm over {:.0} s, leaks held at zero); the model's is now {:+.2} µm, held by the leak filter",
+            bias.bias_m * 1e6,
+            bias.spread_m * 1e6,
+            bias.over_s,
+            (cfg.model.spool_null_bias_m + bias.bias_m) * 1e6
+        );
+        cfg = with_null_bias(&cfg, &bias);
+    }
+    let c = learn(input, &cfg)?;
+    eprintln!(
+        "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
+        c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
+    );
+    cfg.classifier.commissioning = Some(c);
+    Ok(cfg)
 }
 
 /// The command: learn, then write the config with its commissioning.
@@ -44,17 +152,12 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
     inputs.extend(config);
     // refused before the learning, not after
     crate::out::check(out, force, &inputs)?;
-    let mut cfg = Config::load_or_default(config)?;
-    let c = learn(input, &cfg)?;
-    eprintln!(
-        "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
-        c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
-    );
-    cfg.classifier.commissioning = Some(c);
+    let cfg = commission(input, &Config::load_or_default(config)?)?;
     let body = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     let text = format!(
         "# leakwatch configuration with the rig's commissioning (the healthy state of the leak\n\
-         # filter's estimates, learned from {}).\n\
+         # filter's estimates, learned from {}; the spool's null bias identified there and\n\
+         # held by the leak filter).\n\
          # Use it with: leakwatch replay RUN.csv --config {name} --out DIR\n\
          #              leakwatch run --config {name} ...\n\
          # A leak present when monitoring starts is then seen once the filter has converged.\n\

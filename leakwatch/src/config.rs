@@ -49,7 +49,7 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Config {
+        let mut cfg = Config {
             model: ActuatorParams::default(),
             rig: None,
             sensors: SensorParams::default(),
@@ -61,8 +61,42 @@ impl Default for Config {
             run: RunSettings::default(),
             live_view: live::LiveViewConfig::default(),
             zenoh: live::ZenohConfig::default(),
+        };
+        cfg.derive_rig_facts();
+        cfg
+    }
+}
+
+/// The keys `[classifier]` had for rig facts that now live in `[model]` and
+/// `[sensors]` (`supply_pressure_pa`, `pressure_full_scale_pa`), taken out of
+/// `table`: (key, value given, where the fact lives). A file written by an
+/// older leakwatch (a commissioning's config) still loads when they agree.
+fn derived_classifier_keys(
+    table: &mut toml::Table,
+) -> Result<Vec<(&'static str, f64, &'static str)>, ParseError> {
+    let mut out = Vec::new();
+    let Some(cls) = table.get_mut("classifier").and_then(|v| v.as_table_mut()) else {
+        return Ok(out);
+    };
+    for (key, from) in [
+        ("supply_pressure_pa", "[model] supply_pressure_pa"),
+        ("pressure_full_scale_pa", "[sensors] pressure_full_scale_pa"),
+    ] {
+        if let Some(v) = cls.remove(key) {
+            let given = match v {
+                toml::Value::Float(f) => f,
+                toml::Value::Integer(i) => i as f64,
+                other => {
+                    return Err(ParseError::Invalid(format!(
+                        "[classifier] {key} = {}: not a number (and no longer a setting: the detector takes it from {from})",
+                        dataset::shown(&other.to_string())
+                    )))
+                }
+            };
+            out.push((key, given, from));
         }
     }
+    Ok(out)
 }
 
 impl Config {
@@ -84,7 +118,27 @@ impl Config {
     }
 
     fn parse_or_toml_error(text: &str) -> Result<Config, ParseError> {
-        let mut cfg: Config = toml::from_str(text).map_err(ParseError::Toml)?;
+        let mut stripped: toml::Table = toml::from_str(text).map_err(ParseError::Toml)?;
+        let derived = derived_classifier_keys(&mut stripped)?;
+        // From the text when it can be (errors then point at a line).
+        let mut cfg: Config = if derived.is_empty() {
+            toml::from_str(text).map_err(ParseError::Toml)?
+        } else {
+            Config::deserialize(stripped).map_err(ParseError::Toml)?
+        };
+        cfg.derive_rig_facts();
+        for (key, given, from) in derived {
+            let used = match key {
+                "supply_pressure_pa" => cfg.classifier.supply_pressure_pa,
+                _ => cfg.classifier.pressure_full_scale_pa,
+            };
+            if given != used {
+                return Err(ParseError::Invalid(format!(
+                    "[classifier] {key} = {given:?} differs from {from} = {used:?}: the detector now takes \
+                     this rig fact from {from} (written once); remove the line from [classifier]"
+                )));
+            }
+        }
         // A partial [leak_filter] fills its missing fields from the leak filter's own
         // defaults (sensor-derived, 12 states), not from the thesis tuning that
         // `Tuning::default()` gives to a partial [estimator].
@@ -101,6 +155,13 @@ impl Config {
         }
         cfg.validate().map_err(ParseError::Invalid)?;
         Ok(cfg)
+    }
+
+    /// Sets the detector's rig facts from where they are written: the supply
+    /// pressure from `[model]`, the transducers' full scale from `[sensors]`.
+    pub fn derive_rig_facts(&mut self) {
+        self.classifier.supply_pressure_pa = self.model.supply_pressure_pa;
+        self.classifier.pressure_full_scale_pa = self.sensors.pressure_full_scale_pa;
     }
 
     /// Checks every section, naming the first bad field with its range and unit.

@@ -866,3 +866,52 @@ fn plot_draws_a_recorded_log() {
     assert!(bytes.len() > 10_000, "{} bytes", bytes.len());
     assert!(stderr(&o).contains("wrote "), "{}", stderr(&o));
 }
+
+/// `commission` identifies the spool's null bias on a healthy recording (the
+/// leak filter with its leak sizes held at zero), writes it into `[model]` and
+/// holds it in the leak filter; the leak sizes then learn a healthy state near
+/// zero instead of a pair of opposite leaks that cancels a wandering bias.
+#[test]
+fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
+    let d = tmpdir("commission_bias");
+    let rig = d.join("rig.toml");
+    std::fs::write(&rig, "[rig]\nspool_null_bias_m = -6.0e-6\n").unwrap();
+    let healthy = d.join("healthy.csv");
+    let o = leakwatch(&[
+        "simulate",
+        "--config",
+        rig.to_str().unwrap(),
+        "--scenario",
+        "closed-loop-random",
+        "--seconds",
+        "25",
+        "--seed",
+        "5",
+        "--fault",
+        "none",
+        "--out",
+        healthy.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.join("commissioned.toml");
+    let o = leakwatch(&[
+        "commission",
+        healthy.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("spool null bias: -"), "{}", stderr(&o));
+    let t: toml::Table = toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let bias = t["model"]["spool_null_bias_m"].as_float().unwrap();
+    eprintln!("identified bias {bias:e} m (true -6e-6)");
+    assert!((bias + 6.0e-6).abs() < 0.3e-6, "{bias:e}");
+    assert_eq!(t["leak_filter"]["q_bias_m2"].as_float(), Some(0.0));
+    let offsets = t["classifier"]["commissioning"]["offsets_lpm"]
+        .as_array()
+        .unwrap();
+    for o in offsets {
+        let o = o.as_float().unwrap();
+        assert!(o.abs() < 0.05, "healthy offset {o} L/min");
+    }
+}

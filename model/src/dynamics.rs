@@ -123,10 +123,77 @@ fn land_flow(p: &ActuatorParams, opening_m: f64, p_up_pa: f64, p_down_pa: f64, s
     }
 }
 
+/// The null leakage of an underlapped valve (docs/model.md, "Valve null
+/// leakage"): each metering land passes C_L·λ·Δp (laminar), with λ = 1 while the
+/// land is open and fading linearly to 0 as the land closes over the underlap
+/// x_u. Returns (flow into chamber 1, flow out of chamber 2), m³/s, and their
+/// partials with respect to (x_sp, p1, p2), in m³/s per m, per Pa, per Pa.
+#[inline]
+pub fn null_leakage_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> NullLeakage {
+    let c = p.valve_null_leakage_m3_s_pa;
+    let (ps, pr, xu) = (p.supply_pressure_pa, p.return_pressure_pa, p.valve_underlap_m);
+    // P→A and B→T open with x_sp > 0; A→T and P→B close.
+    let z = x_sp_m / xu;
+    let (open, d_open) = if z <= -1.0 {
+        (0.0, 0.0)
+    } else if z < 0.0 {
+        (1.0 + z, 1.0 / xu)
+    } else {
+        (1.0, 0.0)
+    };
+    let (close, d_close) = if z >= 1.0 {
+        (0.0, 0.0)
+    } else if z > 0.0 {
+        (1.0 - z, -1.0 / xu)
+    } else {
+        (1.0, 0.0)
+    };
+    NullLeakage {
+        q1_m3_s: c * (open * (ps - p1_pa) - close * (p1_pa - pr)),
+        q2_m3_s: c * (open * (p2_pa - pr) - close * (ps - p2_pa)),
+        dq1: [
+            c * (d_open * (ps - p1_pa) - d_close * (p1_pa - pr)),
+            -c * (open + close),
+            0.0,
+        ],
+        dq2: [
+            c * (d_open * (p2_pa - pr) - d_close * (ps - p2_pa)),
+            0.0,
+            c * (open + close),
+        ],
+    }
+}
+
+/// The valve's null leakage at one instant ([`null_leakage_flows`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NullLeakage {
+    /// Flow into chamber 1, m³/s.
+    pub q1_m3_s: f64,
+    /// Flow out of chamber 2, m³/s.
+    pub q2_m3_s: f64,
+    /// ∂q1/∂(x_sp, p1, p2): m³/s per m, per Pa, per Pa.
+    pub dq1: [f64; 3],
+    /// ∂q2/∂(x_sp, p1, p2): m³/s per m, per Pa, per Pa.
+    pub dq2: [f64; 3],
+}
+
 /// Valve flows for spool position `x_sp_m` and chamber pressures (MODEL.md §3,
-/// critical centre, signed square root).
+/// critical centre, signed square root), plus the null leakage of an
+/// underlapped valve when the parameters have one ([`null_leakage_flows`]).
 #[inline]
 pub fn valve_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> ValveFlows {
+    let mut f = orifice_flows(p, x_sp_m, p1_pa, p2_pa);
+    if p.valve_null_leakage_m3_s_pa > 0.0 {
+        let n = null_leakage_flows(p, x_sp_m, p1_pa, p2_pa);
+        f.q1_m3_s += n.q1_m3_s;
+        f.q2_m3_s += n.q2_m3_s;
+    }
+    f
+}
+
+/// The metering orifices' flows (critical centre, signed square root, supply sag).
+#[inline]
+fn orifice_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> ValveFlows {
     let ps = p.supply_pressure_pa;
     let pr = p.return_pressure_pa;
     let sag = p.supply_sag_pa_per_m3_s;
@@ -273,6 +340,49 @@ pub fn rk4_step<const N: usize>(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    /// An underlapped valve at null with its ports blocked passes the catalogue's
+    /// internal leakage C_L·p_s from supply to tank, and no flow into either
+    /// chamber at p_s/2; beyond the underlap only the open lands leak.
+    #[test]
+    fn null_leakage_is_a_laminar_bridge_that_closes_with_the_spool() {
+        let p = ActuatorParams {
+            valve_null_leakage_m3_s_pa: 1e-13,
+            valve_underlap_m: 5e-6,
+            supply_pressure_pa: 21e6,
+            ..ActuatorParams::default()
+        };
+        let half = 10.5e6;
+        let n = null_leakage_flows(&p, 0.0, half, half);
+        assert_eq!((n.q1_m3_s, n.q2_m3_s), (0.0, 0.0));
+        // P→A→T and P→B→T in parallel, each through two lands of C_L in series.
+        let through_each_land = 1e-13 * half;
+        assert!((2.0 * through_each_land - 1e-13 * 21e6).abs() < 1e-20);
+        // Chamber 1 above p_s/2 at null: it drains (A→T passes more than P→A).
+        let n = null_leakage_flows(&p, 0.0, 15e6, half);
+        assert!((n.q1_m3_s - 1e-13 * ((21e6 - 15e6) - 15e6)).abs() < 1e-20);
+        // Past the underlap the closing lands (A→T, P→B) pass nothing.
+        let n = null_leakage_flows(&p, 6e-6, 15e6, 5e6);
+        assert!((n.q1_m3_s - 1e-13 * (21e6 - 15e6)).abs() < 1e-20);
+        assert!((n.q2_m3_s - 1e-13 * 5e6).abs() < 1e-20);
+        // Half-way: the closing lands pass half.
+        let n = null_leakage_flows(&p, 2.5e-6, 15e6, 5e6);
+        assert!((n.q1_m3_s - 1e-13 * ((21e6 - 15e6) - 0.5 * 15e6)).abs() < 1e-20);
+        // valve_flows adds it to the orifices' flows; without it nothing changes.
+        let plain = ActuatorParams {
+            valve_null_leakage_m3_s_pa: 0.0,
+            ..p.clone()
+        };
+        let (a, b) = (
+            valve_flows(&p, 2e-6, 15e6, 5e6),
+            valve_flows(&plain, 2e-6, 15e6, 5e6),
+        );
+        let n = null_leakage_flows(&p, 2e-6, 15e6, 5e6);
+        assert_eq!(a.q1_m3_s, b.q1_m3_s + n.q1_m3_s);
+        assert_eq!(a.q2_m3_s, b.q2_m3_s + n.q2_m3_s);
+    }
+
     use super::*;
     use crate::units::m3_s_to_lpm;
 

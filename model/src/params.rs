@@ -120,6 +120,14 @@ pub struct ActuatorParams {
     pub supply_sag_pa_per_m3_s: f64,
     /// Return (tank) pressure p_r, Pa (gauge).
     pub return_pressure_pa: f64,
+    /// Laminar leakage conductance of each of the valve's four metering lands at
+    /// null (spool underlap), m³/(s·Pa) (0 = a critical-centre valve without
+    /// leakage). A catalogue's "internal leakage" Q_L at supply p_s (ports
+    /// blocked, two paths P→A→T and P→B→T in parallel) is C_L = Q_L / p_s.
+    pub valve_null_leakage_m3_s_pa: f64,
+    /// Spool travel over which a closing land's null leakage fades to zero, m (the
+    /// underlap x_u; used only with `valve_null_leakage_m3_s_pa` > 0).
+    pub valve_underlap_m: f64,
     /// Friction of the rod and piston seals.
     pub friction: Friction,
     /// External load: a spring in front of the rod.
@@ -153,6 +161,8 @@ impl Default for ActuatorParams {
             supply_pressure_pa: 13.8e6,
             supply_sag_pa_per_m3_s: 0.0,
             return_pressure_pa: 0.0,
+            valve_null_leakage_m3_s_pa: 0.0,
+            valve_underlap_m: 5.0e-6,
             friction: Friction::default(),
             load: SpringLoad::default(),
             end_stop_stiffness_n_per_m: 1.0e8,

@@ -351,3 +351,46 @@ fn run_cpus_name_known_stages_and_existing_cpus() {
     let err = Config::parse("[run]\nlow_latency_spin_us = 1000\n").unwrap_err();
     assert!(err.contains("low_latency_spin_us = 1000"), "{err}");
 }
+
+/// The detector's rig facts are written once: the supply pressure in `[model]`,
+/// the transducers' full scale in `[sensors]`. A 21 MPa rig written that way
+/// gives its detector 21 MPa (the old `[classifier]` copy, left at 13.8 MPa,
+/// called every pressure above 13.1 MPa an excursion to supply). An older
+/// file's copy loads when it agrees and is refused by name when it does not.
+#[test]
+fn the_detectors_rig_facts_come_from_model_and_sensors() {
+    let c = Config::parse("[model]\nsupply_pressure_pa = 21e6\n[sensors]\npressure_full_scale_pa = 25e6\n")
+        .unwrap();
+    assert_eq!(c.classifier.supply_pressure_pa, 21e6);
+    assert_eq!(c.classifier.pressure_full_scale_pa, 25e6);
+    let d = Config::default();
+    assert_eq!(d.classifier.supply_pressure_pa, d.model.supply_pressure_pa);
+    assert_eq!(
+        d.classifier.pressure_full_scale_pa,
+        d.sensors.pressure_full_scale_pa
+    );
+    // not written by --print-default (nor by `commission`, which writes the same way)
+    let text = Config::default_toml();
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    assert!(!t["classifier"]
+        .as_table()
+        .unwrap()
+        .contains_key("supply_pressure_pa"));
+    assert!(!t["classifier"]
+        .as_table()
+        .unwrap()
+        .contains_key("pressure_full_scale_pa"));
+    // an older file's agreeing copy
+    let c = Config::parse("[model]\nsupply_pressure_pa = 21e6\n[classifier]\nsupply_pressure_pa = 21e6\n")
+        .unwrap();
+    assert_eq!(c.classifier.supply_pressure_pa, 21e6);
+    // a disagreeing one
+    let e = Config::parse("[model]\nsupply_pressure_pa = 21e6\n[classifier]\nsupply_pressure_pa = 13.8e6\n")
+        .unwrap_err();
+    assert!(
+        e.contains("[classifier] supply_pressure_pa") && e.contains("[model] supply_pressure_pa"),
+        "{e}"
+    );
+    let e = Config::parse("[classifier]\npressure_full_scale_pa = \"25 MPa\"\n").unwrap_err();
+    assert!(e.contains("[sensors] pressure_full_scale_pa"), "{e}");
+}

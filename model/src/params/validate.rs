@@ -167,6 +167,19 @@ impl ActuatorParams {
             self.supply_sag_pa_per_m3_s == 0.0 || (1.0..=1e14).contains(&self.supply_sag_pa_per_m3_s),
             "0 (no sag) or a pressure drop from 1 to 1e14 Pa per m³/s",
         )?;
+        check(
+            "valve_null_leakage_m3_s_pa",
+            self.valve_null_leakage_m3_s_pa,
+            (0.0..=1e-9).contains(&self.valve_null_leakage_m3_s_pa),
+            "a conductance from 0 to 1e-9 m³/(s·Pa) (0 = no null leakage; 1e-9 passes 1260 L/min at 21 MPa)",
+        )?;
+        r(
+            "valve_underlap_m",
+            self.valve_underlap_m,
+            1e-8,
+            1e-3,
+            "a spool travel from 1e-8 to 1e-3 m",
+        )?;
         let mut dirs = vec![("friction", self.friction.extend())];
         if let Some(r) = self.friction.retract {
             dirs.push(("friction.retract", r));

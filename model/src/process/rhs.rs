@@ -5,7 +5,9 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::{Linearisation, ProcessModel, I_BIAS, I_BULK, I_FE, I_QE1, I_QE2, I_QI, MIN_SLOPE_DROP_PA};
-use crate::dynamics::{effective_bulk_modulus_pa, end_stop_force_n, end_stop_slopes, valve_flows};
+use crate::dynamics::{
+    effective_bulk_modulus_pa, end_stop_force_n, end_stop_slopes, null_leakage_flows, valve_flows,
+};
 use crate::friction::{friction_dv, friction_force_n};
 use crate::params::ActuatorParams;
 
@@ -182,6 +184,20 @@ impl ProcessModel {
             let d2 = d(q(x_sp, p1, p2 + hp), q(x_sp, p1, p2 - hp), hp);
             return ([dx.0, d1.0, d2.0], [dx.1, d1.1, d2.1]);
         }
+        let (mut dq1, mut dq2) = self.orifice_partials(x_sp, p1, p2);
+        if p.valve_null_leakage_m3_s_pa > 0.0 {
+            let n = null_leakage_flows(p, x_sp, p1, p2);
+            for i in 0..3 {
+                dq1[i] += n.dq1[i];
+                dq2[i] += n.dq2[i];
+            }
+        }
+        (dq1, dq2)
+    }
+
+    /// Partials of the metering orifices' (Q1, Q2) with respect to (x_sp, p1, p2), no sag.
+    fn orifice_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
+        let p = &self.params;
         let g = p.discharge_coefficient * p.area_gradient_m2_per_m * (2.0 / p.oil_density_kg_m3).sqrt();
         let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
         let ss = crate::units::signed_sqrt;

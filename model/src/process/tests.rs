@@ -313,6 +313,22 @@ fn jacobians_match_central_differences_on_every_branch() {
     assert!(check_jacobian::<10>(&m3, Band::Sliding, Pressures::Mixed, 43).0 > 200);
     let (checked, reversed) = check_jacobian::<7>(&m3, Band::Sliding, Pressures::AboveSupply, 44);
     assert!(checked > 250 && reversed == checked, "{checked} {reversed}");
+
+    // An underlapped valve's null leakage: inside the underlap (x_u 1e-4 m > every
+    // drawn spool position) and mostly beyond it (x_u 5 µm), at a conductance that
+    // passes about the orifice's flow at a 10 µm opening.
+    for (xu, seed) in [(1e-4, 51), (5e-6, 52)] {
+        let lapped = ProcessModel::new(
+            ActuatorParams {
+                valve_null_leakage_m3_s_pa: 1e-12,
+                valve_underlap_m: xu,
+                ..ActuatorParams::default()
+            },
+            1e-3,
+        );
+        assert!(check_jacobian::<7>(&lapped, Band::Sliding, inside, seed).0 > 250);
+        assert!(check_jacobian::<12>(&lapped, Band::Sliding, Pressures::Mixed, seed + 10).0 > 200);
+    }
 }
 
 /// Steps of [`fd_step_jacobian`], per state.
