@@ -383,7 +383,6 @@ mod tests {
         assert_eq!(a.q2_m3_s, b.q2_m3_s + n.q2_m3_s);
     }
 
-    use super::*;
     use crate::units::m3_s_to_lpm;
 
     #[test]
