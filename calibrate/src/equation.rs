@@ -10,7 +10,7 @@
 //!   predicts from the valve flows, the piston's displacement and the leaks,
 //!   Σ β_eff/V·(Q − leaks)·dt ∓ Σ β_eff/V·A·Δx, minus the measured change
 //!   (Pa, normalised by `scale_p_pa`);
-//! - **force**: the mean over the window of A(p1 − p2) − friction − spring
+//! - **force**: the mean over the window of A1·p1 − A2·p2 − weight − friction − spring
 //!   load, minus m·Δv/T (N, normalised by `scale_f_n`), with friction from the
 //!   Karnopp law at the measured velocity (stuck samples balance the drive up
 //!   to f_st);
@@ -58,7 +58,8 @@ pub fn residuals(
         }
     };
     let dt = d.dt_s;
-    let area = p.piston_area_m2;
+    let (a1, a2) = p.areas_m2();
+    let gravity = p.gravity_force_n();
     let pr = p.return_pressure_pa;
     let per = per_window(d);
     let ps = p.supply_pressure_pa;
@@ -95,13 +96,13 @@ pub fn residuals(
                 let k1 = effective_bulk_modulus_pa(p, p1m) / v1;
                 let k2 = effective_bulk_modulus_pa(p, p2m) / v2;
                 let dx = d.x_m[j] - x;
-                dp1 += k1 * ((vf.q1_m3_s - lq.int_m3_s - lq.ext1_m3_s) * dt - area * dx);
-                dp2 += k2 * ((-vf.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s) * dt + area * dx);
+                dp1 += k1 * ((vf.q1_m3_s - lq.int_m3_s - lq.ext1_m3_s) * dt - a1 * dx);
+                dp2 += k2 * ((-vf.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s) * dt + a2 * dx);
             }
             let v = d.v_m_s[i];
             let load = p.load.force_n(x, v);
             let end_stop = model::dynamics::end_stop_force_n(p, x, v);
-            let drive = area * (p1 - p2) - load + end_stop;
+            let drive = a1 * p1 - a2 * p2 - gravity - load + end_stop;
             let fr = friction_force_n(&p.friction, v, drive);
             force += drive - fr;
         }

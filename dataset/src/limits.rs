@@ -57,7 +57,7 @@ impl Limits {
         let (p_min, p_max) = p.measured_pressure_range_pa();
         let spool_open = u_max * p.spool_gain_m_per_v;
         let q_valve_m3_s = p.discharge_coefficient
-            * p.area_gradient_m2_per_m
+            * p.area_gradients_m2_per_m().0.max(p.area_gradients_m2_per_m().1)
             * spool_open
             * (2.0 * p_max / p.oil_density_kg_m3).sqrt();
         Limits {

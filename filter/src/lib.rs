@@ -470,7 +470,8 @@ fn make_filter<const N: usize>(
             x0[2] = p2;
             x0[3] = x;
             if N >= 7 {
-                x0[I_FE] = model.params.piston_area_m2 * (p1 - p2);
+                let (a1, a2) = model.params.areas_m2();
+                x0[I_FE] = a1 * p1 - a2 * p2 - model.params.gravity_force_n();
             }
         }
         _ => {

@@ -110,9 +110,15 @@ pub struct ValveFlows {
 /// `p_up_pa` to `p_down_pa`, with supply sag `sag` Pa/(m³/s) applied when the
 /// upstream side is the supply. m³/s, signed by the pressure drop.
 #[inline]
-fn land_flow(p: &ActuatorParams, opening_m: f64, p_up_pa: f64, p_down_pa: f64, sag: f64) -> f64 {
-    let c =
-        p.discharge_coefficient * p.area_gradient_m2_per_m * opening_m * (2.0 / p.oil_density_kg_m3).sqrt();
+fn land_flow(
+    p: &ActuatorParams,
+    gradient_m2_per_m: f64,
+    opening_m: f64,
+    p_up_pa: f64,
+    p_down_pa: f64,
+    sag: f64,
+) -> f64 {
+    let c = p.discharge_coefficient * gradient_m2_per_m * opening_m * (2.0 / p.oil_density_kg_m3).sqrt();
     let dp = p_up_pa - p_down_pa;
     if sag > 0.0 && dp > 0.0 && c > 0.0 {
         // Q = c·sqrt(dp − sag·Q)  ⇒  Q² + c²·sag·Q − c²·dp = 0
@@ -197,17 +203,18 @@ fn orifice_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> Val
     let ps = p.supply_pressure_pa;
     let pr = p.return_pressure_pa;
     let sag = p.supply_sag_pa_per_m3_s;
+    let (wa, wb) = p.area_gradients_m2_per_m();
     if x_sp_m >= 0.0 {
-        let q1 = land_flow(p, x_sp_m, ps, p1_pa, sag);
-        let q2 = land_flow(p, x_sp_m, p2_pa, pr, 0.0);
+        let q1 = land_flow(p, wa, x_sp_m, ps, p1_pa, sag);
+        let q2 = land_flow(p, wb, x_sp_m, p2_pa, pr, 0.0);
         ValveFlows {
             q1_m3_s: q1,
             q2_m3_s: q2,
             supply_pa: ps - sag * q1.max(0.0),
         }
     } else {
-        let q1 = -land_flow(p, -x_sp_m, p1_pa, pr, 0.0);
-        let q2 = -land_flow(p, -x_sp_m, ps, p2_pa, sag);
+        let q1 = -land_flow(p, wa, -x_sp_m, p1_pa, pr, 0.0);
+        let q2 = -land_flow(p, wb, -x_sp_m, ps, p2_pa, sag);
         ValveFlows {
             q1_m3_s: q1,
             q2_m3_s: q2,
@@ -284,13 +291,13 @@ pub fn derivative(p: &ActuatorParams, s: &State, u_v: f64, leaks: &LeakSet) -> (
     let valve = valve_flows(p, x_sp, p1, p2);
     let lq = leaks.flows(p1, p2, p.return_pressure_pa);
     let (v1, v2) = p.chamber_volumes_m3(x);
-    let area = p.piston_area_m2;
-    let dp1 = effective_bulk_modulus_pa(p, p1) / v1 * (valve.q1_m3_s - area * v - lq.int_m3_s - lq.ext1_m3_s);
-    let dp2 = effective_bulk_modulus_pa(p, p2) / v2 * (area * v - valve.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s);
+    let (a1, a2) = p.areas_m2();
+    let dp1 = effective_bulk_modulus_pa(p, p1) / v1 * (valve.q1_m3_s - a1 * v - lq.int_m3_s - lq.ext1_m3_s);
+    let dp2 = effective_bulk_modulus_pa(p, p2) / v2 * (a2 * v - valve.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s);
 
     let load = p.load.force_n(x, v);
     let end_stop = end_stop_force_n(p, x, v);
-    let drive = area * (p1 - p2) - load + end_stop;
+    let drive = a1 * p1 - a2 * p2 - p.gravity_force_n() - load + end_stop;
     let mut friction = friction_force_n(&p.friction, v, drive);
     if v.abs() <= p.friction.zero_velocity_m_s && friction == drive {
         // stuck: stiction also removes the residual creep velocity, within f_st

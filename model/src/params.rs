@@ -79,12 +79,20 @@ pub struct BuiltInLeak {
     pub coefficient: f64,
 }
 
-/// All physical parameters of the servovalve-driven double-rod cylinder.
+/// All physical parameters of the servovalve-driven cylinder: double-rod
+/// (one piston area) or single-rod (`rod_side_area_m2`), at any mounting angle.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ActuatorParams {
-    /// Effective piston area A, m².
+    /// Piston area chamber 1 (the cap side of a single-rod cylinder) pushes on, A1, m².
     pub piston_area_m2: f64,
+    /// Piston area chamber 2 pushes on, A2, m²: the annulus of a single-rod
+    /// cylinder (π/4·(D² − d²)). Absent: A1 (a double-rod cylinder).
+    pub rod_side_area_m2: Option<f64>,
+    /// Angle of the direction of extension above the horizontal, rad: π/2 is a
+    /// vertical cylinder whose extension lifts the moving mass, −π/2 one whose
+    /// extension lowers it; gravity then pulls on the rod with m·g·sin(angle).
+    pub mounting_angle_rad: f64,
     /// Moving mass m (rod + piston), kg.
     pub mass_kg: f64,
     /// Fully retracted rod position X_min, m.
@@ -104,8 +112,11 @@ pub struct ActuatorParams {
     pub oil_density_kg_m3: f64,
     /// Orifice discharge coefficient C_d, dimensionless.
     pub discharge_coefficient: f64,
-    /// Orifice area gradient w, m²/m.
+    /// Orifice area gradient w of the port-A lands (P→A, A→T), m²/m.
     pub area_gradient_m2_per_m: f64,
+    /// Orifice area gradient of the port-B lands (P→B, B→T), m²/m: a valve matched
+    /// to a single-rod cylinder has w_B = w·A2/A1. Absent: the port-A gradient.
+    pub area_gradient_b_m2_per_m: Option<f64>,
     /// Spool displacement per volt of command (DC gain) k_sp, m/V.
     pub spool_gain_m_per_v: f64,
     /// Spool natural frequency ω_n, rad/s.
@@ -144,6 +155,8 @@ impl Default for ActuatorParams {
     fn default() -> Self {
         ActuatorParams {
             piston_area_m2: 6.33e-4,
+            rod_side_area_m2: None,
+            mounting_angle_rad: 0.0,
             mass_kg: 10.0,
             x_min_m: 0.0,
             x_max_m: 0.6069,
@@ -154,6 +167,7 @@ impl Default for ActuatorParams {
             oil_density_kg_m3: 847.15,
             discharge_coefficient: 0.6,
             area_gradient_m2_per_m: 2.075e-2,
+            area_gradient_b_m2_per_m: None,
             spool_gain_m_per_v: 2.794e-5,
             spool_natural_freq_rad_s: 200.0 * std::f64::consts::PI,
             spool_damping_ratio: 0.7,
@@ -171,6 +185,9 @@ impl Default for ActuatorParams {
         }
     }
 }
+
+/// Standard gravity g_n, m/s² (the weight of a vertical cylinder's moving mass).
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 
 /// How far below 0 Pa (gauge) a measured chamber pressure may read, as a
 /// fraction of the supply pressure p_s (dimensionless): 2 %, 0.276 MPa at the
@@ -197,6 +214,42 @@ impl ActuatorParams {
         rig.bulk_modulus_pa *= bulk_modulus_factor;
         rig.spool_null_bias_m = spool_bias_fraction * 8.4e-5;
         rig
+    }
+
+    /// A second rig, unlike the thesis rig: a vertical single-rod lift. Bore 50 mm,
+    /// rod 32 mm (A1 1.963e-3 m², A2 1.159e-3 m²), stroke 0.4 m, 200 kg lifted
+    /// by extension, 21 MPa, a valve whose port B is matched to the area ratio
+    /// (w_B = w·A2/A1), 0.9 m hoses of 12.7 mm (1.1e-4 m³ each side), oil of
+    /// 1.2 GPa, friction 1.5 kN static and 0.9 kN Coulomb.
+    pub fn vertical_lift() -> Self {
+        let bore = std::f64::consts::FRAC_PI_4 * 0.05 * 0.05;
+        let annulus = bore - std::f64::consts::FRAC_PI_4 * 0.032 * 0.032;
+        let w = 3.0e-2;
+        ActuatorParams {
+            piston_area_m2: bore,
+            rod_side_area_m2: Some(annulus),
+            mounting_angle_rad: std::f64::consts::FRAC_PI_2,
+            mass_kg: 200.0,
+            x_min_m: 0.0,
+            x_max_m: 0.4,
+            dead_volume_1_m3: 1.1e-4,
+            dead_volume_2_m3: 1.1e-4,
+            bulk_modulus_pa: 1.2e9,
+            oil_density_kg_m3: 870.0,
+            area_gradient_m2_per_m: w,
+            area_gradient_b_m2_per_m: Some(w * annulus / bore),
+            spool_gain_m_per_v: 3.0e-5,
+            spool_natural_freq_rad_s: 700.0,
+            supply_pressure_pa: 21.0e6,
+            friction: Friction {
+                static_n: 1.5e3,
+                slip_n: 0.9e3,
+                stribeck_velocity_m_s: 0.02,
+                viscous_n_s_per_m: 700.0,
+                ..Friction::default()
+            },
+            ..ActuatorParams::default()
+        }
     }
 
     /// The thesis' nominal parameters (same as `Default`).
@@ -230,11 +283,41 @@ impl ActuatorParams {
         )
     }
 
+    /// The piston areas (A1, A2) chambers 1 and 2 push on, m² (equal for a double-rod cylinder).
+    #[inline]
+    pub fn areas_m2(&self) -> (f64, f64) {
+        (
+            self.piston_area_m2,
+            self.rod_side_area_m2.unwrap_or(self.piston_area_m2),
+        )
+    }
+
+    /// The area gradients (w_A, w_B) of the port-A and port-B lands, m²/m.
+    #[inline]
+    pub fn area_gradients_m2_per_m(&self) -> (f64, f64) {
+        (
+            self.area_gradient_m2_per_m,
+            self.area_gradient_b_m2_per_m
+                .unwrap_or(self.area_gradient_m2_per_m),
+        )
+    }
+
+    /// The weight of the moving mass along the direction of extension, N
+    /// (positive opposes extension): m·g·sin(mounting angle), with standard gravity.
+    #[inline]
+    pub fn gravity_force_n(&self) -> f64 {
+        if self.mounting_angle_rad == 0.0 {
+            return 0.0;
+        }
+        self.mass_kg * STANDARD_GRAVITY_M_S2 * self.mounting_angle_rad.sin()
+    }
+
     /// Chamber volumes (V1, V2) at rod position `x_m`, m³, never below 1 % of the dead volume.
     #[inline]
     pub fn chamber_volumes_m3(&self, x_m: f64) -> (f64, f64) {
-        let v1 = self.dead_volume_1_m3 + self.piston_area_m2 * (x_m - self.x_min_m);
-        let v2 = self.dead_volume_2_m3 + self.piston_area_m2 * (self.x_max_m - x_m);
+        let (a1, a2) = self.areas_m2();
+        let v1 = self.dead_volume_1_m3 + a1 * (x_m - self.x_min_m);
+        let v2 = self.dead_volume_2_m3 + a2 * (self.x_max_m - x_m);
         (
             v1.max(0.01 * self.dead_volume_1_m3),
             v2.max(0.01 * self.dead_volume_2_m3),

@@ -1,5 +1,5 @@
-//! The test scenarios of the thesis (MODEL.md §6), by name, with the
-//! proportional position controller of the closed-loop runs.
+//! The test scenarios of the thesis (MODEL.md §6) and a lift-and-lower cycle,
+//! by name, with the proportional position controller of the closed-loop runs.
 
 use crate::params::SpringLoad;
 use crate::rng::Rng;
@@ -12,13 +12,14 @@ pub const U_MAX_V: f64 = 10.0;
 pub const CHIRP_PERIOD_S: f64 = 40.0;
 
 /// The named scenarios.
-pub const SCENARIO_NAMES: [&str; 6] = [
+pub const SCENARIO_NAMES: [&str; 7] = [
     "open-loop-sine",
     "open-loop-chirp",
     "closed-loop-sine",
     "closed-loop-random",
     "loaded-sine",
     "loaded-random",
+    "lift",
 ];
 
 /// How the valve is driven.
@@ -157,6 +158,18 @@ impl Scenario {
                 },
                 loaded,
                 0.3,
+                60.0,
+                20.0,
+            ),
+            // Lift and lower: moves between random heights in 0.05-0.35 m (any rig
+            // with a stroke of 0.4 m or more), each held 1.5-3 s; with a vertical
+            // rig (`ActuatorParams::vertical_lift`) every rise lifts the load.
+            "lift" => (
+                Drive::ClosedLoopSteps {
+                    levels: random_levels(seed, span, 0.05, 0.35, (1.5, 3.0)),
+                },
+                unloaded,
+                0.2,
                 60.0,
                 20.0,
             ),

@@ -73,9 +73,14 @@ fn friction_holds_below_stiction_and_breaks_away_above() {
 
 #[test]
 fn mass_balance_over_a_run() {
+    mass_balance(ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth));
+    // a vertical single-rod lift: the two chambers change volume at A1·v and A2·v
+    mass_balance(ActuatorParams::vertical_lift());
+}
+
+fn mass_balance(mut p: ActuatorParams) {
     // Integrate, alongside the state, the reference-density oil volume that flowed
     // into each chamber: d/dt(V·e^{(p−p0)/β}) = e^{(p−p0)/β}·Q_net exactly for this model.
-    let mut p = ActuatorParams::default().with_friction_preset(FrictionPreset::Smooth);
     p.leaks.push(model::params::BuiltInLeak {
         path: LeakPath::Internal,
         law: LeakLaw::SquareRoot,
@@ -507,4 +512,90 @@ fn leak_flow_column_reports_the_delivered_flow() {
     // delivered flow is within MODEL.md §8's 0.56..1.25 of the nominal 0.5 L/min
     let mean = samples[1000..].iter().map(|s| s.q_leak_lpm).sum::<f64>() / 2000.0;
     assert!((0.28..0.63).contains(&mean), "{mean}");
+}
+
+/// A vertical single-rod lift held by its sealed chambers: the rod stands still
+/// where A1·p1 − A2·p2 carries the load's weight m·g, and falls when the cap
+/// side cannot (the force balance of a cylinder with two areas and gravity).
+#[test]
+fn a_vertical_lift_holds_its_weight_on_the_cap_side() {
+    let p = ActuatorParams::vertical_lift();
+    let (a1, a2) = p.areas_m2();
+    assert!(
+        (a1 - 1.9635e-3).abs() < 1e-7 && (a2 - 1.1593e-3).abs() < 1e-7,
+        "{a1} {a2}"
+    );
+    let weight = 200.0 * 9.80665;
+    assert!((p.gravity_force_n() - weight).abs() < 1e-9);
+    // p2 = 5 MPa; the cap pressure that carries the weight and the rod side's push
+    let p2 = 5.0e6;
+    let p1 = (weight + a2 * p2) / a1;
+    let mut s = [0.0, p1, p2, 0.2, 0.0, 0.0];
+    for _ in 0..1000 {
+        s = advance(&p, &s, 0.0, &LeakSet::NONE, 1e-3, 40);
+    }
+    assert!((s[I_X] - 0.2).abs() < 1e-9, "rod moved {} m", s[I_X] - 0.2);
+    // cap side short of the weight by more than stiction: the load comes down
+    let mut s = [0.0, p1 - 1.6e3 / a1, p2, 0.2, 0.0, 0.0];
+    for _ in 0..200 {
+        s = advance(&p, &s, 0.0, &LeakSet::NONE, 1e-3, 40);
+    }
+    assert!(s[I_X] < 0.2 - 1e-6, "the load did not come down: x = {}", s[I_X]);
+    // at rest the chambers' forces balance the weight: equal pressures would lift
+    // only (A1 − A2)·p, which at p_s/2 (8.4 kN) is well above 1.96 kN
+    // ((A1 − A2)·p − m·g = 6.48 kN at p_s/2, past stiction: it rises)
+    let (d, _) = derivative(&p, &state_at_rest(0.2, 10.5e6), 0.0, &LeakSet::NONE);
+    let expected = ((a1 - a2) * 10.5e6 - weight - 1.5e3) / 200.0;
+    assert!(
+        (d[I_V] - expected).abs() < 1e-9,
+        "{} against {expected} m/s²",
+        d[I_V]
+    );
+}
+
+/// The in-repo lift in closed loop: it follows the reference and, where it
+/// dwells, its chambers carry the weight: mean A1·p1 − A2·p2 within the
+/// friction band of m·g.
+#[test]
+fn a_vertical_lift_in_closed_loop_carries_its_weight() {
+    let p = ActuatorParams::vertical_lift();
+    let (a1, a2) = p.areas_m2();
+    let mut s = sim(
+        "lift",
+        p.clone(),
+        vec![],
+        SensorParams::ideal(),
+        SimSettings::default(),
+    );
+    let truth = run_truth(&mut s, 20.0);
+    let weight = 200.0 * 9.80665;
+    let (mut sum, mut n, mut stuck, mut stuck_err) = (0.0, 0usize, 0usize, 0.0f64);
+    for (k, st) in truth.iter().enumerate().skip(5000) {
+        let f = a1 * st[I_P1] - a2 * st[I_P2];
+        sum += f;
+        n += 1;
+        let still = |j: usize| truth.get(j).is_some_and(|s| s[I_V].abs() < 1e-4);
+        if (k - 20..=k + 20).all(still) {
+            // standing still: stiction takes what the chambers do not carry
+            stuck += 1;
+            stuck_err = stuck_err.max((f - weight).abs());
+        }
+    }
+    let mean = sum / n as f64;
+    assert!(
+        (mean - weight).abs() < 300.0,
+        "mean rod force {mean} N, weight {weight} N"
+    );
+    assert!(stuck > 100, "{stuck} samples at rest");
+    eprintln!("{stuck} samples at rest, within {stuck_err:.0} N of the weight; mean force {mean:.0} N");
+    // (the stick law also stops a residual creep of under 0.1 mm/s: 1 % more)
+    assert!(
+        stuck_err <= 1.01 * 1.5e3,
+        "at rest the chambers miss the weight by {stuck_err} N (f_st 1.5 kN)"
+    );
+    let xs: Vec<f64> = truth.iter().map(|st| st[I_X]).collect();
+    let (lo, hi) = xs[5000..]
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(hi - lo > 0.05, "the lift moved {} m", hi - lo);
 }

@@ -180,6 +180,31 @@ impl ActuatorParams {
             1e-3,
             "a spool travel from 1e-8 to 1e-3 m",
         )?;
+        if let Some(a2) = self.rod_side_area_m2 {
+            r(
+                "rod_side_area_m2",
+                a2,
+                1e-6,
+                1.0,
+                "an area from 1e-6 to 1 m² (or absent: a double-rod cylinder)",
+            )?;
+        }
+        if let Some(w) = self.area_gradient_b_m2_per_m {
+            r(
+                "area_gradient_b_m2_per_m",
+                w,
+                1e-6,
+                10.0,
+                "an area gradient from 1e-6 to 10 m²/m (or absent: the port-A gradient)",
+            )?;
+        }
+        r(
+            "mounting_angle_rad",
+            self.mounting_angle_rad,
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::FRAC_PI_2,
+            "an angle from -π/2 to π/2 rad (0: horizontal, π/2: vertical, extension lifts)",
+        )?;
         let mut dirs = vec![("friction", self.friction.extend())];
         if let Some(r) = self.friction.retract {
             dirs.push(("friction.retract", r));

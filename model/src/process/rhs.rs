@@ -51,7 +51,7 @@ impl ProcessModel {
         let dl = self.leak_partials(p1, p2);
 
         // Chambers.
-        let area = p.piston_area_m2;
+        let (a1, a2) = p.areas_m2();
         let (v1, v2) = p.chamber_volumes_m3(x);
         // The 12-state layout scales the oil's stiffness by its estimate θ.
         let theta = if N == 12 { s[I_BULK] } else { 1.0 };
@@ -73,8 +73,8 @@ impl ProcessModel {
         } else {
             (0.0, 0.0, 0.0)
         };
-        let net1 = flows.q1_m3_s - area * v - lq.int_m3_s - lq.ext1_m3_s - qe1 * g1 - qi * gi;
-        let net2 = area * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
+        let net1 = flows.q1_m3_s - a1 * v - lq.int_m3_s - lq.ext1_m3_s - qe1 * g1 - qi * gi;
+        let net2 = a2 * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
         f[1] = b1 / v1 * net1;
         f[2] = b2 / v2 * net2;
         if N == 12 {
@@ -88,12 +88,12 @@ impl ProcessModel {
         a[(2, 0)] = -b2 / v2 * dq2[0];
         a[(2, 1)] = b2 / v2 * (-dq2[1] + dl.int[0]);
         a[(2, 2)] = b2 / v2 * (-dq2[2] + dl.int[1] - dl.ext2) + db2 / v2 * net2;
-        // ∂/∂x through the volumes: V1 = V10 + A(x − x_min), V2 = V20 + A(x_max − x).
-        a[(1, 3)] = -b1 * net1 * area / (v1 * v1);
-        a[(2, 3)] = b2 * net2 * area / (v2 * v2);
+        // ∂/∂x through the volumes: V1 = V10 + A1(x − x_min), V2 = V20 + A2(x_max − x).
+        a[(1, 3)] = -b1 * net1 * a1 / (v1 * v1);
+        a[(2, 3)] = b2 * net2 * a2 / (v2 * v2);
         // ∂/∂v
-        a[(1, 4)] = -b1 / v1 * area;
-        a[(2, 4)] = b2 / v2 * area;
+        a[(1, 4)] = -b1 / v1 * a1;
+        a[(2, 4)] = b2 / v2 * a2;
         if N >= 10 {
             a[(1, I_QE1)] = -b1 / v1 * g1;
             a[(1, I_QI)] = -b1 / v1 * gi;
@@ -114,6 +114,7 @@ impl ProcessModel {
         f[3] = v;
         a[(3, 4)] = 1.0;
         let m = p.mass_kg;
+        let gravity = p.gravity_force_n();
         // The end stops, as the rig has them, in leakwatch's own layouts (10 states
         // and more): a stiff spring-damper beyond each end of the stroke
         // ([`ProcessModel::step`] sub-steps while the rod is in one). The thesis'
@@ -125,9 +126,9 @@ impl ProcessModel {
             (0.0, (0.0, 0.0))
         };
         if N >= 7 {
-            f[4] = (area * (p1 - p2) - s[I_FE] + stop) / m;
-            a[(4, 1)] = area / m;
-            a[(4, 2)] = -area / m;
+            f[4] = (a1 * p1 - a2 * p2 - gravity - s[I_FE] + stop) / m;
+            a[(4, 1)] = a1 / m;
+            a[(4, 2)] = -a2 / m;
             a[(4, 3)] = dstop_dx / m;
             a[(4, 4)] = dstop_dv / m;
             a[(4, I_FE)] = -1.0 / m;
@@ -142,19 +143,19 @@ impl ProcessModel {
             } else {
                 (0.0, 0.0)
             };
-            let drive = area * (p1 - p2) - load;
+            let drive = a1 * p1 - a2 * p2 - gravity - load;
             let friction = friction_force_n(&p.friction, v, drive);
             f[4] = (drive - friction) / m;
             if v.abs() > p.friction.zero_velocity_m_s {
                 // sliding: Stribeck + viscous
-                a[(4, 1)] = area / m;
-                a[(4, 2)] = -area / m;
+                a[(4, 1)] = a1 / m;
+                a[(4, 2)] = -a2 / m;
                 a[(4, 3)] = -dload_dx / m;
                 a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
             } else if friction != drive {
                 // breaking away: friction saturated at ±f_st
-                a[(4, 1)] = area / m;
-                a[(4, 2)] = -area / m;
+                a[(4, 1)] = a1 / m;
+                a[(4, 2)] = -a2 / m;
                 a[(4, 3)] = -dload_dx / m;
                 a[(4, 4)] = -dload_dv / m;
             }
@@ -198,20 +199,22 @@ impl ProcessModel {
     /// Partials of the metering orifices' (Q1, Q2) with respect to (x_sp, p1, p2), no sag.
     fn orifice_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
         let p = &self.params;
-        let g = p.discharge_coefficient * p.area_gradient_m2_per_m * (2.0 / p.oil_density_kg_m3).sqrt();
+        let (wa, wb) = p.area_gradients_m2_per_m();
+        let k = p.discharge_coefficient * (2.0 / p.oil_density_kg_m3).sqrt();
+        let (ga, gb) = (k * wa, k * wb);
         let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
         let ss = crate::units::signed_sqrt;
         if x_sp >= 0.0 {
-            // Q1 = g x_sp ssqrt(ps − p1), Q2 = g x_sp ssqrt(p2 − pr)
+            // Q1 = g_A x_sp ssqrt(ps − p1), Q2 = g_B x_sp ssqrt(p2 − pr)
             (
-                [g * ss(ps - p1), -g * x_sp * sqrt_slope(ps - p1), 0.0],
-                [g * ss(p2 - pr), 0.0, g * x_sp * sqrt_slope(p2 - pr)],
+                [ga * ss(ps - p1), -ga * x_sp * sqrt_slope(ps - p1), 0.0],
+                [gb * ss(p2 - pr), 0.0, gb * x_sp * sqrt_slope(p2 - pr)],
             )
         } else {
-            // Q1 = g x_sp ssqrt(p1 − pr), Q2 = g x_sp ssqrt(ps − p2)
+            // Q1 = g_A x_sp ssqrt(p1 − pr), Q2 = g_B x_sp ssqrt(ps − p2)
             (
-                [g * ss(p1 - pr), g * x_sp * sqrt_slope(p1 - pr), 0.0],
-                [g * ss(ps - p2), 0.0, -g * x_sp * sqrt_slope(ps - p2)],
+                [ga * ss(p1 - pr), ga * x_sp * sqrt_slope(p1 - pr), 0.0],
+                [gb * ss(ps - p2), 0.0, -gb * x_sp * sqrt_slope(ps - p2)],
             )
         }
     }

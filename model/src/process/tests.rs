@@ -78,7 +78,8 @@ fn random_state<const N: usize>(
     s[0] = rng.uniform_in(-8e-5, 8e-5);
     s[1] = chamber_pressure(rng, p, pressures);
     s[2] = chamber_pressure(rng, p, pressures);
-    s[3] = rng.uniform_in(0.05, 0.55);
+    // inside the stroke, clear of the stops (0.05-0.55 m on the thesis rig)
+    s[3] = rng.uniform_in(p.x_min_m + 0.05, 0.55f64.min(p.x_max_m - 0.05));
     s[4] = match band {
         Band::Sliding => {
             let v = rng.uniform_in(0.002, 0.5);
@@ -313,6 +314,15 @@ fn jacobians_match_central_differences_on_every_branch() {
     assert!(check_jacobian::<10>(&m3, Band::Sliding, Pressures::Mixed, 43).0 > 200);
     let (checked, reversed) = check_jacobian::<7>(&m3, Band::Sliding, Pressures::AboveSupply, 44);
     assert!(checked > 250 && reversed == checked, "{checked} {reversed}");
+
+    // A vertical single-rod lift: two areas, a port-B gradient matched to them,
+    // the load's weight on the rod (and the rod chamber's smaller volume).
+    let lift = ProcessModel::new(ActuatorParams::vertical_lift(), 1e-3);
+    assert!(check_jacobian::<6>(&lift, Band::Sliding, inside, 61).0 > 250);
+    assert!(check_jacobian::<6>(&lift, Band::Stick, inside, 62).0 > 250);
+    assert!(check_jacobian::<7>(&lift, Band::Sliding, Pressures::Mixed, 63).0 > 200);
+    assert!(check_jacobian::<12>(&lift, Band::Sliding, inside, 64).0 > 250);
+    assert!(check_jacobian::<12>(&lift, Band::Sliding, Pressures::NearTank, 65).0 > 200);
 
     // An underlapped valve's null leakage: inside the underlap (x_u 1e-4 m > every
     // drawn spool position) and mostly beyond it (x_u 5 µm), at a conductance that
