@@ -102,7 +102,7 @@ pub fn residuals(
             let v = d.v_m_s[i];
             let load = p.load.force_n(x, v);
             let end_stop = model::dynamics::end_stop_force_n(p, x, v);
-            let drive = a1 * p1 - a2 * p2 - gravity - load + end_stop;
+            let drive = p.pressure_force_n(p1, p2) - gravity - load + end_stop;
             let fr = friction_force_n(&p.friction, v, drive);
             force += drive - fr;
         }

@@ -21,6 +21,7 @@ const _: () = {
     assert!(crate::FLAG_CONVERGING == estimate_flags::CONVERGING);
     assert!(crate::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
     assert!(crate::FLAG_END_STOP == estimate_flags::END_STOP);
+    assert!(crate::FLAG_REANCHORED == estimate_flags::REANCHORED);
     assert!(FLAGS_ALL & estimate_flags::END_OF_STREAM == 0);
     assert!(MAX_STATES == frames::MAX_STATES);
 };

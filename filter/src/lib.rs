@@ -48,9 +48,18 @@ pub const FLAG_AFTER_GAP: u32 = 1 << 5;
 /// [`model::process::STOP_SUBSTEPS`] sub-steps while the rod is in one, and the
 /// detector takes evidence there as anywhere else).
 pub const FLAG_END_STOP: u32 = 1 << 6;
+/// Flag bit: the gap before this sample was longer than the filter bridges
+/// ([`Tuning::max_bridged_gap_samples`]): its fast states restarted from this sample
+/// (set with [`FLAG_AFTER_GAP`]; a bridged gap carries [`FLAG_AFTER_GAP`] alone).
+pub const FLAG_REANCHORED: u32 = 1 << 7;
 /// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
-pub const FLAGS_ALL: u32 =
-    FLAG_RESET | FLAG_SKIPPED | FLAG_CLAMPED | FLAG_CONVERGING | FLAG_AFTER_GAP | FLAG_END_STOP;
+pub const FLAGS_ALL: u32 = FLAG_RESET
+    | FLAG_SKIPPED
+    | FLAG_CLAMPED
+    | FLAG_CONVERGING
+    | FLAG_AFTER_GAP
+    | FLAG_END_STOP
+    | FLAG_REANCHORED;
 /// Distance from either end of the stroke within which an estimate carries
 /// [`FLAG_END_STOP`], m (an encoder count or two, plus the bounce of a stop).
 pub const END_STOP_MARGIN_M: f64 = 2e-3;
@@ -384,6 +393,7 @@ impl Estimator {
             }
             self.reanchor_pending = false;
             self.diverged_samples = 0;
+            flags |= FLAG_REANCHORED;
         }
         // The command of a sample is held until the next one (a zero-order hold): the
         // interval that ends at this sample was driven by the previous sample's command.
@@ -470,8 +480,7 @@ fn make_filter<const N: usize>(
             x0[2] = p2;
             x0[3] = x;
             if N >= 7 {
-                let (a1, a2) = model.params.areas_m2();
-                x0[I_FE] = a1 * p1 - a2 * p2 - model.params.gravity_force_n();
+                x0[I_FE] = model.params.pressure_force_n(p1, p2) - model.params.gravity_force_n();
             }
         }
         _ => {

@@ -27,6 +27,9 @@ pub mod estimate_flags {
     /// The estimated rod position is at an end of its stroke (the stop's contact is
     /// not tracked by the model).
     pub const END_STOP: u32 = 1 << 6;
+    /// Samples were missing just before this one, more than the filter bridges: it
+    /// restarted its fast states from this sample (set with [`AFTER_GAP`]).
+    pub const REANCHORED: u32 = 1 << 7;
 }
 
 /// Values of [`LeakEventFrame::kind`](crate::LeakEventFrame::kind).

@@ -297,7 +297,7 @@ pub fn derivative(p: &ActuatorParams, s: &State, u_v: f64, leaks: &LeakSet) -> (
 
     let load = p.load.force_n(x, v);
     let end_stop = end_stop_force_n(p, x, v);
-    let drive = a1 * p1 - a2 * p2 - p.gravity_force_n() - load + end_stop;
+    let drive = p.pressure_force_n(p1, p2) - p.gravity_force_n() - load + end_stop;
     let mut friction = friction_force_n(&p.friction, v, drive);
     if v.abs() <= p.friction.zero_velocity_m_s && friction == drive {
         // stuck: stiction also removes the residual creep velocity, within f_st

@@ -292,6 +292,16 @@ impl ActuatorParams {
         )
     }
 
+    /// The force of the chamber pressures on the piston, A1·p1 − A2·p2, N (for a
+    /// double-rod cylinder computed as A·(p1 − p2), so its results stay bit for bit).
+    #[inline]
+    pub fn pressure_force_n(&self, p1_pa: f64, p2_pa: f64) -> f64 {
+        match self.rod_side_area_m2 {
+            None => self.piston_area_m2 * (p1_pa - p2_pa),
+            Some(a2) => self.piston_area_m2 * p1_pa - a2 * p2_pa,
+        }
+    }
+
     /// The area gradients (w_A, w_B) of the port-A and port-B lands, m²/m.
     #[inline]
     pub fn area_gradients_m2_per_m(&self) -> (f64, f64) {

@@ -8,7 +8,7 @@ use crate::{
     misfits, EventKind, LeakEvent, Phase, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, KIND_AVERAGE_S,
     M3_S_PER_LPM, NIS_RATIO_WINDOW_S, REACQUIRE_S,
 };
-use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_CONVERGING, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED};
 
 /// Least real flow per L/min of nominal size that the `min_size_lpm` (or
 /// `min_internal_size_lpm`) floor is divided by (a drop of 1 % of p_s/2): below
@@ -26,11 +26,14 @@ impl LeakSizeDetector {
         } else {
             0.0
         };
-        // Validity gate: a gap, a skipped sample or a reset blinds the detector for
-        // `recovery_s`; so does a filter whose innovations are far beyond its own
-        // covariance (not tracking). The baseline holds while blind.
+        // Validity gate: a gap the filter could not bridge (it re-anchored), a skipped
+        // sample or a reset blinds the detector for `recovery_s`; so does a filter
+        // whose innovations are far beyond its own covariance (not tracking). The
+        // baseline holds while blind. A gap the filter bridged by prediction (a few
+        // samples; `FLAG_AFTER_GAP` alone) or estimates lost on their way here leave
+        // the filter tracking: evidence goes on (the NIS gate still watches).
         let recover = e.t_s + self.cfg.recovery_s;
-        if e.flags & (FLAG_SKIPPED | FLAG_AFTER_GAP | FLAG_RESET) != 0 {
+        if e.flags & (FLAG_SKIPPED | FLAG_REANCHORED | FLAG_RESET) != 0 {
             self.invalid_until_s = self.invalid_until_s.max(recover);
             if e.flags & FLAG_RESET != 0 {
                 // The filter started again from its initial leak sizes: the baseline

@@ -126,7 +126,7 @@ impl ProcessModel {
             (0.0, (0.0, 0.0))
         };
         if N >= 7 {
-            f[4] = (a1 * p1 - a2 * p2 - gravity - s[I_FE] + stop) / m;
+            f[4] = (p.pressure_force_n(p1, p2) - gravity - s[I_FE] + stop) / m;
             a[(4, 1)] = a1 / m;
             a[(4, 2)] = -a2 / m;
             a[(4, 3)] = dstop_dx / m;
@@ -143,7 +143,7 @@ impl ProcessModel {
             } else {
                 (0.0, 0.0)
             };
-            let drive = a1 * p1 - a2 * p2 - gravity - load;
+            let drive = p.pressure_force_n(p1, p2) - gravity - load;
             let friction = friction_force_n(&p.friction, v, drive);
             f[4] = (drive - friction) / m;
             if v.abs() > p.friction.zero_velocity_m_s {
@@ -200,8 +200,11 @@ impl ProcessModel {
     fn orifice_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
         let p = &self.params;
         let (wa, wb) = p.area_gradients_m2_per_m();
-        let k = p.discharge_coefficient * (2.0 / p.oil_density_kg_m3).sqrt();
-        let (ga, gb) = (k * wa, k * wb);
+        let root = (2.0 / p.oil_density_kg_m3).sqrt();
+        let (ga, gb) = (
+            p.discharge_coefficient * wa * root,
+            p.discharge_coefficient * wb * root,
+        );
         let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
         let ss = crate::units::signed_sqrt;
         if x_sp >= 0.0 {
