@@ -87,6 +87,28 @@ pub fn rice_threshold(crossings_per_s: f64, rate_per_h: f64, floor: f64) -> f64 
     }
 }
 
+/// The leak-size detector's thresholds (ext1, ext2, int) for healthy spreads
+/// `spreads` (L/min at p_s/2) with `crossings_per_s` upcrossings of the mean per
+/// second: in spreads (from the false-alarm rate, [`rice_threshold`]) and in L/min
+/// (at least the floors `min_size_lpm`, `min_internal_size_lpm`).
+pub fn thresholds(
+    cfg: &ClassifierConfig,
+    spreads: [f64; 3],
+    crossings_per_s: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
+    let (mut z, mut lpm) = ([0.0; 3], [0.0; 3]);
+    for k in 0..3 {
+        z[k] = rice_threshold(crossings_per_s[k], cfg.false_alarms_per_hour, cfg.threshold_sigma);
+        let floor = if k == 2 {
+            cfg.min_internal_size_lpm
+        } else {
+            cfg.min_size_lpm
+        };
+        lpm[k] = (z[k] * spreads[k]).max(floor);
+    }
+    (z, lpm)
+}
+
 /// Healthy values of the three single-leak sizes kept every 10 ms, and their
 /// statistics: the mean as the offset, the standard deviation as the spread
 /// (the healthy estimate wanders with the operating point, which a robust
@@ -425,15 +447,11 @@ impl LeakSizeDetector {
     /// The thresholds (spreads and L/min) for healthy spreads `spreads` (L/min) with
     /// `crossings_per_s` upcrossings of the mean per second.
     fn set_thresholds(&mut self, spreads: [f64; 3], crossings_per_s: [f64; 3]) {
-        for k in 0..3 {
-            let z = rice_threshold(
-                crossings_per_s[k],
-                self.cfg.false_alarms_per_hour,
-                self.cfg.threshold_sigma,
-            );
-            self.threshold_z[k] = z;
-            self.threshold_lpm[k] = (z * spreads[k]).max(self.min_size_of(k));
-            self.stats[k].m2 = spreads[k] * spreads[k];
+        let (z, lpm) = thresholds(&self.cfg, spreads, crossings_per_s);
+        self.threshold_z = z;
+        self.threshold_lpm = lpm;
+        for (k, spread) in spreads.iter().enumerate() {
+            self.stats[k].m2 = spread * spread;
             self.stats[k].n = 2.0;
         }
     }

@@ -48,7 +48,7 @@ mod track;
 
 pub use config::{ClassifierConfig, Commissioning};
 pub use events::{EventKind, LeakEvent, Phase};
-pub use leak_size::{rice_threshold, CommissioningLearner, LeakSizeDetector};
+pub use leak_size::{rice_threshold, thresholds, CommissioningLearner, LeakSizeDetector};
 pub use mae::MaeDetector;
 pub use stage::Classifier;
 

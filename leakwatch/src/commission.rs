@@ -142,6 +142,15 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
         "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
         c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
     );
+    let (_, thr) = classifier::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
+    eprintln!(
+        "the detector will raise leaks from {:.3}/{:.3}/{:.3} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
+        thr[0], thr[1], thr[2], cfg.classifier.false_alarms_per_hour
+    );
+    eprintln!(
+        "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
+        c.nis_mean
+    );
     cfg.classifier.commissioning = Some(c);
     Ok(cfg)
 }

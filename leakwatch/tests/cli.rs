@@ -902,6 +902,23 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("spool null bias: -"), "{}", stderr(&o));
+    // it says from what size on it will see a leak (measured 0.033/0.030/0.040 L/min)
+    let err = stderr(&o);
+    let line = err
+        .lines()
+        .find_map(|l| l.strip_prefix("the detector will raise leaks from "))
+        .expect("the thresholds are stated");
+    let sizes: Vec<f64> = line
+        .split(' ')
+        .next()
+        .unwrap()
+        .split('/')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        sizes.len() == 3 && sizes.iter().all(|s| *s >= 0.03 && *s < 0.1),
+        "{line}"
+    );
     let t: toml::Table = toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let bias = t["model"]["spool_null_bias_m"].as_float().unwrap();
     eprintln!("identified bias {bias:e} m (true -6e-6)");
