@@ -360,6 +360,11 @@ impl LeakSizeDetector {
         self.threshold_z
     }
 
+    /// When the thresholds were learned (the detector armed), s; `None` if never.
+    pub fn armed_at_s(&self) -> Option<f64> {
+        (self.is_armed() && self.armed_at_s.is_finite()).then_some(self.armed_at_s)
+    }
+
     /// Seconds in which no evidence was gathered after arming (gaps, resets, excursions, NIS), s.
     pub fn blind_s(&self) -> f64 {
         self.blind_s

@@ -91,6 +91,24 @@ pub struct ResidualRms {
     pub bulk_scale_sigma: f64,
 }
 
+/// How much of a run the leak-size detector watched: from arming to the end,
+/// less the time it took no evidence (gaps it could not bridge, resets,
+/// excursions, a filter that did not track).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Watch {
+    /// Length of the run, s (first to last sample).
+    pub run_s: f64,
+    /// When the detector armed (its thresholds learned or loaded), s; null if never.
+    pub armed_at_s: Option<f64>,
+    /// Seconds it watched (armed and taking evidence), s.
+    pub watched_s: f64,
+    /// Seconds after arming without evidence, s.
+    pub blind_s: f64,
+    /// Why it never armed (the `not-armed` event's detail), if it did not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_armed: Option<String>,
+}
+
 /// What `summary.json` holds.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Summary {
@@ -130,6 +148,8 @@ pub struct Summary {
     pub thesis_filter: ResidualRms,
     /// Number of events written to events.json.
     pub events: usize,
+    /// How much of the run the leak detector watched.
+    pub watch: Watch,
     /// How the stages were connected.
     pub wiring: String,
 }
@@ -250,6 +270,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let gate = req.config.classifier.nis_gate;
     let mut acc = (Acc::new(gate), Acc::new(gate));
     let mut last_t = 0.0;
+    let mut first_t = f64::NAN;
     let bar = progress_bar(req.progress);
     let started = Instant::now();
 
@@ -258,6 +279,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let mut sink = |s: &StageEstimate, summary: &mut Summary| {
         summary.samples += 1;
         last_t = s.leak.t_s;
+        if first_t.is_nan() {
+            first_t = s.leak.t_s;
+        }
         acc.0.push(&s.leak);
         acc.1.push(&s.thesis);
         cls.on_stage(s, |ev| events.push(ev));
@@ -377,6 +401,22 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     summary.leak_filter = acc.0.finish(stage.leak().counters().resets);
     summary.thesis_filter = acc.1.finish(stage.thesis().counters().resets);
     summary.events = events.len();
+    let armed_at_s = cls.leak_size.armed_at_s();
+    let blind_s = cls.leak_size.blind_s();
+    summary.watch = Watch {
+        run_s: if first_t.is_finite() {
+            (last_t - first_t).max(0.0)
+        } else {
+            0.0
+        },
+        armed_at_s,
+        watched_s: armed_at_s.map_or(0.0, |a| (last_t - a - blind_s).max(0.0)),
+        blind_s: if armed_at_s.is_some() { blind_s } else { 0.0 },
+        not_armed: events
+            .iter()
+            .find(|e| e.kind == classifier::EventKind::NotArmed)
+            .map(|e| e.detail.to_string()),
+    };
     summary.rows = summary.samples + summary.rows_skipped;
     summary.max_bad_fraction = req.max_bad_fraction;
     for (k, name) in ["x_sp", "f_load", "ref", "q_leak"].into_iter().enumerate() {

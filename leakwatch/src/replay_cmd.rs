@@ -120,6 +120,21 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
     ) {
         eprintln!("{line}");
     }
+    let w = &s.watch;
+    match w.armed_at_s {
+        None => eprintln!(
+            "NOT WATCHED: the leak detector never armed in this run ({}): no leak could have been seen",
+            w.not_armed.as_deref().unwrap_or("no healthy state learned")
+        ),
+        Some(armed) => eprintln!(
+            "watched {:.1} of {:.1} s ({:.0} %): armed at {:.1} s, {:.1} s without evidence after it",
+            w.watched_s,
+            w.run_s,
+            100.0 * w.watched_s / w.run_s.max(1e-9),
+            armed,
+            w.blind_s
+        ),
+    }
     eprintln!(
         "replayed {} samples in {:.2} s ({:.0} samples/s); {} rows skipped, {} samples missing; {} events; wrote {}",
         s.samples,

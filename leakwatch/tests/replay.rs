@@ -576,3 +576,41 @@ fn a_json_log_of_an_earlier_version_replays_like_the_cdr_log_and_the_csv() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
 }
+
+/// A replay says how much of the run the detector watched, and plainly when it
+/// never armed: a 5 s recording is too short to learn the healthy state, so no
+/// leak could have been seen (it used to end with "0 events" and exit 0 as if
+/// the rig had been watched). A 30 s recording is watched from its first seconds.
+#[test]
+fn a_replay_says_how_long_it_watched_and_when_it_never_armed() {
+    let d = tmpdir("watch");
+    let short = simulate(&d, "closed-loop-sine", "5", "none");
+    let out = d.join("short");
+    let o = replay(&short, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("NOT WATCHED: the leak detector never armed"),
+        "{err}"
+    );
+    let w = &json(&out.join("summary.json"))["watch"];
+    assert!(w["armed_at_s"].is_null(), "{w}");
+    assert_eq!(w["watched_s"].as_f64(), Some(0.0), "{w}");
+    assert!(
+        w["not_armed"].as_str().unwrap().contains("warm-up too short"),
+        "{w}"
+    );
+
+    let d2 = d.join("long");
+    std::fs::create_dir_all(&d2).unwrap();
+    let long = simulate(&d2, "closed-loop-sine", "30", "none");
+    let out = d.join("long-out");
+    let o = replay(&long, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success() && err.contains("watched "), "{err}");
+    let w = &json(&out.join("summary.json"))["watch"];
+    let (run, watched) = (w["run_s"].as_f64().unwrap(), w["watched_s"].as_f64().unwrap());
+    eprintln!("{w}");
+    assert!((run - 29.999).abs() < 1e-6, "{w}");
+    assert!(watched > 0.6 * run && watched <= run, "{w}");
+}
