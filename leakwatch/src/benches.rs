@@ -207,7 +207,23 @@ pub fn detection(
     write_json(out, "detection.json", &json, force)
 }
 
-/// Detection scored on recorded runs with truth (a directory like ../shared/data/leaks_dev).
+/// The rig's own description and commissioning recording in a data directory
+/// laid out like `../shared/data/plant_dev/double`: `datasheet.toml` and
+/// `commission_cold.csv[.gz]` (either may be absent).
+fn rig_files(dir: &Path) -> (Option<PathBuf>, Option<PathBuf>) {
+    let sheet = dir.join("datasheet.toml");
+    let recording = ["commission_cold.csv.gz", "commission_cold.csv"]
+        .iter()
+        .map(|n| dir.join(n))
+        .find(|p| p.is_file());
+    (sheet.is_file().then_some(sheet), recording)
+}
+
+/// Detection scored on recorded runs with truth (a directory like
+/// ../shared/data/leaks_dev). A directory laid out like plant_dev runs the README's
+/// workflow first: without `--config`, its `datasheet.toml` is the config; with a
+/// commissioning recording, `commission` runs on it (bias identified, healthy
+/// state learned) before the runs are scored.
 pub fn detection_data(
     dir: &Path,
     config: Option<&Path>,
@@ -215,7 +231,18 @@ pub fn detection_data(
     out: &Path,
     force: bool,
 ) -> Result<(), String> {
-    let cfg = crate::config::Config::load_or_default(config)?;
+    let (sheet, recording) = rig_files(dir);
+    let config_path = config.map(Path::to_path_buf).or(sheet);
+    let mut cfg = crate::config::Config::load_or_default(config_path.as_deref())?;
+    if let Some(p) = &config_path {
+        eprintln!("config: {}", p.display());
+    }
+    if let Some(rec) = &recording {
+        if cfg.classifier.commissioning.is_none() {
+            eprintln!("commissioning on {}", rec.display());
+            cfg = crate::commission::commission(rec, &cfg)?;
+        }
+    }
     out::dir(out)?;
     let inputs: Vec<&Path> = config.into_iter().collect();
     for name in ["detection.md", "detection.json"] {
