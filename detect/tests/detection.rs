@@ -353,6 +353,17 @@ fn healthy_samples(scenario: &str, seconds: f64, seed: u64) -> Vec<model::Sample
     (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect()
 }
 
+/// 40 s of the off-nominal rig under the loaded sine with a 0.5 L/min ext1 leak at 20 s.
+fn ext1_leak_samples(seed: u64) -> Vec<model::Sample> {
+    let seconds = 40.0;
+    let rig = off_nominal_rig();
+    let scenario = Scenario::by_name("loaded-sine", seed, seconds).unwrap();
+    let mut sched = FaultSchedule::default();
+    sched.faults.push(Fault::parse("ext1:0.5lpm@20s", &rig).unwrap());
+    let mut sim = Simulator::with_default_sensors(rig, scenario, sched, seed).unwrap();
+    (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect()
+}
+
 fn replay_events(samples: &[model::Sample], cfg: ClassifierConfig) -> Vec<LeakEvent> {
     let mut stage = filter::EstimatorStage::new(
         ActuatorParams::default(),
@@ -398,13 +409,7 @@ fn gaps_of_any_length_at_any_position_raise_no_leak() {
 /// nothing at all).
 #[test]
 fn one_lost_sample_in_a_thousand_does_not_blind_the_detector() {
-    let seconds = 40.0;
-    let rig = off_nominal_rig();
-    let scenario = Scenario::by_name("loaded-sine", 93, seconds).unwrap();
-    let mut sched = FaultSchedule::default();
-    sched.faults.push(Fault::parse("ext1:0.5lpm@20s", &rig).unwrap());
-    let mut sim = Simulator::with_default_sensors(rig, scenario, sched, 93).unwrap();
-    let all: Vec<model::Sample> = (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect();
+    let all = ext1_leak_samples(93);
     let lossy: Vec<model::Sample> = all
         .iter()
         .enumerate()
@@ -438,13 +443,7 @@ fn one_lost_sample_in_a_thousand_does_not_blind_the_detector() {
 /// through a gap, so the baseline is held, not taken again with the leak in it.
 #[test]
 fn a_leak_opening_inside_a_gap_is_reported_after_it() {
-    let seconds = 40.0;
-    let rig = off_nominal_rig();
-    let scenario = Scenario::by_name("loaded-sine", 91, seconds).unwrap();
-    let mut sched = FaultSchedule::default();
-    sched.faults.push(Fault::parse("ext1:0.5lpm@20s", &rig).unwrap());
-    let mut sim = Simulator::with_default_sensors(rig, scenario, sched, 91).unwrap();
-    let all: Vec<model::Sample> = (0..(seconds * 1000.0) as usize).map(|_| sim.step()).collect();
+    let all = ext1_leak_samples(91);
     let (gap_from_s, gap_to_s) = (19.0, 21.0);
     let kept: Vec<model::Sample> = all
         .iter()

@@ -244,7 +244,8 @@ pub fn detection_data(
         }
     }
     out::dir(out)?;
-    let inputs: Vec<&Path> = config.into_iter().collect();
+    let mut inputs: Vec<&Path> = config_path.iter().map(PathBuf::as_path).collect();
+    inputs.extend(recording.as_deref());
     for name in ["detection.md", "detection.json"] {
         out::check(&out.join(name), force, &inputs)?;
     }

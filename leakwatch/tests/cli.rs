@@ -867,6 +867,26 @@ fn plot_draws_a_recorded_log() {
     assert!(stderr(&o).contains("wrote "), "{}", stderr(&o));
 }
 
+/// `simulate --scenario closed-loop-random` of the rig in `config` into `out`.
+fn simulate_random(config: &std::path::Path, seconds: &str, seed: &str, fault: &str, out: &std::path::Path) {
+    let o = leakwatch(&[
+        "simulate",
+        "--config",
+        config.to_str().unwrap(),
+        "--scenario",
+        "closed-loop-random",
+        "--seconds",
+        seconds,
+        "--seed",
+        seed,
+        "--fault",
+        fault,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 /// `commission` identifies the spool's null bias on a healthy recording (the
 /// leak filter with its leak sizes held at zero), writes it into `[model]` and
 /// holds it in the leak filter; the leak sizes then learn a healthy state near
@@ -877,22 +897,7 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
     let rig = d.join("rig.toml");
     std::fs::write(&rig, "[rig]\nspool_null_bias_m = -6.0e-6\n").unwrap();
     let healthy = d.join("healthy.csv");
-    let o = leakwatch(&[
-        "simulate",
-        "--config",
-        rig.to_str().unwrap(),
-        "--scenario",
-        "closed-loop-random",
-        "--seconds",
-        "25",
-        "--seed",
-        "5",
-        "--fault",
-        "none",
-        "--out",
-        healthy.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    simulate_random(&rig, "25", "5", "none", &healthy);
     let out = d.join("commissioned.toml");
     let o = leakwatch(&[
         "commission",
@@ -943,25 +948,7 @@ fn bench_detection_on_a_plant_folder_commissions_then_scores() {
     let d = tmpdir("plant_folder");
     std::fs::write(d.join("datasheet.toml"), "[rig]\nspool_null_bias_m = -6.0e-6\n").unwrap();
     let sheet = d.join("datasheet.toml");
-    let simulate = |out: &std::path::Path, seconds: &str, seed: &str, fault: &str| {
-        let o = leakwatch(&[
-            "simulate",
-            "--config",
-            sheet.to_str().unwrap(),
-            "--scenario",
-            "closed-loop-random",
-            "--seconds",
-            seconds,
-            "--seed",
-            seed,
-            "--fault",
-            fault,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-    };
-    simulate(&d.join("commission_cold.csv"), "25", "5", "none");
+    simulate_random(&sheet, "25", "5", "none", &d.join("commission_cold.csv"));
     for (run, seed, fault, truth) in [
         (
             "run_000",
@@ -978,7 +965,7 @@ fn bench_detection_on_a_plant_folder_commissions_then_scores() {
     ] {
         let dir = d.join(run);
         std::fs::create_dir_all(&dir).unwrap();
-        simulate(&dir.join("measured.csv"), "30", seed, fault);
+        simulate_random(&sheet, "30", seed, fault, &dir.join("measured.csv"));
         std::fs::write(dir.join("truth.json"), truth).unwrap();
     }
     let out = d.join("scored");
