@@ -5,8 +5,11 @@
 //! by default; `lat_ns_*` = lateness of the publish instants against the
 //! schedule). The UDP stream is paced by its sender: each sample is published
 //! as it arrives (`lat_ns_*` = datagram arrival to publish), and the closing
-//! line on stderr counts lost, duplicated, late, malformed and rejected
-//! datagrams ([`crate::UdpCounts`]). The last frame carries `END_OF_STREAM`;
+//! line on stderr counts lost, duplicated, late, malformed, rejected, foreign
+//! and wrong-rate datagrams, sender restarts, time jumps and rate errors
+//! ([`crate::UdpCounts`]; a rate error that still lasts is named on it). The
+//! UDP source is told the rig's sample period (`[sim] sample_period_s`) and
+//! the expected sender (`[udp] sender`). The last frame carries `END_OF_STREAM`;
 //! the process then exits 0. SIGINT/SIGTERM stop it cleanly.
 //!
 //! A paced acquisition that could not run for longer than `--max-catch-up-ms`
@@ -194,6 +197,9 @@ fn build_source(args: &Args, stop: &'static AtomicBool) -> Result<Box<dyn Source
             limits: dataset::Limits::for_model(&cfg.model, cfg.sim.sample_period_s),
             idle_timeout: Duration::from_secs_f64(idle),
             stop: Some(stop),
+            // the rig's sample period: a sender at another rate is a rate error
+            sample_period_s: cfg.sim.sample_period_s,
+            sender: cfg.udp.sender,
         };
         return Ok(Box::new(UdpSource::bind(addr, opts)?));
     }

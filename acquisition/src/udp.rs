@@ -17,6 +17,63 @@
 //!   range or whose time does not increase: dropped, counted, reported
 //!   missing in the next gap.
 //!
+//! The receiver survives its sender (`T` below is the configured sample
+//! period, [`UdpOptions::sample_period_s`]):
+//!
+//! - **one sender**: the stream is taken from one address only, the
+//!   configured one (`[udp] sender = "IP:PORT"`, [`UdpOptions::sender`]) or
+//!   else the first that sends a valid datagram. Datagrams from any other
+//!   address are **foreign**: dropped before they are decoded (never mixed
+//!   into the sequence tracking), counted, the first one named on stderr.
+//! - **reboot** (a restart of the sender): a valid datagram whose sequence
+//!   number is below the newest by more than the 64-entry reorder window
+//!   ([`REORDER_WINDOW`]) is a new stream when its time went back (below the
+//!   newest datagram's time) after at least [`RESTART_SILENCE_PERIODS`]
+//!   sample periods without a datagram of the stream, or when its time went
+//!   on (past the newest's: a sender that restarts its sequence but keeps its
+//!   clock; no old datagram of the stream can be newer than the newest). It is
+//!   recognised on the first datagram of the new stream: counted (`reboots`),
+//!   named on stderr (old and new sequence number and time), the sequence
+//!   window, the last time and the rate measurement start again, and the
+//!   sample is [`Acquired::AfterGap`]: missing are the samples of the silence
+//!   as the arrival clock measured it, `round(silence / T) − 1`, at least 1
+//!   (the sender's own times of two streams say nothing about the time
+//!   between them). An old datagram that arrives out of order while the
+//!   stream flows (seq far below, time below, no silence) stays **late**; a
+//!   sender that restarts without a pause has its first datagrams counted
+//!   late until `RESTART_SILENCE_PERIODS` periods have passed.
+//! - **time jump**: between two samples of the stream, the time says
+//!   `Δt / T` periods passed and the sequence numbers `Δseq`. When they
+//!   differ by more than `max(10, Δseq / 2)` periods (a clock step of the
+//!   sender: NTP, a clock set by hand) the sample is a time jump: counted
+//!   (`time_jumps`), named on stderr, and passed on as
+//!   [`Acquired::AfterGap`]. Forward, the gap is what the time stamps imply,
+//!   `round(Δt / T) − 1` samples (at least what the sequence says): the
+//!   estimator reckons gaps from the time stamps, so both stages count the
+//!   same, and a gap that long makes the filter re-anchor instead of bridging
+//!   the step by prediction (the stderr line also says what the sequence
+//!   numbers imply, to tell a clock step from a pause). Backward (by more
+//!   than the rule allows; a smaller step back is rejected as before), the
+//!   sample is accepted as a gap of what the sequence says, at least 1: the
+//!   stream goes on in the new time base (rather than rejecting every sample
+//!   until the time has caught up), flagged after a gap for the filter to
+//!   re-anchor on.
+//! - **rate**: the sender's sample period is measured as the median of
+//!   `Δt / Δseq` over blocks of [`RATE_WINDOW`] steps of the stream (the
+//!   median passes over the odd time jump or jittered stamp; time stamps
+//!   coarser than the period can hide a small error). The first block of a
+//!   stream is looked at after [`RATE_EARLY_STEPS`] steps already, with a
+//!   tolerance of 20 % (a sender at twice or half the rate is caught within
+//!   20 samples); every full block with 5 % ([`RATE_TOLERANCE`]). A period
+//!   outside the tolerance is a **rate error**: counted (`rate_errors`),
+//!   named on stderr once with both rates, shown by [`UdpSource::rate_error`]
+//!   and the summary; from that sample on the stream's samples are dropped
+//!   and counted (`wrong_rate`, reported missing in the next gap): the
+//!   detector is blind rather than fed samples at a rate it does not model.
+//!   The measurement goes on: a full block within 5 % (after the sender was
+//!   set right, usually by a reboot) clears the error and samples flow again.
+//!   The samples before the first look (20 at most) are passed on.
+//!
 //! The counts are [`UdpCounts`] ([`UdpSource::counts`]). The sender paces the
 //! stream: a live source is published on arrival, never re-paced. The stream
 //! ends with the datagram flagged end of stream (the sender's last sample, or
@@ -67,12 +124,23 @@ impl ChannelScale {
 
 /// The `[udp]` section of the configuration: the scaling of each channel of
 /// the UDP stream from raw values to SI (`[udp.p1] gain = 250.0, offset =
-/// -1.0e6` for a pressure sent in counts of 250 Pa from −1 MPa). The default,
-/// gain 1 and offset 0 everywhere, means the sender already sends SI. The
-/// sample time is never scaled (seconds).
+/// -1.0e6` for a pressure sent in counts of 250 Pa from −1 MPa), and the
+/// expected sender (`sender = "192.168.10.20:5005"`). The default, gain 1 and
+/// offset 0 everywhere, means the sender already sends SI. The sample time is
+/// never scaled (seconds).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct UdpScaling {
+    /// The only address datagrams are taken from, `IP:PORT` of the rig's DAQ
+    /// or PLC (its source port must then be fixed); datagrams from any other
+    /// address are dropped and counted foreign. `None` (the default): the
+    /// first sender of a valid datagram. The acquisition passes it on as
+    /// [`UdpOptions::sender`].
+    #[serde(
+        deserialize_with = "deserialize_sender",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub sender: Option<SocketAddr>,
     /// Valve command, to V.
     pub u: ChannelScale,
     /// Rod position, to m.
@@ -106,8 +174,12 @@ impl UdpScaling {
     }
 
     /// Checks every gain (finite, |gain| from 1e-12 to 1e12) and offset
-    /// (finite, |offset| ≤ 1e9 in the channel's unit); the error names the field.
+    /// (finite, |offset| ≤ 1e9 in the channel's unit), and the sender (a
+    /// fixed port, not the unspecified address); the error names the field.
     pub fn validate(&self) -> Result<(), String> {
+        if let Some(sender) = self.sender {
+            parse_sender_address(&sender.to_string())?;
+        }
         for (name, unit, c) in self.channels() {
             let g = c.gain.abs();
             if !(GAIN_RANGE.0..=GAIN_RANGE.1).contains(&g) {
@@ -170,14 +242,51 @@ pub fn parse_udp_address(text: &str) -> Result<SocketAddr, String> {
     Ok(parsed)
 }
 
+/// Parses the `[udp] sender` of the configuration: the `IP:PORT` datagrams
+/// are expected from (e.g. `192.168.10.20:5005`, `[fe80::1]:5005`). The error
+/// names the field and the problem: not IP:PORT (host names are not looked
+/// up), port 0, or an unspecified address (0.0.0.0, ::), which no datagram comes from.
+pub fn parse_sender_address(text: &str) -> Result<SocketAddr, String> {
+    let parsed: SocketAddr = text.parse().map_err(|_| {
+        format!(
+            "[udp] sender = {text:?}: expected the IP:PORT the rig's DAQ or PLC sends from, such as \
+             192.168.10.20:5005 (IPv6: [fe80::1]:5005); host names are not looked up"
+        )
+    })?;
+    if parsed.port() == 0 {
+        return Err(format!(
+            "[udp] sender = {text:?}: port 0 is no sender's port; name the port the sender sends from (1 to 65535)"
+        ));
+    }
+    if parsed.ip().is_unspecified() {
+        return Err(format!(
+            "[udp] sender = {text:?}: {} is no sender's address; name the address the sender sends from",
+            parsed.ip()
+        ));
+    }
+    Ok(parsed)
+}
+
+/// `[udp] sender` from its text, checked by [`parse_sender_address`].
+fn deserialize_sender<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<SocketAddr>, D::Error> {
+    let text = String::deserialize(d)?;
+    parse_sender_address(&text)
+        .map(Some)
+        .map_err(serde::de::Error::custom)
+}
+
 /// What a UDP stream received, by outcome (since the source was opened).
 ///
 /// Every datagram is counted once: `datagrams = samples + duplicated + late +
-/// malformed + rejected + end marks` (a sample-less end-of-stream datagram is
-/// an end mark). `lost` counts sequence numbers skipped by a jump forward
-/// (reported as gaps); a late datagram was counted lost first, when the gap
-/// was published, so the datagrams that never arrived are `lost - late` (plus
-/// the malformed ones whose sequence number could not be read, if any).
+/// malformed + rejected + foreign + wrong_rate + end marks` (a sample-less
+/// end-of-stream datagram is an end mark). `lost` counts sequence numbers
+/// skipped by a jump forward (reported as gaps); a late datagram was counted
+/// lost first, when the gap was published, so the datagrams that never arrived
+/// are `lost - late` (plus the malformed ones whose sequence number could not
+/// be read, if any). `reboots`, `time_jumps` and `rate_errors` count events,
+/// not datagrams: the gaps of reboots and time jumps are in the `missing` of
+/// the [`Acquired::AfterGap`] items (from the arrival clock and the time
+/// stamps), not in `lost`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct UdpCounts {
     /// Datagrams received.
@@ -195,15 +304,47 @@ pub struct UdpCounts {
     /// Valid datagrams whose sample is out of its physical range or whose time
     /// does not increase: dropped and reported missing in the next gap.
     pub rejected: u64,
+    /// Datagrams from an address other than the stream's sender (the
+    /// configured `[udp] sender`, else the first one): dropped, not decoded.
+    pub foreign: u64,
+    /// Samples dropped while the sender's measured rate did not match the
+    /// configured sample period (a rate error): reported missing in the next gap.
+    pub wrong_rate: u64,
+    /// Restarts of the sender (sequence number and time started again): each
+    /// began a new stream after a gap.
+    pub reboots: u64,
+    /// Time stamps that jumped against the sequence numbers (a clock step of
+    /// the sender): each reported as a gap.
+    pub time_jumps: u64,
+    /// Times the measured sample period was found not to match the configured one.
+    pub rate_errors: u64,
 }
 
 impl fmt::Display for UdpCounts {
+    /// `N datagrams: N samples, N lost, ...`; foreign, wrong-rate and the
+    /// events (reboots, time jumps, rate errors) only when there were any.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
             "{} datagrams: {} samples, {} lost, {} duplicated, {} late (reordered), {} malformed, {} rejected",
             self.datagrams, self.samples, self.lost, self.duplicated, self.late, self.malformed, self.rejected
-        )
+        )?;
+        if self.foreign > 0 {
+            write!(f, ", {} foreign (another sender)", self.foreign)?;
+        }
+        if self.wrong_rate > 0 {
+            write!(f, ", {} dropped at a wrong rate", self.wrong_rate)?;
+        }
+        for (n, what) in [
+            (self.reboots, "sender restarts (reboots)"),
+            (self.time_jumps, "time jumps"),
+            (self.rate_errors, "rate errors"),
+        ] {
+            if n > 0 {
+                write!(f, "; {n} {what}")?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -212,7 +353,8 @@ impl fmt::Display for UdpCounts {
 pub enum UdpEnd {
     /// The sender flagged its last sample as the end of the stream.
     LastSample,
-    /// A sample-less end-of-stream datagram came (or the flagged last sample was rejected).
+    /// A sample-less end-of-stream datagram came (or the flagged last sample
+    /// was rejected or dropped at a wrong rate).
     EndMark,
     /// No datagram came for the idle timeout.
     IdleTimeout,
@@ -228,6 +370,24 @@ const POLL: Duration = Duration::from_millis(50);
 pub const RECV_BUFFER_BYTES: usize = 8 << 20;
 /// How many problems of each kind are named on stderr.
 const NAMED: u64 = 10;
+/// Sequence numbers behind the newest that are still told apart (duplicated
+/// or late); a datagram further behind may start a new stream (a reboot).
+pub const REORDER_WINDOW: u64 = 64;
+/// Sample periods without a datagram of the stream after which a datagram
+/// far behind in sequence and time is a reboot rather than a late one.
+pub const RESTART_SILENCE_PERIODS: u64 = 20;
+/// Steps (`Δt / Δseq` of consecutive samples) per block of the rate measurement.
+pub const RATE_WINDOW: usize = 200;
+/// Steps after which the first block of a stream is looked at (tolerance 20 %).
+pub const RATE_EARLY_STEPS: usize = 20;
+/// Largest relative difference of the measured from the configured sample
+/// period over a full block (dimensionless, 5 %).
+pub const RATE_TOLERANCE: f64 = 0.05;
+/// Tolerance of the early look at a stream's first steps (dimensionless, 20 %).
+const RATE_EARLY_TOLERANCE: f64 = 0.2;
+/// A time step that differs from the sequence numbers by more than this many
+/// periods (and by more than half the steps) is a time jump.
+const TIME_JUMP_PERIODS: f64 = 10.0;
 
 /// Options of a [`UdpSource`].
 #[derive(Debug, Clone)]
@@ -240,18 +400,100 @@ pub struct UdpOptions {
     pub idle_timeout: Duration,
     /// Set by a signal handler: the source ends at once (checked every 50 ms).
     pub stop: Option<&'static AtomicBool>,
+    /// The sample period the sender must keep, s (the rig's, `[sim]
+    /// sample_period_s`; the estimator models it); a measured period more
+    /// than 5 % off is a rate error.
+    pub sample_period_s: f64,
+    /// The only address datagrams are taken from (`[udp] sender`); `None`: the
+    /// first sender of a valid datagram.
+    pub sender: Option<SocketAddr>,
 }
 
 impl Default for UdpOptions {
-    /// SI senders, the default rig's limits at 1 kHz, 5 s idle timeout, no stop flag.
+    /// SI senders, the default rig's limits at 1 kHz (period 1 ms), 5 s idle
+    /// timeout, no stop flag, the first sender.
     fn default() -> Self {
         UdpOptions {
             scaling: UdpScaling::default(),
             limits: dataset::Limits::default(),
             idle_timeout: Duration::from_secs(5),
             stop: None,
+            sample_period_s: 1e-3,
+            sender: None,
         }
     }
+}
+
+/// The sender's sample period, measured over blocks of steps (module docs).
+struct RateMeter {
+    /// `Δt / Δseq` of the block's steps, s.
+    steps: [f64; RATE_WINDOW],
+    /// Steps in the block.
+    n: usize,
+    /// Whether the block is the first of the stream (looked at early).
+    first_block: bool,
+    /// The median of the last block looked at, s.
+    measured_s: Option<f64>,
+}
+
+impl RateMeter {
+    fn new() -> RateMeter {
+        RateMeter {
+            steps: [0.0; RATE_WINDOW],
+            n: 0,
+            first_block: true,
+            measured_s: None,
+        }
+    }
+
+    /// A new stream: its first block is looked at early again.
+    fn restart(&mut self) {
+        self.n = 0;
+        self.first_block = true;
+    }
+
+    /// Adds a step of `period_s`; returns the block's median period, s, and
+    /// the tolerance to judge it with when the block is due to be looked at.
+    fn push(&mut self, period_s: f64) -> Option<(f64, f64)> {
+        if !(period_s.is_finite() && period_s > 0.0) || self.n >= RATE_WINDOW {
+            return None;
+        }
+        self.steps[self.n] = period_s;
+        self.n += 1;
+        let tolerance = if self.n == RATE_WINDOW {
+            RATE_TOLERANCE
+        } else if self.first_block && self.n == RATE_EARLY_STEPS {
+            RATE_EARLY_TOLERANCE
+        } else {
+            return None;
+        };
+        let mut sorted = self.steps;
+        let block = &mut sorted[..self.n];
+        let mid = self.n / 2;
+        block.select_nth_unstable_by(mid, f64::total_cmp);
+        let mut median = block[mid];
+        if self.n.is_multiple_of(2) {
+            // the mean of the two middle steps: the largest of the lower half
+            let below = block[..mid].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            median = 0.5 * (median + below);
+        }
+        if self.n == RATE_WINDOW {
+            self.n = 0;
+            self.first_block = false;
+        }
+        self.measured_s = Some(median);
+        Some((median, tolerance))
+    }
+}
+
+/// What [`UdpSource::track`] made of a sequence number.
+enum Tracked {
+    /// New to the stream (a jump forward counted lost): go on with the sample.
+    New,
+    /// The first datagram of a restarted sender: a new stream.
+    Restart,
+    /// Duplicated or late: dropped, counted.
+    Dropped,
 }
 
 /// A UDP sensor stream as a [`Source`] (see the module docs).
@@ -265,27 +507,45 @@ pub struct UdpSource {
     /// Newest sequence number received, and a bitmap of the 64 before it
     /// (bit k: `newest - k` was received).
     newest: Option<(u64, u64)>,
+    /// The time of the datagram with the newest sequence number, s.
+    newest_t: f64,
     /// Samples missing before the next one passed on.
     pending_missing: u64,
-    last_t: Option<f64>,
+    /// Sequence number and time (s) of the stream's last sample that passed
+    /// the checks (passed on, or dropped at a wrong rate).
+    last: Option<(u64, f64)>,
     /// `CLOCK_MONOTONIC` of the last datagram's arrival, ns (0: none yet).
     arrival_mono_ns: u64,
+    /// `CLOCK_MONOTONIC` of the arrival of the last datagram new to the
+    /// stream (that advanced the newest sequence number), ns.
+    stream_mono_ns: u64,
+    /// The stream's sender: configured, else the first of a valid datagram.
     sender: Option<SocketAddr>,
-    second_sender_seen: bool,
     consecutive_late: u64,
+    rate: RateMeter,
+    /// The rate error while there is one (made once per error, not per datagram).
+    rate_error: Option<String>,
     end: Option<UdpEnd>,
 }
 
 impl UdpSource {
     /// Binds `addr` and asks for an 8 MiB receive buffer (the kernel grants up
-    /// to `net.core.rmem_max`); the error names the address.
+    /// to `net.core.rmem_max`); the error names the address, or the sample
+    /// period if it is not a positive number of seconds (up to 1 s).
     pub fn bind(addr: SocketAddr, opts: UdpOptions) -> Result<UdpSource, String> {
+        if !(opts.sample_period_s > 0.0 && opts.sample_period_s <= 1.0) {
+            return Err(format!(
+                "UDP {addr}: sample period {} s: must be a number of seconds in (0, 1]",
+                opts.sample_period_s
+            ));
+        }
         let socket = UdpSocket::bind(addr).map_err(|e| format!("cannot listen on UDP {addr}: {e}"))?;
         socket
             .set_read_timeout(Some(POLL))
             .map_err(|e| format!("UDP {addr}: {e}"))?;
         let local = socket.local_addr().map_err(|e| format!("UDP {addr}: {e}"))?;
         let recv_buffer_bytes = set_recv_buffer(&socket, RECV_BUFFER_BYTES);
+        let sender = opts.sender;
         Ok(UdpSource {
             socket,
             local,
@@ -294,12 +554,15 @@ impl UdpSource {
             buf: [0; 2048],
             counts: UdpCounts::default(),
             newest: None,
+            newest_t: f64::NAN,
             pending_missing: 0,
-            last_t: None,
+            last: None,
             arrival_mono_ns: 0,
-            sender: None,
-            second_sender_seen: false,
+            stream_mono_ns: 0,
+            sender,
             consecutive_late: 0,
+            rate: RateMeter::new(),
+            rate_error: None,
             end: None,
         })
     }
@@ -324,32 +587,72 @@ impl UdpSource {
         self.end
     }
 
-    /// Follows the sequence number of a valid datagram; false if it is to be
-    /// dropped (duplicated or late).
-    fn track(&mut self, seq: u64, from: SocketAddr) -> bool {
+    /// The rate error while the sender's measured sample period does not
+    /// match the configured one (its samples are dropped: the detector is
+    /// blind), with both rates; `None` while the rate is right or not yet measured.
+    pub fn rate_error(&self) -> Option<&str> {
+        self.rate_error.as_deref()
+    }
+
+    /// The sender's sample period as last measured (median of a block of
+    /// steps, module docs), s; `None` before the first look.
+    pub fn measured_period_s(&self) -> Option<f64> {
+        self.rate.measured_s
+    }
+
+    /// The stream's sender: the configured one, else the first that sent a
+    /// valid datagram (`None` before it).
+    pub fn sender(&self) -> Option<SocketAddr> {
+        self.sender
+    }
+
+    /// The configured sample period in ns (at least 1).
+    fn period_ns(&self) -> u64 {
+        ((self.opts.sample_period_s * 1e9).round() as u64).max(1)
+    }
+
+    /// Follows the sequence number of a valid datagram of time `t_s` (s).
+    fn track(&mut self, seq: u64, t_s: f64, from: SocketAddr) -> Tracked {
         let Some((newest, seen)) = self.newest else {
             self.newest = Some((seq, 1));
-            return true;
+            self.newest_t = t_s;
+            self.stream_mono_ns = self.arrival_mono_ns;
+            return Tracked::New;
         };
         if seq > newest {
             let jump = seq - newest;
             let lost = jump - 1;
             self.counts.lost += lost;
             self.pending_missing += lost;
-            let seen = if jump >= 64 { 1 } else { (seen << jump) | 1 };
+            let seen = if jump >= REORDER_WINDOW {
+                1
+            } else {
+                (seen << jump) | 1
+            };
             self.newest = Some((seq, seen));
+            self.newest_t = t_s;
+            self.stream_mono_ns = self.arrival_mono_ns;
             self.consecutive_late = 0;
-            return true;
+            return Tracked::New;
         }
         let age = newest - seq;
-        if age < 64 && seen & (1 << age) != 0 {
+        if age >= REORDER_WINDOW {
+            let silence_ns = self.arrival_mono_ns.saturating_sub(self.stream_mono_ns);
+            let went_back =
+                t_s < self.newest_t && silence_ns >= RESTART_SILENCE_PERIODS.saturating_mul(self.period_ns());
+            if went_back || t_s > self.newest_t {
+                self.restart(seq, t_s, silence_ns, from);
+                return Tracked::Restart;
+            }
+        }
+        if age < REORDER_WINDOW && seen & (1 << age) != 0 {
             self.counts.duplicated += 1;
             if self.counts.duplicated <= NAMED {
                 eprintln!("udp: duplicated datagram seq {seq} from {from} dropped");
             }
-            return false;
+            return Tracked::Dropped;
         }
-        if age < 64 {
+        if age < REORDER_WINDOW {
             self.newest = Some((newest, seen | (1 << age)));
         }
         self.counts.late += 1;
@@ -359,26 +662,143 @@ impl UdpSource {
         }
         if self.consecutive_late == 1000 {
             eprintln!(
-                "udp: 1000 late datagrams in a row (seq {seq}, newest {newest}): did the sender restart its \
-                 sequence? Restart the receiver with it"
+                "udp: 1000 late datagrams in a row (seq {seq}, newest {newest}) and the time did not go back \
+                 by a restart: is the sender's clock stuck? Restart the receiver with the sender"
             );
         }
-        false
+        Tracked::Dropped
+    }
+
+    /// A restart of the sender (module docs): a new stream from `seq`, after
+    /// a gap of the silence before it.
+    fn restart(&mut self, seq: u64, t_s: f64, silence_ns: u64, from: SocketAddr) {
+        let (old_seq, old_t) = (self.newest.map_or(0, |(n, _)| n), self.newest_t);
+        let periods = (silence_ns as f64 / self.period_ns() as f64).round() as u64;
+        let gap = periods.saturating_sub(1).max(1);
+        self.counts.reboots += 1;
+        if self.counts.reboots <= NAMED {
+            let how = if t_s < old_t {
+                "sequence and time started again: a reboot"
+            } else {
+                "sequence started again, time went on"
+            };
+            eprintln!(
+                "udp: sender {from} restarted ({how}): seq {old_seq} -> {seq}, t {old_t} s -> {t_s} s after \
+                 {:.1} ms without a datagram; a new stream, {gap} samples missing",
+                silence_ns as f64 * 1e-6
+            );
+        }
+        self.pending_missing += gap;
+        self.newest = Some((seq, 1));
+        self.newest_t = t_s;
+        self.stream_mono_ns = self.arrival_mono_ns;
+        self.last = None;
+        self.consecutive_late = 0;
+        self.rate.restart();
+    }
+
+    /// Whether the datagram from `from` belongs to the stream; a foreign one
+    /// is counted (the first named). The stream's sender is locked by the
+    /// caller once a datagram decoded.
+    fn is_foreign(&mut self, from: SocketAddr) -> bool {
+        let Some(sender) = self.sender else {
+            return false;
+        };
+        if from == sender {
+            return false;
+        }
+        self.counts.foreign += 1;
+        if self.counts.foreign == 1 {
+            if self.opts.sender.is_some() {
+                eprintln!(
+                    "udp: error: datagrams from {from} dropped: not the configured sender {sender} ([udp] sender); \
+                     they are counted as foreign"
+                );
+            } else {
+                eprintln!(
+                    "udp: error: datagrams from a second sender {from} dropped (the stream is from {sender}, the \
+                     first sender); if {from} is the rig's, set `[udp] sender = \"{from}\"` in the config, else \
+                     `[udp] sender = \"{sender}\"` so that no other device can take the stream over"
+                );
+            }
+        }
+        true
+    }
+
+    /// The time step from the stream's last sample to `(seq, t_s)`: a time
+    /// jump is counted, named and its gap made pending (module docs). Returns
+    /// whether the time goes on (false: it does not increase, and it was no jump).
+    fn time_step(&mut self, seq: u64, t_s: f64) -> bool {
+        let Some((last_seq, last_t)) = self.last else {
+            return true;
+        };
+        let period = self.opts.sample_period_s;
+        let dt = t_s - last_t;
+        let dseq = seq.saturating_sub(last_seq).max(1);
+        let by_seq = dseq as f64;
+        let by_time = dt / period;
+        if (by_time - by_seq).abs() > TIME_JUMP_PERIODS.max(0.5 * by_seq) && by_time.is_finite() {
+            self.counts.time_jumps += 1;
+            let missing = if dt > 0.0 {
+                (by_time.round() as u64).saturating_sub(1).max(dseq - 1)
+            } else {
+                dseq - 1
+            }
+            .max(1);
+            if self.counts.time_jumps <= NAMED {
+                eprintln!(
+                    "udp: time jump: t {last_t} s -> {t_s} s (by {dt:.6} s) at seq {last_seq} -> {seq}, which \
+                     says {:.6} s: the sender's clock stepped (or it paused); reported as a gap of {missing} samples",
+                    by_seq * period
+                );
+            }
+            self.pending_missing = self.pending_missing.max(missing);
+            return true;
+        }
+        dt > 0.0
+    }
+
+    /// Feeds the step to `(seq, t_s)` to the rate measurement; returns whether
+    /// the sample is at the right rate (false: dropped while a rate error lasts).
+    fn rate_ok(&mut self, seq: u64, t_s: f64) -> bool {
+        if let Some((last_seq, last_t)) = self.last {
+            let dseq = seq.saturating_sub(last_seq).max(1) as f64;
+            if let Some((measured, tolerance)) = self.rate.push((t_s - last_t) / dseq) {
+                let configured = self.opts.sample_period_s;
+                let off = (measured / configured - 1.0).abs();
+                if off > tolerance && self.rate_error.is_none() {
+                    self.counts.rate_errors += 1;
+                    let msg = format!(
+                        "the sender's sample period is {:.4} ms ({:.1} Hz), the configured one {:.4} ms ({:.1} Hz; \
+                         [sim] sample_period_s), {:.0} % off: its samples are dropped, the detector is blind until \
+                         the sender keeps the configured rate",
+                        measured * 1e3,
+                        1.0 / measured,
+                        configured * 1e3,
+                        1.0 / configured,
+                        off * 100.0
+                    );
+                    eprintln!("udp: error: {msg}");
+                    self.rate_error = Some(msg);
+                } else if off <= RATE_TOLERANCE && tolerance == RATE_TOLERANCE && self.rate_error.is_some() {
+                    self.rate_error = None;
+                    eprintln!(
+                        "udp: the sender's sample period is {:.4} ms again (configured {:.4} ms): samples are \
+                         passed on again",
+                        measured * 1e3,
+                        configured * 1e3
+                    );
+                }
+            }
+        }
+        self.rate_error.is_none()
     }
 
     /// The item of one received datagram, or `None` to wait for the next one.
     fn on_datagram(&mut self, len: usize, from: SocketAddr) -> Option<Acquired> {
         self.counts.datagrams += 1;
-        match self.sender {
-            None => self.sender = Some(from),
-            Some(first) if first != from && !self.second_sender_seen => {
-                self.second_sender_seen = true;
-                eprintln!(
-                    "udp: warning: datagrams from a second sender {from} (the stream is from {first}); \
-                     their sequence numbers mix with the stream's"
-                );
-            }
-            Some(_) => {}
+        if self.is_foreign(from) {
+            return None;
         }
         let d = match UdpDatagram::try_from(&self.buf[..len.min(self.buf.len())]) {
             Ok(d) => d,
@@ -387,20 +807,27 @@ impl UdpSource {
                 return None;
             }
         };
+        // a valid datagram: its address is the stream's from now on
+        self.sender.get_or_insert(from);
         if !d.has_sample() {
             self.end = Some(UdpEnd::EndMark);
             return None;
         }
-        if !self.track(d.seq, from) {
+        if let Tracked::Dropped = self.track(d.seq, d.t_s, from) {
             return None;
         }
         let s = self.opts.scaling.sample(&d);
         let problem = match self.opts.limits.check(&s) {
             Some((_, _, msg)) => Some(msg),
-            None => match self.last_t {
-                Some(t) if s.t_s <= t => Some(format!("time {} s does not increase (previous {t} s)", s.t_s)),
-                _ => None,
-            },
+            None => {
+                let last = self.last;
+                match last {
+                    Some((_, t)) if !self.time_step(d.seq, s.t_s) => {
+                        Some(format!("time {} s does not increase (previous {t} s)", s.t_s))
+                    }
+                    _ => None,
+                }
+            }
         };
         if let Some(msg) = problem {
             self.counts.rejected += 1;
@@ -413,7 +840,16 @@ impl UdpSource {
             }
             return None;
         }
-        self.last_t = Some(s.t_s);
+        let rate_ok = self.rate_ok(d.seq, s.t_s);
+        self.last = Some((d.seq, s.t_s));
+        if !rate_ok {
+            self.counts.wrong_rate += 1;
+            self.pending_missing += 1;
+            if d.is_end_of_stream() {
+                self.end = Some(UdpEnd::EndMark);
+            }
+            return None;
+        }
         self.counts.samples += 1;
         if d.is_end_of_stream() {
             self.end = Some(UdpEnd::LastSample);
@@ -473,14 +909,19 @@ impl Source for UdpSource {
     }
 
     fn sample_period_s(&self) -> f64 {
-        self.opts.limits.sample_period_s.unwrap_or(1e-3)
+        self.opts.sample_period_s
     }
 
     fn describe(&self) -> String {
         format!(
-            "UDP stream on {} (LWUD v{}, receive buffer {} KiB, idle timeout {} s{})",
+            "UDP stream on {} (LWUD v{}, {} Hz, {}, receive buffer {} KiB, idle timeout {} s{})",
             self.local,
             frames::udp::VERSION,
+            1.0 / self.opts.sample_period_s,
+            match self.opts.sender {
+                Some(a) => format!("from {a} only"),
+                None => "from the first sender".to_string(),
+            },
             self.recv_buffer_bytes / 1024,
             self.opts.idle_timeout.as_secs_f64(),
             if self.opts.scaling.is_identity() {
@@ -512,7 +953,11 @@ impl Source for UdpSource {
             Some(UdpEnd::SocketError) => "a socket error",
             None => "not yet",
         };
-        Some(format!("udp: {}; ended by {end}", self.counts))
+        let rate = match &self.rate_error {
+            Some(e) => format!("; RATE ERROR: {e}"),
+            None => String::new(),
+        };
+        Some(format!("udp: {}; ended by {end}{rate}", self.counts))
     }
 }
 

@@ -51,6 +51,39 @@ fn drain(src: &mut UdpSource) -> Vec<Acquired> {
     out
 }
 
+/// The datagrams counted by outcome (without end marks): equals `datagrams`
+/// when no end mark came.
+fn identity(c: &UdpCounts) -> u64 {
+    c.samples + c.duplicated + c.late + c.malformed + c.rejected + c.foreign + c.wrong_rate
+}
+
+/// The datagram of `seq` at time `t_s`, s (flagged end of stream if `last`).
+fn datagram_at(seq: u64, t_s: f64, last: bool) -> [u8; frames::udp::LEN] {
+    let mut d = UdpDatagram::from_sample(seq, &sample(seq));
+    d.t_s = t_s;
+    if last {
+        d.flags |= flags::END_OF_STREAM;
+    }
+    d.encode()
+}
+
+/// Sends `datagrams` from `tx` to `to` on a thread (a pause of 1 ms every 50,
+/// so that a small receive buffer does not overflow while the test drains).
+fn send_from(
+    tx: UdpSocket,
+    to: SocketAddr,
+    datagrams: Vec<[u8; frames::udp::LEN]>,
+) -> std::thread::JoinHandle<()> {
+    std::thread::spawn(move || {
+        for (i, d) in datagrams.iter().enumerate() {
+            tx.send_to(d, to).unwrap();
+            if i % 50 == 49 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+    })
+}
+
 /// (seq of the sample as the test encodes it, missing before it)
 fn seqs(items: &[Acquired]) -> Vec<(u64, u64)> {
     items
@@ -118,13 +151,15 @@ fn lost_duplicated_reordered_and_malformed_datagrams_are_counted_exactly() {
             late: 1,
             malformed: 3,
             rejected: 0,
+            foreign: 0,
+            wrong_rate: 0,
+            reboots: 0,
+            time_jumps: 0,
+            rate_errors: 0,
         }
     );
     let c = src.counts();
-    assert_eq!(
-        c.datagrams,
-        c.samples + c.duplicated + c.late + c.malformed + c.rejected
-    );
+    assert_eq!(c.datagrams, identity(&c));
     // the samples are passed on bit for bit
     match &items[5] {
         Acquired::Sample(s) => {
@@ -437,6 +472,29 @@ fn udp_arguments_are_refused_with_the_reason() {
         "0",
     ]);
     assert!(e.contains("--udp-idle-timeout-s"), "{e}");
+    // a bad `[udp] sender` is named
+    let dir = scratch::ScratchDir::new("acquisition-udp-sender");
+    for (text, why) in [
+        ("rig-plc:5005", "host names are not looked up"),
+        ("192.168.10.20", "IP:PORT"),
+        ("192.168.10.20:0", "port 0"),
+        ("0.0.0.0:5005", "no sender's address"),
+    ] {
+        let cfg = dir.join("rig.toml");
+        std::fs::write(&cfg, format!("[udp]\nsender = \"{text}\"\n")).unwrap();
+        let e = run(&[
+            "--rig",
+            "r",
+            "--udp",
+            "127.0.0.1:5005",
+            "--config",
+            cfg.to_str().unwrap(),
+        ]);
+        assert!(
+            e.contains("[udp] sender") && e.contains(text) && e.contains(why),
+            "{text}: {e}"
+        );
+    }
 }
 
 /// A stream that ends by the idle timeout (no end-of-stream flag) is closed by
@@ -470,4 +528,358 @@ fn an_idle_stream_is_closed_by_an_end_frame_at_the_last_sample_time() {
         .iter()
         .all(|f| f.flags & sensor_flags::END_OF_STREAM == 0));
     assert!(stderr.contains("ended by the idle timeout"), "{stderr}");
+}
+
+/// A sender that reboots (sequence number and time back to 0 after a silence)
+/// is recognised on the first datagram of its new stream, within 100 ms: the
+/// new stream's samples are all passed on, the first after a gap as long as
+/// the silence. A reordered datagram, and an old one that arrives while the
+/// stream flows, stay late.
+#[test]
+fn a_rebooted_sender_is_recognised_on_its_first_datagram_and_its_new_stream_taken() {
+    let (mut src, tx, to) = source(5.0);
+    let (sent_tx, sent_rx) = std::sync::mpsc::channel();
+    let sender = std::thread::spawn(move || {
+        // the first stream: 0..=99, 51 before 50 (reordered), then seq 5 again (far behind, no silence)
+        let mut first: Vec<u64> = (0..100).collect();
+        first.swap(50, 51);
+        first.push(5);
+        for seq in first {
+            tx.send_to(&datagram(seq), to).unwrap();
+        }
+        // the reboot: 300 ms of silence, then sequence and time from 0 again
+        std::thread::sleep(Duration::from_millis(300));
+        tx.send_to(&datagram(0), to).unwrap();
+        sent_tx.send(Instant::now()).unwrap();
+        // the rest well after the recognition is due
+        std::thread::sleep(Duration::from_millis(200));
+        for seq in 1..100 {
+            tx.send_to(&datagram_at(seq, sample(seq).t_s, seq == 99), to)
+                .unwrap();
+        }
+    });
+    let mut items = Vec::new();
+    let mut arrived = Vec::new();
+    while let Some(item) = src.next_item() {
+        items.push(item);
+        arrived.push(Instant::now());
+        if src.ended() || items.len() > 1000 {
+            break;
+        }
+    }
+    sender.join().unwrap();
+    let sent = sent_rx.recv().unwrap();
+    let got = seqs(&items);
+    // the first stream: 50 came late (after 51, reported missing then)
+    let mut want: Vec<(u64, u64)> = (0..50).map(|s| (s, 0)).collect();
+    want.push((51, 1));
+    want.extend((52..100).map(|s| (s, 0)));
+    assert_eq!(got[..99], want[..]);
+    // the new stream, all of it; its first sample after the gap of the silence
+    assert_eq!(got.len(), 199);
+    assert_eq!(got[99].0, 0);
+    assert!(
+        (250..=2000).contains(&got[99].1),
+        "300 ms of silence at 1 kHz: {:?}",
+        got[99]
+    );
+    assert_eq!(got[100..], (1..100).map(|s| (s, 0)).collect::<Vec<_>>()[..]);
+    // recognised on its first datagram, well within 100 ms
+    let took = arrived[99].saturating_duration_since(sent);
+    assert!(took < Duration::from_millis(100), "{took:?}");
+    assert_eq!(src.end(), Some(UdpEnd::LastSample));
+    let c = src.counts();
+    assert_eq!(
+        c,
+        UdpCounts {
+            datagrams: 201,
+            samples: 199,
+            lost: 1,
+            late: 2,
+            reboots: 1,
+            ..UdpCounts::default()
+        }
+    );
+    assert_eq!(c.datagrams, identity(&c));
+    let summary = src.summary().unwrap();
+    assert!(summary.contains("; 1 sender restarts (reboots)"), "{summary}");
+    assert!(src.rate_error().is_none());
+}
+
+/// A sender whose sequence starts again while its clock goes on (no old
+/// datagram can be newer than the newest) starts a new stream at once.
+#[test]
+fn a_sequence_that_starts_again_with_the_time_going_on_is_a_new_stream() {
+    let (mut src, tx, to) = source(5.0);
+    let mut sends: Vec<[u8; frames::udp::LEN]> = (0..100).map(datagram).collect();
+    sends.extend((0..10).map(|seq| datagram_at(seq, 0.1 + seq as f64 * 1e-3, seq == 9)));
+    let sender = send_from(tx, to, sends);
+    let items = drain(&mut src);
+    sender.join().unwrap();
+    assert_eq!(items.len(), 110);
+    assert!(matches!(items[100], Acquired::AfterGap { missing, .. } if missing >= 1));
+    let c = src.counts();
+    assert_eq!((c.datagrams, c.samples, c.late, c.reboots), (110, 110, 0, 1));
+}
+
+/// A sender's clock that steps by +1 h and back is reported as a gap each
+/// time: forward, of the samples the time stamps imply; backward, of one.
+#[test]
+fn a_time_jump_is_reported_as_a_gap_and_counted() {
+    let (mut src, tx, to) = source(5.0);
+    let hour = 3600.0;
+    let sends: Vec<[u8; frames::udp::LEN]> = (0..100)
+        .map(|seq| {
+            let t = sample(seq).t_s + if (50..80).contains(&seq) { hour } else { 0.0 };
+            datagram_at(seq, t, seq == 99)
+        })
+        .collect();
+    let sender = send_from(tx, to, sends);
+    let items = drain(&mut src);
+    sender.join().unwrap();
+    assert_eq!(items.len(), 100);
+    let gaps: Vec<(usize, u64)> = items
+        .iter()
+        .enumerate()
+        .filter_map(|(i, item)| match item {
+            Acquired::AfterGap { missing, .. } => Some((i, *missing)),
+            _ => None,
+        })
+        .collect();
+    // 49 ms -> 3600.050 s: 3 600 001 periods, 3 600 000 samples missing by the time stamps
+    assert_eq!(gaps, [(50, 3_600_000), (80, 1)]);
+    match &items[50] {
+        Acquired::AfterGap { sample, .. } => assert_eq!(sample.t_s, sample_t(50) + hour),
+        other => panic!("{other:?}"),
+    }
+    let c = src.counts();
+    assert_eq!(
+        c,
+        UdpCounts {
+            datagrams: 100,
+            samples: 100,
+            time_jumps: 2,
+            ..UdpCounts::default()
+        }
+    );
+    assert!(src.summary().unwrap().contains("; 2 time jumps"));
+    assert!(src.rate_error().is_none());
+}
+
+/// A sender at 2 kHz, at 500 Hz or 6 % slow is a rate error: named, counted,
+/// shown by `rate_error`, and its samples after the look are dropped (the
+/// gross errors are caught after 20 samples, a small one after a block of
+/// 200). A right 1 kHz sender is measured right.
+#[test]
+fn a_sender_at_the_wrong_rate_is_a_rate_error_and_its_samples_are_not_passed_on() {
+    for (period_s, passed, hz) in [
+        (0.5e-3, 20, "2000.0 Hz"),
+        (2e-3, 20, "500.0 Hz"),
+        (1.06e-3, 200, "943.4 Hz"),
+    ] {
+        let (mut src, tx, to) = source(5.0);
+        let sends = (0..300)
+            .map(|seq| datagram_at(seq, seq as f64 * period_s, seq == 299))
+            .collect();
+        let sender = send_from(tx, to, sends);
+        let items = drain(&mut src);
+        sender.join().unwrap();
+        // only the samples before the look, each at its own time, no gap
+        assert_eq!(items.len(), passed, "{period_s}");
+        for (seq, item) in items.iter().enumerate() {
+            match item {
+                Acquired::Sample(s) => assert_eq!(s.t_s, seq as f64 * period_s),
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(
+            src.end(),
+            Some(UdpEnd::EndMark),
+            "the flagged last sample was dropped"
+        );
+        let c = src.counts();
+        assert_eq!(
+            c,
+            UdpCounts {
+                datagrams: 300,
+                samples: passed as u64,
+                wrong_rate: 300 - passed as u64,
+                rate_errors: 1,
+                ..UdpCounts::default()
+            },
+            "{period_s}"
+        );
+        let e = src.rate_error().expect("a rate error").to_string();
+        assert!(
+            e.contains(hz) && e.contains("1000.0 Hz") && e.contains("blind"),
+            "{e}"
+        );
+        let measured = src.measured_period_s().unwrap();
+        assert!((measured / period_s - 1.0).abs() < 1e-9, "{measured}");
+        let summary = src.summary().unwrap();
+        assert!(
+            summary.contains(&format!(
+                "{} dropped at a wrong rate; 1 rate errors",
+                300 - passed
+            )) && summary.contains("RATE ERROR"),
+            "{summary}"
+        );
+    }
+    // 1 kHz: two full blocks, no error
+    let (mut src, tx, to) = source(5.0);
+    let sender = send_from(
+        tx,
+        to,
+        (0..450)
+            .map(|seq| datagram_at(seq, sample(seq).t_s, seq == 449))
+            .collect(),
+    );
+    assert_eq!(drain(&mut src).len(), 450);
+    sender.join().unwrap();
+    assert!(src.rate_error().is_none());
+    assert!((src.measured_period_s().unwrap() - 1e-3).abs() < 1e-12);
+    assert_eq!(src.counts().rate_errors, 0);
+}
+
+/// A rate error lasts until a full block of the stream is at the right rate
+/// again (here after a reboot of the sender with the right rate): then the
+/// samples flow again, the first after a gap.
+#[test]
+fn a_rate_error_clears_when_the_sender_keeps_the_rate_again() {
+    let (mut src, tx, to) = source(5.0);
+    let sender = std::thread::spawn(move || {
+        for seq in 0..100 {
+            tx.send_to(&datagram_at(seq, seq as f64 * 0.5e-3, false), to)
+                .unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        for seq in 0..400 {
+            tx.send_to(&datagram_at(seq, sample(seq).t_s, seq == 399), to)
+                .unwrap();
+            if seq % 50 == 49 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+    });
+    let items = drain(&mut src);
+    sender.join().unwrap();
+    // 20 at 2 kHz; at 1 kHz, from the sample that completed a right block on
+    assert_eq!(items.len(), 20 + 200);
+    assert!(items[..20].iter().all(|i| matches!(i, Acquired::Sample(_))));
+    match &items[20] {
+        // 80 dropped at 2 kHz, the gap of the reboot (~100 ms), 200 dropped at 1 kHz
+        Acquired::AfterGap { sample, missing } => {
+            assert_eq!(sample.t_s, sample_t(200));
+            assert!(*missing >= 80 + 50 + 200, "{missing}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(src.rate_error().is_none());
+    let c = src.counts();
+    assert_eq!(
+        c,
+        UdpCounts {
+            datagrams: 500,
+            samples: 220,
+            wrong_rate: 280,
+            reboots: 1,
+            rate_errors: 1,
+            ..UdpCounts::default()
+        }
+    );
+}
+
+fn sample_t(seq: u64) -> f64 {
+    sample(seq).t_s
+}
+
+/// With `[udp] sender` configured, a second device sending higher sequence
+/// numbers cannot take the stream over: its datagrams are counted foreign,
+/// every one of the real stream's samples arrives.
+#[test]
+fn a_configured_sender_keeps_its_stream_against_a_second_device() {
+    let real = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let intruder = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mut src = UdpSource::bind(
+        "127.0.0.1:0".parse().unwrap(),
+        UdpOptions {
+            sender: Some(real.local_addr().unwrap()),
+            ..UdpOptions::default()
+        },
+    )
+    .unwrap();
+    let to = src.local_addr();
+    // the intruder first, and in between, with sequence numbers far ahead
+    for seq in 1_000_000..1_000_005 {
+        intruder.send_to(&datagram(seq), to).unwrap();
+    }
+    let mut sends = Vec::new();
+    for seq in 0..100 {
+        sends.push((seq % 10 == 5, datagram_at(seq, sample_t(seq), seq == 99)));
+    }
+    let t = std::thread::spawn(move || {
+        for (also_intruder, d) in sends {
+            if also_intruder {
+                intruder.send_to(&datagram(2_000_000), to).unwrap();
+            }
+            real.send_to(&d, to).unwrap();
+        }
+    });
+    let items = drain(&mut src);
+    t.join().unwrap();
+    assert_eq!(seqs(&items), (0..100).map(|s| (s, 0)).collect::<Vec<_>>());
+    let c = src.counts();
+    assert_eq!(
+        c,
+        UdpCounts {
+            datagrams: 115,
+            samples: 100,
+            foreign: 15,
+            ..UdpCounts::default()
+        }
+    );
+    assert_eq!(c.datagrams, identity(&c));
+    assert!(src.summary().unwrap().contains(", 15 foreign (another sender)"));
+}
+
+/// Without `[udp] sender` the first sender of a valid datagram locks the
+/// stream; a second one is counted foreign and does not disturb it.
+#[test]
+fn without_a_configured_sender_a_second_sender_is_foreign_and_does_not_disturb_the_stream() {
+    let (mut src, tx, to) = source(5.0);
+    let other = UdpSocket::bind("127.0.0.1:0").unwrap();
+    // garbage from the other one first: it does not lock the stream
+    other.send_to(b"not a datagram", to).unwrap();
+    let mut sends = Vec::new();
+    for seq in 0..100 {
+        sends.push((seq % 20 == 10, datagram_at(seq, sample_t(seq), seq == 99)));
+    }
+    let t = std::thread::spawn(move || {
+        for (also_other, d) in sends {
+            tx.send_to(&d, to).unwrap();
+            if also_other {
+                // higher sequence numbers and a valid end mark: both ignored
+                other.send_to(&datagram(500), to).unwrap();
+                other
+                    .send_to(&UdpDatagram::end_of_stream(501).encode(), to)
+                    .unwrap();
+            }
+        }
+    });
+    let items = drain(&mut src);
+    t.join().unwrap();
+    assert_eq!(seqs(&items), (0..100).map(|s| (s, 0)).collect::<Vec<_>>());
+    assert_eq!(src.end(), Some(UdpEnd::LastSample));
+    let c = src.counts();
+    assert_eq!(
+        c,
+        UdpCounts {
+            datagrams: 111,
+            samples: 100,
+            malformed: 1,
+            foreign: 10,
+            ..UdpCounts::default()
+        }
+    );
+    assert_eq!(c.datagrams, identity(&c));
 }

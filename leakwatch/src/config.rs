@@ -37,7 +37,8 @@ pub struct Config {
     /// The detectors.
     pub classifier: ClassifierConfig,
     /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
-    /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent).
+    /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent),
+    /// and the expected sender, `sender = "IP:PORT"` (default: the first one).
     pub udp: UdpScaling,
     /// How `run` places its stage processes: CPU pinning, the low-latency spin.
     pub run: RunSettings,
@@ -226,7 +227,8 @@ impl Config {
              # [estimator]: the thesis filter (Q, R, P0 in SI squared units per step; see README).\n\
              # [leak_filter]: the filter that estimates leak sizes; [classifier]: the detectors.\n\
              # [udp.<channel>]: a real rig's UDP stream (u, x, p1, p2, x_sp, f_load), SI = gain * raw + offset\n\
-             #        (gain 1, offset 0: the sender sends SI).\n\
+             #        (gain 1, offset 0: the sender sends SI); [udp] sender = \"IP:PORT\": optional, the only\n\
+             #        address datagrams are taken from (default: the first sender).\n\
              # [live_view]: the Foxglove WebSocket live view (run --live-view), rates in Hz.\n\
              # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\n{body}"
         )

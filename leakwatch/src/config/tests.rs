@@ -43,6 +43,20 @@ fn default_round_trips_and_errors_name_the_problem() {
     assert!(e.contains("p3"), "{e}");
     let e = Config::parse("[udp.x]\nscale = 2.0\n").unwrap_err();
     assert!(e.contains("scale"), "{e}");
+    // [udp] sender: the one address datagrams are taken from, named when bad
+    assert_eq!(Config::default().udp.sender, None);
+    let c = Config::parse("[udp]\nsender = \"192.168.10.20:5005\"\n").unwrap();
+    assert_eq!(c.udp.sender, Some("192.168.10.20:5005".parse().unwrap()));
+    assert_eq!(Config::parse(&toml::to_string(&c).unwrap()).unwrap(), c);
+    for (text, why) in [
+        ("plc.local:5005", "host names are not looked up"),
+        ("192.168.10.20", "IP:PORT"),
+        ("192.168.10.20:0", "port 0"),
+        ("[::]:5005", "no sender's address"),
+    ] {
+        let e = Config::parse(&format!("[udp]\nsender = \"{text}\"\n")).unwrap_err();
+        assert!(e.contains("[udp] sender") && e.contains(why), "{text}: {e}");
+    }
     let c = Config::parse("[rig]\nbulk_modulus_pa = 5e8\n").unwrap();
     assert_eq!(c.rig_params().bulk_modulus_pa, 5e8);
     assert_eq!(c.model.bulk_modulus_pa, 6.89e8);
