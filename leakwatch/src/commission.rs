@@ -1,6 +1,8 @@
-//! `leakwatch commission HEALTHY.csv --out rig.toml`: identifies the spool's
-//! null bias and learns the healthy state of the leak filter's estimates on a rig
-//! (offsets, spreads, crossing rates), and writes a config that carries both.
+//! `leakwatch commission HEALTHY.csv --out rig.toml`: identifies the rig (valve
+//! flow gains, null leakage, oil stiffness: the `identify` crate), then the
+//! spool's null bias, and learns the healthy state of the leak filter's
+//! estimates on a rig (offsets, spreads, crossing rates), and writes a config
+//! that carries all of them.
 //!
 //! Why the bias is identified here and then held: at chamber pressures near
 //! p_s/2 a spool null bias b and a pair of opposite external leaks (flow into
@@ -20,6 +22,122 @@ use estimator::{EstimatorStage, Tuning};
 use model::process::I_BIAS;
 
 use crate::config::Config;
+
+/// Reads `input` into the rows [`identify::identify`] takes.
+fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
+    let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
+    let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
+    let mut rows = Vec::new();
+    let mut gap = false;
+    while let Some(row) = reader.next_row() {
+        match row {
+            Row::Sample(sample) => rows.push(identify::Row {
+                sample,
+                after_gap: std::mem::take(&mut gap),
+            }),
+            Row::AfterGap(sample, _) => {
+                rows.push(identify::Row {
+                    sample,
+                    after_gap: true,
+                });
+                gap = false;
+            }
+            Row::Skipped(_) => gap = true,
+        }
+    }
+    Ok(rows)
+}
+
+/// One identified parameter as a line: `name: value ± σ unit (model's m)` or why not.
+fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model_value: f64) -> String {
+    match found {
+        identify::Found::Identified(e) => format!(
+            "  {name}: {:.4} ± {:.4} {unit} (the datasheet's {:.4})",
+            e.value * scale,
+            e.sigma * scale,
+            model_value * scale
+        ),
+        identify::Found::NotIdentifiable(why) => {
+            format!("  {name}: not identifiable from this recording: {why}")
+        }
+    }
+}
+
+/// Identifies the valve's flow gains, null leakage and the oil's stiffness on
+/// `input` and puts them into the model (printing what was found).
+pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
+    let rows = read_rows(input, cfg)?;
+    let noise = identify::SensorNoise {
+        position_m: cfg.sensors.position_sigma_m(),
+        pressure_pa: cfg.sensors.pressure_sigma_pa(),
+    };
+    let dt = cfg.leak_filter.sample_period_s;
+    let id = identify::identify(&cfg.model, dt, &rows, noise)
+        .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))?;
+    let m = &cfg.model;
+    let (wa, wb) = m.area_gradients_m2_per_m();
+    eprintln!(
+        "identified on {} windows of {} ms ({} moving); flow-balance gap {:.3} -> {:.3} L/min RMS (sensor floor {:.3}):",
+        id.windows,
+        identify::WINDOW_SAMPLES as f64 * dt * 1e3,
+        id.moving_windows,
+        id.gap_before_lpm,
+        id.gap_after_lpm,
+        id.sensor_floor_lpm
+    );
+    let ga = &id.valve_gain_a;
+    let scaled = |f: &identify::Found, w: f64| match f {
+        identify::Found::Identified(e) => identify::Found::Identified(identify::Estimate {
+            value: e.value * w,
+            sigma: e.sigma * w,
+        }),
+        other => other.clone(),
+    };
+    if m.rod_side_area_m2.is_none() && m.area_gradient_b_m2_per_m.is_none() {
+        eprintln!(
+            "{}",
+            found_line("valve area gradient", &scaled(ga, wa), "mm²/mm", 1e3, wa)
+        );
+    } else {
+        eprintln!(
+            "{}",
+            found_line("port A area gradient", &scaled(ga, wa), "mm²/mm", 1e3, wa)
+        );
+        eprintln!(
+            "{}",
+            found_line(
+                "port B area gradient",
+                &scaled(&id.valve_gain_b, wb),
+                "mm²/mm",
+                1e3,
+                wb
+            )
+        );
+    }
+    eprintln!(
+        "{}",
+        found_line(
+            "effective bulk modulus",
+            &id.bulk_modulus_pa,
+            "MPa",
+            1e-6,
+            m.bulk_modulus_pa
+        )
+    );
+    eprintln!(
+        "{}",
+        found_line(
+            "valve null leakage C_L",
+            &id.null_leakage_m3_s_pa,
+            "1e-13 m³/(s·Pa)",
+            1e13,
+            m.valve_null_leakage_m3_s_pa
+        )
+    );
+    let mut out = cfg.clone();
+    out.model = id.apply(&cfg.model);
+    Ok(out)
+}
 
 /// Least healthy, converged data a commissioning needs, s.
 pub const MIN_HEALTHY_S: f64 = 10.0;
@@ -122,10 +240,10 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))
 }
 
-/// Identifies the null bias (layouts with a bias state, 11 and 12), then
+/// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
 /// learns the commissioning with the bias held: the config to write.
 pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
-    let mut cfg = cfg.clone();
+    let mut cfg = identify_rig(input, cfg)?;
     if cfg.leak_filter.states >= 11 {
         let bias = identify_null_bias(input, &cfg)?;
         eprintln!(

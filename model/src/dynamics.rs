@@ -132,11 +132,16 @@ fn land_flow(
 /// The null leakage of an underlapped valve (docs/plant.md, "Valve null
 /// leakage"): each metering land passes C_L·λ·Δp (laminar), with λ = 1 while the
 /// land is open and fading linearly to 0 as the land closes over the underlap
-/// x_u. Returns (flow into chamber 1, flow out of chamber 2), m³/s, and their
+/// x_u. The port-B lands pass C_L·w_B/w_A (a matched valve's narrower
+/// lands). Returns (flow into chamber 1, flow out of chamber 2), m³/s, and their
 /// partials with respect to (x_sp, p1, p2), in m³/s per m, per Pa, per Pa.
 #[inline]
 pub fn null_leakage_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> NullLeakage {
     let c = p.valve_null_leakage_m3_s_pa;
+    // The port-B lands of a matched valve are narrower: their conductance is
+    // C_L·w_B/w_A (the same land geometry over a shorter width).
+    let (wa, wb) = p.area_gradients_m2_per_m();
+    let cb = if wb == wa { c } else { c * wb / wa };
     let (ps, pr, xu) = (p.supply_pressure_pa, p.return_pressure_pa, p.valve_underlap_m);
     // P→A and B→T open with x_sp > 0; A→T and P→B close.
     let z = x_sp_m / xu;
@@ -156,16 +161,16 @@ pub fn null_leakage_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f6
     };
     NullLeakage {
         q1_m3_s: c * (open * (ps - p1_pa) - close * (p1_pa - pr)),
-        q2_m3_s: c * (open * (p2_pa - pr) - close * (ps - p2_pa)),
+        q2_m3_s: cb * (open * (p2_pa - pr) - close * (ps - p2_pa)),
         dq1: [
             c * (d_open * (ps - p1_pa) - d_close * (p1_pa - pr)),
             -c * (open + close),
             0.0,
         ],
         dq2: [
-            c * (d_open * (p2_pa - pr) - d_close * (ps - p2_pa)),
+            cb * (d_open * (p2_pa - pr) - d_close * (ps - p2_pa)),
             0.0,
-            c * (open + close),
+            cb * (open + close),
         ],
     }
 }
@@ -197,9 +202,10 @@ pub fn valve_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> V
     f
 }
 
-/// The metering orifices' flows (critical centre, signed square root, supply sag).
+/// The metering orifices' flows (critical centre, signed square root, supply
+/// sag), without the null leakage: (flow into chamber 1, out of chamber 2), m³/s.
 #[inline]
-fn orifice_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> ValveFlows {
+pub fn orifice_flows(p: &ActuatorParams, x_sp_m: f64, p1_pa: f64, p2_pa: f64) -> ValveFlows {
     let ps = p.supply_pressure_pa;
     let pr = p.return_pressure_pa;
     let sag = p.supply_sag_pa_per_m3_s;

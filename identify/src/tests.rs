@@ -1,0 +1,140 @@
+//! Identification on the in-repo simulator: a model that is wrong by known
+//! factors is corrected to the simulated rig's values.
+
+use super::*;
+use model::{FaultSchedule, Scenario, Simulator};
+
+/// `seconds` of `scenario` on `rig` (default sensors, seed 7), as rows; every
+/// `drop_every`-th sample missing (0: none).
+fn record(rig: &ActuatorParams, scenario: &str, seconds: f64, drop_every: usize) -> Vec<Row> {
+    let sc = Scenario::by_name(scenario, 3, seconds).expect("scenario");
+    let mut sim = Simulator::with_default_sensors(rig.clone(), sc, FaultSchedule::default(), 7).expect("rig");
+    let mut out = Vec::new();
+    let mut gap = false;
+    for (k, s) in sim.run(seconds).into_iter().enumerate() {
+        if drop_every > 0 && k % drop_every == drop_every - 1 {
+            gap = true;
+            continue;
+        }
+        out.push(Row {
+            sample: s,
+            after_gap: gap,
+        });
+        gap = false;
+    }
+    out
+}
+
+fn noise() -> SensorNoise {
+    let s = model::SensorParams::default();
+    SensorNoise {
+        position_m: s.position_sigma_m(),
+        pressure_pa: s.pressure_sigma_pa(),
+    }
+}
+
+fn value(f: &Found) -> f64 {
+    f.estimate()
+        .unwrap_or_else(|| panic!("not identified: {f:?}"))
+        .value
+}
+
+/// The lift rig (single-rod, vertical, matched valve) against a model whose
+/// port-A gain is 10 % high, port-B gain 8 % low and oil 25 % too stiff.
+#[test]
+fn single_rod_gains_and_stiffness_are_recovered() {
+    let rig = ActuatorParams::vertical_lift();
+    let rows = record(&rig, "lift", 60.0, 0);
+    let mut model = rig.clone();
+    let (wa, wb) = rig.area_gradients_m2_per_m();
+    model.area_gradient_m2_per_m = 1.10 * wa;
+    model.area_gradient_b_m2_per_m = Some(0.92 * wb);
+    model.bulk_modulus_pa = 1.25 * rig.bulk_modulus_pa;
+    let id = identify(&model, 1e-3, &rows, noise()).expect("identified");
+    let ka = value(&id.valve_gain_a);
+    let kb = value(&id.valve_gain_b);
+    let beta = value(&id.bulk_modulus_pa);
+    assert!(
+        (ka * 1.10 - 1.0).abs() < 0.01,
+        "port A gain {ka} (want {})",
+        1.0 / 1.10
+    );
+    assert!(
+        (kb * 0.92 - 1.0).abs() < 0.01,
+        "port B gain {kb} (want {})",
+        1.0 / 0.92
+    );
+    assert!(
+        (beta / rig.bulk_modulus_pa - 1.0).abs() < 0.03,
+        "bulk modulus {beta} Pa (rig {})",
+        rig.bulk_modulus_pa
+    );
+    assert!(id.gap_after_lpm < 0.5 * id.gap_before_lpm, "{id:?}");
+    // Applied, the model's gradients and stiffness are the rig's.
+    let fixed = id.apply(&model);
+    let (fa, fb) = fixed.area_gradients_m2_per_m();
+    assert!(
+        (fa / wa - 1.0).abs() < 0.01 && (fb / wb - 1.0).abs() < 0.01,
+        "{fa} {fb}"
+    );
+    // A model that is right is left (nearly) as it is.
+    let same = identify(&rig, 1e-3, &rows, noise()).expect("identified");
+    assert!((value(&same.valve_gain_a) - 1.0).abs() < 0.01, "{same:?}");
+    assert!((value(&same.valve_gain_b) - 1.0).abs() < 0.01, "{same:?}");
+}
+
+/// The thesis rig (double-rod): one gain for both ports; a spool null bias
+/// is found; gaps in the recording are skipped, not bridged.
+#[test]
+fn double_rod_gain_bias_and_gaps() {
+    let rig = ActuatorParams {
+        spool_null_bias_m: 4e-6,
+        ..ActuatorParams::default()
+    };
+    let rows = record(&rig, "closed-loop-random", 60.0, 97);
+    let mut model = rig.clone();
+    model.spool_null_bias_m = 0.0;
+    model.area_gradient_m2_per_m *= 0.9;
+    let id = identify(&model, 1e-3, &rows, noise()).expect("identified");
+    let k = value(&id.valve_gain_a);
+    assert_eq!(
+        id.valve_gain_a, id.valve_gain_b,
+        "one gain for a double-rod cylinder"
+    );
+    assert!((k * 0.9 - 1.0).abs() < 0.02, "gain {k} (want {})", 1.0 / 0.9);
+    let b = value(&id.null_bias_m);
+    assert!((b - 4e-6).abs() < 0.5e-6, "null bias {b} m (rig 4 µm)");
+    let beta = value(&id.bulk_modulus_pa);
+    assert!(
+        (beta / rig.bulk_modulus_pa - 1.0).abs() < 0.05,
+        "bulk modulus {beta}"
+    );
+    // No window spans a gap: 96 rows between gaps make 95 intervals, 4 windows.
+    assert!(id.windows <= (60_000 / 97 + 1) * 4, "{} windows", id.windows);
+    assert!(id.windows >= 60_000 / 97 * 4 - 4, "{} windows", id.windows);
+    assert!(id.gap_after_lpm < 3.0 * id.sensor_floor_lpm, "{id:?}");
+}
+
+/// A rod that does not move cannot identify a valve: the error says so.
+#[test]
+fn a_hold_is_refused() {
+    let rig = ActuatorParams::default();
+    let still: Vec<Row> = (0..20_000)
+        .map(|k| Row {
+            sample: Sample {
+                t_s: k as f64 * 1e-3,
+                u_v: 0.0,
+                x_m: 0.3,
+                p1_pa: 3e6,
+                p2_pa: 3e6,
+                x_sp_m: f64::NAN,
+                f_load_n: f64::NAN,
+                ref_m: f64::NAN,
+                q_leak_lpm: f64::NAN,
+            },
+            after_gap: false,
+        })
+        .collect();
+    let e = identify(&rig, 1e-3, &still, noise()).expect_err("a hold");
+    assert!(e.contains("the rod moved in 0 windows"), "{e}");
+}
