@@ -12,7 +12,7 @@ use crate::wire::EstimateWire;
 use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
 use bus::{run_stage_with, Received, StageOptions};
 use clap::Parser;
-use frames::{EstimateFrame, SensorFrame};
+use frames::{sensor_flags, EstimateFrame, SensorFrame};
 use model::{ActuatorParams, Sample};
 use serde::Deserialize;
 
@@ -74,6 +74,10 @@ impl Join {
 
 /// The estimator's work on one sensor frame, whichever process runs it: the
 /// estimate of `input` written into `out` (sequence number, clocks, both filters).
+/// The frame's after-gap flag goes to the stage with the sample
+/// ([`EstimatorStage::on_sample_flagged`]): a sensor stream that restarted (its
+/// time went back, or a flagged gap its time does not show: a sender's reboot)
+/// re-anchors both filters and is said on stderr, one line per restart.
 /// The first estimate of a process that joins a stream already running (a
 /// restart, `join` resumed; or a first frame after frame 0: a stage swapped by
 /// hand) is marked reset and after-gap, as its filter starts again without the
@@ -85,7 +89,14 @@ pub fn estimate_frame(
     out: &mut EstimateFrame,
     join: &mut Join,
 ) {
-    let mut e = stage.on_sample(&Sample::from(&input.frame));
+    let after_gap = input.frame.flags & sensor_flags::AFTER_GAP != 0;
+    let restarts = stage.stream_restarts();
+    let mut e = stage.on_sample_flagged(&Sample::from(&input.frame), after_gap);
+    if stage.stream_restarts() != restarts {
+        if let Some(restart) = stage.last_restart() {
+            eprintln!("estimator: {restart}");
+        }
+    }
     if std::mem::take(&mut join.first) && (join.resumed_after.is_some() || input.seq > 0) {
         mark_restart(&mut e);
         match join.resumed_after {
@@ -113,6 +124,18 @@ pub fn oil_stiffness(stage: &EstimatorStage) -> Option<String> {
     let leak = stage.leak();
     let (theta, sigma) = leak.bulk_scale()?;
     crate::oil_stiffness_line(theta, sigma, leak.model().params.bulk_modulus_pa)
+}
+
+/// How often the sensor stream of `stage` restarted, as a line for the process
+/// log (printed at exit); `None` if it never did.
+pub fn restarts_line(stage: &EstimatorStage) -> Option<String> {
+    match stage.stream_restarts() {
+        0 => None,
+        1 => Some("sensor stream restarted once: filters re-anchored".to_string()),
+        n => Some(format!(
+            "sensor stream restarted {n} times: filters re-anchored each time"
+        )),
+    }
 }
 
 fn load(path: Option<&Path>) -> Result<StageConfig, String> {
@@ -149,6 +172,9 @@ fn run(args: Args) -> Result<(), String> {
     )
     .map_err(|e| e.to_string())?;
     eprintln!("estimator: {report}");
+    if let Some(line) = restarts_line(&stage) {
+        eprintln!("estimator: {line}");
+    }
     if let Some(line) = oil_stiffness(&stage) {
         eprintln!("estimator: {line}");
     }
@@ -172,5 +198,94 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
             eprintln!("estimator: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::FLAG_REANCHORED;
+    use frames::estimate_flags;
+    use model::{FaultSchedule, Scenario, Simulator};
+
+    /// `seconds` of the closed-loop sine on the default rig (seed `seed`), times from 0 s.
+    fn record(seconds: f64, seed: u64) -> Vec<Sample> {
+        let sc = Scenario::by_name("closed-loop-sine", 3, seconds).expect("scenario");
+        let mut sim =
+            Simulator::with_default_sensors(ActuatorParams::default(), sc, FaultSchedule::default(), seed)
+                .expect("rig");
+        sim.run(seconds)
+    }
+
+    /// Frame `seq` with sample `s` and sensor flags `flags`, as the subscriber hands it on.
+    fn received(seq: u64, s: &Sample, flags: u32) -> Received<SensorFrame> {
+        Received {
+            frame: SensorFrame {
+                seq,
+                flags,
+                ..SensorFrame::from(s)
+            },
+            recv_mono_ns: 0,
+            missing_before: 0,
+            restarted: false,
+            publisher_pid: 0,
+        }
+    }
+
+    /// A rebooted UDP sender as the acquisition publishes it (sequence on by
+    /// one, time back to 0 s, the frame flagged after a gap): the estimate frame
+    /// of its first sample says re-anchored and after-gap, and so does the
+    /// estimate the classifier reads back from the wire.
+    #[test]
+    fn a_sensor_stream_that_restarts_reanchors_and_the_wire_says_so() {
+        let mut stage = load_stage(None).expect("stage");
+        let mut join = Join::new(None);
+        let mut out = EstimateFrame::default();
+        let mut seq = 0;
+        for s in &record(2.5, 7) {
+            estimate_frame(&mut stage, &received(seq, s, 0), &mut out, &mut join);
+            assert_eq!(
+                out.flags & (estimate_flags::REANCHORED | estimate_flags::RESET),
+                0
+            );
+            seq += 1;
+        }
+        assert_eq!(restarts_line(&stage), None);
+        let new = record(0.5, 11);
+        estimate_frame(
+            &mut stage,
+            &received(seq, &new[0], sensor_flags::AFTER_GAP),
+            &mut out,
+            &mut join,
+        );
+        let reanchored = estimate_flags::REANCHORED | estimate_flags::AFTER_GAP;
+        assert_eq!((out.seq, out.t_s), (seq, 0.0));
+        assert_eq!(out.flags & reanchored, reanchored, "{:#x}", out.flags);
+        assert_eq!(out.th_flags & reanchored, reanchored, "{:#x}", out.th_flags);
+        assert_eq!(out.flags & (estimate_flags::RESET | estimate_flags::SKIPPED), 0);
+        assert!(
+            (out.state[3] - new[0].x_m).abs() < 5e-6,
+            "x {} m vs {} m",
+            out.state[3],
+            new[0].x_m
+        );
+        let back = StageEstimate::from_frame(&out, 0);
+        assert_ne!(
+            back.leak.flags & FLAG_REANCHORED,
+            0,
+            "the detector's input is flagged"
+        );
+        assert_eq!(stage.stream_restarts(), 1);
+        assert_eq!(
+            restarts_line(&stage).as_deref(),
+            Some("sensor stream restarted once: filters re-anchored")
+        );
+        for s in &new[1..] {
+            seq += 1;
+            estimate_frame(&mut stage, &received(seq, s, 0), &mut out, &mut join);
+            assert_eq!(out.flags & reanchored, 0);
+            assert!(out.nis.is_finite());
+        }
+        assert_eq!(stage.stream_restarts(), 1);
     }
 }

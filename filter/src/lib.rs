@@ -14,7 +14,7 @@ pub mod mae;
 pub mod stage;
 pub mod tuning;
 
-use model::process::{ProcessModel, I_BULK, I_FE, N_MEAS};
+use model::process::{ProcessModel, I_BULK, I_FE, I_QE1, I_QI, N_MEAS};
 use model::{ActuatorParams, Sample};
 use nalgebra::SVector;
 
@@ -121,6 +121,12 @@ impl Estimate {
     }
 }
 
+/// The leak filter has converged once `convergence_time_s` has passed and
+/// the standard deviation of each leak size is below this share of its
+/// initial one (1). A heavy or stiff rig takes seconds (plant_dev/differential:
+/// 2-7 s); the thesis rig is there within its first second.
+pub const CONVERGED_LEAK_SIGMA: f64 = 0.05;
+
 /// Counters of what the stage did, for summaries.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct EstimatorCounters {
@@ -161,6 +167,8 @@ pub struct Estimator {
     last_u_v: f64,
     started: bool,
     t0_s: f64,
+    /// The leak sizes' standard deviations have fallen below [`CONVERGED_LEAK_SIGMA`] of their start (latched until a restart).
+    leaks_converged: bool,
     diverged_samples: u32,
     /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
     reanchor_pending: bool,
@@ -204,6 +212,7 @@ impl Estimator {
             last_u_v: 0.0,
             started: false,
             t0_s: 0.0,
+            leaks_converged: false,
             diverged_samples: 0,
             reanchor_pending: false,
             measured_p_range_pa,
@@ -335,6 +344,25 @@ impl Estimator {
         }
     }
 
+    /// Tells the filter that its input stream restarted before the next sample
+    /// (its time went back, or the source flagged a gap its time does not
+    /// show: a sender's reboot; see [`stage`]). Nothing is bridged: the fast
+    /// states restart from the next complete sample as after a gap longer than
+    /// [`Tuning::max_bridged_gap_samples`] ([`Estimator::on_gap`]; the estimate is
+    /// flagged [`FLAG_REANCHORED`]), the leak sizes, the spool bias and the
+    /// oil's stiffness keep their estimate. `time_shift_s` (the new sample's time
+    /// minus the time the next sample was due at, s) moves the filter's start
+    /// time with the stream, so its convergence time does not start again.
+    pub fn on_restart(&mut self, time_shift_s: f64) {
+        if !self.started {
+            return;
+        }
+        self.reanchor_pending = true;
+        if time_shift_s.is_finite() {
+            self.t0_s += time_shift_s;
+        }
+    }
+
     /// Processes one sensor sample (one sample period after the previous one).
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
         let mut e = self.on_sample_inner(s);
@@ -377,6 +405,7 @@ impl Estimator {
             }
             self.started = true;
             self.t0_s = s.t_s;
+            self.leaks_converged = false;
             self.diverged_samples = 0;
             self.mae[0].clear();
             self.mae[1].clear();
@@ -453,6 +482,18 @@ impl Estimator {
         }
         if s.t_s - self.t0_s < self.tuning.convergence_time_s {
             flags |= FLAG_CONVERGING;
+        } else if !self.leaks_converged {
+            // The layouts with leak sizes (10 states and more) converge when the
+            // three sizes are known to [`CONVERGED_LEAK_SIGMA`] of their start
+            // (held sizes, without a random walk, have nothing to converge).
+            let limit = CONVERGED_LEAK_SIGMA * self.tuning.p0_leak_m6_s2.sqrt();
+            let leaks = I_QE1..(I_QI + 1).min(self.tuning.states as usize);
+            let worst = leaks.map(|i| out.sigma[i]).fold(0.0, f64::max);
+            if worst > limit && self.tuning.q_leak_m6_s2 > 0.0 {
+                flags |= FLAG_CONVERGING;
+            } else {
+                self.leaks_converged = true;
+            }
         }
         let (x_min_m, x_max_m) = (self.model.params.x_min_m, self.model.params.x_max_m);
         let x_m = out.state[3];

@@ -7,10 +7,31 @@
 //! - the **thesis filter** (default: 7 states, the thesis' tuning) gives the
 //!   residuals and MAE of MODEL.md §5 for the baseline detector.
 //!
-//! Samples that arrive more than one period after the previous one mean that
-//! samples were lost: short gaps are bridged by prediction, longer ones
-//! re-anchor the fast states and keep the leak sizes (see
-//! [`crate::Tuning::max_bridged_gap_samples`]).
+//! The time step from one sample to the next, `round(Δt / T)` sample periods
+//! `T`, is the one place gaps and restarts are decided ([`StepKind`]):
+//!
+//! - **two periods or more**: samples were lost, `round(Δt / T) − 1` of them
+//!   (whether the source flagged the sample after a gap or not): short gaps
+//!   are bridged by prediction, longer ones re-anchor the fast states and keep
+//!   the leak sizes (see [`crate::Tuning::max_bridged_gap_samples`]); the
+//!   estimate is flagged [`crate::FLAG_AFTER_GAP`] (and
+//!   [`crate::FLAG_REANCHORED`] when re-anchored);
+//! - **time went back** (`Δt < 0`), or a sample its source flagged after a gap
+//!   ([`EstimatorStage::on_sample_flagged`]) comes one period or less after
+//!   the previous one (the flag says samples are missing, the time says none
+//!   are): the **stream restarted** (a sender's reboot, a clock set back).
+//!   Neither the time nor the count of missing samples can be trusted, so
+//!   nothing is bridged: both filters re-anchor their fast states on the new
+//!   sample as after a gap too long to bridge ([`crate::Estimator::on_restart`]),
+//!   the estimate is flagged [`crate::FLAG_AFTER_GAP`] and
+//!   [`crate::FLAG_REANCHORED`], the restart is counted
+//!   ([`EstimatorStage::stream_restarts`]) and kept for the process to report
+//!   ([`EstimatorStage::last_restart`]);
+//! - **otherwise** (one period, or less without the flag): the next sample.
+//!
+//! A sample without a finite time decides nothing and is not a time reference.
+
+use std::fmt;
 
 use model::{ActuatorParams, Sample};
 
@@ -23,8 +44,63 @@ pub struct StageEstimate {
     pub leak: Estimate,
     /// The thesis filter's estimate.
     pub thesis: Estimate,
-    /// Samples found missing just before this one.
+    /// Samples found missing just before this one (0 after a stream restart,
+    /// whose count of missing samples is unknown; its flags tell).
     pub missing_before: u64,
+}
+
+/// A restart of the sample stream the stage found (see the [module](self) docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamRestart {
+    /// Sample time of the last sample before the restart, s.
+    pub t_before_s: f64,
+    /// Sample time of the first sample after it, s.
+    pub t_after_s: f64,
+}
+
+impl fmt::Display for StreamRestart {
+    /// The line the estimator process writes to stderr for the restart.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.t_after_s < self.t_before_s {
+            write!(
+                f,
+                "sensor stream restarted at t = {} s (time went back from {} s): filters re-anchored",
+                self.t_after_s, self.t_before_s
+            )
+        } else {
+            write!(
+                f,
+                "sensor stream restarted at t = {} s (flagged after a gap, but at most one sample period \
+                 after the previous sample at {} s): filters re-anchored",
+                self.t_after_s, self.t_before_s
+            )
+        }
+    }
+}
+
+/// What the time step to a sample says about the stream (the one place that decides).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum StepKind {
+    /// The next sample (or no decision: the first sample, a time that is not finite).
+    Next,
+    /// This many samples were lost before the sample.
+    Gap(u64),
+    /// The stream restarted before the sample.
+    Restart,
+}
+
+/// The kind of the step from a sample at `t_prev_s` to one at `t_s`, s, with
+/// sample period `period_s`; `flagged`: the source flagged the sample after a gap.
+fn step_kind(t_prev_s: f64, t_s: f64, period_s: f64, flagged: bool) -> StepKind {
+    let dt_s = t_s - t_prev_s;
+    let steps = (dt_s / period_s).round();
+    if steps > 1.0 && steps.is_finite() {
+        StepKind::Gap(steps as u64 - 1)
+    } else if dt_s < 0.0 || (flagged && steps <= 1.0) {
+        StepKind::Restart
+    } else {
+        StepKind::Next
+    }
 }
 
 /// Two estimators over one sample stream.
@@ -35,6 +111,8 @@ pub struct EstimatorStage {
     period_s: f64,
     last_t_s: Option<f64>,
     missing: u64,
+    restarts: u64,
+    last_restart: Option<StreamRestart>,
 }
 
 impl EstimatorStage {
@@ -47,6 +125,8 @@ impl EstimatorStage {
             period_s,
             last_t_s: None,
             missing: 0,
+            restarts: 0,
+            last_restart: None,
         })
     }
 
@@ -60,9 +140,19 @@ impl EstimatorStage {
         &self.thesis
     }
 
-    /// Samples found missing so far (gaps in the time stamps).
+    /// Samples found missing so far (gaps in the time stamps; restarts not counted).
     pub fn missing_samples(&self) -> u64 {
         self.missing
+    }
+
+    /// Restarts of the sample stream found so far (see the [module](self) docs).
+    pub fn stream_restarts(&self) -> u64 {
+        self.restarts
+    }
+
+    /// The latest restart of the sample stream, if any.
+    pub fn last_restart(&self) -> Option<StreamRestart> {
+        self.last_restart
     }
 
     /// A throw-away step of both filters before the next sample is due (see
@@ -72,17 +162,41 @@ impl EstimatorStage {
         self.thesis.warm_up();
     }
 
-    /// Processes one sample.
+    /// Processes one sample (gaps and restarts from its time alone).
     #[inline]
     pub fn on_sample(&mut self, s: &Sample) -> StageEstimate {
+        self.on_sample_flagged(s, false)
+    }
+
+    /// Processes one sample whose source says whether samples were missing
+    /// just before it (`after_gap`: the sensor frame's after-gap flag). A
+    /// flagged sample whose time shows no gap is a stream restart; one whose
+    /// time shows a gap is processed exactly as without the flag.
+    #[inline]
+    pub fn on_sample_flagged(&mut self, s: &Sample, after_gap: bool) -> StageEstimate {
         let mut missing_before = 0;
-        if let Some(t_prev) = self.last_t_s {
-            let steps = ((s.t_s - t_prev) / self.period_s).round();
-            if steps > 1.0 && steps.is_finite() {
-                missing_before = steps as u64 - 1;
-                self.leak.on_gap(missing_before);
-                self.thesis.on_gap(missing_before);
-                self.missing += missing_before;
+        let mut restarted = false;
+        if let (Some(t_prev_s), true) = (self.last_t_s, s.t_s.is_finite()) {
+            match step_kind(t_prev_s, s.t_s, self.period_s, after_gap) {
+                StepKind::Next => {}
+                StepKind::Gap(missing) => {
+                    missing_before = missing;
+                    self.leak.on_gap(missing_before);
+                    self.thesis.on_gap(missing_before);
+                    self.missing += missing_before;
+                }
+                StepKind::Restart => {
+                    // the new time against the one the next sample was due at
+                    let time_shift_s = s.t_s - (t_prev_s + self.period_s);
+                    self.leak.on_restart(time_shift_s);
+                    self.thesis.on_restart(time_shift_s);
+                    self.restarts += 1;
+                    self.last_restart = Some(StreamRestart {
+                        t_before_s: t_prev_s,
+                        t_after_s: s.t_s,
+                    });
+                    restarted = true;
+                }
             }
         }
         if s.t_s.is_finite() {
@@ -90,7 +204,7 @@ impl EstimatorStage {
         }
         let mut leak = self.leak.on_sample(s);
         let mut thesis = self.thesis.on_sample(s);
-        if missing_before > 0 {
+        if missing_before > 0 || restarted {
             leak.flags |= crate::FLAG_AFTER_GAP;
             thesis.flags |= crate::FLAG_AFTER_GAP;
         }
@@ -99,5 +213,26 @@ impl EstimatorStage {
             thesis,
             missing_before,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_step_decides_gaps_and_restarts() {
+        let t = 1e-3;
+        for flagged in [false, true] {
+            assert_eq!(step_kind(1.0, 1.002, t, flagged), StepKind::Gap(1));
+            assert_eq!(step_kind(1.0, 1.0514, t, flagged), StepKind::Gap(50));
+            assert_eq!(step_kind(1.0, 0.0, t, flagged), StepKind::Restart);
+            assert_eq!(step_kind(1.0, 0.9999, t, flagged), StepKind::Restart);
+        }
+        assert_eq!(step_kind(1.0, 1.001, t, false), StepKind::Next);
+        assert_eq!(step_kind(1.0, 1.0, t, false), StepKind::Next);
+        assert_eq!(step_kind(1.0, 1.001, t, true), StepKind::Restart);
+        assert_eq!(step_kind(1.0, 1.0, t, true), StepKind::Restart);
+        assert_eq!(step_kind(1.0, f64::INFINITY, t, false), StepKind::Next);
     }
 }

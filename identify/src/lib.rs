@@ -38,6 +38,10 @@ pub const MIN_MOVING_WINDOWS: usize = 100;
 /// Largest relative standard deviation of a flow gain or the compliance that
 /// counts as identified (1).
 pub const MAX_RELATIVE_SIGMA: f64 = 0.05;
+/// The null leakage counts as resolved from zero beyond this many of its σ
+/// (the σ are a floor, see the module docs; a rig without null leakage came
+/// out at 3 σ).
+pub const RESOLVED_SIGMAS: f64 = 5.0;
 /// A flow-gain multiple outside this range is refused as implausible (1): the
 /// datasheet, the command's scale or its sign is wrong, not the tolerance.
 pub const PLAUSIBLE_GAIN: (f64, f64) = (0.5, 2.0);
@@ -368,13 +372,13 @@ pub fn identify(
         value: fit.theta[C_L],
         sigma: fit.cov[(cl_col, cl_col)].sqrt(),
     };
-    let null_leakage = if cl.value > 3.0 * cl.sigma {
+    let null_leakage = if cl.value > RESOLVED_SIGMAS * cl.sigma {
         Found::Identified(cl)
     } else {
         // Not resolved: fitted again with the model's C_L.
         fit = solve(&built, &cols, &model, w).ok_or_else(fail)?;
         Found::NotIdentifiable(format!(
-            "the null leakage came out {:.2e} ± {:.2e} m³/(s·Pa), not resolved from zero: the rig rests too little at null, or leaks less than the sensors resolve",
+            "the null leakage came out {:.2e} ± {:.2e} m³/(s·Pa), not resolved from zero (5 σ): the rig rests too little at null, or leaks less than the sensors resolve",
             cl.value, cl.sigma
         ))
     };

@@ -979,9 +979,16 @@ fn bench_detection_on_a_plant_folder_commissions_then_scores() {
     ]);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
+    assert!(err.contains("commissioning on"), "{err}");
+    let bias_um: f64 = err
+        .split("spool null bias: ")
+        .nth(1)
+        .and_then(|rest| rest.split(" µm").next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no spool null bias in: {err}"));
     assert!(
-        err.contains("commissioning on") && err.contains("spool null bias: -6.0"),
-        "{err}"
+        (bias_um + 6.0).abs() < 0.1,
+        "spool null bias {bias_um} µm (rig −6 µm)"
     );
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("detection.json")).unwrap()).unwrap();
