@@ -26,6 +26,9 @@ pub struct Classifier {
     next_id: u64,
     not_armed_reported: bool,
     learning_since_s: Option<f64>,
+    /// The previous estimate of the leak / thesis filter was a reset: a run of
+    /// resets (a filter that cannot start on this rig) is one event, not one per sample.
+    resetting: [bool; 2],
 }
 
 impl Classifier {
@@ -40,6 +43,7 @@ impl Classifier {
             next_id: 1_000_000,
             not_armed_reported: false,
             learning_since_s: None,
+            resetting: [false; 2],
         })
     }
 
@@ -86,7 +90,14 @@ impl Classifier {
 
     /// Reads the leak filter's estimate `e` and the thesis filter's `thesis`.
     pub fn on_estimates(&mut self, e: &Estimate, thesis: &Estimate, mut emit: impl FnMut(LeakEvent)) {
-        if e.flags & FLAG_RESET != 0 {
+        let leak_reset = e.flags & FLAG_RESET != 0;
+        let thesis_reset = thesis.flags & FLAG_RESET != 0 && !std::ptr::eq(e, thesis);
+        let first = [
+            leak_reset && !self.resetting[0],
+            thesis_reset && !self.resetting[1],
+        ];
+        self.resetting = [leak_reset, thesis_reset];
+        if leak_reset {
             // (the detector decides itself whether it keeps what it learned)
             if std::ptr::eq(e, thesis) {
                 self.thesis.restart();
@@ -96,19 +107,23 @@ impl Classifier {
             } else {
                 "the leak filter restarted; warm-up begins again"
             };
-            let ev = self.plain(EventKind::EstimatorReset, e.t_s, "", detail);
             self.leak_size.restart();
-            emit(ev);
+            if first[0] {
+                let ev = self.plain(EventKind::EstimatorReset, e.t_s, "", detail);
+                emit(ev);
+            }
         }
-        if thesis.flags & FLAG_RESET != 0 && !std::ptr::eq(e, thesis) {
+        if thesis_reset {
             self.thesis.restart();
-            let ev = self.plain(
-                EventKind::EstimatorReset,
-                e.t_s,
-                "",
-                "the thesis filter restarted; its warm-up begins again",
-            );
-            emit(ev);
+            if first[1] {
+                let ev = self.plain(
+                    EventKind::EstimatorReset,
+                    e.t_s,
+                    "",
+                    "the thesis filter restarted; its warm-up begins again",
+                );
+                emit(ev);
+            }
         }
         let faulty_before = self.channels.iter().any(|c| c.raised.is_some());
         self.check_sensors(e, &mut emit);

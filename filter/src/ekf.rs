@@ -155,6 +155,11 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         out
     }
 
+    /// Standard deviation of state `i`, SI.
+    pub fn sigma_of(&self, i: usize) -> f64 {
+        self.s.row(i).norm() * self.x_scale[i]
+    }
+
     /// Whether the state and the factor are finite.
     pub fn is_finite(&self) -> bool {
         self.x.iter().all(|v| v.is_finite()) && self.s.iter().all(|v| v.is_finite())

@@ -6,16 +6,18 @@
 //! The method is the chambers' flow balance (continuity), which holds whatever
 //! the mass, friction and load are. Over a window of W sample intervals:
 //!
-//! - chamber 1: κ_A·ΣQ_A·T + κ_A·b·ΣG_A·T + C_L·ΣN_1·T − s·ΣV1·Δp1/β = A1·Δx + ΣL_1·T
-//! - chamber 2: κ_B·ΣQ_B·T + κ_B·b·ΣG_B·T + C_L·ΣN_2·T + s·ΣV2·Δp2/β = A2·Δx + ΣL_2·T
+//! - chamber 1: κ_A·ΣQ_A·T + κ_A·b·ΣG_A·T + C_L·ΣN_1·T + Δr·ΣR_1·T − s·ΣV1·Δp1/β = A1·Δx + ΣL_1·T
+//! - chamber 2: κ_B·ΣQ_B·T + κ_B·b·ΣG_B·T + C_L·ΣN_2·T + Δr·ΣR_2·T + s·ΣV2·Δp2/β = A2·Δx + ΣL_2·T
 //!
 //! Q_A, Q_B are the model's orifice flows (into chamber 1, out of chamber 2) at
 //! the spool position the model's spool dynamics give for the recorded
-//! command, G = ∂Q/∂x_sp, N the null leakage per unit C_L, L the model's own
+//! command, G = ∂Q/∂x_sp, N the null leakage per unit C_L, R = ∂Q/∂r the
+//! flows' slope in the supply sag r (Pa per m³/s of pump flow), L the model's own
 //! leaks, V the chamber volumes at the measured rod position, β the model's
 //! bulk modulus. The unknowns are the flow-gain multiples κ_A, κ_B (one κ for a
 //! double-rod cylinder), the products κ·b with the spool null bias b, the null
-//! leakage C_L and the compliance multiple s (effective β = β_model/s). The
+//! leakage C_L, the sag's change Δr and the compliance multiple s (effective
+//! β = β_model/s). The
 //! system is linear in them: weighted least squares, each chamber's rows
 //! weighted by the inverse of its residual RMS.
 //!
@@ -99,6 +101,8 @@ pub struct Identification {
     pub null_leakage_m3_s_pa: Found,
     /// The oil's effective bulk modulus with the dead volumes, Pa.
     pub bulk_modulus_pa: Found,
+    /// The supply pressure's drop per unit of pump flow, Pa/(m³/s).
+    pub supply_sag_pa_per_m3_s: Found,
     /// Windows of [`WINDOW_SAMPLES`] used, and how many of them moved.
     pub windows: usize,
     /// Windows in which the rod moved more than 0.1 mm.
@@ -127,7 +131,10 @@ const KB_A: usize = 2;
 const KB_B: usize = 3;
 const C_L: usize = 4;
 const S: usize = 5;
-const UNKNOWNS: usize = 6;
+const SAG: usize = 6;
+const UNKNOWNS: usize = 7;
+/// Step of the supply sag for its column (a finite difference), Pa/(m³/s).
+const SAG_STEP: f64 = 1.0e8;
 
 /// The least-squares rows: per window, chamber 1 and chamber 2.
 struct Rows {
@@ -147,6 +154,8 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
     let h = dt_s / SPOOL_SUBSTEPS as f64;
     let mut unit_cl = p.clone();
     unit_cl.valve_null_leakage_m3_s_pa = 1.0;
+    let mut sagged = p.clone();
+    sagged.supply_sag_pa_per_m3_s += SAG_STEP;
     let (mut x_sp, mut v_sp) = match rows.first() {
         Some(r) => (p.spool_null_bias_m + p.spool_gain_m_per_v * r.sample.u_v, 0.0),
         None => (0.0, 0.0),
@@ -193,14 +202,17 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
             (qp.q2_m3_s - qm.q2_m3_s) / (2.0 * hx),
         );
         let nl = null_leakage_flows(&unit_cl, x_sp_mean, p1, p2);
+        let qs = orifice_flows(&sagged, x_sp_mean, p1, p2);
         let lq = leaks.flows(p1, p2, p.return_pressure_pa);
         acc1[K_A] += q.q1_m3_s * dt_s;
         acc1[KB_A] += g1 * dt_s;
         acc1[C_L] += nl.q1_m3_s * dt_s;
+        acc1[SAG] += (qs.q1_m3_s - q.q1_m3_s) / SAG_STEP * dt_s;
         acc1[S] -= v1 * (s1.p1_pa - s0.p1_pa) / p.bulk_modulus_pa;
         acc2[K_B] += q.q2_m3_s * dt_s;
         acc2[KB_B] += g2 * dt_s;
         acc2[C_L] += nl.q2_m3_s * dt_s;
+        acc2[SAG] += (qs.q2_m3_s - q.q2_m3_s) / SAG_STEP * dt_s;
         acc2[S] += v2 * (s1.p2_pa - s0.p2_pa) / p.bulk_modulus_pa;
         rhs1 += (lq.int_m3_s + lq.ext1_m3_s) * dt_s;
         rhs2 += (lq.int_m3_s - lq.ext2_m3_s) * dt_s;
@@ -346,6 +358,7 @@ pub fn identify(
         vec![vec![K_A], vec![K_B], vec![KB_A], vec![KB_B]]
     };
     cols.push(vec![S]);
+    cols.push(vec![SAG]);
     let with_cl = {
         let mut c = cols.clone();
         c.push(vec![C_L]);
@@ -439,6 +452,18 @@ pub fn identify(
             sigma: p.bulk_modulus_pa * s.sigma / (s.value * s.value),
         })
     };
+    let sag = Estimate {
+        value: p.supply_sag_pa_per_m3_s + fit.theta[SAG],
+        sigma: sigma(s_col + 1),
+    };
+    let supply_sag_pa_per_m3_s = if sag.value > RESOLVED_SIGMAS * sag.sigma {
+        Found::Identified(sag)
+    } else {
+        Found::NotIdentifiable(format!(
+            "the supply sag came out {:.3e} ± {:.2e} Pa/(m³/s), not resolved from zero (5 σ)",
+            sag.value, sag.sigma
+        ))
+    };
     let pooled = |r: [f64; 2]| ((r[0] * r[0] + r[1] * r[1]) / 2.0).sqrt() * to_lpm;
     let floor = [
         (built.floor2[0] / windows as f64).sqrt(),
@@ -450,6 +475,7 @@ pub fn identify(
         null_bias_m,
         null_leakage_m3_s_pa: null_leakage,
         bulk_modulus_pa,
+        supply_sag_pa_per_m3_s,
         windows,
         moving_windows: built.moving,
         gap_before_lpm: pooled(rms_before),
@@ -478,6 +504,9 @@ impl Identification {
         }
         if let Some(b) = self.bulk_modulus_pa.estimate() {
             out.bulk_modulus_pa = b.value;
+        }
+        if let Some(s) = self.supply_sag_pa_per_m3_s.estimate() {
+            out.supply_sag_pa_per_m3_s = s.value;
         }
         out
     }

@@ -134,6 +134,16 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.valve_null_leakage_m3_s_pa
         )
     );
+    eprintln!(
+        "{}",
+        found_line(
+            "supply sag",
+            &id.supply_sag_pa_per_m3_s,
+            "MPa per m³/s",
+            1e-6,
+            m.supply_sag_pa_per_m3_s
+        )
+    );
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
     Ok(out)
