@@ -195,3 +195,35 @@ fn an_external_leak_that_alone_explains_the_mismatch_is_confirmed_sooner() {
     let d = delay_of_step(&same, [0.5, 0.0, 0.0]);
     assert!((0.095..0.11).contains(&d), "external at 0.2 s: {d} s");
 }
+
+/// A filter that resets on every sample (one that cannot start on a rig) gives
+/// one reset event per run of resets, not one per sample; a later, separate
+/// reset is a new event.
+#[test]
+fn a_run_of_filter_resets_is_one_event() {
+    let mut c = detect::Classifier::new(ClassifierConfig::default()).expect("classifier");
+    let mut resets = 0;
+    let mut count = |ev: LeakEvent| {
+        if ev.kind == EventKind::EstimatorReset {
+            resets += 1;
+        }
+    };
+    let thesis_reset = |t: f64| {
+        let mut e = estimate(t, [0.0; 3]);
+        e.flags = filter::FLAG_RESET | filter::FLAG_SKIPPED;
+        e
+    };
+    for k in 0..1000 {
+        let t = k as f64 * 1e-3;
+        c.on_estimates(&estimate(t, [0.0; 3]), &thesis_reset(t), &mut count);
+    }
+    for k in 1000..1100 {
+        let t = k as f64 * 1e-3;
+        c.on_estimates(&estimate(t, [0.0; 3]), &estimate(t, [0.0; 3]), &mut count);
+    }
+    for k in 1100..1200 {
+        let t = k as f64 * 1e-3;
+        c.on_estimates(&estimate(t, [0.0; 3]), &thesis_reset(t), &mut count);
+    }
+    assert_eq!(resets, 2, "1000 resets, then 100 without, then 100 more");
+}

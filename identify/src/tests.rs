@@ -39,18 +39,28 @@ fn value(f: &Found) -> f64 {
         .value
 }
 
-/// The lift rig (single-rod, vertical, matched valve) against a model whose
-/// port-A gain is 10 % high, port-B gain 8 % low and oil 25 % too stiff.
+/// The lift rig (single-rod, vertical, matched valve, a supply that sags
+/// 0.3 MPa per 1 L/s) against a model whose port-A gain is 10 % high, port-B
+/// gain 8 % low, oil 25 % too stiff and supply stiff.
 #[test]
 fn single_rod_gains_and_stiffness_are_recovered() {
-    let rig = ActuatorParams::vertical_lift();
+    let rig = ActuatorParams {
+        supply_sag_pa_per_m3_s: 3.0e8,
+        ..ActuatorParams::vertical_lift()
+    };
     let rows = record(&rig, "lift", 60.0, 0);
     let mut model = rig.clone();
     let (wa, wb) = rig.area_gradients_m2_per_m();
     model.area_gradient_m2_per_m = 1.10 * wa;
     model.area_gradient_b_m2_per_m = Some(0.92 * wb);
     model.bulk_modulus_pa = 1.25 * rig.bulk_modulus_pa;
+    model.supply_sag_pa_per_m3_s = 0.0;
     let id = identify(&model, 1e-3, &rows, noise()).expect("identified");
+    let sag = value(&id.supply_sag_pa_per_m3_s);
+    assert!(
+        (sag / 3.0e8 - 1.0).abs() < 0.15,
+        "supply sag {sag:e} Pa/(m³/s) (rig 3e8)"
+    );
     let ka = value(&id.valve_gain_a);
     let kb = value(&id.valve_gain_b);
     let beta = value(&id.bulk_modulus_pa);
