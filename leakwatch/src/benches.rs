@@ -278,6 +278,71 @@ pub fn detection_data(
     write_json(out, "detection.json", &json, force)
 }
 
+/// A JSON file read for scoring, if the directory has it.
+fn read_json(path: &Path) -> Result<Option<serde_json::Value>, String> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    serde_json::from_str(&text)
+        .map(Some)
+        .map_err(|e| format!("{}: not JSON: {e}", path.display()))
+}
+
+/// The identification of a plant-style folder's rig on its commissioning
+/// recording (config: `--config`, else its `datasheet.toml`), scored against its
+/// `truth_rig.json` and `commission_cold.truth.json` where present.
+fn identification_data(
+    dir: &Path,
+    recording: &Path,
+    config: Option<&Path>,
+    json: bool,
+    out: Option<PathBuf>,
+    force: bool,
+) -> Result<(), String> {
+    let (sheet, _) = rig_files(dir);
+    let config_path = config.map(Path::to_path_buf).or(sheet);
+    let cfg = crate::config::Config::load_or_default(config_path.as_deref())?;
+    if let Some(p) = &config_path {
+        eprintln!("config: {}", p.display());
+    }
+    eprintln!("identifying the rig on {}", recording.display());
+    let t0 = std::time::Instant::now();
+    let id = crate::commission::identify_on(recording, &cfg)?;
+    let wall_s = t0.elapsed().as_secs_f64();
+    let rig = read_json(&dir.join("truth_rig.json"))?;
+    let rec = read_json(&dir.join("commission_cold.truth.json"))?;
+    let score = bench::identification::score(&cfg.model, &id, rig.as_ref(), rec.as_ref());
+    let md = format!(
+        "{}
+Identified in {wall_s:.2} s.
+",
+        score.markdown()
+    );
+    if json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&score).map_err(|e| e.to_string())?
+        );
+    } else {
+        outln!("{md}");
+    }
+    if let Some(out) = out {
+        out::dir(&out)?;
+        let mut inputs: Vec<&Path> = config_path.iter().map(PathBuf::as_path).collect();
+        inputs.push(recording);
+        out::write(
+            &out.join("identification.md"),
+            format!("# Identification on {}\n\n{md}", dir.display()).as_bytes(),
+            force,
+            &inputs,
+        )?;
+        let v = serde_json::to_value(&score).map_err(|e| e.to_string())?;
+        write_json(&out, "identification.json", &v, force)?;
+    }
+    Ok(())
+}
+
 /// The calibration workflow's hidden-effect suites (smooth and stick-slip rig, or the smooth
 /// matrix), or a directory of cases with truth (`--data`).
 pub fn calibration(
@@ -288,6 +353,11 @@ pub fn calibration(
     out: Option<PathBuf>,
     force: bool,
 ) -> Result<(), String> {
+    if let Some(dir) = &data {
+        if let (_, Some(recording)) = rig_files(dir) {
+            return identification_data(dir, &recording, config.as_deref(), json, out, force);
+        }
+    }
     let opts = calibrate::CalibrateOptions {
         keep_traces: false,
         ..calibrate::CalibrateOptions::default()

@@ -305,7 +305,9 @@ pub(crate) enum BenchCommand {
         /// Run the full smooth-rig matrix (every effect under every input, 44 cases, multiple shooting).
         #[arg(long)]
         matrix: bool,
-        /// Score a directory laid out like ../shared/data/hidden_dev: DIR/case_*/measured.csv[.gz] + truth.json.
+        /// Score a directory laid out like ../shared/data/hidden_dev: DIR/case_*/measured.csv[.gz] + truth.json;
+        /// or, laid out like plant_dev (a commission_cold.csv[.gz]), identify the rig on its recording and
+        /// score it against its truth_rig.json.
         #[arg(long)]
         data: Option<PathBuf>,
         /// Configuration whose [model] is the starting model for --data (default: the built-in model).

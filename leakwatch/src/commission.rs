@@ -63,17 +63,22 @@ fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model
     }
 }
 
-/// Identifies the valve's flow gains, null leakage and the oil's stiffness on
-/// `input` and puts them into the model (printing what was found).
-pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
+/// The identification of the rig on the healthy recording `input` against `cfg`'s model.
+pub fn identify_on(input: &Path, cfg: &Config) -> Result<identify::Identification, String> {
     let rows = read_rows(input, cfg)?;
     let noise = identify::SensorNoise {
         position_m: cfg.sensors.position_sigma_m(),
         pressure_pa: cfg.sensors.pressure_sigma_pa(),
     };
+    identify::identify(&cfg.model, cfg.leak_filter.sample_period_s, &rows, noise)
+        .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))
+}
+
+/// Identifies the valve's flow gains, null leakage and the oil's stiffness on
+/// `input` and puts them into the model (printing what was found).
+pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
+    let id = identify_on(input, cfg)?;
     let dt = cfg.leak_filter.sample_period_s;
-    let id = identify::identify(&cfg.model, dt, &rows, noise)
-        .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))?;
     let m = &cfg.model;
     let (wa, wb) = m.area_gradients_m2_per_m();
     eprintln!(

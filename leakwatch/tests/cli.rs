@@ -1052,3 +1052,50 @@ fn bench_detection_on_a_plant_folder_commissions_then_scores() {
         .collect();
     assert!(early.is_empty(), "false leaks before the onset: {early:#?}");
 }
+
+/// `bench calibration --data DIR` on a folder laid out like plant_dev identifies
+/// the rig on its commissioning recording and scores it against its
+/// `truth_rig.json`. Here the datasheet's valve passes 10 % too much and its oil
+/// is 20 % too stiff; the identification finds the simulated rig's values.
+#[test]
+fn bench_calibration_on_a_plant_folder_scores_the_identification() {
+    let d = tmpdir("plant_identification");
+    let rig = model::ActuatorParams::default();
+    let sheet = d.join("datasheet.toml");
+    std::fs::write(
+        &sheet,
+        format!(
+            // the simulated rig is `[rig]` (the built-in one), the datasheet `[model]`
+            "[model]\narea_gradient_m2_per_m = {}\nbulk_modulus_pa = {}\n[rig]\nspool_null_bias_m = 0.0\n",
+            1.1 * rig.area_gradient_m2_per_m,
+            1.2 * rig.bulk_modulus_pa
+        ),
+    )
+    .unwrap();
+    simulate_random(&sheet, "30", "5", "none", &d.join("commission_cold.csv"));
+    let truth = serde_json::json!({"params": {
+        "Cd": rig.discharge_coefficient, "w": rig.area_gradient_m2_per_m, "k_sp": rig.spool_gain_m_per_v,
+        "rho": rig.oil_density_kg_m3, "beta": rig.bulk_modulus_pa, "beta_tc": 0.0045, "T_ref": 40.0,
+        "supply_sag": 0.0, "nu_tc": 0.028}});
+    std::fs::write(d.join("truth_rig.json"), truth.to_string()).unwrap();
+    std::fs::write(
+        d.join("commission_cold.truth.json"),
+        r#"{"nuisances": {"oil_temperature": {"T_C": 40.0}}}"#,
+    )
+    .unwrap();
+    let o = leakwatch(&["bench", "calibration", "--data", d.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let params = r["params"].as_array().unwrap();
+    let error = |name: &str| -> f64 {
+        let p = params
+            .iter()
+            .find(|p| p["name"].as_str().unwrap().starts_with(name))
+            .unwrap_or_else(|| panic!("no {name} in {r:#}"));
+        p["error_pct"].as_f64().unwrap_or_else(|| panic!("{p:#}"))
+    };
+    assert!(error("port A area gradient").abs() < 1.0, "{r:#}");
+    assert!(error("effective bulk modulus").abs() < 5.0, "{r:#}");
+    let gap = r["gap_lpm"].as_array().unwrap();
+    assert!(gap[1].as_f64().unwrap() < 0.5 * gap[0].as_f64().unwrap(), "{r:#}");
+}
