@@ -127,11 +127,17 @@ impl Estimate {
 /// 2-7 s); the thesis rig is there within its first second.
 pub const CONVERGED_LEAK_SIGMA: f64 = 0.05;
 
-/// The oil-stiffness scale θ (12 states) learns only while the rod's velocity
-/// estimate is beyond this many of its standard deviations from zero (1).
-/// At rest on plant_dev/double, θ otherwise fell from 1 to 0.2 within 0.3 s
-/// and the first move raised a false leak.
+/// The oil-stiffness scale θ (12 states) is held while the rod rests: its
+/// velocity estimate within this many of its standard deviations of zero (1)
+/// for [`STILL_SAMPLES`] samples in a row. At rest on plant_dev/double, θ
+/// otherwise fell from 1 to 0.2 within 0.3 s and the first move raised a
+/// false leak.
 pub const THETA_LEARNS_ABOVE_SIGMA_V: f64 = 3.0;
+
+/// Samples in a row the rod must rest before θ is held (50 ms at 1 kHz): a
+/// velocity passing through zero in a reversal is not a rest (holding θ at
+/// every reversal of a 5 Hz chirp raised a false leak in the 30-hour suite).
+pub const STILL_SAMPLES: u32 = 50;
 
 /// Counters of what the stage did, for summaries.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -175,6 +181,8 @@ pub struct Estimator {
     t0_s: f64,
     /// The leak sizes' standard deviations have fallen below [`CONVERGED_LEAK_SIGMA`] of their start (latched until a restart).
     leaks_converged: bool,
+    /// Samples in a row the rod's velocity estimate has been within noise of zero.
+    still_samples: u32,
     diverged_samples: u32,
     /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
     reanchor_pending: bool,
@@ -226,6 +234,7 @@ impl Estimator {
             started: false,
             t0_s: 0.0,
             leaks_converged: false,
+            still_samples: 0,
             diverged_samples: 0,
             reanchor_pending: false,
             measured_p_range_pa,
@@ -248,7 +257,7 @@ impl Estimator {
             w.clone_from(f);
             let y = ProcessModel::measure(w.state());
             // (the result is thrown away with the copy)
-            let _ = step_filter(w, model, u, &y, [true; 3], true, out);
+            let _ = step_filter(w, model, u, &y, [true; 3], true, out, &mut 0);
         }
         if !self.started {
             return;
@@ -449,11 +458,56 @@ impl Estimator {
         );
         let mut out = Estimate::empty(s.t_s, self.tuning.states);
         let step = match &mut self.filter {
-            Filter::S6(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
-            Filter::S7(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
-            Filter::S10(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
-            Filter::S11(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
-            Filter::S12(e) => step_filter(e, &self.model, u, &y, use_channel, usable, &mut out),
+            Filter::S6(e) => step_filter(
+                e,
+                &self.model,
+                u,
+                &y,
+                use_channel,
+                usable,
+                &mut out,
+                &mut self.still_samples,
+            ),
+            Filter::S7(e) => step_filter(
+                e,
+                &self.model,
+                u,
+                &y,
+                use_channel,
+                usable,
+                &mut out,
+                &mut self.still_samples,
+            ),
+            Filter::S10(e) => step_filter(
+                e,
+                &self.model,
+                u,
+                &y,
+                use_channel,
+                usable,
+                &mut out,
+                &mut self.still_samples,
+            ),
+            Filter::S11(e) => step_filter(
+                e,
+                &self.model,
+                u,
+                &y,
+                use_channel,
+                usable,
+                &mut out,
+                &mut self.still_samples,
+            ),
+            Filter::S12(e) => step_filter(
+                e,
+                &self.model,
+                u,
+                &y,
+                use_channel,
+                usable,
+                &mut out,
+                &mut self.still_samples,
+            ),
         };
         match step {
             Ok(clamped) => {
@@ -574,9 +628,17 @@ fn step_filter<const N: usize>(
     use_channel: [bool; 3],
     usable: bool,
     out: &mut Estimate,
+    still_samples: &mut u32,
 ) -> Result<bool, EkfError> {
     let (x_pred, mut f, guard) = model.step(e.state(), u);
-    if N == 12 && e.state()[4].abs() < THETA_LEARNS_ABOVE_SIGMA_V * e.sigma_of(4) {
+    if N == 12 {
+        if e.state()[4].abs() < THETA_LEARNS_ABOVE_SIGMA_V * e.sigma_of(4) {
+            *still_samples = still_samples.saturating_add(1);
+        } else {
+            *still_samples = 0;
+        }
+    }
+    if N == 12 && *still_samples >= STILL_SAMPLES {
         // θ scales the pressure change the flow A·v makes. While v is not
         // known to differ from zero, its noise would pass for that change and
         // pull θ toward 0 (an errors-in-variables bias): θ is held this step.
