@@ -5,6 +5,7 @@ pub mod alarms;
 pub mod detection;
 pub mod detection_data;
 pub mod identification;
+pub mod replay;
 pub mod speed;
 pub mod stats;
 pub mod thesis;

@@ -127,14 +127,14 @@ impl Estimate {
 /// 2-7 s); the thesis rig is there within its first second.
 pub const CONVERGED_LEAK_SIGMA: f64 = 0.05;
 
-/// The oil-stiffness scale θ (12 states) is held while the rod rests: its
-/// velocity estimate within this many of its standard deviations of zero (1)
-/// for [`STILL_SAMPLES`] samples in a row. At rest on plant_dev/double, θ
+/// The oil-stiffness scale θ (12 states) does not learn from the rod's
+/// velocity while the rod rests: its velocity estimate within this many of its
+/// standard deviations of zero (1) for [`STILL_SAMPLES`] samples in a row. At rest on plant_dev/double, θ
 /// otherwise fell from 1 to 0.2 within 0.3 s and the first move raised a
 /// false leak.
 pub const THETA_LEARNS_ABOVE_SIGMA_V: f64 = 3.0;
 
-/// Samples in a row the rod must rest before θ is held (50 ms at 1 kHz): a
+/// Samples in a row the rod must rest before θ stops learning from v (50 ms at 1 kHz): a
 /// velocity passing through zero in a reversal is not a rest (holding θ at
 /// every reversal of a 5 Hz chirp raised a false leak in the 30-hour suite).
 pub const STILL_SAMPLES: u32 = 50;
@@ -620,6 +620,8 @@ fn predict_only<const N: usize>(e: &mut Ekf<N, 3>, model: &ProcessModel, u: f64)
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
+/// (`still_samples` counts the samples the rod has rested, for θ's hold.)
+#[allow(clippy::too_many_arguments)] // the hot path takes its inputs by reference, unbundled
 fn step_filter<const N: usize>(
     e: &mut Ekf<N, 3>,
     model: &ProcessModel,
@@ -639,11 +641,20 @@ fn step_filter<const N: usize>(
         }
     }
     if N == 12 && *still_samples >= STILL_SAMPLES {
-        // θ scales the pressure change the flow A·v makes. While v is not
-        // known to differ from zero, its noise would pass for that change and
-        // pull θ toward 0 (an errors-in-variables bias): θ is held this step.
-        f[(1, I_BULK)] = 0.0;
-        f[(2, I_BULK)] = 0.0;
+        // θ scales the pressure change the net flow Q − A·v makes. While the
+        // rod rests, v̂ is noise, and that noise would pass for a change and
+        // pull θ toward 0 (an errors-in-variables bias): the A·v part leaves
+        // θ's column. The valve's and the leaks' flows stay (a chamber
+        // compressed against a stop still tells θ).
+        let st = e.state();
+        let p = &model.params;
+        let (v1, v2) = p.chamber_volumes_m3(st[3]);
+        let (a1, a2) = p.areas_m2();
+        let b1 = model::dynamics::effective_bulk_modulus_pa(p, st[1]);
+        let b2 = model::dynamics::effective_bulk_modulus_pa(p, st[2]);
+        let h = model.dt_s;
+        f[(1, I_BULK)] += h * b1 / v1 * a1 * st[4];
+        f[(2, I_BULK)] -= h * b2 / v2 * a2 * st[4];
     }
     e.predict(x_pred, &f)?;
     let y_pred = ProcessModel::measure(e.state());

@@ -187,10 +187,15 @@ pub(crate) enum Command {
         #[arg(long, value_delimiter = ',')]
         effects: Vec<String>,
     },
-    /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time.
+    /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time;
+    /// a directory or several files are replayed as a batch over all cores.
     Replay {
-        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) or a recorded log (.mcap).
-        input: PathBuf,
+        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) or a recorded log (.mcap); or a
+        /// directory (its *.csv, *.csv.gz, *.mcap and those of its subfolders, one level down) or
+        /// several files: a batch, each file's outputs in OUT/<its relative name without extension>/,
+        /// a table on stdout, a non-zero exit if any file failed.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
         /// Configuration file (TOML; defaults for everything missing).
         #[arg(long)]
         config: Option<PathBuf>,
@@ -213,6 +218,9 @@ pub(crate) enum Command {
         /// with a non-zero exit (outputs are still written).
         #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
         max_bad_rows: f64,
+        /// Worker threads of a batch, each replaying whole files (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Learn the healthy state of a rig from a healthy recording and write a config
     /// that `replay`, `run` and every stage load with --config: a leak present when
@@ -341,6 +349,26 @@ pub(crate) enum BenchCommand {
         #[arg(long, default_value_t = 20.0)]
         seconds: f64,
         /// Output directory for scale.json and the runs' outputs.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Batch replay throughput: samples per second per core and in total, for each number of
+    /// worker threads, on a directory of recordings (default: 16 simulated ten-minute CSVs).
+    Replay {
+        /// Directory to replay as `leakwatch replay DIR` would (default: generate the files
+        /// into OUT/replay-inputs/, removed at the end).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Numbers of worker threads to measure, one pass each (default: 1 and all cores).
+        #[arg(long, value_delimiter = ',')]
+        threads: Vec<usize>,
+        /// Generated files (without --data).
+        #[arg(long, default_value_t = 16)]
+        files: usize,
+        /// Length of each generated file, s (without --data).
+        #[arg(long, default_value_t = 600.0)]
+        seconds: f64,
+        /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
         #[arg(long)]
         out: PathBuf,
     },

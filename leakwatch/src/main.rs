@@ -1,6 +1,7 @@
 //! `leakwatch`: watch a hydraulic actuator for leaks. One command line for
 //! simulation, offline replay, the live pipeline, calibration and benchmarks.
 
+mod batch;
 mod benches;
 mod calibrate_cmd;
 mod cli;
@@ -21,6 +22,7 @@ mod replay_cmd;
 mod run;
 mod scale;
 mod simulate;
+mod status;
 mod watch;
 
 use std::process::ExitCode;
@@ -37,7 +39,10 @@ fn main() -> ExitCode {
         return run::stage_main(&argv[2..]);
     }
     let cli = Cli::parse();
+    // (benchmarks run pipelines and replays of their own: their status is theirs)
+    let watches = matches!(cli.command, Command::Run { .. } | Command::Replay { .. });
     match run(cli) {
+        Ok(()) if watches && status::not_watched() => ExitCode::from(status::NOT_WATCHED),
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
             eprintln!("leakwatch: error: {msg}");
@@ -109,7 +114,7 @@ fn run(cli: Cli) -> Result<(), String> {
             effects,
         } => calibrate_cmd::run(&input, Config::pick(config).as_deref(), &out, effects, force),
         Command::Replay {
-            input,
+            inputs,
             config,
             model,
             out,
@@ -117,8 +122,9 @@ fn run(cli: Cli) -> Result<(), String> {
             single_thread,
             thesis_baseline,
             max_bad_rows,
+            threads,
         } => replay_cmd::run(replay_cmd::ReplayArgs {
-            input,
+            inputs,
             config,
             model,
             out,
@@ -127,6 +133,7 @@ fn run(cli: Cli) -> Result<(), String> {
             thesis_baseline,
             max_bad_rows,
             force,
+            threads,
         }),
         Command::Simulate {
             scenario,
@@ -167,6 +174,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 json,
                 out,
             } => benches::calibration(matrix, data, config, json, out, force),
+            BenchCommand::Replay {
+                data,
+                threads,
+                files,
+                seconds,
+                out,
+            } => benches::replay(data.as_deref(), &threads, files, seconds, &out, force),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
             BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
             BenchCommand::Detection {

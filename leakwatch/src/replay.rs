@@ -48,6 +48,9 @@ pub struct ReplayRequest {
     pub log: Option<LogDamage>,
     /// Format of the estimates file (estimates.csv or estimates.parquet).
     pub estimates: EstimatesFormat,
+    /// Samples processed so far, added to as the replay goes (a batch's progress
+    /// across its worker threads); none: not counted.
+    pub samples_done: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
 }
 
 /// What reading a recorded log (MCAP) skipped, reported in summary.json.
@@ -152,6 +155,10 @@ pub struct Summary {
     pub watch: Watch,
     /// How the stages were connected.
     pub wiring: String,
+    /// The events written to events.json (not repeated in summary.json): the
+    /// batch replay's table reads the leak kinds and first alarm from them.
+    #[serde(skip)]
+    pub event_log: Vec<LeakEvent>,
 }
 
 struct Acc {
@@ -304,6 +311,14 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         }
     };
     let has_optional = reader.has_optional();
+    // Adds the samples processed since the last call to `req.samples_done`.
+    let counted = std::cell::Cell::new(0u64);
+    let count = |samples: u64| {
+        if let Some(c) = &req.samples_done {
+            c.fetch_add(samples - counted.get(), std::sync::atomic::Ordering::Relaxed);
+            counted.set(samples);
+        }
+    };
 
     let absent = match req.wiring {
         Wiring::SingleThread => {
@@ -323,6 +338,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                 sink(&e, &mut summary);
                 if summary.samples.is_multiple_of(65536) {
                     bar.set_position(summary.samples);
+                    count(summary.samples);
                 }
             }
             reader.absent
@@ -384,11 +400,13 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                         on_issue(issue, &mut summary);
                     }
                     bar.set_position(summary.samples);
+                    count(summary.samples);
                 }
                 read.join().unwrap_or_default()
             })
         }
     };
+    count(summary.samples);
     cls.finish(last_t, |ev| events.push(ev));
     bar.finish_and_clear();
     if let Some(e) = write_err {
@@ -453,6 +471,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     if let Some(why) = &summary.refused {
         return Err(why.clone());
     }
+    summary.event_log = events;
     Ok(summary)
 }
 

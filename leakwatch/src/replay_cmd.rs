@@ -1,7 +1,10 @@
 //! `leakwatch replay`: the command's checks, a recorded log read through its
-//! CSV export, and the warnings and summary printed after [`replay::run`].
+//! CSV export, and the warnings and summary printed after [`replay::run`]; a
+//! directory or several inputs go to [`crate::batch`].
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicU64;
+use std::sync::Arc;
 
 use crate::config::Config;
 use crate::logs::export_log;
@@ -9,8 +12,8 @@ use crate::{out, replay};
 
 /// What `leakwatch replay` was asked to do: its arguments (`cli::Command::Replay`) and `--force`.
 pub struct ReplayArgs {
-    /// Input: a CSV or a recorded log (.mcap).
-    pub input: PathBuf,
+    /// Inputs: one CSV or recorded log (.mcap), or a directory or several files (a batch).
+    pub inputs: Vec<PathBuf>,
     /// Configuration file.
     pub config: Option<PathBuf>,
     /// States of the thesis filter (6 or 7).
@@ -27,12 +30,102 @@ pub struct ReplayArgs {
     pub max_bad_rows: f64,
     /// Replace existing outputs.
     pub force: bool,
+    /// Worker threads of a batch (default: all cores).
+    pub threads: Option<usize>,
 }
 
-/// `leakwatch replay`.
+/// What every file of a replay shares: the configuration and the output rules.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// The configuration, with the command line's changes applied.
+    pub cfg: Config,
+    /// The configuration file it came from (never overwritten).
+    pub config: Option<PathBuf>,
+    /// Format of the estimates file.
+    pub estimates: crate::estimates_out::EstimatesFormat,
+    /// Largest fraction of unusable input rows (0 to 1).
+    pub max_bad_rows: f64,
+    /// Replace existing outputs.
+    pub force: bool,
+}
+
+impl Settings {
+    /// Checks the options and loads the configuration (`config`, or ./leakwatch.toml, or the defaults).
+    pub fn new(
+        config: Option<PathBuf>,
+        model: Option<u32>,
+        thesis_baseline: bool,
+        estimates: crate::estimates_out::EstimatesFormat,
+        max_bad_rows: f64,
+        force: bool,
+    ) -> Result<Settings, String> {
+        if !(0.0..=1.0).contains(&max_bad_rows) {
+            return Err(format!(
+                "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
+            ));
+        }
+        let config = Config::pick(config);
+        let mut cfg = Config::load_or_default(config.as_deref())?;
+        cfg.classifier.thesis_baseline |= thesis_baseline;
+        if let Some(m) = model {
+            if m != 6 && m != 7 {
+                return Err(format!("--model {m}: the thesis filter has 6 or 7 states"));
+            }
+            cfg.estimator.states = m;
+        }
+        Ok(Settings {
+            cfg,
+            config,
+            estimates,
+            max_bad_rows,
+            force,
+        })
+    }
+}
+
+/// Replays one file (a CSV, or a recorded log through its export in
+/// `out/log-export/`) into `out`: the one path of a single replay and of every
+/// file of a batch, so their outputs are the same bytes.
+pub fn replay_file(
+    input: &Path,
+    out: &Path,
+    settings: &Settings,
+    wiring: replay::Wiring,
+    progress: bool,
+    samples_done: Option<Arc<AtomicU64>>,
+) -> Result<replay::Summary, String> {
+    // A recorded log is replayed through its frames, exported as dataset.csv.
+    let mut protect: Vec<PathBuf> = settings.config.iter().cloned().collect();
+    let mut log = None;
+    let input = if input.extension().is_some_and(|e| e == "mcap") {
+        out::dir(out)?;
+        let dir = out.join("log-export");
+        log = Some(export_log(input, &dir, settings.force, true)?.1);
+        protect.push(input.to_path_buf());
+        dir.join("dataset.csv")
+    } else {
+        input.to_path_buf()
+    };
+    let req = replay::ReplayRequest {
+        input,
+        out_dir: out.to_path_buf(),
+        config: settings.cfg.clone(),
+        wiring,
+        progress,
+        max_bad_fraction: settings.max_bad_rows,
+        overwrite: settings.force,
+        protect,
+        log,
+        estimates: settings.estimates,
+        samples_done,
+    };
+    replay::run(&req)
+}
+
+/// `leakwatch replay`: one file as before; a directory or several files as a batch.
 pub fn run(args: ReplayArgs) -> Result<(), String> {
     let ReplayArgs {
-        input,
+        inputs,
         config,
         model,
         out,
@@ -41,52 +134,22 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         thesis_baseline,
         max_bad_rows,
         force,
+        threads,
     } = args;
-    if !(0.0..=1.0).contains(&max_bad_rows) {
-        return Err(format!(
-            "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
-        ));
-    }
-    let config = Config::pick(config);
-    let mut cfg = Config::load_or_default(config.as_deref())?;
-    cfg.classifier.thesis_baseline |= thesis_baseline;
-    if let Some(m) = model {
-        if m != 6 && m != 7 {
-            return Err(format!("--model {m}: the thesis filter has 6 or 7 states"));
-        }
-        cfg.estimator.states = m;
-    }
-    // A recorded log is replayed through its frames, exported as dataset.csv.
-    let mut protect: Vec<PathBuf> = config.iter().cloned().collect();
-    let mut log = None;
-    let input = if input.extension().is_some_and(|e| e == "mcap") {
-        out::dir(&out)?;
-        let dir = out.join("log-export");
-        log = Some(export_log(&input, &dir, force, true)?.1);
-        protect.push(input);
-        dir.join("dataset.csv")
+    let settings = Settings::new(config, model, thesis_baseline, estimates, max_bad_rows, force)?;
+    let input = match inputs.as_slice() {
+        [one] if !one.is_dir() => one,
+        _ => return crate::batch::run(&inputs, &out, &settings, threads),
+    };
+    let wiring = if single_thread {
+        replay::Wiring::SingleThread
     } else {
-        input
+        replay::Wiring::Channels
     };
-    let req = replay::ReplayRequest {
-        input,
-        out_dir: out.clone(),
-        config: cfg,
-        wiring: if single_thread {
-            replay::Wiring::SingleThread
-        } else {
-            replay::Wiring::Channels
-        },
-        progress: true,
-        max_bad_fraction: max_bad_rows,
-        overwrite: force,
-        protect,
-        log,
-        estimates,
-    };
-    let (cfg_nis_gate, cfg_recovery_s) = (req.config.classifier.nis_gate, req.config.classifier.recovery_s);
-    let model_bulk_modulus_pa = req.config.model.bulk_modulus_pa;
-    let s = replay::run(&req)?;
+    let s = replay_file(input, &out, &settings, wiring, true, None)?;
+    let cfg = &settings.cfg;
+    let (cfg_nis_gate, cfg_recovery_s) = (cfg.classifier.nis_gate, cfg.classifier.recovery_s);
+    let model_bulk_modulus_pa = cfg.model.bulk_modulus_pa;
     for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
         if f.resets * 10 > s.samples {
             eprintln!(
@@ -122,10 +185,13 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
     }
     let w = &s.watch;
     match w.armed_at_s {
-        None => eprintln!(
-            "NOT WATCHED: the leak detector never armed in this run ({}): no leak could have been seen",
-            w.not_armed.as_deref().unwrap_or("no healthy state learned")
-        ),
+        None => {
+            eprintln!(
+                "NOT WATCHED: the leak detector never armed in this run ({}): no leak could have been seen",
+                w.not_armed.as_deref().unwrap_or("no healthy state learned")
+            );
+            crate::status::set_not_watched();
+        }
         Some(armed) => eprintln!(
             "watched {:.1} of {:.1} s ({:.0} %): armed at {:.1} s, {:.1} s without evidence after it",
             w.watched_s,

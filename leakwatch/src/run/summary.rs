@@ -69,7 +69,20 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
                 e.t_onset_s,
                 e.detail
             ),
-            None => outln!("\nno leak detected"),
+            None => match o
+                .events
+                .iter()
+                .find(|e| e.kind == classifier::EventKind::NotArmed)
+            {
+                Some(e) => {
+                    outln!(
+                        "\nNOT WATCHED: the leak detector never armed in this run ({}): no leak could have been seen",
+                        e.detail
+                    );
+                    crate::status::set_not_watched();
+                }
+                None => outln!("\nno leak detected"),
+            },
         },
     }
     if matches!(parse_source(args.source.as_deref()), Ok(RunSource::Udp(_))) {

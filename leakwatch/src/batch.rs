@@ -1,0 +1,390 @@
+//! `leakwatch replay DIR` (or several files): a batch of replays spread over
+//! worker threads. Each file is replayed whole on one thread by the single
+//! replay's path ([`replay_cmd::replay_file`], its one-thread wiring), so its
+//! outputs, in `OUT/<relative name without extension>/`, are the bytes a
+//! replay of that file alone writes. A file that fails is reported and the
+//! others go on; the command then ends with an error (a non-zero exit).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use classifier::{EventKind, Phase};
+
+use crate::out::outln;
+use crate::replay::{Summary, Wiring};
+use crate::replay_cmd::{replay_file, Settings};
+
+/// One file of a batch.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The input file.
+    pub input: PathBuf,
+    /// Its name relative to the directory given (or its file name), without the
+    /// extension (`run_000/measured`): the folder of its outputs under OUT.
+    pub name: String,
+    /// Its size, bytes (the largest files start first).
+    pub bytes: u64,
+}
+
+/// What replaying one file of a batch gave.
+#[derive(Debug)]
+pub struct Done {
+    /// The replay's summary, or its error (naming the file).
+    pub result: Result<Summary, String>,
+    /// Wall time of this file, s.
+    pub wall_s: f64,
+}
+
+/// A whole batch: one [`Done`] per job, in the jobs' order.
+#[derive(Debug)]
+pub struct BatchResult {
+    /// The outcome of each job.
+    pub done: Vec<Done>,
+    /// Wall time of the batch, s.
+    pub wall_s: f64,
+    /// Worker threads used.
+    pub threads: usize,
+    /// Samples processed, failed files' included as far as they got.
+    pub samples: u64,
+}
+
+/// The name of a replayable file without its extension (`.csv`, `.csv.gz`,
+/// `.mcap`, any case); `None` for other files and hidden ones.
+pub fn stem(file_name: &str) -> Option<&str> {
+    if file_name.starts_with('.') {
+        return None;
+    }
+    let lower = file_name.to_ascii_lowercase();
+    [".csv.gz", ".csv", ".mcap"]
+        .into_iter()
+        .find(|ext| lower.ends_with(ext) && lower.len() > ext.len())
+        .map(|ext| &file_name[..file_name.len() - ext.len()])
+}
+
+/// Sorted entries of `dir`, each with whether it is a directory (symbolic links followed).
+fn entries(dir: &Path) -> Result<Vec<(PathBuf, String, bool)>, String> {
+    let rd = std::fs::read_dir(dir).map_err(|e| format!("cannot read directory {}: {e}", dir.display()))?;
+    let mut v = Vec::new();
+    for entry in rd {
+        let entry = entry.map_err(|e| format!("cannot read directory {}: {e}", dir.display()))?;
+        let path = entry.path();
+        let Some(name) = entry.file_name().to_str().map(str::to_string) else {
+            eprintln!("warning: {}: a name that is not UTF-8, skipped", path.display());
+            continue;
+        };
+        let is_dir = std::fs::metadata(&path).map(|m| m.is_dir()).unwrap_or(false);
+        v.push((path, name, is_dir));
+    }
+    v.sort_by(|a, b| a.1.cmp(&b.1));
+    Ok(v)
+}
+
+fn file_job(input: PathBuf, name: String) -> Result<Job, String> {
+    let bytes = std::fs::metadata(&input)
+        .map_err(|e| format!("{}: {e}", input.display()))?
+        .len();
+    Ok(Job { input, name, bytes })
+}
+
+/// The files of a batch: every `*.csv`, `*.csv.gz` and `*.mcap` of each
+/// directory in `inputs` and of its subfolders one level down (named
+/// `sub/stem`; the output directory `out` and folders with a replay's
+/// summary.json are skipped), and each file in
+/// `inputs` (named by its stem), sorted by name. Two files with the same name
+/// (`a.csv` beside `a.mcap`) are refused, as is a batch with no file.
+pub fn jobs(inputs: &[PathBuf], out: &Path) -> Result<Vec<Job>, String> {
+    let out_canon = std::fs::canonicalize(out).ok();
+    let mut jobs: Vec<Job> = Vec::new();
+    for input in inputs {
+        let meta = std::fs::metadata(input).map_err(|e| format!("{}: {e}", input.display()))?;
+        if !meta.is_dir() {
+            let file_name = input.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            let name = stem(file_name)
+                .or_else(|| Path::new(file_name).file_stem().and_then(|s| s.to_str()))
+                .filter(|s| !s.is_empty())
+                .ok_or_else(|| format!("{}: no file name to name its outputs by", input.display()))?;
+            jobs.push(file_job(input.clone(), name.to_string())?);
+            continue;
+        }
+        let before = jobs.len();
+        for (path, name, is_dir) in entries(input)? {
+            if !is_dir {
+                if let Some(s) = stem(&name) {
+                    jobs.push(file_job(path, s.to_string())?);
+                }
+                continue;
+            }
+            // the output directory, and a replay's output folder (its summary.json
+            // beside an estimates.csv that is no recording) are not inputs
+            if name.starts_with('.')
+                || out_canon.is_some() && std::fs::canonicalize(&path).ok() == out_canon
+                || path.join("summary.json").exists()
+            {
+                continue;
+            }
+            for (sub_path, sub_name, sub_is_dir) in entries(&path)? {
+                if let (false, Some(s)) = (sub_is_dir, stem(&sub_name)) {
+                    jobs.push(file_job(sub_path, format!("{name}/{s}"))?);
+                }
+            }
+        }
+        if jobs.len() == before {
+            return Err(format!(
+                "{}: no *.csv, *.csv.gz or *.mcap file in it or in its subfolders",
+                input.display()
+            ));
+        }
+    }
+    jobs.sort_by(|a, b| a.name.cmp(&b.name));
+    for w in jobs.windows(2) {
+        if w[0].name == w[1].name {
+            return Err(format!(
+                "{} and {} would both write to {}: replay them separately",
+                w[0].input.display(),
+                w[1].input.display(),
+                out.join(&w[0].name).display()
+            ));
+        }
+    }
+    Ok(jobs)
+}
+
+/// Worker threads for `threads` (default: all cores) and `files` files.
+pub fn threads_for(threads: Option<usize>, files: usize) -> Result<usize, String> {
+    let n = match threads {
+        Some(0) => return Err("--threads 0: at least one worker thread".into()),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+    };
+    Ok(n.min(files.max(1)))
+}
+
+/// Replays `jobs` into `out` on `threads` worker threads, each taking the next
+/// file (the largest first) until none is left. With `progress`, a line on
+/// stderr for every file done and every 10 s: files done / total and samples/s.
+pub fn replay_all(
+    jobs: &[Job],
+    out: &Path,
+    settings: &Settings,
+    threads: usize,
+    progress: bool,
+) -> BatchResult {
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by(|&a, &b| jobs[b].bytes.cmp(&jobs[a].bytes).then(a.cmp(&b)));
+    let next = AtomicUsize::new(0);
+    let samples = Arc::new(AtomicU64::new(0));
+    let (tx, rx) = crossbeam_channel::unbounded::<(usize, Done)>();
+    let mut done: Vec<Option<Done>> = jobs.iter().map(|_| None).collect();
+    let threads = threads.max(1);
+    let started = Instant::now();
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, order, samples) = (&next, &order, &samples);
+            scope.spawn(move || loop {
+                let Some(&i) = order.get(next.fetch_add(1, Ordering::Relaxed)) else {
+                    return;
+                };
+                let job = &jobs[i];
+                let t0 = Instant::now();
+                let dir = out.join(&job.name);
+                let run = || {
+                    replay_file(
+                        &job.input,
+                        &dir,
+                        settings,
+                        Wiring::SingleThread,
+                        false,
+                        Some(samples.clone()),
+                    )
+                };
+                let result =
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)).unwrap_or_else(|p| {
+                        let why = p
+                            .downcast_ref::<&str>()
+                            .map(|s| s.to_string())
+                            .or_else(|| p.downcast_ref::<String>().cloned())
+                            .unwrap_or_else(|| "unknown".into());
+                        Err(format!("{}: the replay panicked: {why}", job.input.display()))
+                    });
+                let wall_s = t0.elapsed().as_secs_f64();
+                if tx.send((i, Done { result, wall_s })).is_err() {
+                    return;
+                }
+            });
+        }
+        drop(tx);
+        let mut finished = 0usize;
+        loop {
+            match rx.recv_timeout(Duration::from_secs(10)) {
+                Ok((i, d)) => {
+                    finished += 1;
+                    if progress {
+                        let what = match &d.result {
+                            Ok(s) => format!("{} samples in {:.1} s", s.samples, d.wall_s),
+                            Err(e) => format!("FAILED: {e}"),
+                        };
+                        eprintln!(
+                            "[{finished}/{}] {}: {what} | {}",
+                            jobs.len(),
+                            jobs[i].name,
+                            rate(&samples, started)
+                        );
+                    }
+                    done[i] = Some(d);
+                }
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
+                    if progress {
+                        eprintln!("[{finished}/{}] ... | {}", jobs.len(), rate(&samples, started));
+                    }
+                }
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
+            }
+        }
+    });
+    let done = done
+        .into_iter()
+        .zip(jobs)
+        .map(|(d, job)| {
+            d.unwrap_or_else(|| Done {
+                result: Err(format!(
+                    "{}: not replayed (its worker thread ended)",
+                    job.input.display()
+                )),
+                wall_s: 0.0,
+            })
+        })
+        .collect();
+    BatchResult {
+        done,
+        wall_s: started.elapsed().as_secs_f64(),
+        threads,
+        samples: samples.load(Ordering::Relaxed),
+    }
+}
+
+fn rate(samples: &AtomicU64, started: Instant) -> String {
+    let n = samples.load(Ordering::Relaxed);
+    format!(
+        "batch: {n} samples, {:.0} samples/s",
+        n as f64 / started.elapsed().as_secs_f64().max(1e-9)
+    )
+}
+
+/// The leak kinds raised by the leak-size detector (`ext1, int`; `leak` for
+/// one whose kind was not named yet) and the first such alarm's time, s.
+pub fn leaks_raised(s: &Summary) -> (Vec<&'static str>, Option<f64>) {
+    let mut kinds: Vec<&'static str> = Vec::new();
+    let mut first_s: Option<f64> = None;
+    for e in s.event_log.iter().filter(|e| {
+        e.phase == Phase::Raised
+            && e.detector == "leak-size"
+            && (EventKind::LEAKS.contains(&e.kind) || e.kind == EventKind::Leak)
+    }) {
+        if !kinds.contains(&e.kind.name()) {
+            kinds.push(e.kind.name());
+        }
+        first_s = Some(first_s.map_or(e.t_detect_s, |t| t.min(e.t_detect_s)));
+    }
+    (kinds, first_s)
+}
+
+/// One table cell: no `|` nor line break.
+fn cell(text: &str) -> String {
+    text.replace('|', "/").replace(['\n', '\r'], " ")
+}
+
+/// `leakwatch replay DIR|FILE...`: the batch, its progress on stderr, its table
+/// on stdout (per file: samples, events raised (distinct events of any kind),
+/// the leak kinds the leak-size detector raised and its first alarm's sample
+/// time, the seconds watched of the run, the error); an error (a non-zero
+/// exit) if any file failed.
+pub fn run(
+    inputs: &[PathBuf],
+    out: &Path,
+    settings: &Settings,
+    threads: Option<usize>,
+) -> Result<(), String> {
+    let jobs = jobs(inputs, out)?;
+    let threads = threads_for(threads, jobs.len())?;
+    crate::out::dir(out)?;
+    eprintln!(
+        "replaying {} files on {threads} threads into {}",
+        jobs.len(),
+        out.display()
+    );
+    let b = replay_all(&jobs, out, settings, threads, true);
+    outln!("| file | samples | events raised | leaks raised | first alarm s | watched s | error |");
+    outln!("|---|---|---|---|---|---|---|");
+    let mut failed = 0usize;
+    for (job, d) in jobs.iter().zip(&b.done) {
+        match &d.result {
+            Ok(s) => {
+                // events, not reports: a leak raised first with its kind pending
+                // and again, same id, with its kind is one event
+                let mut raised: Vec<(&str, u64)> = s
+                    .event_log
+                    .iter()
+                    .filter(|e| e.phase == Phase::Raised)
+                    .map(|e| (e.detector.as_str(), e.event_id))
+                    .collect();
+                raised.sort_unstable();
+                raised.dedup();
+                let raised = raised.len();
+                let (kinds, first_s) = leaks_raised(s);
+                let watched = match s.watch.armed_at_s {
+                    Some(_) => format!("{:.1} of {:.1}", s.watch.watched_s, s.watch.run_s),
+                    None => {
+                        crate::status::set_not_watched();
+                        "NOT WATCHED (never armed)".into()
+                    }
+                };
+                outln!(
+                    "| {} | {} | {raised} | {} | {} | {watched} | |",
+                    cell(&job.name),
+                    s.samples,
+                    if kinds.is_empty() {
+                        "none".into()
+                    } else {
+                        kinds.join(", ")
+                    },
+                    first_s.map_or("–".into(), |t| format!("{t:.3}")),
+                )
+            }
+            Err(e) => {
+                failed += 1;
+                outln!("| {} | – | – | – | – | – | {} |", cell(&job.name), cell(e))
+            }
+        }
+    }
+    eprintln!(
+        "replayed {} files ({failed} failed) in {:.1} s on {} threads: {} samples, {:.0} samples/s; wrote {}",
+        jobs.len(),
+        b.wall_s,
+        b.threads,
+        b.samples,
+        b.samples as f64 / b.wall_s.max(1e-9),
+        out.display()
+    );
+    if failed > 0 {
+        return Err(format!("{failed} of {} files failed (see the table)", jobs.len()));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replayable_names_lose_their_extension() {
+        assert_eq!(stem("measured.csv.gz"), Some("measured"));
+        assert_eq!(stem("RUN.CSV"), Some("RUN"));
+        assert_eq!(stem("a.b.mcap"), Some("a.b"));
+        assert_eq!(stem("truth.json"), None);
+        assert_eq!(stem(".hidden.csv"), None);
+        assert_eq!(stem(".csv"), None);
+    }
+}
