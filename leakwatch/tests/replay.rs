@@ -225,7 +225,7 @@ fn model_6_replays_the_six_state_thesis_filter() {
     let o = replay(&input, &six, &["--model", "6", "--single-thread"]);
     assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
     let o = replay(&input, &seven, &["--model", "7", "--single-thread"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(six.join("events.json").exists());
 
     // The thesis filter's F_e estimate per row, from the column named th_f_e.
