@@ -257,7 +257,13 @@ impl Estimator {
             w.clone_from(f);
             let y = ProcessModel::measure(w.state());
             // (the result is thrown away with the copy)
-            let _ = step_filter(w, model, u, &y, [true; 3], true, out, &mut 0);
+            let input = StepInput {
+                u,
+                y,
+                use_channel: [true; 3],
+                usable: true,
+            };
+            let _ = step_filter(w, model, &input, out, &mut 0);
         }
         if !self.started {
             return;
@@ -457,57 +463,19 @@ impl Estimator {
             if use_channel[2] { s.p2_pa } else { 0.0 },
         );
         let mut out = Estimate::empty(s.t_s, self.tuning.states);
+        let input = StepInput {
+            u,
+            y,
+            use_channel,
+            usable,
+        };
+        let still = &mut self.still_samples;
         let step = match &mut self.filter {
-            Filter::S6(e) => step_filter(
-                e,
-                &self.model,
-                u,
-                &y,
-                use_channel,
-                usable,
-                &mut out,
-                &mut self.still_samples,
-            ),
-            Filter::S7(e) => step_filter(
-                e,
-                &self.model,
-                u,
-                &y,
-                use_channel,
-                usable,
-                &mut out,
-                &mut self.still_samples,
-            ),
-            Filter::S10(e) => step_filter(
-                e,
-                &self.model,
-                u,
-                &y,
-                use_channel,
-                usable,
-                &mut out,
-                &mut self.still_samples,
-            ),
-            Filter::S11(e) => step_filter(
-                e,
-                &self.model,
-                u,
-                &y,
-                use_channel,
-                usable,
-                &mut out,
-                &mut self.still_samples,
-            ),
-            Filter::S12(e) => step_filter(
-                e,
-                &self.model,
-                u,
-                &y,
-                use_channel,
-                usable,
-                &mut out,
-                &mut self.still_samples,
-            ),
+            Filter::S6(e) => step_filter(e, &self.model, &input, &mut out, still),
+            Filter::S7(e) => step_filter(e, &self.model, &input, &mut out, still),
+            Filter::S10(e) => step_filter(e, &self.model, &input, &mut out, still),
+            Filter::S11(e) => step_filter(e, &self.model, &input, &mut out, still),
+            Filter::S12(e) => step_filter(e, &self.model, &input, &mut out, still),
         };
         match step {
             Ok(clamped) => {
@@ -619,19 +587,33 @@ fn predict_only<const N: usize>(e: &mut Ekf<N, 3>, model: &ProcessModel, u: f64)
     e.predict(x, &f).is_ok()
 }
 
+/// What one sample gives a filter step.
+struct StepInput {
+    /// Valve command, V.
+    u: f64,
+    /// Measurement [x m, p1 Pa, p2 Pa] (0 where a channel is not used).
+    y: SVector<f64, 3>,
+    /// Which channels update the filter.
+    use_channel: [bool; 3],
+    /// Whether the sample updates the filter at all.
+    usable: bool,
+}
+
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
 /// (`still_samples` counts the samples the rod has rested, for θ's hold.)
-#[allow(clippy::too_many_arguments)] // the hot path takes its inputs by reference, unbundled
 fn step_filter<const N: usize>(
     e: &mut Ekf<N, 3>,
     model: &ProcessModel,
-    u: f64,
-    y: &SVector<f64, 3>,
-    use_channel: [bool; 3],
-    usable: bool,
+    input: &StepInput,
     out: &mut Estimate,
     still_samples: &mut u32,
 ) -> Result<bool, EkfError> {
+    let StepInput {
+        u,
+        ref y,
+        use_channel,
+        usable,
+    } = *input;
     let (x_pred, mut f, guard) = model.step(e.state(), u);
     if N == 12 {
         if e.state()[4].abs() < THETA_LEARNS_ABOVE_SIGMA_V * e.sigma_of(4) {
