@@ -85,13 +85,6 @@ pub fn score(
         Some(num(p, &["Cd"])? * w * num(p, &["k_sp"])? / num(p, &["rho"])?.sqrt() / model_gain)
     };
     let (wa, wb) = model.area_gradients_m2_per_m();
-    let scaled = |f: &Found, w: f64| match f {
-        Found::Identified(e) => Found::Identified(identify::Estimate {
-            value: e.value * w,
-            sigma: e.sigma * w,
-        }),
-        other => other.clone(),
-    };
     let beta_true = (|| {
         let p = p?;
         let dt = temp_c? - t_ref?;
@@ -108,7 +101,7 @@ pub fn score(
         "port A area gradient (mm²/mm, in the model's Cd, k_sp, ρ)",
         1e3,
         wa,
-        &scaled(&id.valve_gain_a, wa),
+        &id.valve_gain_a.scaled(wa),
         true_gradient("w"),
     )];
     if model.rod_side_area_m2.is_some() || model.area_gradient_b_m2_per_m.is_some() {
@@ -116,7 +109,7 @@ pub fn score(
             "port B area gradient (mm²/mm, in the model's Cd, k_sp, ρ)",
             1e3,
             wb,
-            &scaled(&id.valve_gain_b, wb),
+            &id.valve_gain_b.scaled(wb),
             true_gradient("w2"),
         ));
     }

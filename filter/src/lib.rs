@@ -628,15 +628,9 @@ fn step_filter<const N: usize>(
         // pull θ toward 0 (an errors-in-variables bias): the A·v part leaves
         // θ's column. The valve's and the leaks' flows stay (a chamber
         // compressed against a stop still tells θ).
-        let st = e.state();
-        let p = &model.params;
-        let (v1, v2) = p.chamber_volumes_m3(st[3]);
-        let (a1, a2) = p.areas_m2();
-        let b1 = model::dynamics::effective_bulk_modulus_pa(p, st[1]);
-        let b2 = model::dynamics::effective_bulk_modulus_pa(p, st[2]);
-        let h = model.dt_s;
-        f[(1, I_BULK)] += h * b1 / v1 * a1 * st[4];
-        f[(2, I_BULK)] -= h * b2 / v2 * a2 * st[4];
+        let (from_v1, from_v2) = model.bulk_column_from_velocity(e.state());
+        f[(1, I_BULK)] -= from_v1;
+        f[(2, I_BULK)] -= from_v2;
     }
     e.predict(x_pred, &f)?;
     let y_pred = ProcessModel::measure(e.state());

@@ -77,7 +77,38 @@ pub enum Found {
     NotIdentifiable(String),
 }
 
+/// A multiple of the model's value `e` (1) judged: too uncertain (σ above
+/// [`MAX_RELATIVE_SIGMA`] of it) or outside `plausible` is not identified, the
+/// line naming `what` and the advice.
+fn judge(e: Estimate, plausible: (f64, f64), what: &str, uncertain: &str, advice: &str) -> Found {
+    if e.sigma > MAX_RELATIVE_SIGMA * e.value.abs() {
+        Found::NotIdentifiable(format!(
+            "{what} came out {:.3} ± {:.3} of the model's: {uncertain}",
+            e.value, e.sigma
+        ))
+    } else if !(plausible.0..=plausible.1).contains(&e.value) {
+        Found::NotIdentifiable(format!(
+            "{what} came out {:.3} of the model's: outside {}-{}; {advice}",
+            e.value, plausible.0, plausible.1
+        ))
+    } else {
+        Found::Identified(e)
+    }
+}
+
 impl Found {
+    /// The same finding with its value and σ multiplied by `k` (a multiple
+    /// of the model's turned into the model's unit).
+    pub fn scaled(&self, k: f64) -> Found {
+        match self {
+            Found::Identified(e) => Found::Identified(Estimate {
+                value: e.value * k,
+                sigma: e.sigma * k,
+            }),
+            other => other.clone(),
+        }
+    }
+
     /// The estimate, if identified.
     pub fn estimate(&self) -> Option<Estimate> {
         match self {
@@ -241,7 +272,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
 }
 
 /// Weighted least squares over the columns `cols` with the other unknowns
-/// fixed at `fixed`: (solution over all unknowns, covariance of `cols`, RMS
+/// fixed at `fixed`: (solution over all unknowns, their standard deviations, RMS
 /// residual per chamber in m³ per window).
 fn solve(rows: &Rows, cols: &[Vec<usize>], fixed: &[f64; UNKNOWNS], weights: [f64; 2]) -> Option<Fitted> {
     let m = rows.y1.len() + rows.y2.len();
@@ -290,18 +321,16 @@ fn solve(rows: &Rows, cols: &[Vec<usize>], fixed: &[f64; UNKNOWNS], weights: [f6
     let dof = (m - k) as f64;
     let var = resid.norm_squared() / dof;
     let mut theta = *fixed;
-    let mut cov = DMatrix::<f64>::zeros(k, k);
+    let mut sigma = [f64::NAN; UNKNOWNS];
     for c in 0..k {
         for &u in &cols[c] {
             theta[u] = sol[c] / scale[c];
-        }
-        for d in 0..k {
-            cov[(c, d)] = var * inv[(c, d)] / (scale[c] * scale[d]);
+            sigma[u] = (var * inv[(c, c)]).sqrt() / scale[c];
         }
     }
     Some(Fitted {
         theta,
-        cov,
+        sigma,
         rms: [
             chamber_rms(&rows.x1, &rows.y1, &theta),
             chamber_rms(&rows.x2, &rows.y2, &theta),
@@ -310,8 +339,10 @@ fn solve(rows: &Rows, cols: &[Vec<usize>], fixed: &[f64; UNKNOWNS], weights: [f6
 }
 
 struct Fitted {
+    /// Every unknown: fitted, or as fixed.
     theta: [f64; UNKNOWNS],
-    cov: DMatrix<f64>,
+    /// Standard deviation of each fitted unknown (NaN for a fixed one).
+    sigma: [f64; UNKNOWNS],
     rms: [f64; 2],
 }
 
@@ -380,11 +411,11 @@ pub fn identify(
     let first = solve(&built, &with_cl, &model, [1.0, 1.0]).ok_or_else(fail)?;
     let w = [1.0 / first.rms[0].max(1e-30), 1.0 / first.rms[1].max(1e-30)];
     let mut fit = solve(&built, &with_cl, &model, w).ok_or_else(fail)?;
-    let cl_col = with_cl.len() - 1;
-    let cl = Estimate {
-        value: fit.theta[C_L],
-        sigma: fit.cov[(cl_col, cl_col)].sqrt(),
+    let estimate = |fit: &Fitted, u: usize| Estimate {
+        value: fit.theta[u],
+        sigma: fit.sigma[u],
     };
+    let cl = estimate(&fit, C_L);
     let null_leakage = if cl.value > RESOLVED_SIGMAS * cl.sigma {
         Found::Identified(cl)
     } else {
@@ -395,66 +426,46 @@ pub fn identify(
             cl.value, cl.sigma
         ))
     };
-    let sigma = |c: usize| fit.cov[(c, c)].sqrt();
-    let gain = |c: usize, u: usize, port: &str| -> Found {
-        let e = Estimate {
-            value: fit.theta[u],
-            sigma: sigma(c),
-        };
-        if e.sigma > MAX_RELATIVE_SIGMA * e.value.abs() {
-            Found::NotIdentifiable(format!(
-                "port {port}'s flow gain came out {:.3} ± {:.3} of the model's: too uncertain (the valve moved too little)",
-                e.value, e.sigma
-            ))
-        } else if !(PLAUSIBLE_GAIN.0..=PLAUSIBLE_GAIN.1).contains(&e.value) {
-            Found::NotIdentifiable(format!(
-                "port {port}'s flow gain came out {:.3} of the model's: outside {}-{}; check the valve's rated flow, spool stroke and the command's scale and sign",
-                e.value, PLAUSIBLE_GAIN.0, PLAUSIBLE_GAIN.1
-            ))
-        } else {
-            Found::Identified(e)
-        }
+    let gain = |u: usize, port: &str| {
+        judge(
+            estimate(&fit, u),
+            PLAUSIBLE_GAIN,
+            &format!("port {port}'s flow gain"),
+            "too uncertain (the valve moved too little)",
+            "check the valve's rated flow, spool stroke and the command's scale and sign",
+        )
     };
-    let (valve_gain_a, valve_gain_b, kb_col) = if double_rod {
-        let g = gain(0, K_A, "A and B");
-        (g.clone(), g, 1)
+    let (valve_gain_a, valve_gain_b) = if double_rod {
+        let g = gain(K_A, "A and B");
+        (g.clone(), g)
     } else {
-        (gain(0, K_A, "A"), gain(1, K_B, "B"), 2)
+        (gain(K_A, "A"), gain(K_B, "B"))
     };
     // b from κ_A·b (the better-determined port when the two differ).
-    let kb = fit.theta[KB_A];
     let null_bias_m = Found::Identified(Estimate {
-        value: kb / fit.theta[K_A],
-        sigma: sigma(kb_col) / fit.theta[K_A].abs(),
+        value: fit.theta[KB_A] / fit.theta[K_A],
+        sigma: fit.sigma[KB_A] / fit.theta[K_A].abs(),
     });
-    let s_col = if double_rod { 2 } else { 4 };
-    let s = Estimate {
-        value: fit.theta[S],
-        sigma: sigma(s_col),
-    };
-    let bulk_modulus_pa = if s.sigma > MAX_RELATIVE_SIGMA * s.value.abs() {
-        Found::NotIdentifiable(format!(
-            "the oil's compliance came out {:.3} ± {:.3} of the model's: too uncertain",
-            s.value, s.sigma
-        ))
-    } else if !(PLAUSIBLE_COMPLIANCE.0..=PLAUSIBLE_COMPLIANCE.1).contains(&s.value) {
-        Found::NotIdentifiable(format!(
-            "the oil's compliance came out {:.3} of the model's: outside {}-{}; check the dead volumes and the bulk modulus",
-            s.value, PLAUSIBLE_COMPLIANCE.0, PLAUSIBLE_COMPLIANCE.1
-        ))
-    } else if p.entrained_air_fraction != 0.0 {
-        Found::NotIdentifiable(
+    let compliance = judge(
+        estimate(&fit, S),
+        PLAUSIBLE_COMPLIANCE,
+        "the oil's compliance",
+        "too uncertain",
+        "check the dead volumes and the bulk modulus",
+    );
+    let bulk_modulus_pa = match compliance {
+        Found::Identified(_) if p.entrained_air_fraction != 0.0 => Found::NotIdentifiable(
             "the model has entrained air: its pressure-dependent stiffness is left as it is".to_string(),
-        )
-    } else {
-        Found::Identified(Estimate {
+        ),
+        Found::Identified(s) => Found::Identified(Estimate {
             value: p.bulk_modulus_pa / s.value,
             sigma: p.bulk_modulus_pa * s.sigma / (s.value * s.value),
-        })
+        }),
+        other => other,
     };
     let sag = Estimate {
         value: p.supply_sag_pa_per_m3_s + fit.theta[SAG],
-        sigma: sigma(s_col + 1),
+        sigma: fit.sigma[SAG],
     };
     let supply_sag_pa_per_m3_s = if sag.value > RESOLVED_SIGMAS * sag.sigma {
         Found::Identified(sag)

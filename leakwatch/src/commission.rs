@@ -91,28 +91,21 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
         id.sensor_floor_lpm
     );
     let ga = &id.valve_gain_a;
-    let scaled = |f: &identify::Found, w: f64| match f {
-        identify::Found::Identified(e) => identify::Found::Identified(identify::Estimate {
-            value: e.value * w,
-            sigma: e.sigma * w,
-        }),
-        other => other.clone(),
-    };
     if m.rod_side_area_m2.is_none() && m.area_gradient_b_m2_per_m.is_none() {
         eprintln!(
             "{}",
-            found_line("valve area gradient", &scaled(ga, wa), "mm²/mm", 1e3, wa)
+            found_line("valve area gradient", &ga.scaled(wa), "mm²/mm", 1e3, wa)
         );
     } else {
         eprintln!(
             "{}",
-            found_line("port A area gradient", &scaled(ga, wa), "mm²/mm", 1e3, wa)
+            found_line("port A area gradient", &ga.scaled(wa), "mm²/mm", 1e3, wa)
         );
         eprintln!(
             "{}",
             found_line(
                 "port B area gradient",
-                &scaled(&id.valve_gain_b, wb),
+                &id.valve_gain_b.scaled(wb),
                 "mm²/mm",
                 1e3,
                 wb

@@ -122,6 +122,19 @@ impl ProcessModel {
         0.5 * (self.params.supply_pressure_pa - self.params.return_pressure_pa)
     }
 
+    /// The part the rod's velocity makes of θ's column in a sample step's
+    /// Jacobian (12 states), ∂(p1, p2)(k+1)/∂θ through −A1·v and +A2·v, Pa
+    /// per unit of θ: what a filter leaves out when v̂ is noise (a resting rod).
+    pub fn bulk_column_from_velocity<const N: usize>(&self, s: &SVector<f64, N>) -> (f64, f64) {
+        let p = &self.params;
+        let (v1, v2) = p.chamber_volumes_m3(s[3]);
+        let (a1, a2) = p.areas_m2();
+        let b1 = crate::dynamics::effective_bulk_modulus_pa(p, s[1]);
+        let b2 = crate::dynamics::effective_bulk_modulus_pa(p, s[2]);
+        let h = self.dt_s;
+        (-h * b1 / v1 * a1 * s[4], h * b2 / v2 * a2 * s[4])
+    }
+
     /// The measurement y = [x, p1, p2] of a state, m, Pa, Pa.
     #[inline]
     pub fn measure<const N: usize>(s: &SVector<f64, N>) -> SVector<f64, N_MEAS> {

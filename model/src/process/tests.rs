@@ -612,3 +612,27 @@ fn the_end_stops_are_in_the_model_and_stepped_finely() {
     let lin = m.linearise(&s7, 0.0);
     assert_eq!((lin.f[4], lin.a[(4, 3)], lin.a[(4, 4)]), (0.0, 0.0, 0.0));
 }
+
+/// The velocity's part of θ's column is what the column loses when v is 0:
+/// a step's ∂(p1, p2)/∂θ at v minus the same at v = 0 (one sub-step, in stroke).
+#[test]
+fn bulk_column_from_velocity_is_the_velocity_term_of_the_step_jacobian() {
+    let m = ProcessModel::new(ActuatorParams::vertical_lift(), 1e-3);
+    let mut s = SVector::<f64, 12>::zeros();
+    s[0] = 2e-6;
+    s[1] = 8.5e6;
+    s[2] = 12.5e6;
+    s[3] = 0.2;
+    s[4] = 0.05;
+    s[11] = 0.9;
+    let (_, f, _) = m.step(&s, 0.5);
+    let mut still = s;
+    still[4] = 0.0;
+    let (_, f0, _) = m.step(&still, 0.5);
+    let (c1, c2) = m.bulk_column_from_velocity(&s);
+    for (row, c) in [(1, c1), (2, c2)] {
+        let want = f[(row, I_BULK)] - f0[(row, I_BULK)];
+        assert!((c - want).abs() <= 1e-9 * want.abs(), "row {row}: {c} against {want}");
+        assert!(c.abs() > 1e3, "row {row}: {c} Pa per unit θ");
+    }
+}
