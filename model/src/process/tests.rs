@@ -632,7 +632,10 @@ fn bulk_column_from_velocity_is_the_velocity_term_of_the_step_jacobian() {
     let (c1, c2) = m.bulk_column_from_velocity(&s);
     for (row, c) in [(1, c1), (2, c2)] {
         let want = f[(row, I_BULK)] - f0[(row, I_BULK)];
-        assert!((c - want).abs() <= 1e-9 * want.abs(), "row {row}: {c} against {want}");
+        assert!(
+            (c - want).abs() <= 1e-9 * want.abs(),
+            "row {row}: {c} against {want}"
+        );
         assert!(c.abs() > 1e3, "row {row}: {c} Pa per unit θ");
     }
 }
