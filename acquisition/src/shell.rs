@@ -251,7 +251,7 @@ fn next_frame(src: &mut dyn Source, unusable: &mut u64, stats: &mut StageStats) 
             Acquired::Unusable(why) => {
                 *unusable += 1;
                 if *unusable <= 10 {
-                    eprintln!("acquisition: skipped {why}");
+                    bus::say!("acquisition: skipped {why}");
                 }
                 flags |= sensor_flags::AFTER_GAP;
             }
@@ -300,9 +300,10 @@ fn publish_paced(
             current = next_frame(source, &mut scratch_unusable, &mut scratch);
             passed += 1;
         }
-        eprintln!(
+        bus::say!(
             "acquisition: resuming after frame {} (t = {} s): {passed} samples moved over",
-            r.seq, r.t_s
+            r.seq,
+            r.t_s
         );
         seq = r.seq + 1;
         pacer = pacer.resume_after(r.mono_ns);
@@ -313,7 +314,7 @@ fn publish_paced(
 
     while let Some(mut frame) = current {
         if stop.load(Ordering::Relaxed) {
-            eprintln!("acquisition: stopped by signal after {published} frames");
+            bus::say!("acquisition: stopped by signal after {published} frames");
             break;
         }
         let tick = pacer.wait();
@@ -334,7 +335,7 @@ fn publish_paced(
             frame.flags |= sensor_flags::AFTER_GAP;
             stats.seq_gaps += dropped;
             seq += dropped;
-            eprintln!(
+            bus::say!(
                 "acquisition: {} ms behind schedule (stopped, or restarted): {dropped} samples skipped, t = {:.3} s",
                 tick.skipped * period_ns / 1_000_000,
                 frame.t_s
@@ -430,7 +431,7 @@ fn publish_live(
         }
     }
     if stop.load(Ordering::Relaxed) {
-        eprintln!("acquisition: stopped by signal after {published} frames");
+        bus::say!("acquisition: stopped by signal after {published} frames");
     } else if !closed && published > 0 {
         let end = SensorFrame {
             seq,
@@ -484,13 +485,13 @@ fn run(args: &Args) -> Result<(), String> {
     }
     let live = source.is_live();
     if live {
-        eprintln!(
+        bus::say!(
             "acquisition: {} on rig {}, published as it arrives (the sender paces); waiting for datagrams",
             source.describe(),
             bus.rig()
         );
     } else {
-        eprintln!(
+        bus::say!(
             "acquisition: {} on rig {} at {} Hz",
             source.describe(),
             bus.rig(),
@@ -511,7 +512,7 @@ fn run(args: &Args) -> Result<(), String> {
     } else {
         ("schedule lateness", "sample production")
     };
-    eprintln!(
+    bus::say!(
         "acquisition: {} frames, {} unusable rows skipped, {} samples missing, {} deadline misses\n  {what}: {}\n  {proc}: {}",
         p.frames,
         p.unusable,
@@ -521,7 +522,7 @@ fn run(args: &Args) -> Result<(), String> {
         p.stats.proc_total()
     );
     if let Some(summary) = source.summary() {
-        eprintln!("acquisition: {summary}");
+        bus::say!("acquisition: {summary}");
     }
     // let subscribers take the last frames before the publisher goes away
     let linger_end = monotonic_ns() + args.linger_ms * 1_000_000;
@@ -538,7 +539,7 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
     match run(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("acquisition: error: {e}");
+            bus::say!("acquisition: error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -648,7 +648,7 @@ impl UdpSource {
         if age < REORDER_WINDOW && seen & (1 << age) != 0 {
             self.counts.duplicated += 1;
             if self.counts.duplicated <= NAMED {
-                eprintln!("udp: duplicated datagram seq {seq} from {from} dropped");
+                bus::say!("udp: duplicated datagram seq {seq} from {from} dropped");
             }
             return Tracked::Dropped;
         }
@@ -658,10 +658,10 @@ impl UdpSource {
         self.counts.late += 1;
         self.consecutive_late += 1;
         if self.counts.late <= NAMED {
-            eprintln!("udp: late datagram seq {seq} from {from} (newest {newest}) dropped: reordered");
+            bus::say!("udp: late datagram seq {seq} from {from} (newest {newest}) dropped: reordered");
         }
         if self.consecutive_late == 1000 {
-            eprintln!(
+            bus::say!(
                 "udp: 1000 late datagrams in a row (seq {seq}, newest {newest}) and the time did not go back \
                  by a restart: is the sender's clock stuck? Restart the receiver with the sender"
             );
@@ -682,7 +682,7 @@ impl UdpSource {
             } else {
                 "sequence started again, time went on"
             };
-            eprintln!(
+            bus::say!(
                 "udp: sender {from} restarted ({how}): seq {old_seq} -> {seq}, t {old_t} s -> {t_s} s after \
                  {:.1} ms without a datagram; a new stream, {gap} samples missing",
                 silence_ns as f64 * 1e-6
@@ -710,12 +710,12 @@ impl UdpSource {
         self.counts.foreign += 1;
         if self.counts.foreign == 1 {
             if self.opts.sender.is_some() {
-                eprintln!(
+                bus::say!(
                     "udp: error: datagrams from {from} dropped: not the configured sender {sender} ([udp] sender); \
                      they are counted as foreign"
                 );
             } else {
-                eprintln!(
+                bus::say!(
                     "udp: error: datagrams from a second sender {from} dropped (the stream is from {sender}, the \
                      first sender); if {from} is the rig's, set `[udp] sender = \"{from}\"` in the config, else \
                      `[udp] sender = \"{sender}\"` so that no other device can take the stream over"
@@ -746,7 +746,7 @@ impl UdpSource {
             }
             .max(1);
             if self.counts.time_jumps <= NAMED {
-                eprintln!(
+                bus::say!(
                     "udp: time jump: t {last_t} s -> {t_s} s (by {dt:.6} s) at seq {last_seq} -> {seq}, which \
                      says {:.6} s: the sender's clock stepped (or it paused); reported as a gap of {missing} samples",
                     by_seq * period
@@ -778,11 +778,11 @@ impl UdpSource {
                         1.0 / configured,
                         off * 100.0
                     );
-                    eprintln!("udp: error: {msg}");
+                    bus::say!("udp: error: {msg}");
                     self.rate_error = Some(msg);
                 } else if off <= RATE_TOLERANCE && tolerance == RATE_TOLERANCE && self.rate_error.is_some() {
                     self.rate_error = None;
-                    eprintln!(
+                    bus::say!(
                         "udp: the sender's sample period is {:.4} ms again (configured {:.4} ms): samples are \
                          passed on again",
                         measured * 1e3,
@@ -833,7 +833,7 @@ impl UdpSource {
             self.counts.rejected += 1;
             self.pending_missing += 1;
             if self.counts.rejected <= NAMED {
-                eprintln!("udp: datagram seq {} rejected: {msg}", d.seq);
+                bus::say!("udp: datagram seq {} rejected: {msg}", d.seq);
             }
             if d.is_end_of_stream() {
                 self.end = Some(UdpEnd::EndMark);
@@ -865,7 +865,7 @@ impl UdpSource {
     fn malformed(&mut self, e: DecodeError, from: SocketAddr) {
         self.counts.malformed += 1;
         if self.counts.malformed <= NAMED {
-            eprintln!("udp: malformed datagram from {from} dropped: {e}");
+            bus::say!("udp: malformed datagram from {from} dropped: {e}");
         }
     }
 }
@@ -900,7 +900,7 @@ impl Source for UdpSource {
                     }
                 }
                 Err(e) => {
-                    eprintln!("udp: receive on {} failed: {e}", self.local);
+                    bus::say!("udp: receive on {} failed: {e}", self.local);
                     self.end = Some(UdpEnd::SocketError);
                 }
             }

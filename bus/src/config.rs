@@ -1,6 +1,7 @@
 //! The bus configuration ([`BusConfig`]): service sizes and the isolation
 //! prefix, with what a prefix owns (its lock, its files, why a start is blocked).
 
+use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
 
 use crate::BusError;
@@ -100,6 +101,136 @@ impl BusConfig {
             }
         }
         Ok(removed)
+    }
+}
+
+/// One file or directory a prefix's processes left behind.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Leftover {
+    /// The file (`/dev/shm/lw_<prefix>_*`) or directory (`/tmp/iceoryx2/lw_<prefix>`).
+    pub path: std::path::PathBuf,
+    /// Its size, bytes (a directory: the sum of the files in it).
+    pub bytes: u64,
+}
+
+/// Whether `name` (a file name in `/dev/shm`) belongs to the prefix whose
+/// iceoryx2 file prefix is `start` (`lw_<prefix>_`): iceoryx2 names follow the
+/// file prefix with a 40-digit hexadecimal hash, so the files of a longer prefix
+/// that begins the same way (`lab` and `lab_1`) are not taken for this one's.
+fn is_prefix_file(name: &str, start: &str) -> bool {
+    let Some(rest) = name.strip_prefix(start) else {
+        return false;
+    };
+    let hex = rest.bytes().take_while(u8::is_ascii_hexdigit).count();
+    hex >= 40 && matches!(rest.as_bytes().get(hex), Some(b'_' | b'.'))
+}
+
+/// Bytes of the files under `path` (0 for what cannot be read).
+fn size_of(path: &std::path::Path) -> u64 {
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return 0;
+    };
+    if !meta.is_dir() {
+        return meta.len();
+    }
+    std::fs::read_dir(path)
+        .map(|d| d.flatten().map(|e| size_of(&e.path())).sum())
+        .unwrap_or(0)
+}
+
+impl BusConfig {
+    /// The files of this config's prefix as they are now: the directory
+    /// `/tmp/iceoryx2/lw_<prefix>` and the segments `/dev/shm/lw_<prefix>_*`.
+    /// Empty without a prefix (iceoryx2's default prefix is shared with other programs).
+    pub fn prefix_files(&self) -> Vec<Leftover> {
+        let Some(p) = &self.iox_prefix else {
+            return Vec::new();
+        };
+        if validate_prefix(p).is_err() {
+            return Vec::new();
+        }
+        let (start, root) = self.file_prefix_and_root();
+        let mut out = Vec::new();
+        let root = std::path::PathBuf::from(root);
+        if std::fs::symlink_metadata(&root).is_ok() {
+            out.push(Leftover {
+                bytes: size_of(&root),
+                path: root,
+            });
+        }
+        if let Ok(dir) = std::fs::read_dir("/dev/shm") {
+            let mut shm: Vec<Leftover> = dir
+                .flatten()
+                .filter(|e| is_prefix_file(&e.file_name().to_string_lossy(), &start))
+                .map(|e| Leftover {
+                    bytes: size_of(&e.path()),
+                    path: e.path(),
+                })
+                .collect();
+            shm.sort_by(|a, b| a.path.cmp(&b.path));
+            out.extend(shm);
+        }
+        out
+    }
+
+    /// Process ids of the iceoryx2 nodes of this prefix whose process still runs
+    /// (iceoryx2's node monitoring; a node that cannot be checked counts as alive).
+    pub fn live_node_pids(&self) -> Result<Vec<u32>, BusError> {
+        set_log_level_from_env_or(LogLevel::Error);
+        let config = self.iceoryx2_config()?;
+        let mut pids = Vec::new();
+        Node::<ipc::Service>::list(&config, |state| {
+            let id = match &state {
+                NodeState::Alive(view) => Some(*view.id()),
+                NodeState::Inaccessible(id) | NodeState::Undefined(id) => Some(*id),
+                NodeState::Dead(_) => None,
+            };
+            if let Some(id) = id {
+                pids.push(
+                    id.pid::<ipc::Service>()
+                        .map(|p| u32::try_from(p.value()).unwrap_or(0))
+                        .unwrap_or(0),
+                );
+            }
+            CallbackProgression::Continue
+        })
+        .map_err(|e| BusError::new("cannot list the iceoryx2 nodes of the prefix", e))?;
+        pids.sort_unstable();
+        pids.dedup();
+        Ok(pids)
+    }
+
+    /// Removes what dead processes of this prefix left behind (see
+    /// [`BusConfig::prefix_files`]) and returns it; nothing if there is nothing.
+    /// Refused, with the process ids, while a process of the prefix still runs
+    /// (its files are in use); the caller makes sure no run holds the prefix
+    /// ([`BusConfig::lock_prefix`]).
+    pub fn remove_leftovers(&self) -> Result<Vec<Leftover>, BusError> {
+        let found = self.prefix_files();
+        if found.is_empty() {
+            return Ok(found);
+        }
+        let live = self.live_node_pids()?;
+        if !live.is_empty() {
+            let p = self.iox_prefix.as_deref().unwrap_or("");
+            return Err(BusError(format!(
+                "the iceoryx2 prefix {p:?} has running processes ({}): its files are in use and were left in place",
+                live.iter().map(|p| format!("process {p}")).collect::<Vec<_>>().join(", ")
+            )));
+        }
+        for f in &found {
+            let gone = if f.path.is_dir() {
+                std::fs::remove_dir_all(&f.path)
+            } else {
+                std::fs::remove_file(&f.path)
+            };
+            match gone {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(BusError(format!("cannot remove {}: {e}", f.path.display()))),
+            }
+        }
+        Ok(found)
     }
 }
 
@@ -278,4 +409,33 @@ fn validate_prefix(p: &str) -> Result<(), BusError> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_prefix_owns_its_files_and_not_those_of_a_longer_prefix() {
+        let hash = "0354a209029e7d094a819e2d4030ea331e6caaf0";
+        assert!(is_prefix_file(
+            &format!("lw_lab_{hash}_1029966520912543268563897568756.data"),
+            "lw_lab_"
+        ));
+        assert!(is_prefix_file(
+            &format!("lw_lab_{hash}_node.0_10_0.global_mgmt"),
+            "lw_lab_"
+        ));
+        // prefix `lab_1`'s files begin with `lw_lab_` too
+        assert!(!is_prefix_file(
+            &format!("lw_lab_1_{hash}_102996.data"),
+            "lw_lab_"
+        ));
+        assert!(is_prefix_file(
+            &format!("lw_lab_1_{hash}_102996.data"),
+            "lw_lab_1_"
+        ));
+        assert!(!is_prefix_file("lw_lab_0354a209.data", "lw_lab_"));
+        assert!(!is_prefix_file(&format!("iox2_{hash}.data"), "lw_lab_"));
+    }
 }

@@ -38,8 +38,19 @@ mod stage_args;
 pub mod stats;
 mod subscriber;
 
+/// `eprintln!` that never panics: a standard error that cannot be written (a
+/// stage's log file on a full disk, a closed descriptor) loses the line instead
+/// of taking the process down with it.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use ::std::io::Write as _;
+        let _ = ::std::writeln!(::std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub use clock::{monotonic_ns, set_timer_slack_ns, sleep_until_ns, Pacer, Tick};
-pub use config::{BusConfig, PrefixLock, PREFIX_ENV};
+pub use config::{BusConfig, Leftover, PrefixLock, PREFIX_ENV};
 pub use frames;
 pub use publisher::{Publisher, PublisherWatch, TopicWatch};
 pub use schedule::ArrivalSchedule;

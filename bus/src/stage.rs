@@ -12,7 +12,7 @@
 //!     out.est_done_mono_ns = bus::monotonic_ns();
 //!     true                                             // publish it
 //! })?;
-//! eprintln!("{report}");
+//! crate::say!("{report}");
 //! ```
 //!
 //! Per input frame: wait (in the chosen [`WaitMode`]), count it and any

@@ -77,12 +77,12 @@ fn run(args: Args) -> Result<(), String> {
         return Err(e);
     }
     let (read, events, missing) = node.finish()?;
-    eprintln!(
+    bus::say!(
         "estimator+classifier: estimator {report}\n  classifier: {read} estimates read, {events} events out, {missing} \
          missing"
     );
     if let Some(line) = estimator::shell::oil_stiffness(&stage) {
-        eprintln!("estimator+classifier: {line}");
+        bus::say!("estimator+classifier: {line}");
     }
     Ok(())
 }
@@ -94,7 +94,7 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
     match run(Args::parse_from(args)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("estimator+classifier: error: {e}");
+            bus::say!("estimator+classifier: error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -93,7 +93,7 @@ impl ClassifierNode {
         stats.frames_in += 1;
         stats.seq_gaps += missing_before;
         if let Some(last) = self.restarted_after.take() {
-            eprintln!(
+            bus::say!(
                 "classifier: restarted after estimate {last}: {missing_before} estimates not read before estimate {} \
                  (a gap)",
                 frame.seq

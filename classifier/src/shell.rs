@@ -74,7 +74,7 @@ fn run(args: Args) -> Result<(), String> {
         }
     }
     let (read, events, missing) = node.finish()?;
-    eprintln!("classifier: {read} estimates in, {events} events out, {missing} missing");
+    bus::say!("classifier: {read} estimates in, {events} events out, {missing} missing");
     Ok(())
 }
 
@@ -84,7 +84,7 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
     match run(Args::parse_from(args)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("classifier: error: {e}");
+            bus::say!("classifier: error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -94,18 +94,18 @@ pub fn estimate_frame(
     let mut e = stage.on_sample_flagged(&Sample::from(&input.frame), after_gap);
     if stage.stream_restarts() != restarts {
         if let Some(restart) = stage.last_restart() {
-            eprintln!("estimator: {restart}");
+            bus::say!("estimator: {restart}");
         }
     }
     if std::mem::take(&mut join.first) && (join.resumed_after.is_some() || input.seq > 0) {
         mark_restart(&mut e);
         match join.resumed_after {
-            Some(last) => eprintln!(
+            Some(last) => bus::say!(
                 "estimator: restarted after frame {last}: {} frames not estimated before frame {} (a gap); its \
                  estimate is marked reset and after-gap",
                 input.missing_before, input.seq
             ),
-            None => eprintln!(
+            None => bus::say!(
                 "estimator: joined the stream at frame {}: its estimate is marked reset and after-gap",
                 input.seq
             ),
@@ -171,12 +171,12 @@ fn run(args: Args) -> Result<(), String> {
         EstimatorStage::warm_up,
     )
     .map_err(|e| e.to_string())?;
-    eprintln!("estimator: {report}");
+    bus::say!("estimator: {report}");
     if let Some(line) = restarts_line(&stage) {
-        eprintln!("estimator: {line}");
+        bus::say!("estimator: {line}");
     }
     if let Some(line) = oil_stiffness(&stage) {
-        eprintln!("estimator: {line}");
+        bus::say!("estimator: {line}");
     }
     Ok(())
 }
@@ -195,7 +195,7 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
     match run(Args::parse_from(args)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("estimator: error: {e}");
+            bus::say!("estimator: error: {e}");
             ExitCode::FAILURE
         }
     }

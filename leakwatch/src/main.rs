@@ -43,9 +43,10 @@ fn main() -> ExitCode {
     let watches = matches!(cli.command, Command::Run { .. } | Command::Replay { .. });
     match run(cli) {
         Ok(()) if watches && status::not_watched() => ExitCode::from(status::NOT_WATCHED),
+        Ok(()) if watches && status::output_failed() => ExitCode::from(status::OUTPUT_FAILED),
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            eprintln!("leakwatch: error: {msg}");
+            out::errln!("leakwatch: error: {msg}");
             ExitCode::FAILURE
         }
     }
@@ -101,6 +102,7 @@ fn run(cli: Cli) -> Result<(), String> {
             seconds,
             config,
         } => watch::command(listen, connect, seconds, config.as_deref()),
+        Command::Clean { prefix } => run::clean(prefix.as_deref()),
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),
         Command::Info { log, config_out } => logs::info(&log, config_out.as_deref(), force),

@@ -51,3 +51,7 @@ macro_rules! outln {
     };
 }
 pub(crate) use outln;
+
+/// `eprintln!` that never panics: a standard error that cannot be written
+/// (closed, its file on a full disk) loses the line (`bus::say!`).
+pub(crate) use bus::say as errln;

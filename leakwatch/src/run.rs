@@ -10,6 +10,7 @@
 //! see each other.
 
 mod args;
+mod clean;
 mod events;
 mod figures;
 mod launch;
@@ -21,6 +22,7 @@ mod supervisor;
 mod watchdog;
 
 pub use args::RunArgs;
+pub use clean::clean;
 pub use stages::stage_main;
 pub use supervisor::run_pipeline;
 

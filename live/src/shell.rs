@@ -99,7 +99,7 @@ fn serve(stage: &str, tap: &mut Tap, sink: &mut impl Sink, batch: Duration) -> R
             .collect::<Vec<_>>()
             .join(", ")
     };
-    eprintln!(
+    bus::say!(
         "{stage}: stopped by signal after {wall:.1} s; received {}; sent {}; missing {}; \
          CPU {cpu:.2} s ({:.1} % of one core)",
         per(&c.received),
@@ -126,7 +126,7 @@ fn liveview(args: ViewArgs) -> Result<(), String> {
     let bus = open_bus(&args.rig)?;
     let mut tap = Tap::open(&bus, cfg.frames_hz, cfg.estimates_hz)?;
     let mut view = crate::view::LiveView::start(bus.rig().as_str(), &cfg.bind, port, cfg.backlog)?;
-    eprintln!(
+    bus::say!(
         "liveview: rig {}, Foxglove WebSocket on ws://{}:{} (subprotocol {}; frames at {} Hz, estimates at {} Hz, \
          events and health: every one; backlog {} messages per client)",
         bus.rig(),
@@ -157,7 +157,7 @@ fn gateway(args: GatewayArgs) -> Result<(), String> {
     let bus = open_bus(&args.rig)?;
     let mut tap = Tap::open(&bus, 1.0, cfg.estimates_hz)?;
     let mut gw = crate::gateway::Gateway::open(bus.rig().as_str(), &cfg)?;
-    eprintln!(
+    bus::say!(
         "gateway: rig {rig}, publishing leakwatch/{rig}/events, health and estimates (at {} Hz) on zenoh \
          (peer; listening on [{}]; connecting to [{}]; multicast scouting {})",
         cfg.estimates_hz,
@@ -168,7 +168,7 @@ fn gateway(args: GatewayArgs) -> Result<(), String> {
     );
     serve("gateway", &mut tap, &mut gw, batch)?;
     if gw.errors > 0 {
-        eprintln!("gateway: {} messages could not be sent", gw.errors);
+        bus::say!("gateway: {} messages could not be sent", gw.errors);
     }
     Ok(())
 }
@@ -177,7 +177,7 @@ fn exit(stage: &str, r: Result<(), String>) -> ExitCode {
     match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{stage}: error: {e}");
+            bus::say!("{stage}: error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -123,7 +123,7 @@ pub enum RecorderError {
         /// What was wrong.
         problem: String,
     },
-    /// The writer thread has stopped (its error comes from `finish`).
+    /// The writer thread had stopped before (its error was returned then).
     WriterStopped,
     /// The writer thread could not start or failed.
     Thread(String),
@@ -144,10 +144,41 @@ impl fmt::Display for RecorderError {
                 "{}: channel {channel}, message {sequence}: {problem}",
                 path.display()
             ),
-            RecorderError::WriterStopped => write!(f, "the log writer has stopped"),
+            RecorderError::WriterStopped => write!(f, "the log writer had stopped on an earlier error"),
             RecorderError::Thread(e) => write!(f, "log writer thread: {e}"),
         }
     }
 }
 
 impl std::error::Error for RecorderError {}
+
+impl RecorderError {
+    /// The error of the MCAP library on `path` as a [`RecorderError`]: an I/O
+    /// error (a full disk, a file too large) keeps its reason and becomes
+    /// [`RecorderError::Io`] (the library's own message names no reason).
+    pub fn from_mcap(path: &std::path::Path, e: mcap::McapError) -> RecorderError {
+        if let mcap::McapError::Io(io) = e {
+            return RecorderError::Io(path.to_path_buf(), io);
+        }
+        // an I/O error wrapped deeper (a record the binary writer could not write)
+        let mut source: Option<&(dyn std::error::Error + 'static)> = std::error::Error::source(&e);
+        while let Some(s) = source {
+            if let Some(io) = s.downcast_ref::<std::io::Error>() {
+                let copy = match io.raw_os_error() {
+                    Some(code) => std::io::Error::from_raw_os_error(code),
+                    None => std::io::Error::new(io.kind(), io.to_string()),
+                };
+                return RecorderError::Io(path.to_path_buf(), copy);
+            }
+            source = s.source();
+        }
+        RecorderError::Mcap(path.to_path_buf(), e.to_string())
+    }
+
+    /// Whether this is an error of writing the log file (I/O, or the MCAP
+    /// library refusing to write): a recorder restarted on the same disk would
+    /// fail the same way.
+    pub fn is_write_error(&self) -> bool {
+        matches!(self, RecorderError::Io(..) | RecorderError::Mcap(..))
+    }
+}

@@ -174,7 +174,7 @@ pub fn repair(input: &Path, output: &Path, overwrite: bool) -> Result<RepairSumm
 }
 
 fn copy(input: &Path, output: &Path, data: &[u8], file: File) -> Result<RepairSummary, RecorderError> {
-    let out_err = |e: mcap::McapError| RecorderError::Mcap(output.to_path_buf(), e.to_string());
+    let out_err = |e: mcap::McapError| RecorderError::from_mcap(output, e);
     let w = mcap::WriteOptions::new()
         .compression(Some(mcap::Compression::Zstd))
         .chunk_size(Some(256 * 1024))

@@ -72,7 +72,7 @@ impl Continuation {
         if let Some(h) = self.search.take_if(|h| wait || h.is_finished()) {
             let (last, problems) = h.join().unwrap_or((None, vec!["the search panicked".into()]));
             for p in problems {
-                eprintln!("recorder: an earlier log part could not be read: {p}");
+                bus::say!("recorder: an earlier log part could not be read: {p}");
             }
             self.last_logged = Some(last);
         }
@@ -87,7 +87,7 @@ impl Continuation {
         let (first_seq, recv) = first?;
         let last = self.poll(wait)?;
         let gap = continuation_gap(last, first_seq, recv);
-        eprintln!(
+        bus::say!(
             "recorder: continuing the run's log: the earlier parts end at frame {}, this part starts at frame \
              {first_seq}; {} frames are in no part (recorded as a gap)",
             last.map_or("none".to_string(), |s| s.to_string()),

@@ -21,6 +21,10 @@
 //! them are logged as one gap (see [`crate::resume`]). The recorder publishes
 //! its own stats (stage 3): frames in = messages received, out = queued for
 //! the writer (not the estimates left out), deadline misses = messages dropped because the disk stalled.
+//!
+//! A log it cannot write (a full disk, a file-size limit, an I/O error) ends it
+//! with the line `recorder: error: cannot write the log FILE: REASON` and exit
+//! status [`EXIT_LOG_UNWRITABLE`] (74), which `leakwatch run` does not restart.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -29,10 +33,44 @@ use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use crate::resume::{existing_parts, Continuation};
-use crate::{Entry, GapRecord, LogWriter, WriterOptions};
-use bus::{monotonic_ns, Bus, BusConfig, Received, StageStats, Subscriber, WaitMode};
+use crate::{Entry, GapRecord, LogWriter, RecorderError, WriterOptions};
+use bus::{monotonic_ns, say, Bus, BusConfig, Received, StageStats, Subscriber, WaitMode};
 use clap::Parser;
 use frames::{EstimateFrame, Frame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame};
+
+/// Exit status of a recorder that cannot write its log (a full disk, a file too
+/// large, an I/O error; `EX_IOERR` of sysexits.h): a recorder started again on
+/// the same disk would fail the same way, so `leakwatch run` does not restart it.
+/// Its last line on stderr names the file and the reason.
+pub const EXIT_LOG_UNWRITABLE: u8 = 74;
+
+/// The first words of the recorder's line on stderr that names a log it cannot write.
+pub const LOG_UNWRITABLE_LINE: &str = "recorder: error: cannot write the log";
+
+/// Why the recorder stopped with an error.
+#[derive(Debug)]
+enum Failure {
+    /// The log cannot be written: restarting does not help.
+    Log(RecorderError),
+    /// Anything else (the bus, arguments, an earlier part).
+    Other(String),
+}
+
+impl From<String> for Failure {
+    fn from(e: String) -> Self {
+        Failure::Other(e)
+    }
+}
+
+impl From<RecorderError> for Failure {
+    fn from(e: RecorderError) -> Self {
+        if e.is_write_error() {
+            Failure::Log(e)
+        } else {
+            Failure::Other(e.to_string())
+        }
+    }
+}
 
 /// Record every topic of a rig into an MCAP file.
 #[derive(Debug, Parser)]
@@ -106,7 +144,12 @@ impl<T: Frame> Topic<T> {
     }
 
     /// Queues one received frame (and the gap before it, if any).
-    fn log(&mut self, r: &Received<T>, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(), String> {
+    fn log(
+        &mut self,
+        r: &Received<T>,
+        writer: &mut LogWriter,
+        stats: &mut StageStats,
+    ) -> Result<(), Failure> {
         stats.frames_in += 1;
         if self.first.is_none() {
             self.first = r.seq().map(|s| (s, r.recv_mono_ns));
@@ -136,7 +179,7 @@ impl<T: Frame> Topic<T> {
     }
 
     /// Logs everything buffered; returns how many frames and whether one ended its stream.
-    fn drain(&mut self, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(u64, bool), String> {
+    fn drain(&mut self, writer: &mut LogWriter, stats: &mut StageStats) -> Result<(u64, bool), Failure> {
         let mut n = 0;
         let mut eos = false;
         while let Some(r) = self.rx.try_receive().map_err(|e| e.to_string())? {
@@ -148,8 +191,8 @@ impl<T: Frame> Topic<T> {
     }
 }
 
-fn queue(writer: &mut LogWriter, stats: &mut StageStats, entry: Entry) -> Result<(), String> {
-    if writer.write(entry).map_err(|e| e.to_string())? {
+fn queue(writer: &mut LogWriter, stats: &mut StageStats, entry: Entry) -> Result<(), Failure> {
+    if writer.write(entry)? {
         stats.frames_out += 1;
     } else {
         stats.deadline_misses += 1;
@@ -162,7 +205,7 @@ fn log_continuation_gap(
     gap: Option<GapRecord>,
     writer: &mut LogWriter,
     stats: &mut StageStats,
-) -> Result<(), String> {
+) -> Result<(), Failure> {
     if let Some(g) = gap {
         stats.seq_gaps += g.missing;
         queue(writer, stats, Entry::Gap(g))?;
@@ -170,12 +213,14 @@ fn log_continuation_gap(
     Ok(())
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> Result<(), Failure> {
     let stop = bus::stop_on_signals();
     let bus =
         Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
     if args.estimates_every == 0 {
-        return Err("--estimates-every 0: must be 1 (every estimate) or more".into());
+        return Err("--estimates-every 0: must be 1 (every estimate) or more"
+            .to_string()
+            .into());
     }
     let config_toml = match &args.config {
         Some(p) => Some(std::fs::read_to_string(p).map_err(|e| format!("--config {}: {e}", p.display()))?),
@@ -207,8 +252,8 @@ fn run(args: &Args) -> Result<(), String> {
         overwrite: args.force,
         ..WriterOptions::default()
     };
-    let mut writer = LogWriter::create(&args.out, options).map_err(|e| e.to_string())?;
-    eprintln!("recorder: rig {} -> {}", bus.rig(), args.out.display());
+    let mut writer = LogWriter::create(&args.out, options)?;
+    say!("recorder: rig {} -> {}", bus.rig(), args.out.display());
     let mut continuation = if args.continues.is_empty() {
         None
     } else {
@@ -221,7 +266,7 @@ fn run(args: &Args) -> Result<(), String> {
     let mut last_data = monotonic_ns();
     let grace_ns = args.grace_ms * 1_000_000;
     if args.batch_ms == 0 || args.batch_ms > 100 {
-        return Err(format!("--batch-ms {}: must be 1 to 100 ms", args.batch_ms));
+        return Err(format!("--batch-ms {}: must be 1 to 100 ms", args.batch_ms).into());
     }
     let batch = Duration::from_millis(args.batch_ms);
     let reason = loop {
@@ -262,11 +307,9 @@ fn run(args: &Args) -> Result<(), String> {
     // the last stats frame goes into the log too
     let last = stats.take_frame();
     stats_tx.send(&last).map_err(|e| e.to_string())?;
-    writer
-        .write(Entry::Stats(last, monotonic_ns()))
-        .map_err(|e| e.to_string())?;
-    let summary = writer.finish().map_err(|e| e.to_string())?;
-    eprintln!(
+    writer.write(Entry::Stats(last, monotonic_ns()))?;
+    let summary = writer.finish()?;
+    say!(
         "recorder: stopped by {reason}; {} bytes, messages {:?}, {} dropped, {} missing from sequences\n  \
          latency since acquisition: {}",
         summary.bytes,
@@ -282,10 +325,21 @@ fn run(args: &Args) -> Result<(), String> {
 /// program name, as from `std::env::args_os`); the exit code says whether it succeeded.
 pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
     let args = Args::parse_from(args);
+    // A log that outgrows the file-size limit (RLIMIT_FSIZE) is a write error that
+    // names the file (EFBIG), not a silent death by SIGXFSZ.
+    // SAFETY: setting a signal's disposition to SIG_IGN touches no memory.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     match run(&args) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("recorder: error: {e}");
+        Err(Failure::Log(e)) => {
+            // the file and the reason, e.g. `DIR/run.mcap: No space left on device (os error 28)`
+            say!("{LOG_UNWRITABLE_LINE} {e}; stopping (a restart cannot help until the disk has room)");
+            ExitCode::from(EXIT_LOG_UNWRITABLE)
+        }
+        Err(Failure::Other(e)) => {
+            say!("recorder: error: {e}");
             ExitCode::FAILURE
         }
     }

@@ -156,7 +156,7 @@ impl LogWriter {
     /// through a symbolic link), writes the header, schemas and channels, and
     /// starts the writer thread.
     pub fn create(path: &Path, options: WriterOptions) -> Result<LogWriter, RecorderError> {
-        let mcap_err = |e: mcap::McapError| RecorderError::Mcap(path.to_path_buf(), e.to_string());
+        let mcap_err = |e: mcap::McapError| RecorderError::from_mcap(path, e);
         let file = dataset::output::create_file(path, options.overwrite, &[])
             .map_err(|e| RecorderError::Io(path.to_path_buf(), e))?;
         let mut w = mcap::WriteOptions::new()
@@ -226,8 +226,9 @@ impl LogWriter {
     }
 
     /// Queues an entry without blocking. Returns false if the queue was full
-    /// (the entry is dropped and counted); an error if the writer thread
-    /// has stopped (its error is returned by [`LogWriter::finish`]).
+    /// (the entry is dropped and counted). If the writer thread has stopped on an
+    /// error (a full disk, an I/O error), returns that error, which names the
+    /// file and the reason; later calls return [`RecorderError::WriterStopped`].
     pub fn write(&mut self, entry: Entry) -> Result<bool, RecorderError> {
         let Some(tx) = &self.tx else {
             return Err(RecorderError::WriterStopped);
@@ -238,7 +239,19 @@ impl LogWriter {
                 self.dropped += 1;
                 Ok(false)
             }
-            Err(TrySendError::Disconnected(_)) => Err(RecorderError::WriterStopped),
+            Err(TrySendError::Disconnected(_)) => {
+                self.tx = None;
+                Err(self.stopped_error())
+            }
+        }
+    }
+
+    /// The error the writer thread stopped on (it has stopped).
+    fn stopped_error(&mut self) -> RecorderError {
+        match self.thread.take().map(JoinHandle::join) {
+            Some(Ok(Err(e))) => e,
+            Some(Err(_)) => RecorderError::Thread("the writer thread panicked".into()),
+            Some(Ok(Ok(_))) | None => RecorderError::WriterStopped,
         }
     }
 
@@ -275,7 +288,7 @@ fn write_loop(
     path: PathBuf,
     options: WriterOptions,
 ) -> Result<WriterSummary, RecorderError> {
-    let mcap_err = |e: mcap::McapError| RecorderError::Mcap(path.clone(), e.to_string());
+    let mcap_err = |e: mcap::McapError| RecorderError::from_mcap(&path, e);
     let mut counters = [0u64; 6];
     let mut counter_gaps = 0u32;
     let mut last_flush = bus::monotonic_ns();

@@ -510,3 +510,20 @@ fn a_later_part_appends_after_the_frames_the_earlier_holds() {
         "the cut part's frames were all held already"
     );
 }
+
+/// A log on a full device (`/dev/full`: every write fails with ENOSPC): the
+/// error names the file and the reason, and counts as a write error (the
+/// recorder stops with exit status 74 and is not restarted).
+#[test]
+fn a_full_disk_is_named_with_the_file_and_the_reason() {
+    let options = WriterOptions {
+        overwrite: true,
+        ..WriterOptions::default()
+    };
+    let e = match LogWriter::create(std::path::Path::new("/dev/full"), options) {
+        Err(e) => e,
+        Ok(_) => panic!("a log was created on /dev/full"),
+    };
+    assert!(e.is_write_error(), "{e:?}");
+    assert_eq!(e.to_string(), "/dev/full: No space left on device (os error 28)");
+}

@@ -9,7 +9,7 @@ use classifier::LeakEvent;
 use frames::LeakEventFrame;
 
 use super::stages::FUSED;
-use crate::out::outln;
+use crate::out::{errln, outln};
 
 /// The classifier's process id in `children` (a map of running children, or of pids).
 pub(super) trait ClassifierPid {
@@ -40,7 +40,7 @@ pub(super) fn own_event(
     if f.publisher_pid != 0 && own.is_some_and(|pid| pid != f.publisher_pid) {
         *foreign += 1;
         if *foreign <= 10 {
-            eprintln!(
+            errln!(
                 "leakwatch run: warning: an event from process {} (not this run's classifier, process {}) was left out",
                 f.publisher_pid,
                 own.unwrap_or(0)
@@ -51,7 +51,7 @@ pub(super) fn own_event(
     match LeakEvent::from_frame(&f.frame) {
         Ok(ev) => Some(ev),
         Err(e) => {
-            eprintln!("leakwatch run: an event frame was not understood ({e}); left out");
+            errln!("leakwatch run: an event frame was not understood ({e}); left out");
             None
         }
     }

@@ -29,6 +29,9 @@ pub(super) struct StageArgs {
     pub(super) out_dir: std::path::PathBuf,
     /// Replace an earlier run's log (`--force`).
     pub(super) force: bool,
+    /// Subscribers of the frames topic a (re)started acquisition waits for:
+    /// [`FRAME_SUBSCRIBERS`], one fewer once the recorder is given up.
+    pub(super) frame_subscribers: usize,
     pub(super) samples: Samples,
     /// The acquisition pacer's spin before each deadline, µs (0: sleep only).
     pub(super) spin_us: u64,
@@ -119,7 +122,7 @@ impl StageArgs {
                     s("--config"),
                     self.config.clone(),
                     s("--wait-subscribers"),
-                    FRAME_SUBSCRIBERS.to_string(),
+                    self.frame_subscribers.to_string(),
                 ]);
                 if self.spin_us > 0 {
                     a.extend([s("--spin-us"), self.spin_us.to_string()]);
@@ -153,6 +156,7 @@ mod tests {
             mode: "event".into(),
             out_dir: "out".into(),
             force: false,
+            frame_subscribers: FRAME_SUBSCRIBERS,
             samples: Samples::Sim {
                 scenario: "loaded-sine".into(),
                 seconds: 20.0,

@@ -5,6 +5,8 @@ use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
+use crate::out::errln;
+
 /// The four stage processes of the split placement, in the order they start.
 pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
 /// The estimator and the classifier in one process (`--placement estimator+classifier`).
@@ -42,7 +44,7 @@ pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Some("liveview") => live::shell::liveview_main(argv),
         Some("gateway") => live::shell::gateway_main(argv),
         other => {
-            eprintln!(
+            errln!(
                 "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder, \
                  liveview, gateway (and estimator+classifier, the two in one process)",
                 other.unwrap_or("")

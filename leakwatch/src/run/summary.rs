@@ -85,6 +85,15 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
             },
         },
     }
+    // monitoring went on; what did not is said plainly, with exit status 4 (status.rs)
+    if let Some(why) = &o.log_failure {
+        outln!("LOG FAILED: {why}; monitoring went on to the end without a log (the events above are all of them)");
+        crate::status::set_output_failed();
+    }
+    for why in &o.output_failures {
+        outln!("OUTPUT FAILED: {why}");
+        crate::status::set_output_failed();
+    }
     if matches!(parse_source(args.source.as_deref()), Ok(RunSource::Udp(_))) {
         // the stream's counts (lost, duplicated, late, malformed), from the acquisition's closing line
         let log = std::fs::read_to_string(o.out_dir.join("acquisition.log")).unwrap_or_default();
@@ -97,11 +106,18 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
         .map(|n| format!("run-{n}.mcap"))
         .filter(|p| o.out_dir.join(p).is_file());
     let log: Vec<String> = std::iter::once("run.mcap".to_string()).chain(parts).collect();
+    let events = match &o.events_path {
+        Some(p) if p.parent() == Some(o.out_dir.as_path()) => "events.json".to_string(),
+        Some(p) => format!("(events.json in {})", p.display()),
+        None => "(no events.json)".to_string(),
+    };
     outln!(
-        "wrote {}/events.json, latency.json, {}{}",
+        "wrote {}/{events}, latency.json, {}{}",
         o.out_dir.display(),
         log.join(", "),
-        if log.len() > 1 {
+        if o.log_failure.is_some() {
+            " (incomplete: the recorder could not write it)"
+        } else if log.len() > 1 {
             " (the recorder was restarted: the log continues part after part, the frames in none recorded as a gap)"
         } else {
             ""

@@ -17,13 +17,13 @@ use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
 use super::events::{own_event, print_event};
 use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
-use super::launch::{is_log_part, Resume, Samples, StageArgs};
+use super::launch::{is_log_part, Resume, Samples, StageArgs, FRAME_SUBSCRIBERS};
 use super::placement::Placement;
 use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
 use super::stages::{spawn, stage_program, terminate, FUSED};
 use super::watchdog::{stall_cause, Alarm, Watchdog};
 use crate::config::Config;
-use crate::out::outln;
+use crate::out::{errln, outln};
 
 /// The result of a run.
 #[derive(Debug)]
@@ -34,7 +34,19 @@ pub struct RunOutcome {
     pub latency: LatencyReport,
     /// The output directory.
     pub out_dir: PathBuf,
+    /// Why the log could not be written (the recorder's file and reason), if it could not:
+    /// the run monitored on without it.
+    pub log_failure: Option<String>,
+    /// Other outputs that failed while monitoring went on: events.json or latency.json
+    /// written elsewhere (or nowhere), a live view or gateway given up.
+    pub output_failures: Vec<String>,
+    /// Where events.json was written (the output directory's, or the fallback), if anywhere.
+    pub events_path: Option<PathBuf>,
 }
+
+/// Stages whose failure does not end the run: monitoring (acquisition,
+/// estimator, classifier) goes on without them.
+const OPTIONAL_STAGES: [&str; 3] = ["recorder", "liveview", "gateway"];
 
 /// Runs the pipeline; prints events as they come; writes the outputs.
 pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
@@ -115,6 +127,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     // The run owns its prefix until it ends: a second run on it is refused here,
     // before it could touch the first one's shared memory.
     let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
+    // what a killed run on this prefix left in shared memory: removed, and said
+    super::clean::remove_at_start(&bus_cfg);
     let cfg_path = out_dir.join("config.toml");
     let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
@@ -142,12 +156,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let mut last_watch = Instant::now();
     let stop = bus::stop_on_signals();
 
-    let launch = StageArgs {
+    let mut launch = StageArgs {
         rig: args.rig.clone(),
         config: cfg_path.display().to_string(),
         mode: args.mode.clone(),
         out_dir: out_dir.clone(),
         force: args.force,
+        frame_subscribers: FRAME_SUBSCRIBERS,
         spin_us: if args.mode.starts_with("low-latency") || args.mode == "busy-poll" {
             cfg.run.low_latency_spin_us
         } else {
@@ -226,10 +241,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
     // A failure ends the run, but what was gathered is still written.
     let mut failure: Option<String> = None;
+    // A failed output (the log, the live view, the gateway) does not: monitoring goes on.
+    let mut log_failure: Option<String> = None;
+    let mut output_failures: Vec<String> = Vec::new();
     // Events published by anything but this run's classifier are left out.
     let mut foreign_events = 0u64;
     let stall_ended = |name: &str, d: Duration| {
-        eprintln!(
+        errln!(
             "leakwatch run: the {name} runs again after {:.1} s without progress",
             d.as_secs_f64()
         );
@@ -281,12 +299,12 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             let counts = [frames_watch.publisher_count(), events_watch.publisher_count()];
             for (watch, count) in [&mut frames_pubs, &mut events_pubs].into_iter().zip(counts) {
                 if let Some(w) = watch.observe(count) {
-                    eprintln!("leakwatch run: warning: {w}");
+                    errln!("leakwatch run: warning: {w}");
                 }
             }
         }
         if stop.load(Ordering::Relaxed) {
-            eprintln!("leakwatch run: stopping (signal)");
+            errln!("leakwatch run: stopping (signal)");
             break;
         }
         // Supervision: exits, restarts with backoff, stalls.
@@ -314,9 +332,23 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                             Some(n) => format!("{name}-{n}.log"),
                             None => format!("{name}.log"),
                         });
+                        if name == "recorder"
+                            && status.code() == Some(i32::from(recorder::shell::EXIT_LOG_UNWRITABLE))
+                        {
+                            // a full disk or an I/O error: a restart would fail the same way
+                            let part = launch.log_part(restarts.get(name).copied().unwrap_or(0));
+                            let why = super::clean::log_write_error(&log, &part);
+                            errln!(
+                                "leakwatch run: error: {why}; the recorder is not restarted: monitoring goes on \
+                                 without a log (events are printed here and written to events.json at the end)"
+                            );
+                            log_failure = Some(why);
+                            launch.frame_subscribers = launch.frame_subscribers.saturating_sub(1);
+                            continue;
+                        }
                         match backoff.on_exit(ran) {
                             Decision::RestartIn(delay) => {
-                                eprintln!(
+                                errln!(
                                     "leakwatch run: stage {name} exited ({status}) after {:.1} s; restarting it in {:.1} s \
                                      (restart {} since it last ran {} s; see {})",
                                     ran.as_secs_f64(),
@@ -326,6 +358,22 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                                     log.display()
                                 );
                                 restart_at.insert(name, now + delay);
+                            }
+                            Decision::GiveUp if OPTIONAL_STAGES.contains(&name) => {
+                                let why = format!(
+                                    "stage {name} keeps failing: it exited {} times without running {} s in between \
+                                     (last: {status}); see {}",
+                                    MAX_RESTARTS + 1,
+                                    HEALTHY_RUN.as_secs(),
+                                    log.display()
+                                );
+                                errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
+                                if name == "recorder" {
+                                    log_failure = Some(why);
+                                    launch.frame_subscribers = launch.frame_subscribers.saturating_sub(1);
+                                } else {
+                                    output_failures.push(why);
+                                }
                             }
                             Decision::GiveUp => {
                                 failure = Some(format!(
@@ -340,14 +388,14 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                         }
                     }
                     Ok(None) if watched(name) => match watchdog.check(name, now, name != "recorder") {
-                        Some(Alarm::Stalled(idle)) => eprintln!(
+                        Some(Alarm::Stalled(idle)) => errln!(
                             "leakwatch run: warning: the {name} has made no progress for {:.1} s (process {} {})",
                             idle.as_secs_f64(),
                             child.id(),
                             stall_cause(child.id())
                         ),
                         Some(Alarm::Kill(idle)) => {
-                            eprintln!(
+                            errln!(
                                 "leakwatch run: the {name} has made no progress for {:.1} s; killing it to restart it",
                                 idle.as_secs_f64()
                             );
@@ -402,7 +450,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             }
         }
         if deadline.is_some_and(|d| started.elapsed() > d) {
-            eprintln!("leakwatch run: the run did not end in time; stopping");
+            errln!("leakwatch run: the run did not end in time; stopping");
             break;
         }
         std::thread::sleep(Duration::from_millis(10));
@@ -446,14 +494,26 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         restarts,
         stalls: watchdog.finish(Instant::now()),
     };
-    crate::replay::write_events(&out_dir.join("events.json"), &events, args.force, &inputs)?;
-    let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())?;
-    crate::out::write(
-        &out_dir.join("latency.json"),
-        (text + "\n").as_bytes(),
+    // Written whatever ended the run; one that cannot be written into the output
+    // directory (a full disk) goes to the temporary directory, said on stderr, and
+    // masks no earlier failure.
+    let events_path = super::clean::write_somewhere(
+        &out_dir,
+        "events.json",
+        &args.rig,
+        &mut output_failures,
+        |path, force| crate::replay::write_events(path, &events, force, &inputs),
         args.force,
-        &inputs,
-    )?;
+    );
+    let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())? + "\n";
+    let latency_path = super::clean::write_somewhere(
+        &out_dir,
+        "latency.json",
+        &args.rig,
+        &mut output_failures,
+        |path, force| crate::out::write(path, text.as_bytes(), force, &inputs),
+        args.force,
+    );
     drop(events_rx);
     drop(stats_rx);
     drop(frames_rx);
@@ -462,15 +522,36 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
     if let Some(f) = failure {
+        let held: Vec<String> = [events_path, latency_path]
+            .into_iter()
+            .flatten()
+            .map(|p| p.display().to_string())
+            .collect();
+        let also: Vec<&String> = log_failure.iter().chain(&output_failures).collect();
         return Err(format!(
-            "{f} (events.json and latency.json in {} hold what the run gathered)",
-            out_dir.display()
+            "{f} ({} hold what the run gathered){}",
+            if held.is_empty() {
+                "no output file could be written: the events printed above".to_string()
+            } else {
+                held.join(" and ")
+            },
+            if also.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; also: {}",
+                    also.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
+                )
+            }
         ));
     }
     Ok(RunOutcome {
         events,
         latency,
         out_dir,
+        log_failure,
+        output_failures,
+        events_path,
     })
 }
 

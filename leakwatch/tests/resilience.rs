@@ -1,0 +1,374 @@
+//! Monitoring goes on when what is around it fails (issue 29), with real
+//! processes and real files: a recorder whose log hits a file-size limit (a full
+//! disk without root: RLIMIT_FSIZE set on the running recorder, which ignores
+//! SIGXFSZ, so its write fails with EFBIG), and the shared memory a killed run
+//! leaves (removed by the next start on its prefix and by `leakwatch clean`).
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The runs share two cores: one at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+fn tmpdir(name: &str) -> scratch::ScratchDir {
+    scratch::ScratchDir::new(&format!("resilience-{name}"))
+}
+
+/// A config whose classifier learns its thresholds in time for a leak at 12 s.
+fn short_warmup_config(dir: &Path) -> PathBuf {
+    let p = dir.join("cfg.toml");
+    std::fs::write(&p, "[classifier]\nsettle_s = 2.0\nwarmup_s = 3.0\n").unwrap();
+    p
+}
+
+/// The rig id of test tag `tag`: unique to this test process.
+fn rig_id(tag: &str) -> String {
+    format!("t{}-{}", std::process::id(), tag.replace('-', "_"))
+}
+
+/// `leakwatch run` on rig `tag`, the loaded-sine scenario for `seconds`, not started.
+fn run_command(tag: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_leakwatch"));
+    c.args([
+        "run",
+        "--rig",
+        &rig_id(tag),
+        "--scenario",
+        "loaded-sine",
+        "--seconds",
+        seconds,
+    ])
+    .arg("--config")
+    .arg(cfg)
+    .arg("--out")
+    .arg(out)
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped());
+    if let Some(f) = fault {
+        c.args(["--fault", f]);
+    }
+    c
+}
+
+/// PIDs of the stage processes `stage` (any: `None`) of test tag `tag`'s rig.
+fn stage_pids(stage: Option<&str>, tag: &str) -> Vec<i32> {
+    let rig = rig_id(tag);
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(entry.path().join("cmdline")) else {
+            continue;
+        };
+        let args: Vec<&[u8]> = cmd.split(|b| *b == 0).collect();
+        let is_stage =
+            args.get(1) == Some(&&b"stage"[..]) && stage.is_none_or(|s| args.get(2) == Some(&s.as_bytes()));
+        let on_rig = args
+            .windows(2)
+            .any(|w| w[0] == b"--rig" && w[1] == rig.as_bytes());
+        if is_stage && on_rig {
+            out.push(pid);
+        }
+    }
+    out
+}
+
+/// Waits until `cond` holds (a minute at most: a run that never gets there failed).
+fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    let t0 = Instant::now();
+    while !cond() {
+        assert!(t0.elapsed() < Duration::from_secs(60), "never happened: {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+fn wait_for_stage(stage: &str, tag: &str) -> i32 {
+    let mut pid = 0;
+    wait_until(&format!("{stage} of {tag} started"), || {
+        pid = stage_pids(Some(stage), tag).first().copied().unwrap_or(0);
+        pid != 0
+    });
+    pid
+}
+
+fn signal(pid: i32, sig: i32) {
+    // SAFETY: kill(2) on a process of this test's run.
+    unsafe {
+        libc::kill(pid, sig);
+    }
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A run this test started, SIGKILLed if the test fails before it ends it
+/// (its stages die with it).
+struct Running(Option<Child>);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// The state letter of process `pid` (`T`: stopped), from /proc/PID/stat.
+fn state(pid: i32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit(") ").next()?.chars().next()
+}
+
+/// Kills a run as a crash would: the supervisor stopped first (so it restarts
+/// nothing), every stage SIGKILLed, then the supervisor.
+fn kill_run(mut run: Running, tag: &str) -> Output {
+    let child = run.0.take().unwrap();
+    let sup = child.id() as i32;
+    signal(sup, libc::SIGSTOP);
+    wait_until("the supervisor is stopped", || state(sup) == Some('T'));
+    let stages = stage_pids(None, tag);
+    assert_eq!(stages.len(), 4, "the four stages of {tag}: {stages:?}");
+    for pid in stages {
+        signal(pid, libc::SIGKILL);
+    }
+    wait_until("the stages are gone", || stage_pids(None, tag).is_empty());
+    signal(sup, libc::SIGKILL);
+    child.wait_with_output().unwrap()
+}
+
+/// The recorder's log hits a file-size limit 40 kB into the run (its write
+/// fails with EFBIG, as on a full disk): the recorder says which file and why
+/// and stops, is not restarted, and the run monitors on to its end: the leak at
+/// 12 s is printed and in events.json, the summary names the file and the
+/// error, the exit status is 4, and the one log file is the cut run.mcap.
+#[test]
+fn a_recorder_that_cannot_write_stops_and_monitoring_goes_on() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("fsize");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let tag = "fsize";
+    let mut run = Running(Some(
+        run_command(tag, "20", Some("ext1:0.5lpm@12s"), &out, &cfg)
+            .spawn()
+            .expect("leakwatch runs"),
+    ));
+    // once the recorder has set up its bus (its shared memory must not be limited) and its file
+    let rec = wait_for_stage("recorder", tag);
+    wait_until("the recorder created its log", || {
+        std::fs::read_to_string(out.join("recorder.log")).is_ok_and(|l| l.contains("recorder: rig"))
+    });
+    const LIMIT: u64 = 40_000;
+    let lim = libc::rlimit {
+        rlim_cur: LIMIT,
+        rlim_max: LIMIT,
+    };
+    // SAFETY: prlimit on the recorder process of this test's run, with a valid rlimit.
+    let rc = unsafe { libc::prlimit(rec, libc::RLIMIT_FSIZE, &lim, std::ptr::null_mut()) };
+    assert_eq!(rc, 0, "prlimit: {}", std::io::Error::last_os_error());
+    let o = run.0.take().unwrap().wait_with_output().unwrap();
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    let log = out.join("run.mcap");
+    let why = format!(
+        "the recorder cannot write the log {}: File too large (os error 27)",
+        log.display()
+    );
+    assert_eq!(o.status.code(), Some(4), "stdout:\n{stdout}\nstderr:\n{stderr}");
+    assert!(
+        stdout.contains(&format!("LOG FAILED: {why}; monitoring went on")),
+        "{stdout}"
+    );
+    assert_eq!(stderr.matches(&why).count(), 1, "{stderr}");
+    assert!(
+        !stderr.contains("stage recorder exited"),
+        "the recorder was restarted:\n{stderr}"
+    );
+    let rec_log = std::fs::read_to_string(out.join("recorder.log")).unwrap();
+    assert!(
+        rec_log.contains(&format!(
+            "recorder: error: cannot write the log {}: File too large",
+            log.display()
+        )) && !rec_log.contains("panicked"),
+        "{rec_log}"
+    );
+    // monitoring went on: the leak at 12 s printed live and in events.json
+    assert!(stdout.contains("raised   ext1"), "{stdout}");
+    let events: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("events.json")).unwrap()).unwrap();
+    let ext1: Vec<&serde_json::Value> = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "ext1" && e["phase"] == "raised" && e["detector"] == "leak-size")
+        .collect();
+    assert_eq!(ext1.len(), 1, "{events}");
+    let t = ext1[0]["t_detect_s"].as_f64().unwrap();
+    assert!((12.0..16.0).contains(&t), "ext1 raised at {t} s");
+    // the estimator and classifier took every frame after the recorder stopped
+    let latency: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("latency.json")).unwrap()).unwrap();
+    for stage in ["estimator", "classifier"] {
+        assert_eq!(
+            latency["stages"][stage]["frames_in"], 20_000,
+            "{stage}: {latency}"
+        );
+    }
+    assert!(latency["restarts"].get("recorder").is_none(), "{latency}");
+    // one log file, cut at the limit; no further parts
+    let size = std::fs::metadata(&log).unwrap().len();
+    assert!(size <= LIMIT, "run.mcap {size} bytes");
+    let mcaps: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".mcap"))
+        .collect();
+    assert_eq!(mcaps, ["run.mcap"]);
+}
+
+/// The files of iceoryx2 prefix `prefix` in /dev/shm.
+fn shm_files(prefix: &str) -> Vec<PathBuf> {
+    let start = format!("lw_{prefix}_");
+    let mut v: Vec<PathBuf> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&start))
+        .map(|e| e.path())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The number N in `... (N files or directories, ...` of `text`.
+fn removed_count(text: &str) -> Option<usize> {
+    let head = text.split(" files or directories").next()?;
+    head.rsplit(['(', ' ']).next()?.parse().ok()
+}
+
+/// The paths listed in `text` (one per line, indented, followed by their size).
+fn listed(text: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("  "))
+        .filter_map(|l| l.split(" (").next())
+        .map(str::to_string)
+        .collect()
+}
+
+/// A SIGKILLed run leaves its shared memory; the next run on the prefix removes
+/// it and says so; `leakwatch clean` is refused while that run holds the prefix,
+/// and after it too was killed, removes its files and lock and lists them.
+#[test]
+fn a_killed_runs_leftovers_are_removed_at_the_next_start_and_by_clean() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("leftovers");
+    let cfg = short_warmup_config(&d);
+    let prefix = format!("lwcl{}", std::process::id());
+    let root = PathBuf::from(format!("/tmp/iceoryx2/lw_{prefix}"));
+    let lock = std::env::temp_dir().join(format!("leakwatch-prefix-{prefix}.lock"));
+    let clean = || {
+        Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+            .args(["clean", "--prefix", &prefix])
+            .output()
+            .unwrap()
+    };
+
+    // a run killed while it runs
+    let a = Running(Some(
+        run_command("left-a", "60", None, &d.join("a"), &cfg)
+            .env("LEAKWATCH_IOX_PREFIX", &prefix)
+            .spawn()
+            .unwrap(),
+    ));
+    wait_for_stage("acquisition", "left-a");
+    wait_until("run a publishes its stats", || {
+        std::fs::read_to_string(d.join("a/recorder.log")).is_ok_and(|l| l.contains("recorder: rig"))
+    });
+    kill_run(a, "left-a");
+    let left = shm_files(&prefix);
+    assert!(left.len() > 10, "leftovers of the killed run: {left:?}");
+    assert!(root.is_dir() && lock.is_file());
+
+    // the next run on the prefix removes them and says so
+    let b = Running(Some(
+        run_command("left-b", "60", None, &d.join("b"), &cfg)
+            .env("LEAKWATCH_IOX_PREFIX", &prefix)
+            .spawn()
+            .unwrap(),
+    ));
+    wait_for_stage("acquisition", "left-b");
+    // ... and holds the prefix: clean is refused, nothing removed
+    let refused = clean();
+    assert_eq!(refused.status.code(), Some(1));
+    let err = text(&refused.stderr);
+    assert!(
+        err.contains(&format!(
+            "not cleaned: the iceoryx2 prefix {prefix:?} is in use by another leakwatch run"
+        )),
+        "{err}"
+    );
+    // (the running run's own files come and go as its stages connect; its
+    // directory and lock are there from its start to its end)
+    assert!(root.is_dir() && lock.is_file() && !shm_files(&prefix).is_empty());
+    let b_out = kill_run(b, "left-b");
+    let b_err = text(&b_out.stderr);
+    assert!(
+        b_err.contains(&format!(
+            "leakwatch run: removed what a dead run left on the iceoryx2 prefix {prefix:?}"
+        )),
+        "{b_err}"
+    );
+    // every shm file of run a, and its directory
+    let named = listed(&b_err);
+    let extra: Vec<&String> = named
+        .iter()
+        .filter(|n| !left.iter().any(|f| f.display().to_string() == **n))
+        .collect();
+    assert_eq!(
+        removed_count(&b_err),
+        Some(left.len() + 1),
+        "{b_err}\nnot counted before: {extra:?}"
+    );
+    for f in &left {
+        assert!(
+            b_err.contains(&f.display().to_string()),
+            "{} not named:\n{b_err}",
+            f.display()
+        );
+    }
+
+    // run b's leftovers, removed on demand
+    let left_b = shm_files(&prefix);
+    assert!(
+        left_b.len() > 10,
+        "leftovers of the second killed run: {left_b:?}"
+    );
+    let done = clean();
+    let said = text(&done.stdout);
+    assert_eq!(done.status.code(), Some(0), "{said}{}", text(&done.stderr));
+    assert!(
+        said.starts_with(&format!(
+            "leakwatch clean: removed {} files or directories",
+            left_b.len() + 1
+        )),
+        "{said}"
+    );
+    assert!(said.contains(&root.display().to_string()), "{said}");
+    for f in &left_b {
+        assert!(
+            said.contains(&f.display().to_string()),
+            "{} not listed:\n{said}",
+            f.display()
+        );
+    }
+    assert!(shm_files(&prefix).is_empty() && !root.exists() && !lock.exists());
+    let again = clean();
+    assert_eq!(
+        text(&again.stdout),
+        format!("leakwatch clean: nothing left on the iceoryx2 prefix {prefix:?}\n")
+    );
+}
