@@ -154,10 +154,15 @@ pub(super) fn write_somewhere(
     force: bool,
 ) -> Option<PathBuf> {
     let path = out_dir.join(name);
+    let existed = std::fs::symlink_metadata(&path).is_ok();
     let err = match write(&path, force) {
         Ok(()) => return Some(path),
         Err(e) => e,
     };
+    if !existed {
+        // the empty or cut file this attempt made is no output: not left to be read
+        let _ = std::fs::remove_file(&path);
+    }
     let alt = fallback_path(name, rig);
     match write(&alt, false) {
         Ok(()) => {
@@ -217,6 +222,36 @@ mod tests {
             "{}",
             failures[1]
         );
+    }
+
+    /// A write that made the file and then failed (a disk that filled
+    /// meanwhile) leaves no empty events.json behind; one that was there before
+    /// (`--force`) is not removed.
+    #[test]
+    fn a_file_cut_by_a_failed_write_is_not_left_in_the_output_directory() {
+        let d = scratch::ScratchDir::new("run-cut");
+        let rig = format!("cut{}", std::process::id());
+        let cut = |p: &Path, force: bool| {
+            if p.starts_with(d.path()) {
+                std::fs::write(p, "").map_err(|e| e.to_string())?;
+                Err(format!(
+                    "cannot write {}: No space left on device (os error 28)",
+                    p.display()
+                ))
+            } else {
+                crate::out::write(p, b"[]\n", force, &[])
+            }
+        };
+        let mut failures = Vec::new();
+        let at = write_somewhere(d.path(), "events.json", &rig, &mut failures, cut, false).unwrap();
+        assert!(!d.join("events.json").exists());
+        assert_eq!(std::fs::read_to_string(&at).unwrap(), "[]\n");
+        std::fs::remove_file(&at).unwrap();
+        std::fs::write(d.join("latency.json"), "{}").unwrap();
+        let at = write_somewhere(d.path(), "latency.json", &rig, &mut failures, cut, true).unwrap();
+        assert!(d.join("latency.json").exists());
+        std::fs::remove_file(&at).unwrap();
+        assert_eq!(failures.len(), 2, "{failures:?}");
     }
 
     #[test]

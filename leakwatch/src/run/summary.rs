@@ -106,15 +106,25 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
         .map(|n| format!("run-{n}.mcap"))
         .filter(|p| o.out_dir.join(p).is_file());
     let log: Vec<String> = std::iter::once("run.mcap".to_string()).chain(parts).collect();
-    let events = match &o.events_path {
-        Some(p) if p.parent() == Some(o.out_dir.as_path()) => "events.json".to_string(),
-        Some(p) => format!("(events.json in {})", p.display()),
-        None => "(no events.json)".to_string(),
-    };
+    // events.json and latency.json where they are (the temporary directory when the
+    // output directory could not take them)
+    let mut here = Vec::new();
+    let mut elsewhere = Vec::new();
+    for (name, at) in [("events.json", &o.events_path), ("latency.json", &o.latency_path)] {
+        match at {
+            Some(p) if p.parent() == Some(o.out_dir.as_path()) => here.push(name.to_string()),
+            Some(p) => elsewhere.push(format!("{name} to {}", p.display())),
+            None => elsewhere.push(format!("no {name}")),
+        }
+    }
+    here.extend(log.iter().cloned());
+    if !elsewhere.is_empty() {
+        outln!("wrote {}", elsewhere.join(", "));
+    }
     outln!(
-        "wrote {}/{events}, latency.json, {}{}",
+        "wrote {}/{}{}",
         o.out_dir.display(),
-        log.join(", "),
+        here.join(", "),
         if o.log_failure.is_some() {
             " (incomplete: the recorder could not write it)"
         } else if log.len() > 1 {

@@ -42,6 +42,8 @@ pub struct RunOutcome {
     pub output_failures: Vec<String>,
     /// Where events.json was written (the output directory's, or the fallback), if anywhere.
     pub events_path: Option<PathBuf>,
+    /// Where latency.json was written, as [`RunOutcome::events_path`].
+    pub latency_path: Option<PathBuf>,
 }
 
 /// Stages whose failure does not end the run: monitoring (acquisition,
@@ -523,7 +525,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let _ = bus_cfg.remove_isolated_files();
     if let Some(f) = failure {
         let held: Vec<String> = [events_path, latency_path]
-            .into_iter()
+            .iter()
             .flatten()
             .map(|p| p.display().to_string())
             .collect();
@@ -552,6 +554,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         log_failure,
         output_failures,
         events_path,
+        latency_path,
     })
 }
 
