@@ -372,3 +372,66 @@ fn a_killed_runs_leftovers_are_removed_at_the_next_start_and_by_clean() {
         format!("leakwatch clean: nothing left on the iceoryx2 prefix {prefix:?}\n")
     );
 }
+
+/// A recorder that keeps dying (SIGKILLed each time it starts, 11 times) is
+/// given up after the restart budget instead of ending the run: the leak after
+/// that is still printed and in events.json, every frame was estimated, and the
+/// run exits 4 with the recorder's failure in the summary.
+#[test]
+fn a_recorder_that_keeps_failing_is_given_up_and_monitoring_goes_on() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("rec-given-up");
+    let cfg = short_warmup_config(&d);
+    let out = d.join("out");
+    let tag = "rec-given-up";
+    let mut run = Running(Some(
+        run_command(tag, "50", Some("ext1:0.5lpm@42s"), &out, &cfg)
+            .spawn()
+            .expect("leakwatch runs"),
+    ));
+    let mut killed = Vec::new();
+    for _ in 0..11 {
+        let mut pid = 0;
+        wait_until("the recorder (re)started", || {
+            pid = stage_pids(Some("recorder"), tag)
+                .into_iter()
+                .find(|p| !killed.contains(p))
+                .unwrap_or(0);
+            pid != 0
+        });
+        signal(pid, libc::SIGKILL);
+        killed.push(pid);
+    }
+    let o = run.0.take().unwrap().wait_with_output().unwrap();
+    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
+    assert_eq!(o.status.code(), Some(4), "stdout:\n{stdout}\nstderr:\n{stderr}");
+    assert!(
+        stdout.contains("LOG FAILED: stage recorder keeps failing: it exited 11 times without running 30 s"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("given up: monitoring goes on without it"),
+        "{stderr}"
+    );
+    assert!(stage_pids(Some("recorder"), tag).is_empty());
+    let events: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("events.json")).unwrap()).unwrap();
+    let ext1: Vec<f64> = events
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "ext1" && e["phase"] == "raised" && e["detector"] == "leak-size")
+        .filter_map(|e| e["t_detect_s"].as_f64())
+        .collect();
+    assert_eq!(ext1.len(), 1, "{events}");
+    assert!((42.0..46.0).contains(&ext1[0]), "ext1 raised at {} s", ext1[0]);
+    let latency: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("latency.json")).unwrap()).unwrap();
+    assert_eq!(latency["restarts"]["recorder"], 10, "{latency}");
+    for stage in ["estimator", "classifier"] {
+        assert_eq!(
+            latency["stages"][stage]["frames_in"], 50_000,
+            "{stage}: {latency}"
+        );
+    }
+}
