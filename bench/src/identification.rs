@@ -7,7 +7,7 @@
 //! `truth_rig.json`; the flow gain is compared as Cd·w·k_sp/√ρ, so a model with
 //! other Cd, k_sp or ρ is scored in its own terms.
 
-use identify::{Found, Identification};
+use identify::{Found, Identification, Mechanics};
 use model::ActuatorParams;
 use serde::Serialize;
 use serde_json::Value;
@@ -65,12 +65,13 @@ fn row(name: &str, scale: f64, datasheet: f64, found: &Found, truth: Option<f64>
     }
 }
 
-/// Scores `id` (found against the model `model`) with the truth of the rig
+/// Scores `id` and `mechanics` (found against the model `model`) with the truth of the rig
 /// instance `rig` (`truth_rig.json`) and of the recording `recording`
 /// (`commission_cold.truth.json`), either absent.
 pub fn score(
     model: &ActuatorParams,
     id: &Identification,
+    mechanics: Option<&Mechanics>,
     rig: Option<&Value>,
     recording: Option<&Value>,
 ) -> IdentificationScore {
@@ -134,6 +135,54 @@ pub fn score(
         &id.supply_sag_pa_per_m3_s,
         sag_true,
     ));
+    if let Some(m) = mechanics {
+        // The generator's factors at the recording's temperature, where it wrote them.
+        let factor = |key: &str| {
+            let t = temp_c?;
+            let derived = rig?.get("derived")?;
+            ["oil_at_30C", "oil_at_55C"]
+                .iter()
+                .filter_map(|k| derived.get(*k))
+                .find(|o| num(o, &["T_C"]) == Some(t))
+                .and_then(|o| num(o, &[key]))
+        };
+        let f = model.friction.extend();
+        params.push(row(
+            "moving mass (kg)",
+            1.0,
+            model.mass_kg,
+            &m.mass_kg,
+            p.and_then(|p| num(p, &["m"])),
+        ));
+        params.push(row(
+            "Coulomb friction (N, at the recording's temperature)",
+            1.0,
+            f.slip_n,
+            &m.coulomb_n,
+            p.and_then(|p| Some(num(p, &["f_sl"])? * factor("coulomb_factor")?)),
+        ));
+        params.push(row(
+            "static friction (N)",
+            1.0,
+            f.static_n,
+            &m.static_n,
+            p.and_then(|p| num(p, &["f_st"])),
+        ));
+        params.push(row(
+            "Stribeck velocity (mm/s)",
+            1e3,
+            f.stribeck_velocity_m_s,
+            &m.stribeck_velocity_m_s,
+            p.and_then(|p| num(p, &["alpha"])),
+        ));
+        params.push(row(
+            "viscous friction (N·s/m; identified: apparent, with the line drop)",
+            1.0,
+            f.viscous_n_s_per_m,
+            &m.viscous_n_s_per_m,
+            p.and_then(|p| Some(num(p, &["d"])? * factor("viscous_factor")?)),
+        ));
+    }
     IdentificationScore {
         params,
         gap_lpm: [id.gap_before_lpm, id.gap_after_lpm, id.sensor_floor_lpm],
@@ -163,7 +212,7 @@ impl IdentificationScore {
             ));
         }
         s.push_str(&format!(
-            "\nFlow-balance gap {:.3} → {:.3} L/min RMS (sensor floor {:.3} L/min; {:.1}× the floor), over {} windows of 20 samples ({} moving). Not identified by this method: friction, the load, transducer offsets, lag and the line drop.\n",
+            "\nFlow-balance gap {:.3} → {:.3} L/min RMS (sensor floor {:.3} L/min; {:.1}× the floor), over {} windows of 20 samples ({} moving). Not identified: the load beyond a constant, transducer offsets (at rest an offset difference is a load; a common offset is a supply error), the transducers' lag and the line drop (the drop is in the apparent viscous friction).\n",
             self.gap_lpm[0],
             self.gap_lpm[1],
             self.gap_lpm[2],

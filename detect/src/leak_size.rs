@@ -35,8 +35,8 @@ pub struct LeakSizeDetector {
     last_t_s: f64,
     /// When the detector armed, s.
     armed_at_s: f64,
-    /// Since when the baseline has been held by a rise, s.
-    hold_since_s: Option<f64>,
+    /// Since when the baseline has been held, and whether by a rise (true) or a fall, s.
+    hold_since_s: Option<(bool, f64)>,
     above_since_s: [Option<f64>; 3],
     /// Evidence gathered since `above_since_s`: the time above the threshold, each
     /// second counted `min(rise/threshold, confirm_gain_cap)` times, s.

@@ -25,6 +25,10 @@
 //! window errors, so they are a floor: model errors that persist over many
 //! windows (supply sag, a line drop) bias a value by more than its σ.
 
+mod mechanics;
+
+pub use mechanics::{identify_mechanics, Mechanics, HALF_WINDOW, MIN_EQUATIONS, SLIDING_M_S};
+
 use model::dynamics::{null_leakage_flows, orifice_flows, LeakSet};
 use model::{ActuatorParams, Sample};
 use nalgebra::{DMatrix, DVector};

@@ -148,3 +148,50 @@ fn a_hold_is_refused() {
     let e = identify(&rig, 1e-3, &still, noise()).expect_err("a hold");
     assert!(e.contains("the rod moved in 0 windows"), "{e}");
 }
+
+/// The lift rig (single-rod, vertical, 200 kg) on random steps against a model
+/// whose mass is 20 % low and whose friction is the thesis preset: the force
+/// balance recovers the rig's Coulomb friction and weight. The mass is refused
+/// here (the two fit windows disagree), so the model keeps its own.
+#[test]
+fn single_rod_friction_and_weight_are_recovered() {
+    let rig = ActuatorParams::vertical_lift();
+    let rows = record(&rig, "closed-loop-random", 60.0, 0);
+    let mut model = rig.clone();
+    model.mass_kg = 0.8 * rig.mass_kg;
+    model.friction = ActuatorParams::default().friction;
+    let m = identify_mechanics(&model, 1e-3, &rows).expect("identified");
+    let f = rig.friction.extend();
+    let coulomb = value(&m.coulomb_n);
+    let weight = value(&m.static_force_n);
+    assert!(
+        (coulomb / f.slip_n - 1.0).abs() < 0.1,
+        "Coulomb friction {coulomb} N (rig {})",
+        f.slip_n
+    );
+    assert!(
+        (weight / rig.gravity_force_n() - 1.0).abs() < 0.01,
+        "static force {weight} N (the rig's weight {})",
+        rig.gravity_force_n()
+    );
+    assert!(m.gap_after_n < 0.2 * m.gap_before_n, "{m:?}");
+    assert!(matches!(m.mass_kg, Found::NotIdentifiable(_)), "{m:?}");
+    let applied = m.apply(&model);
+    assert_eq!(applied.mass_kg, model.mass_kg);
+    assert_eq!(applied.friction.extend().slip_n, coulomb);
+}
+
+/// A hold (the rod never slides) is refused with the reason.
+#[test]
+fn a_hold_does_not_identify_the_mechanics() {
+    let rig = ActuatorParams::vertical_lift();
+    let rows: Vec<Row> = record(&rig, "lift", 30.0, 0)
+        .into_iter()
+        .map(|mut r| {
+            r.sample.x_m = 0.1;
+            r
+        })
+        .collect();
+    let err = identify_mechanics(&rig, 1e-3, &rows).expect_err("a hold");
+    assert!(err.contains("record the rig's duty cycle"), "{err}");
+}

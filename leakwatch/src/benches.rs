@@ -309,10 +309,11 @@ fn identification_data(
     eprintln!("identifying the rig on {}", recording.display());
     let t0 = std::time::Instant::now();
     let id = crate::commission::identify_on(recording, &cfg)?;
+    let mech = crate::commission::mechanics_on(recording, &cfg);
     let wall_s = t0.elapsed().as_secs_f64();
     let rig = read_json(&dir.join("truth_rig.json"))?;
     let rec = read_json(&dir.join("commission_cold.truth.json"))?;
-    let score = bench::identification::score(&cfg.model, &id, rig.as_ref(), rec.as_ref());
+    let score = bench::identification::score(&cfg.model, &id, mech.as_ref().ok(), rig.as_ref(), rec.as_ref());
     let md = format!(
         "{}
 Identified in {wall_s:.2} s.

@@ -63,6 +63,16 @@ fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model
     }
 }
 
+/// The rod's mass and friction identified on the healthy recording `input`
+/// against `cfg`'s model (the flow balance's model: run it on the model
+/// [`identify_on`] corrected, or on the datasheet's; the force balance does not
+/// use the valve or the oil).
+pub fn mechanics_on(input: &Path, cfg: &Config) -> Result<identify::Mechanics, String> {
+    let rows = read_rows(input, cfg)?;
+    identify::identify_mechanics(&cfg.model, cfg.leak_filter.sample_period_s, &rows)
+        .map_err(|e| format!("{}: cannot identify the rod's mechanics: {e}", input.display()))
+}
+
 /// The identification of the rig on the healthy recording `input` against `cfg`'s model.
 pub fn identify_on(input: &Path, cfg: &Config) -> Result<identify::Identification, String> {
     let rows = read_rows(input, cfg)?;
@@ -142,8 +152,51 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.supply_sag_pa_per_m3_s
         )
     );
+    let mut mechanics = None;
+    match mechanics_on(input, cfg) {
+        Ok(mech) => {
+            let f = m.friction.extend();
+            eprintln!(
+                "force balance on {} sliding samples: gap {:.0} -> {:.0} N RMS",
+                mech.equations, mech.gap_before_n, mech.gap_after_n
+            );
+            for (name, found, unit, scale, model) in [
+                ("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
+                ("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
+                ("static friction", &mech.static_n, "N", 1.0, f.static_n),
+                (
+                    "Stribeck velocity",
+                    &mech.stribeck_velocity_m_s,
+                    "mm/s",
+                    1e3,
+                    f.stribeck_velocity_m_s,
+                ),
+                (
+                    "viscous friction (apparent)",
+                    &mech.viscous_n_s_per_m,
+                    "N·s/m",
+                    1.0,
+                    f.viscous_n_s_per_m,
+                ),
+                (
+                    "static force (weight and load)",
+                    &mech.static_force_n,
+                    "N",
+                    1.0,
+                    m.gravity_force_n(),
+                ),
+            ] {
+                eprintln!("{}", found_line(name, found, unit, scale, model));
+            }
+            mechanics = Some(mech);
+        }
+        Err(e) => eprintln!("  mass and friction: not identified: {e}"),
+    }
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
+    if let Some(mech) = mechanics {
+        out.model = mech.apply(&out.model);
+    }
     Ok(out)
 }
 

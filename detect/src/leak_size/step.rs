@@ -158,13 +158,28 @@ impl LeakSizeDetector {
         // A rise past `baseline_hold` of its threshold holds the baseline for up to
         // `baseline_hold_s`: a leak that opens over seconds is not absorbed before it
         // reaches the threshold; a slow drift of the operating point is followed again.
+        // A pattern no leak can make ([`crate::leak_can_make`]) as far from it holds it
+        // for up to `baseline_tau_s`, from arming on: leaks only add flow, so a fall is
+        // model error (a transient the filter cannot
+        // follow kicks the leak estimates down, and they relax back over seconds); a
+        // baseline that followed the kick would take the relaxation for a leak.
         let settled = e.t_s - self.armed_at_s >= self.cfg.baseline_tau_s;
-        let past = settled
-            && (0..3).any(|k| raw[k] - self.baseline_lpm[k] > self.cfg.baseline_hold * self.threshold_lpm[k]);
-        if !past {
-            self.hold_since_s = None;
+        let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.threshold_lpm[k]);
+        let rise_now: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
+        let leak_like = crate::leak_can_make(rise_now, self.threshold_lpm);
+        let up = settled && leak_like && (0..3).any(|k| rise_now[k] > band[k]);
+        let down = !leak_like && (0..3).any(|k| rise_now[k].abs() > band[k]);
+        let longest = if up {
+            self.cfg.baseline_hold_s
+        } else {
+            self.cfg.baseline_tau_s
+        };
+        match self.hold_since_s {
+            Some((was_up, _)) if (up || down) && was_up == up => {}
+            _ if up || down => self.hold_since_s = Some((up, e.t_s)),
+            _ => self.hold_since_s = None,
         }
-        let holding = past && e.t_s - *self.hold_since_s.get_or_insert(e.t_s) <= self.cfg.baseline_hold_s;
+        let holding = self.hold_since_s.is_some_and(|(_, t0)| e.t_s - t0 <= longest);
         if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 {
             let a = if reacquiring {
                 (dt_s / 0.5).min(1.0)
