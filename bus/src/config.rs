@@ -9,12 +9,22 @@ use crate::BusError;
 /// The environment variable that isolates a set of processes (see [`BusConfig::from_env`]).
 pub const PREFIX_ENV: &str = "LEAKWATCH_IOX_PREFIX";
 
+/// The longest isolation prefix, characters. Measured with iceoryx2 0.10
+/// (bus/tests/prefix.rs): an event listener's Unix socket is
+/// `/tmp/iceoryx2/lw_<prefix>/lw_<prefix>_<id>.event`, the prefix twice, and
+/// its path must fit the 108 bytes of a socket address (a 24-character prefix
+/// worked with a 32-digit id, 108 bytes, and failed with `ResourceCreationFailed`
+/// at 33 digits, 109 bytes). The id is a 128-bit number whose top 32 bits
+/// count the ids the process made: 30 digits at first, up to 39. So 28 + 2 ×
+/// prefix + 39 ≤ 108 bytes: 20 characters work whatever the count; 25 fail at once.
+pub const MAX_PREFIX_LEN: usize = 20;
+
 /// Sizes of the services and the isolation prefix. Every process of a rig
 /// must use the same values: the first process creates the services and the
 /// others open them only if their requirements fit.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BusConfig {
-    /// Isolation prefix (`[A-Za-z0-9_-]{1,32}`): iceoryx2 files get the
+    /// Isolation prefix (1 to [`MAX_PREFIX_LEN`] characters of `[A-Za-z0-9_-]`): iceoryx2 files get the
     /// prefix `lw_<prefix>_` and live under `/tmp/iceoryx2/lw_<prefix>/`.
     /// `None`: iceoryx2's defaults (what other iceoryx2 programs, like the
     /// Python bindings with a default config, see).
@@ -397,15 +407,24 @@ impl BusConfig {
 /// counter); a smaller file of that name is damaged.
 const GLOBAL_MGMT_MIN_BYTES: u64 = 16;
 
-fn validate_prefix(p: &str) -> Result<(), BusError> {
+/// Checks an isolation prefix: 1 to [`MAX_PREFIX_LEN`] characters of
+/// `A-Z a-z 0-9 _ -`; the error names the prefix, its length and the limit.
+pub fn validate_prefix(p: &str) -> Result<(), BusError> {
     if p.is_empty()
-        || p.len() > 32
         || !p
             .bytes()
             .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
     {
         return Err(BusError(format!(
-            "invalid iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?): use 1 to 32 characters of A-Z a-z 0-9 _ -"
+            "invalid iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?): use 1 to {MAX_PREFIX_LEN} characters of A-Z a-z 0-9 _ -"
+        )));
+    }
+    if p.len() > MAX_PREFIX_LEN {
+        return Err(BusError(format!(
+            "iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?) has {} characters; at most {MAX_PREFIX_LEN} \
+             work: iceoryx2 puts it twice into the path of a Unix socket \
+             (/tmp/iceoryx2/lw_<prefix>/lw_<prefix>_<id of up to 39 digits>.event), which must fit 108 bytes",
+            p.len()
         )));
     }
     Ok(())

@@ -50,7 +50,7 @@ macro_rules! say {
 }
 
 pub use clock::{monotonic_ns, set_timer_slack_ns, sleep_until_ns, Pacer, Tick};
-pub use config::{BusConfig, Leftover, PrefixLock, PREFIX_ENV};
+pub use config::{validate_prefix, BusConfig, Leftover, PrefixLock, MAX_PREFIX_LEN, PREFIX_ENV};
 pub use frames;
 pub use publisher::{Publisher, PublisherWatch, TopicWatch};
 pub use schedule::ArrivalSchedule;

@@ -98,7 +98,7 @@ impl EventWire for LeakEvent {
             statistic: self.statistic,
             threshold: self.threshold,
             channel: frames::text_bytes(&self.channel),
-            detail: frames::text_bytes(&self.detail),
+            detail: frames::detail_bytes(&self.detail),
         }
     }
 
@@ -179,9 +179,59 @@ mod tests {
         let back = LeakEvent::from_frame(&s.to_frame(0, 0, 0)).expect("known codes");
         assert_eq!(back.channel, "p1");
         assert!(back.t_onset_s.is_nan() && back.size_lpm.is_nan());
-        // a detail longer than the field is cut at a character boundary, not lost
-        ev.detail = "√".repeat(100);
+        // a detail longer than the field with no space is cut at a character
+        // boundary and ends in an ellipsis
+        ev.detail = "√".repeat(200);
         let back = LeakEvent::from_frame(&ev.to_frame(0, 0, 0)).expect("known codes");
-        assert_eq!(back.detail, "√".repeat(frames::DETAIL_LEN / 3));
+        assert_eq!(
+            back.detail,
+            format!("{}…", "√".repeat((frames::DETAIL_LEN - 3) / 3))
+        );
+        assert_eq!(back.detail.len(), 3 * 127 + 3);
+    }
+
+    /// The longest detail the leak-size detector writes (the base text of
+    /// `detect/src/leak_size.rs` behind the longest prefix of
+    /// `detect/src/leak_size/step.rs`, "slowly growing", every number at the
+    /// widest it takes on a rig) crosses the wire whole.
+    #[test]
+    fn the_longest_detail_crosses_the_wire_whole() {
+        let base = format!(
+            "rise {z:.1} healthy spreads (threshold {:.1}, for {} false alarms/h); {:.3} L/min at the measured \
+             pressures (mean over {} s), {:.3} L/min at p_s/2, k = {:.3e} m³/(s·√Pa)",
+            123.45,
+            0.001,
+            -123.456,
+            0.125,
+            -123.456,
+            -6.94e-10,
+            z = 99999.9,
+        );
+        let detail = format!(
+            "slowly growing: the healthy baseline drifted {:.3} L/min (at p_s/2) since the warm-up; {base}",
+            -123.456
+        );
+        assert_eq!(detail.len(), 280, "{detail}");
+        let mut ev = LeakEvent::plain(EventKind::Ext1, Phase::Raised, "leak-size", 1, 1.0, 0.5);
+        ev.detail = detail.clone();
+        let back = LeakEvent::from_frame(&ev.to_frame(0, 0, 0)).expect("known codes");
+        assert_eq!(back.detail, detail);
+        // the 192-byte field of LeakEventFrame.v2 cut it inside the unit
+        assert!(detail.len() > 192);
+        // twice as long: cut before a word, ended by an ellipsis, never inside the unit
+        ev.detail = format!("{detail} {detail}");
+        let back = LeakEvent::from_frame(&ev.to_frame(0, 0, 0)).expect("known codes");
+        assert!(back.detail.len() <= frames::DETAIL_LEN, "{}", back.detail.len());
+        assert!(back.detail.ends_with('…'), "{}", back.detail);
+        let kept = back.detail.trim_end_matches('…');
+        assert!(ev.detail.starts_with(kept), "{kept}");
+        // the next character of the original after the kept text is a space
+        assert_eq!(
+            ev.detail[kept.len()..].chars().next(),
+            Some(' '),
+            "{}",
+            back.detail
+        );
+        assert!(kept.len() > frames::DETAIL_LEN - 64, "{}", kept.len());
     }
 }

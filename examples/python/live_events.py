@@ -37,12 +37,12 @@ class LeakEventFrame(ctypes.Structure):
         ("statistic", ctypes.c_double),
         ("threshold", ctypes.c_double),
         ("channel", ctypes.c_uint8 * 8),
-        ("detail", ctypes.c_uint8 * 192),
+        ("detail", ctypes.c_uint8 * 384),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.LeakEventFrame.v2"
+        return "leakwatch.LeakEventFrame.v3"
 
 
 class EstimateFrame(ctypes.Structure):

@@ -9,13 +9,16 @@ use crate::{Frame, Topic};
 pub const DETECTOR_NAME_LEN: usize = 16;
 /// Length of [`LeakEventFrame::channel`], bytes.
 pub const CHANNEL_NAME_LEN: usize = 8;
-/// Length of [`LeakEventFrame::detail`], bytes (UTF-8, cut at a character boundary).
-pub const DETAIL_LEN: usize = 192;
+/// Length of [`LeakEventFrame::detail`], bytes (UTF-8): room for the longest
+/// detail the classifier writes (280 bytes: a slowly growing leak, every number
+/// at its widest; a test in classifier/src/wire.rs); a longer text is cut at a
+/// word boundary and ends in `…` (see [`detail_bytes`]).
+pub const DETAIL_LEN: usize = 384;
 
 /// A leak or fault event from the classifier (raised, updated, cleared).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.LeakEventFrame.v2")]
+#[type_name("leakwatch.LeakEventFrame.v3")]
 pub struct LeakEventFrame {
     /// Sequence number of the estimate that triggered the event.
     pub seq: u64,
@@ -51,7 +54,8 @@ pub struct LeakEventFrame {
     pub threshold: f64,
     /// Sensor events: the channel (`x`, `p1`, `p2`), ASCII, NUL-padded; empty otherwise.
     pub channel: [u8; CHANNEL_NAME_LEN],
-    /// Human-readable detail, UTF-8, NUL-padded, cut to [`DETAIL_LEN`] bytes (see [`text`]).
+    /// Human-readable detail, UTF-8, NUL-padded, at most [`DETAIL_LEN`] bytes
+    /// (a longer one cut at a word boundary with `…`, see [`detail_bytes`]).
     pub detail: [u8; DETAIL_LEN],
 }
 
@@ -122,6 +126,36 @@ pub fn text_bytes<const N: usize>(text: &str) -> [u8; N] {
         n += len;
     }
     out
+}
+
+/// The ellipsis that ends a detail cut by [`detail_bytes`] (3 bytes of UTF-8).
+pub const ELLIPSIS: &str = "…";
+
+/// A detail as the NUL-padded field [`LeakEventFrame::detail`]: whole if it
+/// fits in [`DETAIL_LEN`] bytes; else cut before the last space that leaves
+/// room for [`ELLIPSIS`] (never inside a word, a number or a unit), or, in a
+/// text without a space in its last 64 bytes, at a character boundary, and
+/// ended with [`ELLIPSIS`]. NUL characters are left out.
+pub fn detail_bytes(detail: &str) -> [u8; DETAIL_LEN] {
+    let clean: String = detail.chars().filter(|c| *c != '\0').collect();
+    if clean.len() <= DETAIL_LEN {
+        return text_bytes(&clean);
+    }
+    let room = DETAIL_LEN - ELLIPSIS.len();
+    // the last character boundary at or before `room`
+    let mut end = room;
+    while !clean.is_char_boundary(end) {
+        end -= 1;
+    }
+    // back to the last space, unless that throws away more than 64 bytes
+    if let Some(space) = clean[..end].rfind(' ').filter(|s| end - *s <= 64) {
+        end = space;
+    }
+    let cut = format!(
+        "{}{ELLIPSIS}",
+        clean[..end].trim_end_matches([' ', ',', ';', ':'])
+    );
+    text_bytes(&cut)
 }
 
 /// The text of a NUL-padded field: the bytes before the first NUL (non-UTF-8

@@ -37,8 +37,8 @@ pub use codes::{
 };
 pub use estimate::{EstimateFrame, MAX_STATES, THESIS_STATES};
 pub use event::{
-    detector_bytes, detector_name, text, text_bytes, LeakEventFrame, CHANNEL_NAME_LEN, DETAIL_LEN,
-    DETECTOR_NAME_LEN,
+    detail_bytes, detector_bytes, detector_name, text, text_bytes, LeakEventFrame, CHANNEL_NAME_LEN,
+    DETAIL_LEN, DETECTOR_NAME_LEN, ELLIPSIS,
 };
 pub use health::HealthFrame;
 pub use sensor::SensorFrame;
@@ -88,6 +88,6 @@ use impl_sequenced_frame;
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 96);
 const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 488);
-const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 328);
+const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 520);
 const _: () = assert!(core::mem::size_of::<HealthFrame>() == 80);
 const _: () = assert!(core::mem::size_of::<StatsFrame>() == 112);

@@ -8,7 +8,7 @@ use iceoryx2::prelude::ZeroCopySend;
 fn sizes_and_alignment() {
     assert_eq!(size_of::<SensorFrame>(), 96);
     assert_eq!(size_of::<EstimateFrame>(), 488);
-    assert_eq!(size_of::<LeakEventFrame>(), 328);
+    assert_eq!(size_of::<LeakEventFrame>(), 520);
     assert_eq!(size_of::<HealthFrame>(), 80);
     assert_eq!(size_of::<StatsFrame>(), 112);
     assert_eq!(align_of::<SensorFrame>(), 8);
@@ -54,7 +54,7 @@ fn type_names_are_versioned() {
     unsafe {
         assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v1");
         assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v2");
-        assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v2");
+        assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v3");
         assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v1");
         assert_eq!(StatsFrame::type_name(), "leakwatch.StatsFrame.v1");
     }

@@ -101,7 +101,7 @@ fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> R
             .arg(&dir)
             .env(
                 bus::PREFIX_ENV,
-                format!("lwscale{}n{rigs}r{i}_", std::process::id()),
+                format!("lws{}n{rigs}r{i}_", std::process::id()),
             )
             .stdout(Stdio::null())
             .stderr(Stdio::piped());

@@ -117,9 +117,13 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
     }
     let stages = live_stages(args, &mut cfg, &out_dir, &inputs, quiet, processes)?;
-    // A private iceoryx2 prefix per run, unless the user names one (to attach other tools).
+    // A private iceoryx2 prefix per run, unless the user names one (to attach
+    // other tools; checked as it is read, its length against bus::MAX_PREFIX_LEN).
     let prefix = match std::env::var(bus::PREFIX_ENV) {
-        Ok(p) if !p.is_empty() => p,
+        Ok(p) if !p.is_empty() => {
+            bus::validate_prefix(&p).map_err(|e| e.to_string())?;
+            p
+        }
         _ => format!("run{}", std::process::id()),
     };
     let bus_cfg = BusConfig {
