@@ -24,6 +24,15 @@ pub struct Commissioning {
     /// Where it was learned (the recording's path).
     #[serde(default)]
     pub source: String,
+    /// The internal leak's pressure factors (r1, r2) of the chamber-flow
+    /// signatures ([`crate::signatures_with`]), 1: ssqrt(p1 − p2)/√p_i at the
+    /// recording's mean pressures where p1 − p2 kept its sign, else (1, 1).
+    #[serde(default = "nominal_factors")]
+    pub internal_factors: [f64; 2],
+}
+
+fn nominal_factors() -> [f64; 2] {
+    crate::NOMINAL_INTERNAL_FACTORS
 }
 
 impl Commissioning {
@@ -33,6 +42,7 @@ impl Commissioning {
             .iter()
             .chain(&self.spreads_lpm)
             .chain(&self.crossings_per_s)
+            .chain(&self.internal_factors)
             .chain(std::iter::once(&self.healthy_s));
         for v in all {
             if !v.is_finite() {
@@ -67,6 +77,12 @@ impl Commissioning {
                  at most 1e6 per s, healthy_s at most 1e9 s, nis_mean finite or NaN"
                     .into(),
             );
+        }
+        let [r1, r2] = self.internal_factors;
+        if r1 * r2 <= 0.0 || r1.abs() > 10.0 || r2.abs() > 10.0 {
+            return Err(format!(
+                "[classifier.commissioning] internal_factors = [{r1}, {r2}]: both of one sign, nonzero and within ±10"
+            ));
         }
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! implies (the per-sample decision is in `step.rs`).
 
 use crate::track::{Active, Arming, Stats};
-use crate::{signatures_lpm, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
+use crate::{signatures_with, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
 use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
 mod step;
@@ -12,6 +12,8 @@ mod step;
 #[derive(Debug, Clone)]
 pub struct LeakSizeDetector {
     cfg: ClassifierConfig,
+    /// The internal leak's pressure factors of the signatures (the commissioning's, else nominal).
+    internal_factors: [f64; 2],
     arming: Arming,
     stats: [Stats; 3],
     /// The healthy values seen while learning.
@@ -226,13 +228,32 @@ impl RunningSpread {
 
 /// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
 /// the offset, spread and upcrossing rate of each single-leak size after the
-/// filter has converged and settled, gaps and resets left out.
+/// filter has converged and settled, gaps and resets left out; and the
+/// internal leak's pressure factors ([`signatures_with`]) from the chambers'
+/// pressures over the same samples.
 #[derive(Debug, Clone)]
 pub struct CommissioningLearner {
     settle_s: f64,
     converged_at_s: Option<f64>,
-    record: HealthyRecord,
+    /// The samples learned from: time s, interval s, leak sizes L/min at the nominal drop, NIS.
+    samples: Vec<(f64, f64, [f64; 3], f64)>,
+    /// Sums of ssqrt(p1 − p2), its square, √p1 and √p2 (√Pa, Pa), and their count.
+    pressure_sums: [f64; 5],
     last_t_s: f64,
+}
+
+/// The leak sizes [q_e1, q_e2, q_i] of an estimate, L/min at the nominal drop.
+fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
+    [
+        e.state[7] / M3_S_PER_LPM,
+        e.state[8] / M3_S_PER_LPM,
+        e.state[9] / M3_S_PER_LPM,
+    ]
+}
+
+/// The signed square root, √|x|·sgn x.
+fn ssqrt(x: f64) -> f64 {
+    x.abs().sqrt().copysign(x)
 }
 
 impl CommissioningLearner {
@@ -241,7 +262,8 @@ impl CommissioningLearner {
         CommissioningLearner {
             settle_s,
             converged_at_s: None,
-            record: HealthyRecord::with_capacity_s(600.0),
+            samples: Vec::new(),
+            pressure_sums: [0.0; 5],
             last_t_s: f64::NAN,
         }
     }
@@ -263,8 +285,9 @@ impl CommissioningLearner {
         if e.t_s - t0 < self.settle_s {
             return;
         }
-        let raw = LeakSizeDetector::raw_sizes(e);
-        if !raw.iter().all(|v| v.is_finite()) {
+        let q = leak_sizes_lpm(e);
+        let (p1, p2) = (e.state[1], e.state[2]);
+        if !q.iter().chain([&p1, &p2]).all(|v| v.is_finite()) {
             return;
         }
         let dt_s = if self.last_t_s.is_finite() {
@@ -273,25 +296,56 @@ impl CommissioningLearner {
             0.0
         };
         self.last_t_s = e.t_s;
-        self.record.push(e.t_s, dt_s, raw, e.nis);
+        self.samples.push((e.t_s, dt_s, q, e.nis));
+        let s = ssqrt(p1 - p2);
+        for (sum, v) in
+            self.pressure_sums
+                .iter_mut()
+                .zip([s, s * s, p1.max(0.0).sqrt(), p2.max(0.0).sqrt(), 1.0])
+        {
+            *sum += v;
+        }
+    }
+
+    /// The internal leak's pressure factors (r1, r2): ssqrt(p1 − p2)/√p_i at the
+    /// mean pressures where ssqrt(p1 − p2) stayed on one side of zero (its mean
+    /// beyond twice its spread), else the nominal (1, 1).
+    pub fn internal_factors(&self) -> [f64; 2] {
+        let [s, s2, g1, g2, n] = self.pressure_sums;
+        if n < 2.0 {
+            return crate::NOMINAL_INTERNAL_FACTORS;
+        }
+        let (mean, g1, g2) = (s / n, g1 / n, g2 / n);
+        let spread = (s2 / n - mean * mean).max(0.0).sqrt();
+        if mean.abs() > 2.0 * spread && g1 > 0.0 && g2 > 0.0 {
+            [mean / g1, mean / g2]
+        } else {
+            crate::NOMINAL_INTERNAL_FACTORS
+        }
     }
 
     /// The commissioning, or why there is none (too little healthy data).
     pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
-        let learned_s = self.record.learned_s;
+        let internal_factors = self.internal_factors();
+        let mut record = HealthyRecord::with_capacity_s(600.0);
+        for (t_s, dt_s, q, nis) in &self.samples {
+            record.push(*t_s, *dt_s, signatures_with(*q, internal_factors), *nis);
+        }
+        let learned_s = record.learned_s;
         if learned_s < min_s {
             return Err(format!(
                 "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
             ));
         }
-        let (offsets_lpm, spreads_lpm, crossings_per_s) = self.record.summary();
+        let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary();
         Ok(Commissioning {
             offsets_lpm,
             spreads_lpm,
             crossings_per_s,
             healthy_s: learned_s,
-            nis_mean: self.record.nis_mean(),
+            nis_mean: record.nis_mean(),
             source: source.to_string(),
+            internal_factors,
         })
     }
 }
@@ -300,6 +354,10 @@ impl LeakSizeDetector {
     /// A detector with settings `cfg`.
     pub fn new(cfg: ClassifierConfig) -> Self {
         LeakSizeDetector {
+            internal_factors: cfg
+                .commissioning
+                .as_ref()
+                .map_or(crate::NOMINAL_INTERNAL_FACTORS, |c| c.internal_factors),
             record: HealthyRecord::with_capacity_s(cfg.warmup_s),
             refine: RunningSpread::default(),
             next_refine_s: f64::NEG_INFINITY,
@@ -375,12 +433,12 @@ impl LeakSizeDetector {
         [self.stats[0].mean, self.stats[1].mean, self.stats[2].mean]
     }
 
-    /// Current rise of each hypothesis' size (ext1, ext2, int; [`signatures_lpm`])
+    /// Current rise of each hypothesis' size (ext1, ext2, int; [`signatures_with`])
     /// above its healthy baseline, L/min (NaN if unknown or not armed).
     pub fn rise_lpm(&self, e: &Estimate) -> [f64; 3] {
         let mut r = [f64::NAN; 3];
         if e.n_states >= 10 {
-            let raw = Self::raw_sizes(e);
+            let raw = self.raw_sizes(e);
             for (k, v) in r.iter_mut().enumerate() {
                 *v = raw[k] - self.baseline_lpm[k];
             }
@@ -426,13 +484,9 @@ impl LeakSizeDetector {
     }
 
     /// The three single-leak sizes that explain the estimated leak flows, L/min
-    /// (before the healthy offsets are removed): see [`signatures_lpm`].
-    fn raw_sizes(e: &Estimate) -> [f64; 3] {
-        signatures_lpm([
-            e.state[7] / M3_S_PER_LPM,
-            e.state[8] / M3_S_PER_LPM,
-            e.state[9] / M3_S_PER_LPM,
-        ])
+    /// (before the healthy offsets are removed): see [`signatures_with`].
+    fn raw_sizes(&self, e: &Estimate) -> [f64; 3] {
+        signatures_with(leak_sizes_lpm(e), self.internal_factors)
     }
 
     fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {

@@ -72,38 +72,82 @@ pub const KIND_AVERAGE_S: f64 = 1.0;
 /// Cubic metres per second in one litre per minute.
 const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
 
+/// The pressure factors (r1, r2) of the thesis rig's convention: an internal
+/// leak of nominal size q moves the chamber-flow signatures by (q, −q).
+pub const NOMINAL_INTERNAL_FACTORS: [f64; 2] = [1.0, 1.0];
+
 /// How badly each single-leak hypothesis (ext1, ext2, int) fits rises `r` =
-/// [w1, w2, (w1 − w2)/2] of the chamber flows, L/min: the part of the flow
-/// mismatch it leaves unexplained (ext1 leaves w2, ext2 leaves w1, an internal
-/// leak leaves the common part (w1 + w2)/√2).
-pub fn misfits(r: [f64; 3]) -> [f64; 3] {
+/// [w1, w2, int] of the chamber flows, L/min: the part of the flow mismatch it
+/// leaves unexplained (ext1 leaves w2, ext2 leaves w1, an internal leak leaves
+/// the part across its direction (r1, −r2), see [`signatures_with`]).
+pub fn misfits_with(r: [f64; 3], factors: [f64; 2]) -> [f64; 3] {
     let (w1, w2) = (r[0], r[1]);
-    [w2.abs(), w1.abs(), (w1 + w2).abs() / std::f64::consts::SQRT_2]
+    let [r1, r2] = factors;
+    [
+        w2.abs(),
+        w1.abs(),
+        (r2 * w1 + r1 * w2).abs() / (r1 * r1 + r2 * r2).sqrt(),
+    ]
+}
+
+/// [`misfits_with`] in the thesis rig's convention ([`NOMINAL_INTERNAL_FACTORS`]).
+pub fn misfits(r: [f64; 3]) -> [f64; 3] {
+    misfits_with(r, NOMINAL_INTERNAL_FACTORS)
 }
 
 /// The size of each single-leak hypothesis that best explains estimated leak
 /// sizes `q_lpm` = [q_e1, q_e2, q_i] (L/min at nominal drop), judged by the
-/// flows they take from each chamber: w1 = q_e1 + q_i out of chamber 1 and
-/// w2 = q_e2 − q_i out of chamber 2. An external leak at chamber 1 is
-/// (w1, w2) = (q, 0), at chamber 2 (0, q), an internal leak (q, −q); so the
-/// sizes are [w1, w2, (w1 − w2)/2]. (The three estimates are strongly
-/// correlated, e.g. ext2 ≈ ext1 + a negative internal leak while the filter
-/// settles; the chamber flows are what the data pins down.)
-pub fn signatures_lpm(q_lpm: [f64; 3]) -> [f64; 3] {
-    let w1 = q_lpm[0] + q_lpm[2];
-    let w2 = q_lpm[1] - q_lpm[2];
-    [w1, w2, 0.5 * (w1 - w2)]
+/// flows they take from each chamber: w1 = q_e1 + r1·q_i out of chamber 1 and
+/// w2 = q_e2 − r2·q_i out of chamber 2, with the internal leak's pressure
+/// factors `factors` = (r1, r2). An external leak at chamber 1 is
+/// (w1, w2) = (q, 0), at chamber 2 (0, q), an internal leak (r1·q, −r2·q); so
+/// the sizes are [w1, w2, (r1·w1 − r2·w2)/(r1² + r2²)]. (The three estimates
+/// are strongly correlated: a combination that changes no chamber's flow is
+/// not seen by the data, and the estimates wander along it; the chamber flows
+/// are what the data pins down.)
+///
+/// The factors are the ratios of the internal leak's drop to each chamber's
+/// own, r_i = ssqrt(p1 − p2)/√p_i, where the chambers rest at pressures whose
+/// difference keeps its sign (a single-rod cylinder carrying a load): then
+/// that combination is (−r1, r2, 1)·q_i and the signatures cancel it. Where it
+/// changes sign with the load (the thesis rig, p1 ≈ p2), the nominal (1, 1).
+pub fn signatures_with(q_lpm: [f64; 3], factors: [f64; 2]) -> [f64; 3] {
+    let [r1, r2] = factors;
+    let w1 = q_lpm[0] + r1 * q_lpm[2];
+    let w2 = q_lpm[1] - r2 * q_lpm[2];
+    [w1, w2, (r1 * w1 - r2 * w2) / (r1 * r1 + r2 * r2)]
 }
 
-/// Whether rises `rise` = [w1, w2, (w1 − w2)/2] of the chamber flows (L/min,
-/// [`signatures_lpm`]) are a pattern that leaks can make, within one threshold
-/// `threshold_lpm` (ext1, ext2, int; L/min) of it. Every leak coefficient is ≥ 0:
-/// leaks take flow out of chamber 1 or none (w1 = q_e1 + q_i ≥ 0) and out of the
-/// two chambers together (w1 + w2 = q_e1 + q_e2 ≥ 0). A pattern far outside that
+/// [`signatures_with`] in the thesis rig's convention ([`NOMINAL_INTERNAL_FACTORS`]).
+pub fn signatures_lpm(q_lpm: [f64; 3]) -> [f64; 3] {
+    signatures_with(q_lpm, NOMINAL_INTERNAL_FACTORS)
+}
+
+/// Whether rises `rise` = [w1, w2, int] of the chamber flows (L/min,
+/// [`signatures_with`] with `factors`) are a pattern that leaks can make,
+/// within one threshold `threshold_lpm` (ext1, ext2, int; L/min) of it. Every
+/// leak coefficient is ≥ 0, so the rises lie in the cone spanned by ext1
+/// (1, 0), ext2 (0, 1) and int (r1, −r2). With the nominal factors: leaks take
+/// flow out of chamber 1 or none (w1 = q_e1 + q_i ≥ 0) and out of the two
+/// chambers together (w1 + w2 = q_e1 + q_e2 ≥ 0). A pattern far outside that
 /// cone (the filter's internal-leak estimate relaxing after its start makes
 /// w1 fall while w2 rises) is model error, not a leak.
+pub fn leak_can_make_with(rise: [f64; 3], threshold_lpm: [f64; 3], factors: [f64; 2]) -> bool {
+    let [r1, r2] = factors;
+    let tol = threshold_lpm[0].max(threshold_lpm[1]);
+    // The side of the internal leak's ray, scaled so that the nominal factors give w1 + w2.
+    let across = (r2 * rise[0] + r1 * rise[1]) / (0.5 * (r1.abs() + r2.abs()));
+    if r1 >= 0.0 {
+        rise[0] >= -threshold_lpm[0] && across >= -tol
+    } else {
+        // The internal leak feeds chamber 1 (p2 > p1): the cone is bounded by ext1's ray.
+        rise[1] >= -threshold_lpm[1] && -across >= -tol
+    }
+}
+
+/// [`leak_can_make_with`] in the thesis rig's convention ([`NOMINAL_INTERNAL_FACTORS`]).
 pub fn leak_can_make(rise: [f64; 3], threshold_lpm: [f64; 3]) -> bool {
-    rise[0] >= -threshold_lpm[0] && rise[0] + rise[1] >= -threshold_lpm[0].max(threshold_lpm[1])
+    leak_can_make_with(rise, threshold_lpm, NOMINAL_INTERNAL_FACTORS)
 }
 
 /// Names of the measured channels, in measurement order.

@@ -2,7 +2,9 @@
 //! patterns leaks can make, on synthetic estimate streams with known spreads.
 
 use detect::{
-    leak_can_make, signatures_lpm, ClassifierConfig, EventKind, LeakEvent, LeakSizeDetector, Phase,
+    leak_can_make, leak_can_make_with, misfits, misfits_with, signatures_lpm, signatures_with,
+    ClassifierConfig, CommissioningLearner, EventKind, LeakEvent, LeakSizeDetector, Phase,
+    NOMINAL_INTERNAL_FACTORS,
 };
 use filter::{Estimate, MAX_STATES};
 
@@ -272,4 +274,61 @@ fn a_kick_no_leak_can_make_does_not_move_the_baseline() {
     let leak = |t: f64| kick(t) + if t >= 90.0 { 0.3 } else { 0.0 };
     let (t, _) = first_raised(100.0, leak).expect("the leak after the kick is raised");
     assert!((90.0..91.0).contains(&t), "raised at {t} s");
+}
+
+#[test]
+fn the_internal_leaks_pressure_factors_cancel_what_no_chamber_sees() {
+    // The nominal factors are the thesis convention, bit for bit.
+    for q in [[0.3, -0.1, 0.25], [-0.02, 0.03, -0.2]] {
+        let w = signatures_lpm(q);
+        assert_eq!(signatures_with(q, NOMINAL_INTERNAL_FACTORS), w);
+        assert_eq!(misfits_with(w, NOMINAL_INTERNAL_FACTORS), misfits(w));
+    }
+    // A lift holding its load: p1 = 8.4, p2 = 12.4 MPa. r_i = ssqrt(p1 − p2)/√p_i.
+    let (p1, p2) = (8.4e6_f64, 12.4e6_f64);
+    let s = -(p2 - p1).sqrt();
+    let r = [s / p1.sqrt(), s / p2.sqrt()];
+    // The combination (−r1, r2, 1)·q_i changes no chamber's flow: no signature moves.
+    let unseen = signatures_with([-r[0] * 0.5, r[1] * 0.5, 0.5], r);
+    assert!(unseen.iter().all(|v| v.abs() < 1e-12), "{unseen:?}");
+    // A 0.3 L/min internal leak: its own size, inside the cone, fitted best by
+    // the internal hypothesis; in the nominal geometry it is no leak at all.
+    let thr = [0.04; 3];
+    let w = signatures_with([0.0, 0.0, 0.3], r);
+    assert!((w[2] - 0.3).abs() < 1e-12, "{w:?}");
+    assert!(leak_can_make_with(w, thr, r));
+    let m = misfits_with(w, r);
+    assert!(m[2] < 1e-12 && m[0] > 0.1 && m[1] > 0.1, "{m:?}");
+    assert!(!leak_can_make(w, thr));
+    // External leaks stay in the cone; a negative one does not.
+    assert!(leak_can_make_with(signatures_with([0.3, 0.0, 0.0], r), thr, r));
+    assert!(leak_can_make_with(signatures_with([0.0, 0.3, 0.0], r), thr, r));
+    assert!(!leak_can_make_with(signatures_with([0.0, -0.3, 0.0], r), thr, r));
+    assert!(!leak_can_make_with(signatures_with([0.0, 0.0, -0.3], r), thr, r));
+}
+
+/// The commissioning learner's factors on 30 s of estimates at pressures `p` (Pa).
+fn learned_factors(p: impl Fn(f64) -> (f64, f64)) -> [f64; 2] {
+    let mut learner = CommissioningLearner::new(1.0);
+    for i in 0..30_000 {
+        let t = i as f64 * 1e-3;
+        let mut e = estimate(t, [0.0; 3]);
+        (e.state[1], e.state[2]) = p(t);
+        learner.on_estimate(&e);
+    }
+    let c = learner.finish(10.0, "test").expect("commissioned");
+    assert_eq!(c.internal_factors, learner.internal_factors());
+    c.internal_factors
+}
+
+#[test]
+fn commissioning_takes_the_factors_where_the_pressure_difference_keeps_its_sign() {
+    // A held load: p1 − p2 = −4 MPa ± 1 MPa.
+    let r = learned_factors(|t| (8.4e6 + 1e6 * (3.0 * t).sin(), 12.4e6));
+    let s_mean = -(4.0e6_f64).sqrt();
+    assert!((r[0] / (s_mean / 8.4e6_f64.sqrt()) - 1.0).abs() < 0.05, "{r:?}");
+    assert!((r[1] / (s_mean / 12.4e6_f64.sqrt()) - 1.0).abs() < 0.05, "{r:?}");
+    // A double-rod rig reversing its load: the nominal factors.
+    let r = learned_factors(|t| (10.5e6 + 1.5e6 * (3.0 * t).sin(), 10.5e6 - 1.5e6 * (3.0 * t).sin()));
+    assert_eq!(r, NOMINAL_INTERNAL_FACTORS);
 }

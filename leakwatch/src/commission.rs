@@ -321,6 +321,12 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
         "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
         c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
     );
+    if c.internal_factors != classifier::NOMINAL_INTERNAL_FACTORS {
+        eprintln!(
+            "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",
+            c.internal_factors[0], c.internal_factors[1]
+        );
+    }
     let (_, thr) = classifier::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     eprintln!(
         "the detector will raise leaks from {:.3}/{:.3}/{:.3} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",

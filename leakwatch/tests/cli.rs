@@ -1100,3 +1100,104 @@ fn bench_calibration_on_a_plant_folder_scores_the_identification() {
     let gap = r["gap_lpm"].as_array().unwrap();
     assert!(gap[1].as_f64().unwrap() < 0.5 * gap[0].as_f64().unwrap(), "{r:#}");
 }
+
+/// `seconds` of the lift scenario on the config `config`'s rig, with `fault`, to `out`.
+fn simulate_lift(config: &std::path::Path, seconds: &str, seed: &str, fault: &str, out: &std::path::Path) {
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "lift",
+        "--seconds",
+        seconds,
+        "--seed",
+        seed,
+        "--fault",
+        fault,
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A vertical single-rod lift (`ActuatorParams::vertical_lift`: 2.0/1.2e-3 m²,
+/// 200 kg, matched valve) through the README's workflow: commissioned on a
+/// healthy minute, then one 0.3 L/min leak of each kind and a healthy run.
+/// Its chambers rest at unequal pressures (p2 > p1 while holding the load), so
+/// the commissioning takes the internal leak's pressure factors (r1, r2 < 0);
+/// each leak is found and named, the healthy run raises nothing.
+#[test]
+fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
+    let d = tmpdir("lift_folder");
+    let lift = model::ActuatorParams::vertical_lift();
+    let mut cfg = toml::Table::new();
+    cfg.insert("model".into(), toml::Value::try_from(&lift).unwrap());
+    std::fs::write(d.join("datasheet.toml"), toml::to_string(&cfg).unwrap()).unwrap();
+    let sheet = d.join("datasheet.toml");
+    simulate_lift(&sheet, "60", "11", "none", &d.join("commission_cold.csv"));
+    let runs = [
+        ("run_000", "12", "ext1"),
+        ("run_001", "13", "ext2"),
+        ("run_002", "14", "int"),
+        ("run_003", "15", "none"),
+    ];
+    for (run, seed, kind) in runs {
+        let dir = d.join(run);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (fault, truth) = if kind == "none" {
+            (
+                "none".to_string(),
+                r#"{"scenario": {"name": "lift"}, "fault": null}"#.to_string(),
+            )
+        } else {
+            (
+                format!("{kind}:0.3lpm@30s"),
+                format!(
+                    r#"{{"scenario": {{"name": "lift"}}, "fault": {{"kind": "{kind}", "size_lpm": 0.3, "t_on_s": 30.0, "ramp_s": 0.0, "observed_mean_abs_flow_lpm_after_ramp": 0.3}}}}"#
+                ),
+            )
+        };
+        simulate_lift(&sheet, "50", seed, &fault, &dir.join("measured.csv"));
+        std::fs::write(dir.join("truth.json"), truth).unwrap();
+    }
+    let out = d.join("scored");
+    let o = leakwatch(&[
+        "bench",
+        "detection",
+        "--data",
+        d.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("detection.json")).unwrap()).unwrap();
+    let rows = r["runs"].as_array().expect("runs");
+    assert_eq!(rows.len(), 4, "{r:#}");
+    for row in rows {
+        let name = row["truth"]["run"].as_str().unwrap_or_default();
+        let kind = row["truth"]["kind"].as_str().unwrap_or_default();
+        assert_eq!(row["false_alarms"], 0, "{name}: {row:#}");
+        if kind == "none" {
+            assert_eq!(row["detected"], false, "{name}: {row:#}");
+        } else {
+            assert_eq!(row["detected"], true, "{name}: {row:#}");
+            assert_eq!(row["kind_first"].as_str(), Some(kind), "{name}: {row:#}");
+            let delay = row["delay_s"].as_f64().unwrap_or(f64::NAN);
+            assert!(delay < 5.0, "{name}: found after {delay} s");
+        }
+    }
+    // The commissioning took the internal leak's pressure factors: both negative (p2 > p1).
+    let factors: Vec<f64> = err
+        .split("internal leak's pressure factors ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .map(|v| v.split('/').filter_map(|x| x.parse().ok()).collect())
+        .unwrap_or_default();
+    assert!(
+        factors.len() == 2 && factors.iter().all(|r| (-1.0..-0.1).contains(r)),
+        "{factors:?} in {err}"
+    );
+}

@@ -5,8 +5,8 @@ use super::LeakSizeDetector;
 use crate::track::Active;
 use crate::track::Arming;
 use crate::{
-    misfits, EventKind, LeakEvent, Phase, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, KIND_AVERAGE_S,
-    M3_S_PER_LPM, NIS_RATIO_WINDOW_S, REACQUIRE_S,
+    misfits_with, EventKind, LeakEvent, Phase, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V,
+    KIND_AVERAGE_S, M3_S_PER_LPM, NIS_RATIO_WINDOW_S, REACQUIRE_S,
 };
 use filter::{Estimate, FLAG_CONVERGING, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED};
 
@@ -100,7 +100,7 @@ impl LeakSizeDetector {
             }
         }
         self.update_flow_factor(e, dt_s);
-        let raw = Self::raw_sizes(e);
+        let raw = self.raw_sizes(e);
         if !raw.iter().all(|v| v.is_finite()) {
             return;
         }
@@ -166,7 +166,7 @@ impl LeakSizeDetector {
         let settled = e.t_s - self.armed_at_s >= self.cfg.baseline_tau_s;
         let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.threshold_lpm[k]);
         let rise_now: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
-        let leak_like = crate::leak_can_make(rise_now, self.threshold_lpm);
+        let leak_like = crate::leak_can_make_with(rise_now, self.threshold_lpm, self.internal_factors);
         let up = settled && leak_like && (0..3).any(|k| rise_now[k] > band[k]);
         let down = !leak_like && (0..3).any(|k| rise_now[k].abs() > band[k]);
         let longest = if up {
@@ -200,7 +200,7 @@ impl LeakSizeDetector {
         // Rise of each hypothesis' size above its healthy baseline, and how badly the
         // hypothesis fits (the part of the flow mismatch it leaves unexplained).
         let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
-        let misfit = misfits(rise);
+        let misfit = misfits_with(rise, self.internal_factors);
         let sigma_q = [
             e.sigma[7] / M3_S_PER_LPM,
             e.sigma[8] / M3_S_PER_LPM,
@@ -239,7 +239,7 @@ impl LeakSizeDetector {
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
         let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
-        let drift_misfit = misfits(drift);
+        let drift_misfit = misfits_with(drift, self.internal_factors);
         let slow_lead = (0..3)
             .map(|k| (k, (drift[k] - drift_misfit[k]) / self.cfg.slow_leak_lpm.max(1e-9)))
             .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
@@ -258,7 +258,7 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
-        let physical = crate::leak_can_make(rise, self.threshold_lpm);
+        let physical = crate::leak_can_make_with(rise, self.threshold_lpm, self.internal_factors);
         let mut strong = None;
         for k in 0..3 {
             let thr = thr[k];
@@ -411,7 +411,7 @@ impl LeakSizeDetector {
                     }
                 }
                 let avg = self.pending_rise_lpm;
-                let avg_misfit = misfits(avg);
+                let avg_misfit = misfits_with(avg, self.internal_factors);
                 let lead = (0..3)
                     .map(|k| (k, (avg[k] - avg_misfit[k]) / self.threshold_lpm[k]))
                     .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
