@@ -167,6 +167,70 @@ impl Pacer {
     }
 }
 
+/// The environment variable by which `leakwatch run` hands every stage one
+/// [`epoch_offset_ns`] (decimal ns), so that the log, the live view and a
+/// restarted stage put the same Unix time on the same message.
+pub const EPOCH_OFFSET_ENV: &str = "LEAKWATCH_EPOCH_OFFSET_NS";
+
+static EPOCH_OFFSET: std::sync::OnceLock<i64> = std::sync::OnceLock::new();
+
+/// `CLOCK_REALTIME` now, ns since the Unix epoch (0 before 1970).
+pub fn wall_clock_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+        .unwrap_or(0)
+}
+
+/// The wall clock minus `CLOCK_MONOTONIC`, ns, read now (the wall clock between
+/// two monotonic readings, their midpoint taken).
+pub fn measure_epoch_offset_ns() -> i64 {
+    let m0 = monotonic_ns();
+    let wall = wall_clock_ns();
+    let m1 = monotonic_ns();
+    let mono = m0 / 2 + m1 / 2 + (m0 % 2 + m1 % 2) / 2;
+    (i128::from(wall) - i128::from(mono)).clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+}
+
+/// Fixes this process's [`epoch_offset_ns`]: from [`EPOCH_OFFSET_ENV`] if it
+/// is set (a stage of `leakwatch run`), else measured now. Call it once at
+/// start; a value of the variable that is not a whole number of ns is an
+/// error naming it. Later calls return the offset fixed first.
+pub fn init_epoch_offset() -> Result<i64, crate::BusError> {
+    if let Some(v) = EPOCH_OFFSET.get() {
+        return Ok(*v);
+    }
+    let offset = match std::env::var(EPOCH_OFFSET_ENV) {
+        Ok(s) => s.trim().parse::<i64>().map_err(|e| {
+            crate::BusError(format!(
+                "{EPOCH_OFFSET_ENV}={s:?}: expected the wall clock minus CLOCK_MONOTONIC in ns, a whole number ({e})"
+            ))
+        })?,
+        Err(std::env::VarError::NotPresent) => measure_epoch_offset_ns(),
+        Err(e) => return Err(crate::BusError(format!("{EPOCH_OFFSET_ENV}: {e}"))),
+    };
+    Ok(*EPOCH_OFFSET.get_or_init(|| offset))
+}
+
+/// The wall clock minus `CLOCK_MONOTONIC`, ns, fixed once per process (by
+/// [`init_epoch_offset`], or measured at the first call): one monotonic clock
+/// anchored once to the wall clock, so the times it gives never go back when
+/// NTP steps the wall clock.
+pub fn epoch_offset_ns() -> i64 {
+    *EPOCH_OFFSET.get_or_init(measure_epoch_offset_ns)
+}
+
+/// A `CLOCK_MONOTONIC` stamp as Unix time, ns: `mono_ns` + `offset_ns`
+/// (saturating at 0 and `u64::MAX`).
+pub fn epoch_ns_with(mono_ns: u64, offset_ns: i64) -> u64 {
+    mono_ns.saturating_add_signed(offset_ns)
+}
+
+/// A `CLOCK_MONOTONIC` stamp as Unix time, ns, with this process's [`epoch_offset_ns`].
+pub fn epoch_ns(mono_ns: u64) -> u64 {
+    epoch_ns_with(mono_ns, epoch_offset_ns())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

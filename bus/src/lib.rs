@@ -49,7 +49,10 @@ macro_rules! say {
     }};
 }
 
-pub use clock::{monotonic_ns, set_timer_slack_ns, sleep_until_ns, Pacer, Tick};
+pub use clock::{
+    epoch_ns, epoch_ns_with, epoch_offset_ns, init_epoch_offset, measure_epoch_offset_ns, monotonic_ns,
+    set_timer_slack_ns, sleep_until_ns, wall_clock_ns, Pacer, Tick, EPOCH_OFFSET_ENV,
+};
 pub use config::{validate_prefix, BusConfig, Leftover, PrefixLock, MAX_PREFIX_LEN, PREFIX_ENV};
 pub use frames;
 pub use publisher::{Publisher, PublisherWatch, TopicWatch};

@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """A minimal Foxglove WebSocket client (protocol v1: subprotocol foxglove.sdk.v1,
-the name the foxglove SDK gives foxglove.websocket.v1; both are offered) for
-leakwatch's live view: connects, reads serverInfo and advertise, subscribes to
-every channel, decodes the binary message frames (JSON payloads) and prints a
-JSON summary on stdout: the server info, the advertised channels with their
-schemas, message counts and rates per topic, the first and last message of
-each topic, the range [min, max] of each numeric field, and every event.
+the name the foxglove SDK gives foxglove.websocket.v1; both are offered, or
+only those given with --subprotocol) for leakwatch's live view: connects,
+reads serverInfo and advertise, subscribes to every channel, decodes the
+binary message frames (JSON payloads) and prints a JSON summary on stdout: the
+server info, the advertised channels with their schemas, message counts and
+rates per topic, the first and last message of each topic, the range [min,
+max] of each numeric field, every event, and each message's time (ns since
+the Unix epoch, the log's time of the same message) by its seq.
 
     pip install websockets==17.4
     leakwatch run --live-view &          # ws://127.0.0.1:8765
@@ -28,11 +30,11 @@ SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
 OP_MESSAGE_DATA = 0x01
 
 
-async def connect(url, timeout):
+async def connect(url, timeout, subprotocols):
     deadline = time.monotonic() + timeout
     while True:
         try:
-            return await websockets.connect(url, subprotocols=SUBPROTOCOLS, max_size=None)
+            return await websockets.connect(url, subprotocols=subprotocols, max_size=None)
         except (OSError, websockets.exceptions.InvalidHandshake):
             if time.monotonic() > deadline:
                 raise
@@ -48,15 +50,18 @@ async def main():
     ap.add_argument("--connect-timeout", type=float, default=20.0)
     ap.add_argument("--stall", action="store_true",
                     help="subscribe, then stop reading (a slow client: the server must drop, not wait)")
+    ap.add_argument("--subprotocol", action="append",
+                    help="offer only this subprotocol (repeatable; default: %s)" % ", ".join(SUBPROTOCOLS))
     args = ap.parse_args()
 
     try:
-        ws = await connect(args.url, args.connect_timeout)
+        ws = await connect(args.url, args.connect_timeout, args.subprotocol or SUBPROTOCOLS)
     except Exception as e:  # noqa: BLE001 - report any failure to connect
         print(f"cannot connect to {args.url}: {e}", file=sys.stderr)
         return 1
     out = {"subprotocol": ws.subprotocol, "server_info": None, "channels": {}, "counts": {},
-           "first": {}, "last": {}, "events": [], "ranges": {}, "bad": 0, "closed": False}
+           "first": {}, "last": {}, "events": [], "ranges": {}, "bad": 0, "closed": False,
+           "stamps": {}}
     by_sub = {}
     t_first, t_last = {}, {}
     start = time.monotonic()
@@ -104,6 +109,9 @@ async def main():
             t_first.setdefault(topic, now)
             t_last[topic] = now
             out["first"].setdefault(topic, body)
+            # each message's time (ns since the Unix epoch) by its seq
+            if "seq" in body:
+                out["stamps"].setdefault(topic, {})[str(body["seq"])] = stamp_ns
             out["last"][topic] = body
             ranges = out["ranges"].setdefault(topic, {})
             for k, v in body.items():

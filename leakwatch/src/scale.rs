@@ -99,10 +99,7 @@ fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> R
             .args(["--rig", &format!("scale{rigs}r{i}")])
             .arg("--out")
             .arg(&dir)
-            .env(
-                bus::PREFIX_ENV,
-                format!("lws{}n{rigs}r{i}_", std::process::id()),
-            )
+            .env(bus::PREFIX_ENV, format!("lws{}n{rigs}r{i}_", std::process::id()))
             .stdout(Stdio::null())
             .stderr(Stdio::piped());
         if force {

@@ -1201,3 +1201,128 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
         "{factors:?} in {err}"
     );
 }
+
+/// Prints, for a log, what `rosbags` (the pure-Python rosbag2 reader) reads:
+/// the message count, each connection's topic, type and count, the first log
+/// time, and every frame's seq and p1 (IEEE-754 bits) as JSON.
+const ROSBAGS_SCRIPT: &str = r#"
+import json, struct, sys
+from pathlib import Path
+from rosbags.highlevel import AnyReader
+
+with AnyReader([Path(sys.argv[1])]) as reader:
+    out = {"message_count": reader.message_count, "start_time": reader.start_time,
+           "connections": {c.topic: [c.msgtype, c.msgcount] for c in reader.connections},
+           "frames": []}
+    frames = [c for c in reader.connections if c.topic.endswith("/frames")]
+    for connection, timestamp, rawdata in reader.messages(connections=frames):
+        m = reader.deserialize(rawdata, connection.msgtype)
+        out["frames"].append([m.seq, struct.unpack("<Q", struct.pack("<d", m.p1_pa))[0], timestamp, m.acq_mono_ns])
+    print(json.dumps(out))
+"#;
+
+/// A real run's log opens in `rosbags` as a rosbag2 file: every channel's
+/// message count and every frame's p1 equal `leakwatch export`'s CSV, bit for
+/// bit, and its times are the wall clock of the run (Unix time, ns).
+#[test]
+fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
+    let has = Command::new("python3")
+        .args(["-c", "import rosbags.highlevel"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !has {
+        assert!(
+            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
+            "python3 with rosbags is required (.ci/setup installs it)"
+        );
+        eprintln!("SKIPPED: python3 with the rosbags package is not installed");
+        return;
+    }
+    let d = tmpdir("rosbags");
+    let run = d.join("run");
+    let wall_before = bus::wall_clock_ns();
+    let o = leakwatch(&[
+        "run",
+        "--rig",
+        "press-3",
+        "--seconds",
+        "3",
+        "--fault",
+        "none",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    // exit 3: the detector never armed in 3 s (not watched); the log is whole
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
+    let wall_after = bus::wall_clock_ns();
+    let log = run.join("run.mcap");
+    let csv = d.join("csv");
+    let o = leakwatch(&["export", log.to_str().unwrap(), "--csv", csv.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = Command::new("python3")
+        .args(["-c", ROSBAGS_SCRIPT])
+        .arg(&log)
+        .output()
+        .expect("python3 runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let rows = |name: &str| -> Vec<Vec<String>> {
+        let text = std::fs::read_to_string(csv.join(format!("{name}.csv"))).expect("the export's CSV");
+        text.lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    };
+    let mut total = 0;
+    for (name, msg) in [
+        ("frames", "SensorFrame"),
+        ("estimates", "EstimateFrame"),
+        ("events", "LeakEventFrame"),
+        ("health", "HealthFrame"),
+        ("stats", "StatsFrame"),
+        ("gaps", "Gap"),
+    ] {
+        let n = rows(name).len() as u64 - 1;
+        let topic = format!("/leakwatch/press-3/{name}");
+        assert_eq!(
+            r["connections"][&topic],
+            serde_json::json!([format!("leakwatch/msg/{msg}"), n]),
+            "{topic}: {}",
+            r["connections"]
+        );
+        total += n;
+    }
+    assert_eq!(r["message_count"], total);
+    // a 3 s run at 1 kHz
+    let frames = rows("frames");
+    assert!(frames.len() > 2900, "{} frames", frames.len());
+    let col = |name: &str| frames[0].iter().position(|c| c == name).expect("a column");
+    let (seq, p1, acq) = (col("seq"), col("p1_pa"), col("acq_mono_ns"));
+    let got = r["frames"].as_array().expect("frames");
+    assert_eq!(got.len(), frames.len() - 1);
+    for (g, row) in got.iter().zip(&frames[1..]) {
+        let want_p1: f64 = row[p1].parse().expect("a number");
+        assert_eq!(g[0].as_u64(), row[seq].parse().ok(), "{g}");
+        assert_eq!(
+            g[1].as_u64(),
+            Some(want_p1.to_bits()),
+            "frame {}: p1 {want_p1}",
+            row[seq]
+        );
+        assert_eq!(g[3].as_u64(), row[acq].parse().ok(), "{g}");
+    }
+    // Unix time of the run: the first message after the run started, the last before it ended
+    let first = r["start_time"].as_u64().expect("a start time");
+    assert!(
+        wall_before < first && first < wall_after,
+        "{wall_before} < {first} < {wall_after}"
+    );
+    let last_frame = got.last().and_then(|g| g[2].as_u64()).expect("a time");
+    assert!(last_frame < wall_after, "{last_frame} < {wall_after}");
+}

@@ -140,6 +140,7 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     let cfg = short_warmup_config(&dir, "");
     let out = dir.join("run");
     let port = free_port().to_string();
+    let wall_before = bus::wall_clock_ns();
     let run = Command::new(BIN)
         .args([
             "run",
@@ -158,13 +159,15 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    // the v1 protocol's earlier name only, as @foxglove/ws-protocol offers it
     let client = Command::new("python3")
         .arg(example("liveview/foxglove_client.py"))
         .arg(format!("ws://127.0.0.1:{port}"))
-        .args(["--seconds", "40"])
+        .args(["--seconds", "40", "--subprotocol", "foxglove.websocket.v1"])
         .output()
         .unwrap();
     let run = run.wait_with_output().unwrap();
+    let wall_after = bus::wall_clock_ns();
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     // the summary names every file the run left beside its log, the live view's own log too
     let summary = String::from_utf8_lossy(&run.stdout);
@@ -190,7 +193,41 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         String::from_utf8_lossy(&client.stderr)
     );
     let c: Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(c["subprotocol"], "foxglove.sdk.v1");
+    assert_eq!(c["subprotocol"], "foxglove.websocket.v1");
+    // one time base: the live view's time of a frame is the log's, to the ns,
+    // and the log's times are the wall clock of the run
+    let log = recorder::LogReader::open(&out.join("run.mcap"))
+        .unwrap()
+        .read()
+        .unwrap();
+    let offset: i64 = log.metadata["leakwatch"]["epoch_offset_ns"].parse().unwrap();
+    let stamps = c["stamps"]["/leakwatch/lv1/frames"].as_object().unwrap();
+    assert!(stamps.len() > 300, "{} frames with a time", stamps.len());
+    let mut matched = 0;
+    for f in &log.frames {
+        if let Some(t) = stamps.get(&f.seq.to_string()) {
+            assert_eq!(
+                t.as_u64().unwrap(),
+                bus::epoch_ns_with(f.acq_mono_ns, offset),
+                "frame {}",
+                f.seq
+            );
+            matched += 1;
+        }
+    }
+    assert_eq!(
+        matched,
+        stamps.len(),
+        "every frame the live view sent is in the log"
+    );
+    let (first, last) = (
+        log.channels["frames"].first_log_time,
+        log.channels["frames"].last_log_time,
+    );
+    assert!(
+        wall_before < first && last < wall_after,
+        "{wall_before} < {first}..{last} < {wall_after}"
+    );
     assert_eq!(c["server_info"]["metadata"]["rig"], "lv1");
     assert_eq!(c["bad"], 0);
     let p_s = 13.8e6;

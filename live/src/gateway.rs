@@ -95,7 +95,7 @@ impl Sink for Gateway {
         self.publishers[topic.index()].is_some()
     }
 
-    fn send(&mut self, topic: LiveTopic, json: &[u8]) {
+    fn send(&mut self, topic: LiveTopic, json: &[u8], _log_time_ns: u64) {
         if let Some(p) = &self.publishers[topic.index()] {
             if p.put(json.to_vec()).wait().is_err() {
                 self.errors += 1;

@@ -4,7 +4,8 @@
 //! sends at a configured rate, and drops what a slow client cannot take):
 //!
 //! - [`view`]: the **live view**, Foxglove's WebSocket protocol
-//!   (v1, subprotocol `foxglove.sdk.v1`) served by the official `foxglove` crate
+//!   (v1, subprotocol `foxglove.sdk.v1`, `foxglove.sdk.v1.1` or the earlier
+//!   name `foxglove.websocket.v1`) served by the official `foxglove` crate
 //!   (`leakwatch stage liveview`, `leakwatch run --live-view [PORT]`);
 //! - [`gateway`]: the **fleet gateway**, which publishes a rig's events,
 //!   health and decimated estimates on Zenoh under `leakwatch/<rig>/<topic>`

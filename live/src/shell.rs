@@ -16,7 +16,9 @@ use crate::config::LiveSections;
 use crate::{LiveTopic, Sink, Tap};
 
 /// Serve a rig's frames, estimates, events and health to Foxglove over its
-/// WebSocket protocol (foxglove.websocket.v1).
+/// WebSocket protocol v1 (subprotocol foxglove.sdk.v1.1, foxglove.sdk.v1 or
+/// foxglove.websocket.v1, answered with the one the client offers), each
+/// message at its acquisition time as Unix time, the log's time.
 #[derive(Debug, Parser)]
 #[command(name = "liveview", version)]
 struct ViewArgs {
@@ -69,7 +71,10 @@ struct GatewayArgs {
 }
 
 fn open_bus(rig: &str) -> Result<Bus, String> {
-    Bus::open(rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())
+    let cfg = BusConfig::from_env().map_err(|e| e.to_string())?;
+    // the run's one time base (LEAKWATCH_EPOCH_OFFSET_NS): the messages' times are the log's
+    bus::init_epoch_offset().map_err(|e| e.to_string())?;
+    Bus::open(rig, cfg).map_err(|e| e.to_string())
 }
 
 fn check_batch(ms: u64) -> Result<Duration, String> {
@@ -127,12 +132,12 @@ fn liveview(args: ViewArgs) -> Result<(), String> {
     let mut tap = Tap::open(&bus, cfg.frames_hz, cfg.estimates_hz)?;
     let mut view = crate::view::LiveView::start(bus.rig().as_str(), &cfg.bind, port, cfg.backlog)?;
     bus::say!(
-        "liveview: rig {}, Foxglove WebSocket on ws://{}:{} (subprotocol {}; frames at {} Hz, estimates at {} Hz, \
+        "liveview: rig {}, Foxglove WebSocket on ws://{}:{} (subprotocols {}; frames at {} Hz, estimates at {} Hz, \
          events and health: every one; backlog {} messages per client)",
         bus.rig(),
         cfg.bind,
         view.port(),
-        crate::view::SUBPROTOCOL,
+        crate::view::SUBPROTOCOLS.join(", "),
         cfg.frames_hz,
         cfg.estimates_hz,
         cfg.backlog

@@ -101,8 +101,11 @@ impl Decimator {
 pub trait Sink {
     /// Whether anyone takes `topic` now (if not, nothing is encoded for it).
     fn wants(&self, topic: LiveTopic) -> bool;
-    /// One message of `topic`, JSON text.
-    fn send(&mut self, topic: LiveTopic, json: &[u8]);
+    /// One message of `topic`, JSON text, with its time: the record's own
+    /// `CLOCK_MONOTONIC` stamp (`acq_mono_ns` of frames, estimates and events,
+    /// `mono_ns` of health) as Unix time, ns ([`bus::epoch_ns`]), the
+    /// `log_time` the recorder gives the same message.
+    fn send(&mut self, topic: LiveTopic, json: &[u8], log_time_ns: u64);
 }
 
 /// What a tap has seen and passed on, per topic in [`LiveTopic::ALL`] order.
@@ -161,6 +164,7 @@ impl Tap {
                 sink,
                 LiveTopic::Frames,
                 keep,
+                r.frame.acq_mono_ns,
                 || FrameMsg::from(&r.frame),
             )?;
         }
@@ -174,6 +178,7 @@ impl Tap {
                 sink,
                 LiveTopic::Estimates,
                 keep,
+                r.frame.acq_mono_ns,
                 || EstimateMsg::from(&r.frame),
             )?;
         }
@@ -185,6 +190,7 @@ impl Tap {
                 sink,
                 LiveTopic::Events,
                 true,
+                r.frame.acq_mono_ns,
                 || EventMsg::from(&r.frame),
             )?;
         }
@@ -197,6 +203,7 @@ impl Tap {
                 sink,
                 LiveTopic::Health,
                 true,
+                r.frame.mono_ns,
                 || HealthMsg::from(&r.frame),
             )?;
         }
@@ -210,6 +217,7 @@ fn pass<M: Serialize>(
     sink: &mut impl Sink,
     topic: LiveTopic,
     keep: bool,
+    stamp_mono_ns: u64,
     msg: impl FnOnce() -> M,
 ) -> Result<(), String> {
     let i = topic.index();
@@ -219,7 +227,7 @@ fn pass<M: Serialize>(
     }
     buf.clear();
     serde_json::to_writer(&mut *buf, &msg()).map_err(|e| format!("{} message: {e}", topic.name()))?;
-    sink.send(topic, buf);
+    sink.send(topic, buf, bus::epoch_ns(stamp_mono_ns));
     counts.sent[i] += 1;
     Ok(())
 }

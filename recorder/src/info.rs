@@ -15,8 +15,11 @@ pub const CHANNEL_ORDER: [&str; 6] = ["frames", "estimates", "events", "health",
 /// One channel of [`Info`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelSummary {
-    /// The topic.
+    /// The channel's name (`frames`, ..., the last part of its topic).
     pub topic: String,
+    /// The channel's topic in the file (`/leakwatch/<rig>/frames`; `frames` in
+    /// logs of earlier versions): what rosbag2 tools call it.
+    pub mcap_topic: String,
     /// Messages read.
     pub messages: u64,
     /// Mean rate over the channel's own span, Hz ((messages − 1) / span; `None`
@@ -50,8 +53,9 @@ pub struct Info {
     /// The first and last `log_time` of any message, ns (`None`: no message).
     pub span_ns: Option<(u64, u64)>,
     /// Wall clock minus the log-time clock, ns, where the log says (this
-    /// version: from its `leakwatch` metadata record; earlier versions logged
-    /// the wall clock: 0).
+    /// version logs Unix time: 0; the versions before logged `CLOCK_MONOTONIC`,
+    /// the offset from their `leakwatch` metadata record; JSON logs, older
+    /// still, the wall clock: 0).
     pub wall_offset_ns: Option<i128>,
     /// The first and last sample time of the sensor frames, s.
     pub sample_span_s: Option<(f64, f64)>,
@@ -101,6 +105,11 @@ impl Info {
                 let dt = c.last_log_time.saturating_sub(c.first_log_time) as f64 * 1e-9;
                 ChannelSummary {
                     topic: topic.clone(),
+                    mcap_topic: if c.topic.is_empty() {
+                        topic.clone()
+                    } else {
+                        c.topic.clone()
+                    },
                     messages: c.messages,
                     rate_hz: (c.messages > 1 && dt > 0.0).then(|| (c.messages - 1) as f64 / dt),
                     message_encoding: c.message_encoding.clone(),
@@ -115,6 +124,9 @@ impl Info {
         let meta = log.metadata.get(LEAKWATCH_METADATA);
         let num = |k: &str| meta.and_then(|m| m.get(k)).and_then(|v| v.parse::<i128>().ok());
         let wall_offset_ns = match (num("wall_clock_ns_at_start"), num("monotonic_ns_at_start")) {
+            // this version: log_time is Unix time (the stamp + epoch_offset_ns)
+            _ if num("epoch_offset_ns").is_some() => Some(0),
+            // the versions before: log_time was CLOCK_MONOTONIC
             (Some(w), Some(m)) => Some(w - m),
             // earlier versions: log_time was the wall clock
             _ if log.channels.values().any(|c| c.message_encoding == "json") => Some(0),
@@ -211,7 +223,12 @@ impl Info {
         let total: u64 = self.channels.iter().map(|c| c.messages).sum();
         let _ = writeln!(o, "Messages:    {total}");
         let _ = writeln!(o, "Channels:");
-        let width = self.channels.iter().map(|c| c.topic.len()).max().unwrap_or(0);
+        let width = self
+            .channels
+            .iter()
+            .map(|c| c.mcap_topic.len())
+            .max()
+            .unwrap_or(0);
         for c in &self.channels {
             let rate = match c.rate_hz {
                 Some(r) if r >= 10.0 => format!("{r:>8.1} Hz"),
@@ -221,7 +238,7 @@ impl Info {
             let _ = writeln!(
                 o,
                 "  {:<width$}  {:>9} msgs  {rate}  {} {}",
-                c.topic, c.messages, c.message_encoding, c.schema
+                c.mcap_topic, c.messages, c.message_encoding, c.schema
             );
         }
         let recorded: u64 = self.gap_records.iter().map(|(_, g)| g.gaps).sum();

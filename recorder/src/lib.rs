@@ -1,10 +1,12 @@
-//! The leakwatch log: one MCAP file per run with a channel per topic
-//! (`frames`, `estimates`, `events`, `health`, `stats`) plus `gaps`: ROS 2
-//! messages in CDR described by their ros2msg schemas ([`msg`], the `.msg`
-//! files in `recorder/msg/`), so Foxglove, rosbag2 and Python's `mcap` with
-//! `mcap-ros2-support` open it without leakwatch. Logs of earlier versions
-//! (JSON messages with JSON Schemas) still read: the reader follows each
-//! channel's `message_encoding`.
+//! The leakwatch log: one MCAP file per run, a rosbag2 file (profile `ros2`),
+//! with a channel per topic (`/leakwatch/<rig>/frames`, `estimates`, `events`,
+//! `health`, `stats`) plus `gaps`: ROS 2 messages in CDR described by their
+//! ros2msg schemas ([`msg`], the `.msg` files in `recorder/msg/`), log times
+//! in Unix time (ns), so Foxglove, rosbag2 readers (`rosbags`) and Python's
+//! `mcap` with `mcap-ros2-support` open it without leakwatch. Logs of earlier
+//! versions (channels `frames`, ..., profile `leakwatch`, monotonic log times;
+//! JSON messages with JSON Schemas before that) still read: the reader names
+//! a channel by the last part of its topic and follows its `message_encoding`.
 //!
 //! - [`LogWriter`]: a writer thread fed through a bounded channel; chunked,
 //!   zstd-compressed, flushed at least once a second, so a killed recorder
@@ -37,10 +39,10 @@ mod writer;
 pub use export::export_csv;
 pub use info::{Info, CHANNEL_ORDER};
 pub use msg::Message;
-pub use reader::{ChannelInfo, Log, LogReader};
+pub use reader::{channel_name, ChannelInfo, Log, LogReader};
 pub use record::Record;
 pub use repair::{repair, RepairSummary};
-pub use writer::{Encoding, LogWriter, WriterOptions, WriterSummary};
+pub use writer::{channel_topic, Encoding, LogWriter, WriterOptions, WriterSummary, OFFERED_QOS_PROFILES};
 
 /// The name of the metadata record that holds the configuration of the run.
 pub const CONFIG_METADATA: &str = "leakwatch.config";

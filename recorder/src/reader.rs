@@ -14,6 +14,10 @@ use crate::{GapRecord, RecorderError, GAPS_CHANNEL};
 /// One channel of a log as read: how it is encoded and what it held.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ChannelInfo {
+    /// The channel's topic in the file (`/leakwatch/<rig>/frames`; `frames`,
+    /// ... in logs of earlier versions). [`Log::channels`] is keyed by its last
+    /// part ([`channel_name`]).
+    pub topic: String,
     /// The channel's `message_encoding` (`cdr`, or `json` in logs of earlier versions).
     pub message_encoding: String,
     /// The name of its schema (`leakwatch/msg/SensorFrame`, ...; empty if its record was lost).
@@ -59,7 +63,9 @@ pub struct Log {
     /// sequence numbers around each; before the first frame read, from sequence 0,
     /// where a run starts; a chunk skipped after the last frame is not counted).
     pub frames_lost: u64,
-    /// Every channel by topic, with its encoding and message count and times.
+    /// Every channel by name (`frames`, `estimates`, `events`, `health`,
+    /// `stats`, `gaps`: the last part of its topic, [`channel_name`]), with its
+    /// topic, encoding and message count and times.
     pub channels: BTreeMap<String, ChannelInfo>,
     /// The metadata records by name (`leakwatch`: rig, command, clocks;
     /// [`crate::CONFIG_METADATA`]: the run's configuration), in file order
@@ -143,9 +149,16 @@ impl Log {
     }
 }
 
-/// A channel of the file by id: its topic, encoding and schema id.
+/// The name of a channel of topic `topic`: its last part (`frames` of
+/// `/leakwatch/rig1/frames`; logs of earlier versions named the channel `frames`).
+pub fn channel_name(topic: &str) -> &str {
+    topic.rsplit('/').next().unwrap_or(topic)
+}
+
+/// A channel of the file by id: its name ([`channel_name`]), topic, encoding and schema id.
 #[derive(Debug, Clone)]
 struct ChannelDef {
+    name: String,
     topic: String,
     encoding: String,
     schema_id: u16,
@@ -228,6 +241,7 @@ impl LogReader {
                 channels.insert(
                     *id,
                     ChannelDef {
+                        name: channel_name(&c.topic).to_string(),
                         topic: c.topic.clone(),
                         encoding: c.message_encoding.clone(),
                         schema_id: c.schema.as_ref().map(|s| s.id).unwrap_or(0),
@@ -245,6 +259,7 @@ impl LogReader {
             match item {
                 Item::Channel(c) => {
                     let def = ChannelDef {
+                        name: channel_name(&c.topic).to_string(),
                         topic: c.topic,
                         encoding: c.message_encoding,
                         schema_id: c.schema_id,
@@ -268,7 +283,8 @@ impl LogReader {
         })?;
         // every channel known, with or without messages
         for def in channels.values() {
-            let info = log.channels.entry(def.topic.clone()).or_default();
+            let info = log.channels.entry(def.name.clone()).or_default();
+            info.topic.clone_from(&def.topic);
             info.message_encoding.clone_from(&def.encoding);
             info.metadata.clone_from(&def.metadata);
             if let Some((name, encoding)) = schemas.get(&def.schema_id) {
@@ -299,7 +315,9 @@ impl LogReader {
         let mut last: Option<u64> = None;
         walk(&self.path, &self.data, |item| {
             match item {
-                Item::Channel(c) if c.topic == "frames" => frames_channels.push((c.id, c.message_encoding)),
+                Item::Channel(c) if channel_name(&c.topic) == "frames" => {
+                    frames_channels.push((c.id, c.message_encoding))
+                }
                 Item::Message(header, data) => {
                     if let Some((_, encoding)) =
                         frames_channels.iter().find(|(id, _)| *id == header.channel_id)
@@ -339,7 +357,7 @@ impl LogReader {
             sequence: header.sequence,
             problem,
         };
-        match def.topic.as_str() {
+        match def.name.as_str() {
             "frames" => log
                 .frames
                 .push(decode_as(&def.encoding, data).map_err(decode_err)?),
@@ -363,7 +381,7 @@ impl LogReader {
                 return Ok(());
             }
         }
-        let info = log.channels.entry(def.topic.clone()).or_default();
+        let info = log.channels.entry(def.name.clone()).or_default();
         if info.messages == 0 || header.log_time < info.first_log_time {
             info.first_log_time = header.log_time;
         }

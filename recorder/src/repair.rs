@@ -15,7 +15,8 @@ use crate::RecorderError;
 pub struct RepairSummary {
     /// The repaired file.
     pub path: PathBuf,
-    /// Messages copied, per channel topic.
+    /// Messages copied, per channel name (`frames`, ..., the last part of its
+    /// topic, [`crate::channel_name`]).
     pub messages: BTreeMap<String, u64>,
     /// Messages dropped because their channel (or its schema) record was lost
     /// with a damaged chunk and the file has no summary that names it.
@@ -89,7 +90,7 @@ impl Copier {
         };
         let n = self.w.add_channel(schema, &c.topic, &c.encoding, &c.metadata)?;
         self.new_channel.insert(id, n);
-        self.topics.insert(id, c.topic.clone());
+        self.topics.insert(id, crate::channel_name(&c.topic).to_string());
         Ok(Some(n))
     }
 

@@ -215,8 +215,10 @@ fn log_continuation_gap(
 
 fn run(args: &Args) -> Result<(), Failure> {
     let stop = bus::stop_on_signals();
-    let bus =
-        Bus::open(&args.rig, BusConfig::from_env().map_err(|e| e.to_string())?).map_err(|e| e.to_string())?;
+    let bus_cfg = BusConfig::from_env().map_err(|e| e.to_string())?;
+    // the run's one time base (LEAKWATCH_EPOCH_OFFSET_NS), before any message
+    let epoch_offset_ns = bus::init_epoch_offset().map_err(|e| e.to_string())?;
+    let bus = Bus::open(&args.rig, bus_cfg).map_err(|e| e.to_string())?;
     if args.estimates_every == 0 {
         return Err("--estimates-every 0: must be 1 (every estimate) or more"
             .to_string()
@@ -250,6 +252,8 @@ fn run(args: &Args) -> Result<(), Failure> {
         metadata,
         config_toml,
         overwrite: args.force,
+        rig: bus.rig().to_string(),
+        epoch_offset_ns: Some(epoch_offset_ns),
         ..WriterOptions::default()
     };
     let mut writer = LogWriter::create(&args.out, options)?;

@@ -37,9 +37,9 @@ pub struct WriterOptions {
     pub max_chunk_age_ns: u64,
     /// Entries the channel to the writer thread holds; when it is full (the
     /// disk stalled this long) entries are dropped and counted. The channel
-    /// allocates and touches every slot up front (about 512 bytes each, an
-    /// estimate frame by value): the default 8192 is 4 s of the two 1 kHz
-    /// streams in about 4 MB resident.
+    /// allocates and touches every slot up front (about 540 bytes each, an
+    /// event frame by value): the default 8192 is 4 s of the two 1 kHz
+    /// streams in about 4.4 MB resident.
     pub queue_len: usize,
     /// Compression of the chunks.
     pub compression: Option<mcap::Compression>,
@@ -55,6 +55,14 @@ pub struct WriterOptions {
     pub config_toml: Option<String>,
     /// Replace an existing log file (`--force`); a symbolic link is never followed.
     pub overwrite: bool,
+    /// The rig whose topics are logged: the channels are `/leakwatch/<rig>/<topic>`
+    /// (see [`channel_topic`]), the live view's topic names.
+    pub rig: String,
+    /// Wall clock minus `CLOCK_MONOTONIC`, ns, that turns each record's
+    /// monotonic stamp into its `log_time` (Unix time, ns); `None`: this
+    /// process's [`bus::epoch_offset_ns`] (from `LEAKWATCH_EPOCH_OFFSET_NS` in a
+    /// stage of `leakwatch run`, so the log and the live view agree).
+    pub epoch_offset_ns: Option<i64>,
 }
 
 impl Default for WriterOptions {
@@ -69,6 +77,8 @@ impl Default for WriterOptions {
             metadata: BTreeMap::new(),
             config_toml: None,
             overwrite: false,
+            rig: "rig1".into(),
+            epoch_offset_ns: None,
         }
     }
 }
@@ -90,15 +100,24 @@ pub struct WriterSummary {
 /// with their ros2msg schemas (see [`crate::msg`]; JSON with
 /// [`Encoding::Json`]), zstd-compressed chunks of about [`WriterOptions::chunk_size`].
 ///
-/// One clock: each message's `log_time` and `publish_time` are both the
-/// record's own `CLOCK_MONOTONIC` stamp, ns: `acq_mono_ns` for frames,
+/// A rosbag2 file: MCAP profile `ros2`, channels `/leakwatch/<rig>/<topic>`
+/// ([`channel_topic`]) with the metadata `offered_qos_profiles`
+/// ([`OFFERED_QOS_PROFILES`]), so rosbag2 readers (`ros2 bag`, Python's
+/// `rosbags`) open it as it is.
+///
+/// One time base: each message's `log_time` and `publish_time` are both the
+/// record's own `CLOCK_MONOTONIC` stamp turned into Unix time, ns (stamp +
+/// [`WriterOptions::epoch_offset_ns`], the wall clock minus the monotonic
+/// clock fixed once at the start of the run): `acq_mono_ns` for frames,
 /// estimates and events (the acquisition of the sample), `mono_ns` for health
 /// and stats, `recv_mono_ns` for gaps (the recorder's receive time where a
-/// stamp is 0). The `leakwatch` metadata record holds the wall clock and the
-/// monotonic clock read together when the file was created
-/// (`wall_clock_ns_at_start`, `monotonic_ns_at_start`), which map them onto
-/// dates. `sequence` is the frame's `seq` (truncated to 32 bits) where it has
-/// one, else a count per channel.
+/// stamp is 0). The times never go back when NTP steps the wall clock, and the
+/// live view puts the same time on the same message; the messages keep their
+/// monotonic stamps (latency). The `leakwatch` metadata record holds the offset
+/// (`epoch_offset_ns`) and the wall clock and the monotonic clock read together
+/// when the file was created (`wall_clock_ns_at_start`, `monotonic_ns_at_start`).
+/// `sequence` is the frame's `seq` (truncated to 32 bits) where it has one,
+/// else a count per channel.
 pub struct LogWriter {
     tx: Option<Sender<Entry>>,
     thread: Option<JoinHandle<Result<WriterSummary, RecorderError>>>,
@@ -112,13 +131,44 @@ struct Channels {
     health: u16,
     stats: u16,
     gaps: u16,
+    /// Wall clock minus `CLOCK_MONOTONIC`, ns: stamp + this = `log_time`.
+    epoch_offset_ns: i64,
 }
 
-/// Adds the schema and channel of topic `topic`, type `R` (iceoryx2 type name
-/// `type_name`, in the channel's metadata), in `encoding`.
+/// The QoS a rosbag2 recording of the topics would have offered (the MCAP
+/// `ros2` profile requires `offered_qos_profiles` on every channel): reliable,
+/// keep last 1000, volatile, the defaults of `ros2 bag record`, in its YAML.
+pub const OFFERED_QOS_PROFILES: &str = "- history: keep_last
+  depth: 1000
+  reliability: reliable
+  durability: volatile
+  deadline:
+    sec: 9223372036
+    nsec: 854775807
+  lifespan:
+    sec: 9223372036
+    nsec: 854775807
+  liveliness: automatic
+  liveliness_lease_duration:
+    sec: 9223372036
+    nsec: 854775807
+  avoid_ros_namespace_conventions: false
+";
+
+/// The MCAP channel (ROS 2 topic) of `topic` (`frames`, ..., `gaps`) of `rig`:
+/// `/leakwatch/<rig>/<topic>`, the live view's topic name. The reader takes the
+/// last part of a channel's topic, so logs of earlier versions (channels
+/// `frames`, ...) still read.
+pub fn channel_topic(rig: &str, topic: &str) -> String {
+    format!("/leakwatch/{rig}/{topic}")
+}
+
+/// Adds the schema and channel of topic `topic` (`frames`, ...) of `rig`, type
+/// `R` (iceoryx2 type name `type_name`, in the channel's metadata), in `encoding`.
 fn add_channel<R: Message>(
     w: &mut mcap::Writer<File>,
     encoding: Encoding,
+    rig: &str,
     topic: &str,
     type_name: &str,
     json_schema: impl FnOnce() -> (String, serde_json::Value),
@@ -126,6 +176,10 @@ fn add_channel<R: Message>(
     let metadata = BTreeMap::from([
         ("leakwatch_topic".to_string(), topic.to_string()),
         ("leakwatch_type".to_string(), type_name.to_string()),
+        (
+            "offered_qos_profiles".to_string(),
+            OFFERED_QOS_PROFILES.to_string(),
+        ),
     ]);
     let sid = match encoding {
         Encoding::Cdr => w.add_schema(R::MSG_TYPE, "ros2msg", R::DEFINITION.as_bytes())?,
@@ -139,14 +193,15 @@ fn add_channel<R: Message>(
         Encoding::Cdr => "cdr",
         Encoding::Json => "json",
     };
-    w.add_channel(sid, topic, message_encoding, &metadata)
+    w.add_channel(sid, &channel_topic(rig, topic), message_encoding, &metadata)
 }
 
 fn add_frame_channel<R: Record + Message>(
     w: &mut mcap::Writer<File>,
     encoding: Encoding,
+    rig: &str,
 ) -> Result<u16, mcap::McapError> {
-    add_channel::<R>(w, encoding, R::TOPIC.as_str(), R::SCHEMA_NAME, || {
+    add_channel::<R>(w, encoding, rig, R::TOPIC.as_str(), R::SCHEMA_NAME, || {
         (R::SCHEMA_NAME.to_string(), R::schema())
     })
 }
@@ -163,7 +218,7 @@ impl LogWriter {
             .compression(options.compression)
             .compression_level(options.compression_level)
             .chunk_size(Some(options.chunk_size))
-            .profile("leakwatch")
+            .profile("ros2")
             .create(file)
             .map_err(mcap_err)?;
         let mut meta = options.metadata.clone();
@@ -174,16 +229,16 @@ impl LogWriter {
             Encoding::Json => "leakwatch frames as JSON, see frames/README.md",
         };
         meta.insert("format".into(), format.into());
-        let wall = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_nanos() as u64)
-            .unwrap_or(0);
-        meta.insert("wall_clock_ns_at_start".into(), wall.to_string());
-        meta.insert("monotonic_ns_at_start".into(), bus::monotonic_ns().to_string());
+        let offset = options.epoch_offset_ns.unwrap_or_else(bus::epoch_offset_ns);
+        let mono = bus::monotonic_ns();
+        meta.insert("wall_clock_ns_at_start".into(), bus::wall_clock_ns().to_string());
+        meta.insert("monotonic_ns_at_start".into(), mono.to_string());
+        meta.insert("epoch_offset_ns".into(), offset.to_string());
         meta.insert(
             "clock".into(),
-            "log_time = publish_time = CLOCK_MONOTONIC ns of the record's own stamp \
-             (acq_mono_ns, mono_ns or recv_mono_ns)"
+            "log_time = publish_time = Unix time ns: the record's own CLOCK_MONOTONIC stamp \
+             (acq_mono_ns, mono_ns or recv_mono_ns) + epoch_offset_ns (wall clock minus \
+             CLOCK_MONOTONIC, fixed at the start of the run)"
                 .into(),
         );
         w.write_metadata(&mcap::records::Metadata {
@@ -199,13 +254,15 @@ impl LogWriter {
             .map_err(mcap_err)?;
         }
         let enc = options.encoding;
+        let rig = options.rig.as_str();
         let channels = Channels {
-            frames: add_frame_channel::<SensorFrame>(&mut w, enc).map_err(mcap_err)?,
-            estimates: add_frame_channel::<EstimateFrame>(&mut w, enc).map_err(mcap_err)?,
-            events: add_frame_channel::<LeakEventFrame>(&mut w, enc).map_err(mcap_err)?,
-            health: add_frame_channel::<HealthFrame>(&mut w, enc).map_err(mcap_err)?,
-            stats: add_frame_channel::<StatsFrame>(&mut w, enc).map_err(mcap_err)?,
-            gaps: add_channel::<GapRecord>(&mut w, enc, GAPS_CHANNEL, GAP_SCHEMA_NAME, || {
+            frames: add_frame_channel::<SensorFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+            estimates: add_frame_channel::<EstimateFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+            events: add_frame_channel::<LeakEventFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+            health: add_frame_channel::<HealthFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+            stats: add_frame_channel::<StatsFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+            epoch_offset_ns: offset,
+            gaps: add_channel::<GapRecord>(&mut w, enc, rig, GAPS_CHANNEL, GAP_SCHEMA_NAME, || {
                 (GAP_SCHEMA_NAME.to_string(), GapRecord::schema())
             })
             .map_err(mcap_err)?,
@@ -312,8 +369,10 @@ fn write_loop(
                     (ch.gaps, 5, counter_gaps, g.recv_mono_ns)
                 }
             };
-            // one clock for both: the record's own stamp (the receive time if it has none)
-            let time = if stamp > 0 { stamp } else { entry.recv_mono_ns() };
+            // one clock for both: the record's own stamp (the receive time if it
+            // has none) as Unix time
+            let mono = if stamp > 0 { stamp } else { entry.recv_mono_ns() };
+            let time = bus::epoch_ns_with(mono, ch.epoch_offset_ns);
             encode(&entry, options.encoding, &mut buf).map_err(RecorderError::Thread)?;
             w.write_to_known_channel(
                 &MessageHeader {

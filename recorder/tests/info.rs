@@ -82,15 +82,22 @@ fn info_names_the_channels_gaps_events_and_config() {
     let options = WriterOptions {
         metadata: BTreeMap::from([("rig".to_string(), "rig7".to_string())]),
         config_toml: Some(CONFIG.to_string()),
+        rig: "rig7".into(),
+        // 2025-11-24 16:00:00 UTC at monotonic 0
+        epoch_offset_ns: Some(1_764_000_000_000_000_000),
         ..WriterOptions::default()
     };
     write(&path, options);
     let log = LogReader::open(&path).unwrap().read().unwrap();
     assert_eq!(log.config_toml(), Some(CONFIG));
+    assert_eq!(log.channels["frames"].topic, "/leakwatch/rig7/frames");
     let bytes = std::fs::metadata(&path).unwrap().len();
     let info = Info::from_log(&path, bytes, &log);
-    // the span is the frames' acquisition stamps: 0 to 1.999 s
-    assert_eq!(info.span_ns, Some((5_000_000_000, 6_999_000_000)));
+    // the span is the frames' acquisition stamps (5 s to 6.999 s) as Unix time
+    assert_eq!(
+        info.span_ns,
+        Some((1_764_000_005_000_000_000, 1_764_000_006_999_000_000))
+    );
     assert!((info.duration_s() - 1.999).abs() < 1e-9);
     let frames = &info.channels[0];
     assert_eq!((frames.topic.as_str(), frames.messages), ("frames", 1995));
@@ -112,14 +119,17 @@ fn info_names_the_channels_gaps_events_and_config() {
     );
     assert_eq!((info.frame_seq_jumps.gaps, info.frame_seq_jumps.missing), (1, 5));
     assert_eq!(info.events.len(), 2, "the raised ones");
-    assert!(info.wall_offset_ns.is_some());
+    // log times are Unix time: dates without a monotonic reading
+    assert_eq!(info.wall_offset_ns, Some(0));
     let text = info.render();
     for want in [
         "Duration:    1.999 s",
         "Rig:         rig7",
         "Messages:    2020",
-        "frames          1995 msgs     997.5 Hz  cdr leakwatch/msg/SensorFrame (ros2msg)",
-        "estimates         20 msgs      10.0 Hz  cdr leakwatch/msg/EstimateFrame (ros2msg)",
+        "Start:       2025-11-24 16:00:05.000 UTC\n",
+        "End:         2025-11-24 16:00:06.999 UTC\n",
+        "/leakwatch/rig7/frames          1995 msgs     997.5 Hz  cdr leakwatch/msg/SensorFrame (ros2msg)",
+        "/leakwatch/rig7/estimates         20 msgs      10.0 Hz  cdr leakwatch/msg/EstimateFrame (ros2msg)",
         "Gaps:        frames 1 (5 missing)",
         "Frame seq:   1 jumps, 5 frames missing",
         "Events:      2 raised",
@@ -128,10 +138,10 @@ fn info_names_the_channels_gaps_events_and_config() {
         "Truncated:   no",
         "Damaged:     none",
         "Config:      stored (5 lines): [model] [classifier]",
-        "(monotonic 5.000 s)",
     ] {
         assert!(text.contains(want), "{want:?} in\n{text}");
     }
+    assert!(!text.contains("monotonic"), "{text}");
     // a file cut in its middle: what is complete, and that it is truncated
     let all = std::fs::read(&path).unwrap();
     let cut = d.join("cut.mcap");

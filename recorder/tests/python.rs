@@ -43,6 +43,36 @@ with open(sys.argv[1], "rb") as f:
         }))
 "#;
 
+/// The same with `rosbags` (the pure-Python rosbag2 reader): `AnyReader` on the
+/// file, every message deserialized with the types the file declares.
+const ROSBAGS_SCRIPT: &str = r#"
+import dataclasses, json, struct, sys
+from pathlib import Path
+from rosbags.highlevel import AnyReader
+
+def plain(v):
+    if dataclasses.is_dataclass(v):
+        # the fields (rosbags adds the type name and the .msg constants, FLAG_...)
+        return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)
+                if not f.name.startswith("__") and not f.name.isupper()}
+    if hasattr(v, "tolist"):
+        return plain(v.tolist())
+    if isinstance(v, float):
+        return {"f64": struct.unpack("<Q", struct.pack("<d", v))[0]}
+    if isinstance(v, (list, tuple)):
+        return [plain(x) for x in v]
+    return v
+
+with AnyReader([Path(sys.argv[1])]) as reader:
+    print(json.dumps({"profile_ok": True, "message_count": reader.message_count,
+                      "start_time": reader.start_time, "end_time": reader.end_time}))
+    for c in reader.connections:
+        print(json.dumps({"connection": c.topic, "msgtype": c.msgtype, "msgcount": c.msgcount}))
+    for connection, timestamp, rawdata in reader.messages():
+        msg = reader.deserialize(rawdata, connection.msgtype)
+        print(json.dumps({"topic": connection.topic, "timestamp": timestamp, "msg": plain(msg)}))
+"#;
+
 /// True if python3 with `mcap` and `mcap_ros2` runs; false (the test skips)
 /// only where Python is not required.
 fn python_mcap() -> bool {
@@ -152,8 +182,17 @@ fn expected_gap(x: &GapRecord) -> Value {
 
 /// A log with every record type: distinct values in every field, NaN, the
 /// infinities, text, a kind this version does not name.
+/// The wall clock minus `CLOCK_MONOTONIC` the test log is written with, ns
+/// (2025-11-24 16:00:00 UTC at monotonic 0).
+const EPOCH_OFFSET_NS: i64 = 1_764_000_000_000_000_000;
+
 fn write_log(path: &Path) {
-    let mut w = LogWriter::create(path, WriterOptions::default()).unwrap();
+    let options = WriterOptions {
+        rig: "press-3".into(),
+        epoch_offset_ns: Some(EPOCH_OFFSET_NS),
+        ..WriterOptions::default()
+    };
+    let mut w = LogWriter::create(path, options).unwrap();
     let mut put = |e: Entry| assert!(w.write(e).unwrap());
     for i in 0..50u64 {
         let t = 1_000_000_000 + i * 1_000_000;
@@ -311,15 +350,24 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
     expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
     let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
     for line in &lines {
-        let topic = line["topic"].as_str().unwrap();
+        // rosbag2 topics: /leakwatch/<rig>/<topic>
+        let topic = line["topic"]
+            .as_str()
+            .unwrap()
+            .strip_prefix("/leakwatch/press-3/")
+            .unwrap_or_else(|| panic!("a topic of the rig: {line}"));
         assert_eq!(line["encoding"], "cdr", "{line}");
         assert_eq!(line["schema_encoding"], "ros2msg", "{line}");
         assert!(
             line["schema"].as_str().unwrap().starts_with("leakwatch/msg/"),
             "{line}"
         );
-        // one clock: log time and publish time are the record's monotonic stamp
+        // one clock: log time and publish time are the record's monotonic stamp as Unix time
         assert_eq!(line["log_time"], line["publish_time"], "{line}");
+        assert!(
+            line["log_time"].as_u64().unwrap() >= EPOCH_OFFSET_NS as u64,
+            "{line}"
+        );
         let i = seen.entry(topic.to_string()).or_default();
         let want = &expected[topic][*i];
         assert_eq!(&line["msg"], want, "{topic} message {i}");
@@ -333,16 +381,138 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
         (50, 50, 2)
     );
     // the values a user looks for, by name
-    let frame = lines.iter().find(|l| l["topic"] == "frames").unwrap();
-    assert_eq!(frame["log_time"], 1_000_000_000u64);
-    let est = lines.iter().filter(|l| l["topic"] == "estimates").nth(7).unwrap();
+    let frame = lines
+        .iter()
+        .find(|l| l["topic"] == "/leakwatch/press-3/frames")
+        .unwrap();
+    // acq_mono_ns 1 s: 2025-11-24 16:00:01 UTC
+    assert_eq!(frame["log_time"], 1_764_000_001_000_000_000u64);
+    assert_eq!(frame["msg"]["acq_mono_ns"], 1_000_000_000u64);
+    let est = lines
+        .iter()
+        .filter(|l| l["topic"] == "/leakwatch/press-3/estimates")
+        .nth(7)
+        .unwrap();
     assert_eq!(est["msg"]["state"]["q_e1_m3_s"], f(707.0));
     assert_eq!(est["msg"]["th_state"]["f_e_n"], f(-607.0));
-    let events: Vec<&Value> = lines.iter().filter(|l| l["topic"] == "events").collect();
+    let events: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["topic"] == "/leakwatch/press-3/events")
+        .collect();
     assert_eq!(
         (&events[0]["msg"]["kind"], &events[0]["msg"]["phase"]),
         (&json!("ext1"), &json!("raised"))
     );
     assert_eq!(events[1]["msg"]["kind"], "99");
     assert_eq!(log.events[1].kind, 99);
+}
+
+/// True if python3 with `rosbags` runs; false (the test skips) only where
+/// Python is not required.
+fn python_rosbags() -> bool {
+    let ok = Command::new("python3")
+        .args(["-c", "import rosbags.highlevel"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok {
+        assert!(
+            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
+            "python3 with rosbags is required (.ci/setup installs it)"
+        );
+        eprintln!("SKIPPED: python3 with the rosbags package is not installed");
+    }
+    ok
+}
+
+/// `rosbags`' `AnyReader` opens the log as a rosbag2 file (profile `ros2`,
+/// `offered_qos_profiles` on every channel) and deserializes every message to
+/// the values the Rust reader gives, bit for bit, at the log's Unix times.
+#[test]
+fn rosbags_reads_the_log_as_a_rosbag2_file() {
+    if !python_rosbags() {
+        return;
+    }
+    let d = scratch::ScratchDir::new("recorder-rosbags");
+    let path = d.join("log.mcap");
+    write_log(&path);
+    let log = LogReader::open(&path).unwrap().read().unwrap();
+    let o = Command::new("python3")
+        .args(["-c", ROSBAGS_SCRIPT])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<Value> = String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let total = log.frames.len()
+        + log.estimates.len()
+        + log.events.len()
+        + log.health.len()
+        + log.stats.len()
+        + log.gaps.len();
+    assert_eq!(lines[0]["message_count"], total as u64, "{}", lines[0]);
+    // the first message is the first frame, at its acquisition as Unix time
+    assert_eq!(
+        lines[0]["start_time"], 1_764_000_001_000_000_000u64,
+        "{}",
+        lines[0]
+    );
+    let mut connections: Vec<(&str, &str, u64)> = lines
+        .iter()
+        .filter(|l| l.get("connection").is_some())
+        .map(|l| {
+            (
+                l["connection"].as_str().unwrap(),
+                l["msgtype"].as_str().unwrap(),
+                l["msgcount"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    connections.sort();
+    assert_eq!(
+        connections,
+        [
+            ("/leakwatch/press-3/estimates", "leakwatch/msg/EstimateFrame", 50),
+            ("/leakwatch/press-3/events", "leakwatch/msg/LeakEventFrame", 2),
+            ("/leakwatch/press-3/frames", "leakwatch/msg/SensorFrame", 50),
+            ("/leakwatch/press-3/gaps", "leakwatch/msg/Gap", 1),
+            ("/leakwatch/press-3/health", "leakwatch/msg/HealthFrame", 1),
+            ("/leakwatch/press-3/stats", "leakwatch/msg/StatsFrame", 1),
+        ]
+    );
+    let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();
+    expected.insert("frames", log.frames.iter().map(expected_sensor).collect());
+    expected.insert("estimates", log.estimates.iter().map(expected_estimate).collect());
+    expected.insert("events", log.events.iter().map(expected_event).collect());
+    expected.insert("health", log.health.iter().map(expected_health).collect());
+    expected.insert("stats", log.stats.iter().map(expected_stats).collect());
+    expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
+    let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
+    for line in lines.iter().filter(|l| l.get("timestamp").is_some()) {
+        let topic = line["topic"]
+            .as_str()
+            .unwrap()
+            .strip_prefix("/leakwatch/press-3/")
+            .unwrap();
+        let i = seen.entry(topic.to_string()).or_default();
+        assert_eq!(&line["msg"], &expected[topic][*i], "{topic} message {i}");
+        *i += 1;
+    }
+    for (topic, want) in &expected {
+        assert_eq!(seen.get(*topic).copied().unwrap_or(0), want.len(), "{topic}");
+    }
+    let est = lines
+        .iter()
+        .filter(|l| l["topic"] == "/leakwatch/press-3/estimates")
+        .nth(7)
+        .unwrap();
+    assert_eq!(est["msg"]["state"]["q_e1_m3_s"], f(707.0));
+    assert_eq!(
+        est["timestamp"],
+        EPOCH_OFFSET_NS as u64 + log.estimates[7].acq_mono_ns
+    );
 }

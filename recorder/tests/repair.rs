@@ -89,9 +89,26 @@ fn repair_and_check(damaged: &Path, fixed: &Path) -> Log {
     topics.sort();
     assert_eq!(
         topics,
-        ["estimates", "events", "frames", "gaps", "health", "stats"]
+        [
+            "/leakwatch/rig1/estimates",
+            "/leakwatch/rig1/events",
+            "/leakwatch/rig1/frames",
+            "/leakwatch/rig1/gaps",
+            "/leakwatch/rig1/health",
+            "/leakwatch/rig1/stats"
+        ]
     );
     assert!(summary.channels.values().all(|c| c.schema.is_some()));
+    // still a rosbag2 file: profile ros2, the QoS on every channel
+    assert!(summary
+        .channels
+        .values()
+        .all(|c| c.metadata.get("offered_qos_profiles").map(String::as_str)
+            == Some(recorder::OFFERED_QOS_PROFILES)));
+    match mcap::read::LinearReader::new(&bytes).unwrap().next() {
+        Some(Ok(mcap::records::Record::Header(h))) => assert_eq!(h.profile, "ros2"),
+        other => panic!("a header first: {other:?}"),
+    }
     after
 }
 

@@ -122,6 +122,8 @@ pub(super) fn spawn(
         .arg(name)
         .args(args)
         .env(bus::PREFIX_ENV, prefix)
+        // the run's time base (bus::init_epoch_offset at its start)
+        .env(bus::EPOCH_OFFSET_ENV, bus::epoch_offset_ns().to_string())
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(err)

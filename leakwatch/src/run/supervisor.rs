@@ -126,6 +126,9 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
         _ => format!("run{}", std::process::id()),
     };
+    // The run's one time base, fixed now: every stage gets it (stages.rs), so
+    // the log and the live view put the same Unix time on the same message.
+    bus::init_epoch_offset().map_err(|e| e.to_string())?;
     let bus_cfg = BusConfig {
         iox_prefix: Some(prefix.clone()),
         ..BusConfig::default()
