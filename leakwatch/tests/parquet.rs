@@ -23,7 +23,8 @@ fn tmpdir(name: &str) -> scratch::ScratchDir {
 }
 
 /// Reads the Parquet file with pyarrow, compares every cell with the CSV
-/// (parsed as f64; NaN equals NaN) and prints a JSON summary.
+/// (parsed as f64; NaN equals NaN) and every column chunk's statistics with
+/// its values (min and max without NaN, null count), and prints a JSON summary.
 const SCRIPT: &str = r#"
 import csv, json, math, sys
 import pyarrow.parquet as pq
@@ -41,7 +42,31 @@ with open(sys.argv[2]) as fh:
             a, b = float(row[j]), cols[name][i]
             if not (a == b or (math.isnan(a) and math.isnan(b))):
                 mismatches += 1
+meta = f.metadata
+stats_checked = 0
+stats_mismatches = []
+start = 0
+for g in range(meta.num_row_groups):
+    rg = meta.row_group(g)
+    for c in range(rg.num_columns):
+        name = table.column_names[c]
+        values = [x for x in cols[name][start:start + rg.num_rows] if not (isinstance(x, float) and math.isnan(x))]
+        st = rg.column(c).statistics
+        if st is None or not st.has_min_max or st.null_count != 0:
+            stats_mismatches.append([g, name, "no statistics"])
+            continue
+        if st.min != min(values) or st.max != max(values):
+            stats_mismatches.append([g, name, st.min, st.max, min(values), max(values)])
+        stats_checked += 1
+    start += rg.num_rows
+# a filter on t reads only the row group that holds it (the statistics skip the first)
+late = pq.read_table(sys.argv[1], filters=[("t", ">=", 66.0)])
 print(json.dumps({
+    "created_by": meta.created_by,
+    "stats_checked": stats_checked,
+    "stats_mismatches": stats_mismatches,
+    "t_min_group_1": meta.row_group(1).column(0).statistics.min,
+    "filtered_rows": late.num_rows,
     "names": table.column_names,
     "csv_header": header,
     "rows": table.num_rows,
@@ -143,4 +168,12 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
     assert_eq!(v["types"]["flags"], "int32");
     assert_eq!(v["types"]["th_flags"], "int32");
     assert!((v["t_last"].as_f64().unwrap() - 69.999).abs() < 1e-9, "{v}");
+    // statistics on every column chunk: 2 row groups of 39 columns, each min
+    // and max equal to its values'; created_by with the version
+    assert_eq!(v["stats_checked"], 78, "{v}");
+    assert_eq!(v["stats_mismatches"], serde_json::json!([]), "{v}");
+    assert_eq!(v["created_by"], format!("leakwatch version {}", env!("CARGO_PKG_VERSION")));
+    // the second group starts at row 65,536: t = 65.536 s
+    assert!((v["t_min_group_1"].as_f64().unwrap() - 65.536).abs() < 1e-9, "{v}");
+    assert_eq!(v["filtered_rows"], 4_000, "{v}");
 }
