@@ -172,8 +172,14 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
     // and max equal to its values'; created_by with the version
     assert_eq!(v["stats_checked"], 78, "{v}");
     assert_eq!(v["stats_mismatches"], serde_json::json!([]), "{v}");
-    assert_eq!(v["created_by"], format!("leakwatch version {}", env!("CARGO_PKG_VERSION")));
+    assert_eq!(
+        v["created_by"],
+        format!("leakwatch version {}", env!("CARGO_PKG_VERSION"))
+    );
     // the second group starts at row 65,536: t = 65.536 s
-    assert!((v["t_min_group_1"].as_f64().unwrap() - 65.536).abs() < 1e-9, "{v}");
+    assert!(
+        (v["t_min_group_1"].as_f64().unwrap() - 65.536).abs() < 1e-9,
+        "{v}"
+    );
     assert_eq!(v["filtered_rows"], 4_000, "{v}");
 }
