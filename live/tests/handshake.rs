@@ -164,3 +164,45 @@ fn a_client_offering_no_known_subprotocol_is_refused_naming_them() {
         Ok(_) => panic!("expected HTTP 400, the handshake succeeded"),
     }
 }
+
+/// Foxglove's own client library, `@foxglove/ws-protocol` (run with node),
+/// connects with its default subprotocol `foxglove.websocket.v1`, subscribes
+/// and receives a frame at the time given. Optional: it runs where
+/// `LEAKWATCH_NODE_MODULES` names a folder whose `node_modules` holds
+/// `@foxglove/ws-protocol` and `ws` (`npm install @foxglove/ws-protocol@0.8.0
+/// ws@8`), and says it was skipped elsewhere.
+#[test]
+fn foxglove_ws_protocol_client_connects_when_node_has_it() {
+    let Ok(modules) = std::env::var("LEAKWATCH_NODE_MODULES") else {
+        eprintln!("SKIPPED: LEAKWATCH_NODE_MODULES is not set (optional check with @foxglove/ws-protocol)");
+        return;
+    };
+    let mut view = LiveView::start("rig9", "127.0.0.1", 0, 16).expect("the live view starts");
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/liveview/ws_protocol_client.js");
+    let child = std::process::Command::new("node")
+        .arg(&script)
+        .arg(format!("ws://127.0.0.1:{}", view.port()))
+        .env("NODE_PATH", std::path::Path::new(&modules).join("node_modules"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("node runs");
+    let start = Instant::now();
+    while !view.wants(LiveTopic::Frames) {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the client never subscribed"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    view.send(LiveTopic::Frames, br#"{"t_s":2.5}"#, 1_764_000_004_000_000_001);
+    let o = child.wait_with_output().expect("node ends");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("a JSON line");
+    assert_eq!(v["subprotocol"], "foxglove.websocket.v1");
+    assert_eq!(v["server"], "leakwatch rig9");
+    assert_eq!(v["topic"], "/leakwatch/rig9/frames");
+    assert_eq!(v["log_time_ns"], "1764000004000000001");
+    assert_eq!(v["payload"], r#"{"t_s":2.5}"#);
+}
