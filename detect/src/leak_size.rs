@@ -12,8 +12,11 @@ mod step;
 #[derive(Debug, Clone)]
 pub struct LeakSizeDetector {
     cfg: ClassifierConfig,
-    /// The internal leak's pressure factors of the signatures (the commissioning's, else nominal).
+    /// The internal leak's pressure factors of the signatures (the commissioning's,
+    /// else the warm-up's, nominal until armed).
     internal_factors: [f64; 2],
+    /// The chambers' pressures over the warm-up, for the factors.
+    warmup_pressures: PressureSums,
     arming: Arming,
     stats: [Stats; 3],
     /// The healthy values seen while learning.
@@ -139,7 +142,7 @@ impl HealthyRecord {
         }
     }
 
-    fn push(&mut self, t_s: f64, dt_s: f64, raw: [f64; 3], nis: f64) {
+    fn push(&mut self, t_s: f64, dt_s: f64, q: [f64; 3], nis: f64) {
         self.learned_s += dt_s;
         if nis.is_finite() {
             self.nis_sum += nis.min(1e6);
@@ -148,7 +151,7 @@ impl HealthyRecord {
         if t_s >= self.next_t_s {
             self.next_t_s = t_s + Self::EVERY_S;
             for k in 0..3 {
-                self.values[k].push(raw[k]);
+                self.values[k].push(q[k]);
             }
         }
     }
@@ -162,13 +165,22 @@ impl HealthyRecord {
         }
     }
 
-    /// (offsets, spreads, upcrossings per second of the learned time).
-    fn summary(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    /// (offsets, spreads, upcrossings per second of the learned time) of the
+    /// signatures ([`signatures_with`] with `factors`) of the kept leak sizes.
+    fn summary(&self, factors: [f64; 2]) -> ([f64; 3], [f64; 3], [f64; 3]) {
         let mut med = [f64::NAN; 3];
         let mut spread = [f64::NAN; 3];
         let mut cross = [0.0; 3];
+        let n = self.values[0].len();
+        let mut signatures: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
+        for i in 0..n {
+            let w = signatures_with([self.values[0][i], self.values[1][i], self.values[2][i]], factors);
+            for k in 0..3 {
+                signatures[k].push(w[k]);
+            }
+        }
         for k in 0..3 {
-            let v = &self.values[k];
+            let v = &signatures[k];
             if v.is_empty() {
                 continue;
             }
@@ -226,6 +238,48 @@ impl RunningSpread {
     }
 }
 
+/// Sums of the chambers' pressures over the healthy samples, for the internal
+/// leak's pressure factors ([`signatures_with`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PressureSums {
+    /// Σ ssqrt(p1 − p2) (√Pa), Σ (p1 − p2)·sgn (Pa), Σ √p1, Σ √p2 (√Pa), count.
+    sums: [f64; 5],
+}
+
+impl PressureSums {
+    /// Adds one sample of the chamber pressures `p1_pa`, `p2_pa` (skipped if not finite).
+    pub(crate) fn push(&mut self, p1_pa: f64, p2_pa: f64) {
+        if !(p1_pa.is_finite() && p2_pa.is_finite()) {
+            return;
+        }
+        let s = ssqrt(p1_pa - p2_pa);
+        for (sum, v) in
+            self.sums
+                .iter_mut()
+                .zip([s, s * s, p1_pa.max(0.0).sqrt(), p2_pa.max(0.0).sqrt(), 1.0])
+        {
+            *sum += v;
+        }
+    }
+
+    /// The internal leak's pressure factors (r1, r2): ssqrt(p1 − p2)/√p_i at the
+    /// mean pressures where ssqrt(p1 − p2) stayed on one side of zero (its mean
+    /// beyond twice its spread), else the nominal (1, 1).
+    pub(crate) fn factors(&self) -> [f64; 2] {
+        let [s, s2, g1, g2, n] = self.sums;
+        if n < 2.0 {
+            return crate::NOMINAL_INTERNAL_FACTORS;
+        }
+        let (mean, g1, g2) = (s / n, g1 / n, g2 / n);
+        let spread = (s2 / n - mean * mean).max(0.0).sqrt();
+        if mean.abs() > 2.0 * spread && g1 > 0.0 && g2 > 0.0 {
+            [mean / g1, mean / g2]
+        } else {
+            crate::NOMINAL_INTERNAL_FACTORS
+        }
+    }
+}
+
 /// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
 /// the offset, spread and upcrossing rate of each single-leak size after the
 /// filter has converged and settled, gaps and resets left out; and the
@@ -235,10 +289,8 @@ impl RunningSpread {
 pub struct CommissioningLearner {
     settle_s: f64,
     converged_at_s: Option<f64>,
-    /// The samples learned from: time s, interval s, leak sizes L/min at the nominal drop, NIS.
-    samples: Vec<(f64, f64, [f64; 3], f64)>,
-    /// Sums of ssqrt(p1 − p2), its square, √p1 and √p2 (√Pa, Pa), and their count.
-    pressure_sums: [f64; 5],
+    record: HealthyRecord,
+    pressures: PressureSums,
     last_t_s: f64,
 }
 
@@ -262,8 +314,8 @@ impl CommissioningLearner {
         CommissioningLearner {
             settle_s,
             converged_at_s: None,
-            samples: Vec::new(),
-            pressure_sums: [0.0; 5],
+            record: HealthyRecord::with_capacity_s(600.0),
+            pressures: PressureSums::default(),
             last_t_s: f64::NAN,
         }
     }
@@ -286,8 +338,7 @@ impl CommissioningLearner {
             return;
         }
         let q = leak_sizes_lpm(e);
-        let (p1, p2) = (e.state[1], e.state[2]);
-        if !q.iter().chain([&p1, &p2]).all(|v| v.is_finite()) {
+        if !q.iter().all(|v| v.is_finite()) {
             return;
         }
         let dt_s = if self.last_t_s.is_finite() {
@@ -296,48 +347,26 @@ impl CommissioningLearner {
             0.0
         };
         self.last_t_s = e.t_s;
-        self.samples.push((e.t_s, dt_s, q, e.nis));
-        let s = ssqrt(p1 - p2);
-        for (sum, v) in
-            self.pressure_sums
-                .iter_mut()
-                .zip([s, s * s, p1.max(0.0).sqrt(), p2.max(0.0).sqrt(), 1.0])
-        {
-            *sum += v;
-        }
+        self.record.push(e.t_s, dt_s, q, e.nis);
+        self.pressures.push(e.state[1], e.state[2]);
     }
 
-    /// The internal leak's pressure factors (r1, r2): ssqrt(p1 − p2)/√p_i at the
-    /// mean pressures where ssqrt(p1 − p2) stayed on one side of zero (its mean
-    /// beyond twice its spread), else the nominal (1, 1).
+    /// The internal leak's pressure factors learned so far (see [`Commissioning::internal_factors`]).
     pub fn internal_factors(&self) -> [f64; 2] {
-        let [s, s2, g1, g2, n] = self.pressure_sums;
-        if n < 2.0 {
-            return crate::NOMINAL_INTERNAL_FACTORS;
-        }
-        let (mean, g1, g2) = (s / n, g1 / n, g2 / n);
-        let spread = (s2 / n - mean * mean).max(0.0).sqrt();
-        if mean.abs() > 2.0 * spread && g1 > 0.0 && g2 > 0.0 {
-            [mean / g1, mean / g2]
-        } else {
-            crate::NOMINAL_INTERNAL_FACTORS
-        }
+        self.pressures.factors()
     }
 
     /// The commissioning, or why there is none (too little healthy data).
     pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
         let internal_factors = self.internal_factors();
-        let mut record = HealthyRecord::with_capacity_s(600.0);
-        for (t_s, dt_s, q, nis) in &self.samples {
-            record.push(*t_s, *dt_s, signatures_with(*q, internal_factors), *nis);
-        }
+        let record = &self.record;
         let learned_s = record.learned_s;
         if learned_s < min_s {
             return Err(format!(
                 "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
             ));
         }
-        let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary();
+        let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary(internal_factors);
         Ok(Commissioning {
             offsets_lpm,
             spreads_lpm,
@@ -358,6 +387,7 @@ impl LeakSizeDetector {
                 .commissioning
                 .as_ref()
                 .map_or(crate::NOMINAL_INTERNAL_FACTORS, |c| c.internal_factors),
+            warmup_pressures: PressureSums::default(),
             record: HealthyRecord::with_capacity_s(cfg.warmup_s),
             refine: RunningSpread::default(),
             next_refine_s: f64::NEG_INFINITY,
@@ -487,6 +517,12 @@ impl LeakSizeDetector {
     /// (before the healthy offsets are removed): see [`signatures_with`].
     fn raw_sizes(&self, e: &Estimate) -> [f64; 3] {
         signatures_with(leak_sizes_lpm(e), self.internal_factors)
+    }
+
+    /// The leak sizes of `e` for the warm-up's record, L/min at the nominal drop.
+    fn warmup_sample(&mut self, e: &Estimate) -> [f64; 3] {
+        self.warmup_pressures.push(e.state[1], e.state[2]);
+        leak_sizes_lpm(e)
     }
 
     fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {

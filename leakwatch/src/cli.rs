@@ -57,15 +57,19 @@ pub(crate) enum Command {
         /// Leak to inject (default ext1:0.5lpm@20s).
         #[arg(long = "fault")]
         faults: Vec<String>,
-        /// Scenario (default loaded-sine).
-        #[arg(long, default_value = "loaded-sine")]
-        scenario: String,
+        /// Scenario (default loaded-sine; `lift` on the lift rig).
+        #[arg(long)]
+        scenario: Option<String>,
         /// Simulated seconds (default 40).
         #[arg(long, default_value_t = 40.0)]
         seconds: f64,
         /// Seed.
         #[arg(long, default_value_t = 7)]
         seed: u64,
+        /// The rig: `thesis` (the double-rod test rig) or `lift` (a vertical single-rod
+        /// cylinder lifting 200 kg, docs/plant.md).
+        #[arg(long, default_value = "thesis", value_parser = ["thesis", "lift"])]
+        rig: String,
     },
     /// Run the live pipeline: acquisition, estimator, classifier and recorder as processes over
     /// iceoryx2. Without a fault or a config (with or without `--scenario loaded-sine`): the

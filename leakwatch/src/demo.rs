@@ -14,9 +14,21 @@ pub fn off_nominal_rig(model: &model::ActuatorParams) -> model::ActuatorParams {
     model.off_nominal(0.85, 0.03)
 }
 
-/// Runs the demonstration and prints what happens.
-pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result<(), String> {
-    let cfg = Config::default();
+/// Runs the demonstration and prints what happens: on the thesis rig, or with
+/// `lift` on the vertical single-rod lift (`ActuatorParams::vertical_lift`),
+/// `scenario` defaulting to each rig's own (loaded-sine, lift).
+pub fn run(
+    scenario: Option<&str>,
+    seconds: f64,
+    seed: u64,
+    faults: &[String],
+    lift: bool,
+) -> Result<(), String> {
+    let mut cfg = Config::default();
+    if lift {
+        cfg.model = model::ActuatorParams::vertical_lift();
+    }
+    let scenario = scenario.unwrap_or(if lift { "lift" } else { "loaded-sine" });
     crate::simulate::check_seconds(seconds, cfg.sim.sample_period_s)?;
     let rig = off_nominal_rig(&cfg.model);
     let specs: Vec<String> = if faults.is_empty() {
@@ -31,7 +43,10 @@ pub fn run(scenario: &str, seconds: f64, seed: u64, faults: &[String]) -> Result
             .push(Fault::parse(s, &rig).map_err(|e| e.to_string())?);
     }
     let sc = Scenario::by_name(scenario, seed, seconds).map_err(|e| e.to_string())?;
-    outln!("leakwatch demo: scenario {scenario}, {seconds} s, rig off-nominal (friction ±, air, spool bias)");
+    outln!(
+        "leakwatch demo: {} rig, scenario {scenario}, {seconds} s, rig off-nominal (friction ±, air, spool bias)",
+        if lift { "lift (single-rod, vertical)" } else { "thesis (double-rod)" }
+    );
     for f in &schedule.faults {
         outln!(
             "  injected: {} leak ({} law) at t = {} s{}",

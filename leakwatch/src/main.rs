@@ -63,7 +63,8 @@ fn run(cli: Cli) -> Result<(), String> {
             scenario,
             seconds,
             seed,
-        } => demo::run(&scenario, seconds, seed, &faults),
+            rig,
+        } => demo::run(scenario.as_deref(), seconds, seed, &faults, rig == "lift"),
         Command::Run {
             seconds,
             scenario,

@@ -1326,3 +1326,41 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
     let last_frame = got.last().and_then(|g| g[2].as_u64()).expect("a time");
     assert!(last_frame < wall_after, "{last_frame} < {wall_after}");
 }
+
+/// `demo --rig lift`: the vertical single-rod lift, not commissioned. The
+/// detector's warm-up takes the internal leak's pressure factors itself, and an
+/// internal leak is raised and named.
+#[test]
+fn demo_runs_the_single_rod_lift_and_names_an_internal_leak() {
+    let o = leakwatch(&[
+        "demo",
+        "--rig",
+        "lift",
+        "--seconds",
+        "50",
+        "--fault",
+        "int:0.3lpm@35s",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(o.status.success(), "{out}{}", stderr(&o));
+    assert!(
+        out.contains("lift (single-rod, vertical) rig, scenario lift"),
+        "{out}"
+    );
+    let named: Vec<&str> = out
+        .lines()
+        .filter(|l| l.contains(" raised ") && !l.contains(" leak  "))
+        .collect();
+    assert!(
+        !named.is_empty() && named.iter().all(|l| l.contains(" int ")),
+        "{out}"
+    );
+    let t: f64 = named[0]
+        .split("t = ")
+        .nth(1)
+        .and_then(|r| r.split(' ').find(|w| !w.is_empty()))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(f64::NAN);
+    assert!((35.0..40.0).contains(&t), "named at {t} s: {out}");
+    assert!(out.contains("leak detected"), "{out}");
+}

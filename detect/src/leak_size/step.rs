@@ -127,9 +127,12 @@ impl LeakSizeDetector {
                     self.arming = Arming::Learning(e.t_s);
                 }
                 Arming::Learning(_) if !blind => {
-                    self.record.push(e.t_s, dt_s, raw, e.nis);
+                    let q = self.warmup_sample(e);
+                    self.record.push(e.t_s, dt_s, q, e.nis);
                     if self.record.learned_s >= self.cfg.warmup_s {
-                        let (offsets, spreads, crossings) = self.record.summary();
+                        // The internal leak's factors from the warm-up's pressures.
+                        self.internal_factors = self.warmup_pressures.factors();
+                        let (offsets, spreads, crossings) = self.record.summary(self.internal_factors);
                         self.nis_healthy = self.record.nis_mean();
                         self.arm_with(offsets, spreads, crossings, e.t_s);
                     }
