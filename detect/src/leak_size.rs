@@ -12,11 +12,8 @@ mod step;
 #[derive(Debug, Clone)]
 pub struct LeakSizeDetector {
     cfg: ClassifierConfig,
-    /// The internal leak's pressure factors of the signatures (the commissioning's,
-    /// else the warm-up's, nominal until armed).
+    /// The internal leak's pressure factors of the signatures (the commissioning's, else nominal).
     internal_factors: [f64; 2],
-    /// The chambers' pressures over the warm-up, for the factors.
-    warmup_pressures: PressureSums,
     arming: Arming,
     stats: [Stats; 3],
     /// The healthy values seen while learning.
@@ -241,14 +238,14 @@ impl RunningSpread {
 /// Sums of the chambers' pressures over the healthy samples, for the internal
 /// leak's pressure factors ([`signatures_with`]).
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct PressureSums {
+struct PressureSums {
     /// Σ ssqrt(p1 − p2) (√Pa), Σ (p1 − p2)·sgn (Pa), Σ √p1, Σ √p2 (√Pa), count.
     sums: [f64; 5],
 }
 
 impl PressureSums {
     /// Adds one sample of the chamber pressures `p1_pa`, `p2_pa` (skipped if not finite).
-    pub(crate) fn push(&mut self, p1_pa: f64, p2_pa: f64) {
+    fn push(&mut self, p1_pa: f64, p2_pa: f64) {
         if !(p1_pa.is_finite() && p2_pa.is_finite()) {
             return;
         }
@@ -265,7 +262,7 @@ impl PressureSums {
     /// The internal leak's pressure factors (r1, r2): ssqrt(p1 − p2)/√p_i at the
     /// mean pressures where ssqrt(p1 − p2) stayed on one side of zero (its mean
     /// beyond twice its spread), else the nominal (1, 1).
-    pub(crate) fn factors(&self) -> [f64; 2] {
+    fn factors(&self) -> [f64; 2] {
         let [s, s2, g1, g2, n] = self.sums;
         if n < 2.0 {
             return crate::NOMINAL_INTERNAL_FACTORS;
@@ -295,7 +292,7 @@ pub struct CommissioningLearner {
 }
 
 /// The leak sizes [q_e1, q_e2, q_i] of an estimate, L/min at the nominal drop.
-fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
+pub(crate) fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
     [
         e.state[7] / M3_S_PER_LPM,
         e.state[8] / M3_S_PER_LPM,
@@ -387,7 +384,6 @@ impl LeakSizeDetector {
                 .commissioning
                 .as_ref()
                 .map_or(crate::NOMINAL_INTERNAL_FACTORS, |c| c.internal_factors),
-            warmup_pressures: PressureSums::default(),
             record: HealthyRecord::with_capacity_s(cfg.warmup_s),
             refine: RunningSpread::default(),
             next_refine_s: f64::NEG_INFINITY,
@@ -517,12 +513,6 @@ impl LeakSizeDetector {
     /// (before the healthy offsets are removed): see [`signatures_with`].
     fn raw_sizes(&self, e: &Estimate) -> [f64; 3] {
         signatures_with(leak_sizes_lpm(e), self.internal_factors)
-    }
-
-    /// The leak sizes of `e` for the warm-up's record, L/min at the nominal drop.
-    fn warmup_sample(&mut self, e: &Estimate) -> [f64; 3] {
-        self.warmup_pressures.push(e.state[1], e.state[2]);
-        leak_sizes_lpm(e)
     }
 
     fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {

@@ -29,6 +29,16 @@ pub fn run(
         cfg.model = model::ActuatorParams::vertical_lift();
     }
     let scenario = scenario.unwrap_or(if lift { "lift" } else { "loaded-sine" });
+    if lift {
+        let c = commission_lift(&cfg, seed)?;
+        outln!(
+            "  commissioned on {:.0} s of the healthy lift: the internal leak's pressure factors {:.3}/{:.3} (docs/plant.md)",
+            c.healthy_s,
+            c.internal_factors[0],
+            c.internal_factors[1]
+        );
+        cfg.classifier.commissioning = Some(c);
+    }
     crate::simulate::check_seconds(seconds, cfg.sim.sample_period_s)?;
     let rig = off_nominal_rig(&cfg.model);
     let specs: Vec<String> = if faults.is_empty() {
@@ -120,4 +130,32 @@ pub fn run(
         if leak_found { "detected" } else { "not detected" }
     );
     Ok(())
+}
+
+/// Seconds of healthy lift the lift demonstration commissions on.
+const LIFT_COMMISSIONING_S: f64 = 60.0;
+
+/// The lift's commissioning, as `leakwatch commission` would learn it: a minute
+/// of the healthy off-nominal rig (another seed) through the leak filter.
+fn commission_lift(cfg: &Config, seed: u64) -> Result<classifier::Commissioning, String> {
+    let rig = off_nominal_rig(&cfg.model);
+    let sc =
+        Scenario::by_name("lift", seed.wrapping_add(1), LIFT_COMMISSIONING_S).map_err(|e| e.to_string())?;
+    let mut sim = Simulator::new(
+        rig,
+        cfg.sensors,
+        cfg.sim,
+        sc,
+        FaultSchedule::default(),
+        seed.wrapping_add(1),
+    )
+    .map_err(|e| e.to_string())?;
+    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
+    let mut learner = classifier::CommissioningLearner::new(cfg.classifier.settle_s);
+    let n = (LIFT_COMMISSIONING_S / sim.sample_period_s()).round() as u64;
+    for _ in 0..n {
+        let s = sim.step();
+        learner.on_estimate(&stage.on_sample(&s).leak);
+    }
+    learner.finish(10.0, "the simulated healthy lift")
 }

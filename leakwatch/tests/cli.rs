@@ -1327,9 +1327,9 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
     assert!(last_frame < wall_after, "{last_frame} < {wall_after}");
 }
 
-/// `demo --rig lift`: the vertical single-rod lift, not commissioned. The
-/// detector's warm-up takes the internal leak's pressure factors itself, and an
-/// internal leak is raised and named.
+/// `demo --rig lift`: the vertical single-rod lift, commissioned first on a
+/// simulated healthy minute (negative pressure factors printed); an internal
+/// leak is raised and named.
 #[test]
 fn demo_runs_the_single_rod_lift_and_names_an_internal_leak() {
     let o = leakwatch(&[
@@ -1347,6 +1347,7 @@ fn demo_runs_the_single_rod_lift_and_names_an_internal_leak() {
         out.contains("lift (single-rod, vertical) rig, scenario lift"),
         "{out}"
     );
+    assert!(out.contains("the internal leak's pressure factors -0."), "{out}");
     let named: Vec<&str> = out
         .lines()
         .filter(|l| l.contains(" raised ") && !l.contains(" leak  "))

@@ -127,11 +127,11 @@ impl LeakSizeDetector {
                     self.arming = Arming::Learning(e.t_s);
                 }
                 Arming::Learning(_) if !blind => {
-                    let q = self.warmup_sample(e);
-                    self.record.push(e.t_s, dt_s, q, e.nis);
+                    // (A warm-up of seconds cannot tell whether p1 − p2 keeps its sign: the
+                    // internal leak's factors stay nominal without a commissioning. Taken
+                    // from a 5 s warm-up they raised a false alarm in the 30-hour suite.)
+                    self.record.push(e.t_s, dt_s, super::leak_sizes_lpm(e), e.nis);
                     if self.record.learned_s >= self.cfg.warmup_s {
-                        // The internal leak's factors from the warm-up's pressures.
-                        self.internal_factors = self.warmup_pressures.factors();
                         let (offsets, spreads, crossings) = self.record.summary(self.internal_factors);
                         self.nis_healthy = self.record.nis_mean();
                         self.arm_with(offsets, spreads, crossings, e.t_s);
