@@ -868,14 +868,21 @@ fn plot_draws_a_recorded_log() {
     assert!(stderr(&o).contains("wrote "), "{}", stderr(&o));
 }
 
-/// `simulate --scenario closed-loop-random` of the rig in `config` into `out`.
-fn simulate_random(config: &std::path::Path, seconds: &str, seed: &str, fault: &str, out: &std::path::Path) {
+/// `seconds` of `scenario` on the config `config`'s rig, with `fault`, to `out`.
+fn simulate_scenario(
+    scenario: &str,
+    config: &std::path::Path,
+    seconds: &str,
+    seed: &str,
+    fault: &str,
+    out: &std::path::Path,
+) {
     let o = leakwatch(&[
         "simulate",
         "--config",
         config.to_str().unwrap(),
         "--scenario",
-        "closed-loop-random",
+        scenario,
         "--seconds",
         seconds,
         "--seed",
@@ -886,6 +893,11 @@ fn simulate_random(config: &std::path::Path, seconds: &str, seed: &str, fault: &
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `simulate --scenario closed-loop-random` of the rig in `config` into `out`.
+fn simulate_random(config: &std::path::Path, seconds: &str, seed: &str, fault: &str, out: &std::path::Path) {
+    simulate_scenario("closed-loop-random", config, seconds, seed, fault, out);
 }
 
 /// `commission` identifies the spool's null bias on a healthy recording (the
@@ -1101,26 +1113,6 @@ fn bench_calibration_on_a_plant_folder_scores_the_identification() {
     assert!(gap[1].as_f64().unwrap() < 0.5 * gap[0].as_f64().unwrap(), "{r:#}");
 }
 
-/// `seconds` of the lift scenario on the config `config`'s rig, with `fault`, to `out`.
-fn simulate_lift(config: &std::path::Path, seconds: &str, seed: &str, fault: &str, out: &std::path::Path) {
-    let o = leakwatch(&[
-        "simulate",
-        "--scenario",
-        "lift",
-        "--seconds",
-        seconds,
-        "--seed",
-        seed,
-        "--fault",
-        fault,
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-}
-
 /// A vertical single-rod lift (`ActuatorParams::vertical_lift`: 2.0/1.2e-3 m²,
 /// 200 kg, matched valve) through the README's workflow: commissioned on a
 /// healthy minute, then one 0.3 L/min leak of each kind and a healthy run.
@@ -1135,7 +1127,7 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     cfg.insert("model".into(), toml::Value::try_from(&lift).unwrap());
     std::fs::write(d.join("datasheet.toml"), toml::to_string(&cfg).unwrap()).unwrap();
     let sheet = d.join("datasheet.toml");
-    simulate_lift(&sheet, "60", "11", "none", &d.join("commission_cold.csv"));
+    simulate_scenario("lift", &sheet, "60", "11", "none", &d.join("commission_cold.csv"));
     let runs = [
         ("run_000", "12", "ext1"),
         ("run_001", "13", "ext2"),
@@ -1158,7 +1150,7 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
                 ),
             )
         };
-        simulate_lift(&sheet, "50", seed, &fault, &dir.join("measured.csv"));
+        simulate_scenario("lift", &sheet, "50", seed, &fault, &dir.join("measured.csv"));
         std::fs::write(dir.join("truth.json"), truth).unwrap();
     }
     let out = d.join("scored");
