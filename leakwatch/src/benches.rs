@@ -308,8 +308,8 @@ fn identification_data(
     }
     eprintln!("identifying the rig on {}", recording.display());
     let t0 = std::time::Instant::now();
-    let id = crate::commission::identify_on(recording, &cfg)?;
-    let mech = crate::commission::mechanics_on(recording, &cfg);
+    let found = crate::commission::identify_on(recording, &cfg)?;
+    let (id, mech) = (found.rig, found.mechanics);
     let wall_s = t0.elapsed().as_secs_f64();
     let rig = read_json(&dir.join("truth_rig.json"))?;
     let rec = read_json(&dir.join("commission_cold.truth.json"))?;

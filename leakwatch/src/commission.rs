@@ -63,31 +63,38 @@ fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model
     }
 }
 
-/// The rod's mass and friction identified on the healthy recording `input`
-/// against `cfg`'s model (the flow balance's model: run it on the model
-/// [`identify_on`] corrected, or on the datasheet's; the force balance does not
-/// use the valve or the oil).
-pub fn mechanics_on(input: &Path, cfg: &Config) -> Result<identify::Mechanics, String> {
-    let rows = read_rows(input, cfg)?;
-    identify::identify_mechanics(&cfg.model, cfg.leak_filter.sample_period_s, &rows)
-        .map_err(|e| format!("{}: cannot identify the rod's mechanics: {e}", input.display()))
+/// What `identify` finds on one healthy recording: the flow balance's
+/// parameters, and the rod's mass and friction (or why not).
+pub struct Found {
+    /// Valve, oil and supply ([`identify::identify`]).
+    pub rig: identify::Identification,
+    /// Mass and friction ([`identify::identify_mechanics`]), or why they were not identified.
+    pub mechanics: Result<identify::Mechanics, String>,
 }
 
-/// The identification of the rig on the healthy recording `input` against `cfg`'s model.
-pub fn identify_on(input: &Path, cfg: &Config) -> Result<identify::Identification, String> {
+/// The identification of the rig on the healthy recording `input` against
+/// `cfg`'s model, both balances on the rows read once.
+pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
     let rows = read_rows(input, cfg)?;
+    let dt = cfg.leak_filter.sample_period_s;
     let noise = identify::SensorNoise {
         position_m: cfg.sensors.position_sigma_m(),
         pressure_pa: cfg.sensors.pressure_sigma_pa(),
     };
-    identify::identify(&cfg.model, cfg.leak_filter.sample_period_s, &rows, noise)
-        .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))
+    let rig = identify::identify(&cfg.model, dt, &rows, noise)
+        .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))?;
+    let mechanics = identify::identify_mechanics(&cfg.model, dt, &rows)
+        .map_err(|e| format!("{}: cannot identify the rod's mechanics: {e}", input.display()));
+    Ok(Found { rig, mechanics })
 }
 
 /// Identifies the valve's flow gains, null leakage and the oil's stiffness on
 /// `input` and puts them into the model (printing what was found).
 pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
-    let id = identify_on(input, cfg)?;
+    let Found {
+        rig: id,
+        mechanics: found_mechanics,
+    } = identify_on(input, cfg)?;
     let dt = cfg.leak_filter.sample_period_s;
     let m = &cfg.model;
     let (wa, wb) = m.area_gradients_m2_per_m();
@@ -153,7 +160,7 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
         )
     );
     let mut mechanics = None;
-    match mechanics_on(input, cfg) {
+    match found_mechanics {
         Ok(mech) => {
             let f = m.friction.extend();
             eprintln!(
