@@ -420,8 +420,23 @@ pub fn identify(
         sigma: fit.sigma[u],
     };
     let cl = estimate(&fit, C_L);
+    // The values of C_L this recording allows: within 5 σ of the estimate, not below 0.
+    let allowed = (
+        (cl.value - RESOLVED_SIGMAS * cl.sigma).max(0.0),
+        (cl.value + RESOLVED_SIGMAS * cl.sigma).max(0.0),
+    );
+    let kept = p.valve_null_leakage_m3_s_pa.clamp(allowed.0, allowed.1);
     let null_leakage = if cl.value > RESOLVED_SIGMAS * cl.sigma {
         Found::Identified(cl)
+    } else if kept != p.valve_null_leakage_m3_s_pa {
+        // Not resolved from zero, but the model's C_L (a catalogue's maximum, say)
+        // is outside what the recording allows: the nearest allowed value.
+        model[C_L] = kept;
+        fit = solve(&built, &cols, &model, w).ok_or_else(fail)?;
+        Found::Identified(Estimate {
+            value: kept,
+            sigma: cl.sigma,
+        })
     } else {
         // Not resolved: fitted again with the model's C_L.
         fit = solve(&built, &cols, &model, w).ok_or_else(fail)?;

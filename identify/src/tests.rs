@@ -125,6 +125,35 @@ fn double_rod_gain_bias_and_gaps() {
     assert!(id.gap_after_lpm < 3.0 * id.sensor_floor_lpm, "{id:?}");
 }
 
+/// A catalogue's maximum null leakage entered as the model's value, on a rig
+/// whose valve is critical-centre: the recording rejects it (the estimate is
+/// within noise of zero, the catalogue value far outside it), so the model's
+/// value falls to the nearest one the recording allows, 0; a model value the
+/// recording allows is left as it was.
+#[test]
+fn a_null_leakage_the_recording_rejects_is_lowered_to_what_it_allows() {
+    let rig = ActuatorParams::default();
+    let rows = record(&rig, "closed-loop-random", 60.0, 0);
+    // 0.3 L/min at supply
+    let catalogue = 0.3 / 60_000.0 / rig.supply_pressure_pa;
+    let model = ActuatorParams {
+        valve_null_leakage_m3_s_pa: catalogue,
+        ..rig.clone()
+    };
+    let id = identify(&model, 1e-3, &rows, noise()).expect("identified");
+    let cl = id.null_leakage_m3_s_pa.estimate().expect("bounded");
+    assert!(cl.value < 0.05 * catalogue, "{cl:?} (catalogue {catalogue:e})");
+    assert!(cl.value >= 0.0 && cl.sigma < 0.2 * catalogue, "{cl:?}");
+    assert_eq!(id.apply(&model).valve_null_leakage_m3_s_pa, cl.value);
+    // with C_L = 0 in the model nothing is claimed and nothing changes
+    let same = identify(&rig, 1e-3, &rows, noise()).expect("identified");
+    assert!(
+        matches!(same.null_leakage_m3_s_pa, Found::NotIdentifiable(_)),
+        "{same:?}"
+    );
+    assert_eq!(same.apply(&rig).valve_null_leakage_m3_s_pa, 0.0);
+}
+
 /// A rod that does not move cannot identify a valve: the error says so.
 #[test]
 fn a_hold_is_refused() {

@@ -6,15 +6,18 @@ use crate::out::{self, outln};
 
 /// `leakwatch calibrate`: calibrates the model of `config` (or the built-in one)
 /// against `input` (a CSV or a recorded log) and writes the outputs into `out`.
+/// With `identify`, or a config with a `[datasheet]`, the rig is identified on
+/// `input` first and the search starts from the identified model.
 pub fn run(
     input: &std::path::Path,
     config: Option<&std::path::Path>,
+    identify: bool,
     out: &std::path::Path,
     effects: Vec<String>,
     force: bool,
 ) -> Result<(), String> {
     let original = input;
-    let model = match config {
+    let mut model = match config {
         Some(p) => crate::model_file::load_model(p).map_err(|e| e.to_string())?,
         None => model::ActuatorParams::default(),
     };
@@ -27,6 +30,24 @@ pub fn run(
     } else {
         input.to_path_buf()
     };
+    let datasheet = config.is_some_and(crate::model_file::has_datasheet);
+    // a datasheet's sensors and noise go on into model.toml with the calibrated model
+    let mut whole = None;
+    if identify || datasheet {
+        // A datasheet's model is a prior within its tolerances: its values are
+        // identified first, so that the search names what the rig has beyond them.
+        let cfg = crate::config::Config::load_or_default(config)?;
+        match crate::commission::identify_rig(&input, &cfg) {
+            Ok(identified) => {
+                eprintln!("the search for missing effects starts from the identified model");
+                model = identified.model;
+            }
+            Err(e) => eprintln!("note: {e}; the search starts from the config's model"),
+        }
+        if datasheet {
+            whole = Some(cfg);
+        }
+    }
     let measured = calibrate::load_measured(&input).map_err(|e| e.to_string())?;
     let opts = calibrate::CalibrateOptions {
         candidates: effects,
@@ -59,7 +80,15 @@ pub fn run(
     }
     let mut inputs = vec![original, input.as_path()];
     inputs.extend(config);
-    let model_file = crate::model_file::model_toml(&cal.model_after).map_err(|e| e.to_string())?;
+    let model_file = match whole {
+        Some(cfg) => crate::model_file::config_toml(&crate::config::Config {
+            datasheet: None,
+            model: cal.model_after.clone(),
+            ..cfg
+        }),
+        None => crate::model_file::model_toml(&cal.model_after),
+    }
+    .map_err(|e| e.to_string())?;
     let files =
         calibrate::write_outputs(&cal, out, force, &inputs, &model_file).map_err(|e| e.to_string())?;
     let g = |gap: &calibrate::Gap| {

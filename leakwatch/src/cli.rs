@@ -190,8 +190,14 @@ pub(crate) enum Command {
         /// Measured data: CSV (t,u,x,p1,p2[,x_sp,f_load,...], also .csv.gz) or a recorded log (.mcap); u drives the model.
         input: PathBuf,
         /// Configuration whose [model] is the starting model (default: the built-in model).
+        /// A config with a [datasheet] is identified on INPUT first (as `commission` does)
+        /// and the search starts from the identified model.
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Identify the valve, the oil and the mechanics on INPUT first, also for a config
+        /// without a [datasheet] (one whose [model] was entered from datasheets by hand).
+        #[arg(long)]
+        identify: bool,
         /// Output directory: calibration.json, model.toml, report.md and plots.
         #[arg(long)]
         out: PathBuf,
@@ -279,6 +285,17 @@ pub(crate) enum Command {
         input: PathBuf,
         /// Output PNG.
         #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write a config to fill in with your rig's datasheet (`[datasheet]`: cylinder, hoses,
+    /// oil, valve, supply, transducers; each fact commented with its unit, docs/rig.md).
+    Init {
+        /// The example rig in the template is a vertical single-rod lift (default: a
+        /// horizontal double-rod cylinder).
+        #[arg(long)]
+        single_rod: bool,
+        /// The file to write.
+        #[arg(long, default_value = "leakwatch.toml")]
         out: PathBuf,
     },
     /// Show the configuration.

@@ -312,6 +312,8 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
 /// learns the commissioning with the bias held: the config to write.
 pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
     let mut cfg = identify_rig(input, cfg)?;
+    // the identified model is now the rig's; the datasheet it started from is not written again
+    cfg.datasheet = None;
     if cfg.leak_filter.states >= 11 {
         let bias = identify_null_bias(input, &cfg)?;
         eprintln!(
@@ -358,7 +360,8 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
     let text = format!(
         "# leakwatch configuration with the rig's commissioning (the healthy state of the leak\n\
          # filter's estimates, learned from {}; the spool's null bias identified there and\n\
-         # held by the leak filter).\n\
+         # held by the leak filter). [model] is the rig as identified there (from the\n\
+         # datasheet's values where the recording could not tell).\n\
          # Use it with: leakwatch replay RUN.csv --config {name} --out DIR\n\
          #              leakwatch run --config {name} ...\n\
          # A leak present when monitoring starts is then seen once the filter has converged.\n\

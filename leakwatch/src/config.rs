@@ -22,6 +22,10 @@ pub const WORKING_DIR_CONFIG: &str = "leakwatch.toml";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Config {
+    /// The rig in its datasheets' terms (docs/rig.md); when given, the rig facts
+    /// of `[model]`, `[sensors]` and `[leak_filter]` are derived from it
+    /// ([`model::datasheet::DERIVED_FIELDS`]) and are not written there.
+    pub datasheet: Option<model::Datasheet>,
     /// The actuator model the estimator and calibration believe in.
     pub model: ActuatorParams,
     /// The simulated rig's own parameters; when absent the rig equals `[model]`.
@@ -51,6 +55,7 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         let mut cfg = Config {
+            datasheet: None,
             model: ActuatorParams::default(),
             rig: None,
             sensors: SensorParams::default(),
@@ -127,19 +132,6 @@ impl Config {
         } else {
             Config::deserialize(stripped).map_err(ParseError::Toml)?
         };
-        cfg.derive_rig_facts();
-        for (key, given, from) in derived {
-            let used = match key {
-                "supply_pressure_pa" => cfg.classifier.supply_pressure_pa,
-                _ => cfg.classifier.pressure_full_scale_pa,
-            };
-            if given != used {
-                return Err(ParseError::Invalid(format!(
-                    "[classifier] {key} = {given:?} differs from {from} = {used:?}: the detector now takes \
-                     this rig fact from {from} (written once); remove the line from [classifier]"
-                )));
-            }
-        }
         // A partial [leak_filter] fills its missing fields from the leak filter's own
         // defaults (sensor-derived, 12 states), not from the thesis tuning that
         // `Tuning::default()` gives to a partial [estimator].
@@ -154,8 +146,69 @@ impl Config {
                 ParseError::Invalid(format!("[leak_filter] {}", dataset::escaped(&e.to_string())))
             })?;
         }
+        if let Some(sheet) = cfg.datasheet {
+            cfg.apply_datasheet(&sheet, &table).map_err(ParseError::Invalid)?;
+        }
+        cfg.derive_rig_facts();
+        for (key, given, from) in derived {
+            let used = match key {
+                "supply_pressure_pa" => cfg.classifier.supply_pressure_pa,
+                _ => cfg.classifier.pressure_full_scale_pa,
+            };
+            if given != used {
+                return Err(ParseError::Invalid(format!(
+                    "[classifier] {key} = {given:?} differs from {from} = {used:?}: the detector now takes \
+                     this rig fact from {from} (written once); remove the line from [classifier]"
+                )));
+            }
+        }
         cfg.validate().map_err(ParseError::Invalid)?;
         Ok(cfg)
+    }
+
+    /// Derives the rig facts of `[model]`, `[sensors]` and `[leak_filter]` from
+    /// `sheet`. `written` is the file's table: a derived field written there too
+    /// is refused unless it holds the derived value (a config this program
+    /// wrote, with its values spelled out, reads back).
+    fn apply_datasheet(&mut self, sheet: &model::Datasheet, written: &toml::Table) -> Result<(), String> {
+        sheet.validate().map_err(|e| format!("[datasheet] {e}"))?;
+        let mut derived = self.clone();
+        derived.model = sheet.model(&self.model);
+        derived.sensors = sheet.sensors(&self.sensors);
+        (derived.leak_filter.r_x_m2, derived.leak_filter.r_p_pa2) = sheet.measurement_noise();
+        let derived_table = toml::Table::try_from(&derived).map_err(|e| e.to_string())?;
+        let number = |v: Option<&toml::Value>| match v {
+            Some(toml::Value::Float(f)) => Some(*f),
+            Some(toml::Value::Integer(i)) => Some(*i as f64),
+            _ => None,
+        };
+        for (section, field, from) in model::datasheet::DERIVED_FIELDS {
+            let Some(given) = written
+                .get(section)
+                .and_then(|t| t.as_table())
+                .and_then(|t| t.get(field))
+            else {
+                continue;
+            };
+            let value = derived_table
+                .get(section)
+                .and_then(|t| t.as_table())
+                .and_then(|t| t.get(field));
+            let (given_n, value_n) = (number(Some(given)), number(value));
+            if given_n.is_none() || given_n != value_n {
+                let derived_text = value.map_or("none".to_string(), |v| v.to_string());
+                return Err(format!(
+                    "[{section}] {field} = {} is a rig fact the datasheet gives: [datasheet] {from} makes it {derived_text}. \
+                     Write it once: remove the line from [{section}] (or correct the datasheet)",
+                    dataset::shown(&given.to_string())
+                ));
+            }
+        }
+        self.model = derived.model;
+        self.sensors = derived.sensors;
+        self.leak_filter.r_x_m2 = derived.leak_filter.r_x_m2;
+        self.leak_filter.r_p_pa2 = derived.leak_filter.r_p_pa2;
+        Ok(())
     }
 
     /// Sets the detector's rig facts from where they are written: the supply

@@ -12,6 +12,7 @@ mod config_fuzz;
 mod demo;
 mod estimates_out;
 mod floors;
+mod init;
 mod latency;
 mod logs;
 mod model_file;
@@ -113,9 +114,17 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Calibrate {
             input,
             config,
+            identify,
             out,
             effects,
-        } => calibrate_cmd::run(&input, Config::pick(config).as_deref(), &out, effects, force),
+        } => calibrate_cmd::run(
+            &input,
+            Config::pick(config).as_deref(),
+            identify,
+            &out,
+            effects,
+            force,
+        ),
         Command::Replay {
             inputs,
             config,
@@ -157,6 +166,7 @@ fn run(cli: Cli) -> Result<(), String> {
             simulate::command(config, req, &out, force)
         }
         Command::Plot { input, out } => plots::command(&input, &out, force),
+        Command::Init { single_rod, out } => init::command(single_rod, &out, force),
         Command::Config { print_default, check } => {
             if let Some(path) = check {
                 let cfg = Config::load(&path)?;

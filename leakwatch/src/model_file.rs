@@ -10,7 +10,8 @@ use model::ActuatorParams;
 use serde::Serialize;
 
 /// Reads the `[model]` table of a leakwatch config file (other sections are
-/// ignored here); a missing table gives the default model. The model is validated.
+/// ignored here, except a `[datasheet]`, from which the model is derived); a
+/// missing table gives the default model. The model is validated.
 pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
     let err = |message: String| CalibrateError::ModelFile {
         path: path.to_path_buf(),
@@ -18,6 +19,11 @@ pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
     };
     let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
     let table: toml::Table = toml::from_str(&text).map_err(|e| err(format!("not valid TOML: {e}")))?;
+    if table.contains_key("datasheet") {
+        // the model's rig facts are derived from the datasheet: the whole config is read
+        let cfg = crate::config::Config::parse(&text).map_err(err)?;
+        return Ok(cfg.model);
+    }
     let params = match table.get("model") {
         Some(v) => {
             let t = toml::to_string(v).map_err(|e| err(e.to_string()))?;
@@ -27,6 +33,15 @@ pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
     };
     params.validate().map_err(|e| err(format!("[model] {e}")))?;
     Ok(params)
+}
+
+/// Whether the config file at `path` describes the rig by a `[datasheet]`
+/// (false for a file that cannot be read or parsed: loading it says why).
+pub fn has_datasheet(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| toml::from_str::<toml::Table>(&t).ok())
+        .is_some_and(|t| t.contains_key("datasheet"))
 }
 
 #[derive(Serialize)]
@@ -48,6 +63,19 @@ pub fn model_toml(params: &ActuatorParams) -> Result<String, CalibrateError> {
          #   leakwatch calibrate MEASURED.csv --config model.toml --out cal-out   (calibrate further)\n\
          # (the stage binaries take the same `--config model.toml`), or paste the [model]\n\
          # table into your own configuration file in place of its [model].\n\n{body}"
+    ))
+}
+
+/// A whole calibrated configuration as `model.toml` (written when the starting
+/// config described the rig by a `[datasheet]`: its sensors and noise are kept,
+/// the datasheet itself is not, its model being now the calibrated one).
+pub fn config_toml(cfg: &crate::config::Config) -> Result<String, CalibrateError> {
+    let body = toml::to_string(cfg).map_err(|e| CalibrateError::Serialize(e.to_string()))?;
+    Ok(format!(
+        "# Written by `leakwatch calibrate`: the configuration it started from (derived from its\n\
+         # [datasheet]) with the identified and calibrated [model] (SI units). Use it as it is:\n\
+         #   leakwatch commission HEALTHY.csv --config model.toml --out rig.toml\n\
+         #   leakwatch replay MEASURED.csv --config model.toml --out replay-out\n\n{body}"
     ))
 }
 

@@ -1122,9 +1122,21 @@ fn bench_calibration_on_a_plant_folder_scores_the_identification() {
 #[test]
 fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     let d = tmpdir("lift_folder");
+    // The lift described as a user would: its datasheet, and in [model] only
+    // what no datasheet gives (friction, damping, end stops).
     let lift = model::ActuatorParams::vertical_lift();
+    let mut rest = toml::Table::try_from(&lift).unwrap();
+    for (section, field, _) in model::datasheet::DERIVED_FIELDS {
+        if section == "model" {
+            rest.remove(field);
+        }
+    }
     let mut cfg = toml::Table::new();
-    cfg.insert("model".into(), toml::Value::try_from(&lift).unwrap());
+    cfg.insert(
+        "datasheet".into(),
+        toml::Value::try_from(model::Datasheet::vertical_lift()).unwrap(),
+    );
+    cfg.insert("model".into(), toml::Value::Table(rest));
     std::fs::write(d.join("datasheet.toml"), toml::to_string(&cfg).unwrap()).unwrap();
     let sheet = d.join("datasheet.toml");
     simulate_scenario("lift", &sheet, "60", "11", "none", &d.join("commission_cold.csv"));
@@ -1191,6 +1203,66 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     assert!(
         factors.len() == 2 && factors.iter().all(|r| (-1.0..-0.1).contains(r)),
         "{factors:?} in {err}"
+    );
+    // calibrate on a datasheet identifies first, then searches on top; its
+    // model.toml is a whole config without the datasheet, and it loads
+    let cal = d.join("cal");
+    let o = leakwatch(&[
+        "calibrate",
+        d.join("commission_cold.csv").to_str().unwrap(),
+        "--config",
+        sheet.to_str().unwrap(),
+        "--out",
+        cal.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("flow-balance gap")
+            && err.contains("the search for missing effects starts from the identified model"),
+        "{err}"
+    );
+    let written = std::fs::read_to_string(cal.join("model.toml")).unwrap();
+    assert!(
+        !written.lines().any(|l| l.starts_with("[datasheet")) && written.contains("adc_bits = 16"),
+        "{written}"
+    );
+    let o = leakwatch(&["config", "--check", cal.join("model.toml").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `init` writes a datasheet template that loads, and refuses to overwrite it.
+#[test]
+fn init_writes_a_datasheet_template_that_loads() {
+    let d = tmpdir("init");
+    let file = d.join("leakwatch.toml");
+    let o = leakwatch(&["init", "--single-rod", "--out", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(
+        text.contains("kind = \"single-rod\"") && text.contains("rated_flow_b_l_min = 18.0"),
+        "{text}"
+    );
+    let o = leakwatch(&["config", "--check", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let resolved = String::from_utf8_lossy(&o.stdout).to_string();
+    // the cap area of a 50 mm bore and the angle of a lift, derived
+    assert!(
+        resolved.contains("piston_area_m2 = 0.0019634954084936")
+            && resolved.contains("mounting_angle_rad = 1.5707963267948966"),
+        "{resolved}"
+    );
+    let o = leakwatch(&["init", "--out", file.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
+    // a fact written twice is refused, naming both places
+    std::fs::write(&file, text + "\n[model]\nmass_kg = 250.0\n").unwrap();
+    let o = leakwatch(&["config", "--check", file.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("[model] mass_kg") && err.contains("cylinder.moving_mass_kg"),
+        "{err}"
     );
 }
 

@@ -1,10 +1,11 @@
-//! Physics of a servovalve-driven double-rod hydraulic cylinder (MODEL.md):
-//! parameters, valve, chambers, friction, leakage laws and load; the
+//! Physics of a servovalve-driven hydraulic cylinder (MODEL.md), double-rod
+//! or single-rod: parameters (also from a rig's datasheet), valve, chambers, friction, leakage laws and load; the
 //! continuous dynamics; the simulated rig (RK4 with sub-steps, sensors,
 //! seeded noise, fault schedule); and the scenarios of the thesis.
 //!
 //! All quantities are SI (m, s, Pa, m³/s, N, V) unless a name says otherwise.
 
+pub mod datasheet;
 pub mod dynamics;
 pub mod fault;
 pub mod friction;
@@ -18,6 +19,7 @@ pub mod sensors;
 pub mod sim;
 pub mod units;
 
+pub use datasheet::Datasheet;
 pub use dynamics::{LeakSet, State};
 pub use fault::{Fault, FaultSchedule};
 pub use leakage::{LeakLaw, LeakPath};
