@@ -22,12 +22,29 @@ pub struct Throughput {
 
 /// A recorded scenario: `seconds` of the loaded sine with a leak at half time.
 pub fn recorded_samples(seconds: f64) -> Vec<Sample> {
-    let rig = ActuatorParams::default();
+    recorded_samples_on(&ActuatorParams::default(), "loaded-sine", seconds)
+}
+
+/// The plant model the second chain runs: the in-repo vertical lift (single-rod,
+/// gravity, a matched valve) with a valve null leakage of 0.1 L/min at supply
+/// and a supply that sags 0.3 MPa per L/s, so every term of the model is live.
+pub fn plant_model() -> ActuatorParams {
+    let lift = ActuatorParams::vertical_lift();
+    ActuatorParams {
+        valve_null_leakage_m3_s_pa: 0.1 / 60_000.0 / lift.supply_pressure_pa,
+        supply_sag_pa_per_m3_s: 3.0e8,
+        ..lift
+    }
+}
+
+/// `seconds` of `scenario` on `rig` with a 0.5 L/min chamber-1 leak from half time (seed 1).
+pub fn recorded_samples_on(rig: &ActuatorParams, scenario: &str, seconds: f64) -> Vec<Sample> {
+    let rig = rig.clone();
     let mut faults = FaultSchedule::default();
     if let Ok(f) = model::Fault::parse(&format!("ext1:0.5lpm@{}s", seconds / 2.0), &rig) {
         faults.faults.push(f);
     }
-    let sc = match Scenario::by_name("loaded-sine", 1, seconds) {
+    let sc = match Scenario::by_name(scenario, 1, seconds) {
         Ok(s) => s,
         Err(_) => return Vec::new(),
     };
@@ -124,15 +141,26 @@ pub fn step_time(
 
 /// Samples per second through the estimator stage (both filters) and the classifier, one core, in memory.
 pub fn chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
+    chain_throughput_on(
+        "estimator stage (12-state leak filter + 7-state thesis filter) + classifier",
+        &ActuatorParams::default(),
+        samples,
+        repeat,
+    )
+}
+
+/// [`chain_throughput`] with `model` in both filters, labelled `chain`.
+pub fn chain_throughput_on(
+    chain: &str,
+    model: &ActuatorParams,
+    samples: &[Sample],
+    repeat: u32,
+) -> Throughput {
     let mut n = 0u64;
     let mut events = 0usize;
     let t0 = Instant::now();
     for _ in 0..repeat.max(1) {
-        let mut stage = match EstimatorStage::new(
-            ActuatorParams::default(),
-            Tuning::sensor_derived(),
-            Tuning::thesis(),
-        ) {
+        let mut stage = match EstimatorStage::new(model.clone(), Tuning::sensor_derived(), Tuning::thesis()) {
             Ok(s) => s,
             Err(_) => break,
         };
@@ -149,7 +177,7 @@ pub fn chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
     std::hint::black_box(events);
     let wall = t0.elapsed().as_secs_f64();
     Throughput {
-        chain: "estimator stage (12-state leak filter + 7-state thesis filter) + classifier".into(),
+        chain: chain.into(),
         samples: n,
         wall_s: wall,
         samples_per_s: n as f64 / wall.max(1e-12),

@@ -135,18 +135,29 @@ pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> 
         );
     }
     let tp = speed::chain_throughput(&samples, 5);
-    outln!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
-    outln!(
-        "| {} | {} | {:.3} | {:.0} |",
-        tp.chain,
-        tp.samples,
-        tp.wall_s,
-        tp.samples_per_s
+    let plant = speed::plant_model();
+    let plant_samples = speed::recorded_samples_on(&plant, "lift", 60.0);
+    let tp_plant = speed::chain_throughput_on(
+        "the same on the plant model (single-rod lift, gravity, null leakage, supply sag)",
+        &plant,
+        &plant_samples,
+        5,
     );
+    outln!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
+    for t in [&tp, &tp_plant] {
+        outln!(
+            "| {} | {} | {:.3} | {:.0} |",
+            t.chain,
+            t.samples,
+            t.wall_s,
+            t.samples_per_s
+        );
+    }
     let json = serde_json::json!({
         "step_time": rows,
         "timing": "per step (std::time::Instant around each predict + update; figures include timer_overhead_ns)",
         "throughput": tp,
+        "throughput_plant": tp_plant,
     });
     match out {
         Some(dir) => write_json(&dir, "ekf.json", &json, force),

@@ -159,6 +159,12 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.supply_sag_pa_per_m3_s
         )
     );
+    // what this recording cannot tell apart, said rather than guessed
+    eprintln!(
+        "  transducer offsets: not separable from this recording: the flow balance uses pressure \
+         changes (an offset cancels); in the force balance an offset difference reads as a static \
+         load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them"
+    );
     let mut mechanics = None;
     match found_mechanics {
         Ok(mech) => {
