@@ -159,6 +159,17 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.supply_sag_pa_per_m3_s
         )
     );
+    eprintln!(
+        "{}",
+        found_line(
+            "spool -90° frequency",
+            &id.spool_natural_freq_rad_s
+                .scaled(1.0 / (2.0 * std::f64::consts::PI)),
+            "Hz",
+            1.0,
+            m.spool_natural_freq_rad_s / (2.0 * std::f64::consts::PI)
+        )
+    );
     // what this recording cannot tell apart, said rather than guessed
     eprintln!(
         "  transducer offsets: not separable from this recording: the flow balance uses pressure \
