@@ -289,6 +289,9 @@ pub(crate) enum Command {
         /// Check a configuration file and print it with every default filled in.
         #[arg(long)]
         check: Option<PathBuf>,
+        /// Print the configuration reference in Markdown: per section, each field's unit, range, default and meaning (docs/config.md).
+        #[arg(long)]
+        reference: bool,
     },
     /// Benchmarks (they print a table and write JSON).
     Bench {
