@@ -159,11 +159,12 @@ fn first_sentence(doc: &str) -> String {
         match c {
             '(' => depth += 1,
             ')' => depth -= 1,
-            '.' if depth == 0 && doc[i + 1..].starts_with(' ') => {
-                if doc[i + 2..].chars().next().is_some_and(char::is_uppercase) {
-                    end = i + 1;
-                    break;
-                }
+            '.' if depth == 0
+                && doc[i + 1..].starts_with(' ')
+                && doc[i + 2..].chars().next().is_some_and(char::is_uppercase) =>
+            {
+                end = i + 1;
+                break;
             }
             _ => {}
         }
@@ -428,7 +429,7 @@ pub fn reference_markdown() -> Result<String, String> {
         if !is_struct(inner) {
             return Err(format!("Config::{} is not a section (type {})", f.name, f.ty));
         }
-        w.section(&[f.name.clone()], inner, &f.doc, opt)?;
+        w.section(std::slice::from_ref(&f.name), inner, &f.doc, opt)?;
     }
     Ok(w.out.trim_end().to_string() + "\n")
 }
