@@ -75,7 +75,7 @@ pub(crate) enum Command {
     /// iceoryx2. Without a fault or a config (with or without `--scenario loaded-sine`): the
     /// demonstration, an off-nominal rig with a 0.5 L/min chamber-1 leak at 20 s, events printed
     /// as they happen. With `--source udp://IP:PORT` the samples are a real rig's UDP sensor
-    /// stream instead (README "On a real rig"). Every argument is checked before any stage starts.
+    /// stream instead (docs/live.md, "A real rig's input"). Every argument is checked before any stage starts.
     Run {
         /// Simulated seconds (default 40).
         #[arg(long)]
@@ -306,6 +306,9 @@ pub(crate) enum Command {
         /// Check a configuration file and print it with every default filled in.
         #[arg(long)]
         check: Option<PathBuf>,
+        /// Print the configuration reference in Markdown: per section, each field's unit, range, default and meaning (docs/config.md).
+        #[arg(long)]
+        reference: bool,
     },
     /// Benchmarks (they print a table and write JSON).
     Bench {

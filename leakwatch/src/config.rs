@@ -11,7 +11,9 @@ use model::sensors::SensorParams;
 use model::sim::SimSettings;
 use serde::{Deserialize, Serialize};
 
+mod reference;
 mod run_settings;
+pub use reference::reference_markdown;
 pub use run_settings::RunSettings;
 
 /// The config file `run`, `replay`, `simulate`, `calibrate` and `commission` pick
@@ -339,43 +341,108 @@ pub fn range_hint(e: &toml::de::Error) -> String {
     if path.first() == Some(&"rig") {
         path[0] = "model"; // [rig] has [model]'s fields and ranges (not in the default config)
     }
-    let Ok(base) = toml::Table::try_from(Config::default()) else {
-        return String::new();
+    // only a field the default config has (an optional one has no type to name)
+    match toml::Table::try_from(Config::default()) {
+        Ok(base) if leaf(&base, &path).is_some() => {}
+        _ => return String::new(),
+    }
+    match probe_range(&path) {
+        Some((Probe::Integer, r)) => format!(" (`{keys}` must be an integer: {r})"),
+        Some((Probe::Number, r)) if r.starts_with("a number ") => format!(" (`{keys}` must be {r})"),
+        Some((Probe::Number, r)) => format!(" (`{keys}` must be a number: {r})"),
+        _ => String::new(),
+    }
+}
+
+/// What kind of value [`probe_range`] tried in a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Probe {
+    /// A floating-point number (tried: NaN).
+    Number,
+    /// An integer (tried: 0, then the largest u8, u16, u32).
+    Integer,
+    /// Text or a choice of names (tried: `"?"`, and `["?"]` for a list).
+    Text,
+}
+
+/// The range of the config field at `path` (`["model", "mass_kg"]`) as its
+/// own validation states it (`a mass from 1e-3 to 1e5 kg`), with the kind of
+/// value tried; `None` when no value outside every range is refused by name.
+///
+/// The field is set, in the default config, to values outside every range
+/// (NaN for a number; 0, then the largest u8, u16, u32 for an integer; `"?"`
+/// for text or a name) until the validation, or the parser for a choice of
+/// names, refuses it by name. So a range is written once, where it is checked.
+/// A field of an optional section that is absent by default (`[rig]`,
+/// `[model.friction.retract]`) is tried with that section given empty;
+/// `[rig]` has `[model]`'s fields and ranges.
+pub fn probe_range(path: &[&str]) -> Option<(Probe, String)> {
+    let mut path: Vec<&str> = path.to_vec();
+    if path.first() == Some(&"rig") {
+        path[0] = "model"; // [rig] has [model]'s fields and ranges (not in the default config)
+    }
+    let (last, parents) = path.split_last()?;
+    // [datasheet] has required fields: probed in the example `leakwatch init` writes
+    let datasheet = (path.first() == Some(&"datasheet")).then(|| crate::init::example(false));
+    let mut base = toml::Table::try_from(Config {
+        datasheet,
+        ..Config::default()
+    })
+    .ok()?;
+    // an optional section absent by default is given empty (its fields then take their defaults)
+    let mut t = &mut base;
+    for key in parents {
+        t = t
+            .entry(key.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()?;
+    }
+    let given = match t.get(*last) {
+        Some(v) => v.clone(),
+        // an optional field absent by default: its kind from a config that has it
+        None => toml::Value::Float(0.0),
     };
-    let (integer, candidates) = match leaf(&base, &path) {
-        Some(toml::Value::Integer(_)) => (
-            true,
+    let (kind, candidates) = match given {
+        toml::Value::Integer(_) => (
+            Probe::Integer,
             [0, 255, 65_535, 4_294_967_295].map(toml::Value::Integer).to_vec(),
         ),
-        Some(toml::Value::Float(_)) => (false, vec![toml::Value::Float(f64::NAN)]),
-        _ => return String::new(),
+        toml::Value::Float(_) => (Probe::Number, vec![toml::Value::Float(f64::NAN)]),
+        toml::Value::String(_) => (Probe::Text, vec![toml::Value::String("?".into())]),
+        toml::Value::Array(_) => (
+            Probe::Text,
+            vec![toml::Value::Array(vec![toml::Value::String("?".into())])],
+        ),
+        _ => return None,
     };
-    let last = path[path.len() - 1];
     for v in candidates {
         let mut t = base.clone();
-        if let Some(slot) = leaf_mut(&mut t, &path) {
-            *slot = v;
+        if let Some(section) = leaf_mut(&mut t, parents).and_then(|s| s.as_table_mut()) {
+            section.insert(last.to_string(), v);
+        } else if parents.is_empty() {
+            t.insert(last.to_string(), v);
         }
         let Ok(text) = toml::to_string(&t) else { continue };
-        let Err(ParseError::Invalid(msg)) = Config::parse_or_toml_error(&text) else {
-            continue;
+        let range = match Config::parse_or_toml_error(&text) {
+            Err(ParseError::Invalid(msg))
+                if msg.contains(&format!("{last}` =")) || msg.contains(&format!("{last} =")) =>
+            {
+                msg.split_once("is invalid: expected ")
+                    .or_else(|| msg.split_once(": must be "))
+                    .map(|(_, r)| r.to_string())
+            }
+            // a choice of names: the parser lists them (`unknown variant `?`, expected ...`)
+            Err(ParseError::Toml(e)) if kind == Probe::Text => e
+                .message()
+                .split_once("expected ")
+                .map(|(_, r)| r.trim().to_string()),
+            _ => None,
         };
-        if !(msg.contains(&format!("{last}` =")) || msg.contains(&format!("{last} ="))) {
-            continue;
-        }
-        let range = msg
-            .split_once("is invalid: expected ")
-            .or_else(|| msg.split_once(": must be "))
-            .map(|(_, r)| r);
-        let path = keys;
-        match range {
-            Some(r) if !integer && r.starts_with("a number ") => return format!(" (`{path}` must be {r})"),
-            Some(r) if integer => return format!(" (`{path}` must be an integer: {r})"),
-            Some(r) => return format!(" (`{path}` must be a number: {r})"),
-            None => {}
+        if let Some(r) = range {
+            return Some((kind, r));
         }
     }
-    String::new()
+    None
 }
 
 fn leaf<'a>(t: &'a toml::Table, path: &[&str]) -> Option<&'a toml::Value> {

@@ -167,14 +167,20 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Plot { input, out } => plots::command(&input, &out, force),
         Command::Init { single_rod, out } => init::command(single_rod, &out, force),
-        Command::Config { print_default, check } => {
+        Command::Config {
+            print_default,
+            check,
+            reference,
+        } => {
             if let Some(path) = check {
                 let cfg = Config::load(&path)?;
                 out::stdout(&toml::to_string(&cfg).map_err(|e| e.to_string())?)
             } else if print_default {
                 out::stdout(&Config::default_toml())
+            } else if reference {
+                out::stdout(&config::reference_markdown()?)
             } else {
-                Err("nothing to do: use --print-default or --check FILE".into())
+                Err("nothing to do: use --print-default, --reference or --check FILE".into())
             }
         }
         Command::Bench { which } => match which {

@@ -205,7 +205,7 @@ impl Datasheet {
             c.rod_m,
             0.0,
             0.99 * c.bore_m,
-            "a rod diameter from 0 m to 0.99 of the bore",
+            "a rod diameter below 0.99 of the bore: from 0 m",
         )?;
         if c.kind == CylinderKind::DoubleRod {
             check(
@@ -213,7 +213,7 @@ impl Datasheet {
                 c.rod_m,
                 1e-4,
                 0.99 * c.bore_m,
-                "a rod diameter from 1e-4 m to 0.99 of the bore (a double-rod cylinder has a rod)",
+                "a rod diameter below 0.99 of the bore: from 1e-4 m (a double-rod cylinder has a rod)",
             )?;
         }
         check(
