@@ -135,6 +135,13 @@ pub fn score(
         &id.supply_sag_pa_per_m3_s,
         sag_true,
     ));
+    params.push(row(
+        "spool -90° frequency (Hz)",
+        1.0 / (2.0 * std::f64::consts::PI),
+        model.spool_natural_freq_rad_s,
+        &id.spool_natural_freq_rad_s,
+        p.and_then(|p| num(p, &["omega_n"])),
+    ));
     if let Some(m) = mechanics {
         // The generator's factors at the recording's temperature, where it wrote them.
         let factor = |key: &str| {
