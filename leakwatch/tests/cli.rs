@@ -652,6 +652,30 @@ fn run_refuses_bad_arguments_before_starting_anything() {
     }
 }
 
+/// `run` without `--out` writes into a new folder named by its start time,
+/// so the README's first command runs again without `--force`.
+#[test]
+fn run_without_out_writes_a_new_folder_each_time() {
+    let dir = tmpdir("run-default-out");
+    for _ in 0..2 {
+        let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+            .args(["run", "--seconds", "1", "--fault", "none", "--rig", "dflt"])
+            .current_dir(&*dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string() + &String::from_utf8_lossy(&o.stdout);
+        // a 1 s run ends before the detector arms: exit 3, said, not an error of the folder
+        assert!(!err.contains("exists"), "{err}");
+        assert!(err.contains("output leakwatch-run/20"), "{err}");
+    }
+    let runs: Vec<_> = std::fs::read_dir(dir.join("leakwatch-run"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().join("events.json").is_file())
+        .collect();
+    assert_eq!(runs.len(), 2, "{runs:?}");
+}
+
 #[test]
 fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
     let d = tmpdir("repair");

@@ -371,7 +371,7 @@ fn human_bytes(bytes: u64) -> String {
 }
 
 /// Nanoseconds since the Unix epoch as `YYYY-MM-DD hh:mm:ss.mmm UTC`.
-fn utc(ns: i128) -> String {
+pub fn utc(ns: i128) -> String {
     let ms = ns.div_euclid(1_000_000);
     let (days, ms_of_day) = (ms.div_euclid(86_400_000), ms.rem_euclid(86_400_000));
     // civil date of a day count (H. Hinnant's algorithm)

@@ -66,7 +66,10 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             None
         }
     };
-    let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from("leakwatch-run"));
+    let out_dir = match &args.out {
+        Some(dir) => dir.clone(),
+        None => default_out_dir(),
+    };
     crate::out::dir(&out_dir)?;
     // An earlier run's outputs are replaced only with --force; refused before anything starts.
     let mut outputs: Vec<String> = ["config.toml", "events.json", "latency.json", "run.mcap"]
@@ -622,4 +625,31 @@ fn live_stages(
         crate::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
     }
     Ok(stages)
+}
+
+/// Where a run without `--out` writes: `leakwatch-run/<UTC start time>`
+/// (`2026-11-26_17-50-03`, as rosbag2 names a recording by its start), so a
+/// second run never collides with the first; `-2`, `-3`, ... within one second.
+fn default_out_dir() -> PathBuf {
+    let ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as i128);
+    // "YYYY-MM-DD hh:mm:ss.mmm UTC" -> "YYYY-MM-DD_hh-mm-ss"
+    let stamp: String = recorder::info::utc(ns)
+        .chars()
+        .take(19)
+        .map(|c| match c {
+            ' ' => '_',
+            ':' => '-',
+            c => c,
+        })
+        .collect();
+    let base = Path::new("leakwatch-run");
+    let mut dir = base.join(&stamp);
+    let mut n = 2;
+    while dir.exists() {
+        dir = base.join(format!("{stamp}-{n}"));
+        n += 1;
+    }
+    dir
 }
