@@ -98,7 +98,7 @@ pub(crate) enum Command {
         /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
         #[arg(long)]
         thesis_baseline: bool,
-        /// Output directory (default ./leakwatch-run/<UTC start time>, e.g. leakwatch-run/2026-11-26_17-50-03).
+        /// Output directory (default ./leakwatch-run-YYYYMMDD-HHMMSS, its UTC start time: a new folder each run).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Where samples come from: `sim` (the simulated rig, default) or `udp://IP:PORT`, a

@@ -17,7 +17,7 @@ pub struct RunArgs {
     pub config: Option<PathBuf>,
     /// Wait mode of the stages: event, low-latency or busy-poll.
     pub mode: String,
-    /// Output directory (default ./leakwatch-run/<UTC start time>, e.g. leakwatch-run/2026-11-26_17-50-03).
+    /// Output directory (default ./leakwatch-run-YYYYMMDD-HHMMSS, its UTC start time: a new folder each run).
     pub out: Option<PathBuf>,
     /// Also report the thesis' MAE baseline detector's decisions.
     pub thesis_baseline: bool,

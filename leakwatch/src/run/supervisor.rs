@@ -627,28 +627,24 @@ fn live_stages(
     Ok(stages)
 }
 
-/// Where a run without `--out` writes: `leakwatch-run/<UTC start time>`
-/// (`2026-11-26_17-50-03`, as rosbag2 names a recording by its start), so a
-/// second run never collides with the first; `-2`, `-3`, ... within one second.
+/// Where a run without `--out` writes: `leakwatch-run-YYYYMMDD-HHMMSS` (its
+/// UTC start time, as rosbag2 names a recording by its start), so a second run
+/// never collides with the first; `-2`, `-3`, ... within one second.
 fn default_out_dir() -> PathBuf {
     let ns = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_nanos() as i128);
-    // "YYYY-MM-DD hh:mm:ss.mmm UTC" -> "YYYY-MM-DD_hh-mm-ss"
-    let stamp: String = recorder::info::utc(ns)
+    // "YYYY-MM-DD hh:mm:ss.mmm UTC" -> "YYYYMMDD-hhmmss"
+    let digits: String = recorder::info::utc(ns)
         .chars()
         .take(19)
-        .map(|c| match c {
-            ' ' => '_',
-            ':' => '-',
-            c => c,
-        })
+        .filter(char::is_ascii_digit)
         .collect();
-    let base = Path::new("leakwatch-run");
-    let mut dir = base.join(&stamp);
+    let stamp = format!("leakwatch-run-{}-{}", &digits[..8], &digits[8..]);
+    let mut dir = PathBuf::from(&stamp);
     let mut n = 2;
     while dir.exists() {
-        dir = base.join(format!("{stamp}-{n}"));
+        dir = PathBuf::from(format!("{stamp}-{n}"));
         n += 1;
     }
     dir
