@@ -1310,9 +1310,10 @@ with AnyReader([Path(sys.argv[1])]) as reader:
     print(json.dumps(out))
 "#;
 
-/// A real run's log opens in `rosbags` as a rosbag2 file: every channel's
-/// message count and every frame's p1 equal `leakwatch export`'s CSV, bit for
-/// bit, and its times are the wall clock of the run (Unix time, ns).
+/// A real run's log opens in `rosbags` as a rosbag2 file, and its folder as a
+/// rosbag2 bag: every channel's message count and every frame's p1 equal
+/// `leakwatch export`'s CSV, bit for bit, and its times are the wall clock of
+/// the run (Unix time, ns).
 #[test]
 fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
     let has = Command::new("python3")
@@ -1414,6 +1415,15 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
     );
     let last_frame = got.last().and_then(|g| g[2].as_u64()).expect("a time");
     assert!(last_frame < wall_after, "{last_frame} < {wall_after}");
+    // the run's folder opens as a rosbag2 bag too (its metadata.yaml), with the same content
+    let o = Command::new("python3")
+        .args(["-c", ROSBAGS_SCRIPT])
+        .arg(&run)
+        .output()
+        .expect("python3 runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let folder: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(folder, r, "the folder reads as the file");
 }
 
 /// `demo --rig lift`: the vertical single-rod lift, commissioned first on a

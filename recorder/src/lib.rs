@@ -33,6 +33,7 @@ mod reader;
 pub mod record;
 mod repair;
 pub mod resume;
+pub mod rosbag2;
 pub mod shell;
 mod writer;
 

@@ -72,9 +72,15 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     };
     crate::out::dir(&out_dir)?;
     // An earlier run's outputs are replaced only with --force; refused before anything starts.
-    let mut outputs: Vec<String> = ["config.toml", "events.json", "latency.json", "run.mcap"]
-        .map(String::from)
-        .into();
+    let mut outputs: Vec<String> = [
+        "config.toml",
+        "events.json",
+        "latency.json",
+        "run.mcap",
+        "metadata.yaml",
+    ]
+    .map(String::from)
+    .into();
     outputs.extend(processes.iter().map(|n| format!("{n}.log")));
     // an earlier run's further log parts (its recorder was restarted): a restarted
     // recorder of this run must not find them in its way
@@ -526,6 +532,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         |path, force| crate::out::write(path, text.as_bytes(), force, &inputs),
         args.force,
     );
+    write_bag_metadata(&out_dir, args.force, &inputs);
     drop(events_rx);
     drop(stats_rx);
     drop(frames_rx);
@@ -648,4 +655,24 @@ fn default_out_dir() -> PathBuf {
         n += 1;
     }
     dir
+}
+
+/// Writes the rosbag2 `metadata.yaml` beside the run's log, so that rosbag2
+/// readers open the run's folder as a bag (`ros2 bag info DIR`, `rosbags`).
+/// A log that cannot be read or a file that cannot be written is said on
+/// stderr; the run's other outputs stand.
+fn write_bag_metadata(out_dir: &Path, force: bool, inputs: &[&Path]) {
+    let log = out_dir.join("run.mcap");
+    if !log.is_file() {
+        return;
+    }
+    let written = crate::logs::read_log(&log).and_then(|(l, parts, bytes)| {
+        let mut info = recorder::Info::from_log(&log, bytes, &l);
+        info.later_parts = parts.into_iter().skip(1).collect();
+        let text = recorder::rosbag2::metadata_yaml(&info);
+        crate::out::write(&out_dir.join("metadata.yaml"), text.as_bytes(), force, inputs)
+    });
+    if let Err(e) = written {
+        eprintln!("leakwatch run: no rosbag2 metadata.yaml beside the log: {e}");
+    }
 }
