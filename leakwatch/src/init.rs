@@ -77,6 +77,9 @@ fn num(v: f64) -> String {
     }
 }
 
+/// One line of the template: key, value (empty: commented out), comment.
+type Line = (&'static str, String, &'static str);
+
 /// The template: `sheet` as a `[datasheet]` with one comment per fact.
 pub fn template(sheet: &Datasheet) -> String {
     let c = &sheet.cylinder;
@@ -100,7 +103,7 @@ pub fn template(sheet: &Datasheet) -> String {
          # Check it:  leakwatch config --check leakwatch.toml\n\
          # Then:      leakwatch commission HEALTHY.csv --config leakwatch.toml --out rig.toml\n",
     );
-    let sections: [(&str, Vec<(&str, String, &str)>); 7] = [
+    let sections: [(&str, Vec<Line>); 7] = [
         (
             "cylinder",
             vec![

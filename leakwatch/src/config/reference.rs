@@ -77,6 +77,30 @@ struct StructDoc {
     fields: Vec<Field>,
 }
 
+/// The settings a user sets first, with why; each is in its section's table below.
+pub const FIRST: [(&str, &str); 5] = [
+    (
+        "`[datasheet]`",
+        "your rig in its datasheets' terms; the model, the sensors and the filters' noise are derived from it ([rig.md](rig.md)).",
+    ),
+    (
+        "`[classifier] false_alarms_per_hour`",
+        "the false-alarm rate you accept; the detector's thresholds follow from it and the healthy spreads commissioning learns.",
+    ),
+    (
+        "`[classifier] min_size_lpm`, `min_internal_size_lpm`",
+        "the smallest leak ever declared, external and internal.",
+    ),
+    (
+        "`[udp] sender`, `[udp.<channel>] gain`, `offset`",
+        "a real rig's stream: the only device that may send, and its raw values to SI.",
+    ),
+    (
+        "`[live_view] enabled`, `[zenoh] enabled`",
+        "watching from Foxglove on this PC, or from another PC with `leakwatch watch`.",
+    ),
+];
+
 /// The struct `name` from [`SOURCES`], or why not.
 fn find_struct(name: &str) -> Result<StructDoc, String> {
     for (file, text) in SOURCES {
@@ -427,6 +451,11 @@ pub fn reference_markdown() -> Result<String, String> {
          Do not edit it; regenerate it with `{REGENERATE}`.\n\
          A test (`leakwatch/tests/reference.rs`) fails when it differs from what the command prints.\n\n"
     ));
+    w.out.push_str("## The five that matter first\n\n");
+    for (fields, why) in FIRST {
+        w.out.push_str(&format!("- {fields}: {why}\n"));
+    }
+    w.out.push('\n');
     let config = find_struct("Config")?;
     for f in &config.fields {
         let (opt, inner) = unwrap_option(&f.ty);
@@ -441,6 +470,23 @@ pub fn reference_markdown() -> Result<String, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_five_first_are_fields_of_the_reference() {
+        let page = reference_markdown().expect("the reference");
+        for (fields, _) in FIRST {
+            for name in fields.split('`').skip(1).step_by(2) {
+                // `[section] field` or `field`: the field's own row, or the section's heading
+                let field = name.rsplit(' ').next().unwrap_or(name);
+                let found = if field.starts_with('[') {
+                    page.contains(&format!("## {field}"))
+                } else {
+                    page.contains(&format!("| `{field}` |"))
+                };
+                assert!(found, "{name} of the five first is not in the reference");
+            }
+        }
+    }
 
     #[test]
     fn a_field_has_its_unit_range_default_and_meaning() {
