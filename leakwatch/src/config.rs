@@ -409,6 +409,14 @@ pub fn probe_range(path: &[&str]) -> Option<(Probe, String)> {
         ),
         toml::Value::Float(_) => (Probe::Number, vec![toml::Value::Float(f64::NAN)]),
         toml::Value::String(_) => (Probe::Text, vec![toml::Value::String("?".into())]),
+        // numbers per channel: each NaN
+        toml::Value::Array(items) if items.iter().all(|v| v.is_float()) && !items.is_empty() => (
+            Probe::Number,
+            vec![toml::Value::Array(vec![
+                toml::Value::Float(f64::NAN);
+                items.len()
+            ])],
+        ),
         toml::Value::Array(_) => (
             Probe::Text,
             vec![toml::Value::Array(vec![toml::Value::String("?".into())])],

@@ -1148,7 +1148,7 @@ fn bench_calibration_on_a_plant_folder_scores_the_identification() {
 fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     let d = tmpdir("lift_folder");
     // The lift described as a user would: its datasheet, and in [model] only
-    // what no datasheet gives (friction, damping, end stops).
+    // what no datasheet gives (friction, damping, end stops); installed as a plant's is.
     let lift = model::ActuatorParams::vertical_lift();
     let mut rest = toml::Table::try_from(&lift).unwrap();
     for (section, field, _) in model::datasheet::DERIVED_FIELDS {
@@ -1162,6 +1162,15 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
         toml::Value::try_from(model::Datasheet::vertical_lift()).unwrap(),
     );
     cfg.insert("model".into(), toml::Value::Table(rest));
+    // and what an installation adds (the simulated rig's sensors; the model has none
+    // of it): transducers at the valve manifold (0.15 MPa at 50 L/min), lagging
+    // 0.5 ms, with offsets and span errors
+    let installation: toml::Table = toml::from_str(
+        "line_resistance_pa_s_per_m3 = 1.8e8\npressure_lag_s = 5e-4\n\
+         pressure_offset_pa = [30e3, -20e3]\npressure_gain_error = [0.004, -0.003]\n",
+    )
+    .unwrap();
+    cfg.insert("sensors".into(), toml::Value::Table(installation));
     std::fs::write(d.join("datasheet.toml"), toml::to_string(&cfg).unwrap()).unwrap();
     let sheet = d.join("datasheet.toml");
     simulate_scenario("lift", &sheet, "60", "11", "none", &d.join("commission_cold.csv"));

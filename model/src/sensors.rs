@@ -27,6 +27,17 @@ pub struct SensorParams {
     pub load_cell_noise_n: f64,
     /// Whether to add noise and quantisation at all (false gives the true states).
     pub enabled: bool,
+    /// Zero offsets of the p1 and p2 transducers, Pa (an installation's; 0 by default).
+    pub pressure_offset_pa: [f64; 2],
+    /// Span errors of the p1 and p2 transducers, relative (0.005: reads 0.5 % high).
+    pub pressure_gain_error: [f64; 2],
+    /// Time constant of both transducers' first-order lag, s (0: none), applied
+    /// to the pressures at the sample rate.
+    pub pressure_lag_s: f64,
+    /// Laminar resistance of the line between the valve manifold, where the
+    /// transducers sit, and each chamber, Pa/(m³/s) (0: transducers at the
+    /// cylinder ports): the manifold reads p1 + R·Q1 and p2 − R·Q2, Q the valve's flows.
+    pub line_resistance_pa_s_per_m3: f64,
 }
 
 impl Default for SensorParams {
@@ -41,6 +52,10 @@ impl Default for SensorParams {
             load_cell_full_scale_n: 22.0e3,
             load_cell_noise_n: 5.0,
             enabled: true,
+            pressure_offset_pa: [0.0; 2],
+            pressure_gain_error: [0.0; 2],
+            pressure_lag_s: 0.0,
+            line_resistance_pa_s_per_m3: 0.0,
         }
     }
 }
@@ -112,6 +127,55 @@ impl SensorParams {
                 return Err(bad(name, v, expected));
             }
         }
+        let installation: [(&str, f64, f64, f64, &'static str); 6] = [
+            (
+                "pressure_offset_pa",
+                self.pressure_offset_pa[0],
+                -1e7,
+                1e7,
+                "offsets from -1e7 to 1e7 Pa",
+            ),
+            (
+                "pressure_offset_pa",
+                self.pressure_offset_pa[1],
+                -1e7,
+                1e7,
+                "offsets from -1e7 to 1e7 Pa",
+            ),
+            (
+                "pressure_gain_error",
+                self.pressure_gain_error[0],
+                -0.5,
+                0.5,
+                "span errors from -0.5 to 0.5",
+            ),
+            (
+                "pressure_gain_error",
+                self.pressure_gain_error[1],
+                -0.5,
+                0.5,
+                "span errors from -0.5 to 0.5",
+            ),
+            (
+                "pressure_lag_s",
+                self.pressure_lag_s,
+                0.0,
+                1.0,
+                "a time constant from 0 to 1 s",
+            ),
+            (
+                "line_resistance_pa_s_per_m3",
+                self.line_resistance_pa_s_per_m3,
+                0.0,
+                1e13,
+                "a resistance from 0 to 1e13 Pa/(m³/s)",
+            ),
+        ];
+        for (name, v, lo, hi, expected) in installation {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(bad(name, v, expected));
+            }
+        }
         Ok(())
     }
 
@@ -170,6 +234,27 @@ impl SensorParams {
         )
     }
 
+    /// Reading of channel `ch` (0: p1, 1: p2) for the pressure `p_pa` at the
+    /// transducer, Pa: its span error and offset, then noise and the ADC.
+    #[inline]
+    pub fn pressure_channel(&self, ch: usize, p_pa: f64, rng: &mut Rng) -> f64 {
+        if !self.enabled {
+            return p_pa;
+        }
+        self.pressure(
+            p_pa * (1.0 + self.pressure_gain_error[ch]) + self.pressure_offset_pa[ch],
+            rng,
+        )
+    }
+
+    /// Whether any installation effect (offset, span error, lag, line) is set.
+    pub fn has_installation_effects(&self) -> bool {
+        self.pressure_offset_pa != [0.0; 2]
+            || self.pressure_gain_error != [0.0; 2]
+            || self.pressure_lag_s > 0.0
+            || self.line_resistance_pa_s_per_m3 > 0.0
+    }
+
     /// Spool position reading, m.
     #[inline]
     pub fn spool(&self, x_sp_m: f64, rng: &mut Rng) -> f64 {
@@ -211,5 +296,28 @@ mod tests {
         assert_eq!(quiet.pressure(-1e6, &mut rng), 0.0);
         assert_eq!(quiet.pressure(30e6, &mut rng), 20.7e6);
         assert_eq!(SensorParams::ideal().pressure(1.234e6, &mut rng), 1.234e6);
+    }
+
+    #[test]
+    fn an_installation_reads_its_offset_and_span() {
+        let s = SensorParams {
+            pressure_noise_pa: 0.0,
+            adc_bits: 24,
+            pressure_offset_pa: [30e3, -20e3],
+            pressure_gain_error: [0.004, -0.003],
+            ..SensorParams::default()
+        };
+        let mut rng = Rng::new(1);
+        let lsb = s.pressure_lsb_pa();
+        let p1 = s.pressure_channel(0, 10e6, &mut rng);
+        let p2 = s.pressure_channel(1, 10e6, &mut rng);
+        assert!((p1 - (10e6 * 1.004 + 30e3)).abs() <= lsb, "{p1}");
+        assert!((p2 - (10e6 * 0.997 - 20e3)).abs() <= lsb, "{p2}");
+        assert!(s.has_installation_effects() && !SensorParams::default().has_installation_effects());
+        let bad = SensorParams {
+            pressure_lag_s: -1e-3,
+            ..SensorParams::default()
+        };
+        assert!(bad.validate().unwrap_err().to_string().contains("pressure_lag_s"));
     }
 }

@@ -99,6 +99,8 @@ pub struct Simulator {
     state: State,
     k: u64,
     truth: Truth,
+    /// The lagging transducers' readings before noise, Pa (set at the first sample).
+    lagged: Option<[f64; 2]>,
 }
 
 impl Simulator {
@@ -149,6 +151,7 @@ impl Simulator {
             rng: Rng::new(seed),
             state,
             k: 0,
+            lagged: None,
             truth: Truth {
                 t_s: 0.0,
                 state,
@@ -203,8 +206,18 @@ impl Simulator {
         let leaks = self.leaks_at(t);
         let s = self.state;
         let x_meas = self.sensors.encoder(s[I_X]);
-        let p1_meas = self.sensors.pressure(s[1], &mut self.rng);
-        let p2_meas = self.sensors.pressure(s[2], &mut self.rng);
+        let (p1_meas, p2_meas) = if self.sensors.has_installation_effects() {
+            let [p1, p2] = self.at_transducers(&s);
+            (
+                self.sensors.pressure_channel(0, p1, &mut self.rng),
+                self.sensors.pressure_channel(1, p2, &mut self.rng),
+            )
+        } else {
+            (
+                self.sensors.pressure(s[1], &mut self.rng),
+                self.sensors.pressure(s[2], &mut self.rng),
+            )
+        };
         let x_sp_meas = self.sensors.spool(s[0], &mut self.rng);
         let u = self.scenario.command_v(t, x_meas);
         let (_, forces) = derivative(&self.rig, &s, u, &leaks);
@@ -245,6 +258,30 @@ impl Simulator {
         self.state = y;
         self.k += 1;
         sample
+    }
+
+    /// The pressures at the transducers, Pa: at the valve manifold the chambers'
+    /// plus the line's drop (R·Q1 into chamber 1, −R·Q2 out of chamber 2), through
+    /// the transducers' first-order lag (stepped at the sample rate from the first
+    /// sample's pressures).
+    fn at_transducers(&mut self, s: &State) -> [f64; 2] {
+        let r = self.sensors.line_resistance_pa_s_per_m3;
+        let mut p = [s[1], s[2]];
+        if r > 0.0 {
+            let q = crate::dynamics::valve_flows(&self.rig, s[0], s[1], s[2]);
+            p[0] += r * q.q1_m3_s;
+            p[1] -= r * q.q2_m3_s;
+        }
+        let tau = self.sensors.pressure_lag_s;
+        if tau <= 0.0 {
+            return p;
+        }
+        let a = 1.0 - (-self.settings.sample_period_s / tau).exp();
+        let lagged = self.lagged.get_or_insert(p);
+        for (l, now) in lagged.iter_mut().zip(p) {
+            *l += a * (now - *l);
+        }
+        *lagged
     }
 
     /// Runs `seconds` of the scenario and returns every sample.

@@ -599,3 +599,86 @@ fn a_vertical_lift_in_closed_loop_carries_its_weight() {
         .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
     assert!(hi - lo > 0.05, "the lift moved {} m", hi - lo);
 }
+
+/// Transducers at the valve manifold read each chamber plus the line's laminar
+/// drop (R·Q1 into chamber 1, −R·Q2 out of chamber 2), then their offset and
+/// span error; a lagging transducer follows y += (1 − e^(−T/τ))·(p − y) per sample.
+#[test]
+fn an_installation_reads_the_line_drop_offset_span_and_lag() {
+    use model::{FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
+    let rig = model::ActuatorParams::vertical_lift();
+    let quiet = SensorParams {
+        pressure_noise_pa: 0.0,
+        adc_bits: 24,
+        pressure_full_scale_pa: 25e6,
+        ..SensorParams::default()
+    };
+    let r = 2.0e8; // 0.2 MPa at 1 L/s
+    let installed = SensorParams {
+        line_resistance_pa_s_per_m3: r,
+        pressure_offset_pa: [30e3, -20e3],
+        pressure_gain_error: [0.004, -0.003],
+        ..quiet
+    };
+    let sc = Scenario::by_name("lift", 3, 5.0).expect("scenario");
+    let mut sim = Simulator::new(
+        rig.clone(),
+        installed,
+        SimSettings::default(),
+        sc.clone(),
+        FaultSchedule::default(),
+        3,
+    )
+    .expect("rig");
+    let lsb = quiet.pressure_lsb_pa();
+    let mut moved = 0;
+    for _ in 0..5000 {
+        let s = sim.step();
+        let t = sim.truth();
+        let q = t.forces.valve;
+        // the ADC reads 0 to its full scale
+        let p1 = ((t.state[1] + r * q.q1_m3_s) * 1.004 + 30e3).clamp(0.0, 25e6);
+        let p2 = ((t.state[2] - r * q.q2_m3_s) * 0.997 - 20e3).clamp(0.0, 25e6);
+        assert!((s.p1_pa - p1).abs() <= lsb, "t {}: {} vs {p1}", s.t_s, s.p1_pa);
+        assert!((s.p2_pa - p2).abs() <= lsb, "t {}: {} vs {p2}", s.t_s, s.p2_pa);
+        if (r * q.q1_m3_s).abs() > 50e3 {
+            moved += 1;
+        }
+    }
+    assert!(
+        moved > 100,
+        "the line drop was above 50 kPa in {moved} samples only"
+    );
+    // the lag: each reading moves by a = 1 − e^(−T/τ) of the way to the pressure
+    let tau = 2.0e-3;
+    let lagging = SensorParams {
+        pressure_lag_s: tau,
+        ..quiet
+    };
+    let mut sim = Simulator::new(
+        rig,
+        lagging,
+        SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        3,
+    )
+    .expect("rig");
+    let a = 1.0 - (-1e-3 / tau).exp();
+    let mut y = None::<f64>;
+    for _ in 0..3000 {
+        let s = sim.step();
+        let p = sim.truth().state[1];
+        let want = match y {
+            None => p,
+            Some(prev) => prev + a * (p - prev),
+        };
+        assert!(
+            (s.p1_pa - want).abs() <= lsb,
+            "t {}: {} vs {want}",
+            s.t_s,
+            s.p1_pa
+        );
+        y = Some(want);
+    }
+}
