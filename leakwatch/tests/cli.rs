@@ -1171,6 +1171,9 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     )
     .unwrap();
     cfg.insert("sensors".into(), toml::Value::Table(installation));
+    // and a pump that ripples ±0.4 % at 250 Hz
+    let pump: toml::Table = toml::from_str("supply_ripple_fraction = 0.004\n").unwrap();
+    cfg.insert("sim".into(), toml::Value::Table(pump));
     std::fs::write(d.join("datasheet.toml"), toml::to_string(&cfg).unwrap()).unwrap();
     let sheet = d.join("datasheet.toml");
     simulate_scenario("lift", &sheet, "60", "11", "none", &d.join("commission_cold.csv"));

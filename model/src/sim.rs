@@ -15,7 +15,7 @@ use crate::scenario::Scenario;
 use crate::sensors::SensorParams;
 use crate::units::m3_s_to_lpm;
 
-/// Integration settings of the simulator.
+/// Integration settings of the simulator, and its pump.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimSettings {
@@ -23,6 +23,11 @@ pub struct SimSettings {
     pub sample_period_s: f64,
     /// RK4 sub-steps per sample period (40 gives 25 µs steps).
     pub substeps_per_sample: u32,
+    /// The simulated pump's ripple: amplitude as a fraction of the supply
+    /// pressure (0.004: ±0.4 %; 0: none). The filters' model has no ripple.
+    pub supply_ripple_fraction: f64,
+    /// The ripple's frequency, Hz.
+    pub supply_ripple_hz: f64,
 }
 
 impl SimSettings {
@@ -42,6 +47,20 @@ impl SimSettings {
                 expected: "1 to 10000 sub-steps per sample",
             });
         }
+        if !(0.0..=0.5).contains(&self.supply_ripple_fraction) {
+            return Err(InvalidParam {
+                field: "sim.supply_ripple_fraction".into(),
+                value: self.supply_ripple_fraction,
+                expected: "a fraction of the supply pressure from 0 to 0.5",
+            });
+        }
+        if !(0.0..=1e5).contains(&self.supply_ripple_hz) {
+            return Err(InvalidParam {
+                field: "sim.supply_ripple_hz".into(),
+                value: self.supply_ripple_hz,
+                expected: "a frequency from 0 to 1e5 Hz",
+            });
+        }
         Ok(())
     }
 }
@@ -51,6 +70,8 @@ impl Default for SimSettings {
         SimSettings {
             sample_period_s: 1.0e-3,
             substeps_per_sample: 40,
+            supply_ripple_fraction: 0.0,
+            supply_ripple_hz: 250.0,
         }
     }
 }
@@ -220,6 +241,15 @@ impl Simulator {
         };
         let x_sp_meas = self.sensors.spool(s[0], &mut self.rng);
         let u = self.scenario.command_v(t, x_meas);
+        let ripple = self.settings.supply_ripple_fraction;
+        let supply = self.rig.supply_pressure_pa;
+        let rippled = |t_s: f64| {
+            let phase = 2.0 * std::f64::consts::PI * self.settings.supply_ripple_hz * t_s;
+            supply * (1.0 + ripple * phase.sin())
+        };
+        if ripple > 0.0 {
+            self.rig.supply_pressure_pa = rippled(t);
+        }
         let (_, forces) = derivative(&self.rig, &s, u, &leaks);
         let load_meas = self.sensors.load_cell(forces.load_n, &mut self.rng);
         let lq = forces.leaks;
@@ -253,8 +283,13 @@ impl Simulator {
             } else {
                 self.leaks_at(t + j as f64 * h)
             };
+            if ripple > 0.0 {
+                // the pump's ripple at the middle of the sub-step
+                self.rig.supply_pressure_pa = rippled(t + (j as f64 + 0.5) * h);
+            }
             y = rk4_step(&y, h, |z| derivative(&self.rig, z, u, &lj).0);
         }
+        self.rig.supply_pressure_pa = supply;
         self.state = y;
         self.k += 1;
         sample
