@@ -135,6 +135,49 @@ fn is_prefix_file(name: &str, start: &str) -> bool {
     hex >= 40 && matches!(rest.as_bytes().get(hex), Some(b'_' | b'.'))
 }
 
+/// The prefixes that have iceoryx2 files of leakwatch's naming in `shm_dir`
+/// (`lw_<prefix>_<40 hex digits>...`) or `iox_dir` (`lw_<prefix>/`), sorted,
+/// each once; names that are not a valid prefix are left out.
+pub fn prefixes_with_files_in(shm_dir: &std::path::Path, iox_dir: &std::path::Path) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Ok(dir) = std::fs::read_dir(iox_dir) {
+        for e in dir.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if let Some(p) = name.strip_prefix("lw_") {
+                out.push(p.to_string());
+            }
+        }
+    }
+    if let Ok(dir) = std::fs::read_dir(shm_dir) {
+        for e in dir.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let Some(rest) = name.strip_prefix("lw_") else {
+                continue;
+            };
+            // the prefix ends at the first '_' the hash follows
+            let found = rest
+                .match_indices('_')
+                .map(|(i, _)| &rest[..i])
+                .find(|p| is_prefix_file(&name, &format!("lw_{p}_")));
+            if let Some(p) = found {
+                out.push(p.to_string());
+            }
+        }
+    }
+    out.retain(|p| validate_prefix(p).is_ok());
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// [`prefixes_with_files_in`] `/dev/shm` and `/tmp/iceoryx2`.
+pub fn prefixes_with_files() -> Vec<String> {
+    prefixes_with_files_in(
+        std::path::Path::new("/dev/shm"),
+        std::path::Path::new("/tmp/iceoryx2"),
+    )
+}
+
 /// Bytes of the files under `path` (0 for what cannot be read).
 fn size_of(path: &std::path::Path) -> u64 {
     let Ok(meta) = std::fs::symlink_metadata(path) else {
@@ -433,6 +476,28 @@ pub fn validate_prefix(p: &str) -> Result<(), BusError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_prefixes_with_files_are_read_off_their_names() {
+        let base = std::env::temp_dir().join(format!("lw-prefixes-{}", std::process::id()));
+        let (shm, iox) = (base.join("shm"), base.join("iox"));
+        std::fs::create_dir_all(&shm).unwrap();
+        std::fs::create_dir_all(iox.join("lw_lab_1")).unwrap();
+        std::fs::create_dir_all(iox.join("other")).unwrap();
+        let hash = "0354a209029e7d094a819e2d4030ea331e6caaf0";
+        for name in [
+            format!("lw_lab_{hash}_1029966520912543268563897568756.data"),
+            format!("lw_lab_1_{hash}_node.0_10_0.global_mgmt"),
+            format!("lw_run4242_{hash}_102996.data"),
+            "lw_short_0354a209.data".to_string(),
+            format!("iox2_{hash}_x.data"),
+        ] {
+            std::fs::write(shm.join(name), b"").unwrap();
+        }
+        let found = prefixes_with_files_in(&shm, &iox);
+        std::fs::remove_dir_all(&base).unwrap();
+        assert_eq!(found, ["lab", "lab_1", "run4242"]);
+    }
 
     #[test]
     fn a_prefix_owns_its_files_and_not_those_of_a_longer_prefix() {

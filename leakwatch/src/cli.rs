@@ -153,8 +153,12 @@ pub(crate) enum Command {
     Clean {
         /// The iceoryx2 prefix (a run's `run<pid>`, or the LEAKWATCH_IOX_PREFIX it was started
         /// with; default: LEAKWATCH_IOX_PREFIX).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "all")]
         prefix: Option<String>,
+        /// Every prefix with leakwatch's iceoryx2 files on this machine; those a live run
+        /// holds are named and left.
+        #[arg(long)]
+        all: bool,
     },
     /// Export a recorded log (MCAP) as one CSV per channel, plus dataset.csv (the replay/calibrate format).
     Export {

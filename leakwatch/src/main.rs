@@ -104,7 +104,13 @@ fn run(cli: Cli) -> Result<(), String> {
             seconds,
             config,
         } => watch::command(listen, connect, seconds, config.as_deref()),
-        Command::Clean { prefix } => run::clean(prefix.as_deref()),
+        Command::Clean { prefix, all } => {
+            if all {
+                run::clean_all()
+            } else {
+                run::clean(prefix.as_deref())
+            }
+        }
         Command::Export { log, csv } => logs::export(&log, &csv, force),
         Command::Repair { log, out } => logs::repair(&log, &out, force),
         Command::Info { log, config_out } => logs::info(&log, config_out.as_deref(), force),

@@ -22,7 +22,7 @@ mod supervisor;
 mod watchdog;
 
 pub use args::RunArgs;
-pub use clean::clean;
+pub use clean::{clean, clean_all};
 pub use stages::stage_main;
 pub use supervisor::run_pipeline;
 

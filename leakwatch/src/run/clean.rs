@@ -44,6 +44,64 @@ pub(super) fn remove_at_start(cfg: &BusConfig) {
     }
 }
 
+/// `leakwatch clean --all`: what [`clean`] does, on every prefix that has
+/// iceoryx2 files of leakwatch's naming, one line per prefix; a prefix a live
+/// run holds is named and left, and does not make the command fail.
+pub fn clean_all() -> Result<(), String> {
+    let prefixes = bus::prefixes_with_files();
+    if prefixes.is_empty() {
+        outln!("leakwatch clean: no leakwatch iceoryx2 files on this machine");
+        return Ok(());
+    }
+    let mut in_use = Vec::new();
+    for p in &prefixes {
+        match clean_prefix(p) {
+            Ok(removed) => outln!(
+                "  {p}: removed {} files or directories ({:.1} MB)",
+                removed.len(),
+                mb(removed.iter().map(|f| f.bytes).sum())
+            ),
+            Err(e) => {
+                errln!("  {p}: left: {e}");
+                in_use.push(p.as_str());
+            }
+        }
+    }
+    outln!(
+        "leakwatch clean: {} of {} prefixes cleaned{}",
+        prefixes.len() - in_use.len(),
+        prefixes.len(),
+        if in_use.is_empty() {
+            String::new()
+        } else {
+            format!("; in use, left: {}", in_use.join(", "))
+        }
+    );
+    Ok(())
+}
+
+/// Removes what a dead run left on `prefix` and its lock file: refused while
+/// a run holds the prefix's lock or a process of it still runs.
+fn clean_prefix(prefix: &str) -> Result<Vec<Leftover>, String> {
+    let cfg = BusConfig {
+        iox_prefix: Some(prefix.to_string()),
+        ..BusConfig::default()
+    };
+    // a live run holds it: refused (naming the run), nothing touched
+    let lock = cfg.lock_prefix().map_err(|e| format!("not cleaned: {e}"))?;
+    let removed = cfg.remove_leftovers().map_err(|e| format!("not cleaned: {e}"))?;
+    let lock_path = lock.path.clone();
+    // the lock's file goes with the lock (a killed run left it)
+    drop(lock);
+    if lock_path.exists() {
+        errln!(
+            "leakwatch clean: warning: the lock file {} is still there",
+            lock_path.display()
+        );
+    }
+    Ok(removed)
+}
+
 /// `leakwatch clean [--prefix P]`: removes what a killed run left on prefix `P`
 /// (default `LEAKWATCH_IOX_PREFIX`): its iceoryx2 files and its lock file.
 /// Refused while a run holds the prefix's lock or a process of it still runs.
@@ -61,16 +119,7 @@ pub fn clean(prefix: Option<&str>) -> Result<(), String> {
             }
         },
     };
-    let cfg = BusConfig {
-        iox_prefix: Some(prefix.clone()),
-        ..BusConfig::default()
-    };
-    // a live run holds it: refused (naming the run), nothing touched
-    let lock = cfg.lock_prefix().map_err(|e| format!("not cleaned: {e}"))?;
-    let removed = cfg.remove_leftovers().map_err(|e| format!("not cleaned: {e}"))?;
-    let lock_path = lock.path.clone();
-    // the lock's file goes with the lock (a killed run left it)
-    drop(lock);
+    let removed = clean_prefix(&prefix)?;
     if removed.is_empty() {
         outln!("leakwatch clean: nothing left on the iceoryx2 prefix {prefix:?}");
     } else {
@@ -79,12 +128,6 @@ pub fn clean(prefix: Option<&str>) -> Result<(), String> {
             removed.len(),
             mb(removed.iter().map(|f| f.bytes).sum()),
             listing(&removed)
-        );
-    }
-    if lock_path.exists() {
-        errln!(
-            "leakwatch clean: warning: the lock file {} is still there",
-            lock_path.display()
         );
     }
     Ok(())
