@@ -100,7 +100,7 @@ use crate::{Acquired, Source};
 pub struct ChannelScale {
     /// SI units per raw unit (e.g. Pa per count); negative for an inverted sensor.
     pub gain: f64,
-    /// SI value at raw 0, in the channel's SI unit (V, m, Pa or N).
+    /// SI value at raw 0, in the channel's SI unit (V, m, Pa, N or °C).
     pub offset: f64,
 }
 
@@ -153,6 +153,8 @@ pub struct UdpScaling {
     pub x_sp: ChannelScale,
     /// Load force, to N.
     pub f_load: ChannelScale,
+    /// Oil temperature, to °C.
+    pub temp_c: ChannelScale,
 }
 
 /// Smallest and largest accepted |gain|, SI units per raw unit.
@@ -162,7 +164,7 @@ pub const OFFSET_MAX: f64 = 1e9;
 
 impl UdpScaling {
     /// Every channel with its name and SI unit.
-    fn channels(&self) -> [(&'static str, &'static str, ChannelScale); 6] {
+    fn channels(&self) -> [(&'static str, &'static str, ChannelScale); 7] {
         [
             ("u", "V", self.u),
             ("x", "m", self.x),
@@ -170,6 +172,7 @@ impl UdpScaling {
             ("p2", "Pa", self.p2),
             ("x_sp", "m", self.x_sp),
             ("f_load", "N", self.f_load),
+            ("temp_c", "°C", self.temp_c),
         ]
     }
 
@@ -219,6 +222,7 @@ impl UdpScaling {
             f_load_n: self.f_load.apply(d.f_load),
             ref_m: f64::NAN,
             q_leak_lpm: f64::NAN,
+            temp_c: self.temp_c.apply(d.temp_c),
         }
     }
 }

@@ -1,8 +1,8 @@
 //! The measured-data CSV format (ARCHITECTURE.md, "Data formats").
 //!
 //! A header line names the columns; `t,u,x,p1,p2` (s, V, m, Pa, Pa) are
-//! required, `x_sp` (m), `f_load` (N), `ref` (m) and `q_leak` (L/min) are
-//! optional, in any order. Floats are written with Rust's shortest
+//! required, `x_sp` (m), `f_load` (N), `ref` (m), `q_leak` (L/min) and
+//! `temp_c` (the oil's temperature, °C) are optional, in any order. Floats are written with Rust's shortest
 //! round-trip formatting, so a file reads back bit for bit. A header name or
 //! cell may be wrapped in one pair of double quotes (`"p1"`, `"0.0"`, as
 //! spreadsheets and pandas write with quoting on; `""` is an empty cell);
@@ -60,7 +60,11 @@ pub fn escaped(text: &str) -> String {
 }
 
 /// The column names, in the order they are written.
-pub const COLUMNS: [&str; 9] = ["t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak"];
+pub const COLUMNS: [&str; 10] = [
+    "t", "u", "x", "p1", "p2", "x_sp", "f_load", "ref", "q_leak", "temp_c",
+];
+/// Number of optional columns (x_sp, f_load, ref, q_leak, temp_c).
+pub const N_OPTIONAL: usize = COLUMNS.len() - REQUIRED.len();
 /// The columns every file must have.
 pub const REQUIRED: [&str; 5] = ["t", "u", "x", "p1", "p2"];
 
@@ -199,8 +203,8 @@ pub struct Dataset {
     pub samples: Vec<Sample>,
     /// Every problem found (skipped rows and gaps), in file order.
     pub issues: Vec<Issue>,
-    /// Which optional columns the file has (x_sp, f_load, ref, q_leak).
-    pub has_optional: [bool; 4],
+    /// Which optional columns the file has (x_sp, f_load, ref, q_leak, temp_c).
+    pub has_optional: [bool; N_OPTIONAL],
     /// Rows read (excluding the header and empty lines).
     pub rows: u64,
 }
@@ -269,7 +273,7 @@ pub fn write_header<W: Write>(w: &mut W) -> std::io::Result<()> {
 pub fn write_row<W: Write>(w: &mut W, s: &Sample) -> std::io::Result<()> {
     writeln!(
         w,
-        "{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
-        s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa, s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm
+        "{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+        s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa, s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm, s.temp_c
     )
 }

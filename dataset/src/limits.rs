@@ -35,7 +35,13 @@ pub struct Limits {
     pub max_force_n: f64,
     /// Largest accepted |q_leak|, L/min.
     pub max_leak_lpm: f64,
+    /// Accepted oil temperatures `temp_c`, °C (lowest, highest).
+    pub oil_temp_range_c: (f64, f64),
 }
+
+/// The oil temperatures a row may carry, °C: a mineral oil's working range
+/// with margin (below −40 °C it is a solid, above 150 °C it is ruined).
+pub const OIL_TEMP_RANGE_C: (f64, f64) = (-40.0, 150.0);
 
 impl Limits {
     /// The physical ranges of an actuator with parameters `p`, sampled every
@@ -50,6 +56,7 @@ impl Limits {
     /// - spool |x_sp| within 2 × the opening at 10 V, m;
     /// - load |f_load| within 10 × the force of 1.5 p_s on the piston, N;
     /// - leak |q_leak| within 10 × the valve's flow at full opening and 1.5 p_s, L/min;
+    /// - oil temperature `temp_c` within [`OIL_TEMP_RANGE_C`], °C;
     /// - time steps no shorter than half a sample period, |t| ≤ 1e10 s.
     pub fn for_model(p: &model::ActuatorParams, sample_period_s: f64) -> Limits {
         let u_max = model::scenario::U_MAX_V;
@@ -72,6 +79,7 @@ impl Limits {
             max_spool_m: 2.0 * spool_open,
             max_force_n: 10.0 * p_max * p.piston_area_m2,
             max_leak_lpm: 10.0 * model::units::m3_s_to_lpm(q_valve_m3_s),
+            oil_temp_range_c: OIL_TEMP_RANGE_C,
         }
     }
 
@@ -106,7 +114,8 @@ impl Limits {
                 3 | 4 => (self.min_pressure_pa, self.max_pressure_pa, "Pa"),
                 5 => (-self.max_spool_m, self.max_spool_m, "m"),
                 6 => (-self.max_force_n, self.max_force_n, "N"),
-                _ => (-self.max_leak_lpm, self.max_leak_lpm, "L/min"),
+                8 => (-self.max_leak_lpm, self.max_leak_lpm, "L/min"),
+                _ => (self.oil_temp_range_c.0, self.oil_temp_range_c.1, "°C"),
             };
             if !(lo..=hi).contains(&v) {
                 let what = match j {
@@ -117,7 +126,8 @@ impl Limits {
                     5 => "spool position",
                     6 => "load",
                     7 => "position reference",
-                    _ => "leak flow",
+                    8 => "leak flow",
+                    _ => "oil temperature",
                 };
                 let mut msg = format!("{what} {v:?} {unit} is outside [{lo:?}, {hi:?}] {unit}");
                 if what == "pressure" {

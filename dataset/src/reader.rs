@@ -5,7 +5,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
-use crate::{DatasetError, Issue, IssueKind, Limits, Sample, COLUMNS, REQUIRED};
+use crate::{DatasetError, Issue, IssueKind, Limits, Sample, COLUMNS, N_OPTIONAL, REQUIRED};
 
 /// A streaming reader of samples from a CSV file.
 pub struct CsvReader<R: BufRead> {
@@ -13,7 +13,7 @@ pub struct CsvReader<R: BufRead> {
     line: Vec<u8>,
     ended: bool,
     path: PathBuf,
-    map: [Option<usize>; 9],
+    map: [Option<usize>; COLUMNS.len()],
     n_cols: usize,
     limits: Limits,
     line_no: u64,
@@ -25,8 +25,8 @@ pub struct CsvReader<R: BufRead> {
     /// Rows skipped.
     pub skipped: u64,
     /// Usable rows whose optional column was absent (empty or NaN), per column
-    /// in [`COLUMNS`] order (x_sp, f_load, ref, q_leak); only columns in the header count.
-    pub absent: [u64; 4],
+    /// in [`COLUMNS`] order (x_sp, f_load, ref, q_leak, temp_c); only columns in the header count.
+    pub absent: [u64; N_OPTIONAL],
 }
 
 /// A buffered byte source: a plain file, or a gzip-compressed one decoded on the fly.
@@ -64,7 +64,7 @@ impl<R: BufRead> CsvReader<R> {
         let header = String::from_utf8_lossy(&line);
         let header = header.trim_start_matches('\u{feff}').trim().to_string();
         let names: Vec<&str> = header.split(',').map(|s| unquote(s.trim())).collect();
-        let mut map = [None; 9];
+        let mut map = [None; COLUMNS.len()];
         for (i, name) in names.iter().enumerate() {
             if let Some(j) = COLUMNS.iter().position(|c| c == name) {
                 if map[j].is_some() {
@@ -99,18 +99,13 @@ impl<R: BufRead> CsvReader<R> {
             cells: Vec::with_capacity(names.len()),
             rows: 0,
             skipped: 0,
-            absent: [0; 4],
+            absent: [0; N_OPTIONAL],
         })
     }
 
-    /// Which optional columns the file has, in [`COLUMNS`] order (x_sp, f_load, ref, q_leak).
-    pub fn has_optional(&self) -> [bool; 4] {
-        [
-            self.map[5].is_some(),
-            self.map[6].is_some(),
-            self.map[7].is_some(),
-            self.map[8].is_some(),
-        ]
+    /// Which optional columns the file has, in [`COLUMNS`] order (x_sp, f_load, ref, q_leak, temp_c).
+    pub fn has_optional(&self) -> [bool; N_OPTIONAL] {
+        std::array::from_fn(|k| self.map[REQUIRED.len() + k].is_some())
     }
 
     fn issue(&mut self, column: Option<usize>, kind: IssueKind, message: String, skipped: bool) -> Issue {
@@ -179,11 +174,11 @@ impl<R: BufRead> CsvReader<R> {
         self.rows += 1;
         let parsed = self.parse_row(line);
         if let Ok((s, _)) = &parsed {
-            for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm]
+            for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm, s.temp_c]
                 .into_iter()
                 .enumerate()
             {
-                if v.is_nan() && self.map[5 + k].is_some() {
+                if v.is_nan() && self.map[REQUIRED.len() + k].is_some() {
                     self.absent[k] += 1;
                 }
             }
@@ -238,6 +233,7 @@ impl<R: BufRead> CsvReader<R> {
             f_load_n: get(6),
             ref_m: get(7),
             q_leak_lpm: get(8),
+            temp_c: get(9),
         };
         if let Some((j, kind, msg)) = self.limits.check(&s) {
             return Err(self.issue(Some(j), kind, msg, true));

@@ -23,6 +23,11 @@ fn round_trip_is_bit_exact() {
             f_load_n: if k % 3 == 0 { f64::NAN } else { 1e3 * rng.normal() },
             ref_m: 1.0 / 3.0,
             q_leak_lpm: 1e-300 * rng.uniform(),
+            temp_c: if k % 5 == 0 {
+                f64::NAN
+            } else {
+                30.0 + 25.0 * rng.uniform()
+            },
         })
         .collect();
     let d = scratch::ScratchDir::new("dataset");
@@ -42,6 +47,7 @@ fn round_trip_is_bit_exact() {
             (a.f_load_n, b.f_load_n),
             (a.ref_m, b.ref_m),
             (a.q_leak_lpm, b.q_leak_lpm),
+            (a.temp_c, b.temp_c),
         ] {
             assert_eq!(x.to_bits(), y.to_bits());
         }
@@ -193,7 +199,7 @@ fn values_outside_their_physical_range_are_skipped_by_column() {
     while let Some(Row::Sample(_)) = r.next_row() {
         n += 1;
     }
-    assert_eq!((n, r.skipped, r.absent), (3, 0, [0, 0, 2, 0]));
+    assert_eq!((n, r.skipped, r.absent), (3, 0, [0, 0, 2, 0, 0]));
 }
 
 #[test]
@@ -388,7 +394,7 @@ fn fields_in_double_quotes_are_read_as_without() {
     let p = d.join("quoted.csv");
     std::fs::write(&p, text).unwrap();
     let mut r = CsvReader::open(&p, Limits::default()).unwrap();
-    assert_eq!(r.has_optional(), [false, false, true, false]);
+    assert_eq!(r.has_optional(), [false, false, true, false, false]);
     let mut samples = Vec::new();
     while let Some(row) = r.next_row() {
         let Row::Sample(s) = row else { panic!("{row:?}") };
@@ -401,7 +407,7 @@ fn fields_in_double_quotes_are_read_as_without() {
     );
     assert_eq!(samples[0].ref_m, 0.31);
     assert!(samples[1].ref_m.is_nan());
-    assert_eq!(r.absent, [0, 0, 1, 0]);
+    assert_eq!(r.absent, [0, 0, 1, 0, 0]);
     // anything else stays strict: one quote, quotes inside, single quotes, a quoted comma
     for (cell, shown) in [
         ("\"1.5", "`\"1.5` is not a number"),

@@ -190,7 +190,16 @@ pub struct Estimator {
     /// ([`ActuatorParams::measured_pressure_range_pa`], as for CSV rows).
     measured_p_range_pa: (f64, f64),
     counters: EstimatorCounters,
+    /// The model at its oil law's reference temperature.
+    params_at_reference: ActuatorParams,
+    /// The oil temperature the model was last set to, °C (NaN: none yet).
+    oil_temp_c: f64,
 }
+
+/// The model follows the samples' oil temperature (`temp_c`) in steps of this
+/// much, K: finer than any effect of it the filter can see, coarse enough that
+/// a thermometer's last digit does not rescale the model every sample.
+pub const OIL_TEMP_STEP_K: f64 = 0.05;
 
 /// First state index kept across a re-anchoring (the leak sizes and the spool bias).
 const FIRST_SLOW_STATE: usize = 7;
@@ -214,6 +223,7 @@ impl Estimator {
             // where the sagged orifice law's finite differences overflow).
             params.supply_sag_pa_per_m3_s = 0.0;
         }
+        let params_at_reference = params.clone();
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
         model.substeps = tuning.substeps;
         let filter = match tuning.states {
@@ -239,6 +249,8 @@ impl Estimator {
             reanchor_pending: false,
             measured_p_range_pa,
             counters: EstimatorCounters::default(),
+            params_at_reference,
+            oil_temp_c: f64::NAN,
         })
     }
 
@@ -391,8 +403,32 @@ impl Estimator {
         }
     }
 
+    /// The oil temperature the model is at, °C: the latest sample's `temp_c`
+    /// (to [`OIL_TEMP_STEP_K`]); NaN while no sample carried one (the model
+    /// then holds at its parameters as given).
+    pub fn oil_temp_c(&self) -> f64 {
+        self.oil_temp_c
+    }
+
+    /// Sets the model to oil temperature `temp_c` (°C) when it moved by
+    /// [`OIL_TEMP_STEP_K`] or more ([`ActuatorParams::set_oil_temperature`]:
+    /// bulk modulus, viscous friction, laminar flows). Allocates nothing.
+    fn follow_oil_temperature(&mut self, temp_c: f64) {
+        if (temp_c - self.oil_temp_c).abs() < OIL_TEMP_STEP_K {
+            return;
+        }
+        self.model
+            .params
+            .set_oil_temperature(&self.params_at_reference, temp_c);
+        self.model.leaks = model::LeakSet::from_params(&self.model.params);
+        self.oil_temp_c = temp_c;
+    }
+
     /// Processes one sensor sample (one sample period after the previous one).
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
+        if s.temp_c.is_finite() {
+            self.follow_oil_temperature(s.temp_c);
+        }
         let mut e = self.on_sample_inner(s);
         e.measured = [s.x_m, s.p1_pa, s.p2_pa];
         e.u_v = s.u_v;

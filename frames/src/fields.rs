@@ -13,7 +13,7 @@ macro_rules! frame_fields {
     (SensorFrame, $m:ident!($($args:tt)*)) => {
         $m! {$($args)* [
             seq, acq_mono_ns, t_s, u_v, x_m, p1_pa, p2_pa, x_sp_m, f_load_n, ref_m, q_leak_lpm,
-            flags, _pad
+            flags, _pad, temp_c
         ]}
     };
     (EstimateFrame, $m:ident!($($args:tt)*)) => {

@@ -86,7 +86,7 @@ macro_rules! impl_sequenced_frame {
 use impl_sequenced_frame;
 
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
-const _: () = assert!(core::mem::size_of::<SensorFrame>() == 96);
+const _: () = assert!(core::mem::size_of::<SensorFrame>() == 104);
 const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 488);
 const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 520);
 const _: () = assert!(core::mem::size_of::<HealthFrame>() == 80);

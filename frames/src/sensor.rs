@@ -8,7 +8,7 @@ use crate::{impl_sequenced_frame, sensor_flags, Topic};
 /// One rig sample as published by the acquisition process (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.SensorFrame.v1")]
+#[type_name("leakwatch.SensorFrame.v2")]
 pub struct SensorFrame {
     /// Sequence number, 0 for the first frame of a stream, +1 per frame.
     pub seq: u64,
@@ -36,6 +36,8 @@ pub struct SensorFrame {
     pub flags: u32,
     /// Explicit padding, always 0.
     pub _pad: u32,
+    /// Oil temperature, °C (NaN = channel absent).
+    pub temp_c: f64,
 }
 
 impl_sequenced_frame!(SensorFrame, Topic::Frames, sensor_flags::END_OF_STREAM);
@@ -57,6 +59,7 @@ impl Default for SensorFrame {
             q_leak_lpm: f64::NAN,
             flags: 0,
             _pad: 0,
+            temp_c: f64::NAN,
         }
     }
 }
@@ -74,6 +77,7 @@ impl From<&SensorFrame> for model::Sample {
             f_load_n: f.f_load_n,
             ref_m: f.ref_m,
             q_leak_lpm: f.q_leak_lpm,
+            temp_c: f.temp_c,
         }
     }
 }
@@ -96,6 +100,7 @@ impl From<&model::Sample> for SensorFrame {
             q_leak_lpm: s.q_leak_lpm,
             flags: 0,
             _pad: 0,
+            temp_c: s.temp_c,
         }
     }
 }

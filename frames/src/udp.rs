@@ -2,15 +2,16 @@
 //! the acquisition stage (`acquisition --udp ADDR:PORT`, `leakwatch run
 //! --source udp://ADDR:PORT`). One datagram carries one sample.
 //!
-//! The datagram is [`LEN`] = 72 bytes, **little-endian**, fixed size, with no
-//! padding (table in `frames/README.md`, C header `examples/udp/leakwatch_udp.h`,
-//! Python sender `examples/udp/send_csv.py`):
+//! The datagram is [`LEN`] = 80 bytes (version 2; version 1 is the first
+//! [`LEN_V1`] = 72, without `temp_c`, and is read as well), **little-endian**,
+//! fixed size, with no padding (table in `frames/README.md`, C header
+//! `examples/udp/leakwatch_udp.h`, Python sender `examples/udp/send_csv.py`):
 //!
 //! | offset | field | type | meaning |
 //! |---|---|---|---|
 //! | 0 | magic | u8\[4\] | `LWUD` ([`MAGIC`]) |
-//! | 4 | version | u16 | [`VERSION`] (1) |
-//! | 6 | flags | u16 | [`flags`]: bit0 x_sp present, bit1 f_load present, bit2 end of stream, bit3 no sample |
+//! | 4 | version | u16 | [`VERSION`] (2), or 1 |
+//! | 6 | flags | u16 | [`flags`]: bit0 x_sp present, bit1 f_load present, bit2 end of stream, bit3 no sample, bit4 temp_c present (version 2) |
 //! | 8 | seq | u64 | sequence number, +1 per datagram |
 //! | 16 | t | f64 | sample time, s |
 //! | 24 | u | f64 | valve command (V after scaling) |
@@ -19,6 +20,7 @@
 //! | 48 | p2 | f64 | chamber-2 pressure (Pa after scaling) |
 //! | 56 | x_sp | f64 | spool position (m after scaling), read only with flag bit0 |
 //! | 64 | f_load | f64 | load force (N after scaling), read only with flag bit1 |
+//! | 72 | temp_c | f64 | oil temperature (°C after scaling), read only with flag bit4; version 2 only |
 //!
 //! The channel values are what the sender measured: SI units, or raw counts
 //! that the receiver scales (`SI = gain·raw + offset`, the `[udp]` section of
@@ -30,14 +32,16 @@
 
 use core::fmt;
 
-/// Length of a datagram, bytes.
-pub const LEN: usize = 72;
+/// Length of a datagram of this version, bytes.
+pub const LEN: usize = 80;
+/// Length of a version-1 datagram (no `temp_c`), bytes.
+pub const LEN_V1: usize = 72;
 
 /// The first four bytes of every datagram: `LWUD` ("leakwatch UDP").
 pub const MAGIC: [u8; 4] = *b"LWUD";
 
-/// The format version this code reads and writes.
-pub const VERSION: u16 = 1;
+/// The format version this code writes (it reads 1 and 2).
+pub const VERSION: u16 = 2;
 
 /// Bits of [`UdpDatagram::flags`].
 pub mod flags {
@@ -51,8 +55,12 @@ pub mod flags {
     /// with [`END_OF_STREAM`], for a sender that learns of the end after its
     /// last sample.
     pub const NO_SAMPLE: u16 = 1 << 3;
-    /// Every defined bit; the others are reserved and must be 0.
-    pub const ALL: u16 = X_SP_PRESENT | F_LOAD_PRESENT | END_OF_STREAM | NO_SAMPLE;
+    /// The oil temperature `temp_c` is present (version 2; else it is read as absent, NaN).
+    pub const TEMP_PRESENT: u16 = 1 << 4;
+    /// Every defined bit of version 1; the others are reserved and must be 0.
+    pub const ALL_V1: u16 = X_SP_PRESENT | F_LOAD_PRESENT | END_OF_STREAM | NO_SAMPLE;
+    /// Every defined bit of version 2; the others are reserved and must be 0.
+    pub const ALL: u16 = ALL_V1 | TEMP_PRESENT;
 }
 
 /// Byte offset of each field in a datagram.
@@ -79,6 +87,8 @@ pub mod offset {
     pub const X_SP: usize = 56;
     /// `f_load`, f64.
     pub const F_LOAD: usize = 64;
+    /// `temp_c`, f64, °C (version 2).
+    pub const TEMP: usize = 72;
 }
 
 /// One decoded datagram. The channel values are as sent (SI, or raw counts
@@ -104,12 +114,14 @@ pub struct UdpDatagram {
     pub x_sp: f64,
     /// Load force: N, or raw counts (NaN = absent).
     pub f_load: f64,
+    /// Oil temperature: °C, or raw counts (NaN = absent).
+    pub temp_c: f64,
 }
 
 /// Why a datagram was refused.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DecodeError {
-    /// The datagram is not [`LEN`] bytes long.
+    /// The datagram is not as long as its version says ([`LEN`], [`LEN_V1`]).
     WrongLength {
         /// Its length, bytes.
         len: usize,
@@ -131,7 +143,7 @@ pub enum DecodeError {
     },
     /// The sample time or a channel that must be present is NaN or infinite.
     NonFinite {
-        /// The field (`t`, `u`, `x`, `p1`, `p2`, `x_sp`, `f_load`).
+        /// The field (`t`, `u`, `x`, `p1`, `p2`, `x_sp`, `f_load`, `temp_c`).
         field: &'static str,
         /// Its value.
         value: f64,
@@ -142,7 +154,10 @@ impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             DecodeError::WrongLength { len } => {
-                write!(f, "wrong length: {len} bytes, a leakwatch datagram has {LEN}")
+                write!(
+                    f,
+                    "wrong length: {len} bytes, a leakwatch datagram has {LEN} (version 2) or {LEN_V1} (version 1)"
+                )
             }
             DecodeError::BadMagic { found } => write!(
                 f,
@@ -152,7 +167,7 @@ impl fmt::Display for DecodeError {
             DecodeError::UnsupportedVersion { found } => {
                 write!(
                     f,
-                    "unsupported version {found} (this receiver reads version {VERSION})"
+                    "unsupported version {found} (this receiver reads versions 1 and {VERSION})"
                 )
             }
             DecodeError::BadFlags { found } => write!(
@@ -193,6 +208,9 @@ impl UdpDatagram {
         if !s.f_load_n.is_nan() {
             f |= flags::F_LOAD_PRESENT;
         }
+        if !s.temp_c.is_nan() {
+            f |= flags::TEMP_PRESENT;
+        }
         UdpDatagram {
             flags: f,
             seq,
@@ -203,6 +221,7 @@ impl UdpDatagram {
             p2: s.p2_pa,
             x_sp: s.x_sp_m,
             f_load: s.f_load_n,
+            temp_c: s.temp_c,
         }
     }
 
@@ -218,6 +237,7 @@ impl UdpDatagram {
             p2: f64::NAN,
             x_sp: f64::NAN,
             f_load: f64::NAN,
+            temp_c: f64::NAN,
         }
     }
 
@@ -246,6 +266,7 @@ impl UdpDatagram {
             (offset::P2, self.p2),
             (offset::X_SP, self.x_sp),
             (offset::F_LOAD, self.f_load),
+            (offset::TEMP, self.temp_c),
         ] {
             b[at..at + 8].copy_from_slice(&v.to_le_bytes());
         }
@@ -260,14 +281,15 @@ impl From<&UdpDatagram> for [u8; LEN] {
     }
 }
 
-/// Decodes and checks one datagram: its length, magic, version and flags;
-/// unless it carries no sample, a finite time and finite `u`, `x`, `p1`, `p2`
-/// and, where flagged present, `x_sp` and `f_load` (absent ones read NaN).
+/// Decodes and checks one datagram: its length, magic, version (1 or 2, each
+/// at its length) and flags; unless it carries no sample, a finite time and
+/// finite `u`, `x`, `p1`, `p2` and, where flagged present, `x_sp`, `f_load`
+/// and `temp_c` (absent ones read NaN).
 impl TryFrom<&[u8]> for UdpDatagram {
     type Error = DecodeError;
 
     fn try_from(b: &[u8]) -> Result<Self, Self::Error> {
-        if b.len() != LEN {
+        if b.len() != LEN && b.len() != LEN_V1 {
             return Err(DecodeError::WrongLength { len: b.len() });
         }
         let mut magic = [0u8; 4];
@@ -276,11 +298,16 @@ impl TryFrom<&[u8]> for UdpDatagram {
             return Err(DecodeError::BadMagic { found: magic });
         }
         let version = u16_at(b, offset::VERSION);
-        if version != VERSION {
-            return Err(DecodeError::UnsupportedVersion { found: version });
+        let (len, defined) = match version {
+            1 => (LEN_V1, flags::ALL_V1),
+            VERSION => (LEN, flags::ALL),
+            found => return Err(DecodeError::UnsupportedVersion { found }),
+        };
+        if b.len() != len {
+            return Err(DecodeError::WrongLength { len: b.len() });
         }
         let fl = u16_at(b, offset::FLAGS);
-        if fl & !flags::ALL != 0 || (fl & flags::NO_SAMPLE != 0 && fl & flags::END_OF_STREAM == 0) {
+        if fl & !defined != 0 || (fl & flags::NO_SAMPLE != 0 && fl & flags::END_OF_STREAM == 0) {
             return Err(DecodeError::BadFlags { found: fl });
         }
         let present = |bit: u16, at: usize| {
@@ -300,6 +327,7 @@ impl TryFrom<&[u8]> for UdpDatagram {
             p2: f64_at(b, offset::P2),
             x_sp: present(flags::X_SP_PRESENT, offset::X_SP),
             f_load: present(flags::F_LOAD_PRESENT, offset::F_LOAD),
+            temp_c: present(flags::TEMP_PRESENT, offset::TEMP),
         };
         if d.has_sample() {
             let fields = [
@@ -310,6 +338,7 @@ impl TryFrom<&[u8]> for UdpDatagram {
                 ("p2", d.p2, true),
                 ("x_sp", d.x_sp, fl & flags::X_SP_PRESENT != 0),
                 ("f_load", d.f_load, fl & flags::F_LOAD_PRESENT != 0),
+                ("temp_c", d.temp_c, fl & flags::TEMP_PRESENT != 0),
             ];
             if let Some((field, value, _)) = fields
                 .into_iter()
@@ -338,7 +367,7 @@ mod tests {
         assert_eq!(d.flags, flags::F_LOAD_PRESENT);
         let b = d.encode();
         assert_eq!(&b[..4], b"LWUD");
-        assert_eq!(&b[4..8], &[1, 0, 2, 0]);
+        assert_eq!(&b[4..8], &[2, 0, 2, 0]);
         assert_eq!(&b[8..16], &41u64.to_le_bytes());
         let back = UdpDatagram::try_from(&b[..]).unwrap();
         assert_eq!(back.seq, 41);
@@ -352,12 +381,28 @@ mod tests {
         ] {
             assert_eq!(a.to_bits(), b.to_bits());
         }
-        assert!(back.x_sp.is_nan());
+        assert!(back.x_sp.is_nan() && back.temp_c.is_nan());
         assert!(!back.is_end_of_stream() && back.has_sample());
+        let mut warm = d;
+        warm.temp_c = 41.5;
+        warm.flags |= flags::TEMP_PRESENT;
+        assert_eq!(UdpDatagram::try_from(&warm.encode()[..]).unwrap().temp_c, 41.5);
         let eos = UdpDatagram::try_from(&UdpDatagram::end_of_stream(7).encode()[..]).unwrap();
         assert!(eos.is_end_of_stream() && !eos.has_sample());
         assert_eq!(eos.seq, 7);
         assert_eq!(<[u8; LEN]>::from(&d), b);
+    }
+
+    #[test]
+    fn a_version_1_datagram_reads_without_temperature_and_may_not_flag_it() {
+        let mut v1 = sample_datagram().encode()[..LEN_V1].to_vec();
+        v1[offset::VERSION..offset::VERSION + 2].copy_from_slice(&1u16.to_le_bytes());
+        let d = UdpDatagram::try_from(&v1[..]).unwrap();
+        assert_eq!(d.f_load, -1500.0);
+        assert!(d.temp_c.is_nan());
+        v1[offset::FLAGS..offset::FLAGS + 2].copy_from_slice(&flags::TEMP_PRESENT.to_le_bytes());
+        let e = UdpDatagram::try_from(&v1[..]).unwrap_err().to_string();
+        assert!(e.contains("bad flags 0x0010"), "{e}");
     }
 
     #[test]
@@ -373,13 +418,15 @@ mod tests {
         let cases: Vec<(Vec<u8>, &str)> = vec![
             (vec![], "wrong length: 0 bytes"),
             (good[..71].to_vec(), "wrong length: 71 bytes"),
-            ([&good[..], &[0]].concat(), "wrong length: 73 bytes"),
+            (good[..72].to_vec(), "wrong length: 72 bytes"),
+            ([&good[..], &[0]].concat(), "wrong length: 81 bytes"),
             (vec![0xff; 1500], "wrong length: 1500 bytes"),
             (with(0, b"LWUE").to_vec(), "bad magic"),
             (vec![0u8; LEN], "bad magic"),
-            (with(4, &2u16.to_le_bytes()).to_vec(), "unsupported version 2"),
+            (with(4, &3u16.to_le_bytes()).to_vec(), "unsupported version 3"),
+            (with(4, &1u16.to_le_bytes()).to_vec(), "wrong length: 80 bytes"),
             (with(4, &0u16.to_le_bytes()).to_vec(), "unsupported version 0"),
-            (with(6, &0x0010u16.to_le_bytes()).to_vec(), "bad flags 0x0010"),
+            (with(6, &0x0020u16.to_le_bytes()).to_vec(), "bad flags 0x0020"),
             (with(6, &flags::NO_SAMPLE.to_le_bytes()).to_vec(), "bad flags"),
             (with(offset::T, &nan).to_vec(), "field `t` is NaN"),
             (with(offset::U, &inf).to_vec(), "field `u` is inf"),

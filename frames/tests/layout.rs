@@ -6,7 +6,7 @@ use iceoryx2::prelude::ZeroCopySend;
 
 #[test]
 fn sizes_and_alignment() {
-    assert_eq!(size_of::<SensorFrame>(), 96);
+    assert_eq!(size_of::<SensorFrame>(), 104);
     assert_eq!(size_of::<EstimateFrame>(), 488);
     assert_eq!(size_of::<LeakEventFrame>(), 520);
     assert_eq!(size_of::<HealthFrame>(), 80);
@@ -29,7 +29,7 @@ macro_rules! offsets {
 #[test]
 fn field_offsets_match_the_readme_table() {
     let s = frame_fields!(SensorFrame, offsets!(SensorFrame));
-    assert_eq!(s, [0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 92]);
+    assert_eq!(s, [0, 8, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 92, 96]);
     let e = frame_fields!(EstimateFrame, offsets!(EstimateFrame));
     assert_eq!(
         e,
@@ -52,7 +52,7 @@ fn field_offsets_match_the_readme_table() {
 #[test]
 fn type_names_are_versioned() {
     unsafe {
-        assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v1");
+        assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v2");
         assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v2");
         assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v3");
         assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v1");

@@ -22,7 +22,11 @@ proptest! {
     #[test]
     fn decoding_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
         match UdpDatagram::try_from(&bytes[..]) {
-            Ok(d) => prop_assert_eq!(&d.encode()[..8], &bytes[..8]),
+            // a version-1 datagram encodes as version 2: magic and flags are kept
+            Ok(d) => {
+                prop_assert_eq!(&d.encode()[..4], &bytes[..4]);
+                prop_assert_eq!(&d.encode()[6..16], &bytes[6..16]);
+            }
             Err(e) => prop_assert!(!e.to_string().is_empty()),
         }
     }
@@ -30,7 +34,7 @@ proptest! {
     /// A valid header with arbitrary flags and payload: decoded, or refused by name;
     /// every accepted datagram has a finite time and required channels.
     #[test]
-    fn arbitrary_payloads_behind_a_valid_header(fl in any::<u16>(), payload in proptest::collection::vec(any::<u8>(), 64)) {
+    fn arbitrary_payloads_behind_a_valid_header(fl in any::<u16>(), payload in proptest::collection::vec(any::<u8>(), udp::LEN - 8)) {
         let mut b = [0u8; udp::LEN];
         b[..4].copy_from_slice(&udp::MAGIC);
         b[4..6].copy_from_slice(&udp::VERSION.to_le_bytes());
@@ -74,7 +78,7 @@ fn readme() -> String {
 #[test]
 fn the_readme_table_is_the_datagram() {
     let text = readme();
-    let head = "## UdpDatagram: `LWUD` version 1, 72 bytes";
+    let head = "## UdpDatagram: `LWUD` version 2, 80 bytes";
     let start = text.find(head).expect("README.md has the UdpDatagram section");
     let body = &text[start + head.len()..];
     let body = &body[..body.find("\n## ").unwrap_or(body.len())];
@@ -98,11 +102,13 @@ fn the_readme_table_is_the_datagram() {
         ("p2", offset::P2),
         ("x_sp", offset::X_SP),
         ("f_load", offset::F_LOAD),
+        ("temp_c", offset::TEMP),
     ]
     .map(|(n, o)| (n.to_string(), o));
     assert_eq!(rows, code);
-    assert_eq!(udp::LEN, offset::F_LOAD + 8);
-    assert_eq!(udp::VERSION, 1);
+    assert_eq!(udp::LEN, offset::TEMP + 8);
+    assert_eq!(udp::LEN_V1, offset::F_LOAD + 8);
+    assert_eq!(udp::VERSION, 2);
     assert_eq!(&udp::MAGIC, b"LWUD");
 }
 
@@ -126,22 +132,25 @@ fn the_c_header_encodes_the_same_bytes() {
 int main(void)
 {
     struct lwud_sample s = {
-        .flags = LWUD_FLAG_X_SP_PRESENT | LWUD_FLAG_F_LOAD_PRESENT | LWUD_FLAG_END_OF_STREAM,
+        .flags = LWUD_FLAG_X_SP_PRESENT | LWUD_FLAG_F_LOAD_PRESENT | LWUD_FLAG_END_OF_STREAM
+            | LWUD_FLAG_TEMP_PRESENT,
         .seq = 0x0102030405060708ull,
         .t = 12.345, .u = -2.5, .x = 0.125, .p1 = 6.9e6, .p2 = 3.1e6, .x_sp = 1e-5, .f_load = -1500.0,
+        .temp_c = 47.25,
     };
     uint8_t b[LWUD_LEN];
     lwud_encode(&s, b);
     for (unsigned i = 0; i < LWUD_LEN; i++) {
         printf("%02x", b[i]);
     }
-    printf("\n%zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu\n",
+    printf("\n%zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu %zu\n",
            offsetof(struct lwud_datagram, magic), offsetof(struct lwud_datagram, version),
            offsetof(struct lwud_datagram, flags), offsetof(struct lwud_datagram, seq),
            offsetof(struct lwud_datagram, t), offsetof(struct lwud_datagram, u),
            offsetof(struct lwud_datagram, x), offsetof(struct lwud_datagram, p1),
            offsetof(struct lwud_datagram, p2), offsetof(struct lwud_datagram, x_sp),
-           offsetof(struct lwud_datagram, f_load), sizeof(struct lwud_datagram));
+           offsetof(struct lwud_datagram, f_load), offsetof(struct lwud_datagram, temp_c),
+           sizeof(struct lwud_datagram));
     return 0;
 }
 "#,
@@ -175,7 +184,7 @@ int main(void)
     let mut lines = text.lines();
     let c_hex = lines.next().unwrap();
     let d = UdpDatagram {
-        flags: flags::X_SP_PRESENT | flags::F_LOAD_PRESENT | flags::END_OF_STREAM,
+        flags: flags::X_SP_PRESENT | flags::F_LOAD_PRESENT | flags::END_OF_STREAM | flags::TEMP_PRESENT,
         seq: 0x0102030405060708,
         t_s: 12.345,
         u: -2.5,
@@ -184,6 +193,7 @@ int main(void)
         p2: 3.1e6,
         x_sp: 1e-5,
         f_load: -1500.0,
+        temp_c: 47.25,
     };
     let rust_hex: String = d.encode().iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(c_hex, rust_hex);
@@ -207,6 +217,7 @@ int main(void)
             offset::P2,
             offset::X_SP,
             offset::F_LOAD,
+            offset::TEMP,
             udp::LEN
         ]
     );

@@ -154,6 +154,20 @@ pub struct Identification {
     pub gap_after_lpm: f64,
     /// The part of the gap the sensors' noise alone makes, L/min.
     pub sensor_floor_lpm: f64,
+    /// The recording's mean oil temperature, °C, when its rows carry one
+    /// (`temp_c` in at least half of them): the temperature the identified
+    /// values hold at.
+    pub oil_temp_c: Option<f64>,
+}
+
+/// The mean oil temperature of `rows`, °C, when at least half of them carry one.
+fn mean_oil_temp_c(rows: &[Row]) -> Option<f64> {
+    let (n, sum) = rows
+        .iter()
+        .map(|r| r.sample.temp_c)
+        .filter(|t| t.is_finite())
+        .fold((0usize, 0.0), |(n, sum), t| (n + 1, sum + t));
+    (n > 0 && 2 * n >= rows.len()).then(|| sum / n as f64)
 }
 
 /// The sensors' noise, for the sensor floor.
@@ -413,6 +427,7 @@ pub fn identify(
             ..identify_once(&at, dt_s, rows, noise)?
         };
     }
+    id.oil_temp_c = mean_oil_temp_c(rows);
     Ok(id)
 }
 
@@ -578,14 +593,16 @@ fn identify_once(
         gap_before_lpm: pooled(rms_before),
         gap_after_lpm: pooled(fit.rms),
         sensor_floor_lpm: pooled(floor),
+        oil_temp_c: None,
     })
 }
 
 impl Identification {
     /// `p` with what was identified put in: the area gradients scaled by the
-    /// flow gains, the null leakage, the bulk modulus (the null bias is left to
-    /// the leak filter's commissioning, which identifies it with the filter's
-    /// own model of the spool).
+    /// flow gains, the null leakage, the bulk modulus, the supply sag, and the
+    /// oil law's reference temperature when the recording carried one (the
+    /// null bias is left to the leak filter's commissioning, which identifies
+    /// it with the filter's own model of the spool).
     pub fn apply(&self, p: &ActuatorParams) -> ActuatorParams {
         let mut out = p.clone();
         let (wa, wb) = p.area_gradients_m2_per_m();
@@ -604,6 +621,9 @@ impl Identification {
         }
         if let Some(s) = self.supply_sag_pa_per_m3_s.estimate() {
             out.supply_sag_pa_per_m3_s = s.value;
+        }
+        if let Some(t) = self.oil_temp_c {
+            out.oil_temperature.reference_c = t;
         }
         // the spool's natural frequency is reported, not put in: taken into the
         // filters it made detection on plant_dev/double slightly worse (docs/plant.md)

@@ -197,6 +197,7 @@ fn a_hold_is_refused() {
                 f_load_n: f64::NAN,
                 ref_m: f64::NAN,
                 q_leak_lpm: f64::NAN,
+                temp_c: f64::NAN,
             },
             after_gap: false,
         })

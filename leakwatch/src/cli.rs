@@ -258,7 +258,7 @@ pub(crate) enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Simulate a scenario on the rig and write a CSV (t,u,x,p1,p2,x_sp,f_load,ref,q_leak).
+    /// Simulate a scenario on the rig and write a CSV (t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c).
     Simulate {
         /// Scenario: open-loop-sine, open-loop-chirp, closed-loop-sine, closed-loop-random, loaded-sine, loaded-random.
         #[arg(long)]

@@ -170,6 +170,17 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.spool_natural_freq_rad_s / (2.0 * std::f64::consts::PI)
         )
     );
+    match id.oil_temp_c {
+        Some(t) => eprintln!(
+            "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \
+             and a live temp_c moves the model from it"
+        ),
+        None => eprintln!(
+            "  oil temperature: not recorded (no temp_c column): the identified values hold at the \
+             recording's temperature; the model takes [model.oil_temperature] reference_c = {:.1} °C for it",
+            m.oil_temperature.reference_c
+        ),
+    }
     // what this recording cannot tell apart, said rather than guessed
     eprintln!(
         "  transducer offsets: not separable from this recording: the flow balance uses pressure \

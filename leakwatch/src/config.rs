@@ -184,18 +184,20 @@ impl Config {
             Some(toml::Value::Integer(i)) => Some(*i as f64),
             _ => None,
         };
+        // a field may be dotted (`oil_temperature.viscosity_40c_mm2_s`): a table's field
+        let lookup = |table: &'_ toml::Table, section: &str, field: &str| -> Option<toml::Value> {
+            let mut at = table.get(section)?;
+            for key in field.split('.') {
+                at = at.as_table()?.get(key)?;
+            }
+            Some(at.clone())
+        };
         for (section, field, from) in model::datasheet::DERIVED_FIELDS {
-            let Some(given) = written
-                .get(section)
-                .and_then(|t| t.as_table())
-                .and_then(|t| t.get(field))
-            else {
+            let Some(given) = lookup(written, section, field) else {
                 continue;
             };
-            let value = derived_table
-                .get(section)
-                .and_then(|t| t.as_table())
-                .and_then(|t| t.get(field));
+            let value = lookup(&derived_table, section, field);
+            let (given, value) = (&given, value.as_ref());
             let (given_n, value_n) = (number(Some(given)), number(value));
             if given_n.is_none() || given_n != value_n {
                 let derived_text = value.map_or("none".to_string(), |v| v.to_string());

@@ -28,10 +28,7 @@ pub fn example(single_rod: bool) -> Datasheet {
             extra_volume_a_m3: 0.0,
             extra_volume_b_m3: 0.0,
         },
-        oil: OilSheet {
-            density_kg_m3: 870.0,
-            bulk_modulus_pa: 1.6e9,
-        },
+        oil: OilSheet::mineral(870.0, 1.6e9),
         valve: ValveSheet {
             rated_flow_l_min: 30.0,
             rated_flow_b_l_min: None,
@@ -153,6 +150,21 @@ pub fn template(sheet: &Datasheet) -> String {
                     "bulk_modulus_pa",
                     num(sheet.oil.bulk_modulus_pa),
                     "without air, Pa (commissioning finds the effective one)",
+                ),
+                (
+                    "viscosity_40c_mm2_s",
+                    num(sheet.oil.viscosity_40c_mm2_s),
+                    "at 40 °C, mm²/s (the ISO VG grade)",
+                ),
+                (
+                    "viscosity_100c_mm2_s",
+                    num(sheet.oil.viscosity_100c_mm2_s),
+                    "at 100 °C, mm²/s (the oil's data sheet)",
+                ),
+                (
+                    "bulk_modulus_per_k",
+                    num(sheet.oil.bulk_modulus_per_k),
+                    "relative change per kelvin, 1/K (mineral oil about -0.0045)",
                 ),
             ],
         ),

@@ -437,7 +437,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     };
     summary.rows = summary.samples + summary.rows_skipped;
     summary.max_bad_fraction = req.max_bad_fraction;
-    for (k, name) in ["x_sp", "f_load", "ref", "q_leak"].into_iter().enumerate() {
+    for (k, name) in dataset::COLUMNS[dataset::REQUIRED.len()..].iter().enumerate() {
         if has_optional[k] {
             summary.optional_absent.insert(name.to_string(), absent[k]);
         }

@@ -397,6 +397,7 @@ fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samp
             q_leak_lpm: f64::NAN,
             flags: 0,
             _pad: 0,
+            temp_c: f64::NAN,
         };
         assert!(w.write(Entry::Frame(frame, i)).unwrap());
     }

@@ -37,6 +37,8 @@ pub struct FrameMsg {
     pub ref_m: f64,
     /// Leak flow (flow meter or simulator truth), L/min (null: absent).
     pub q_leak_lpm: f64,
+    /// Oil temperature, °C (null: absent).
+    pub temp_c: f64,
     /// Samples were missing before this one.
     pub after_gap: bool,
     /// The last sample of the stream.
@@ -56,6 +58,7 @@ impl From<&SensorFrame> for FrameMsg {
             f_load_n: f.f_load_n,
             ref_m: f.ref_m,
             q_leak_lpm: f.q_leak_lpm,
+            temp_c: f.temp_c,
             after_gap: f.flags & sensor_flags::AFTER_GAP != 0,
             end_of_stream: f.flags & sensor_flags::END_OF_STREAM != 0,
         }
@@ -309,6 +312,7 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                 ("f_load_n", Num, "load force, N (null: absent)"),
                 ("ref_m", Num, "position reference, m (null: absent)"),
                 ("q_leak_lpm", Num, "leak flow, L/min (null: absent)"),
+                ("temp_c", Num, "oil temperature, °C (null: absent)"),
                 ("after_gap", Bool, "samples were missing before this one"),
                 ("end_of_stream", Bool, "the last sample of the stream"),
             ],

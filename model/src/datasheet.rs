@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::params::{ActuatorParams, InvalidParam};
+use crate::params::{ActuatorParams, InvalidParam, OilTemperature};
 use crate::sensors::SensorParams;
 
 /// Which cylinder: a rod through both ends (one piston area) or a rod on one end.
@@ -68,6 +68,41 @@ pub struct OilSheet {
     /// Bulk modulus of the oil without air, Pa (commissioning identifies the
     /// effective one, with the hoses and the air).
     pub bulk_modulus_pa: f64,
+    /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade). Default 46 (HLP 46).
+    #[serde(default = "default_viscosity_40c")]
+    pub viscosity_40c_mm2_s: f64,
+    /// Kinematic viscosity at 100 °C, mm²/s. Default 6.8 (an HLP 46 of viscosity index 100).
+    #[serde(default = "default_viscosity_100c")]
+    pub viscosity_100c_mm2_s: f64,
+    /// Relative change of the bulk modulus per kelvin, 1/K. Default −0.0045 (mineral oil).
+    #[serde(default = "default_bulk_modulus_per_k")]
+    pub bulk_modulus_per_k: f64,
+}
+
+impl OilSheet {
+    /// A mineral oil of density `density_kg_m3` (kg/m³) and bulk modulus
+    /// `bulk_modulus_pa` (Pa), with the defaults' viscosities and temperature coefficient.
+    pub fn mineral(density_kg_m3: f64, bulk_modulus_pa: f64) -> OilSheet {
+        OilSheet {
+            density_kg_m3,
+            bulk_modulus_pa,
+            viscosity_40c_mm2_s: default_viscosity_40c(),
+            viscosity_100c_mm2_s: default_viscosity_100c(),
+            bulk_modulus_per_k: default_bulk_modulus_per_k(),
+        }
+    }
+}
+
+fn default_viscosity_40c() -> f64 {
+    OilTemperature::default().viscosity_40c_mm2_s
+}
+
+fn default_viscosity_100c() -> f64 {
+    OilTemperature::default().viscosity_100c_mm2_s
+}
+
+fn default_bulk_modulus_per_k() -> f64 {
+    OilTemperature::default().bulk_modulus_per_k
 }
 
 /// The servovalve, from its catalogue sheet.
@@ -147,7 +182,7 @@ pub struct Datasheet {
 
 /// The config fields a datasheet derives: (section, field, the datasheet fact
 /// it comes from). Written once: a config with a `[datasheet]` may not set them.
-pub const DERIVED_FIELDS: [(&str, &str, &str); 22] = [
+pub const DERIVED_FIELDS: [(&str, &str, &str); 25] = [
     ("model", "piston_area_m2", "cylinder.bore_m and rod_m"),
     ("model", "rod_side_area_m2", "cylinder.kind, bore_m and rod_m"),
     ("model", "mounting_angle_rad", "cylinder.mounting_angle_deg"),
@@ -158,6 +193,21 @@ pub const DERIVED_FIELDS: [(&str, &str, &str); 22] = [
     ("model", "dead_volume_2_m3", "hoses"),
     ("model", "bulk_modulus_pa", "oil.bulk_modulus_pa"),
     ("model", "oil_density_kg_m3", "oil.density_kg_m3"),
+    (
+        "model",
+        "oil_temperature.viscosity_40c_mm2_s",
+        "oil.viscosity_40c_mm2_s",
+    ),
+    (
+        "model",
+        "oil_temperature.viscosity_100c_mm2_s",
+        "oil.viscosity_100c_mm2_s",
+    ),
+    (
+        "model",
+        "oil_temperature.bulk_modulus_per_k",
+        "oil.bulk_modulus_per_k",
+    ),
     ("model", "area_gradient_m2_per_m", "valve.rated_flow_l_min"),
     ("model", "area_gradient_b_m2_per_m", "valve.rated_flow_b_l_min"),
     (
@@ -280,6 +330,34 @@ impl Datasheet {
             1e7,
             1e10,
             "a bulk modulus from 1e7 to 1e10 Pa",
+        )?;
+        check(
+            "oil.viscosity_40c_mm2_s",
+            self.oil.viscosity_40c_mm2_s,
+            1.0,
+            10_000.0,
+            "a kinematic viscosity from 1 to 10000 mm²/s",
+        )?;
+        check(
+            "oil.viscosity_100c_mm2_s",
+            self.oil.viscosity_100c_mm2_s,
+            0.5,
+            10_000.0,
+            "a kinematic viscosity from 0.5 to 10000 mm²/s",
+        )?;
+        if self.oil.viscosity_100c_mm2_s >= self.oil.viscosity_40c_mm2_s {
+            return Err(InvalidParam {
+                field: "datasheet.oil.viscosity_100c_mm2_s".into(),
+                value: self.oil.viscosity_100c_mm2_s,
+                expected: "a viscosity below the one at 40 °C (oil thins as it warms)",
+            });
+        }
+        check(
+            "oil.bulk_modulus_per_k",
+            self.oil.bulk_modulus_per_k,
+            -0.02,
+            0.0,
+            "a relative change per kelvin from -0.02 to 0 (1/K)",
         )?;
         let v = &self.valve;
         check(
@@ -442,6 +520,12 @@ impl Datasheet {
             spool_natural_freq_rad_s: 2.0 * std::f64::consts::PI * v.phase_90_hz,
             supply_pressure_pa: self.supply.pressure_pa,
             valve_null_leakage_m3_s_pa: v.null_leakage_l_min * L_MIN / self.supply.pressure_pa,
+            oil_temperature: OilTemperature {
+                viscosity_40c_mm2_s: self.oil.viscosity_40c_mm2_s,
+                viscosity_100c_mm2_s: self.oil.viscosity_100c_mm2_s,
+                bulk_modulus_per_k: self.oil.bulk_modulus_per_k,
+                ..base.oil_temperature
+            },
             ..base.clone()
         }
     }
@@ -496,10 +580,7 @@ impl Datasheet {
                 extra_volume_a_m3: lift.dead_volume_1_m3,
                 extra_volume_b_m3: lift.dead_volume_2_m3,
             },
-            oil: OilSheet {
-                density_kg_m3: lift.oil_density_kg_m3,
-                bulk_modulus_pa: lift.bulk_modulus_pa,
-            },
+            oil: OilSheet::mineral(lift.oil_density_kg_m3, lift.bulk_modulus_pa),
             valve: ValveSheet {
                 rated_flow_l_min: q(wa),
                 rated_flow_b_l_min: Some(q(wb)),
@@ -547,10 +628,7 @@ mod tests {
                 extra_volume_a_m3: 0.0,
                 extra_volume_b_m3: 0.0,
             },
-            oil: OilSheet {
-                density_kg_m3: 870.0,
-                bulk_modulus_pa: 1.6e9,
-            },
+            oil: OilSheet::mineral(870.0, 1.6e9),
             valve: ValveSheet {
                 rated_flow_l_min: 32.0,
                 rated_flow_b_l_min: None,

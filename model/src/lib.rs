@@ -27,4 +27,4 @@ pub use params::{ActuatorParams, FrictionPreset};
 pub use sample::Sample;
 pub use scenario::Scenario;
 pub use sensors::SensorParams;
-pub use sim::{SimSettings, Simulator};
+pub use sim::{OilWarmUp, SimSettings, Simulator};

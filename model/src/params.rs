@@ -11,9 +11,11 @@ use serde::{Deserialize, Serialize};
 use crate::leakage::{LeakLaw, LeakPath};
 
 mod friction;
+mod oil;
 mod validate;
 
 pub use friction::{Friction, FrictionParams, FrictionPreset};
+pub use oil::{OilFactors, OilTemperature};
 pub use validate::InvalidParam;
 
 /// A spring in front of the rod: F_l = k·max(0, x − x_c) + preload + damping
@@ -105,6 +107,9 @@ pub struct ActuatorParams {
     pub dead_volume_2_m3: f64,
     /// Effective bulk modulus of the (air-free) oil β, Pa.
     pub bulk_modulus_pa: f64,
+    /// How the oil's bulk modulus and viscosity follow its temperature (used
+    /// only when the samples carry it, `temp_c`).
+    pub oil_temperature: OilTemperature,
     /// Volume fraction of entrained air at atmospheric pressure (0 = none);
     /// makes the effective bulk modulus fall at low pressure.
     pub entrained_air_fraction: f64,
@@ -163,6 +168,7 @@ impl Default for ActuatorParams {
             dead_volume_1_m3: 2.14e-5,
             dead_volume_2_m3: 2.14e-5,
             bulk_modulus_pa: 6.89e8,
+            oil_temperature: OilTemperature::default(),
             entrained_air_fraction: 0.0,
             oil_density_kg_m3: 847.15,
             discharge_coefficient: 0.6,
@@ -196,6 +202,28 @@ pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 pub const PRESSURE_NEGATIVE_MARGIN: f64 = 0.02;
 
 impl ActuatorParams {
+    /// These parameters at oil temperature `temp_c` (°C), from `base` (the
+    /// parameters at the law's reference temperature): the bulk modulus, the
+    /// seals' viscous friction, the valve's null leakage and the linear leaks
+    /// scaled by [`OilTemperature::factors`], everything else as `base` has it.
+    /// Writes fields in place (no allocation); `self.leaks` must be `base.leaks`
+    /// in length. Returns the factors.
+    pub fn set_oil_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
+        let f = base.oil_temperature.factors(temp_c);
+        self.bulk_modulus_pa = base.bulk_modulus_pa * f.bulk_modulus;
+        self.friction.viscous_n_s_per_m = base.friction.viscous_n_s_per_m * f.viscous_friction;
+        if let (Some(r), Some(b)) = (self.friction.retract.as_mut(), base.friction.retract) {
+            r.viscous_n_s_per_m = b.viscous_n_s_per_m * f.viscous_friction;
+        }
+        self.valve_null_leakage_m3_s_pa = base.valve_null_leakage_m3_s_pa * f.laminar_flow;
+        for (l, b) in self.leaks.iter_mut().zip(&base.leaks) {
+            if b.law == LeakLaw::Linear {
+                l.coefficient = b.coefficient * f.laminar_flow;
+            }
+        }
+        f
+    }
+
     /// This rig made to differ from its model the way real ones do (the one
     /// definition the demonstration, tests and benchmarks share): friction 15 %
     /// higher extending and 10 % lower retracting, the bulk modulus times

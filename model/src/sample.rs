@@ -1,5 +1,5 @@
 //! One sample of measured (or simulated) rig data: the row of the CSV format
-//! of ARCHITECTURE.md (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak`).
+//! of ARCHITECTURE.md (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c`).
 
 /// One 1 kHz sample of the rig. Optional channels are NaN when absent.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,6 +23,8 @@ pub struct Sample {
     /// Leak flow (flow meter, or the simulator's truth), L/min (NaN if absent);
     /// signed along the leak path, chamber 1 to chamber 2 for the internal leak.
     pub q_leak_lpm: f64,
+    /// Oil temperature, °C (NaN if absent).
+    pub temp_c: f64,
 }
 
 impl Sample {
@@ -38,12 +40,13 @@ impl Sample {
             f_load_n: f64::NAN,
             ref_m: f64::NAN,
             q_leak_lpm: f64::NAN,
+            temp_c: f64::NAN,
         }
     }
 
-    /// Every channel in the CSV column order `t,u,x,p1,p2,x_sp,f_load,ref,q_leak`
-    /// (s, V, m, Pa, Pa, m, N, m, L/min).
-    pub fn columns(&self) -> [f64; 9] {
+    /// Every channel in the CSV column order `t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c`
+    /// (s, V, m, Pa, Pa, m, N, m, L/min, °C).
+    pub fn columns(&self) -> [f64; 10] {
         [
             self.t_s,
             self.u_v,
@@ -54,6 +57,7 @@ impl Sample {
             self.f_load_n,
             self.ref_m,
             self.q_leak_lpm,
+            self.temp_c,
         ]
     }
 

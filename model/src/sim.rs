@@ -28,6 +28,37 @@ pub struct SimSettings {
     pub supply_ripple_fraction: f64,
     /// The ripple's frequency, Hz.
     pub supply_ripple_hz: f64,
+    /// The oil's temperature over the run (None: constant, at the rig's
+    /// `oil_temperature.reference_c`).
+    pub oil: Option<OilWarmUp>,
+}
+
+/// The simulated oil's temperature over a run, T(t) = T_end + (T_start −
+/// T_end)·e^(−t/τ): a warm-up (or a cool-down); the rig's bulk modulus,
+/// viscous friction and laminar flows follow it
+/// ([`ActuatorParams::set_oil_temperature`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OilWarmUp {
+    /// Temperature at t = 0, °C.
+    pub start_c: f64,
+    /// Temperature the oil tends to, °C.
+    pub end_c: f64,
+    /// Time constant τ, s.
+    pub time_constant_s: f64,
+    /// Whether the samples carry it (`temp_c`, to [`TEMP_RESOLUTION_C`]); false: the rig has no thermometer.
+    #[serde(default)]
+    pub measured: bool,
+}
+
+/// Resolution of the simulated oil thermometer, °C.
+pub const TEMP_RESOLUTION_C: f64 = 0.1;
+
+impl OilWarmUp {
+    /// The temperature at time `t_s` (s), °C.
+    pub fn at(&self, t_s: f64) -> f64 {
+        self.end_c + (self.start_c - self.end_c) * (-t_s / self.time_constant_s).exp()
+    }
 }
 
 impl SimSettings {
@@ -61,6 +92,24 @@ impl SimSettings {
                 expected: "a frequency from 0 to 1e5 Hz",
             });
         }
+        if let Some(oil) = self.oil {
+            for (field, value) in [("sim.oil.start_c", oil.start_c), ("sim.oil.end_c", oil.end_c)] {
+                if !(-40.0..=150.0).contains(&value) {
+                    return Err(InvalidParam {
+                        field: field.into(),
+                        value,
+                        expected: "an oil temperature from -40 to 150 °C",
+                    });
+                }
+            }
+            if !(1e-3..=1e7).contains(&oil.time_constant_s) {
+                return Err(InvalidParam {
+                    field: "sim.oil.time_constant_s".into(),
+                    value: oil.time_constant_s,
+                    expected: "a time constant from 1e-3 to 1e7 s",
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -72,6 +121,7 @@ impl Default for SimSettings {
             substeps_per_sample: 40,
             supply_ripple_fraction: 0.0,
             supply_ripple_hz: 250.0,
+            oil: None,
         }
     }
 }
@@ -122,6 +172,8 @@ pub struct Simulator {
     truth: Truth,
     /// The lagging transducers' readings before noise, Pa (set at the first sample).
     lagged: Option<[f64; 2]>,
+    /// The rig at its oil law's reference temperature (with a warm-up only).
+    rig_at_reference: Option<ActuatorParams>,
 }
 
 impl Simulator {
@@ -162,6 +214,7 @@ impl Simulator {
         sensors.validate()?;
         let state = state_at_rest(scenario.initial_position_m, rig.nominal_chamber_pressure_pa());
         let base_leaks = LeakSet::from_params(&rig);
+        let rig_at_reference = settings.oil.map(|_| rig.clone());
         Ok(Simulator {
             rig,
             sensors,
@@ -173,6 +226,7 @@ impl Simulator {
             state,
             k: 0,
             lagged: None,
+            rig_at_reference,
             truth: Truth {
                 t_s: 0.0,
                 state,
@@ -182,7 +236,10 @@ impl Simulator {
         })
     }
 
-    /// The rig's parameters (may be changed between samples, e.g. to model drift).
+    /// The rig's parameters (may be changed between samples, e.g. to model
+    /// drift; with a warm-up ([`SimSettings::oil`]) each sample sets the bulk
+    /// modulus, viscous friction, null leakage and linear leaks from the
+    /// parameters the simulator started with).
     pub fn rig_mut(&mut self) -> &mut ActuatorParams {
         &mut self.rig
     }
@@ -190,6 +247,12 @@ impl Simulator {
     /// The rig's parameters.
     pub fn rig(&self) -> &ActuatorParams {
         &self.rig
+    }
+
+    /// The oil's temperature at the last sample, °C (NaN without a warm-up, [`SimSettings::oil`]).
+    pub fn oil_temp_c(&self) -> f64 {
+        let t_s = self.k.saturating_sub(1) as f64 * self.settings.sample_period_s;
+        self.settings.oil.map_or(f64::NAN, |oil| oil.at(t_s))
     }
 
     /// The scenario.
@@ -224,6 +287,15 @@ impl Simulator {
     pub fn step(&mut self) -> Sample {
         let dt = self.settings.sample_period_s;
         let t = self.k as f64 * dt;
+        let mut temp_c = f64::NAN;
+        if let (Some(oil), Some(base)) = (self.settings.oil, self.rig_at_reference.as_ref()) {
+            let temp = oil.at(t);
+            self.rig.set_oil_temperature(base, temp);
+            self.base_leaks = LeakSet::from_params(&self.rig);
+            if oil.measured {
+                temp_c = (temp * TEMP_RESOLUTION_C.recip()).round() / TEMP_RESOLUTION_C.recip();
+            }
+        }
         let leaks = self.leaks_at(t);
         let s = self.state;
         let x_meas = self.sensors.encoder(s[I_X]);
@@ -272,6 +344,7 @@ impl Simulator {
             f_load_n: load_meas,
             ref_m: self.scenario.reference_m(t),
             q_leak_lpm: m3_s_to_lpm(fq.ext1_m3_s + fq.ext2_m3_s + fq.int_m3_s),
+            temp_c,
         };
         // integrate to the next sample; leak coefficients follow ramps per sub-step
         let n = self.settings.substeps_per_sample;

@@ -750,3 +750,74 @@ fn the_pumps_ripple_reaches_the_chambers() {
         "no ripple changes nothing"
     );
 }
+
+/// A warm-up (25 → 55 °C, τ = 10 s) scales the rig by the oil's laws at every
+/// sample: the bulk modulus linearly, the seals' viscous friction by √(ν/ν_ref)
+/// and the valve's null leakage and a linear leak by ν_ref/ν (Walther's ν); the
+/// measured channel reads the temperature to 0.1 °C, an unmeasured one NaN; the
+/// rest of the rig is untouched.
+#[test]
+fn a_warming_oil_scales_stiffness_friction_and_laminar_flows_by_its_laws() {
+    let mut rig = ActuatorParams::vertical_lift();
+    rig.oil_temperature.reference_c = 25.0;
+    rig.valve_null_leakage_m3_s_pa = 3e-13;
+    rig.leaks.push(model::params::BuiltInLeak {
+        path: LeakPath::Internal,
+        law: LeakLaw::Linear,
+        coefficient: 1e-12,
+    });
+    for measured in [true, false] {
+        let oil = model::OilWarmUp {
+            start_c: 25.0,
+            end_c: 55.0,
+            time_constant_s: 10.0,
+            measured,
+        };
+        let settings = SimSettings {
+            oil: Some(oil),
+            ..SimSettings::default()
+        };
+        let sc = Scenario::by_name("closed-loop-random", 3, 30.0).unwrap();
+        let mut s = Simulator::new(
+            rig.clone(),
+            SensorParams::default(),
+            settings,
+            sc,
+            FaultSchedule::default(),
+            3,
+        )
+        .unwrap();
+        for k in 0..20_000u32 {
+            let sample = s.step();
+            if k % 5000 != 4999 {
+                continue;
+            }
+            let temp = oil.at(sample.t_s);
+            let nu = |t: f64| rig.oil_temperature.viscosity_mm2_s(t);
+            let ratio = nu(temp) / nu(25.0);
+            let r = s.rig();
+            assert!((r.bulk_modulus_pa / rig.bulk_modulus_pa - (1.0 - 0.0045 * (temp - 25.0))).abs() < 1e-12);
+            let viscous = r.friction.viscous_n_s_per_m / rig.friction.viscous_n_s_per_m;
+            assert!((viscous - ratio.sqrt()).abs() < 1e-12);
+            assert!((r.valve_null_leakage_m3_s_pa / 3e-13 * ratio - 1.0).abs() < 1e-12);
+            assert!((r.leaks[0].coefficient / 1e-12 * ratio - 1.0).abs() < 1e-12);
+            assert_eq!(r.friction.slip_n, rig.friction.slip_n);
+            assert_eq!(r.mass_kg, rig.mass_kg);
+            if measured {
+                assert!(
+                    (sample.temp_c - temp).abs() <= 0.05 + 1e-9,
+                    "{} vs {temp}",
+                    sample.temp_c
+                );
+            } else {
+                assert!(sample.temp_c.is_nan());
+            }
+        }
+        // 20 s into a 10-s time constant: 30·(1 − e^−2) = 25.9 K warmer; an HLP 46
+        // (VI 100) goes from about 95 to 28 mm²/s there (ISO 3448 charts): 0.29×
+        let temp = oil.at(19.999);
+        assert!((temp - 50.94).abs() < 0.01, "{temp}");
+        let ratio = rig.oil_temperature.viscosity_mm2_s(temp) / rig.oil_temperature.viscosity_mm2_s(25.0);
+        assert!((0.25..0.35).contains(&ratio), "{ratio}");
+    }
+}

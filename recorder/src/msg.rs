@@ -173,6 +173,15 @@ impl<'a> CdrReader<'a> {
         self.u64(field).map(f64::from_bits)
     }
 
+    /// A `float64` a later version appended: NaN (absent) when the message
+    /// ends before it (a log of an earlier version).
+    pub fn f64_appended(&mut self, field: &str) -> Result<f64, String> {
+        if self.pos >= self.data.len() {
+            return Ok(f64::NAN);
+        }
+        self.f64(field)
+    }
+
     /// `N` consecutive `float64`s.
     pub fn f64s<const N: usize>(&mut self, field: &str) -> Result<[f64; N], String> {
         let mut out = [0.0; N];
@@ -243,7 +252,8 @@ pub trait Message: Sized {
 }
 
 /// Writes and reads a record type's fields in the order listed, each with its
-/// codec: `u32`, `u64`, `f64`, `f64s` (a fixed array), `text` (a fixed byte
+/// codec: `u32`, `u64`, `f64`, `f64_appended` (a `float64` a later version
+/// appended: NaN when an earlier version's message ends before it), `f64s` (a fixed array), `text` (a fixed byte
 /// buffer as a string), `code(NAMES)` (a code as its name) or `zero` (padding,
 /// not on the wire, read as 0). Reading builds the struct literally, so a field
 /// added to the type and not listed here does not compile.
@@ -262,6 +272,7 @@ macro_rules! cdr_fields {
     (@write $w:ident, $v:expr, u32) => { $w.u32($v) };
     (@write $w:ident, $v:expr, u64) => { $w.u64($v) };
     (@write $w:ident, $v:expr, f64) => { $w.f64($v) };
+    (@write $w:ident, $v:expr, f64_appended) => { $w.f64($v) };
     (@write $w:ident, $v:expr, f64s) => { $w.f64s(&$v) };
     (@write $w:ident, $v:expr, text) => { $w.string(frames::text(&$v)) };
     (@write $w:ident, $v:expr, code($names:expr)) => { $w.string(&code_name(&$names, $v)) };
@@ -269,6 +280,7 @@ macro_rules! cdr_fields {
     (@read $r:ident, $name:expr, u32) => { $r.u32($name)? };
     (@read $r:ident, $name:expr, u64) => { $r.u64($name)? };
     (@read $r:ident, $name:expr, f64) => { $r.f64($name)? };
+    (@read $r:ident, $name:expr, f64_appended) => { $r.f64_appended($name)? };
     (@read $r:ident, $name:expr, f64s) => { $r.f64s($name)? };
     (@read $r:ident, $name:expr, text) => { $r.text($name)? };
     (@read $r:ident, $name:expr, code($names:expr)) => { $r.code(&$names, $name)? };
@@ -293,6 +305,7 @@ impl Message for SensorFrame {
         q_leak_lpm: f64,
         flags: u32,
         _pad: zero,
+        temp_c: f64_appended,
     });
 }
 

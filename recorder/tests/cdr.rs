@@ -25,6 +25,7 @@ fn sensor() -> SensorFrame {
         q_leak_lpm: 5e-324,
         flags: 3,
         _pad: 0,
+        temp_c: 41.25,
     }
 }
 

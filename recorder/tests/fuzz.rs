@@ -75,6 +75,7 @@ fn write_log(path: &Path, n: u64, compression: Option<mcap::Compression>) {
             q_leak_lpm: 0.25,
             flags: 0,
             _pad: 0,
+            temp_c: f64::NAN,
         };
         assert!(w.write(Entry::Frame(f, 10 + i)).unwrap());
         if i % 10 == 0 {

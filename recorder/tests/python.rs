@@ -122,7 +122,7 @@ fn expected_sensor(x: &SensorFrame) -> Value {
     json!({
         "seq": x.seq, "acq_mono_ns": x.acq_mono_ns, "t_s": f(x.t_s), "u_v": f(x.u_v), "x_m": f(x.x_m),
         "p1_pa": f(x.p1_pa), "p2_pa": f(x.p2_pa), "x_sp_m": f(x.x_sp_m), "f_load_n": f(x.f_load_n),
-        "ref_m": f(x.ref_m), "q_leak_lpm": f(x.q_leak_lpm), "flags": x.flags,
+        "ref_m": f(x.ref_m), "q_leak_lpm": f(x.q_leak_lpm), "flags": x.flags, "temp_c": f(x.temp_c),
     })
 }
 
@@ -211,6 +211,7 @@ fn write_log(path: &Path) {
                 q_leak_lpm: 5e-324,
                 flags: (i % 3) as u32,
                 _pad: 0,
+                temp_c: 30.0 + i as f64 * 0.1,
             },
             t + 10,
         ));

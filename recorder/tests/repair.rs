@@ -30,6 +30,7 @@ fn frame(i: u64) -> SensorFrame {
         q_leak_lpm: 0.0,
         flags: 0,
         _pad: 0,
+        temp_c: f64::NAN,
     }
 }
 

@@ -12,7 +12,7 @@ use super::{probe_range, Config};
 /// The sources of the structs that make up the configuration (path from the
 /// workspace root, text). A section whose type is in none of them is an error
 /// that names the type.
-const SOURCES: [(&str, &str); 12] = [
+const SOURCES: [(&str, &str); 13] = [
     ("leakwatch/src/config.rs", include_str!("../config.rs")),
     (
         "leakwatch/src/config/run_settings.rs",
@@ -25,6 +25,10 @@ const SOURCES: [(&str, &str); 12] = [
     (
         "model/src/params/friction.rs",
         include_str!("../../../model/src/params/friction.rs"),
+    ),
+    (
+        "model/src/params/oil.rs",
+        include_str!("../../../model/src/params/oil.rs"),
     ),
     (
         "model/src/datasheet.rs",

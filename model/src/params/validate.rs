@@ -94,6 +94,41 @@ impl ActuatorParams {
             1e11,
             "a bulk modulus from 1e6 to 1e11 Pa",
         )?;
+        let oil = &self.oil_temperature;
+        r(
+            "oil_temperature.reference_c",
+            oil.reference_c,
+            -40.0,
+            150.0,
+            "an oil temperature from -40 to 150 °C",
+        )?;
+        r(
+            "oil_temperature.viscosity_40c_mm2_s",
+            oil.viscosity_40c_mm2_s,
+            1.0,
+            10_000.0,
+            "a kinematic viscosity from 1 to 10000 mm²/s",
+        )?;
+        r(
+            "oil_temperature.viscosity_100c_mm2_s",
+            oil.viscosity_100c_mm2_s,
+            0.5,
+            10_000.0,
+            "a kinematic viscosity from 0.5 to 10000 mm²/s",
+        )?;
+        check(
+            "oil_temperature.viscosity_100c_mm2_s",
+            oil.viscosity_100c_mm2_s,
+            oil.viscosity_100c_mm2_s < oil.viscosity_40c_mm2_s,
+            "a viscosity below the one at 40 °C (oil thins as it warms)",
+        )?;
+        r(
+            "oil_temperature.bulk_modulus_per_k",
+            oil.bulk_modulus_per_k,
+            -0.02,
+            0.0,
+            "a relative change per kelvin from -0.02 to 0 (1/K)",
+        )?;
         check(
             "entrained_air_fraction",
             self.entrained_air_fraction,

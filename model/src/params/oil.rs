@@ -1,0 +1,135 @@
+//! How the oil's properties follow its temperature (docs/plant.md, "Oil
+//! temperature"): the bulk modulus falls linearly, the viscosity follows
+//! Walther's law (ASTM D341) through the oil's two catalogue viscosities, and
+//! with the viscosity the seals' viscous friction (∝ √ν, a lubricating film)
+//! and every laminar flow (∝ 1/ν: the valve's null leakage, a linear leak).
+
+use serde::{Deserialize, Serialize};
+
+/// Kelvin at 0 °C.
+const ZERO_C_K: f64 = 273.15;
+/// Walther's offset, mm²/s (ASTM D341).
+const WALTHER_OFFSET_MM2_S: f64 = 0.7;
+/// The lowest bulk-modulus factor the linear law gives (1): 100 K above the
+/// reference a mineral oil still has half its stiffness.
+const MIN_BULK_FACTOR: f64 = 0.5;
+
+/// The oil's temperature law, relative to the temperature the model's
+/// parameters hold at. It is used only when the samples carry the oil's
+/// temperature (`temp_c`); without it nothing changes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OilTemperature {
+    /// Oil temperature at which the model's bulk modulus, viscous friction and
+    /// laminar flows hold, °C: the commissioning recording's mean when it has
+    /// a `temp_c` column.
+    pub reference_c: f64,
+    /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade: 46 for HLP 46).
+    pub viscosity_40c_mm2_s: f64,
+    /// Kinematic viscosity at 100 °C, mm²/s (the oil's data sheet; 6.8 for an HLP 46 of viscosity index 100).
+    pub viscosity_100c_mm2_s: f64,
+    /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
+    pub bulk_modulus_per_k: f64,
+}
+
+impl Default for OilTemperature {
+    fn default() -> Self {
+        OilTemperature {
+            reference_c: 40.0,
+            viscosity_40c_mm2_s: 46.0,
+            viscosity_100c_mm2_s: 6.8,
+            bulk_modulus_per_k: -0.0045,
+        }
+    }
+}
+
+/// What the oil's temperature does to the model, as multiples of the values at
+/// the reference temperature (1 each).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OilFactors {
+    /// Bulk modulus.
+    pub bulk_modulus: f64,
+    /// Kinematic viscosity.
+    pub viscosity: f64,
+    /// Viscous friction of the seals: √ of the viscosity's factor.
+    pub viscous_friction: f64,
+    /// Laminar flows (null leakage, linear leaks): 1 / the viscosity's factor.
+    pub laminar_flow: f64,
+}
+
+impl OilFactors {
+    /// No change (the reference temperature).
+    pub const NONE: OilFactors = OilFactors {
+        bulk_modulus: 1.0,
+        viscosity: 1.0,
+        viscous_friction: 1.0,
+        laminar_flow: 1.0,
+    };
+}
+
+impl OilTemperature {
+    /// Walther's W = log10(log10(ν + 0.7)) of a viscosity `nu_mm2_s`.
+    fn walther(nu_mm2_s: f64) -> f64 {
+        (nu_mm2_s + WALTHER_OFFSET_MM2_S).log10().log10()
+    }
+
+    /// The kinematic viscosity at `temp_c` (°C), mm²/s: Walther's law
+    /// log10 log10(ν + 0.7) = A − B·log10(T/K) through the 40 °C and 100 °C values.
+    pub fn viscosity_mm2_s(&self, temp_c: f64) -> f64 {
+        let (t40, t100) = ((40.0 + ZERO_C_K).log10(), (100.0 + ZERO_C_K).log10());
+        let (w40, w100) = (
+            Self::walther(self.viscosity_40c_mm2_s),
+            Self::walther(self.viscosity_100c_mm2_s),
+        );
+        let b = (w40 - w100) / (t100 - t40);
+        let w = w40 - b * ((temp_c + ZERO_C_K).log10() - t40);
+        10f64.powf(10f64.powf(w)) - WALTHER_OFFSET_MM2_S
+    }
+
+    /// The factors at oil temperature `temp_c` (°C) against [`Self::reference_c`].
+    pub fn factors(&self, temp_c: f64) -> OilFactors {
+        let viscosity = self.viscosity_mm2_s(temp_c) / self.viscosity_mm2_s(self.reference_c);
+        OilFactors {
+            bulk_modulus: (1.0 + self.bulk_modulus_per_k * (temp_c - self.reference_c)).max(MIN_BULK_FACTOR),
+            viscosity,
+            viscous_friction: viscosity.sqrt(),
+            laminar_flow: 1.0 / viscosity,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn walther_passes_through_both_catalogue_points_and_halves_the_viscosity_over_about_17_k() {
+        let oil = OilTemperature::default();
+        assert!((oil.viscosity_mm2_s(40.0) - 46.0).abs() < 1e-9);
+        assert!((oil.viscosity_mm2_s(100.0) - 6.8).abs() < 1e-9);
+        // an HLP 46 of VI 100 at 60 °C is about 20 mm²/s (ISO 3448 tables: 19-21)
+        let nu60 = oil.viscosity_mm2_s(60.0);
+        assert!((19.0..21.5).contains(&nu60), "{nu60}");
+        // monotone
+        assert!(oil.viscosity_mm2_s(30.0) > 46.0 && oil.viscosity_mm2_s(55.0) < 46.0);
+    }
+
+    #[test]
+    fn the_factors_are_one_at_the_reference_and_follow_the_laws_away_from_it() {
+        let oil = OilTemperature {
+            reference_c: 30.0,
+            ..OilTemperature::default()
+        };
+        let f = oil.factors(30.0);
+        for v in [f.bulk_modulus, f.viscosity, f.viscous_friction, f.laminar_flow] {
+            assert!((v - 1.0).abs() < 1e-12);
+        }
+        let f = oil.factors(55.0);
+        assert!((f.bulk_modulus - (1.0 - 0.0045 * 25.0)).abs() < 1e-12);
+        let ratio = oil.viscosity_mm2_s(55.0) / oil.viscosity_mm2_s(30.0);
+        assert!((f.viscosity - ratio).abs() < 1e-12);
+        assert!((f.viscous_friction - ratio.sqrt()).abs() < 1e-12);
+        assert!((f.laminar_flow * ratio - 1.0).abs() < 1e-12);
+        assert_eq!(oil.factors(1000.0).bulk_modulus, MIN_BULK_FACTOR);
+    }
+}
