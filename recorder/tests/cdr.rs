@@ -54,15 +54,19 @@ fn estimate() -> EstimateFrame {
 }
 
 /// The sensor and estimate frames have natural alignment, so their CDR body is
-/// their wire layout (frames/README.md) byte for byte, trailing padding left out.
+/// their wire layout (frames/README.md) byte for byte, padding as zeros. A
+/// version-1 sensor message (ending after `flags`) reads with `temp_c` absent.
 #[test]
 fn the_cdr_body_of_the_1_khz_frames_is_their_wire_layout() {
     let mut buf = Vec::new();
     let s = sensor();
     s.to_cdr(&mut buf);
     assert_eq!(buf[..4], CDR_LE_HEADER);
-    assert_eq!(buf.len(), 4 + 92);
-    assert_eq!(buf[4..], bits(&s)[..92]);
+    assert_eq!(buf.len(), 4 + 104);
+    assert_eq!(buf[4..], bits(&s)[..]);
+    let v1 = SensorFrame::from_cdr(&buf[..4 + 92]).unwrap();
+    assert!(v1.temp_c.is_nan());
+    assert_eq!(bits(&SensorFrame { temp_c: s.temp_c, ..v1 }), bits(&s));
     let e = estimate();
     e.to_cdr(&mut buf);
     assert_eq!(buf.len(), 4 + 488);
