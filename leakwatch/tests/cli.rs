@@ -812,7 +812,7 @@ fn info_summarises_a_log_and_writes_the_config_it_holds() {
     for want in [
         "File:        ",
         "Duration:    2.999 s",
-        "frames          3000 msgs    1000.0 Hz  cdr leakwatch/msg/SensorFrame (ros2msg)",
+        "frames          3000 msgs    1000.0 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
         "health            30 msgs",
         "Gaps:        none recorded",
         "Events:      1 raised",
@@ -1394,7 +1394,7 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
         let topic = format!("/leakwatch/press-3/{name}");
         assert_eq!(
             r["connections"][&topic],
-            serde_json::json!([format!("leakwatch/msg/{msg}"), n]),
+            serde_json::json!([format!("leakwatch_msgs/msg/{msg}"), n]),
             "{topic}: {}",
             r["connections"]
         );

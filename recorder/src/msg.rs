@@ -1,6 +1,6 @@
 //! The log's message encoding: every record as a ROS 2 message, serialised
 //! as CDR (`message_encoding = "cdr"`) and described by its `.msg` definition
-//! (`schema encoding = "ros2msg"`, the files in `recorder/msg/`).
+//! (`schema encoding = "ros2msg"`, the files in `leakwatch_msgs/msg/`).
 //!
 //! Why CDR with ros2msg schemas: Foxglove, rosbag2 (`ros2 bag info/play` of an
 //! MCAP file) and Python's `mcap` + `mcap-ros2-support` decode it from the
@@ -31,8 +31,8 @@ use frames::{
 
 use crate::GapRecord;
 
-/// The package of the leakwatch message types (`leakwatch/msg/SensorFrame`, ...).
-pub const PACKAGE: &str = "leakwatch";
+/// The package of the leakwatch message types (`leakwatch_msgs/msg/SensorFrame`, ...).
+pub const PACKAGE: &str = "leakwatch_msgs";
 
 /// The CDR encapsulation header of a little-endian plain-CDR message.
 pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
@@ -42,19 +42,19 @@ pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 macro_rules! dependency {
     ($name:literal) => {
         concat!(
-            "\n================================================================================\nMSG: leakwatch/",
+            "\n================================================================================\nMSG: leakwatch_msgs/",
             $name,
             "\n",
-            include_str!(concat!("../msg/", $name, ".msg"))
+            include_str!(concat!("../../leakwatch_msgs/msg/", $name, ".msg"))
         )
     };
 }
 
 /// `LeakState.msg`: the leak filter's first 11 states by name, SI units (the
 /// 12th, the oil-stiffness scale θ, is not on the wire).
-pub const LEAK_STATE: &str = include_str!("../msg/LeakState.msg");
+pub const LEAK_STATE: &str = include_str!("../../leakwatch_msgs/msg/LeakState.msg");
 /// `ThesisState.msg`: the thesis filter's 7 states by name, SI units.
-pub const THESIS_STATE: &str = include_str!("../msg/ThesisState.msg");
+pub const THESIS_STATE: &str = include_str!("../../leakwatch_msgs/msg/ThesisState.msg");
 
 /// Appends a CDR message to a buffer: the encapsulation header first, then
 /// one field per call, aligned as CDR requires.
@@ -219,7 +219,7 @@ impl<'a> CdrReader<'a> {
 /// The messages are read leniently at the end: bytes after the last known
 /// field are ignored, so a later version may append fields.
 pub trait Message: Sized {
-    /// The ros2msg type name, the MCAP schema name (`leakwatch/msg/SensorFrame`).
+    /// The ros2msg type name, the MCAP schema name (`leakwatch_msgs/msg/SensorFrame`).
     const MSG_TYPE: &'static str;
     /// The MCAP schema data: the `.msg` definition followed by those of the
     /// message types it uses, in rosbag2's concatenated form.
@@ -276,8 +276,8 @@ macro_rules! cdr_fields {
 }
 
 impl Message for SensorFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/SensorFrame";
-    const DEFINITION: &'static str = include_str!("../msg/SensorFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/SensorFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/SensorFrame.msg");
 
     cdr_fields!(SensorFrame {
         seq: u64,
@@ -297,9 +297,9 @@ impl Message for SensorFrame {
 }
 
 impl Message for EstimateFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/EstimateFrame";
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/EstimateFrame";
     const DEFINITION: &'static str = concat!(
-        include_str!("../msg/EstimateFrame.msg"),
+        include_str!("../../leakwatch_msgs/msg/EstimateFrame.msg"),
         dependency!("LeakState"),
         dependency!("Measurement"),
         dependency!("Pressures"),
@@ -334,8 +334,8 @@ impl Message for EstimateFrame {
 }
 
 impl Message for LeakEventFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/LeakEventFrame";
-    const DEFINITION: &'static str = include_str!("../msg/LeakEventFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/LeakEventFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/LeakEventFrame.msg");
 
     cdr_fields!(LeakEventFrame {
         seq: u64,
@@ -360,9 +360,9 @@ impl Message for LeakEventFrame {
 }
 
 impl Message for HealthFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/HealthFrame";
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/HealthFrame";
     const DEFINITION: &'static str =
-        concat!(include_str!("../msg/HealthFrame.msg"), dependency!("LeakFlows"));
+        concat!(include_str!("../../leakwatch_msgs/msg/HealthFrame.msg"), dependency!("LeakFlows"));
 
     cdr_fields!(HealthFrame {
         seq: u64,
@@ -376,8 +376,8 @@ impl Message for HealthFrame {
 }
 
 impl Message for StatsFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/StatsFrame";
-    const DEFINITION: &'static str = include_str!("../msg/StatsFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/StatsFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/StatsFrame.msg");
 
     cdr_fields!(StatsFrame {
         mono_ns: u64,
@@ -404,8 +404,8 @@ pub(crate) fn topic_of(name: &str) -> Option<Topic> {
 }
 
 impl Message for GapRecord {
-    const MSG_TYPE: &'static str = "leakwatch/msg/Gap";
-    const DEFINITION: &'static str = include_str!("../msg/Gap.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/Gap";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/Gap.msg");
 
     fn write_cdr(&self, w: &mut CdrWriter<'_>) {
         let GapRecord {

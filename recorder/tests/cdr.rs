@@ -126,7 +126,7 @@ fn a_bad_message_is_an_error_naming_the_type_and_field() {
     sensor().to_cdr(&mut buf);
     let e = SensorFrame::from_cdr(&buf[..50]).unwrap_err();
     assert!(
-        e.contains("leakwatch/msg/SensorFrame.p1_pa") && e.contains("ends at byte 50"),
+        e.contains("leakwatch_msgs/msg/SensorFrame.p1_pa") && e.contains("ends at byte 50"),
         "{e}"
     );
     let mut be = buf.clone();
@@ -182,14 +182,14 @@ fn the_recorder_keeps_every_nth_estimate_and_the_marked_ones() {
 
 #[test]
 fn the_schemas_name_their_types_and_dependencies() {
-    assert_eq!(EstimateFrame::MSG_TYPE, "leakwatch/msg/EstimateFrame");
+    assert_eq!(EstimateFrame::MSG_TYPE, "leakwatch_msgs/msg/EstimateFrame");
     let def = EstimateFrame::DEFINITION;
     for dep in ["LeakState", "Measurement", "Pressures", "ThesisState"] {
-        assert!(def.contains(&format!("\nMSG: leakwatch/{dep}\n")), "{dep}");
-        assert!(def.contains(&format!("leakwatch/{dep} ")), "{dep} used");
+        assert!(def.contains(&format!("\nMSG: leakwatch_msgs/{dep}\n")), "{dep}");
+        assert!(def.contains(&format!("leakwatch_msgs/{dep} ")), "{dep} used");
     }
     assert!(recorder::msg::LEAK_STATE.contains("float64 q_e1_m3_s"));
-    assert!(HealthFrame::DEFINITION.contains("MSG: leakwatch/LeakFlows"));
+    assert!(HealthFrame::DEFINITION.contains("MSG: leakwatch_msgs/LeakFlows"));
     for d in [
         SensorFrame::DEFINITION,
         LeakEventFrame::DEFINITION,
