@@ -230,6 +230,18 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     );
     assert_eq!(c["server_info"]["metadata"]["rig"], "lv1");
     assert_eq!(c["bad"], 0);
+    // the Foxglove layout, named at start, shows only channels the live view advertised
+    let layout_path = out.join(live::layout::LAYOUT_FILE_NAME);
+    assert!(
+        summary.contains(&format!("live view layout: {}", layout_path.display())),
+        "{summary}"
+    );
+    let layout: Value = serde_json::from_str(&std::fs::read_to_string(&layout_path).unwrap()).unwrap();
+    let paths = live::layout::message_paths(&layout);
+    assert!(!paths.is_empty());
+    for (topic, _) in &paths {
+        assert!(c["channels"].get(topic).is_some(), "{topic}: {}", c["channels"]);
+    }
     let p_s = 13.8e6;
     let topics = ["frames", "estimates", "events", "health"].map(|t| format!("/leakwatch/lv1/{t}"));
     for t in &topics {

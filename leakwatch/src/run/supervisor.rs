@@ -611,14 +611,30 @@ fn live_stages(
             )
         })?;
     }
-    if v.enabled && !quiet {
-        outln!(
-            "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
-            v.bind,
-            v.port,
-            v.frames_hz,
-            v.estimates_hz
-        );
+    if v.enabled {
+        // the shipped Foxglove layout with this rig's topics, beside the run's outputs
+        let layout = out_dir.join(live::layout::LAYOUT_FILE_NAME);
+        crate::out::write(
+            &layout,
+            live::layout::for_rig(&args.rig).as_bytes(),
+            args.force,
+            inputs,
+        )?;
+        if !quiet {
+            outln!(
+                "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
+                v.bind,
+                v.port,
+                v.frames_hz,
+                v.estimates_hz
+            );
+            outln!(
+                "live view layout: {} (Foxglove: Layouts, Import from file; {} for rig {})",
+                layout.display(),
+                live::layout::LAYOUT_REPO_PATH,
+                args.rig
+            );
+        }
     }
     if cfg.zenoh.enabled && !quiet {
         outln!(
