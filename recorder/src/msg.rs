@@ -361,8 +361,10 @@ impl Message for LeakEventFrame {
 
 impl Message for HealthFrame {
     const MSG_TYPE: &'static str = "leakwatch_msgs/msg/HealthFrame";
-    const DEFINITION: &'static str =
-        concat!(include_str!("../../leakwatch_msgs/msg/HealthFrame.msg"), dependency!("LeakFlows"));
+    const DEFINITION: &'static str = concat!(
+        include_str!("../../leakwatch_msgs/msg/HealthFrame.msg"),
+        dependency!("LeakFlows")
+    );
 
     cdr_fields!(HealthFrame {
         seq: u64,

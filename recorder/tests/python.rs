@@ -359,7 +359,10 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
         assert_eq!(line["encoding"], "cdr", "{line}");
         assert_eq!(line["schema_encoding"], "ros2msg", "{line}");
         assert!(
-            line["schema"].as_str().unwrap().starts_with("leakwatch_msgs/msg/"),
+            line["schema"]
+                .as_str()
+                .unwrap()
+                .starts_with("leakwatch_msgs/msg/"),
             "{line}"
         );
         // one clock: log time and publish time are the record's monotonic stamp as Unix time
@@ -476,8 +479,16 @@ fn rosbags_reads_the_log_as_a_rosbag2_file() {
     assert_eq!(
         connections,
         [
-            ("/leakwatch/press-3/estimates", "leakwatch_msgs/msg/EstimateFrame", 50),
-            ("/leakwatch/press-3/events", "leakwatch_msgs/msg/LeakEventFrame", 2),
+            (
+                "/leakwatch/press-3/estimates",
+                "leakwatch_msgs/msg/EstimateFrame",
+                50
+            ),
+            (
+                "/leakwatch/press-3/events",
+                "leakwatch_msgs/msg/LeakEventFrame",
+                2
+            ),
             ("/leakwatch/press-3/frames", "leakwatch_msgs/msg/SensorFrame", 50),
             ("/leakwatch/press-3/gaps", "leakwatch_msgs/msg/Gap", 1),
             ("/leakwatch/press-3/health", "leakwatch_msgs/msg/HealthFrame", 1),

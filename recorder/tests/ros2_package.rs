@@ -81,7 +81,10 @@ fn each_msg_file_is_the_definition_the_recorder_writes() {
         package_dir().display()
     );
     for (name, text) in &written {
-        assert_eq!(&files[name], text, "{name}.msg differs from its schema in the log");
+        assert_eq!(
+            &files[name], text,
+            "{name}.msg differs from its schema in the log"
+        );
     }
 }
 
@@ -90,7 +93,10 @@ fn the_package_builds_every_msg_file() {
     let dir = package_dir();
     let xml = std::fs::read_to_string(dir.join("package.xml")).unwrap();
     let package = recorder::msg::PACKAGE;
-    assert!(xml.contains(&format!("<name>{package}</name>")), "package.xml names {package}");
+    assert!(
+        xml.contains(&format!("<name>{package}</name>")),
+        "package.xml names {package}"
+    );
     assert!(xml.contains("<member_of_group>rosidl_interface_packages</member_of_group>"));
     let cmake = std::fs::read_to_string(dir.join("CMakeLists.txt")).unwrap();
     assert!(cmake.contains(&format!("project({package})")));
