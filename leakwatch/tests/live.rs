@@ -298,6 +298,14 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         range("health", "active_events").1 >= 1.0,
         "no active event in the health"
     );
+    // the health carries the detector's thresholds once it armed, and the
+    // ext1 flow rose above its own (the layout plots both)
+    let (th_lo, th_hi) = range("health", "leak_ext1_threshold_lpm");
+    let (_, flow_hi) = range("health", "leak_ext1_lpm");
+    assert!(
+        th_lo > 0.0 && flow_hi > th_hi,
+        "ext1 threshold {th_lo}..{th_hi}, flow up to {flow_hi} L/min"
+    );
     let live: Vec<(String, String, f64)> = c["events"]
         .as_array()
         .unwrap()

@@ -1,6 +1,7 @@
 //! The Foxglove layout of the live view, `docs/foxglove/leakwatch-layout.json`
 //! (Foxglove: Layouts → Import from file): rod position and chamber pressures,
-//! the three leak flows above the healthy state, the health status and the
+//! the three leak flows above the healthy state with the detector's
+//! thresholds, the health status and the
 //! events. The file names rig [`LAYOUT_RIG`]'s topics; [`for_rig`] gives it
 //! for another rig, as `leakwatch run --live-view` writes it beside the run's
 //! outputs.

@@ -182,6 +182,15 @@ impl<'a> CdrReader<'a> {
         Ok(out)
     }
 
+    /// `N` consecutive `float64`s that a later version appended: all NaN
+    /// ("absent") when the message ends before them (one of an earlier version).
+    pub fn f64s_added<const N: usize>(&mut self, field: &str) -> Result<[f64; N], String> {
+        if self.pos >= self.data.len() {
+            return Ok([f64::NAN; N]);
+        }
+        self.f64s(field)
+    }
+
     /// A `string`.
     pub fn string(&mut self, field: &str) -> Result<&'a str, String> {
         let len = self.u32(field)? as usize;
@@ -243,7 +252,8 @@ pub trait Message: Sized {
 }
 
 /// Writes and reads a record type's fields in the order listed, each with its
-/// codec: `u32`, `u64`, `f64`, `f64s` (a fixed array), `text` (a fixed byte
+/// codec: `u32`, `u64`, `f64`, `f64s` (a fixed array; `f64s_added`: one a later
+/// version appended, NaN in a message of an earlier one), `text` (a fixed byte
 /// buffer as a string), `code(NAMES)` (a code as its name) or `zero` (padding,
 /// not on the wire, read as 0). Reading builds the struct literally, so a field
 /// added to the type and not listed here does not compile.
@@ -263,6 +273,7 @@ macro_rules! cdr_fields {
     (@write $w:ident, $v:expr, u64) => { $w.u64($v) };
     (@write $w:ident, $v:expr, f64) => { $w.f64($v) };
     (@write $w:ident, $v:expr, f64s) => { $w.f64s(&$v) };
+    (@write $w:ident, $v:expr, f64s_added) => { $w.f64s(&$v) };
     (@write $w:ident, $v:expr, text) => { $w.string(frames::text(&$v)) };
     (@write $w:ident, $v:expr, code($names:expr)) => { $w.string(&code_name(&$names, $v)) };
     (@write $w:ident, $v:expr, zero) => { let _ = $v; };
@@ -270,6 +281,7 @@ macro_rules! cdr_fields {
     (@read $r:ident, $name:expr, u64) => { $r.u64($name)? };
     (@read $r:ident, $name:expr, f64) => { $r.f64($name)? };
     (@read $r:ident, $name:expr, f64s) => { $r.f64s($name)? };
+    (@read $r:ident, $name:expr, f64s_added) => { $r.f64s_added($name)? };
     (@read $r:ident, $name:expr, text) => { $r.text($name)? };
     (@read $r:ident, $name:expr, code($names:expr)) => { $r.code(&$names, $name)? };
     (@read $r:ident, $name:expr, zero) => { Default::default() };
@@ -374,6 +386,7 @@ impl Message for HealthFrame {
         active_events: u32,
         leak_flow_lpm: f64s,
         leak_flow_sigma_lpm: f64s,
+        leak_threshold_lpm: f64s_added,
     });
 }
 

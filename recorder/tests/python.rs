@@ -160,6 +160,7 @@ fn expected_health(x: &HealthFrame) -> Value {
         "status": frames::code_name(&frames::health_status::NAMES, x.status),
         "active_events": x.active_events, "leak_flow_lpm": fs(&LEAK_FLOWS, &x.leak_flow_lpm),
         "leak_flow_sigma_lpm": fs(&LEAK_FLOWS, &x.leak_flow_sigma_lpm),
+        "leak_threshold_lpm": fs(&LEAK_FLOWS, &x.leak_threshold_lpm),
     })
 }
 
@@ -287,6 +288,7 @@ fn write_log(path: &Path) {
             active_events: 2,
             leak_flow_lpm: [0.25, f64::NAN, -0.0],
             leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+            leak_threshold_lpm: [0.05, 0.06, 0.07],
         },
         1_040_000_100,
     ));
