@@ -111,3 +111,63 @@ fn the_package_builds_every_msg_file() {
         "rosidl_generate_interfaces in CMakeLists.txt lists every .msg file, sorted"
     );
 }
+
+/// Every line of every `.msg` file is one rosidl accepts: a comment, or a field
+/// `TYPE name` / constant `TYPE NAME=VALUE` (then an optional comment), with a
+/// primitive type or a message of the package, and names as rosidl's parser
+/// requires them (lower snake case fields, upper snake case constants; no
+/// double or trailing underscore); message names are CamelCase.
+#[test]
+fn the_msg_files_follow_rosidls_rules() {
+    const PRIMITIVES: [&str; 4] = ["uint32", "uint64", "float64", "string"];
+    let files = msg_files();
+    let package = recorder::msg::PACKAGE;
+    let snake = |s: &str, upper: bool| {
+        let first_ok = s.chars().next().is_some_and(|c| {
+            if upper {
+                c.is_ascii_uppercase()
+            } else {
+                c.is_ascii_lowercase()
+            }
+        });
+        let rest_ok = s.chars().all(|c| {
+            c == '_'
+                || c.is_ascii_digit()
+                || if upper {
+                    c.is_ascii_uppercase()
+                } else {
+                    c.is_ascii_lowercase()
+                }
+        });
+        first_ok && rest_ok && !s.contains("__") && !s.ends_with('_')
+    };
+    for (name, text) in &files {
+        assert!(
+            name.chars().next().is_some_and(|c| c.is_ascii_uppercase())
+                && name.chars().all(|c| c.is_ascii_alphanumeric()),
+            "{name}: a message name is CamelCase"
+        );
+        for (i, line) in text.lines().enumerate() {
+            let code = line.split('#').next().unwrap_or("").trim();
+            if code.is_empty() {
+                continue;
+            }
+            let at = format!("{name}.msg line {}: {line:?}", i + 1);
+            let mut parts = code.split_whitespace();
+            let (ty, rest) = (parts.next().unwrap(), parts.collect::<Vec<_>>().join(" "));
+            let known = PRIMITIVES.contains(&ty)
+                || ty
+                    .strip_prefix(&format!("{package}/"))
+                    .is_some_and(|m| files.contains_key(m));
+            assert!(known, "{at}: type {ty}");
+            match rest.split_once('=') {
+                Some((constant, value)) => {
+                    assert!(snake(constant.trim(), true), "{at}: constant name");
+                    assert!(PRIMITIVES[..3].contains(&ty), "{at}: a constant is a number");
+                    assert!(value.trim().parse::<u64>().is_ok(), "{at}: value");
+                }
+                None => assert!(snake(&rest, false), "{at}: field name"),
+            }
+        }
+    }
+}
