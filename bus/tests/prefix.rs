@@ -93,7 +93,7 @@ fn a_longer_prefix_is_refused_with_the_limit_before_any_file_is_made() {
     assert!(e.contains("at most 20"), "{e}");
     assert!(cfg.prefix_files().is_empty(), "{:?}", cfg.prefix_files());
     assert!(!std::path::Path::new(&format!("/tmp/iceoryx2/lw_{p}")).exists());
-    // 24 of the allowed characters pass; a bad character is still named
+    // 20 of the allowed characters pass; a bad character is still named
     assert_eq!(bus::validate_prefix(&prefix(20, 'c')), Ok(()));
     let e = bus::validate_prefix("a b").expect_err("a space").0;
     assert!(e.contains("1 to 20 characters of A-Z a-z 0-9 _ -"), "{e}");

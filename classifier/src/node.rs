@@ -144,6 +144,7 @@ impl ClassifierNode {
                     se.leak.sigma[8] * 6e4,
                     se.leak.sigma[9] * 6e4,
                 ],
+                leak_threshold_lpm: self.cls.leak_size.thresholds_lpm(),
             };
             self.health_tx.send(&h).map_err(e)?;
         }

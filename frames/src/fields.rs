@@ -32,7 +32,8 @@ macro_rules! frame_fields {
     };
     (HealthFrame, $m:ident!($($args:tt)*)) => {
         $m! {$($args)* [
-            seq, mono_ns, t_s, status, active_events, leak_flow_lpm, leak_flow_sigma_lpm
+            seq, mono_ns, t_s, status, active_events, leak_flow_lpm, leak_flow_sigma_lpm,
+            leak_threshold_lpm
         ]}
     };
     (StatsFrame, $m:ident!($($args:tt)*)) => {

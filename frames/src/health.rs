@@ -7,7 +7,7 @@ use crate::{health_status, Frame, Topic};
 /// The classifier's summary of the actuator (10 Hz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.HealthFrame.v1")]
+#[type_name("leakwatch.HealthFrame.v2")]
 pub struct HealthFrame {
     /// Sequence number of this health stream, +1 per frame.
     pub seq: u64,
@@ -23,6 +23,9 @@ pub struct HealthFrame {
     pub leak_flow_lpm: [f64; 3],
     /// One standard deviation of each of [`Self::leak_flow_lpm`], L/min.
     pub leak_flow_sigma_lpm: [f64; 3],
+    /// The leak-size detector's threshold on each of [`Self::leak_flow_lpm`],
+    /// L/min at the nominal drop p_s/2 (NaN before it armed).
+    pub leak_threshold_lpm: [f64; 3],
 }
 
 impl Frame for HealthFrame {
@@ -46,6 +49,7 @@ impl Default for HealthFrame {
             active_events: 0,
             leak_flow_lpm: [f64::NAN; 3],
             leak_flow_sigma_lpm: [f64::NAN; 3],
+            leak_threshold_lpm: [f64::NAN; 3],
         }
     }
 }

@@ -89,5 +89,5 @@ use impl_sequenced_frame;
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 104);
 const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 488);
 const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 520);
-const _: () = assert!(core::mem::size_of::<HealthFrame>() == 80);
+const _: () = assert!(core::mem::size_of::<HealthFrame>() == 104);
 const _: () = assert!(core::mem::size_of::<StatsFrame>() == 112);

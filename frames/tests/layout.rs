@@ -9,7 +9,7 @@ fn sizes_and_alignment() {
     assert_eq!(size_of::<SensorFrame>(), 104);
     assert_eq!(size_of::<EstimateFrame>(), 488);
     assert_eq!(size_of::<LeakEventFrame>(), 520);
-    assert_eq!(size_of::<HealthFrame>(), 80);
+    assert_eq!(size_of::<HealthFrame>(), 104);
     assert_eq!(size_of::<StatsFrame>(), 112);
     assert_eq!(align_of::<SensorFrame>(), 8);
     assert_eq!(align_of::<EstimateFrame>(), 8);
@@ -44,7 +44,7 @@ fn field_offsets_match_the_readme_table() {
         [0, 8, 16, 24, 32, 36, 40, 48, 56, 64, 72, 80, 96, 104, 112, 120, 128, 136]
     );
     let h = frame_fields!(HealthFrame, offsets!(HealthFrame));
-    assert_eq!(h, [0, 8, 16, 24, 28, 32, 56]);
+    assert_eq!(h, [0, 8, 16, 24, 28, 32, 56, 80]);
     let st = frame_fields!(StatsFrame, offsets!(StatsFrame));
     assert_eq!(st, [0, 8, 12, 16, 24, 32, 40, 48, 56, 64, 72, 80, 88, 96, 104]);
 }
@@ -55,7 +55,7 @@ fn type_names_are_versioned() {
         assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v2");
         assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v2");
         assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v3");
-        assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v1");
+        assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v2");
         assert_eq!(StatsFrame::type_name(), "leakwatch.StatsFrame.v1");
     }
 }

@@ -812,7 +812,7 @@ fn info_summarises_a_log_and_writes_the_config_it_holds() {
     for want in [
         "File:        ",
         "Duration:    2.999 s",
-        "frames          3000 msgs    1000.0 Hz  cdr leakwatch/msg/SensorFrame (ros2msg)",
+        "frames          3000 msgs    1000.0 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
         "health            30 msgs",
         "Gaps:        none recorded",
         "Events:      1 raised",
@@ -1408,7 +1408,7 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
         let topic = format!("/leakwatch/press-3/{name}");
         assert_eq!(
             r["connections"][&topic],
-            serde_json::json!([format!("leakwatch/msg/{msg}"), n]),
+            serde_json::json!([format!("leakwatch_msgs/msg/{msg}"), n]),
             "{topic}: {}",
             r["connections"]
         );
@@ -1489,4 +1489,135 @@ fn demo_runs_the_single_rod_lift_and_names_an_internal_leak() {
         .unwrap_or(f64::NAN);
     assert!((35.0..40.0).contains(&t), "named at {t} s: {out}");
     assert!(out.contains("leak detected"), "{out}");
+}
+
+/// The folder of Foxglove's npm clients (`LEAKWATCH_NODE_MODULES`, whose
+/// `node_modules` .ci/setup fills from .ci/node/package.json) when node runs;
+/// `None`, the test skipped, elsewhere; a failure where LEAKWATCH_REQUIRE_NODE
+/// is set (CI).
+fn node_clients(package: &str) -> Option<std::path::PathBuf> {
+    let required = std::env::var("LEAKWATCH_REQUIRE_NODE").is_ok_and(|v| v == "1");
+    let node = Command::new("node")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    let dir = std::env::var_os("LEAKWATCH_NODE_MODULES").map(std::path::PathBuf::from);
+    let has = dir.as_ref().is_some_and(|d| {
+        d.join("node_modules")
+            .join(package)
+            .join("package.json")
+            .is_file()
+    });
+    if node && has {
+        return dir;
+    }
+    let why = if !node {
+        "node is not installed".to_string()
+    } else {
+        format!("LEAKWATCH_NODE_MODULES has no node_modules/{package}")
+    };
+    assert!(
+        !required,
+        "{why} (.ci/setup installs it; LEAKWATCH_REQUIRE_NODE=1)"
+    );
+    eprintln!("SKIPPED: {why}");
+    None
+}
+
+/// Foxglove's MCAP stack in Node.js (examples/mcap/decode_log.js: @mcap/core's
+/// indexed reader, @foxglove/rosmsg, @foxglove/rosmsg2-serialization) decodes
+/// every message of a run's log: per topic the count of `leakwatch export`,
+/// no decode error, and every frame's seq and p1 bit for bit.
+#[test]
+fn a_runs_log_decodes_with_foxglove_mcap_stack_in_node() {
+    let Some(modules) = node_clients("@mcap/core") else {
+        return;
+    };
+    let d = tmpdir("node-mcap");
+    let run = d.join("run");
+    let o = leakwatch(&[
+        "run",
+        "--rig",
+        "press-4",
+        "--seconds",
+        "3",
+        "--fault",
+        "none",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    // exit 3: the detector never armed in 3 s (not watched); the log is whole
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let log = run.join("run.mcap");
+    let csv = d.join("csv");
+    let o = leakwatch(&["export", log.to_str().unwrap(), "--csv", csv.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/mcap/decode_log.js");
+    let o = Command::new("node")
+        .arg(&script)
+        .arg(&log)
+        .env("NODE_PATH", modules.join("node_modules"))
+        .output()
+        .expect("node runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(r["profile"], "ros2");
+    let rows = |name: &str| -> Vec<Vec<String>> {
+        let text = std::fs::read_to_string(csv.join(format!("{name}.csv"))).expect("the export's CSV");
+        text.lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    };
+    let mut total = 0;
+    for (name, msg) in [
+        ("frames", "SensorFrame"),
+        ("estimates", "EstimateFrame"),
+        ("events", "LeakEventFrame"),
+        ("health", "HealthFrame"),
+        ("stats", "StatsFrame"),
+        ("gaps", "Gap"),
+    ] {
+        let n = rows(name).len() as u64 - 1;
+        let t = &r["topics"][format!("/leakwatch/press-4/{name}")];
+        assert_eq!(t["schema"], format!("leakwatch_msgs/msg/{msg}"), "{t}");
+        assert_eq!(t["errors"], 0, "{name}: {t}");
+        assert_eq!(t["count"].as_u64(), Some(n), "{name}: {t}");
+        total += n;
+    }
+    assert_eq!(r["statistics_messages"], total.to_string());
+    // nested messages and codes by name
+    let first = |name: &str| r["topics"][format!("/leakwatch/press-4/{name}")]["first"].clone();
+    assert!(
+        first("estimates")["state"]["p1_pa"].is_f64(),
+        "{}",
+        first("estimates")
+    );
+    assert_eq!(first("events")["kind"], "not-armed");
+    assert!(
+        first("health")["leak_flow_sigma_lpm"]["ext1"].is_f64(),
+        "{}",
+        first("health")
+    );
+    // every frame, bit for bit
+    let frames = rows("frames");
+    assert!(frames.len() > 2900, "{} frames", frames.len());
+    let col = |name: &str| frames[0].iter().position(|c| c == name).expect("a column");
+    let (seq, p1) = (col("seq"), col("p1_pa"));
+    let got = r["frames"].as_array().expect("frames");
+    assert_eq!(got.len(), frames.len() - 1);
+    for (g, row) in got.iter().zip(&frames[1..]) {
+        let want: f64 = row[p1].parse().expect("a number");
+        assert_eq!(g[0].as_str(), Some(row[seq].as_str()), "{g}");
+        assert_eq!(
+            g[1].as_str(),
+            Some(hex_le(want).as_str()),
+            "frame {}: p1 {want}",
+            row[seq]
+        );
+    }
+}
+
+/// The little-endian bytes of `x` in hex, as node's `Buffer.writeDoubleLE` gives them.
+fn hex_le(x: f64) -> String {
+    x.to_le_bytes().iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -230,6 +230,18 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     );
     assert_eq!(c["server_info"]["metadata"]["rig"], "lv1");
     assert_eq!(c["bad"], 0);
+    // the Foxglove layout, named at start, shows only channels the live view advertised
+    let layout_path = out.join(live::layout::LAYOUT_FILE_NAME);
+    assert!(
+        summary.contains(&format!("live view layout: {}", layout_path.display())),
+        "{summary}"
+    );
+    let layout: Value = serde_json::from_str(&std::fs::read_to_string(&layout_path).unwrap()).unwrap();
+    let paths = live::layout::message_paths(&layout);
+    assert!(!paths.is_empty());
+    for (topic, _) in &paths {
+        assert!(c["channels"].get(topic).is_some(), "{topic}: {}", c["channels"]);
+    }
     let p_s = 13.8e6;
     let topics = ["frames", "estimates", "events", "health"].map(|t| format!("/leakwatch/lv1/{t}"));
     for t in &topics {
@@ -285,6 +297,14 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     assert!(
         range("health", "active_events").1 >= 1.0,
         "no active event in the health"
+    );
+    // the health carries the detector's thresholds once it armed, and the
+    // ext1 flow rose above its own (the layout plots both)
+    let (th_lo, th_hi) = range("health", "leak_ext1_threshold_lpm");
+    let (_, flow_hi) = range("health", "leak_ext1_lpm");
+    assert!(
+        th_lo > 0.0 && flow_hi > th_hi,
+        "ext1 threshold {th_lo}..{th_hi}, flow up to {flow_hi} L/min"
     );
     let live: Vec<(String, String, f64)> = c["events"]
         .as_array()

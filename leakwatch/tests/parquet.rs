@@ -3,11 +3,13 @@
 //! and polars use) reads it with its column names and types; the events do
 //! not depend on the format.
 //!
-//! Needs python3 with `pyarrow` (.ci/setup installs it). CI sets
-//! LEAKWATCH_REQUIRE_PYTHON=1, so the test must run there; elsewhere it says
-//! it was skipped.
+//! DuckDB reads it too, with its statistics.
+//!
+//! Needs python3 with `pyarrow` and `duckdb` (.ci/setup installs them). CI sets
+//! LEAKWATCH_REQUIRE_PYTHON=1, so the tests must run there; elsewhere they say
+//! they were skipped.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn leakwatch(args: &[&str]) -> Output {
@@ -78,20 +80,92 @@ print(json.dumps({
 }))
 "#;
 
-fn pyarrow() -> bool {
+/// Reads the Parquet file with DuckDB: every cell against the CSV (parsed as
+/// f64 by Python; NaN equals NaN), the column types, and each column chunk's
+/// statistics as DuckDB's `parquet_metadata` gives them against the chunk's
+/// values as DuckDB reads them (min and max without NaN); prints a JSON summary.
+const DUCKDB_SCRIPT: &str = r#"
+import csv, json, math, sys
+import duckdb
+pq_file, csv_file = sys.argv[1], sys.argv[2]
+con = duckdb.connect()
+cur = con.execute(
+    "SELECT * EXCLUDE (file_row_number) FROM read_parquet(?, file_row_number = true) ORDER BY file_row_number",
+    [pq_file],
+)
+names = [d[0] for d in cur.description]
+table = cur.fetchall()
+types = dict(con.execute("SELECT column_name, column_type FROM (DESCRIBE SELECT * FROM read_parquet(?))", [pq_file]).fetchall())
+with open(csv_file) as fh:
+    rows = csv.reader(fh)
+    header = next(rows)
+    mismatches = 0
+    n = 0
+    for i, row in enumerate(rows):
+        n += 1
+        for j, name in enumerate(header):
+            a, b = float(row[j]), table[i][names.index(name)]
+            if not (a == b or (math.isnan(a) and math.isnan(b))):
+                mismatches += 1
+meta = con.execute(
+    "SELECT row_group_id, row_group_num_rows, column_id, path_in_schema, stats_min_value, stats_max_value, "
+    "stats_null_count FROM parquet_metadata(?) ORDER BY row_group_id, column_id",
+    [pq_file],
+).fetchall()
+starts = {}
+start = 0
+for g, rows_in_group, *_ in meta:
+    if g not in starts:
+        starts[g] = start
+        start += rows_in_group
+stats_checked = 0
+stats_mismatches = []
+for g, rows_in_group, c, name, lo, hi, nulls in meta:
+    values = [r[c] for r in table[starts[g]:starts[g] + rows_in_group]]
+    values = [v for v in values if not (isinstance(v, float) and math.isnan(v))]
+    if lo is None or hi is None or nulls != 0:
+        stats_mismatches.append([g, name, "no statistics", lo, hi, nulls])
+        continue
+    cast = float if isinstance(values[0], float) else int
+    if cast(lo) != min(values) or cast(hi) != max(values):
+        stats_mismatches.append([g, name, lo, hi, min(values), max(values)])
+    stats_checked += 1
+late = con.execute("SELECT count(*) FROM read_parquet(?) WHERE t >= 66.0", [pq_file]).fetchone()[0]
+print(json.dumps({
+    "version": duckdb.__version__,
+    "names": names,
+    "csv_header": header,
+    "rows": len(table),
+    "csv_rows": n,
+    "row_groups": len(starts),
+    "types": {k: types[k] for k in ("t", "p1", "q_e1_lpm", "flags", "th_flags")},
+    "mismatches": mismatches,
+    "stats_checked": stats_checked,
+    "stats_mismatches": stats_mismatches,
+    "filtered_rows": late,
+}))
+"#;
+
+/// Whether python3 has `module`; when not, skipped (a failure if
+/// LEAKWATCH_REQUIRE_PYTHON is set: CI installs it).
+fn python_has(module: &str) -> bool {
     let ok = Command::new("python3")
-        .args(["-c", "import pyarrow.parquet"])
+        .args(["-c", &format!("import {module}")])
         .output()
         .map(|o| o.status.success())
         .unwrap_or(false);
     if !ok {
         assert!(
             std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
-            "python3 with pyarrow is required (.ci/setup installs it)"
+            "python3 with {module} is required (.ci/setup installs it)"
         );
-        eprintln!("SKIPPED: python3 with pyarrow is not installed");
+        eprintln!("SKIPPED: python3 with {module} is not installed");
     }
     ok
+}
+
+fn pyarrow() -> bool {
+    python_has("pyarrow.parquet")
 }
 
 fn replay(input: &Path, out: &Path, format: &str) {
@@ -106,9 +180,9 @@ fn replay(input: &Path, out: &Path, format: &str) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
-#[test]
-fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
-    let d = tmpdir("roundtrip");
+/// A 70 s leak run replayed into `d/csv` and `d/parquet`; returns the
+/// Parquet file and the CSV file.
+fn estimates_both_ways(d: &Path) -> (PathBuf, PathBuf) {
     let input = d.join("in.csv");
     // 70 s at 1 kHz: 70,000 rows, more than one row group of 65,536
     let o = leakwatch(&[
@@ -142,21 +216,29 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
     let events = |dir: &Path| std::fs::read_to_string(dir.join("events.json")).unwrap();
     assert_eq!(events(&csv_dir), events(&pq_dir));
     assert!(events(&pq_dir).contains("\"ext1\""), "{}", events(&pq_dir));
+    (pq_file, csv_dir.join("estimates.csv"))
+}
 
-    if !pyarrow() {
-        return;
-    }
+/// Runs a Python `script` on the two files; its JSON output.
+fn python_json(script: &str, pq_file: &Path, csv_file: &Path) -> serde_json::Value {
     let o = Command::new("python3")
-        .args([
-            "-c",
-            SCRIPT,
-            pq_file.to_str().unwrap(),
-            csv_dir.join("estimates.csv").to_str().unwrap(),
-        ])
+        .args(["-c", script])
+        .arg(pq_file)
+        .arg(csv_file)
         .output()
         .expect("python3 runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
+    let d = tmpdir("roundtrip");
+    let (pq_file, csv_file) = estimates_both_ways(&d);
+    if !pyarrow() {
+        return;
+    }
+    let v = python_json(SCRIPT, &pq_file, &csv_file);
     assert_eq!(v["names"], v["csv_header"]);
     assert_eq!(v["names"].as_array().unwrap().len(), 39);
     assert_eq!(v["rows"], 70_000);
@@ -181,5 +263,34 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
         (v["t_min_group_1"].as_f64().unwrap() - 65.536).abs() < 1e-9,
         "{v}"
     );
+    assert_eq!(v["filtered_rows"], 4_000, "{v}");
+}
+
+/// DuckDB reads estimates.parquet: the CSV's columns, types and values, bit
+/// for bit, and min/max statistics on every column chunk that equal its values.
+#[test]
+fn duckdb_reads_the_parquet_estimates_with_their_statistics() {
+    let d = tmpdir("duckdb");
+    let (pq_file, csv_file) = estimates_both_ways(&d);
+    if !python_has("duckdb") {
+        return;
+    }
+    let v = python_json(DUCKDB_SCRIPT, &pq_file, &csv_file);
+    eprintln!("duckdb {}", v["version"]);
+    assert_eq!(v["names"], v["csv_header"]);
+    assert_eq!(v["names"].as_array().unwrap().len(), 39);
+    assert_eq!(
+        (v["rows"].as_u64(), v["csv_rows"].as_u64()),
+        (Some(70_000), Some(70_000))
+    );
+    assert_eq!(v["row_groups"], 2);
+    assert_eq!(v["mismatches"], 0, "{v}");
+    assert_eq!(v["types"]["t"], "DOUBLE");
+    assert_eq!(v["types"]["q_e1_lpm"], "DOUBLE");
+    assert_eq!(v["types"]["flags"], "INTEGER");
+    assert_eq!(v["types"]["th_flags"], "INTEGER");
+    // 2 row groups of 39 column chunks, each with its min and max
+    assert_eq!(v["stats_checked"], 78, "{v}");
+    assert_eq!(v["stats_mismatches"], serde_json::json!([]), "{v}");
     assert_eq!(v["filtered_rows"], 4_000, "{v}");
 }

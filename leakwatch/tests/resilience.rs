@@ -435,3 +435,104 @@ fn a_recorder_that_keeps_failing_is_given_up_and_monitoring_goes_on() {
         );
     }
 }
+
+/// A prefix of `len` characters, unique to this test process, ending in `tag`.
+fn prefix_of_len(len: usize, tag: char) -> String {
+    let mut p = format!("p{}{tag}", std::process::id());
+    while p.len() < len {
+        p.push(tag);
+    }
+    p
+}
+
+/// No iceoryx2 file of `prefix` is left: no segment in /dev/shm, no directory
+/// under /tmp/iceoryx2, no lock.
+fn assert_no_files_of(prefix: &str) {
+    assert!(shm_files(prefix).is_empty(), "{:?}", shm_files(prefix));
+    let root = PathBuf::from(format!("/tmp/iceoryx2/lw_{prefix}"));
+    assert!(!root.exists(), "{} is left", root.display());
+    let lock = std::env::temp_dir().join(format!("leakwatch-prefix-{prefix}.lock"));
+    assert!(!lock.exists(), "{} is left", lock.display());
+}
+
+/// `LEAKWATCH_IOX_PREFIX` of bus::MAX_PREFIX_LEN characters runs a whole
+/// pipeline; one character more is refused before anything is made, with a
+/// message naming the limit and why.
+#[test]
+fn a_prefix_of_the_limit_runs_and_one_longer_is_refused_naming_the_limit() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("prefix-limit");
+    let cfg = short_warmup_config(&d);
+    let longest = prefix_of_len(bus::MAX_PREFIX_LEN, 'l');
+    assert_eq!(longest.len(), 20);
+    let ok = run_command("limit-ok", "3", None, &d.join("ok"), &cfg)
+        .env("LEAKWATCH_IOX_PREFIX", &longest)
+        .output()
+        .unwrap();
+    // done (3: too short for the detector to arm)
+    assert!(
+        matches!(ok.status.code(), Some(0 | 3)),
+        "{:?} {}",
+        ok.status,
+        text(&ok.stderr)
+    );
+    let log = recorder::LogReader::open(&d.join("ok/run.mcap"))
+        .unwrap()
+        .read()
+        .unwrap();
+    assert_eq!(log.frames.len(), 3000);
+    assert_no_files_of(&longest);
+
+    let too_long = prefix_of_len(bus::MAX_PREFIX_LEN + 1, 'm');
+    let refused = run_command("limit-no", "3", None, &d.join("no"), &cfg)
+        .env("LEAKWATCH_IOX_PREFIX", &too_long)
+        .output()
+        .unwrap();
+    let err = text(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{too_long:?} (from LEAKWATCH_IOX_PREFIX?) has 21 characters; at most 20 work"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("must fit 108 bytes"), "the reason: {err}");
+    assert!(!d.join("no/run.mcap").exists());
+    assert_no_files_of(&too_long);
+}
+
+/// A start that fails once the run has opened its prefix (here: a stage's log
+/// cannot be created, the stages before it already run) removes what it made:
+/// no file of the prefix is left, and the error names the stage.
+#[test]
+fn a_start_that_fails_leaves_no_files_on_its_prefix() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("failed-start");
+    let cfg = short_warmup_config(&d);
+    let prefix = prefix_of_len(12, 'f');
+    let out = d.join("run");
+    // the acquisition, started last, cannot have its log: a directory is in the way
+    std::fs::create_dir_all(out.join("acquisition.log")).unwrap();
+    let failed = run_command("failed-start", "3", None, &out, &cfg)
+        .arg("--force")
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .output()
+        .unwrap();
+    let err = text(&failed.stderr);
+    assert_eq!(failed.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot start the acquisition"), "{err}");
+    assert!(
+        err.contains(&format!(
+            "the start failed: removed what it had made on the iceoryx2 prefix {prefix:?}"
+        )),
+        "{err}"
+    );
+    assert_no_files_of(&prefix);
+    // the stages it had started are gone
+    for stage in ["recorder", "estimator", "classifier"] {
+        assert!(
+            stage_pids(Some(stage), "failed-start").is_empty(),
+            "{stage} still runs"
+        );
+    }
+}

@@ -228,11 +228,11 @@ pub struct HealthMsg {
     pub status: String,
     /// Number of active events.
     pub active_events: u32,
-    /// Chamber-1 external leak flow at the measured pressures, L/min.
+    /// Chamber-1 external leak: its size's rise above the healthy state, L/min at p_s/2.
     pub leak_ext1_lpm: f64,
-    /// Chamber-2 external leak flow, L/min.
+    /// Chamber-2 external leak: as `leak_ext1_lpm`, L/min at p_s/2.
     pub leak_ext2_lpm: f64,
-    /// Internal leak flow, L/min.
+    /// Internal leak: as `leak_ext1_lpm`, L/min at p_s/2.
     pub leak_int_lpm: f64,
     /// One standard deviation of `leak_ext1_lpm`, L/min.
     pub leak_ext1_sigma_lpm: f64,
@@ -240,6 +240,12 @@ pub struct HealthMsg {
     pub leak_ext2_sigma_lpm: f64,
     /// One standard deviation of `leak_int_lpm`, L/min.
     pub leak_int_sigma_lpm: f64,
+    /// The detector's threshold on `leak_ext1_lpm`, L/min at p_s/2 (NaN before it armed).
+    pub leak_ext1_threshold_lpm: f64,
+    /// The detector's threshold on `leak_ext2_lpm`, L/min at p_s/2 (NaN before it armed).
+    pub leak_ext2_threshold_lpm: f64,
+    /// The detector's threshold on `leak_int_lpm`, L/min at p_s/2 (NaN before it armed).
+    pub leak_int_threshold_lpm: f64,
 }
 
 impl From<&HealthFrame> for HealthMsg {
@@ -255,6 +261,9 @@ impl From<&HealthFrame> for HealthMsg {
             leak_ext1_sigma_lpm: h.leak_flow_sigma_lpm[0],
             leak_ext2_sigma_lpm: h.leak_flow_sigma_lpm[1],
             leak_int_sigma_lpm: h.leak_flow_sigma_lpm[2],
+            leak_ext1_threshold_lpm: h.leak_threshold_lpm[0],
+            leak_ext2_threshold_lpm: h.leak_threshold_lpm[1],
+            leak_int_threshold_lpm: h.leak_threshold_lpm[2],
         }
     }
 }
@@ -408,9 +417,17 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                 ("t_s", Num, "sample time, s"),
                 ("status", Str, "warming-up, healthy, leak or sensor-fault"),
                 ("active_events", Int, "number of active events"),
-                ("leak_ext1_lpm", Num, "chamber-1 external leak flow, L/min"),
-                ("leak_ext2_lpm", Num, "chamber-2 external leak flow, L/min"),
-                ("leak_int_lpm", Num, "internal leak flow, L/min"),
+                (
+                    "leak_ext1_lpm",
+                    Num,
+                    "chamber-1 external leak: its size's rise above the healthy state, L/min at p_s/2",
+                ),
+                (
+                    "leak_ext2_lpm",
+                    Num,
+                    "chamber-2 external leak, as leak_ext1_lpm, L/min",
+                ),
+                ("leak_int_lpm", Num, "internal leak, as leak_ext1_lpm, L/min"),
                 (
                     "leak_ext1_sigma_lpm",
                     Num,
@@ -425,6 +442,21 @@ pub fn schema_of(topic: crate::LiveTopic) -> Value {
                     "leak_int_sigma_lpm",
                     Num,
                     "one standard deviation of leak_int_lpm, L/min",
+                ),
+                (
+                    "leak_ext1_threshold_lpm",
+                    Num,
+                    "the detector's threshold on leak_ext1_lpm, L/min (null before it armed)",
+                ),
+                (
+                    "leak_ext2_threshold_lpm",
+                    Num,
+                    "the detector's threshold on leak_ext2_lpm, L/min (null before it armed)",
+                ),
+                (
+                    "leak_int_threshold_lpm",
+                    Num,
+                    "the detector's threshold on leak_int_lpm, L/min (null before it armed)",
                 ),
             ],
         ),

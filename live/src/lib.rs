@@ -10,6 +10,7 @@
 //! - [`gateway`]: the **fleet gateway**, which publishes a rig's events,
 //!   health and decimated estimates on Zenoh under `leakwatch/<rig>/<topic>`
 //!   (`leakwatch stage gateway`, `leakwatch run --zenoh`);
+//! - [`layout`]: the live view's Foxglove layout, `docs/foxglove/leakwatch-layout.json`;
 //! - [`watch`]: `leakwatch watch`, which subscribes to `leakwatch/**` on Zenoh
 //!   and prints every rig's events as they happen.
 //!
@@ -20,6 +21,7 @@
 pub mod config;
 pub mod gateway;
 pub mod json;
+pub mod layout;
 pub mod shell;
 pub mod tap;
 pub mod view;

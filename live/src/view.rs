@@ -74,7 +74,7 @@ impl LiveView {
             let schema = crate::json::schema_of(topic);
             let name = schema["title"].as_str().unwrap_or("leakwatch").to_string();
             let data = serde_json::to_vec(&schema).map_err(|e| e.to_string())?;
-            let channel = ChannelBuilder::new(format!("/leakwatch/{rig}/{}", topic.name()))
+            let channel = ChannelBuilder::new(crate::layout::topic_name(rig, topic))
                 .message_encoding("json")
                 .schema(Schema::new(name, "jsonschema", data))
                 .context(&context)

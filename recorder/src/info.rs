@@ -27,7 +27,7 @@ pub struct ChannelSummary {
     pub rate_hz: Option<f64>,
     /// The channel's message encoding (`cdr`, `json`).
     pub message_encoding: String,
-    /// Its schema name and encoding (`leakwatch/msg/SensorFrame (ros2msg)`).
+    /// Its schema name and encoding (`leakwatch_msgs/msg/SensorFrame (ros2msg)`).
     pub schema: String,
 }
 

@@ -1,7 +1,7 @@
 //! The leakwatch log: one MCAP file per run, a rosbag2 file (profile `ros2`),
 //! with a channel per topic (`/leakwatch/<rig>/frames`, `estimates`, `events`,
 //! `health`, `stats`) plus `gaps`: ROS 2 messages in CDR described by their
-//! ros2msg schemas ([`msg`], the `.msg` files in `recorder/msg/`), log times
+//! ros2msg schemas ([`msg`], the `.msg` files in `leakwatch_msgs/msg/`), log times
 //! in Unix time (ns), so Foxglove, rosbag2 readers (`rosbags`) and Python's
 //! `mcap` with `mcap-ros2-support` open it without leakwatch. Logs of earlier
 //! versions (channels `frames`, ..., profile `leakwatch`, monotonic log times;
@@ -55,7 +55,7 @@ pub const LEAKWATCH_METADATA: &str = "leakwatch";
 /// The MCAP channel of [`GapRecord`]s.
 pub const GAPS_CHANNEL: &str = "gaps";
 /// The type name of [`GapRecord`]s: their JSON Schema's name in JSON logs, and the
-/// `leakwatch_type` of the `gaps` channel (the CDR schema is `leakwatch/msg/Gap`).
+/// `leakwatch_type` of the `gaps` channel (the CDR schema is `leakwatch_msgs/msg/Gap`).
 pub const GAP_SCHEMA_NAME: &str = "leakwatch.Gap.v1";
 
 /// One item for the log, with the recorder's receive time

@@ -1,6 +1,6 @@
 //! The log's message encoding: every record as a ROS 2 message, serialised
 //! as CDR (`message_encoding = "cdr"`) and described by its `.msg` definition
-//! (`schema encoding = "ros2msg"`, the files in `recorder/msg/`).
+//! (`schema encoding = "ros2msg"`, the files in `leakwatch_msgs/msg/`).
 //!
 //! Why CDR with ros2msg schemas: Foxglove, rosbag2 (`ros2 bag info/play` of an
 //! MCAP file) and Python's `mcap` + `mcap-ros2-support` decode it from the
@@ -31,8 +31,8 @@ use frames::{
 
 use crate::GapRecord;
 
-/// The package of the leakwatch message types (`leakwatch/msg/SensorFrame`, ...).
-pub const PACKAGE: &str = "leakwatch";
+/// The package of the leakwatch message types (`leakwatch_msgs/msg/SensorFrame`, ...).
+pub const PACKAGE: &str = "leakwatch_msgs";
 
 /// The CDR encapsulation header of a little-endian plain-CDR message.
 pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
@@ -42,19 +42,19 @@ pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 macro_rules! dependency {
     ($name:literal) => {
         concat!(
-            "\n================================================================================\nMSG: leakwatch/",
+            "\n================================================================================\nMSG: leakwatch_msgs/",
             $name,
             "\n",
-            include_str!(concat!("../msg/", $name, ".msg"))
+            include_str!(concat!("../../leakwatch_msgs/msg/", $name, ".msg"))
         )
     };
 }
 
 /// `LeakState.msg`: the leak filter's first 11 states by name, SI units (the
 /// 12th, the oil-stiffness scale θ, is not on the wire).
-pub const LEAK_STATE: &str = include_str!("../msg/LeakState.msg");
+pub const LEAK_STATE: &str = include_str!("../../leakwatch_msgs/msg/LeakState.msg");
 /// `ThesisState.msg`: the thesis filter's 7 states by name, SI units.
-pub const THESIS_STATE: &str = include_str!("../msg/ThesisState.msg");
+pub const THESIS_STATE: &str = include_str!("../../leakwatch_msgs/msg/ThesisState.msg");
 
 /// Appends a CDR message to a buffer: the encapsulation header first, then
 /// one field per call, aligned as CDR requires.
@@ -175,7 +175,7 @@ impl<'a> CdrReader<'a> {
 
     /// A `float64` a later version appended: NaN (absent) when the message
     /// ends before it (a log of an earlier version).
-    pub fn f64_appended(&mut self, field: &str) -> Result<f64, String> {
+    pub fn f64_added(&mut self, field: &str) -> Result<f64, String> {
         if self.pos >= self.data.len() {
             return Ok(f64::NAN);
         }
@@ -189,6 +189,15 @@ impl<'a> CdrReader<'a> {
             *x = self.f64(field)?;
         }
         Ok(out)
+    }
+
+    /// `N` consecutive `float64`s that a later version appended: all NaN
+    /// ("absent") when the message ends before them (one of an earlier version).
+    pub fn f64s_added<const N: usize>(&mut self, field: &str) -> Result<[f64; N], String> {
+        if self.pos >= self.data.len() {
+            return Ok([f64::NAN; N]);
+        }
+        self.f64s(field)
     }
 
     /// A `string`.
@@ -228,7 +237,7 @@ impl<'a> CdrReader<'a> {
 /// The messages are read leniently at the end: bytes after the last known
 /// field are ignored, so a later version may append fields.
 pub trait Message: Sized {
-    /// The ros2msg type name, the MCAP schema name (`leakwatch/msg/SensorFrame`).
+    /// The ros2msg type name, the MCAP schema name (`leakwatch_msgs/msg/SensorFrame`).
     const MSG_TYPE: &'static str;
     /// The MCAP schema data: the `.msg` definition followed by those of the
     /// message types it uses, in rosbag2's concatenated form.
@@ -252,8 +261,10 @@ pub trait Message: Sized {
 }
 
 /// Writes and reads a record type's fields in the order listed, each with its
-/// codec: `u32`, `u64`, `f64`, `f64_appended` (a `float64` a later version
-/// appended: NaN when an earlier version's message ends before it), `f64s` (a fixed array), `text` (a fixed byte
+/// codec: `u32`, `u64`, `f64`, `f64_added` (a `float64` a later version
+/// appended: NaN when an earlier version's message ends before it), `f64s` (a
+/// fixed array; `f64s_added`: one a later version appended, NaN in a message of
+/// an earlier one), `text` (a fixed byte
 /// buffer as a string), `code(NAMES)` (a code as its name) or `zero` (padding,
 /// not on the wire, read as 0). Reading builds the struct literally, so a field
 /// added to the type and not listed here does not compile.
@@ -272,24 +283,26 @@ macro_rules! cdr_fields {
     (@write $w:ident, $v:expr, u32) => { $w.u32($v) };
     (@write $w:ident, $v:expr, u64) => { $w.u64($v) };
     (@write $w:ident, $v:expr, f64) => { $w.f64($v) };
-    (@write $w:ident, $v:expr, f64_appended) => { $w.f64($v) };
+    (@write $w:ident, $v:expr, f64_added) => { $w.f64($v) };
     (@write $w:ident, $v:expr, f64s) => { $w.f64s(&$v) };
+    (@write $w:ident, $v:expr, f64s_added) => { $w.f64s(&$v) };
     (@write $w:ident, $v:expr, text) => { $w.string(frames::text(&$v)) };
     (@write $w:ident, $v:expr, code($names:expr)) => { $w.string(&code_name(&$names, $v)) };
     (@write $w:ident, $v:expr, zero) => { let _ = $v; };
     (@read $r:ident, $name:expr, u32) => { $r.u32($name)? };
     (@read $r:ident, $name:expr, u64) => { $r.u64($name)? };
     (@read $r:ident, $name:expr, f64) => { $r.f64($name)? };
-    (@read $r:ident, $name:expr, f64_appended) => { $r.f64_appended($name)? };
+    (@read $r:ident, $name:expr, f64_added) => { $r.f64_added($name)? };
     (@read $r:ident, $name:expr, f64s) => { $r.f64s($name)? };
+    (@read $r:ident, $name:expr, f64s_added) => { $r.f64s_added($name)? };
     (@read $r:ident, $name:expr, text) => { $r.text($name)? };
     (@read $r:ident, $name:expr, code($names:expr)) => { $r.code(&$names, $name)? };
     (@read $r:ident, $name:expr, zero) => { Default::default() };
 }
 
 impl Message for SensorFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/SensorFrame";
-    const DEFINITION: &'static str = include_str!("../msg/SensorFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/SensorFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/SensorFrame.msg");
 
     cdr_fields!(SensorFrame {
         seq: u64,
@@ -305,14 +318,14 @@ impl Message for SensorFrame {
         q_leak_lpm: f64,
         flags: u32,
         _pad: zero,
-        temp_c: f64_appended,
+        temp_c: f64_added,
     });
 }
 
 impl Message for EstimateFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/EstimateFrame";
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/EstimateFrame";
     const DEFINITION: &'static str = concat!(
-        include_str!("../msg/EstimateFrame.msg"),
+        include_str!("../../leakwatch_msgs/msg/EstimateFrame.msg"),
         dependency!("LeakState"),
         dependency!("Measurement"),
         dependency!("Pressures"),
@@ -347,8 +360,8 @@ impl Message for EstimateFrame {
 }
 
 impl Message for LeakEventFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/LeakEventFrame";
-    const DEFINITION: &'static str = include_str!("../msg/LeakEventFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/LeakEventFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/LeakEventFrame.msg");
 
     cdr_fields!(LeakEventFrame {
         seq: u64,
@@ -373,9 +386,11 @@ impl Message for LeakEventFrame {
 }
 
 impl Message for HealthFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/HealthFrame";
-    const DEFINITION: &'static str =
-        concat!(include_str!("../msg/HealthFrame.msg"), dependency!("LeakFlows"));
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/HealthFrame";
+    const DEFINITION: &'static str = concat!(
+        include_str!("../../leakwatch_msgs/msg/HealthFrame.msg"),
+        dependency!("LeakFlows")
+    );
 
     cdr_fields!(HealthFrame {
         seq: u64,
@@ -385,12 +400,13 @@ impl Message for HealthFrame {
         active_events: u32,
         leak_flow_lpm: f64s,
         leak_flow_sigma_lpm: f64s,
+        leak_threshold_lpm: f64s_added,
     });
 }
 
 impl Message for StatsFrame {
-    const MSG_TYPE: &'static str = "leakwatch/msg/StatsFrame";
-    const DEFINITION: &'static str = include_str!("../msg/StatsFrame.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/StatsFrame";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/StatsFrame.msg");
 
     cdr_fields!(StatsFrame {
         mono_ns: u64,
@@ -417,8 +433,8 @@ pub(crate) fn topic_of(name: &str) -> Option<Topic> {
 }
 
 impl Message for GapRecord {
-    const MSG_TYPE: &'static str = "leakwatch/msg/Gap";
-    const DEFINITION: &'static str = include_str!("../msg/Gap.msg");
+    const MSG_TYPE: &'static str = "leakwatch_msgs/msg/Gap";
+    const DEFINITION: &'static str = include_str!("../../leakwatch_msgs/msg/Gap.msg");
 
     fn write_cdr(&self, w: &mut CdrWriter<'_>) {
         let GapRecord {

@@ -20,7 +20,7 @@ pub struct ChannelInfo {
     pub topic: String,
     /// The channel's `message_encoding` (`cdr`, or `json` in logs of earlier versions).
     pub message_encoding: String,
-    /// The name of its schema (`leakwatch/msg/SensorFrame`, ...; empty if its record was lost).
+    /// The name of its schema (`leakwatch_msgs/msg/SensorFrame`, ...; empty if its record was lost).
     pub schema_name: String,
     /// The encoding of its schema (`ros2msg`, or `jsonschema`).
     pub schema_encoding: String,

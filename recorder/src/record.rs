@@ -284,9 +284,19 @@ record!(
         detail
     ]
 );
-frames::frame_fields!(
+record!(
     HealthFrame,
-    record!(@unpadded HealthFrame, "leakwatch.HealthFrame.v1", [])
+    "leakwatch.HealthFrame.v2",
+    [
+        seq,
+        mono_ns,
+        t_s,
+        status,
+        active_events,
+        leak_flow_lpm,
+        leak_flow_sigma_lpm
+    ],
+    added[leak_threshold_lpm]
 );
 frames::frame_fields!(
     StatsFrame,

@@ -55,7 +55,7 @@ pub fn metadata_yaml(info: &Info) -> String {
     y.push_str(&format!("  message_count: {messages}\n"));
     y.push_str("  topics_with_message_count:\n");
     for c in &info.channels {
-        // "leakwatch/msg/SensorFrame (ros2msg)" -> "leakwatch/msg/SensorFrame"
+        // "leakwatch_msgs/msg/SensorFrame (ros2msg)" -> "leakwatch_msgs/msg/SensorFrame"
         let msgtype = c.schema.split(" (").next().unwrap_or_default();
         y.push_str("    - topic_metadata:\n");
         y.push_str(&format!("        name: {}\n", quoted(&c.mcap_topic)));

@@ -224,7 +224,7 @@ impl LogWriter {
         let mut meta = options.metadata.clone();
         let format = match options.encoding {
             Encoding::Cdr => {
-                "leakwatch frames as ROS 2 messages (CDR, ros2msg schemas in the file), see recorder/msg"
+                "leakwatch frames as ROS 2 messages (CDR, ros2msg schemas in the file), see leakwatch_msgs/msg"
             }
             Encoding::Json => "leakwatch frames as JSON, see frames/README.md",
         };

@@ -131,7 +131,7 @@ fn a_bad_message_is_an_error_naming_the_type_and_field() {
     sensor().to_cdr(&mut buf);
     let e = SensorFrame::from_cdr(&buf[..50]).unwrap_err();
     assert!(
-        e.contains("leakwatch/msg/SensorFrame.p1_pa") && e.contains("ends at byte 50"),
+        e.contains("leakwatch_msgs/msg/SensorFrame.p1_pa") && e.contains("ends at byte 50"),
         "{e}"
     );
     let mut be = buf.clone();
@@ -187,14 +187,14 @@ fn the_recorder_keeps_every_nth_estimate_and_the_marked_ones() {
 
 #[test]
 fn the_schemas_name_their_types_and_dependencies() {
-    assert_eq!(EstimateFrame::MSG_TYPE, "leakwatch/msg/EstimateFrame");
+    assert_eq!(EstimateFrame::MSG_TYPE, "leakwatch_msgs/msg/EstimateFrame");
     let def = EstimateFrame::DEFINITION;
     for dep in ["LeakState", "Measurement", "Pressures", "ThesisState"] {
-        assert!(def.contains(&format!("\nMSG: leakwatch/{dep}\n")), "{dep}");
-        assert!(def.contains(&format!("leakwatch/{dep} ")), "{dep} used");
+        assert!(def.contains(&format!("\nMSG: leakwatch_msgs/{dep}\n")), "{dep}");
+        assert!(def.contains(&format!("leakwatch_msgs/{dep} ")), "{dep} used");
     }
     assert!(recorder::msg::LEAK_STATE.contains("float64 q_e1_m3_s"));
-    assert!(HealthFrame::DEFINITION.contains("MSG: leakwatch/LeakFlows"));
+    assert!(HealthFrame::DEFINITION.contains("MSG: leakwatch_msgs/LeakFlows"));
     for d in [
         SensorFrame::DEFINITION,
         LeakEventFrame::DEFINITION,
@@ -203,4 +203,31 @@ fn the_schemas_name_their_types_and_dependencies() {
     ] {
         assert!(!d.contains("MSG:"), "no dependencies: {d}");
     }
+}
+
+/// A health message of the version before the thresholds (HealthFrame.v1: it
+/// ends after `leak_flow_sigma_lpm`) reads with NaN thresholds; a message cut
+/// inside the thresholds is an error naming the field.
+#[test]
+fn a_health_message_without_thresholds_reads_with_nan_ones() {
+    let h = HealthFrame {
+        seq: 7,
+        mono_ns: 9,
+        t_s: 1.5,
+        status: frames::health_status::LEAK,
+        active_events: 1,
+        leak_flow_lpm: [0.5, 0.0, 0.01],
+        leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+        leak_threshold_lpm: [0.05, 0.06, 0.07],
+    };
+    let mut buf = Vec::new();
+    h.to_cdr(&mut buf);
+    assert_eq!(bits(&HealthFrame::from_cdr(&buf).unwrap()), bits(&h));
+    let old = &buf[..buf.len() - 24];
+    let back = HealthFrame::from_cdr(old).unwrap();
+    assert!(back.leak_threshold_lpm.iter().all(|x| x.is_nan()));
+    assert_eq!(back.leak_flow_sigma_lpm, h.leak_flow_sigma_lpm);
+    assert_eq!((back.seq, back.status, back.active_events), (7, h.status, 1));
+    let e = HealthFrame::from_cdr(&buf[..buf.len() - 4]).err().unwrap();
+    assert!(e.contains("HealthFrame.leak_threshold_lpm"), "{e}");
 }

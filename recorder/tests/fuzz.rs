@@ -87,6 +87,7 @@ fn write_log(path: &Path, n: u64, compression: Option<mcap::Compression>) {
                 active_events: 0,
                 leak_flow_lpm: [0.1, f64::NAN, -0.2],
                 leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+                leak_threshold_lpm: [0.05, 0.06, 0.07],
             };
             assert!(w.write(Entry::Health(h, 11 + i)).unwrap());
         }

@@ -101,7 +101,7 @@ fn info_names_the_channels_gaps_events_and_config() {
     assert!((info.duration_s() - 1.999).abs() < 1e-9);
     let frames = &info.channels[0];
     assert_eq!((frames.topic.as_str(), frames.messages), ("frames", 1995));
-    assert_eq!(frames.schema, "leakwatch/msg/SensorFrame (ros2msg)");
+    assert_eq!(frames.schema, "leakwatch_msgs/msg/SensorFrame (ros2msg)");
     assert_eq!(frames.message_encoding, "cdr");
     // 1994 intervals over 1.999 s
     assert!((frames.rate_hz.unwrap() - 1994.0 / 1.999).abs() < 1e-6);
@@ -128,8 +128,8 @@ fn info_names_the_channels_gaps_events_and_config() {
         "Messages:    2020",
         "Start:       2025-11-24 16:00:05.000 UTC\n",
         "End:         2025-11-24 16:00:06.999 UTC\n",
-        "/leakwatch/rig7/frames          1995 msgs     997.5 Hz  cdr leakwatch/msg/SensorFrame (ros2msg)",
-        "/leakwatch/rig7/estimates         20 msgs      10.0 Hz  cdr leakwatch/msg/EstimateFrame (ros2msg)",
+        "/leakwatch/rig7/frames          1995 msgs     997.5 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
+        "/leakwatch/rig7/estimates         20 msgs      10.0 Hz  cdr leakwatch_msgs/msg/EstimateFrame (ros2msg)",
         "Gaps:        frames 1 (5 missing)",
         "Frame seq:   1 jumps, 5 frames missing",
         "Events:      2 raised",

@@ -97,6 +97,8 @@ fn health(i: u64) -> HealthFrame {
         active_events: 1,
         leak_flow_lpm: [0.25, f64::NAN, -0.0],
         leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+        // the fixture's version had no thresholds: read as absent
+        leak_threshold_lpm: [f64::NAN; 3],
     }
 }
 

@@ -73,6 +73,7 @@ fn write_sample_log(path: &std::path::Path, n: u64, options: WriterOptions) -> V
                     active_events: 0,
                     leak_flow_lpm: [0.1, f64::NAN, -0.2],
                     leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+                    leak_threshold_lpm: [0.05, 0.06, 0.07],
                 },
                 12 + i,
             ));

@@ -160,6 +160,7 @@ fn expected_health(x: &HealthFrame) -> Value {
         "status": frames::code_name(&frames::health_status::NAMES, x.status),
         "active_events": x.active_events, "leak_flow_lpm": fs(&LEAK_FLOWS, &x.leak_flow_lpm),
         "leak_flow_sigma_lpm": fs(&LEAK_FLOWS, &x.leak_flow_sigma_lpm),
+        "leak_threshold_lpm": fs(&LEAK_FLOWS, &x.leak_threshold_lpm),
     })
 }
 
@@ -288,6 +289,7 @@ fn write_log(path: &Path) {
             active_events: 2,
             leak_flow_lpm: [0.25, f64::NAN, -0.0],
             leak_flow_sigma_lpm: [0.01, 0.02, 0.03],
+            leak_threshold_lpm: [0.05, 0.06, 0.07],
         },
         1_040_000_100,
     ));
@@ -360,7 +362,10 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
         assert_eq!(line["encoding"], "cdr", "{line}");
         assert_eq!(line["schema_encoding"], "ros2msg", "{line}");
         assert!(
-            line["schema"].as_str().unwrap().starts_with("leakwatch/msg/"),
+            line["schema"]
+                .as_str()
+                .unwrap()
+                .starts_with("leakwatch_msgs/msg/"),
             "{line}"
         );
         // one clock: log time and publish time are the record's monotonic stamp as Unix time
@@ -477,12 +482,20 @@ fn rosbags_reads_the_log_as_a_rosbag2_file() {
     assert_eq!(
         connections,
         [
-            ("/leakwatch/press-3/estimates", "leakwatch/msg/EstimateFrame", 50),
-            ("/leakwatch/press-3/events", "leakwatch/msg/LeakEventFrame", 2),
-            ("/leakwatch/press-3/frames", "leakwatch/msg/SensorFrame", 50),
-            ("/leakwatch/press-3/gaps", "leakwatch/msg/Gap", 1),
-            ("/leakwatch/press-3/health", "leakwatch/msg/HealthFrame", 1),
-            ("/leakwatch/press-3/stats", "leakwatch/msg/StatsFrame", 1),
+            (
+                "/leakwatch/press-3/estimates",
+                "leakwatch_msgs/msg/EstimateFrame",
+                50
+            ),
+            (
+                "/leakwatch/press-3/events",
+                "leakwatch_msgs/msg/LeakEventFrame",
+                2
+            ),
+            ("/leakwatch/press-3/frames", "leakwatch_msgs/msg/SensorFrame", 50),
+            ("/leakwatch/press-3/gaps", "leakwatch_msgs/msg/Gap", 1),
+            ("/leakwatch/press-3/health", "leakwatch_msgs/msg/HealthFrame", 1),
+            ("/leakwatch/press-3/stats", "leakwatch_msgs/msg/StatsFrame", 1),
         ]
     );
     let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();

@@ -44,6 +44,53 @@ pub(super) fn remove_at_start(cfg: &BusConfig) {
     }
 }
 
+/// What a run's start makes on its prefix (its own services, the stages'
+/// files), removed again when the start fails: dropped before
+/// [`StartCleanup::started`], it removes the prefix's iceoryx2 files and says so
+/// on stderr. Declared after the prefix's lock and before the bus, so that it
+/// runs once the run's own services are closed and while the lock is held.
+pub(super) struct StartCleanup {
+    cfg: BusConfig,
+    started: bool,
+}
+
+impl StartCleanup {
+    /// Watches the start of a run on `cfg`'s prefix.
+    pub(super) fn new(cfg: &BusConfig) -> StartCleanup {
+        StartCleanup {
+            cfg: cfg.clone(),
+            started: false,
+        }
+    }
+
+    /// Every stage started: what the start made stays for the run.
+    pub(super) fn started(mut self) {
+        self.started = true;
+    }
+}
+
+impl Drop for StartCleanup {
+    fn drop(&mut self) {
+        if self.started {
+            return;
+        }
+        let prefix = self.cfg.iox_prefix.as_deref().unwrap_or("");
+        match self.cfg.remove_leftovers() {
+            Ok(removed) if removed.is_empty() => {}
+            Ok(removed) => errln!(
+                "leakwatch run: the start failed: removed what it had made on the iceoryx2 prefix {prefix:?} \
+                 ({} files or directories, {:.1} MB)",
+                removed.len(),
+                mb(removed.iter().map(|f| f.bytes).sum())
+            ),
+            Err(e) => errln!(
+                "leakwatch run: the start failed and its iceoryx2 files stay: {e} \
+                 (`leakwatch clean --prefix {prefix}` removes them)"
+            ),
+        }
+    }
+}
+
 /// `leakwatch clean --all`: what [`clean`] does, on every prefix that has
 /// iceoryx2 files of leakwatch's naming, one line per prefix; a prefix a live
 /// run holds is named and left, and does not make the command fail.

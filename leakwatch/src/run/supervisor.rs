@@ -147,6 +147,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
     // what a killed run on this prefix left in shared memory: removed, and said
     super::clean::remove_at_start(&bus_cfg);
+    // a start that fails from here on removes what it made on the prefix
+    let start_cleanup = super::clean::StartCleanup::new(&bus_cfg);
     let cfg_path = out_dir.join("config.toml");
     let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
@@ -231,13 +233,25 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             &prefix,
             &out_dir.join(format!("{name}.log")),
             cfg.run.cpu_of(name),
-        )?;
+        );
+        let child = match child {
+            Ok(child) => child,
+            Err(e) => {
+                // the stages already started go first, so that their files can go too
+                for (_, mut c) in std::mem::take(&mut children) {
+                    let _ = c.kill();
+                    let _ = c.wait();
+                }
+                return Err(format!("cannot start the {name}: {e}"));
+            }
+        };
         children.insert(name, child);
         watchdog.started(name, Instant::now());
         if name != "acquisition" {
             std::thread::sleep(Duration::from_millis(150));
         }
     }
+    start_cleanup.started();
     // a UDP stream is paced by its sender: no datagram is no stall
     // (the live view and the gateway publish no stats: restarted when they exit, not watched)
     let watched =
@@ -611,14 +625,30 @@ fn live_stages(
             )
         })?;
     }
-    if v.enabled && !quiet {
-        outln!(
-            "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
-            v.bind,
-            v.port,
-            v.frames_hz,
-            v.estimates_hz
-        );
+    if v.enabled {
+        // the shipped Foxglove layout with this rig's topics, beside the run's outputs
+        let layout = out_dir.join(live::layout::LAYOUT_FILE_NAME);
+        crate::out::write(
+            &layout,
+            live::layout::for_rig(&args.rig).as_bytes(),
+            args.force,
+            inputs,
+        )?;
+        if !quiet {
+            outln!(
+                "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
+                v.bind,
+                v.port,
+                v.frames_hz,
+                v.estimates_hz
+            );
+            outln!(
+                "live view layout: {} (Foxglove: Layouts, Import from file; {} for rig {})",
+                layout.display(),
+                live::layout::LAYOUT_REPO_PATH,
+                args.rig
+            );
+        }
     }
     if cfg.zenoh.enabled && !quiet {
         outln!(
