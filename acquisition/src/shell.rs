@@ -70,7 +70,7 @@ struct Args {
     /// Fault of the simulated rig, `KIND:SIZE@ONSET[,ramp=S][,law=sqrt|linear]` (repeatable).
     #[arg(long = "fault")]
     faults: Vec<String>,
-    /// Replay this CSV file (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) instead of simulating.
+    /// Replay this CSV file (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak,temp_c]) instead of simulating.
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Receive a real rig's UDP sensor stream on IP:PORT (format: frames/README.md,

@@ -213,7 +213,7 @@ pub(crate) enum Command {
     /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time;
     /// a directory or several files are replayed as a batch over all cores.
     Replay {
-        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak]) or a recorded log (.mcap); or a
+        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak,temp_c]) or a recorded log (.mcap); or a
         /// directory (its *.csv, *.csv.gz, *.mcap and those of its subfolders, one level down) or
         /// several files: a batch, each file's outputs in OUT/<its relative name without extension>/,
         /// a table on stdout, a non-zero exit if any file failed.

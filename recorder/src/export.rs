@@ -55,7 +55,7 @@ fn write_gaps(dir: &Path, gaps: &[GapRecord], overwrite: bool) -> Result<PathBuf
 /// `stats.csv` and `gaps.csv` (every field; arrays as `name_0..name_N`;
 /// floats in shortest round-trip form, NaN as `NaN`) into `dir` (created if
 /// needed), and `dataset.csv`: the frames in the dataset format
-/// `t,u,x,p1,p2,x_sp,f_load,ref,q_leak` that `leakwatch replay` reads.
+/// `t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c` that `leakwatch replay` reads.
 /// Returns the files written. The directory must not be a symbolic link; an
 /// existing file in it is replaced only if `overwrite` (`--force`), and none is
 /// touched if one would be refused.

@@ -18,7 +18,7 @@
 //! - [`resume`]: a restarted recorder continues the log in a numbered part,
 //!   the frames in no part recorded as a gap.
 //! - [`export_csv`]: one CSV per channel, and the frames again in the
-//!   dataset format (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak`) that
+//!   dataset format (`t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c`) that
 //!   `leakwatch replay` reads.
 
 use std::fmt;

@@ -249,10 +249,13 @@ fn field_csv_names<F: Field>(_: &F, name: &str, out: &mut Vec<String>) {
 }
 
 // The fields are the frames crate's lists (frames::frame_fields!); the
-// LeakEventFrame's are written out here, split by the version that brought them.
-frames::frame_fields!(
+// SensorFrame's, LeakEventFrame's and HealthFrame's are written out here, split
+// by the version that brought them.
+record!(
     SensorFrame,
-    record!(@unpadded SensorFrame, "leakwatch.SensorFrame.v1", [])
+    "leakwatch.SensorFrame.v2",
+    [seq, acq_mono_ns, t_s, u_v, x_m, p1_pa, p2_pa, x_sp_m, f_load_n, ref_m, q_leak_lpm, flags],
+    added[temp_c]
 );
 frames::frame_fields!(
     EstimateFrame,

@@ -362,7 +362,7 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     let mut lines = frames_csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "seq,acq_mono_ns,t_s,u_v,x_m,p1_pa,p2_pa,x_sp_m,f_load_n,ref_m,q_leak_lpm,flags"
+        "seq,acq_mono_ns,t_s,u_v,x_m,p1_pa,p2_pa,x_sp_m,f_load_n,ref_m,q_leak_lpm,flags,temp_c"
     );
     let first: Vec<&str> = lines.next().unwrap().split(',').collect();
     assert_eq!(first[6], "5e-324");
@@ -378,7 +378,7 @@ fn csv_export_round_trips_and_the_dataset_file_reads_back() {
     let dataset_csv = std::fs::read_to_string(out.join("dataset.csv")).unwrap();
     assert_eq!(
         dataset_csv.lines().next().unwrap(),
-        "t,u,x,p1,p2,x_sp,f_load,ref,q_leak"
+        "t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c"
     );
     assert_eq!(dataset_csv.lines().count(), 51);
 }
