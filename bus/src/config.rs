@@ -11,13 +11,30 @@ pub const PREFIX_ENV: &str = "LEAKWATCH_IOX_PREFIX";
 
 /// The longest isolation prefix, characters. Measured with iceoryx2 0.10
 /// (bus/tests/prefix.rs): an event listener's Unix socket is
-/// `/tmp/iceoryx2/lw_<prefix>/lw_<prefix>_<id>.event`, the prefix twice, and
+/// `<root>/lw_<prefix>_<id>.event`, the prefix twice (the root, since issue 29
+/// `<private dir>/<prefix>/`, was `/tmp/iceoryx2/lw_<prefix>/`), and
 /// its path must fit the 108 bytes of a socket address (a 24-character prefix
 /// worked with a 32-digit id, 108 bytes, and failed with `ResourceCreationFailed`
 /// at 33 digits, 109 bytes). The id is a 128-bit number whose top 32 bits
 /// count the ids the process made: 30 digits at first, up to 39. So 28 + 2 ×
 /// prefix + 39 ≤ 108 bytes: 20 characters work whatever the count; 25 fail at once.
+/// A private directory longer than `/tmp/leakwatch-0` allows fewer
+/// ([`max_prefix_len_under`]).
 pub const MAX_PREFIX_LEN: usize = 20;
+
+/// The longest path of a Unix socket, bytes (`sun_path` of `sockaddr_un`).
+const SOCKET_PATH_MAX: usize = 108;
+
+/// Bytes of an event socket's path beyond the root and the prefix:
+/// `lw_`, `_`, an id of up to 39 digits and `.event`.
+const SOCKET_NAME_EXTRA: usize = 3 + 1 + 39 + 6;
+
+/// The longest prefix whose event sockets fit [`SOCKET_PATH_MAX`] when the
+/// private directory is `dir` (root `<dir>/<prefix>/`), at most [`MAX_PREFIX_LEN`].
+pub fn max_prefix_len_under(dir: &std::path::Path) -> usize {
+    let fixed = dir.as_os_str().len() + 2 + SOCKET_NAME_EXTRA;
+    (SOCKET_PATH_MAX.saturating_sub(fixed) / 2).min(MAX_PREFIX_LEN)
+}
 
 /// Sizes of the services and the isolation prefix. Every process of a rig
 /// must use the same values: the first process creates the services and the
@@ -25,7 +42,8 @@ pub const MAX_PREFIX_LEN: usize = 20;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BusConfig {
     /// Isolation prefix (1 to [`MAX_PREFIX_LEN`] characters of `[A-Za-z0-9_-]`): iceoryx2 files get the
-    /// prefix `lw_<prefix>_` and live under `/tmp/iceoryx2/lw_<prefix>/`.
+    /// prefix `lw_<prefix>_`; its segments are in `/dev/shm`, its other files under
+    /// `<private dir>/<prefix>/` ([`crate::private_dir`]).
     /// `None`: iceoryx2's defaults (what other iceoryx2 programs, like the
     /// Python bindings with a default config, see).
     pub iox_prefix: Option<String>,
@@ -80,7 +98,20 @@ impl BusConfig {
             validate_prefix(p)?;
             c.global.prefix = FileName::new(format!("lw_{p}_").as_bytes())
                 .map_err(|e| BusError::new(format!("iceoryx2 prefix from {p:?}"), e))?;
-            let root = format!("/tmp/iceoryx2/lw_{p}/");
+            let dir = crate::private_dir()?;
+            let max = max_prefix_len_under(&dir);
+            if p.len() > max {
+                return Err(BusError(format!(
+                    "iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?) has {} characters; at most {max} work \
+                     with the private directory {}: iceoryx2 puts the prefix twice into the path of a Unix \
+                     socket (<dir>/<prefix>/lw_<prefix>_<id of up to 39 digits>.event), which must fit \
+                     {SOCKET_PATH_MAX} bytes; use a shorter prefix or a shorter {}",
+                    p.len(),
+                    dir.display(),
+                    crate::private::RUNTIME_DIR_ENV
+                )));
+            }
+            let root = format!("{}/", dir.join(p).display());
             c.global
                 .set_root_path(&Path::new(root.as_bytes()).map_err(|e| BusError::new(&root, e))?);
         }
@@ -89,7 +120,7 @@ impl BusConfig {
 }
 
 impl BusConfig {
-    /// Removes the files an isolated run leaves behind (`/tmp/iceoryx2/lw_<prefix>/`
+    /// Removes the files an isolated run leaves behind (`<private dir>/<prefix>/`
     /// and `/dev/shm/lw_<prefix>_*`); for tests, once every process of the
     /// prefix has ended. Does nothing without a prefix. Returns the entries removed.
     pub fn remove_isolated_files(&self) -> std::io::Result<usize> {
@@ -98,8 +129,8 @@ impl BusConfig {
         };
         validate_prefix(p).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.0))?;
         let mut removed = 0;
-        let root = std::path::PathBuf::from(format!("/tmp/iceoryx2/lw_{p}"));
-        if root.exists() {
+        let root = crate::private_dir_path().join(p);
+        if std::fs::symlink_metadata(&root).is_ok() {
             std::fs::remove_dir_all(&root)?;
             removed += 1;
         }
@@ -117,7 +148,7 @@ impl BusConfig {
 /// One file or directory a prefix's processes left behind.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Leftover {
-    /// The file (`/dev/shm/lw_<prefix>_*`) or directory (`/tmp/iceoryx2/lw_<prefix>`).
+    /// The file (`/dev/shm/lw_<prefix>_*`) or directory (`<private dir>/<prefix>`).
     pub path: std::path::PathBuf,
     /// Its size, bytes (a directory: the sum of the files in it).
     pub bytes: u64,
@@ -136,15 +167,14 @@ fn is_prefix_file(name: &str, start: &str) -> bool {
 }
 
 /// The prefixes that have iceoryx2 files of leakwatch's naming in `shm_dir`
-/// (`lw_<prefix>_<40 hex digits>...`) or `iox_dir` (`lw_<prefix>/`), sorted,
-/// each once; names that are not a valid prefix are left out.
+/// (`lw_<prefix>_<40 hex digits>...`) or `iox_dir` (the private directory:
+/// `<prefix>/`), sorted, each once; names that are not a valid prefix are left out.
 pub fn prefixes_with_files_in(shm_dir: &std::path::Path, iox_dir: &std::path::Path) -> Vec<String> {
     let mut out = Vec::new();
     if let Ok(dir) = std::fs::read_dir(iox_dir) {
         for e in dir.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            if let Some(p) = name.strip_prefix("lw_") {
-                out.push(p.to_string());
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                out.push(e.file_name().to_string_lossy().into_owned());
             }
         }
     }
@@ -170,12 +200,9 @@ pub fn prefixes_with_files_in(shm_dir: &std::path::Path, iox_dir: &std::path::Pa
     out
 }
 
-/// [`prefixes_with_files_in`] `/dev/shm` and `/tmp/iceoryx2`.
+/// [`prefixes_with_files_in`] `/dev/shm` and the private directory.
 pub fn prefixes_with_files() -> Vec<String> {
-    prefixes_with_files_in(
-        std::path::Path::new("/dev/shm"),
-        std::path::Path::new("/tmp/iceoryx2"),
-    )
+    prefixes_with_files_in(std::path::Path::new("/dev/shm"), &crate::private_dir_path())
 }
 
 /// Bytes of the files under `path` (0 for what cannot be read).
@@ -193,7 +220,7 @@ fn size_of(path: &std::path::Path) -> u64 {
 
 impl BusConfig {
     /// The files of this config's prefix as they are now: the directory
-    /// `/tmp/iceoryx2/lw_<prefix>` and the segments `/dev/shm/lw_<prefix>_*`.
+    /// `<private dir>/<prefix>` and the segments `/dev/shm/lw_<prefix>_*`.
     /// Empty without a prefix (iceoryx2's default prefix is shared with other programs).
     pub fn prefix_files(&self) -> Vec<Leftover> {
         let Some(p) = &self.iox_prefix else {
@@ -288,11 +315,28 @@ impl BusConfig {
 }
 
 impl BusConfig {
+    /// The directory of this prefix's iceoryx2 files other than its segments
+    /// (`<private dir>/<prefix>`); `None` without a prefix.
+    pub fn iox_root(&self) -> Option<std::path::PathBuf> {
+        self.iox_prefix.as_ref().map(|p| crate::private_dir_path().join(p))
+    }
+
+    /// The lock file of this prefix ([`BusConfig::lock_prefix`]:
+    /// `<private dir>/<prefix>.lock`); `None` without a prefix.
+    pub fn lock_path(&self) -> Option<std::path::PathBuf> {
+        self.iox_prefix
+            .as_ref()
+            .map(|p| crate::private_dir_path().join(format!("{p}.lock")))
+    }
+
     /// The iceoryx2 file prefix in `/dev/shm` (`lw_<prefix>_`, or iceoryx2's `iox2_`)
     /// and the root directory of its other files.
     fn file_prefix_and_root(&self) -> (String, String) {
         match &self.iox_prefix {
-            Some(p) => (format!("lw_{p}_"), format!("/tmp/iceoryx2/lw_{p}")),
+            Some(p) => (
+                format!("lw_{p}_"),
+                crate::private_dir_path().join(p).display().to_string(),
+            ),
             None => ("iox2_".to_string(), "/tmp/iceoryx2".to_string()),
         }
     }
@@ -352,7 +396,7 @@ impl BusConfig {
 }
 
 /// A prefix owned by one run: an exclusive lock (`flock`) on
-/// `$TMPDIR/leakwatch-prefix-<prefix>.lock`, released when it is dropped or the
+/// `<private dir>/<prefix>.lock` ([`crate::private_dir`]), released when it is dropped or the
 /// process ends (however it ends). The file holds the owner's process id. A
 /// dropped lock removes its file (a killed run leaves it, and the next run on
 /// the prefix takes it over).
@@ -396,7 +440,7 @@ impl BusConfig {
             return Err(BusError("a run needs an isolation prefix to own".into()));
         };
         validate_prefix(p)?;
-        let path = std::env::temp_dir().join(format!("leakwatch-prefix-{p}.lock"));
+        let path = crate::private_dir()?.join(format!("{p}.lock"));
         // A lock taken on a file its owner removed on release is not the prefix's
         // lock: open the path again (a few times; each retry means another run
         // released the prefix meanwhile).
@@ -466,7 +510,7 @@ pub fn validate_prefix(p: &str) -> Result<(), BusError> {
         return Err(BusError(format!(
             "iceoryx2 isolation prefix {p:?} (from {PREFIX_ENV}?) has {} characters; at most {MAX_PREFIX_LEN} \
              work: iceoryx2 puts it twice into the path of a Unix socket \
-             (/tmp/iceoryx2/lw_<prefix>/lw_<prefix>_<id of up to 39 digits>.event), which must fit 108 bytes",
+             (<dir>/<prefix>/lw_<prefix>_<id of up to 39 digits>.event), which must fit 108 bytes",
             p.len()
         )));
     }
@@ -482,8 +526,9 @@ mod tests {
         let base = std::env::temp_dir().join(format!("lw-prefixes-{}", std::process::id()));
         let (shm, iox) = (base.join("shm"), base.join("iox"));
         std::fs::create_dir_all(&shm).unwrap();
-        std::fs::create_dir_all(iox.join("lw_lab_1")).unwrap();
-        std::fs::create_dir_all(iox.join("other")).unwrap();
+        std::fs::create_dir_all(iox.join("lab_1")).unwrap();
+        std::fs::create_dir_all(iox.join("bad name")).unwrap();
+        std::fs::write(iox.join("lab_1.lock"), "").unwrap();
         let hash = "0354a209029e7d094a819e2d4030ea331e6caaf0";
         for name in [
             format!("lw_lab_{hash}_1029966520912543268563897568756.data"),

@@ -33,7 +33,9 @@ fn paths(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
 #[test]
 fn the_longest_accepted_prefix_opens_every_service() {
     assert_eq!(MAX_PREFIX_LEN, 20);
-    let p = prefix(MAX_PREFIX_LEN, 'a');
+    // 20 with the private directory /tmp/leakwatch-0 (root, no XDG_RUNTIME_DIR)
+    let longest = bus::max_prefix_len_under(&bus::private_dir_path());
+    let p = prefix(longest, 'a');
     let cfg = BusConfig {
         iox_prefix: Some(p.clone()),
         ..BusConfig::default()
@@ -46,10 +48,12 @@ fn the_longest_accepted_prefix_opens_every_service() {
         .publisher::<SensorFrame>()
         .expect("a publisher and its notifier");
     // the listener's Unix socket, the path that limits the prefix:
-    // /tmp/iceoryx2/lw_<prefix>/lw_<prefix>_<id>.event
+    // <private dir>/<prefix>/lw_<prefix>_<id>.event
     use std::os::unix::fs::FileTypeExt;
     let mut all = Vec::new();
-    paths(std::path::Path::new(&format!("/tmp/iceoryx2/lw_{p}")), &mut all);
+    let root = cfg.iox_root().expect("a root");
+    assert_eq!(root, bus::private_dir().expect("private").join(&p));
+    paths(&root, &mut all);
     let sockets: Vec<String> = all
         .iter()
         .filter(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_socket()))
@@ -58,17 +62,19 @@ fn the_longest_accepted_prefix_opens_every_service() {
     assert!(!sockets.is_empty(), "{all:#?}");
     for s in &sockets {
         let id = s
-            .strip_prefix(&format!("/tmp/iceoryx2/lw_{p}/lw_{p}_"))
+            .strip_prefix(&format!("{}/lw_{p}_", root.display()))
             .and_then(|r| r.strip_suffix(".event"))
             .unwrap_or_else(|| panic!("an unexpected socket name: {s}"));
         assert!(id.bytes().all(|b| b.is_ascii_digit()) && id.len() >= 29, "{s}");
         // with the widest id a process can make (u128 whose top 32 bits are a
         // count: 39 digits) it still fits the 108 bytes of a socket address
         let widest = s.len() - id.len() + 39;
-        assert_eq!(widest, 28 + 2 * MAX_PREFIX_LEN + 39, "{s}");
+        let dir = bus::private_dir_path();
+        assert_eq!(widest, dir.as_os_str().len() + 12 + 2 * longest + 39, "{s}");
         assert!(widest <= 108, "{widest} bytes");
-        // one more character of prefix would not: two more bytes
-        assert!(widest + 2 > 108, "{widest} bytes");
+        // one more character of prefix would not fit (two more bytes), unless
+        // the limit is MAX_PREFIX_LEN with a shorter private directory
+        assert!(widest + 2 > 108 || longest == MAX_PREFIX_LEN, "{widest} bytes");
     }
     drop((rx, tx, bus));
     cfg.remove_leftovers().expect("its files are removed");
@@ -92,7 +98,7 @@ fn a_longer_prefix_is_refused_with_the_limit_before_any_file_is_made() {
     };
     assert!(e.contains("at most 20"), "{e}");
     assert!(cfg.prefix_files().is_empty(), "{:?}", cfg.prefix_files());
-    assert!(!std::path::Path::new(&format!("/tmp/iceoryx2/lw_{p}")).exists());
+    assert!(!cfg.iox_root().expect("a root").exists());
     // 20 of the allowed characters pass; a bad character is still named
     assert_eq!(bus::validate_prefix(&prefix(20, 'c')), Ok(()));
     let e = bus::validate_prefix("a b").expect_err("a space").0;
@@ -125,4 +131,19 @@ fn the_environment_prefix_is_checked_when_it_is_read() {
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(out.contains(want), "{len}: {out}");
     }
+}
+
+/// The limit follows the private directory's length: 20 under
+/// `/tmp/leakwatch-0`, 16 under `/run/user/1000/leakwatch`, never above 20.
+#[test]
+fn the_prefix_limit_follows_the_private_directory() {
+    use std::path::Path;
+    assert_eq!(bus::max_prefix_len_under(Path::new("/tmp/leakwatch-0")), 20);
+    assert_eq!(bus::max_prefix_len_under(Path::new("/tmp/leakwatch-1000")), 19);
+    assert_eq!(bus::max_prefix_len_under(Path::new("/run/user/1000/leakwatch")), 16);
+    assert_eq!(bus::max_prefix_len_under(Path::new("/t")), MAX_PREFIX_LEN);
+    // the socket of the widest id: <dir>/<prefix>/lw_<prefix>_<39 digits>.event
+    let dir = "/run/user/1000/leakwatch";
+    let fits = |n: usize| dir.len() + 1 + n + 1 + 3 + n + 1 + 39 + 6 <= 108;
+    assert!(fits(16) && !fits(17));
 }

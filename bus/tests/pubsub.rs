@@ -272,7 +272,8 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
     assert!(e.contains(&format!("{} of prefix", segment.display())), "{e}");
     assert!(e.contains("is damaged (3 bytes"), "{e}");
     assert!(
-        e.contains("LEAKWATCH_IOX_PREFIX") && e.contains("rm -rf /tmp/iceoryx2/lw_"),
+        e.contains("LEAKWATCH_IOX_PREFIX")
+            && e.contains(&format!("rm -rf {}", cfg.iox_root().expect("root").display())),
         "{e}"
     );
     // the way out works: with the prefix's files removed a node starts again
@@ -287,6 +288,15 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
 fn a_prefix_is_owned_by_one_run_at_a_time() {
     let cfg = config("lock");
     let first = cfg.lock_prefix().expect("first owner");
+    // in the user's private directory (0700, ours), not in the shared temp dir
+    assert_eq!(Some(first.path.clone()), cfg.lock_path());
+    let dir = first.path.parent().expect("a directory");
+    assert_eq!(dir, bus::private_dir().expect("private"));
+    {
+        use std::os::unix::fs::MetadataExt;
+        let m = std::fs::symlink_metadata(dir).expect("the private directory");
+        assert!(m.is_dir() && m.uid() == bus::current_uid() && m.mode() & 0o777 == 0o700);
+    }
     assert_eq!(
         std::fs::read_to_string(&first.path).unwrap().trim(),
         std::process::id().to_string()
