@@ -342,21 +342,22 @@ impl BusConfig {
     }
 
     /// Why a node of this prefix may fail to start, read off the files: a global
-    /// management segment (`/dev/shm/<prefix>*.global_mgmt`) of another user or of a
-    /// size other than iceoryx2's own, or a root directory of another user; with
-    /// the way out. `None` when nothing looks wrong (or nothing can be read).
+    /// management segment (`/dev/shm/<prefix>*.global_mgmt`) of another user, or
+    /// one that is damaged (another size than iceoryx2's own, or another version
+    /// word: anything but what iceoryx2 0.10.0 writes), or a root directory of
+    /// another user; each named with its owner, with the way out. `None` when
+    /// nothing looks wrong (or nothing can be read).
     pub fn diagnose_blocked_start(&self) -> Option<String> {
         use std::os::unix::fs::MetadataExt;
         let (start, root) = self.file_prefix_and_root();
-        // SAFETY: geteuid has no preconditions and cannot fail.
-        let me = unsafe { libc::geteuid() };
-        let env = match &self.iox_prefix {
-            Some(p) => format!("prefix {p:?}"),
-            None => "iceoryx2's default prefix".to_string(),
+        let me = crate::current_uid();
+        let (env, clean) = match &self.iox_prefix {
+            Some(p) => (format!("prefix {p:?}"), format!("leakwatch clean --prefix {p}, or ")),
+            None => ("iceoryx2's default prefix".to_string(), String::new()),
         };
         let way_out = format!(
-            "once no process of this prefix runs, remove its files (rm -rf {root} /dev/shm/{start}*) or start \
-             with another prefix (LEAKWATCH_IOX_PREFIX=...); see docs/security.md"
+            "once no process of this prefix runs, remove its files ({clean}rm -rf {root} /dev/shm/{start}*) or \
+             start with another prefix (LEAKWATCH_IOX_PREFIX=...); see docs/security.md"
         );
         let mut found = Vec::new();
         for entry in std::fs::read_dir("/dev/shm").ok()?.flatten() {
@@ -365,17 +366,15 @@ impl BusConfig {
                 continue;
             }
             let Ok(meta) = entry.metadata() else { continue };
+            let what = format!("the management segment /dev/shm/{name} of {env}");
             if meta.uid() != me {
                 found.push(format!(
-                    "the management segment /dev/shm/{name} of {env} belongs to another user (uid {}, mode {:o})",
+                    "{what} belongs to another user (uid {}, mode {:o}; only that user or root can remove it)",
                     meta.uid(),
                     meta.mode() & 0o7777
                 ));
-            } else if meta.len() < GLOBAL_MGMT_MIN_BYTES {
-                found.push(format!(
-                    "the management segment /dev/shm/{name} of {env} is damaged ({} bytes, iceoryx2 writes {GLOBAL_MGMT_MIN_BYTES})",
-                    meta.len()
-                ));
+            } else if let Some(damage) = mgmt_damage(&entry.path()) {
+                found.push(format!("{what} is damaged ({damage}; owner uid {me}, this user)"));
             }
         }
         if let Ok(meta) = std::fs::metadata(&root) {
@@ -393,6 +392,28 @@ impl BusConfig {
             Some(format!("{}: {way_out}", found.join("; ")))
         }
     }
+}
+
+/// What is wrong with the global management segment at `path`, if anything:
+/// a size other than [`GLOBAL_MGMT_BYTES`], or a first word other than
+/// [`GLOBAL_MGMT_VERSION`] (read twice 50 ms apart: a node that is creating it
+/// writes the word last).
+fn mgmt_damage(path: &std::path::Path) -> Option<String> {
+    let read = || -> Option<String> {
+        let bytes = std::fs::read(path).ok()?;
+        if bytes.len() as u64 != GLOBAL_MGMT_BYTES {
+            return Some(format!("{} bytes, iceoryx2 writes {GLOBAL_MGMT_BYTES}", bytes.len()));
+        }
+        let word = u64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
+        (word != GLOBAL_MGMT_VERSION).then(|| {
+            format!(
+                "its version word is {word:#x}, iceoryx2 0.10.0 writes {GLOBAL_MGMT_VERSION:#x}"
+            )
+        })
+    };
+    read()?;
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    read()
 }
 
 /// A prefix owned by one run: an exclusive lock (`flock`) on
@@ -490,9 +511,15 @@ impl BusConfig {
     }
 }
 
-/// Size of the global management segment iceoryx2 0.10 writes, bytes (the node id
-/// counter); a smaller file of that name is damaged.
-const GLOBAL_MGMT_MIN_BYTES: u64 = 16;
+/// Size of the global management segment iceoryx2 0.10 writes, bytes (its
+/// version word and the node id counter); a file of that name of another size
+/// is damaged.
+const GLOBAL_MGMT_BYTES: u64 = 16;
+
+/// The first 8 bytes (little-endian) of a global management segment iceoryx2
+/// 0.10.0 made: its `PackageVersion` (major << 32 | minor << 16 | patch); a
+/// node of 0.10.0 refuses any other.
+const GLOBAL_MGMT_VERSION: u64 = 10 << 16;
 
 /// Checks an isolation prefix: 1 to [`MAX_PREFIX_LEN`] characters of
 /// `A-Z a-z 0-9 _ -`; the error names the prefix, its length and the limit.

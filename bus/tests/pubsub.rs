@@ -276,10 +276,45 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
             && e.contains(&format!("rm -rf {}", cfg.iox_root().expect("root").display())),
         "{e}"
     );
+    assert!(
+        e.contains(&format!("owner uid {}, this user", bus::current_uid())),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!("leakwatch clean --prefix {}", cfg.iox_prefix.as_deref().unwrap_or(""))),
+        "{e}"
+    );
     // the way out works: with the prefix's files removed a node starts again
     cfg.remove_isolated_files().expect("clean");
     drop(Bus::open("rig1", cfg.clone()).expect("a node after the clean-up"));
+    // the right size with the wrong content (another version word) is named too
+    let mut bytes = std::fs::read(&segment).expect("the segment");
+    assert_eq!(bytes.len(), 16);
+    bytes[..8].copy_from_slice(&0x0001_0009_0000u64.to_le_bytes());
+    std::fs::write(&segment, &bytes).expect("write another version");
+    let why = cfg.diagnose_blocked_start().expect("a wrong version word is reported");
+    assert!(
+        why.contains("is damaged (its version word is 0x100090000, iceoryx2 0.10.0 writes 0xa0000"),
+        "{why}"
+    );
+    let e = Bus::open("rig1", cfg.clone())
+        .err()
+        .expect("a segment of another version must stop the node")
+        .0;
+    assert!(e.contains("its version word is 0x100090000"), "{e}");
     cfg.remove_isolated_files().expect("clean");
+    if bus::current_uid() == 0 {
+        // root can give the segment to another user, as if that user had made it first
+        drop(Bus::open("rig1", cfg.clone()).expect("a node after the clean-up"));
+        std::os::unix::fs::chown(&segment, Some(4242), None).expect("chown");
+        let why = cfg.diagnose_blocked_start().expect("another user's segment is reported");
+        assert!(
+            why.contains(&format!("{} of prefix", segment.display()))
+                && why.contains("belongs to another user (uid 4242, mode 666; only that user or root can remove it)"),
+            "{why}"
+        );
+        cfg.remove_isolated_files().expect("clean");
+    }
 }
 
 /// One run per prefix: a second lock on a prefix is refused with the owner's process

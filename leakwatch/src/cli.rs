@@ -148,7 +148,7 @@ pub(crate) enum Command {
         config: Option<PathBuf>,
     },
     /// Remove what a killed run left in shared memory: the iceoryx2 files of its prefix
-    /// (/dev/shm/lw_<prefix>_*, /tmp/iceoryx2/lw_<prefix>/) and its lock file. Refused while a
+    /// (/dev/shm/lw_<prefix>_*, <private dir>/<prefix>/) and its lock file. Refused while a
     /// run holds the prefix or a process of it still runs.
     Clean {
         /// The iceoryx2 prefix (a run's `run<pid>`, or the LEAKWATCH_IOX_PREFIX it was started

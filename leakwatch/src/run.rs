@@ -10,6 +10,7 @@
 //! see each other.
 
 mod args;
+mod blocked;
 mod clean;
 mod events;
 mod figures;

@@ -268,8 +268,7 @@ fn a_killed_runs_leftovers_are_removed_at_the_next_start_and_by_clean() {
     let d = tmpdir("leftovers");
     let cfg = short_warmup_config(&d);
     let prefix = format!("lwcl{}", std::process::id());
-    let root = PathBuf::from(format!("/tmp/iceoryx2/lw_{prefix}"));
-    let lock = std::env::temp_dir().join(format!("leakwatch-prefix-{prefix}.lock"));
+    let (root, lock) = root_and_lock(&prefix);
     let clean = || {
         Command::new(env!("CARGO_BIN_EXE_leakwatch"))
             .args(["clean", "--prefix", &prefix])
@@ -445,13 +444,25 @@ fn prefix_of_len(len: usize, tag: char) -> String {
     p
 }
 
+/// The iceoryx2 root directory and the lock file of `prefix`, both in the
+/// user's private directory.
+fn root_and_lock(prefix: &str) -> (PathBuf, PathBuf) {
+    let cfg = bus::BusConfig {
+        iox_prefix: Some(prefix.to_string()),
+        ..bus::BusConfig::default()
+    };
+    let (root, lock) = (cfg.iox_root().unwrap(), cfg.lock_path().unwrap());
+    let private = bus::private_dir_path();
+    assert!(root.starts_with(&private) && lock.starts_with(&private));
+    (root, lock)
+}
+
 /// No iceoryx2 file of `prefix` is left: no segment in /dev/shm, no directory
-/// under /tmp/iceoryx2, no lock.
+/// in the private directory, no lock.
 fn assert_no_files_of(prefix: &str) {
     assert!(shm_files(prefix).is_empty(), "{:?}", shm_files(prefix));
-    let root = PathBuf::from(format!("/tmp/iceoryx2/lw_{prefix}"));
+    let (root, lock) = root_and_lock(prefix);
     assert!(!root.exists(), "{} is left", root.display());
-    let lock = std::env::temp_dir().join(format!("leakwatch-prefix-{prefix}.lock"));
     assert!(!lock.exists(), "{} is left", lock.display());
 }
 
@@ -535,4 +546,150 @@ fn a_start_that_fails_leaves_no_files_on_its_prefix() {
             "{stage} still runs"
         );
     }
+}
+
+/// The global management segment of `prefix` in /dev/shm.
+fn mgmt_segment(prefix: &str) -> PathBuf {
+    shm_files(prefix)
+        .into_iter()
+        .find(|p| p.to_string_lossy().ends_with(".global_mgmt"))
+        .expect("the prefix's management segment")
+}
+
+/// A management segment damaged under a running pipeline (3 bytes written
+/// into it, as another local user can: it is 0666) is found before the killed
+/// estimator is restarted: the run stops at once with exit status 1 and a
+/// message naming the file, what is wrong with it, its owner and the way out,
+/// instead of restarts that fail and a run that ends "no leak detected".
+#[test]
+fn a_damaged_management_segment_is_named_before_a_restart_and_ends_the_run() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("mgmt-restart");
+    let cfg = short_warmup_config(&d);
+    let prefix = prefix_of_len(12, 'g');
+    let run = Running(Some(
+        run_command("mgmt-restart", "60", None, &d.join("run"), &cfg)
+            .env("LEAKWATCH_IOX_PREFIX", &prefix)
+            .spawn()
+            .unwrap(),
+    ));
+    wait_for_stage("acquisition", "mgmt-restart");
+    let segment = mgmt_segment(&prefix);
+    std::fs::write(&segment, b"bad").unwrap();
+    let estimator = wait_for_stage("estimator", "mgmt-restart");
+    signal(estimator, libc::SIGKILL);
+    let t0 = Instant::now();
+    let mut run = run;
+    let out = run.0.take().unwrap().wait_with_output().unwrap();
+    let err = text(&out.stderr);
+    assert!(t0.elapsed() < Duration::from_secs(30), "{err}");
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "the estimator cannot be restarted: the management segment {} of prefix {prefix:?} is damaged (3 bytes, \
+             iceoryx2 writes 16; owner uid {}, this user)",
+            segment.display(),
+            bus::current_uid()
+        )),
+        "{err}"
+    );
+    assert!(err.contains(&format!("leakwatch clean --prefix {prefix}")), "{err}");
+    assert!(!err.contains("no leak detected"), "{err}");
+    assert!(stage_pids(None, "mgmt-restart").is_empty());
+    assert_no_files_of(&prefix);
+}
+
+/// A damaged management segment that cannot be removed at the start (a
+/// process of the prefix still runs: here this test's own node) stops the run
+/// before any stage starts, naming the file.
+#[test]
+fn a_damaged_management_segment_is_named_at_the_start() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("mgmt-start");
+    let cfg = short_warmup_config(&d);
+    let prefix = prefix_of_len(12, 'h');
+    let bus_cfg = bus::BusConfig {
+        iox_prefix: Some(prefix.clone()),
+        ..bus::BusConfig::default()
+    };
+    let node = bus::Bus::open("holder", bus_cfg.clone()).expect("a node of the prefix");
+    let segment = mgmt_segment(&prefix);
+    std::fs::write(&segment, [0u8; 16]).unwrap();
+    let out = run_command("mgmt-start", "3", None, &d.join("run"), &cfg)
+        .env("LEAKWATCH_IOX_PREFIX", &prefix)
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    drop(node);
+    bus_cfg.remove_isolated_files().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "cannot start on the iceoryx2 prefix {prefix:?}: the management segment {} of prefix {prefix:?} is \
+             damaged (its version word is 0x0, iceoryx2 0.10.0 writes 0xa0000",
+            segment.display()
+        )),
+        "{err}"
+    );
+    assert!(stage_pids(None, "mgmt-start").is_empty());
+    assert!(!d.join("run/run.mcap").exists());
+    assert_no_files_of(&prefix);
+}
+
+/// A private directory that other users can write (here `LEAKWATCH_RUNTIME_DIR`
+/// with mode 777) is refused before anything starts, naming it and its mode;
+/// a missing one is made 0700 and holds the run's lock and iceoryx2 root.
+#[test]
+fn a_run_refuses_a_private_directory_others_can_write() {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("private-dir");
+    let cfg = short_warmup_config(&d);
+    let open = d.join("open");
+    std::fs::create_dir(&open).unwrap();
+    std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o777)).unwrap();
+    let out = run_command("private-open", "3", None, &d.join("run"), &cfg)
+        .env("LEAKWATCH_RUNTIME_DIR", &open)
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "leakwatch's private directory {} is open to other users (mode 777, not 700)",
+            open.display()
+        )),
+        "{err}"
+    );
+    assert!(stage_pids(None, "private-open").is_empty());
+    assert_eq!(std::fs::read_dir(&open).unwrap().count(), 0, "nothing made in it");
+    assert!(!d.join("run/run.mcap").exists());
+
+    // a missing one is made 0700; the run's root and lock are in it while it runs
+    // (short: the directory's length limits the prefix's, bus::max_prefix_len_under)
+    let fresh = PathBuf::from(format!("/tmp/lwf{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&fresh);
+    let prefix = prefix_of_len(12, 'k');
+    let run = Running(Some(
+        run_command("private-fresh", "60", None, &d.join("run2"), &cfg)
+            .env("LEAKWATCH_RUNTIME_DIR", &fresh)
+            .env("LEAKWATCH_IOX_PREFIX", &prefix)
+            .spawn()
+            .unwrap(),
+    ));
+    wait_for_stage("acquisition", "private-fresh");
+    let m = std::fs::symlink_metadata(&fresh).unwrap();
+    assert!(m.is_dir() && m.mode() & 0o777 == 0o700 && m.uid() == bus::current_uid());
+    assert!(fresh.join(format!("{prefix}.lock")).is_file());
+    assert!(fresh.join(&prefix).is_dir());
+    kill_run(run, "private-fresh");
+    let cleaned = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["clean", "--prefix", &prefix])
+        .env("LEAKWATCH_RUNTIME_DIR", &fresh)
+        .output()
+        .unwrap();
+    assert!(cleaned.status.success(), "{}", text(&cleaned.stderr));
+    assert!(!fresh.join(&prefix).exists() && !fresh.join(format!("{prefix}.lock")).exists());
+    assert!(shm_files(&prefix).is_empty());
+    std::fs::remove_dir(&fresh).unwrap();
 }

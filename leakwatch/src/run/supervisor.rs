@@ -147,6 +147,11 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
     // what a killed run on this prefix left in shared memory: removed, and said
     super::clean::remove_at_start(&bus_cfg);
+    // a management segment of another user, or a damaged one that could not be
+    // removed (a process of the prefix still runs): no stage could start
+    if let Some(why) = super::blocked::why_blocked(&bus_cfg, None) {
+        return Err(format!("cannot start on the iceoryx2 prefix {prefix:?}: {why}"));
+    }
     // a start that fails from here on removes what it made on the prefix
     let start_cleanup = super::clean::StartCleanup::new(&bus_cfg);
     let cfg_path = out_dir.join("config.toml");
@@ -378,6 +383,21 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                             launch.frame_subscribers = launch.frame_subscribers.saturating_sub(1);
                             continue;
                         }
+                        // a prefix on which no node can start: a restart would fail the same way
+                        if let Some(why) = super::blocked::why_blocked(&bus_cfg, Some(&log)) {
+                            if let Some(f) = super::blocked::give_up(
+                                name,
+                                &why,
+                                OPTIONAL_STAGES.contains(&name),
+                                &mut log_failure,
+                                &mut output_failures,
+                                &mut launch.frame_subscribers,
+                            ) {
+                                failure = Some(f);
+                                break;
+                            }
+                            continue;
+                        }
                         match backoff.on_exit(ran) {
                             Decision::RestartIn(delay) => {
                                 errln!(
@@ -440,6 +460,21 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             }
             if restart_at.get(name).is_some_and(|t| now >= *t) {
                 restart_at.remove(name);
+                // checked again: the prefix may have been damaged while the stage waited
+                if let Some(why) = super::blocked::why_blocked(&bus_cfg, None) {
+                    if let Some(f) = super::blocked::give_up(
+                        name,
+                        &why,
+                        OPTIONAL_STAGES.contains(&name),
+                        &mut log_failure,
+                        &mut output_failures,
+                        &mut launch.frame_subscribers,
+                    ) {
+                        failure = Some(f);
+                        break;
+                    }
+                    continue;
+                }
                 let n = restarts.entry(name.to_string()).or_default();
                 *n += 1;
                 match spawn(
