@@ -3,6 +3,7 @@
 //! run's config.toml).
 
 use std::net::IpAddr;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -36,6 +37,15 @@ pub struct LiveViewConfig {
     /// Messages queued per client before the oldest are dropped (a slow
     /// client loses messages; the pipeline never waits for it), 1 to 65536.
     pub backlog: usize,
+    /// A token every client must send (`ws://HOST:PORT/?token=TOKEN`, or an
+    /// `Authorization: Bearer TOKEN` header); a client without it is refused
+    /// with HTTP 401. None by default. 16 to 256 characters of
+    /// `A-Z a-z 0-9 - _ . ~` (nothing to escape in a URL). It is copied into
+    /// the run's config.toml and its log's metadata: prefer `token_file`.
+    pub token: Option<String>,
+    /// A file holding the token (its first line), instead of `token`: a
+    /// regular file of this user that nobody else can read (mode 0600 or 0400).
+    pub token_file: Option<PathBuf>,
 }
 
 impl Default for LiveViewConfig {
@@ -47,6 +57,8 @@ impl Default for LiveViewConfig {
             frames_hz: 50.0,
             estimates_hz: 50.0,
             backlog: 256,
+            token: None,
+            token_file: None,
         }
     }
 }
@@ -102,9 +114,102 @@ pub fn check_endpoint(e: &str) -> Result<(), String> {
     }
 }
 
+/// The shortest token of the live view, characters.
+pub const MIN_TOKEN_LEN: usize = 16;
+
+/// Checks a live view token: [`MIN_TOKEN_LEN`] to 256 characters of
+/// `A-Z a-z 0-9 - _ . ~`; `what` names where it came from.
+fn check_token(what: &str, t: &str) -> Result<(), String> {
+    let ok_chars = t
+        .bytes()
+        .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'-' | b'_' | b'.' | b'~'));
+    if (MIN_TOKEN_LEN..=256).contains(&t.len()) && ok_chars {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what}: a token must be {MIN_TOKEN_LEN} to 256 characters of A-Z a-z 0-9 - _ . ~ (it has {} \
+             characters{}); e.g. `head -c 24 /dev/urandom | base64 | tr +/ -_`",
+            t.len(),
+            if ok_chars { "" } else { ", some of them others" }
+        ))
+    }
+}
+
+/// Reads a secret from `path` (`what`: the setting that names it): a regular
+/// file (not a link) of this user that nobody else can read or write (no group
+/// or other permission bits), holding the secret on its first line. The
+/// error names the file and what is wrong with it.
+pub fn read_secret_file(what: &str, path: &Path) -> Result<String, String> {
+    use std::io::Read;
+    use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+    let shown = path.display();
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+        .open(path)
+        .map_err(|e| format!("{what} {shown}: cannot open it: {e} (a symbolic link is not followed)"))?;
+    let meta = f.metadata().map_err(|e| format!("{what} {shown}: {e}"))?;
+    let me = bus::current_uid();
+    let mode = meta.mode() & 0o7777;
+    if !meta.is_file() {
+        return Err(format!("{what} {shown}: not a regular file"));
+    }
+    if meta.uid() != me {
+        return Err(format!(
+            "{what} {shown}: belongs to another user (uid {}, not {me}); it must be this user's",
+            meta.uid()
+        ));
+    }
+    if mode & 0o077 != 0 {
+        return Err(format!(
+            "{what} {shown}: mode {mode:o} lets other users read or write it; it must be 600 (chmod 600 {shown})"
+        ));
+    }
+    let mut text = String::new();
+    f.take(64 * 1024)
+        .read_to_string(&mut text)
+        .map_err(|e| format!("{what} {shown}: cannot read it: {e}"))?;
+    let line = text.lines().next().unwrap_or("").trim().to_string();
+    if line.is_empty() {
+        return Err(format!("{what} {shown}: empty (the secret goes on its first line)"));
+    }
+    Ok(line)
+}
+
 impl LiveViewConfig {
+    /// The token clients must send: `token`, or the first line of
+    /// `token_file` (checked: this user's, mode 0600); `None` when neither is set.
+    pub fn resolve_token(&self) -> Result<Option<String>, String> {
+        match (&self.token, &self.token_file) {
+            (Some(_), Some(_)) => Err("[live_view] token and token_file: give one of them, not both".into()),
+            (Some(t), None) => check_token("[live_view] token", t).map(|()| Some(t.clone())),
+            (None, Some(path)) => {
+                let what = "[live_view] token_file";
+                let t = read_secret_file(what, path)?;
+                check_token(&format!("{what} {}", path.display()), &t)?;
+                Ok(Some(t))
+            }
+            (None, None) => Ok(None),
+        }
+    }
+
+    /// The warning for a live view that every host that reaches it can watch:
+    /// bound to an address other than a loopback one, with no token.
+    pub fn exposure_warning(&self) -> Option<String> {
+        let open = self.bind.parse::<IpAddr>().is_ok_and(|a| !a.is_loopback());
+        (open && self.token.is_none() && self.token_file.is_none()).then(|| {
+            format!(
+                "the live view listens on {}:{} with no token: anyone who reaches that port sees the rig live; \
+                 set [live_view] token_file (clients then connect to ws://HOST:{}/?token=TOKEN) or bind 127.0.0.1 \
+                 (see docs/security.md)",
+                self.bind, self.port, self.port
+            )
+        })
+    }
+
     /// Checks every field; the error names the field, its range and unit.
     pub fn validate(&self) -> Result<(), String> {
+        self.resolve_token()?;
         self.bind.parse::<IpAddr>().map_err(|_| {
             format!(
                 "[live_view] bind = {:?}: must be an IP address (127.0.0.1: this machine; 0.0.0.0: every interface)",
@@ -191,5 +296,66 @@ mod tests {
             ..ZenohConfig::default()
         };
         assert!(z.validate().unwrap_err().contains("PROTOCOL/ADDRESS"));
+    }
+
+    #[test]
+    fn a_token_is_checked_and_its_file_must_be_private() {
+        use std::os::unix::fs::PermissionsExt;
+        let inline = |t: &str| LiveViewConfig {
+            token: Some(t.into()),
+            ..LiveViewConfig::default()
+        };
+        assert_eq!(
+            inline("abcdefghijklmnop").resolve_token(),
+            Ok(Some("abcdefghijklmnop".into()))
+        );
+        assert!(inline("short").validate().unwrap_err().contains("16 to 256 characters"));
+        assert!(inline("abcdefghijklmnop q").validate().unwrap_err().contains("some of them others"));
+        let dir = std::env::temp_dir().join(format!("lw-token-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("token");
+        std::fs::write(&file, "0123456789abcdefXYZ\n").unwrap();
+        std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o644)).unwrap();
+        let from_file = LiveViewConfig {
+            token_file: Some(file.clone()),
+            ..LiveViewConfig::default()
+        };
+        let e = from_file.validate().unwrap_err();
+        assert!(
+            e.contains(&format!("[live_view] token_file {}: mode 644 lets other users read", file.display())),
+            "{e}"
+        );
+        std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o600)).unwrap();
+        assert_eq!(from_file.resolve_token(), Ok(Some("0123456789abcdefXYZ".into())));
+        let link = dir.join("link");
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        let e = LiveViewConfig {
+            token_file: Some(link),
+            ..LiveViewConfig::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.contains("cannot open it"), "{e}");
+        let both = LiveViewConfig {
+            token: Some("abcdefghijklmnop".into()),
+            ..from_file.clone()
+        };
+        assert!(both.validate().unwrap_err().contains("not both"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        // the exposure warning: any address but a loopback one, without a token
+        assert_eq!(LiveViewConfig::default().exposure_warning(), None);
+        let open = LiveViewConfig {
+            bind: "0.0.0.0".into(),
+            ..LiveViewConfig::default()
+        };
+        assert!(open.exposure_warning().is_some_and(|w| w.contains("0.0.0.0:8765 with no token")));
+        assert_eq!(
+            LiveViewConfig {
+                token_file: Some(file),
+                ..open
+            }
+            .exposure_warning(),
+            None
+        );
     }
 }

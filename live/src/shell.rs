@@ -130,7 +130,11 @@ fn liveview(args: ViewArgs) -> Result<(), String> {
     let batch = check_batch(args.batch_ms)?;
     let bus = open_bus(&args.rig)?;
     let mut tap = Tap::open(&bus, cfg.frames_hz, cfg.estimates_hz)?;
-    let mut view = crate::view::LiveView::start(bus.rig().as_str(), &cfg.bind, port, cfg.backlog)?;
+    let token = cfg.resolve_token()?;
+    if let Some(w) = cfg.exposure_warning() {
+        bus::say!("liveview: warning: {w}");
+    }
+    let mut view = crate::view::LiveView::start(bus.rig().as_str(), &cfg.bind, port, cfg.backlog, token)?;
     bus::say!(
         "liveview: rig {}, Foxglove WebSocket on ws://{}:{} (subprotocols {}; frames at {} Hz, estimates at {} Hz, \
          events and health: every one; backlog {} messages per client)",

@@ -17,6 +17,12 @@
 //! offered; one that offers none is answered 400 naming the accepted ones.
 //! After the handshake the bytes are copied both ways (two threads per client).
 //!
+//! With a token ([`LiveView::start`], `[live_view] token`/`token_file`), a
+//! client must send it, as the query parameter `token` of the WebSocket URL
+//! (`ws://HOST:PORT/?token=TOKEN`, what Foxglove's "Open connection" can do)
+//! or an `Authorization: Bearer TOKEN` header; without it the handshake is
+//! answered with HTTP 401 before anything reaches the server ([`check_token`]).
+//!
 //! The server runs on its own tokio threads; [`LiveView::send`] hands a message
 //! to the clients subscribed to its channel, each with a bounded backlog whose
 //! oldest messages are dropped when the client is slow. Nothing is encoded for
@@ -66,8 +72,15 @@ pub struct LiveView {
 
 impl LiveView {
     /// Starts the server for rig `rig` on `bind:port` (port 0: any free port,
-    /// see [`LiveView::port`]); `backlog`: messages queued per client.
-    pub fn start(rig: &str, bind: &str, port: u16, backlog: usize) -> Result<LiveView, String> {
+    /// see [`LiveView::port`]); `backlog`: messages queued per client; `token`:
+    /// what every client must send (none: any client is served).
+    pub fn start(
+        rig: &str,
+        bind: &str,
+        port: u16,
+        backlog: usize,
+        token: Option<String>,
+    ) -> Result<LiveView, String> {
         let context = Context::new();
         let mut channels = Vec::new();
         for topic in LiveTopic::ALL {
@@ -111,9 +124,10 @@ impl LiveView {
         let stop = Arc::new(AtomicBool::new(false));
         let acceptor = {
             let stop = stop.clone();
+            let token = Arc::new(token);
             std::thread::Builder::new()
                 .name("liveview-accept".into())
-                .spawn(move || accept_loop(listener, inner_port, &stop))
+                .spawn(move || accept_loop(listener, inner_port, &stop, &token))
                 .map_err(|e| format!("live view: cannot start its accept thread: {e}"))?
         };
         Ok(LiveView {
@@ -166,14 +180,15 @@ impl Drop for LiveView {
 }
 
 /// Accepts clients until `stop` (polled every 50 ms), each handed to its own thread.
-fn accept_loop(listener: TcpListener, inner_port: u16, stop: &AtomicBool) {
+fn accept_loop(listener: TcpListener, inner_port: u16, stop: &AtomicBool, token: &Arc<Option<String>>) {
     while !stop.load(Ordering::Relaxed) {
         match listener.accept() {
             Ok((client, _)) => {
+                let token = token.clone();
                 let spawned = std::thread::Builder::new()
                     .name("liveview-client".into())
                     .spawn(move || {
-                        if let Err(e) = serve_client(client, inner_port) {
+                        if let Err(e) = serve_client(client, inner_port, token.as_deref()) {
                             bus::say!("liveview: a client: {e}");
                         }
                     });
@@ -279,6 +294,47 @@ pub fn negotiate_request(head: &str) -> Negotiation {
     ))
 }
 
+/// The token a request head carries: the query parameter `token` of its
+/// request target (`GET /?token=TOKEN HTTP/1.1`), else an `Authorization:
+/// Bearer TOKEN` header.
+pub fn request_token(head: &str) -> Option<&str> {
+    let target = head.split("\r\n").next()?.split(' ').nth(1)?;
+    let from_query = target
+        .split_once('?')
+        .and_then(|(_, q)| q.split('&').find_map(|kv| kv.strip_prefix("token=")));
+    from_query.or_else(|| {
+        head.split("\r\n")
+            .skip(1)
+            .filter_map(|line| line.split_once(':'))
+            .filter(|(name, _)| name.trim().eq_ignore_ascii_case("authorization"))
+            .find_map(|(_, v)| v.trim().strip_prefix("Bearer "))
+            .map(str::trim)
+    })
+}
+
+/// Whether `a` and `b` are equal, in a time that depends on their lengths only.
+fn same_secret(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+/// `Ok` when a request head carries `token` ([`request_token`]); else the
+/// HTTP 401 response to answer.
+pub fn check_token(head: &str, token: &str) -> Result<(), String> {
+    let sent = request_token(head);
+    if sent.is_some_and(|s| same_secret(s.as_bytes(), token.as_bytes())) {
+        return Ok(());
+    }
+    let body = format!(
+        "{}: this live view needs its token: connect to ws://HOST:PORT/?token=TOKEN (the token of its \
+         [live_view] token or token_file)\n",
+        if sent.is_some() { "wrong token" } else { "no token" }
+    );
+    Err(format!(
+        "HTTP/1.1 401 Unauthorized\r\nContent-Type: text/plain\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    ))
+}
+
 /// The server's handshake response head for a client that offered
 /// [`LEGACY_SUBPROTOCOL`]: its `Sec-WebSocket-Protocol` answer named so.
 pub fn rename_response(head: &str) -> String {
@@ -301,7 +357,7 @@ pub fn rename_response(head: &str) -> String {
 
 /// One client: the handshake negotiated (see [`negotiate_request`]), then the
 /// bytes copied both ways between it and the crate's server until either closes.
-fn serve_client(mut client: TcpStream, inner_port: u16) -> Result<(), String> {
+fn serve_client(mut client: TcpStream, inner_port: u16, token: Option<&str>) -> Result<(), String> {
     let peer = client
         .peer_addr()
         .map(|a| a.to_string())
@@ -314,6 +370,20 @@ fn serve_client(mut client: TcpStream, inner_port: u16) -> Result<(), String> {
         .set_read_timeout(Some(HANDSHAKE_TIMEOUT))
         .map_err(|e| format!("{what}: {e}"))?;
     let (head, rest) = read_head(&mut client, &what)?;
+    if let Some(token) = token {
+        if let Err(response) = check_token(&head, token) {
+            let _ = client.write_all(response.as_bytes());
+            let _ = client.shutdown(Shutdown::Both);
+            return Err(format!(
+                "{what}: refused (HTTP 401): {}",
+                if request_token(&head).is_some() {
+                    "a wrong token"
+                } else {
+                    "no token"
+                }
+            ));
+        }
+    }
     let (request, renamed) = match negotiate_request(&head) {
         Negotiation::PassThrough => (head, false),
         Negotiation::Renamed(r) => (r, true),
@@ -411,5 +481,23 @@ mod tests {
             ),
             "{r}"
         );
+    }
+
+    #[test]
+    fn the_token_is_read_from_the_query_or_a_bearer_header() {
+        let rest = "Host: h\r\nUpgrade: websocket\r\n";
+        let token = "abcdefghijklmnop";
+        let q = format!("GET /?x=1&token={token} HTTP/1.1\r\n{rest}\r\n");
+        assert_eq!(request_token(&q), Some(token));
+        assert_eq!(check_token(&q, token), Ok(()));
+        let bearer = format!("GET / HTTP/1.1\r\n{rest}authorization: Bearer {token}\r\n\r\n");
+        assert_eq!(check_token(&bearer, token), Ok(()));
+        let none = format!("GET / HTTP/1.1\r\n{rest}\r\n");
+        let r = check_token(&none, token).expect_err("no token");
+        assert!(r.starts_with("HTTP/1.1 401 Unauthorized\r\n") && r.contains("no token"), "{r}");
+        let wrong = format!("GET /?token={token}x HTTP/1.1\r\n{rest}\r\n");
+        assert!(check_token(&wrong, token).expect_err("wrong").contains("wrong token"));
+        let empty = "GET /?token= HTTP/1.1\r\n\r\n";
+        assert!(check_token(empty, token).is_err());
     }
 }

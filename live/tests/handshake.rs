@@ -19,7 +19,16 @@ use tungstenite::{Message, WebSocket};
 /// Connects to the view on `port` offering `protocols`; the socket and the
 /// subprotocol the server answered.
 fn connect(port: u16, protocols: &str) -> Result<(WebSocket<TcpStream>, Option<String>), tungstenite::Error> {
-    let mut req = format!("ws://127.0.0.1:{port}/").into_client_request()?;
+    connect_to(port, "/", protocols)
+}
+
+/// [`connect`] to the URL path (and query) `path`.
+fn connect_to(
+    port: u16,
+    path: &str,
+    protocols: &str,
+) -> Result<(WebSocket<TcpStream>, Option<String>), tungstenite::Error> {
+    let mut req = format!("ws://127.0.0.1:{port}{path}").into_client_request()?;
     req.headers_mut().insert(
         "Sec-WebSocket-Protocol",
         HeaderValue::from_str(protocols).expect("a header value"),
@@ -53,7 +62,12 @@ fn next_json(ws: &mut WebSocket<TcpStream>) -> Value {
 /// The client's session: serverInfo, the four channels, a subscription to the
 /// frames, one frame message at `log_time_ns`.
 fn session(view: &mut LiveView, protocols: &str, answered_want: &str, log_time_ns: u64) {
-    let (mut ws, answered) = connect(view.port(), protocols).expect("the handshake succeeds");
+    session_at(view, "/", protocols, answered_want, log_time_ns);
+}
+
+/// [`session`] with the URL path (and query) `path`.
+fn session_at(view: &mut LiveView, path: &str, protocols: &str, answered_want: &str, log_time_ns: u64) {
+    let (mut ws, answered) = connect_to(view.port(), path, protocols).expect("the handshake succeeds");
     assert_eq!(answered.as_deref(), Some(answered_want));
     let info = next_json(&mut ws);
     assert_eq!(
@@ -123,7 +137,7 @@ fn session(view: &mut LiveView, protocols: &str, answered_want: &str, log_time_n
 
 #[test]
 fn foxglove_websocket_v1_is_accepted_and_answered_by_its_name() {
-    let mut view = LiveView::start("rig9", "127.0.0.1", 0, 16).expect("the live view starts");
+    let mut view = LiveView::start("rig9", "127.0.0.1", 0, 16, None).expect("the live view starts");
     // 2025-11-24 16:00:01.5 UTC: the time given is the time sent
     session(
         &mut view,
@@ -149,7 +163,7 @@ fn foxglove_websocket_v1_is_accepted_and_answered_by_its_name() {
 
 #[test]
 fn a_client_offering_no_known_subprotocol_is_refused_naming_them() {
-    let view = LiveView::start("rig9", "127.0.0.1", 0, 16).expect("the live view starts");
+    let view = LiveView::start("rig9", "127.0.0.1", 0, 16, None).expect("the live view starts");
     match connect(view.port(), "mqtt, foxglove.websocket.v2") {
         Err(tungstenite::Error::Http(response)) => {
             assert_eq!(response.status().as_u16(), 400);
@@ -189,7 +203,7 @@ fn foxglove_ws_protocol_client_connects_when_node_has_it() {
         eprintln!("SKIPPED: LEAKWATCH_NODE_MODULES names no @foxglove/ws-protocol (optional check)");
         return;
     };
-    let mut view = LiveView::start("rig9", "127.0.0.1", 0, 16).expect("the live view starts");
+    let mut view = LiveView::start("rig9", "127.0.0.1", 0, 16, None).expect("the live view starts");
     let script =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/liveview/ws_protocol_client.js");
     let child = std::process::Command::new("node")
@@ -217,4 +231,33 @@ fn foxglove_ws_protocol_client_connects_when_node_has_it() {
     assert_eq!(v["topic"], "/leakwatch/rig9/frames");
     assert_eq!(v["log_time_ns"], "1764000004000000001");
     assert_eq!(v["payload"], r#"{"t_s":2.5}"#);
+}
+
+/// With a token, a client without it or with a wrong one is refused with HTTP
+/// 401 (before the server sees it: no client is counted), and one that sends
+/// it as the URL's `token` query parameter gets the channels and a frame.
+#[test]
+fn with_a_token_only_a_client_that_sends_it_is_served() {
+    let token = "s3cret-token_of.24chars~";
+    let mut view =
+        LiveView::start("rig9", "127.0.0.1", 0, 16, Some(token.to_string())).expect("the live view starts");
+    for path in ["/".to_string(), "/?token=wrong-token-of-24-chars".to_string()] {
+        match connect_to(view.port(), &path, "foxglove.sdk.v1") {
+            Err(tungstenite::Error::Http(r)) => {
+                assert_eq!(r.status().as_u16(), 401, "{path}");
+                let body = String::from_utf8_lossy(r.body().as_deref().unwrap_or_default()).into_owned();
+                assert!(body.contains("ws://HOST:PORT/?token=TOKEN"), "{body}");
+            }
+            Err(e) => panic!("{path}: expected HTTP 401, got {e}"),
+            Ok(_) => panic!("{path}: a client without the token was served"),
+        }
+    }
+    assert_eq!(view.clients(), 0);
+    session_at(
+        &mut view,
+        &format!("/?token={token}"),
+        "foxglove.sdk.v1",
+        "foxglove.sdk.v1",
+        1_764_000_005_000_000_002,
+    );
 }

@@ -669,11 +669,19 @@ fn live_stages(
             args.force,
             inputs,
         )?;
+        if let Some(w) = v.exposure_warning() {
+            errln!("leakwatch run: warning: {w}");
+        }
         if !quiet {
             outln!(
-                "live view: ws://{}:{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
+                "live view: ws://{}:{}{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
                 v.bind,
                 v.port,
+                if v.token.is_some() || v.token_file.is_some() {
+                    "/?token=TOKEN (the [live_view] token)"
+                } else {
+                    ""
+                },
                 v.frames_hz,
                 v.estimates_hz
             );
