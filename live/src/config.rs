@@ -80,6 +80,15 @@ pub struct ZenohConfig {
     pub multicast_scouting: bool,
     /// Estimates published at most this often, Hz (events and health: every one).
     pub estimates_hz: f64,
+    /// A file holding the key shared by the gateways and `watch` (its first
+    /// line, at least 32 bytes; a file of this user with mode 0600): the
+    /// gateway signs every message with it (HMAC-SHA256) and `watch` marks
+    /// what it cannot verify `UNVERIFIED` and leaves out replays. None by
+    /// default: unsigned, unverified.
+    pub key_file: Option<PathBuf>,
+    /// The oldest signed message `watch` accepts, s (and as far ahead: the
+    /// clocks of the gateway's and the watch's machines must agree this well).
+    pub max_age_s: f64,
 }
 
 impl Default for ZenohConfig {
@@ -90,6 +99,8 @@ impl Default for ZenohConfig {
             connect: vec![DEFAULT_WATCH_ENDPOINT.to_string()],
             multicast_scouting: false,
             estimates_hz: 10.0,
+            key_file: None,
+            max_age_s: 30.0,
         }
     }
 }
@@ -237,7 +248,20 @@ impl ZenohConfig {
         for e in self.listen.iter().chain(&self.connect) {
             check_endpoint(e).map_err(|m| format!("[zenoh] {m}"))?;
         }
-        check_rate("zenoh", "estimates_hz", self.estimates_hz)
+        check_rate("zenoh", "estimates_hz", self.estimates_hz)?;
+        if !(self.max_age_s.is_finite() && (1.0..=3600.0).contains(&self.max_age_s)) {
+            return Err(format!(
+                "[zenoh] max_age_s = {:?}: must be a number from 1 to 3600 s",
+                self.max_age_s
+            ));
+        }
+        self.key().map(|_| ())
+    }
+
+    /// The shared key of `key_file` (checked: this user's, mode 0600, at least
+    /// 32 bytes); `None` without one.
+    pub fn key(&self) -> Result<Option<Vec<u8>>, String> {
+        self.key_file.as_deref().map(crate::sign::read_key).transpose()
     }
 }
 

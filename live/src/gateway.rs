@@ -12,6 +12,7 @@
 use zenoh::qos::CongestionControl;
 use zenoh::{Session, Wait};
 
+use crate::sign::Signer;
 use crate::{LiveTopic, Sink, ZenohConfig};
 
 /// The first part of every key leakwatch publishes.
@@ -51,17 +52,22 @@ pub fn open_session(cfg: &ZenohConfig) -> Result<Session, String> {
         .map_err(|e| format!("cannot open a zenoh session: {e}"))
 }
 
-/// The gateway's publishers (one per topic but the sensor frames).
+/// The gateway's publishers (one per topic but the sensor frames), and its
+/// signer with `[zenoh] key_file` ([`crate::sign`]).
 pub struct Gateway {
     _session: Session,
     publishers: Vec<Option<zenoh::pubsub::Publisher<'static>>>,
+    keys: Vec<String>,
+    signer: Option<Signer>,
     /// Messages Zenoh refused to send (e.g. the session closing).
     pub errors: u64,
 }
 
 impl Gateway {
-    /// Opens the session and declares the publishers of rig `rig`.
+    /// Opens the session and declares the publishers of rig `rig`; with
+    /// `[zenoh] key_file`, every message is signed.
     pub fn open(rig: &str, cfg: &ZenohConfig) -> Result<Gateway, String> {
+        let signer = cfg.key()?.map(Signer::new);
         let session = open_session(cfg)?;
         let mut publishers = Vec::new();
         for topic in LiveTopic::ALL {
@@ -85,6 +91,8 @@ impl Gateway {
         Ok(Gateway {
             _session: session,
             publishers,
+            keys: LiveTopic::ALL.iter().map(|t| key(rig, *t)).collect(),
+            signer,
             errors: 0,
         })
     }
@@ -97,7 +105,12 @@ impl Sink for Gateway {
 
     fn send(&mut self, topic: LiveTopic, json: &[u8], _log_time_ns: u64) {
         if let Some(p) = &self.publishers[topic.index()] {
-            if p.put(json.to_vec()).wait().is_err() {
+            let put = p.put(json.to_vec());
+            let put = match &mut self.signer {
+                Some(s) => put.attachment(s.sign(&self.keys[topic.index()], json)),
+                None => put,
+            };
+            if put.wait().is_err() {
                 self.errors += 1;
             }
         }

@@ -12,7 +12,9 @@
 //!   (`leakwatch stage gateway`, `leakwatch run --zenoh`);
 //! - [`layout`]: the live view's Foxglove layout, `docs/foxglove/leakwatch-layout.json`;
 //! - [`watch`]: `leakwatch watch`, which subscribes to `leakwatch/**` on Zenoh
-//!   and prints every rig's events as they happen.
+//!   and prints every rig's events as they happen;
+//! - [`sign`]: the gateway's messages signed (HMAC-SHA256, `[zenoh] key_file`)
+//!   and verified by `watch`.
 //!
 //! Both outputs send the same JSON messages, each with a JSON Schema
 //! ([`json`]): SI units in the field names (`p1_pa`, `f_e_n`, `leak_ext1_lpm`),
@@ -23,6 +25,7 @@ pub mod gateway;
 pub mod json;
 pub mod layout;
 pub mod shell;
+pub mod sign;
 pub mod tap;
 pub mod view;
 pub mod watch;

@@ -167,9 +167,13 @@ fn gateway(args: GatewayArgs) -> Result<(), String> {
     let mut tap = Tap::open(&bus, 1.0, cfg.estimates_hz)?;
     let mut gw = crate::gateway::Gateway::open(bus.rig().as_str(), &cfg)?;
     bus::say!(
-        "gateway: rig {rig}, publishing leakwatch/{rig}/events, health and estimates (at {} Hz) on zenoh \
+        "gateway: rig {rig}, publishing leakwatch/{rig}/events, health and estimates (at {} Hz, {}) on zenoh \
          (peer; listening on [{}]; connecting to [{}]; multicast scouting {})",
         cfg.estimates_hz,
+        match &cfg.key_file {
+            Some(f) => format!("signed with the key of {}", f.display()),
+            None => "unsigned: no [zenoh] key_file".to_string(),
+        },
         cfg.listen.join(", "),
         cfg.connect.join(", "),
         if cfg.multicast_scouting { "on" } else { "off" },

@@ -1,6 +1,13 @@
 //! `leakwatch watch`: subscribes to `leakwatch/**` on Zenoh and prints every
 //! rig's events as they happen (and each rig's health status when it
 //! changes), until a signal or `--seconds`.
+//!
+//! With `[zenoh] key_file` each message's signature is checked
+//! ([`crate::sign::Verifier`]): an event that cannot be verified (no
+//! signature, or one the shared key did not make) is printed marked
+//! `UNVERIFIED (why)`, its health and estimates are left out; a signed message
+//! that is a replay (too old, or not newer than the last of its key) is left
+//! out. Both are counted per rig in the summary.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -11,6 +18,7 @@ use serde_json::Value;
 use zenoh::Wait;
 
 use crate::gateway::{open_session, parse_key, KEY_ROOT};
+use crate::sign::{unix_ns, Verdict, Verifier};
 use crate::ZenohConfig;
 
 /// What one rig sent, as `watch` counts it.
@@ -20,6 +28,10 @@ pub struct RigSeen {
     pub messages: BTreeMap<String, u64>,
     /// The last health status (`healthy`, `leak`, ...).
     pub status: String,
+    /// Messages that could not be verified (with a key only).
+    pub unverified: u64,
+    /// Signed messages left out as replays (with a key only).
+    pub replayed: u64,
 }
 
 /// The rigs seen by a watch, by rig id.
@@ -61,6 +73,7 @@ pub fn watch(
     stop: &AtomicBool,
     out: &mut impl Write,
 ) -> Result<Seen, String> {
+    let mut verifier = cfg.key()?.map(|k| Verifier::new(k, cfg.max_age_s));
     let session = open_session(cfg)?;
     let sub = session
         .declare_subscriber(format!("{KEY_ROOT}/**"))
@@ -74,7 +87,16 @@ pub fn watch(
         cfg.connect.join(", ")
     )
     .map_err(w)?;
+    if verifier.is_none() {
+        writeln!(
+            out,
+            "leakwatch watch: no [zenoh] key_file: messages are not authenticated (anyone who reaches this \
+             Zenoh network can publish an event; see docs/security.md)"
+        )
+        .map_err(w)?;
+    }
     let start = Instant::now();
+    let mut left_out = 0u64;
     let mut seen = Seen::new();
     let mut malformed = 0u64;
     while !stop.load(Ordering::Relaxed) && seconds.is_none_or(|s| start.elapsed().as_secs_f64() < s) {
@@ -98,14 +120,39 @@ pub fn watch(
                 continue;
             }
         };
+        let verdict = match &mut verifier {
+            Some(v) => {
+                let att = sample.attachment().map(|a| a.to_bytes());
+                v.check(&key, &bytes, att.as_deref(), unix_ns())
+            }
+            None => Verdict::Verified,
+        };
         let first = !seen.contains_key(rig);
         let r = seen.entry(rig.to_string()).or_default();
+        let mark = match verdict {
+            Verdict::Verified => String::new(),
+            Verdict::Unverified(why) => {
+                r.unverified += 1;
+                if topic != "events" {
+                    continue;
+                }
+                format!("UNVERIFIED ({why}): ")
+            }
+            Verdict::Replayed(why) => {
+                r.replayed += 1;
+                left_out += 1;
+                if left_out <= 10 {
+                    eprintln!("leakwatch watch: a replayed message on {key} left out: {why}");
+                }
+                continue;
+            }
+        };
         *r.messages.entry(topic.to_string()).or_default() += 1;
         if first {
             writeln!(out, "{rig:<12} seen ({topic})").map_err(w)?;
         }
         match topic {
-            "events" => writeln!(out, "{}", event_line(rig, &msg)).map_err(w)?,
+            "events" => writeln!(out, "{mark}{}", event_line(rig, &msg)).map_err(w)?,
             "health" => {
                 let status = text(&msg, "status");
                 if status != r.status {
@@ -120,7 +167,18 @@ pub fn watch(
     writeln!(out, "leakwatch watch: {} rig(s) seen", seen.len()).map_err(w)?;
     for (rig, r) in &seen {
         let counts: Vec<String> = r.messages.iter().map(|(t, n)| format!("{t} {n}")).collect();
-        writeln!(out, "  {rig:<12} {}; status {}", counts.join(", "), r.status).map_err(w)?;
+        let doubtful = if r.unverified + r.replayed > 0 {
+            format!("; UNVERIFIED {}, replays left out {}", r.unverified, r.replayed)
+        } else {
+            String::new()
+        };
+        writeln!(
+            out,
+            "  {rig:<12} {}; status {}{doubtful}",
+            counts.join(", "),
+            r.status
+        )
+        .map_err(w)?;
     }
     Ok(seen)
 }
