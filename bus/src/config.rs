@@ -318,7 +318,9 @@ impl BusConfig {
     /// The directory of this prefix's iceoryx2 files other than its segments
     /// (`<private dir>/<prefix>`); `None` without a prefix.
     pub fn iox_root(&self) -> Option<std::path::PathBuf> {
-        self.iox_prefix.as_ref().map(|p| crate::private_dir_path().join(p))
+        self.iox_prefix
+            .as_ref()
+            .map(|p| crate::private_dir_path().join(p))
     }
 
     /// The lock file of this prefix ([`BusConfig::lock_prefix`]:
@@ -352,7 +354,10 @@ impl BusConfig {
         let (start, root) = self.file_prefix_and_root();
         let me = crate::current_uid();
         let (env, clean) = match &self.iox_prefix {
-            Some(p) => (format!("prefix {p:?}"), format!("leakwatch clean --prefix {p}, or ")),
+            Some(p) => (
+                format!("prefix {p:?}"),
+                format!("leakwatch clean --prefix {p}, or "),
+            ),
             None => ("iceoryx2's default prefix".to_string(), String::new()),
         };
         let way_out = format!(
@@ -402,13 +407,14 @@ fn mgmt_damage(path: &std::path::Path) -> Option<String> {
     let read = || -> Option<String> {
         let bytes = std::fs::read(path).ok()?;
         if bytes.len() as u64 != GLOBAL_MGMT_BYTES {
-            return Some(format!("{} bytes, iceoryx2 writes {GLOBAL_MGMT_BYTES}", bytes.len()));
+            return Some(format!(
+                "{} bytes, iceoryx2 writes {GLOBAL_MGMT_BYTES}",
+                bytes.len()
+            ));
         }
         let word = u64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
         (word != GLOBAL_MGMT_VERSION).then(|| {
-            format!(
-                "its version word is {word:#x}, iceoryx2 0.10.0 writes {GLOBAL_MGMT_VERSION:#x}"
-            )
+            format!("its version word is {word:#x}, iceoryx2 0.10.0 writes {GLOBAL_MGMT_VERSION:#x}")
         })
     };
     read()?;

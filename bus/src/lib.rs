@@ -54,12 +54,12 @@ pub use clock::{
     epoch_ns, epoch_ns_with, epoch_offset_ns, init_epoch_offset, measure_epoch_offset_ns, monotonic_ns,
     set_timer_slack_ns, sleep_until_ns, wall_clock_ns, Pacer, Tick, EPOCH_OFFSET_ENV,
 };
-pub use private::{current_uid, ensure_private, private_dir, private_dir_path, RUNTIME_DIR_ENV};
 pub use config::{
-    max_prefix_len_under, prefixes_with_files, prefixes_with_files_in, validate_prefix, BusConfig, Leftover, PrefixLock,
-    MAX_PREFIX_LEN, PREFIX_ENV,
+    max_prefix_len_under, prefixes_with_files, prefixes_with_files_in, validate_prefix, BusConfig, Leftover,
+    PrefixLock, MAX_PREFIX_LEN, PREFIX_ENV,
 };
 pub use frames;
+pub use private::{current_uid, ensure_private, private_dir, private_dir_path, RUNTIME_DIR_ENV};
 pub use publisher::{Publisher, PublisherWatch, TopicWatch};
 pub use schedule::ArrivalSchedule;
 pub use signals::stop_on_signals;

@@ -113,7 +113,13 @@ mod tests {
         std::fs::create_dir(&open).unwrap();
         std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o755)).unwrap();
         let e = ensure_private(&open).expect_err("group/other access").0;
-        assert!(e.contains(&format!("{} is open to other users (mode 755, not 700)", open.display())), "{e}");
+        assert!(
+            e.contains(&format!(
+                "{} is open to other users (mode 755, not 700)",
+                open.display()
+            )),
+            "{e}"
+        );
         assert!(e.contains(RUNTIME_DIR_ENV), "{e}");
 
         let link = base.join("link");

@@ -140,7 +140,10 @@ fn the_prefix_limit_follows_the_private_directory() {
     use std::path::Path;
     assert_eq!(bus::max_prefix_len_under(Path::new("/tmp/leakwatch-0")), 20);
     assert_eq!(bus::max_prefix_len_under(Path::new("/tmp/leakwatch-1000")), 19);
-    assert_eq!(bus::max_prefix_len_under(Path::new("/run/user/1000/leakwatch")), 16);
+    assert_eq!(
+        bus::max_prefix_len_under(Path::new("/run/user/1000/leakwatch")),
+        16
+    );
     assert_eq!(bus::max_prefix_len_under(Path::new("/t")), MAX_PREFIX_LEN);
     // the socket of the widest id: <dir>/<prefix>/lw_<prefix>_<39 digits>.event
     let dir = "/run/user/1000/leakwatch";

@@ -281,7 +281,10 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
         "{e}"
     );
     assert!(
-        e.contains(&format!("leakwatch clean --prefix {}", cfg.iox_prefix.as_deref().unwrap_or(""))),
+        e.contains(&format!(
+            "leakwatch clean --prefix {}",
+            cfg.iox_prefix.as_deref().unwrap_or("")
+        )),
         "{e}"
     );
     // the way out works: with the prefix's files removed a node starts again
@@ -292,7 +295,9 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
     assert_eq!(bytes.len(), 16);
     bytes[..8].copy_from_slice(&0x0001_0009_0000u64.to_le_bytes());
     std::fs::write(&segment, &bytes).expect("write another version");
-    let why = cfg.diagnose_blocked_start().expect("a wrong version word is reported");
+    let why = cfg
+        .diagnose_blocked_start()
+        .expect("a wrong version word is reported");
     assert!(
         why.contains("is damaged (its version word is 0x100090000, iceoryx2 0.10.0 writes 0xa0000"),
         "{why}"
@@ -307,10 +312,14 @@ fn a_damaged_management_segment_is_named_with_the_way_out() {
         // root can give the segment to another user, as if that user had made it first
         drop(Bus::open("rig1", cfg.clone()).expect("a node after the clean-up"));
         std::os::unix::fs::chown(&segment, Some(4242), None).expect("chown");
-        let why = cfg.diagnose_blocked_start().expect("another user's segment is reported");
+        let why = cfg
+            .diagnose_blocked_start()
+            .expect("another user's segment is reported");
         assert!(
             why.contains(&format!("{} of prefix", segment.display()))
-                && why.contains("belongs to another user (uid 4242, mode 666; only that user or root can remove it)"),
+                && why.contains(
+                    "belongs to another user (uid 4242, mode 666; only that user or root can remove it)"
+                ),
             "{why}"
         );
         cfg.remove_isolated_files().expect("clean");

@@ -593,7 +593,10 @@ fn a_damaged_management_segment_is_named_before_a_restart_and_ends_the_run() {
         )),
         "{err}"
     );
-    assert!(err.contains(&format!("leakwatch clean --prefix {prefix}")), "{err}");
+    assert!(
+        err.contains(&format!("leakwatch clean --prefix {prefix}")),
+        "{err}"
+    );
     assert!(!err.contains("no leak detected"), "{err}");
     assert!(stage_pids(None, "mgmt-restart").is_empty());
     assert_no_files_of(&prefix);

@@ -182,7 +182,9 @@ pub fn read_secret_file(what: &str, path: &Path) -> Result<String, String> {
         .map_err(|e| format!("{what} {shown}: cannot read it: {e}"))?;
     let line = text.lines().next().unwrap_or("").trim().to_string();
     if line.is_empty() {
-        return Err(format!("{what} {shown}: empty (the secret goes on its first line)"));
+        return Err(format!(
+            "{what} {shown}: empty (the secret goes on its first line)"
+        ));
     }
     Ok(line)
 }
@@ -333,8 +335,14 @@ mod tests {
             inline("abcdefghijklmnop").resolve_token(),
             Ok(Some("abcdefghijklmnop".into()))
         );
-        assert!(inline("short").validate().unwrap_err().contains("16 to 256 characters"));
-        assert!(inline("abcdefghijklmnop q").validate().unwrap_err().contains("some of them others"));
+        assert!(inline("short")
+            .validate()
+            .unwrap_err()
+            .contains("16 to 256 characters"));
+        assert!(inline("abcdefghijklmnop q")
+            .validate()
+            .unwrap_err()
+            .contains("some of them others"));
         let dir = std::env::temp_dir().join(format!("lw-token-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("token");
@@ -346,7 +354,10 @@ mod tests {
         };
         let e = from_file.validate().unwrap_err();
         assert!(
-            e.contains(&format!("[live_view] token_file {}: mode 644 lets other users read", file.display())),
+            e.contains(&format!(
+                "[live_view] token_file {}: mode 644 lets other users read",
+                file.display()
+            )),
             "{e}"
         );
         std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o600)).unwrap();
@@ -372,7 +383,9 @@ mod tests {
             bind: "0.0.0.0".into(),
             ..LiveViewConfig::default()
         };
-        assert!(open.exposure_warning().is_some_and(|w| w.contains("0.0.0.0:8765 with no token")));
+        assert!(open
+            .exposure_warning()
+            .is_some_and(|w| w.contains("0.0.0.0:8765 with no token")));
         assert_eq!(
             LiveViewConfig {
                 token_file: Some(file),

@@ -32,7 +32,8 @@ pub const MIN_KEY_LEN: usize = 32;
 /// The bytes a signature covers: a domain tag, the key expression, `boot`,
 /// `seq`, `time` and the payload, separated by newlines.
 pub fn signed_bytes(key_expr: &str, boot: u64, seq: u64, time_ns: u64, payload: &[u8]) -> Vec<u8> {
-    let mut b = format!("leakwatch-zenoh-{SIGNATURE_TAG}\n{key_expr}\n{boot}\n{seq}\n{time_ns}\n").into_bytes();
+    let mut b =
+        format!("leakwatch-zenoh-{SIGNATURE_TAG}\n{key_expr}\n{boot}\n{seq}\n{time_ns}\n").into_bytes();
     b.extend_from_slice(payload);
     b
 }
@@ -63,7 +64,8 @@ pub fn unix_ns() -> u64 {
 
 fn mac_of(key: &[u8], bytes: &[u8]) -> HmacSha256 {
     // HMAC takes a key of any length: new_from_slice cannot fail
-    let mut m = <HmacSha256 as Mac>::new_from_slice(key).unwrap_or_else(|_| unreachable!("HMAC takes any key length"));
+    let mut m = <HmacSha256 as Mac>::new_from_slice(key)
+        .unwrap_or_else(|_| unreachable!("HMAC takes any key length"));
     m.update(bytes);
     m
 }
@@ -89,7 +91,10 @@ impl Signer {
     /// The attachment that signs `payload` on `key_expr`, at `time_ns` (Unix ns).
     pub fn sign_at(&mut self, key_expr: &str, payload: &[u8], time_ns: u64) -> String {
         self.seq += 1;
-        let mac = mac_of(&self.key, &signed_bytes(key_expr, self.boot, self.seq, time_ns, payload));
+        let mac = mac_of(
+            &self.key,
+            &signed_bytes(key_expr, self.boot, self.seq, time_ns, payload),
+        );
         let hex: String = mac
             .finalize()
             .into_bytes()
@@ -139,7 +144,13 @@ impl Verifier {
 
     /// Checks a message: its key expression, payload and attachment, at `now_ns`
     /// (Unix ns). A verified message becomes the newest of its key.
-    pub fn check(&mut self, key_expr: &str, payload: &[u8], attachment: Option<&[u8]>, now_ns: u64) -> Verdict {
+    pub fn check(
+        &mut self,
+        key_expr: &str,
+        payload: &[u8],
+        attachment: Option<&[u8]>,
+        now_ns: u64,
+    ) -> Verdict {
         let Some(att) = attachment else {
             return Verdict::Unverified("no signature".into());
         };
@@ -150,14 +161,18 @@ impl Verifier {
         let [tag, boot, seq, time, hex] = parts[..] else {
             return Verdict::Unverified("a malformed signature".into());
         };
-        let (Ok(boot), Ok(seq), Ok(time)) = (boot.parse::<u64>(), seq.parse::<u64>(), time.parse::<u64>()) else {
+        let (Ok(boot), Ok(seq), Ok(time)) = (boot.parse::<u64>(), seq.parse::<u64>(), time.parse::<u64>())
+        else {
             return Verdict::Unverified("a malformed signature".into());
         };
         if tag != SIGNATURE_TAG || hex.len() != 64 {
             return Verdict::Unverified(format!("a signature of another format ({tag})"));
         }
         let Some(mac_bytes) = (0..32)
-            .map(|i| hex.get(2 * i..2 * i + 2).and_then(|h| u8::from_str_radix(h, 16).ok()))
+            .map(|i| {
+                hex.get(2 * i..2 * i + 2)
+                    .and_then(|h| u8::from_str_radix(h, 16).ok())
+            })
             .collect::<Option<Vec<u8>>>()
         else {
             return Verdict::Unverified("a malformed signature".into());
@@ -174,7 +189,11 @@ impl Verifier {
             return Verdict::Replayed(format!(
                 "signed {:.1} s {} (at most {:.1} s accepted)",
                 age_ns as f64 * 1e-9,
-                if time <= now_ns { "ago" } else { "ahead of this clock" },
+                if time <= now_ns {
+                    "ago"
+                } else {
+                    "ahead of this clock"
+                },
                 self.max_age_ns as f64 * 1e-9
             ));
         }
@@ -204,22 +223,43 @@ mod tests {
         let key = "leakwatch/r1/events";
         let msg = br#"{"kind":"ext1"}"#;
         let att = s.sign_at(key, msg, now);
-        assert_eq!(v.check(key, msg, Some(att.as_bytes()), now + 1), Verdict::Verified);
+        assert_eq!(
+            v.check(key, msg, Some(att.as_bytes()), now + 1),
+            Verdict::Verified
+        );
         // the same message again: a replay
-        assert!(matches!(v.check(key, msg, Some(att.as_bytes()), now + 2), Verdict::Replayed(_)));
+        assert!(matches!(
+            v.check(key, msg, Some(att.as_bytes()), now + 2),
+            Verdict::Replayed(_)
+        ));
         // changed, moved to another rig, unsigned, signed with another key
         let att2 = s.sign_at(key, msg, now);
-        assert!(matches!(v.check(key, br#"{"kind":"ext2"}"#, Some(att2.as_bytes()), now), Verdict::Unverified(r) if r.contains("did not make")));
-        assert!(matches!(v.check("leakwatch/r2/events", msg, Some(att2.as_bytes()), now), Verdict::Unverified(_)));
-        assert_eq!(v.check(key, msg, None, now), Verdict::Unverified("no signature".into()));
+        assert!(
+            matches!(v.check(key, br#"{"kind":"ext2"}"#, Some(att2.as_bytes()), now), Verdict::Unverified(r) if r.contains("did not make"))
+        );
+        assert!(matches!(
+            v.check("leakwatch/r2/events", msg, Some(att2.as_bytes()), now),
+            Verdict::Unverified(_)
+        ));
+        assert_eq!(
+            v.check(key, msg, None, now),
+            Verdict::Unverified("no signature".into())
+        );
         let forged = Signer::new(b"another key of thirty-two bytes!".to_vec()).sign_at(key, msg, now);
-        assert!(matches!(v.check(key, msg, Some(forged.as_bytes()), now), Verdict::Unverified(_)));
-        assert!(matches!(v.check(key, msg, Some(b"lw1 1 2 x"), now), Verdict::Unverified(r) if r == "a malformed signature"));
+        assert!(matches!(
+            v.check(key, msg, Some(forged.as_bytes()), now),
+            Verdict::Unverified(_)
+        ));
+        assert!(
+            matches!(v.check(key, msg, Some(b"lw1 1 2 x"), now), Verdict::Unverified(r) if r == "a malformed signature")
+        );
         // the next one of the signer still verifies (the failed checks changed nothing)
         assert_eq!(v.check(key, msg, Some(att2.as_bytes()), now), Verdict::Verified);
         // too old
         let old = s.sign_at(key, msg, now - 31_000_000_000);
-        assert!(matches!(v.check(key, msg, Some(old.as_bytes()), now), Verdict::Replayed(r) if r.contains("31.0 s ago")));
+        assert!(
+            matches!(v.check(key, msg, Some(old.as_bytes()), now), Verdict::Replayed(r) if r.contains("31.0 s ago"))
+        );
         // a restarted gateway (a later boot) starts its count again
         let mut again = Signer::new(KEY.to_vec());
         again.boot = s.boot + 1;

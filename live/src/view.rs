@@ -494,9 +494,14 @@ mod tests {
         assert_eq!(check_token(&bearer, token), Ok(()));
         let none = format!("GET / HTTP/1.1\r\n{rest}\r\n");
         let r = check_token(&none, token).expect_err("no token");
-        assert!(r.starts_with("HTTP/1.1 401 Unauthorized\r\n") && r.contains("no token"), "{r}");
+        assert!(
+            r.starts_with("HTTP/1.1 401 Unauthorized\r\n") && r.contains("no token"),
+            "{r}"
+        );
         let wrong = format!("GET /?token={token}x HTTP/1.1\r\n{rest}\r\n");
-        assert!(check_token(&wrong, token).expect_err("wrong").contains("wrong token"));
+        assert!(check_token(&wrong, token)
+            .expect_err("wrong")
+            .contains("wrong token"));
         let empty = "GET /?token= HTTP/1.1\r\n\r\n";
         assert!(check_token(empty, token).is_err());
     }

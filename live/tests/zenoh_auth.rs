@@ -23,7 +23,10 @@ struct Shared(Arc<Mutex<Vec<u8>>>);
 
 impl Write for Shared {
     fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(b);
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend_from_slice(b);
         Ok(b.len())
     }
     fn flush(&mut self) -> std::io::Result<()> {
@@ -38,7 +41,11 @@ impl Shared {
 }
 
 fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
 }
 
 /// A key file of `key`, mode 0600, in `dir`.
@@ -60,7 +67,11 @@ fn event(t: f64, size: f64) -> Vec<u8> {
 fn wait_for(out: &Shared, what: &str, mut tick: impl FnMut()) {
     let t0 = Instant::now();
     while !out.text().contains(what) {
-        assert!(t0.elapsed() < Duration::from_secs(30), "never printed {what:?}:\n{}", out.text());
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "never printed {what:?}:\n{}",
+            out.text()
+        );
         tick();
         std::thread::sleep(Duration::from_millis(100));
     }
@@ -95,16 +106,20 @@ fn a_watch_with_the_key_marks_forged_events_and_leaves_out_replays() {
     };
     let mut signed = Gateway::open("zS", &gw_cfg(Some(shared.clone()))).expect("the signed gateway");
     let health = br#"{"t_s": 1.0, "status": "healthy"}"#;
-    wait_for(&out, "status healthy", || signed.send(LiveTopic::Health, health, 0));
+    wait_for(&out, "status healthy", || {
+        signed.send(LiveTopic::Health, health, 0)
+    });
     // a forger on the same network without the key, and one with another key
     let mut unsigned = Gateway::open("zS", &gw_cfg(None)).expect("an unsigned gateway");
     let mut wrong = Gateway::open("zS", &gw_cfg(Some(other))).expect("a gateway with another key");
     wait_for(&out, "UNVERIFIED (no signature)", || {
         unsigned.send(LiveTopic::Events, &event(43.0, 99.0), 0)
     });
-    wait_for(&out, "UNVERIFIED (a signature the shared key did not make)", || {
-        wrong.send(LiveTopic::Events, &event(44.0, 98.0), 0)
-    });
+    wait_for(
+        &out,
+        "UNVERIFIED (a signature the shared key did not make)",
+        || wrong.send(LiveTopic::Events, &event(44.0, 98.0), 0),
+    );
     // forged health is left out: the status stays
     unsigned.send(LiveTopic::Health, br#"{"t_s": 2.0, "status": "leak"}"#, 0);
     signed.send(LiveTopic::Events, &event(42.5, 0.8125), 0);
@@ -117,11 +132,23 @@ fn a_watch_with_the_key_marks_forged_events_and_leaves_out_replays() {
     let att = signer.sign(key_expr, &payload);
     let old = signer.sign_at(key_expr, &event(46.0, 0.5), unix_ns() - 60_000_000_000);
     wait_for(&out, "t =   45.000 s", || {
-        session.put(key_expr, payload.clone()).attachment(att.clone()).wait().unwrap();
+        session
+            .put(key_expr, payload.clone())
+            .attachment(att.clone())
+            .wait()
+            .unwrap();
     });
     for _ in 0..3 {
-        session.put(key_expr, payload.clone()).attachment(att.clone()).wait().unwrap();
-        session.put(key_expr, event(46.0, 0.5)).attachment(old.clone()).wait().unwrap();
+        session
+            .put(key_expr, payload.clone())
+            .attachment(att.clone())
+            .wait()
+            .unwrap();
+        session
+            .put(key_expr, event(46.0, 0.5))
+            .attachment(old.clone())
+            .wait()
+            .unwrap();
     }
     std::thread::sleep(Duration::from_millis(500));
     STOP.store(true, Ordering::Relaxed);
@@ -129,18 +156,43 @@ fn a_watch_with_the_key_marks_forged_events_and_leaves_out_replays() {
     let text = out.text();
     let lines: Vec<&str> = text.lines().collect();
     // the signed event as it is, once; the forged ones marked
-    let plain = |t: &str| lines.iter().filter(|l| l.starts_with(&format!("zS           t = {t}"))).count();
+    let plain = |t: &str| {
+        lines
+            .iter()
+            .filter(|l| l.starts_with(&format!("zS           t = {t}")))
+            .count()
+    };
     assert_eq!(plain("  42.500 s  raised   ext1"), 1, "{text}");
-    assert_eq!(plain("  45.000 s"), 1, "the replays of 45 s are left out:\n{text}");
-    assert_eq!(plain("  46.000 s"), 0, "a message signed 60 s ago is left out:\n{text}");
-    for l in lines.iter().filter(|l| l.contains("size 99.000") || l.contains("size 98.000")) {
+    assert_eq!(
+        plain("  45.000 s"),
+        1,
+        "the replays of 45 s are left out:\n{text}"
+    );
+    assert_eq!(
+        plain("  46.000 s"),
+        0,
+        "a message signed 60 s ago is left out:\n{text}"
+    );
+    for l in lines
+        .iter()
+        .filter(|l| l.contains("size 99.000") || l.contains("size 98.000"))
+    {
         assert!(l.starts_with("UNVERIFIED ("), "{l}");
     }
-    assert!(!text.contains("status leak"), "forged health is left out:\n{text}");
+    assert!(
+        !text.contains("status leak"),
+        "forged health is left out:\n{text}"
+    );
     let r = &seen["zS"];
     assert!(r.unverified >= 3, "{}", r.unverified);
     assert!(r.replayed >= 6, "{}", r.replayed);
-    assert!(text.contains(&format!("UNVERIFIED {}, replays left out {}", r.unverified, r.replayed)), "{text}");
+    assert!(
+        text.contains(&format!(
+            "UNVERIFIED {}, replays left out {}",
+            r.unverified, r.replayed
+        )),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
