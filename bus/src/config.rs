@@ -130,7 +130,7 @@ impl BusConfig {
         validate_prefix(p).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.0))?;
         let mut removed = 0;
         let root = crate::private_dir_path().join(p);
-        if std::fs::symlink_metadata(&root).is_ok() {
+        if is_iox_root(&root, p) {
             std::fs::remove_dir_all(&root)?;
             removed += 1;
         }
@@ -173,8 +173,9 @@ pub fn prefixes_with_files_in(shm_dir: &std::path::Path, iox_dir: &std::path::Pa
     let mut out = Vec::new();
     if let Ok(dir) = std::fs::read_dir(iox_dir) {
         for e in dir.flatten() {
-            if e.file_type().is_ok_and(|t| t.is_dir()) {
-                out.push(e.file_name().to_string_lossy().into_owned());
+            let name = e.file_name().to_string_lossy().into_owned();
+            if is_iox_root(&e.path(), &name) {
+                out.push(name);
             }
         }
     }
@@ -198,6 +199,23 @@ pub fn prefixes_with_files_in(shm_dir: &std::path::Path, iox_dir: &std::path::Pa
     out.sort();
     out.dedup();
     out
+}
+
+/// Whether `dir` is the iceoryx2 root of prefix `p`, so that it may be removed
+/// as such: a real directory (not a link) that holds nothing but what iceoryx2
+/// puts there (`services`, `nodes`, files named `lw_<p>_...`); anything else
+/// (a directory of the user's that happens to be in a private directory set
+/// by `LEAKWATCH_RUNTIME_DIR`) is never taken for one.
+fn is_iox_root(dir: &std::path::Path, p: &str) -> bool {
+    let start = format!("lw_{p}_");
+    let is_dir = std::fs::symlink_metadata(dir).is_ok_and(|m| m.is_dir());
+    is_dir
+        && std::fs::read_dir(dir).is_ok_and(|entries| {
+            entries.flatten().all(|e| {
+                let n = e.file_name().to_string_lossy().into_owned();
+                n == "services" || n == "nodes" || n.starts_with(&start)
+            })
+        })
 }
 
 /// [`prefixes_with_files_in`] `/dev/shm` and the private directory.
@@ -232,7 +250,7 @@ impl BusConfig {
         let (start, root) = self.file_prefix_and_root();
         let mut out = Vec::new();
         let root = std::path::PathBuf::from(root);
-        if std::fs::symlink_metadata(&root).is_ok() {
+        if std::fs::symlink_metadata(&root).is_ok() && is_iox_root(&root, p) {
             out.push(Leftover {
                 bytes: size_of(&root),
                 path: root,
@@ -559,8 +577,10 @@ mod tests {
         let base = std::env::temp_dir().join(format!("lw-prefixes-{}", std::process::id()));
         let (shm, iox) = (base.join("shm"), base.join("iox"));
         std::fs::create_dir_all(&shm).unwrap();
-        std::fs::create_dir_all(iox.join("lab_1")).unwrap();
+        std::fs::create_dir_all(iox.join("lab_1/services")).unwrap();
         std::fs::create_dir_all(iox.join("bad name")).unwrap();
+        // a directory with other things in it is no iceoryx2 root
+        std::fs::create_dir_all(iox.join("Documents/notes")).unwrap();
         std::fs::write(iox.join("lab_1.lock"), "").unwrap();
         let hash = "0354a209029e7d094a819e2d4030ea331e6caaf0";
         for name in [
