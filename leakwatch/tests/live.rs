@@ -628,3 +628,90 @@ fn python_zenoh_subscriber_decodes_a_gateways_messages() {
     assert_eq!(e["msg"]["size_lpm"], 0.375);
     assert_eq!(e["msg"]["event_id"], 7);
 }
+
+/// The status line of a WebSocket handshake for `path` on `port` (offering `foxglove.sdk.v1`).
+fn handshake_status(port: u16, path: &str) -> String {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(("127.0.0.1", port)).expect("the live view listens");
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\
+         Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n"
+    )
+    .unwrap();
+    let mut head = Vec::new();
+    let mut b = [0u8; 1];
+    while !head.ends_with(b"\r\n") && s.read(&mut b).unwrap_or(0) == 1 {
+        head.push(b[0]);
+    }
+    String::from_utf8_lossy(&head).trim().to_string()
+}
+
+/// The live view stage with `[live_view] token_file` (mode 0600) in its
+/// config: a client without the token, or with a wrong one, is answered 401;
+/// one with `?token=` is switched to the WebSocket protocol.
+#[test]
+fn a_live_view_with_a_token_file_refuses_a_client_without_the_token() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tmpdir("token");
+    let token = "tok-0123456789abcdefghij";
+    let token_file = dir.join("token");
+    std::fs::write(&token_file, format!("{token}\n")).unwrap();
+    std::fs::set_permissions(&token_file, std::fs::Permissions::from_mode(0o600)).unwrap();
+    let cfg = dir.join("cfg.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[live_view]\ntoken_file = {:?}\n",
+            token_file.display().to_string()
+        ),
+    )
+    .unwrap();
+    let prefix = format!("lwtk{}", std::process::id());
+    let port = free_port();
+    let log = std::fs::File::create(dir.join("liveview.log")).unwrap();
+    let mut view = Command::new(BIN)
+        .args([
+            "stage",
+            "liveview",
+            "--rig",
+            "tk",
+            "--port",
+            &port.to_string(),
+            "--config",
+        ])
+        .arg(&cfg)
+        .env(bus::PREFIX_ENV, &prefix)
+        .stderr(log)
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "the live view never listened"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let none = handshake_status(port, "/");
+    let wrong = handshake_status(port, "/?token=tok-0123456789abcdefghiX");
+    let right = handshake_status(port, &format!("/?token={token}"));
+    sigterm(&view);
+    let _ = view.wait();
+    BusConfig {
+        iox_prefix: Some(prefix),
+        ..BusConfig::default()
+    }
+    .remove_isolated_files()
+    .unwrap();
+    let log = std::fs::read_to_string(dir.join("liveview.log")).unwrap();
+    assert_eq!(none, "HTTP/1.1 401 Unauthorized", "{log}");
+    assert_eq!(wrong, "HTTP/1.1 401 Unauthorized", "{log}");
+    assert!(right.starts_with("HTTP/1.1 101"), "{right}\n{log}");
+    assert!(
+        log.contains("refused (HTTP 401): no token") && log.contains("refused (HTTP 401): a wrong token"),
+        "{log}"
+    );
+}
