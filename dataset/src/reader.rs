@@ -165,6 +165,11 @@ impl<R: BufRead> CsvReader<R> {
 
     /// The row of one line (with its end of line); `None` for an empty line.
     fn row(&mut self, bytes: &[u8]) -> Option<Row> {
+        if self.plain_cells(bytes) {
+            self.rows += 1;
+            let parsed = self.sample_of_cells();
+            return Some(self.counted(parsed));
+        }
         let line = match std::str::from_utf8(bytes) {
             Ok(l) => l.trim(),
             Err(e) => {
@@ -178,6 +183,11 @@ impl<R: BufRead> CsvReader<R> {
         }
         self.rows += 1;
         let parsed = self.parse_row(line);
+        Some(self.counted(parsed))
+    }
+
+    /// The row of a parsed line, its absent optional values counted.
+    fn counted(&mut self, parsed: Result<(Sample, Option<Issue>), Issue>) -> Row {
         if let Ok((s, _)) = &parsed {
             for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm]
                 .into_iter()
@@ -188,11 +198,37 @@ impl<R: BufRead> CsvReader<R> {
                 }
             }
         }
-        Some(match parsed {
+        match parsed {
             Ok((sample, None)) => Row::Sample(sample),
             Ok((sample, Some(issue))) => Row::AfterGap(sample, issue),
             Err(issue) => Row::Skipped(issue),
-        })
+        }
+    }
+
+    /// The cells of a plain line (ASCII decimal numbers or empty cells between
+    /// commas, ended by `\n` or `\r\n`) into `self.cells`, each the f64
+    /// `str::parse` gives; `false` (cells undefined) for any other line, which
+    /// then takes [`Self::parse_row`]'s general path. The hot path of a replay:
+    /// no UTF-8 pass, no trimming, no per-cell search for quotes.
+    fn plain_cells(&mut self, bytes: &[u8]) -> bool {
+        let line = bytes.strip_suffix(b"\n").unwrap_or(bytes);
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if line.is_empty() {
+            return false;
+        }
+        self.cells.clear();
+        for cell in line.split(|b| *b == b',') {
+            let v = if cell.is_empty() {
+                f64::NAN
+            } else {
+                match parse_plain_f64(cell) {
+                    Some(v) => v,
+                    None => return false,
+                }
+            };
+            self.cells.push(v);
+        }
+        true
     }
 
     fn parse_row(&mut self, line: &str) -> Result<(Sample, Option<Issue>), Issue> {
@@ -217,15 +253,22 @@ impl<R: BufRead> CsvReader<R> {
             };
             self.cells.push(v);
         }
-        if count != self.n_cols {
-            let msg = format!("{count} cells, but the header has {}", self.n_cols);
-            return Err(self.issue(None, IssueKind::WrongCellCount, msg, true));
-        }
-        if let Some((i, text)) = bad {
+        if let Some((i, text)) = bad.filter(|_| count == self.n_cols) {
             if let Some(j) = self.map.iter().position(|m| *m == Some(i)) {
                 let msg = format!("`{text}` is not a number");
                 return Err(self.issue(Some(j), IssueKind::NotANumber, msg, true));
             }
+        }
+        self.sample_of_cells()
+    }
+
+    /// The sample of the row whose cells are in `self.cells`: the cell count,
+    /// the physical limits and the time step checked.
+    fn sample_of_cells(&mut self) -> Result<(Sample, Option<Issue>), Issue> {
+        let count = self.cells.len();
+        if count != self.n_cols {
+            let msg = format!("{count} cells, but the header has {}", self.n_cols);
+            return Err(self.issue(None, IssueKind::WrongCellCount, msg, true));
         }
         let get = |j: usize| self.map[j].map(|i| self.cells[i]).unwrap_or(f64::NAN);
         let s = Sample {
@@ -273,6 +316,94 @@ impl<R: BufRead> CsvReader<R> {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// Powers of ten that are exact in an f64 (10²² is the last).
+const EXACT_POWERS_OF_TEN: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
+    1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]` (at least
+/// one digit before the exponent), as the f64 `str::parse` gives (the nearest,
+/// ties to even); `None` for any other text. Numbers of at most 2⁵³ in their
+/// digits and a power of ten within ±22 take Clinger's fast path (one exact
+/// product or quotient, correctly rounded); the others are parsed by
+/// `str::parse`.
+pub fn parse_plain_f64(cell: &[u8]) -> Option<f64> {
+    let (negative, body) = match cell.first()? {
+        b'-' => (true, &cell[1..]),
+        b'+' => (false, &cell[1..]),
+        _ => (false, cell),
+    };
+    let mut mantissa: u64 = 0;
+    let mut significant = 0u32; // digits in `mantissa`, leading zeros not counted
+    let mut digits = 0u32; // all mantissa digits
+    let mut exp10: i64 = 0;
+    let mut i = 0;
+    let mut seen_point = false;
+    while let Some(&b) = body.get(i) {
+        match b {
+            b'0'..=b'9' => {
+                digits += 1;
+                if mantissa != 0 || b != b'0' {
+                    significant += 1;
+                    if significant > 19 {
+                        break;
+                    }
+                    mantissa = mantissa * 10 + u64::from(b - b'0');
+                }
+                if seen_point {
+                    exp10 -= 1;
+                }
+            }
+            b'.' if !seen_point => seen_point = true,
+            _ => break,
+        }
+        i += 1;
+    }
+    if digits == 0 {
+        return None;
+    }
+    let exact = significant <= 19;
+    if exact {
+        if let Some(&(b'e' | b'E')) = body.get(i) {
+            i += 1;
+            let (sign, from) = match body.get(i) {
+                Some(b'-') => (-1, i + 1),
+                Some(b'+') => (1, i + 1),
+                _ => (1, i),
+            };
+            let exp_digits = body.get(from..)?;
+            if exp_digits.is_empty() || exp_digits.len() > 4 || !exp_digits.iter().all(u8::is_ascii_digit) {
+                return None;
+            }
+            let e = exp_digits.iter().fold(0i64, |e, d| e * 10 + i64::from(d - b'0'));
+            exp10 += sign * e;
+            i = body.len();
+        }
+        if i != body.len() {
+            return None;
+        }
+        if mantissa == 0 {
+            return Some(if negative { -0.0 } else { 0.0 });
+        }
+        if mantissa <= 1 << 53 && (-22..=22).contains(&exp10) {
+            let m = mantissa as f64;
+            let p = EXACT_POWERS_OF_TEN[exp10.unsigned_abs() as usize];
+            let v = if exp10 >= 0 { m * p } else { m / p };
+            return Some(if negative { -v } else { v });
+        }
+    }
+    // More digits, or a power beyond the exact ones: the whole cell, checked
+    // to be plain, goes to the standard parser.
+    let plain = cell
+        .iter()
+        .all(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.' | b'e' | b'E'));
+    if !plain {
+        return None;
+    }
+    std::str::from_utf8(cell).ok()?.parse().ok()
 }
 
 /// `text` without one pair of surrounding double quotes (standard CSV quoting,
