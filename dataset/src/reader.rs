@@ -320,8 +320,8 @@ impl<R: BufRead> CsvReader<R> {
 
 /// Powers of ten that are exact in an f64 (10²² is the last).
 const EXACT_POWERS_OF_TEN: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
-    1e18, 1e19, 1e20, 1e21, 1e22,
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18,
+    1e19, 1e20, 1e21, 1e22,
 ];
 
 /// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]` (at least
@@ -330,7 +330,7 @@ const EXACT_POWERS_OF_TEN: [f64; 23] = [
 /// digits and a power of ten within ±22 take Clinger's fast path (one exact
 /// product or quotient, correctly rounded); the others are parsed by
 /// `str::parse`.
-pub fn parse_plain_f64(cell: &[u8]) -> Option<f64> {
+fn parse_plain_f64(cell: &[u8]) -> Option<f64> {
     let (negative, body) = match cell.first()? {
         b'-' => (true, &cell[1..]),
         b'+' => (false, &cell[1..]),
@@ -425,4 +425,108 @@ pub enum Row {
     AfterGap(Sample, Issue),
     /// A row that cannot be used; skipped.
     Skipped(Issue),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_plain_f64;
+
+    /// The fast parse against `str::parse`, bit for bit, or refused where
+    /// `str::parse` fails too (the general path then reports the cell).
+    fn check(text: &str) {
+        let std: Option<f64> = text.parse().ok();
+        match (parse_plain_f64(text.as_bytes()), std) {
+            (Some(a), Some(b)) => assert_eq!(a.to_bits(), b.to_bits(), "{text}: {a:?} against {b:?}"),
+            (Some(a), None) => panic!("{text}: parsed as {a:?}, str::parse refuses it"),
+            // refused: the line takes the general path, which parses it as before
+            (None, _) => {}
+        }
+    }
+
+    #[test]
+    fn plain_numbers_parse_as_str_parse_does() {
+        for text in [
+            "0",
+            "-0",
+            "+0",
+            "0.0",
+            "-0.0",
+            "1",
+            "1.",
+            ".5",
+            "-.5",
+            "0.001",
+            "6905054.945054945",
+            "0.35228911569157584",
+            "0.000010341256119938336",
+            "2.564102564102432e-7",
+            "1e22",
+            "1e23",
+            "9007199254740993",
+            "9007199254740992",
+            "123456789012345678901234",
+            "1.7976931348623157e308",
+            "1e309",
+            "5e-324",
+            "1e-400",
+            "1E+05",
+            "1e",
+            "e5",
+            ".",
+            "-",
+            "+",
+            "1.2.3",
+            "1e+",
+            "1x",
+            "NaN",
+            "inf",
+            "-inf",
+            " 1",
+            "1 ",
+            "\"1\"",
+            "1,5",
+            "0000000000000000000000001.5",
+            "1.50000000000000000000",
+        ] {
+            check(text);
+        }
+        // random decimals of every length and exponent (a fixed LCG, no new dependency)
+        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            state >> 33
+        };
+        for _ in 0..200_000 {
+            let digits = 1 + next() % 22;
+            let mut text = String::new();
+            if next() % 3 == 0 {
+                text.push('-');
+            }
+            let point = next() % (digits + 1);
+            for k in 0..digits {
+                if k == point && next() % 4 != 0 {
+                    text.push('.');
+                }
+                text.push(char::from(b'0' + (next() % 10) as u8));
+            }
+            if next() % 3 == 0 {
+                text.push_str(&format!("e{}", next() as i64 % 60 - 30));
+            }
+            check(&text);
+        }
+        // every value an f64 writes in shortest form reads back
+        for _ in 0..100_000 {
+            let v = f64::from_bits(next() << 31 ^ next());
+            if v.is_finite() {
+                let text = format!("{v:?}");
+                assert_eq!(
+                    parse_plain_f64(text.as_bytes()).map(f64::to_bits),
+                    Some(v.to_bits()),
+                    "{text}"
+                );
+            }
+        }
+    }
 }
