@@ -405,6 +405,9 @@ pub(crate) enum BenchCommand {
         /// Length of each generated file, s (without --data).
         #[arg(long, default_value_t = 600.0)]
         seconds: f64,
+        /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
+        #[arg(long, value_enum, default_value_t)]
+        estimates: crate::estimates_out::EstimatesFormat,
         /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
         #[arg(long)]
         out: PathBuf,
