@@ -213,11 +213,18 @@ impl<R: BufRead> CsvReader<R> {
     fn plain_cells(&mut self, bytes: &[u8]) -> bool {
         let line = bytes.strip_suffix(b"\n").unwrap_or(bytes);
         let line = line.strip_suffix(b"\r").unwrap_or(line);
-        if line.is_empty() {
+        // one UTF-8 pass for the line (ASCII: a quick one); the cells are then
+        // text, so a number the fast path leaves goes to `str::parse` as it is
+        let Ok(mut rest) = std::str::from_utf8(line) else {
+            return false;
+        };
+        if rest.is_empty() {
             return false;
         }
         self.cells.clear();
-        for cell in line.split(|b| *b == b',') {
+        loop {
+            let comma = rest.bytes().position(|b| b == b',');
+            let cell = comma.map_or(rest, |k| &rest[..k]);
             let v = if cell.is_empty() {
                 f64::NAN
             } else {
@@ -227,8 +234,11 @@ impl<R: BufRead> CsvReader<R> {
                 }
             };
             self.cells.push(v);
+            match comma {
+                Some(k) => rest = &rest[k + 1..],
+                None => return true,
+            }
         }
-        true
     }
 
     fn parse_row(&mut self, line: &str) -> Result<(Sample, Option<Issue>), Issue> {
@@ -330,61 +340,66 @@ const EXACT_POWERS_OF_TEN: [f64; 23] = [
 /// digits and a power of ten within ±22 take Clinger's fast path (one exact
 /// product or quotient, correctly rounded); the others are parsed by
 /// `str::parse`.
-fn parse_plain_f64(cell: &[u8]) -> Option<f64> {
-    let (negative, body) = match cell.first()? {
-        b'-' => (true, &cell[1..]),
-        b'+' => (false, &cell[1..]),
-        _ => (false, cell),
+fn parse_plain_f64(cell: &str) -> Option<f64> {
+    let b = cell.as_bytes();
+    let digit = |i: usize| b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d < 10);
+    let (negative, start) = match b.first()? {
+        b'-' => (true, 1),
+        b'+' => (false, 1),
+        _ => (false, 0),
     };
-    let mut mantissa: u64 = 0;
-    let mut significant = 0u32; // digits in `mantissa`, leading zeros not counted
-    let mut digits = 0u32; // all mantissa digits
-    let mut exp10: i64 = 0;
-    let mut i = 0;
-    let mut seen_point = false;
-    while let Some(&b) = body.get(i) {
-        match b {
-            b'0'..=b'9' => {
-                digits += 1;
-                if mantissa != 0 || b != b'0' {
-                    significant += 1;
-                    if significant > 19 {
-                        break;
-                    }
-                    mantissa = mantissa * 10 + u64::from(b - b'0');
-                }
-                if seen_point {
-                    exp10 -= 1;
-                }
-            }
-            b'.' if !seen_point => seen_point = true,
-            _ => break,
-        }
+    // the digits after any leading zeros go into `mantissa` (exact up to 19 of them)
+    let mut i = start;
+    while b.get(i) == Some(&b'0') {
         i += 1;
     }
-    if digits == 0 {
+    let mut mantissa: u64 = 0;
+    let from = i;
+    while let Some(d) = digit(i) {
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        i += 1;
+    }
+    let mut significant = i - from;
+    let mut any_digit = i > start;
+    let mut exp10: i64 = 0;
+    if b.get(i) == Some(&b'.') {
+        i += 1;
+        let fraction = i;
+        if significant == 0 {
+            while b.get(i) == Some(&b'0') {
+                i += 1;
+            }
+        }
+        let from = i;
+        while let Some(d) = digit(i) {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        significant += i - from;
+        exp10 = -((i - fraction) as i64);
+        any_digit |= i > fraction;
+    }
+    if !any_digit {
         return None;
     }
-    let exact = significant <= 19;
-    if exact {
-        if let Some(&(b'e' | b'E')) = body.get(i) {
-            i += 1;
-            let (sign, from) = match body.get(i) {
-                Some(b'-') => (-1, i + 1),
-                Some(b'+') => (1, i + 1),
-                _ => (1, i),
-            };
-            let exp_digits = body.get(from..)?;
-            if exp_digits.is_empty() || exp_digits.len() > 4 || !exp_digits.iter().all(u8::is_ascii_digit) {
-                return None;
-            }
-            let e = exp_digits.iter().fold(0i64, |e, d| e * 10 + i64::from(d - b'0'));
-            exp10 += sign * e;
-            i = body.len();
-        }
-        if i != body.len() {
+    if let Some(b'e' | b'E') = b.get(i) {
+        let (sign, from) = match b.get(i + 1) {
+            Some(b'-') => (-1, i + 2),
+            Some(b'+') => (1, i + 2),
+            _ => (1, i + 1),
+        };
+        let exp_digits = b.get(from..)?;
+        if exp_digits.is_empty() || exp_digits.len() > 4 || !exp_digits.iter().all(u8::is_ascii_digit) {
             return None;
         }
+        let e = exp_digits.iter().fold(0i64, |e, d| e * 10 + i64::from(d - b'0'));
+        exp10 += sign * e;
+        i = b.len();
+    }
+    if i != b.len() {
+        return None;
+    }
+    if significant <= 19 {
         if mantissa == 0 {
             return Some(if negative { -0.0 } else { 0.0 });
         }
@@ -395,15 +410,8 @@ fn parse_plain_f64(cell: &[u8]) -> Option<f64> {
             return Some(if negative { -v } else { v });
         }
     }
-    // More digits, or a power beyond the exact ones: the whole cell, checked
-    // to be plain, goes to the standard parser.
-    let plain = cell
-        .iter()
-        .all(|b| b.is_ascii_digit() || matches!(b, b'+' | b'-' | b'.' | b'e' | b'E'));
-    if !plain {
-        return None;
-    }
-    std::str::from_utf8(cell).ok()?.parse().ok()
+    // More digits, or a power beyond the exact ones: the standard parser.
+    cell.parse().ok()
 }
 
 /// `text` without one pair of surrounding double quotes (standard CSV quoting,
@@ -435,7 +443,7 @@ mod tests {
     /// `str::parse` fails too (the general path then reports the cell).
     fn check(text: &str) {
         let std: Option<f64> = text.parse().ok();
-        match (parse_plain_f64(text.as_bytes()), std) {
+        match (parse_plain_f64(text), std) {
             (Some(a), Some(b)) => assert_eq!(a.to_bits(), b.to_bits(), "{text}: {a:?} against {b:?}"),
             (Some(a), None) => panic!("{text}: parsed as {a:?}, str::parse refuses it"),
             // refused: the line takes the general path, which parses it as before
@@ -522,7 +530,7 @@ mod tests {
             if v.is_finite() {
                 let text = format!("{v:?}");
                 assert_eq!(
-                    parse_plain_f64(text.as_bytes()).map(f64::to_bits),
+                    parse_plain_f64(&text).map(f64::to_bits),
                     Some(v.to_bits()),
                     "{text}"
                 );
