@@ -245,19 +245,22 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     crate::out::dir(&req.out_dir)?;
     let mut inputs: Vec<&Path> = vec![req.input.as_path()];
     inputs.extend(req.protect.iter().map(|p| p.as_path()));
-    let est_path = req.out_dir.join(req.estimates.file_name());
+    let est_path = req.estimates.file_name().map(|name| req.out_dir.join(name));
     let events_path = req.out_dir.join("events.json");
     let summary_path = req.out_dir.join("summary.json");
     // Refuse before reading or writing anything.
-    for p in [&est_path, &events_path, &summary_path] {
+    for p in est_path.iter().chain([&events_path, &summary_path]) {
         crate::out::check(p, req.overwrite, &inputs)?;
     }
+    let est_name = est_path.as_deref().unwrap_or(&req.out_dir).display().to_string();
     let cfg = &req.config;
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
-    let file = crate::out::create(&est_path, req.overwrite, &inputs)?;
-    let mut out =
-        EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{}: {e}", est_path.display()))?;
+    let file = match &est_path {
+        Some(p) => Some(crate::out::create(p, req.overwrite, &inputs)?),
+        None => None,
+    };
+    let mut out = EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{est_name}: {e}"))?;
 
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     let mut cls = Classifier::new(cfg.classifier.clone())?;
@@ -294,7 +297,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         cls.on_stage(s, |ev| events.push(ev));
         if write_err.is_none() {
             if let Err(e) = out.write(s) {
-                write_err = Some(format!("{}: {e}", est_path.display()));
+                write_err = Some(format!("{est_name}: {e}"));
             }
         }
     };
@@ -412,7 +415,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     if let Some(e) = write_err {
         return Err(e);
     }
-    out.finish().map_err(|e| format!("{}: {e}", est_path.display()))?;
+    out.finish().map_err(|e| format!("{est_name}: {e}"))?;
     summary.wall_s = started.elapsed().as_secs_f64();
     summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
     summary.samples_missing = stage.missing_samples();

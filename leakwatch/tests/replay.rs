@@ -62,6 +62,16 @@ fn channels_and_one_thread_give_identical_results_and_find_the_leak() {
         std::fs::read(a.join("events.json")).unwrap(),
         std::fs::read(b.join("events.json")).unwrap()
     );
+    // without the estimates file: the same events
+    let c = d.join("c");
+    let o = replay(&input, &c, &["--single-thread", "--estimates", "none"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!c.join("estimates.csv").exists() && !c.join("estimates.parquet").exists());
+    assert_eq!(
+        std::fs::read(a.join("events.json")).unwrap(),
+        std::fs::read(c.join("events.json")).unwrap()
+    );
+    assert_eq!(json(&c.join("summary.json"))["samples"], 30_000);
     let text = String::from_utf8(ea).unwrap();
     assert_eq!(text.lines().count(), 30_001);
     assert!(text.starts_with("t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm"));
