@@ -92,6 +92,9 @@ pub struct ResidualRms {
     pub bulk_scale: f64,
     /// One standard deviation of [`Self::bulk_scale`] (1; NaN without that state).
     pub bulk_scale_sigma: f64,
+    /// The oil temperatures the model followed, °C, lowest and highest
+    /// (`temp_c` of the samples; NaN: none carried it).
+    pub oil_temp_range_c: (f64, f64),
 }
 
 /// How much of a run the leak-size detector watched: from arming to the end,
@@ -171,6 +174,8 @@ struct Acc {
     first_outlier_s: f64,
     /// θ and its σ at the last estimate that had them.
     bulk_scale: (f64, f64),
+    /// Lowest and highest oil temperature the model was at, °C.
+    oil_temp_c: (f64, f64),
 }
 
 impl Acc {
@@ -183,6 +188,7 @@ impl Acc {
             outliers: 0,
             first_outlier_s: f64::NAN,
             bulk_scale: (f64::NAN, f64::NAN),
+            oil_temp_c: (f64::NAN, f64::NAN),
         }
     }
 
@@ -195,6 +201,13 @@ impl Acc {
         }
         if e.bulk_scale.is_finite() {
             self.bulk_scale = (e.bulk_scale, e.bulk_scale_sigma);
+        }
+        if e.oil_temp_c.is_finite() {
+            // f64::min/max skip the NaN of the start
+            self.oil_temp_c = (
+                self.oil_temp_c.0.min(e.oil_temp_c),
+                self.oil_temp_c.1.max(e.oil_temp_c),
+            );
         }
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
             return;
@@ -222,6 +235,7 @@ impl Acc {
             first_nis_outlier_s: self.first_outlier_s,
             bulk_scale: self.bulk_scale.0,
             bulk_scale_sigma: self.bulk_scale.1,
+            oil_temp_range_c: self.oil_temp_c,
         }
     }
 }

@@ -36,7 +36,10 @@ fn simulate_writes_the_documented_csv() {
     let o = leakwatch(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&out).unwrap();
-    assert_eq!(text.lines().next(), Some("t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c"));
+    assert_eq!(
+        text.lines().next(),
+        Some("t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c")
+    );
     assert_eq!(text.lines().count(), 2001);
     let ds = dataset::read_csv(&out, dataset::Limits::default()).unwrap();
     assert_eq!(ds.samples.len(), 2000);

@@ -254,7 +254,20 @@ fn field_csv_names<F: Field>(_: &F, name: &str, out: &mut Vec<String>) {
 record!(
     SensorFrame,
     "leakwatch.SensorFrame.v2",
-    [seq, acq_mono_ns, t_s, u_v, x_m, p1_pa, p2_pa, x_sp_m, f_load_n, ref_m, q_leak_lpm, flags],
+    [
+        seq,
+        acq_mono_ns,
+        t_s,
+        u_v,
+        x_m,
+        p1_pa,
+        p2_pa,
+        x_sp_m,
+        f_load_n,
+        ref_m,
+        q_leak_lpm,
+        flags
+    ],
     added[temp_c]
 );
 frames::frame_fields!(

@@ -66,7 +66,13 @@ fn the_cdr_body_of_the_1_khz_frames_is_their_wire_layout() {
     assert_eq!(buf[4..], bits(&s)[..]);
     let v1 = SensorFrame::from_cdr(&buf[..4 + 92]).unwrap();
     assert!(v1.temp_c.is_nan());
-    assert_eq!(bits(&SensorFrame { temp_c: s.temp_c, ..v1 }), bits(&s));
+    assert_eq!(
+        bits(&SensorFrame {
+            temp_c: s.temp_c,
+            ..v1
+        }),
+        bits(&s)
+    );
     let e = estimate();
     e.to_cdr(&mut buf);
     assert_eq!(buf.len(), 4 + 488);
