@@ -217,6 +217,10 @@ fn raw_counts_are_scaled_to_si() {
             gain: -0.01,
             offset: 0.0,
         },
+        temp_c: ChannelScale {
+            gain: 0.1,
+            offset: -50.0,
+        },
         ..UdpScaling::default()
     };
     assert!(scaling.validate().is_ok() && !scaling.is_identity());
@@ -232,13 +236,15 @@ fn raw_counts_are_scaled_to_si() {
     let mut d = UdpDatagram::from_sample(0, &sample(0));
     d.p1 = 7000.0; // counts: 7000 · 1000 Pa − 1e5 Pa = 6.9 MPa
     d.u = 250.0; // counts: −2.5 V
-    d.flags |= flags::END_OF_STREAM;
+    d.temp_c = 925.0; // counts: 0.1 K · 925 − 50 °C = 42.5 °C
+    d.flags |= flags::END_OF_STREAM | flags::TEMP_PRESENT;
     tx.send_to(&d.encode(), src.local_addr()).unwrap();
     match src.next_item() {
         Some(Acquired::Sample(s)) => {
             assert_eq!(s.p1_pa, 6.9e6);
             assert_eq!(s.u_v, -2.5);
             assert_eq!(s.p2_pa, 3.4e6, "unscaled channels pass through");
+            assert_eq!(s.temp_c, 42.5, "the oil temperature of a version-2 datagram");
         }
         other => panic!("{other:?}"),
     }

@@ -142,6 +142,22 @@ pub fn score(
         &id.spool_natural_freq_rad_s,
         p.and_then(|p| num(p, &["omega_n"])),
     ));
+    for (k, channel) in ["p1", "p2"].into_iter().enumerate() {
+        let tau = recording.and_then(|r| {
+            r.get("nuisances")?
+                .get("pressure_sensors")?
+                .get("tau_s")?
+                .get(k)?
+                .as_f64()
+        });
+        params.push(row(
+            &format!("{channel} transducer lag (ms, apparent)"),
+            1e3,
+            0.0,
+            &id.pressure_lag_s[k],
+            tau,
+        ));
+    }
     if let Some(m) = mechanics {
         // The generator's factors at the recording's temperature, where it wrote them.
         let factor = |key: &str| {

@@ -160,6 +160,11 @@ impl<R: BufRead> CsvReader<R> {
 
     /// The row of one line (with its end of line); `None` for an empty line.
     fn row(&mut self, bytes: &[u8]) -> Option<Row> {
+        if self.plain_cells(bytes) {
+            self.rows += 1;
+            let parsed = self.sample_of_cells();
+            return Some(self.counted(parsed));
+        }
         let line = match std::str::from_utf8(bytes) {
             Ok(l) => l.trim(),
             Err(e) => {
@@ -173,6 +178,11 @@ impl<R: BufRead> CsvReader<R> {
         }
         self.rows += 1;
         let parsed = self.parse_row(line);
+        Some(self.counted(parsed))
+    }
+
+    /// The row of a parsed line, its absent optional values counted.
+    fn counted(&mut self, parsed: Result<(Sample, Option<Issue>), Issue>) -> Row {
         if let Ok((s, _)) = &parsed {
             for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm, s.temp_c]
                 .into_iter()
@@ -183,11 +193,47 @@ impl<R: BufRead> CsvReader<R> {
                 }
             }
         }
-        Some(match parsed {
+        match parsed {
             Ok((sample, None)) => Row::Sample(sample),
             Ok((sample, Some(issue))) => Row::AfterGap(sample, issue),
             Err(issue) => Row::Skipped(issue),
-        })
+        }
+    }
+
+    /// The cells of a plain line (ASCII decimal numbers or empty cells between
+    /// commas, ended by `\n` or `\r\n`) into `self.cells`, each the f64
+    /// `str::parse` gives; `false` (cells undefined) for any other line, which
+    /// then takes [`Self::parse_row`]'s general path. The hot path of a replay:
+    /// no UTF-8 pass, no trimming, no per-cell search for quotes.
+    fn plain_cells(&mut self, bytes: &[u8]) -> bool {
+        let line = bytes.strip_suffix(b"\n").unwrap_or(bytes);
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        // one UTF-8 pass for the line (ASCII: a quick one); the cells are then
+        // text, so a number the fast path leaves goes to `str::parse` as it is
+        let Ok(mut rest) = std::str::from_utf8(line) else {
+            return false;
+        };
+        if rest.is_empty() {
+            return false;
+        }
+        self.cells.clear();
+        loop {
+            let comma = rest.bytes().position(|b| b == b',');
+            let cell = comma.map_or(rest, |k| &rest[..k]);
+            let v = if cell.is_empty() {
+                f64::NAN
+            } else {
+                match parse_plain_f64(cell) {
+                    Some(v) => v,
+                    None => return false,
+                }
+            };
+            self.cells.push(v);
+            match comma {
+                Some(k) => rest = &rest[k + 1..],
+                None => return true,
+            }
+        }
     }
 
     fn parse_row(&mut self, line: &str) -> Result<(Sample, Option<Issue>), Issue> {
@@ -212,15 +258,22 @@ impl<R: BufRead> CsvReader<R> {
             };
             self.cells.push(v);
         }
-        if count != self.n_cols {
-            let msg = format!("{count} cells, but the header has {}", self.n_cols);
-            return Err(self.issue(None, IssueKind::WrongCellCount, msg, true));
-        }
-        if let Some((i, text)) = bad {
+        if let Some((i, text)) = bad.filter(|_| count == self.n_cols) {
             if let Some(j) = self.map.iter().position(|m| *m == Some(i)) {
                 let msg = format!("`{text}` is not a number");
                 return Err(self.issue(Some(j), IssueKind::NotANumber, msg, true));
             }
+        }
+        self.sample_of_cells()
+    }
+
+    /// The sample of the row whose cells are in `self.cells`: the cell count,
+    /// the physical limits and the time step checked.
+    fn sample_of_cells(&mut self) -> Result<(Sample, Option<Issue>), Issue> {
+        let count = self.cells.len();
+        if count != self.n_cols {
+            let msg = format!("{count} cells, but the header has {}", self.n_cols);
+            return Err(self.issue(None, IssueKind::WrongCellCount, msg, true));
         }
         let get = |j: usize| self.map[j].map(|i| self.cells[i]).unwrap_or(f64::NAN);
         let s = Sample {
@@ -271,6 +324,92 @@ impl<R: BufRead> CsvReader<R> {
     }
 }
 
+/// Powers of ten that are exact in an f64 (10²² is the last).
+const EXACT_POWERS_OF_TEN: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18,
+    1e19, 1e20, 1e21, 1e22,
+];
+
+/// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]` (at least
+/// one digit before the exponent), as the f64 `str::parse` gives (the nearest,
+/// ties to even); `None` for any other text. Numbers of at most 2⁵³ in their
+/// digits and a power of ten within ±22 take Clinger's fast path (one exact
+/// product or quotient, correctly rounded); the others are parsed by
+/// `str::parse`.
+fn parse_plain_f64(cell: &str) -> Option<f64> {
+    let b = cell.as_bytes();
+    let digit = |i: usize| b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d < 10);
+    let (negative, start) = match b.first()? {
+        b'-' => (true, 1),
+        b'+' => (false, 1),
+        _ => (false, 0),
+    };
+    // the digits after any leading zeros go into `mantissa` (exact up to 19 of them)
+    let mut i = start;
+    while b.get(i) == Some(&b'0') {
+        i += 1;
+    }
+    let mut mantissa: u64 = 0;
+    let from = i;
+    while let Some(d) = digit(i) {
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+        i += 1;
+    }
+    let mut significant = i - from;
+    let mut any_digit = i > start;
+    let mut exp10: i64 = 0;
+    if b.get(i) == Some(&b'.') {
+        i += 1;
+        let fraction = i;
+        if significant == 0 {
+            while b.get(i) == Some(&b'0') {
+                i += 1;
+            }
+        }
+        let from = i;
+        while let Some(d) = digit(i) {
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
+            i += 1;
+        }
+        significant += i - from;
+        exp10 = -((i - fraction) as i64);
+        any_digit |= i > fraction;
+    }
+    if !any_digit {
+        return None;
+    }
+    if let Some(b'e' | b'E') = b.get(i) {
+        let (sign, from) = match b.get(i + 1) {
+            Some(b'-') => (-1, i + 2),
+            Some(b'+') => (1, i + 2),
+            _ => (1, i + 1),
+        };
+        let exp_digits = b.get(from..)?;
+        if exp_digits.is_empty() || exp_digits.len() > 4 || !exp_digits.iter().all(u8::is_ascii_digit) {
+            return None;
+        }
+        let e = exp_digits.iter().fold(0i64, |e, d| e * 10 + i64::from(d - b'0'));
+        exp10 += sign * e;
+        i = b.len();
+    }
+    if i != b.len() {
+        return None;
+    }
+    if significant <= 19 {
+        if mantissa == 0 {
+            return Some(if negative { -0.0 } else { 0.0 });
+        }
+        if mantissa <= 1 << 53 && (-22..=22).contains(&exp10) {
+            let m = mantissa as f64;
+            let p = EXACT_POWERS_OF_TEN[exp10.unsigned_abs() as usize];
+            let v = if exp10 >= 0 { m * p } else { m / p };
+            return Some(if negative { -v } else { v });
+        }
+    }
+    // More digits, or a power beyond the exact ones: the standard parser.
+    cell.parse().ok()
+}
+
 /// `text` without one pair of surrounding double quotes (standard CSV quoting,
 /// `"0.0"`), if it has them; anything else as it is. Nothing inside is undone
 /// (no `""` escapes, no commas within quotes: those fields stay invalid).
@@ -290,4 +429,108 @@ pub enum Row {
     AfterGap(Sample, Issue),
     /// A row that cannot be used; skipped.
     Skipped(Issue),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_plain_f64;
+
+    /// The fast parse against `str::parse`, bit for bit, or refused where
+    /// `str::parse` fails too (the general path then reports the cell).
+    fn check(text: &str) {
+        let std: Option<f64> = text.parse().ok();
+        match (parse_plain_f64(text), std) {
+            (Some(a), Some(b)) => assert_eq!(a.to_bits(), b.to_bits(), "{text}: {a:?} against {b:?}"),
+            (Some(a), None) => panic!("{text}: parsed as {a:?}, str::parse refuses it"),
+            // refused: the line takes the general path, which parses it as before
+            (None, _) => {}
+        }
+    }
+
+    #[test]
+    fn plain_numbers_parse_as_str_parse_does() {
+        for text in [
+            "0",
+            "-0",
+            "+0",
+            "0.0",
+            "-0.0",
+            "1",
+            "1.",
+            ".5",
+            "-.5",
+            "0.001",
+            "6905054.945054945",
+            "0.35228911569157584",
+            "0.000010341256119938336",
+            "2.564102564102432e-7",
+            "1e22",
+            "1e23",
+            "9007199254740993",
+            "9007199254740992",
+            "123456789012345678901234",
+            "1.7976931348623157e308",
+            "1e309",
+            "5e-324",
+            "1e-400",
+            "1E+05",
+            "1e",
+            "e5",
+            ".",
+            "-",
+            "+",
+            "1.2.3",
+            "1e+",
+            "1x",
+            "NaN",
+            "inf",
+            "-inf",
+            " 1",
+            "1 ",
+            "\"1\"",
+            "1,5",
+            "0000000000000000000000001.5",
+            "1.50000000000000000000",
+        ] {
+            check(text);
+        }
+        // random decimals of every length and exponent (a fixed LCG, no new dependency)
+        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            state >> 33
+        };
+        for _ in 0..200_000 {
+            let digits = 1 + next() % 22;
+            let mut text = String::new();
+            if next() % 3 == 0 {
+                text.push('-');
+            }
+            let point = next() % (digits + 1);
+            for k in 0..digits {
+                if k == point && next() % 4 != 0 {
+                    text.push('.');
+                }
+                text.push(char::from(b'0' + (next() % 10) as u8));
+            }
+            if next() % 3 == 0 {
+                text.push_str(&format!("e{}", next() as i64 % 60 - 30));
+            }
+            check(&text);
+        }
+        // every value an f64 writes in shortest form reads back
+        for _ in 0..100_000 {
+            let v = f64::from_bits(next() << 31 ^ next());
+            if v.is_finite() {
+                let text = format!("{v:?}");
+                assert_eq!(
+                    parse_plain_f64(&text).map(f64::to_bits),
+                    Some(v.to_bits()),
+                    "{text}"
+                );
+            }
+        }
+    }
 }

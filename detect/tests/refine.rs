@@ -54,6 +54,7 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         innovation_sigma: [1e-5, 5e3, 5e3],
         mae_pa: [0.0; 2],
         nis: 3.0,
+        oil_temp_c: f64::NAN,
     }
 }
 

@@ -79,6 +79,7 @@ impl EstimateWire for StageEstimate {
             // (not on the wire)
             bulk_scale: f64::NAN,
             bulk_scale_sigma: f64::NAN,
+            oil_temp_c: f64::NAN,
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,

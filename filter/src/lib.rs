@@ -98,6 +98,8 @@ pub struct Estimate {
     pub mae_pa: [f64; 2],
     /// Normalised innovation squared (χ² with 3 degrees of freedom when consistent).
     pub nis: f64,
+    /// The oil temperature the model was at, °C (NaN: no sample carried `temp_c`).
+    pub oil_temp_c: f64,
 }
 
 impl Estimate {
@@ -117,6 +119,7 @@ impl Estimate {
             innovation_sigma: [f64::NAN; N_MEAS],
             mae_pa: [f64::NAN; 2],
             nis: f64::NAN,
+            oil_temp_c: f64::NAN,
         }
     }
 }
@@ -432,6 +435,7 @@ impl Estimator {
         let mut e = self.on_sample_inner(s);
         e.measured = [s.x_m, s.p1_pa, s.p2_pa];
         e.u_v = s.u_v;
+        e.oil_temp_c = self.oil_temp_c;
         e
     }
 

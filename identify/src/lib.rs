@@ -6,8 +6,8 @@
 //! The method is the chambers' flow balance (continuity), which holds whatever
 //! the mass, friction and load are. Over a window of W sample intervals:
 //!
-//! - chamber 1: κ_A·ΣQ_A·T + κ_A·b·ΣG_A·T + C_L·ΣN_1·T + Δr·ΣR_1·T − s·ΣV1·Δp1/β = A1·Δx + ΣL_1·T
-//! - chamber 2: κ_B·ΣQ_B·T + κ_B·b·ΣG_B·T + C_L·ΣN_2·T + Δr·ΣR_2·T + s·ΣV2·Δp2/β = A2·Δx + ΣL_2·T
+//! - chamber 1: κ_A·ΣQ_A·T + κ_A·b·ΣG_A·T + C_L·ΣN_1·T + Δr·ΣR_1·T − s·ΣV1·Δp1/β − τ1·V1·Δṗ1/β = A1·Δx + ΣL_1·T
+//! - chamber 2: κ_B·ΣQ_B·T + κ_B·b·ΣG_B·T + C_L·ΣN_2·T + Δr·ΣR_2·T + s·ΣV2·Δp2/β + τ2·V2·Δṗ2/β = A2·Δx + ΣL_2·T
 //!
 //! Q_A, Q_B are the model's orifice flows (into chamber 1, out of chamber 2) at
 //! the spool position the model's spool dynamics give for the recorded
@@ -16,8 +16,9 @@
 //! leaks, V the chamber volumes at the measured rod position, β the model's
 //! bulk modulus. The unknowns are the flow-gain multiples κ_A, κ_B (one κ for a
 //! double-rod cylinder), the products κ·b with the spool null bias b, the null
-//! leakage C_L, the sag's change Δr and the compliance multiple s (effective
-//! β = β_model/s). The
+//! leakage C_L, the sag's change Δr, the compliance multiple s (effective
+//! β = β_model/s) and each transducer's lag τ (Δṗ: the measured pressure
+//! rate's change over the window; a reading lagging by τ is p − τ·ṗ). The
 //! system is linear in them: weighted least squares, each chamber's rows
 //! weighted by the inverse of its residual RMS.
 //!
@@ -56,6 +57,9 @@ pub const PLAUSIBLE_COMPLIANCE: (f64, f64) = (0.3, 5.0);
 /// The spool's natural frequency, as a multiple of the model's, that
 /// identification accepts (a catalogue's −90° frequency is typical, not exact).
 pub const PLAUSIBLE_SPOOL_FREQUENCY: (f64, f64) = (0.5, 1.5);
+/// The longest transducer lag identification accepts, s (a datasheet's 10-90 %
+/// response of a few ms is a lag of about a millisecond).
+pub const MAX_LAG_S: f64 = 0.01;
 
 /// One recorded sample and whether samples are missing before it.
 #[derive(Debug, Clone, Copy)]
@@ -144,6 +148,11 @@ pub struct Identification {
     /// The spool's natural frequency ω_n, rad/s: from when the flow follows the
     /// command (a linearised column, the flow's change per 1 % of ω_n).
     pub spool_natural_freq_rad_s: Found,
+    /// The pressure transducers' apparent first-order lag per channel (p1,
+    /// p2), s: the measured pressure's change lags the flow balance's by τ·Δṗ.
+    /// Apparent: it takes up whatever else delays a reading (the line's own
+    /// dynamics, DAQ timing). Reported, not put into the filters.
+    pub pressure_lag_s: [Found; 2],
     /// Windows of [`WINDOW_SAMPLES`] used, and how many of them moved.
     pub windows: usize,
     /// Windows in which the rod moved more than 0.1 mm.
@@ -188,7 +197,9 @@ const C_L: usize = 4;
 const S: usize = 5;
 const SAG: usize = 6;
 const SPOOL_W: usize = 7;
-const UNKNOWNS: usize = 8;
+const LAG1: usize = 8;
+const LAG2: usize = 9;
+const UNKNOWNS: usize = 10;
 /// Relative step of the spool's natural frequency for its column.
 const SPOOL_W_STEP: f64 = 0.01;
 /// Step of the supply sag for its column (a finite difference), Pa/(m³/s).
@@ -232,7 +243,17 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
     let (mut acc1, mut acc2) = ([0.0; UNKNOWNS], [0.0; UNKNOWNS]);
     let (mut rhs1, mut rhs2, mut dx, mut n) = (0.0, 0.0, 0.0, 0usize);
     let (mut v1_sum, mut v2_sum) = (0.0, 0.0);
-    for pair in rows.windows(2) {
+    // Measured pressure rates, Pa/s: central differences over ±2 samples (0 at
+    // the ends). A transducer lagging by τ reads p − τ·ṗ, so a window's true
+    // pressure change is the measured one plus τ·(ṗ at its end − ṗ at its start).
+    let rate = |k: usize, f: fn(&Sample) -> f64| -> f64 {
+        if k < 2 || k + 2 >= rows.len() {
+            return 0.0;
+        }
+        (f(&rows[k + 2].sample) - f(&rows[k - 2].sample)) / (4.0 * dt_s)
+    };
+    let (mut pd1_first, mut pd2_first) = (0.0, 0.0);
+    for (k, pair) in rows.windows(2).enumerate() {
         let (s0, s1) = (&pair[0].sample, &pair[1].sample);
         // The spool over this interval, under the command of its first sample.
         let mut x_sp_mean = 0.0;
@@ -270,6 +291,10 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
             (qp.q2_m3_s - qm.q2_m3_s) / (2.0 * hx),
         );
         let qw = orifice_flows(p, x_spw_mean, p1, p2);
+        if n == 0 {
+            pd1_first = rate(k, |s| s.p1_pa);
+            pd2_first = rate(k, |s| s.p2_pa);
+        }
         let nl = null_leakage_flows(&unit_cl, x_sp_mean, p1, p2);
         let qs = orifice_flows(&sagged, x_sp_mean, p1, p2);
         let lq = leaks.flows(p1, p2, p.return_pressure_pa);
@@ -292,6 +317,8 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
         v2_sum += v2;
         n += 1;
         if n == WINDOW_SAMPLES {
+            acc1[LAG1] -= v1 * (rate(k + 1, |s| s.p1_pa) - pd1_first) / p.bulk_modulus_pa;
+            acc2[LAG2] += v2 * (rate(k + 1, |s| s.p2_pa) - pd2_first) / p.bulk_modulus_pa;
             out.x1.push(acc1);
             out.y1.push(a1 * dx + rhs1);
             out.x2.push(acc2);
@@ -459,6 +486,8 @@ fn identify_once(
     cols.push(vec![S]);
     cols.push(vec![SAG]);
     cols.push(vec![SPOOL_W]);
+    cols.push(vec![LAG1]);
+    cols.push(vec![LAG2]);
     let with_cl = {
         let mut c = cols.clone();
         c.push(vec![C_L]);
@@ -547,6 +576,26 @@ fn identify_once(
         }),
         other => other,
     };
+    let lag = |u: usize, channel: &str| {
+        let e = estimate(&fit, u);
+        if !(0.0..=MAX_LAG_S).contains(&e.value) {
+            Found::NotIdentifiable(format!(
+                "{channel}'s lag came out {:.2} ± {:.2} ms: outside 0-{} ms, another effect (a line drop, the workpiece) takes its place",
+                e.value * 1e3,
+                e.sigma * 1e3,
+                MAX_LAG_S * 1e3
+            ))
+        } else if e.value <= RESOLVED_SIGMAS * e.sigma {
+            Found::NotIdentifiable(format!(
+                "{channel}'s lag came out {:.2} ± {:.2} ms, not resolved from zero (5 σ)",
+                e.value * 1e3,
+                e.sigma * 1e3
+            ))
+        } else {
+            Found::Identified(e)
+        }
+    };
+    let pressure_lag_s = [lag(LAG1, "p1"), lag(LAG2, "p2")];
     let sag = Estimate {
         value: p.supply_sag_pa_per_m3_s + fit.theta[SAG],
         sigma: fit.sigma[SAG],
@@ -588,6 +637,7 @@ fn identify_once(
         bulk_modulus_pa,
         supply_sag_pa_per_m3_s,
         spool_natural_freq_rad_s,
+        pressure_lag_s,
         windows,
         moving_windows: built.moving,
         gap_before_lpm: pooled(rms_before),

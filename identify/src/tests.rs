@@ -252,3 +252,60 @@ fn a_hold_does_not_identify_the_mechanics() {
     let err = identify_mechanics(&rig, 1e-3, &rows).expect_err("a hold");
     assert!(err.contains("record the rig's duty cycle"), "{err}");
 }
+
+/// Transducers that lag by τ = 0.6 ms on the lift: each channel's lag is
+/// identified within 20 % of the delay the in-repo simulator makes of it, and a
+/// rig without lag reads a lag of 0.1 ms or less (or none). The simulator steps
+/// its lag at the sample rate, y += a·(p − y) with a = 1 − e^(−T/τ), which
+/// delays a ramp by T·(1 − a)/a: 0.23 ms here.
+#[test]
+fn the_transducers_lag_is_identified_per_channel() {
+    let rig = ActuatorParams::vertical_lift();
+    let record_with = |lag_s: f64| {
+        let sc = Scenario::by_name("lift", 3, 60.0).expect("scenario");
+        let sensors = model::SensorParams {
+            pressure_lag_s: lag_s,
+            ..model::SensorParams::default()
+        };
+        let mut sim = Simulator::new(
+            rig.clone(),
+            sensors,
+            model::SimSettings::default(),
+            sc,
+            FaultSchedule::default(),
+            7,
+        )
+        .expect("rig");
+        sim.run(60.0)
+            .into_iter()
+            .map(|sample| Row {
+                sample,
+                after_gap: false,
+            })
+            .collect::<Vec<_>>()
+    };
+    let id = identify(&rig, 1e-3, &record_with(6e-4), noise()).expect("identified");
+    let a = 1.0 - (-1e-3f64 / 6e-4).exp();
+    let delay_s = 1e-3 * (1.0 - a) / a;
+    for (k, found) in id.pressure_lag_s.iter().enumerate() {
+        let tau = value(found);
+        eprintln!(
+            "p{}: lag {:.3} ms (delay {:.3} ms)",
+            k + 1,
+            tau * 1e3,
+            delay_s * 1e3
+        );
+        assert!(
+            (tau / delay_s - 1.0).abs() < 0.2,
+            "p{}: lag {:.3} ms",
+            k + 1,
+            tau * 1e3
+        );
+    }
+    let id = identify(&rig, 1e-3, &record_with(0.0), noise()).expect("identified");
+    for found in &id.pressure_lag_s {
+        if let Some(e) = found.estimate() {
+            assert!(e.value < 1e-4, "lag {:.3} ms on a rig without lag", e.value * 1e3);
+        }
+    }
+}

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use classifier::{EventKind, Phase};
+use classifier::{EventKind, LeakEvent, Phase};
 
 use crate::out::outln;
 use crate::replay::{Summary, Wiring};
@@ -274,10 +274,11 @@ fn rate(samples: &AtomicU64, started: Instant) -> String {
 }
 
 /// The leak kinds raised by the leak-size detector (`ext1, int`; `leak` for
-/// one whose kind was not named yet) and the first such alarm's time, s.
-pub fn leaks_raised(s: &Summary) -> (Vec<&'static str>, Option<f64>) {
+/// one whose kind was not named yet) and its first alarm (the earliest raised
+/// leak event: its kind, size in L/min and time in s).
+pub fn leaks_raised(s: &Summary) -> (Vec<&'static str>, Option<&LeakEvent>) {
     let mut kinds: Vec<&'static str> = Vec::new();
-    let mut first_s: Option<f64> = None;
+    let mut first: Option<&LeakEvent> = None;
     for e in s.event_log.iter().filter(|e| {
         e.phase == Phase::Raised
             && e.detector == "leak-size"
@@ -286,9 +287,24 @@ pub fn leaks_raised(s: &Summary) -> (Vec<&'static str>, Option<f64>) {
         if !kinds.contains(&e.kind.name()) {
             kinds.push(e.kind.name());
         }
-        first_s = Some(first_s.map_or(e.t_detect_s, |t| t.min(e.t_detect_s)));
+        if first.is_none_or(|f| e.t_detect_s < f.t_detect_s) {
+            first = Some(e);
+        }
     }
-    (kinds, first_s)
+    (kinds, first)
+}
+
+/// The first alarm's table cell: `ext1 0.312 L/min at 10.512 s` (`leak` while
+/// its kind is pending); `–` without one.
+fn first_alarm_cell(first: Option<&LeakEvent>) -> String {
+    first.map_or("–".into(), |e| {
+        format!(
+            "{} {:.3} L/min at {:.3} s",
+            e.kind.name(),
+            e.size_lpm,
+            e.t_detect_s
+        )
+    })
 }
 
 /// One table cell: no `|` nor line break.
@@ -298,8 +314,8 @@ fn cell(text: &str) -> String {
 
 /// `leakwatch replay DIR|FILE...`: the batch, its progress on stderr, its table
 /// on stdout (per file: samples, events raised (distinct events of any kind),
-/// the leak kinds the leak-size detector raised and its first alarm's sample
-/// time, the seconds watched of the run, the error); an error (a non-zero
+/// the leak kinds the leak-size detector raised, its first alarm's kind, size
+/// and sample time, the seconds watched of the run, the error); an error (a non-zero
 /// exit) if any file failed.
 pub fn run(
     inputs: &[PathBuf],
@@ -316,7 +332,7 @@ pub fn run(
         out.display()
     );
     let b = replay_all(&jobs, out, settings, threads, true);
-    outln!("| file | samples | events raised | leaks raised | first alarm s | watched s | error |");
+    outln!("| file | samples | events raised | leaks raised | first alarm | watched s | error |");
     outln!("|---|---|---|---|---|---|---|");
     let mut failed = 0usize;
     for (job, d) in jobs.iter().zip(&b.done) {
@@ -333,7 +349,7 @@ pub fn run(
                 raised.sort_unstable();
                 raised.dedup();
                 let raised = raised.len();
-                let (kinds, first_s) = leaks_raised(s);
+                let (kinds, first) = leaks_raised(s);
                 let watched = match s.watch.armed_at_s {
                     Some(_) => format!("{:.1} of {:.1}", s.watch.watched_s, s.watch.run_s),
                     None => {
@@ -350,7 +366,7 @@ pub fn run(
                     } else {
                         kinds.join(", ")
                     },
-                    first_s.map_or("–".into(), |t| format!("{t:.3}")),
+                    first_alarm_cell(first),
                 )
             }
             Err(e) => {

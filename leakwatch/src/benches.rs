@@ -458,13 +458,15 @@ fn suite_with_bar(
 /// after the pass) per number of worker threads in `threads` (default: 1 and
 /// all cores), on `data` or on `files` closed-loop-random CSVs of `seconds` s
 /// simulated into OUT/replay-inputs/ (healthy, ext1, ext2, int leaks in turn;
-/// removed at the end); a table on stdout and OUT/replay.json. The default
-/// configuration, never ./leakwatch.toml.
+/// removed at the end), each writing its estimates as `estimates` says; a
+/// table on stdout and OUT/replay.json. The default configuration, never
+/// ./leakwatch.toml.
 pub fn replay(
     data: Option<&Path>,
     threads: &[usize],
     files: usize,
     seconds: f64,
+    estimates: crate::estimates_out::EstimatesFormat,
     out: &Path,
     force: bool,
 ) -> Result<(), String> {
@@ -556,7 +558,7 @@ pub fn replay(
     let settings = Settings {
         cfg,
         config: None,
-        estimates: crate::estimates_out::EstimatesFormat::default(),
+        estimates,
         max_bad_rows: dataset::DEFAULT_MAX_BAD_FRACTION,
         force: true,
     };
@@ -590,7 +592,7 @@ pub fn replay(
         data: dir.display().to_string(),
         generated,
         cores,
-        estimates: "csv".into(),
+        estimates: format!("{estimates:?}").to_lowercase(),
         passes,
     };
     outln!("{}", bench::replay::table(&report));

@@ -228,7 +228,7 @@ pub(crate) enum Command {
         /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
         #[arg(long)]
         out: PathBuf,
-        /// Format of the estimates file: csv (text) or parquet (columns, for pandas, polars, pyarrow; same values bit for bit).
+        /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
         #[arg(long, value_enum, default_value_t)]
         estimates: crate::estimates_out::EstimatesFormat,
         /// Run all stages in one thread instead of over channels (same results).
@@ -405,6 +405,9 @@ pub(crate) enum BenchCommand {
         /// Length of each generated file, s (without --data).
         #[arg(long, default_value_t = 600.0)]
         seconds: f64,
+        /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
+        #[arg(long, value_enum, default_value_t)]
+        estimates: crate::estimates_out::EstimatesFormat,
         /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
         #[arg(long)]
         out: PathBuf,

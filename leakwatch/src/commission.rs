@@ -170,6 +170,18 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.spool_natural_freq_rad_s / (2.0 * std::f64::consts::PI)
         )
     );
+    for (channel, found) in ["p1", "p2"].iter().zip(&id.pressure_lag_s) {
+        match found {
+            identify::Found::Identified(e) => eprintln!(
+                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters)",
+                e.value * 1e3,
+                e.sigma * 1e3
+            ),
+            identify::Found::NotIdentifiable(why) => {
+                eprintln!("  {channel} transducer lag: not identifiable from this recording: {why}")
+            }
+        }
+    }
     match id.oil_temp_c {
         Some(t) => eprintln!(
             "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \

@@ -16,14 +16,17 @@ pub enum EstimatesFormat {
     Csv,
     /// estimates.parquet: one typed column per field (f64; the two flag columns i32).
     Parquet,
+    /// No estimates file (events.json and summary.json only): the fastest replay.
+    None,
 }
 
 impl EstimatesFormat {
-    /// The file name in the output directory.
-    pub fn file_name(self) -> &'static str {
+    /// The file name in the output directory (none for [`EstimatesFormat::None`]).
+    pub fn file_name(self) -> Option<&'static str> {
         match self {
-            EstimatesFormat::Csv => "estimates.csv",
-            EstimatesFormat::Parquet => "estimates.parquet",
+            EstimatesFormat::Csv => Some("estimates.csv"),
+            EstimatesFormat::Parquet => Some("estimates.parquet"),
+            EstimatesFormat::None => None,
         }
     }
 }
@@ -89,25 +92,36 @@ pub fn parquet_columns() -> Vec<Column> {
         .collect()
 }
 
-/// An open estimates file of either format.
+/// An open estimates file of either format, or none.
 pub enum EstimatesWriter {
     /// Text rows.
-    Csv(BufWriter<File>),
+    Csv(Box<CsvOut>),
     /// Columns, a row group of 65,536 rows at a time.
     Parquet(Box<ParquetWriter<BufWriter<File>>>),
+    /// No file: the estimates are not written.
+    None,
 }
 
 impl EstimatesWriter {
-    /// Starts the file (the CSV header, or the Parquet magic).
-    pub fn new(file: File, format: EstimatesFormat) -> std::io::Result<Self> {
-        let out = BufWriter::with_capacity(1 << 20, file);
+    /// Starts the file (the CSV header, or the Parquet magic); `file` is
+    /// ignored (and may be none) for [`EstimatesFormat::None`].
+    pub fn new(file: Option<File>, format: EstimatesFormat) -> std::io::Result<Self> {
+        let Some(file) = file.filter(|_| format != EstimatesFormat::None) else {
+            if format == EstimatesFormat::None {
+                return Ok(EstimatesWriter::None);
+            }
+            return Err(std::io::Error::other("no file to write the estimates to"));
+        };
         Ok(match format {
+            EstimatesFormat::None => EstimatesWriter::None,
             EstimatesFormat::Csv => {
-                let mut out = out;
-                writeln!(out, "{ESTIMATES_HEADER}")?;
+                let mut out = Box::new(CsvOut::new(file));
+                out.buf.extend_from_slice(ESTIMATES_HEADER.as_bytes());
+                out.buf.push(b'\n');
                 EstimatesWriter::Csv(out)
             }
             EstimatesFormat::Parquet => {
+                let out = BufWriter::with_capacity(1 << 20, file);
                 EstimatesWriter::Parquet(Box::new(ParquetWriter::new(out, &parquet_columns())?))
             }
         })
@@ -116,7 +130,7 @@ impl EstimatesWriter {
     /// Writes the row of one sample.
     pub fn write(&mut self, s: &StageEstimate) -> std::io::Result<()> {
         match self {
-            EstimatesWriter::Csv(out) => write_estimate_row(out, s),
+            EstimatesWriter::Csv(out) => out.row(s),
             EstimatesWriter::Parquet(pq) => {
                 let mut col = 0;
                 for_each_cell(s, |c| {
@@ -128,14 +142,16 @@ impl EstimatesWriter {
                 });
                 pq.end_row()
             }
+            EstimatesWriter::None => Ok(()),
         }
     }
 
     /// Writes what is buffered (and the Parquet footer) and flushes.
     pub fn finish(self) -> std::io::Result<()> {
         match self {
-            EstimatesWriter::Csv(mut out) => out.flush(),
+            EstimatesWriter::Csv(out) => out.finish(),
             EstimatesWriter::Parquet(pq) => pq.finish().map(|_| ()),
+            EstimatesWriter::None => Ok(()),
         }
     }
 }
@@ -146,53 +162,52 @@ pub const ESTIMATES_HEADER: &str =
 spool_bias,bulk_scale,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
 th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
 
-/// One CSV row being assembled: floats in shortest round-trip form, by `zmij`
-/// (parsing a cell gives back the exact f64; NaN is `NaN`, infinities `inf`/`-inf`).
-struct CsvLine {
+/// The text writer of estimates.csv: rows formatted straight into one reused
+/// buffer (no per-row allocation or copy), written to the file a MiB at a time.
+pub struct CsvOut {
+    file: File,
+    buf: Vec<u8>,
     floats: zmij::Buffer,
-    bytes: [u8; 1024],
-    len: usize,
+    digits: itoa::Buffer,
 }
 
-impl CsvLine {
-    fn new() -> Self {
-        CsvLine {
+/// Bytes buffered before a write to the file.
+const CSV_CHUNK: usize = 1 << 20;
+
+impl CsvOut {
+    fn new(file: File) -> Self {
+        CsvOut {
+            file,
+            buf: Vec::with_capacity(CSV_CHUNK + 4096),
             floats: zmij::Buffer::new(),
-            bytes: [0; 1024],
-            len: 0,
+            digits: itoa::Buffer::new(),
         }
     }
 
-    /// Appends `v` (after a comma unless it is the first cell).
-    fn float(&mut self, v: f64) {
-        let text = self.floats.format(v).as_bytes();
-        if self.len > 0 {
-            self.bytes[self.len] = b',';
-            self.len += 1;
+    /// Appends one row (floats in shortest round-trip form, by `zmij`: parsing
+    /// a cell gives back the exact f64; NaN is `NaN`, infinities `inf`/`-inf`).
+    fn row(&mut self, s: &StageEstimate) -> std::io::Result<()> {
+        let (buf, floats, digits) = (&mut self.buf, &mut self.floats, &mut self.digits);
+        for_each_cell(s, |c| {
+            match c {
+                Cell::F64(v) => buf.extend_from_slice(floats.format(v).as_bytes()),
+                Cell::Flags(v) => buf.extend_from_slice(digits.format(v).as_bytes()),
+            }
+            buf.push(b',');
+        });
+        // the last cell's comma ends the line
+        if let Some(last) = buf.last_mut() {
+            *last = b'\n';
         }
-        self.bytes[self.len..self.len + text.len()].copy_from_slice(text);
-        self.len += text.len();
+        if buf.len() >= CSV_CHUNK {
+            self.file.write_all(buf)?;
+            buf.clear();
+        }
+        Ok(())
     }
 
-    /// Appends an integer cell.
-    fn int(&mut self, v: u32) {
-        let mut digits = itoa::Buffer::new();
-        let text = digits.format(v).as_bytes();
-        self.bytes[self.len] = b',';
-        self.bytes[self.len + 1..self.len + 1 + text.len()].copy_from_slice(text);
-        self.len += 1 + text.len();
+    fn finish(mut self) -> std::io::Result<()> {
+        self.file.write_all(&self.buf)?;
+        self.file.flush()
     }
-}
-
-/// Writes one estimates.csv row (floats in shortest round-trip form: parsing a
-/// cell gives back the exact f64).
-pub fn write_estimate_row<W: Write>(w: &mut W, s: &StageEstimate) -> std::io::Result<()> {
-    // 37 floats of at most 24 bytes and two flags: well inside the row's 1024 bytes
-    let mut row = CsvLine::new();
-    for_each_cell(s, |c| match c {
-        Cell::F64(v) => row.float(v),
-        Cell::Flags(v) => row.int(v),
-    });
-    row.bytes[row.len] = b'\n';
-    w.write_all(&row.bytes[..row.len + 1])
 }

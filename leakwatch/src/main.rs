@@ -204,8 +204,9 @@ fn run(cli: Cli) -> Result<(), String> {
                 threads,
                 files,
                 seconds,
+                estimates,
                 out,
-            } => benches::replay(data.as_deref(), &threads, files, seconds, &out, force),
+            } => benches::replay(data.as_deref(), &threads, files, seconds, estimates, &out, force),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
             BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
             BenchCommand::Detection {

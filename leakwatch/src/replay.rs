@@ -92,6 +92,9 @@ pub struct ResidualRms {
     pub bulk_scale: f64,
     /// One standard deviation of [`Self::bulk_scale`] (1; NaN without that state).
     pub bulk_scale_sigma: f64,
+    /// The oil temperatures the model followed, °C, lowest and highest
+    /// (`temp_c` of the samples; NaN: none carried it).
+    pub oil_temp_range_c: (f64, f64),
 }
 
 /// How much of a run the leak-size detector watched: from arming to the end,
@@ -171,6 +174,8 @@ struct Acc {
     first_outlier_s: f64,
     /// θ and its σ at the last estimate that had them.
     bulk_scale: (f64, f64),
+    /// Lowest and highest oil temperature the model was at, °C.
+    oil_temp_c: (f64, f64),
 }
 
 impl Acc {
@@ -183,6 +188,7 @@ impl Acc {
             outliers: 0,
             first_outlier_s: f64::NAN,
             bulk_scale: (f64::NAN, f64::NAN),
+            oil_temp_c: (f64::NAN, f64::NAN),
         }
     }
 
@@ -195,6 +201,13 @@ impl Acc {
         }
         if e.bulk_scale.is_finite() {
             self.bulk_scale = (e.bulk_scale, e.bulk_scale_sigma);
+        }
+        if e.oil_temp_c.is_finite() {
+            // f64::min/max skip the NaN of the start
+            self.oil_temp_c = (
+                self.oil_temp_c.0.min(e.oil_temp_c),
+                self.oil_temp_c.1.max(e.oil_temp_c),
+            );
         }
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
             return;
@@ -222,6 +235,7 @@ impl Acc {
             first_nis_outlier_s: self.first_outlier_s,
             bulk_scale: self.bulk_scale.0,
             bulk_scale_sigma: self.bulk_scale.1,
+            oil_temp_range_c: self.oil_temp_c,
         }
     }
 }
@@ -245,19 +259,22 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     crate::out::dir(&req.out_dir)?;
     let mut inputs: Vec<&Path> = vec![req.input.as_path()];
     inputs.extend(req.protect.iter().map(|p| p.as_path()));
-    let est_path = req.out_dir.join(req.estimates.file_name());
+    let est_path = req.estimates.file_name().map(|name| req.out_dir.join(name));
     let events_path = req.out_dir.join("events.json");
     let summary_path = req.out_dir.join("summary.json");
     // Refuse before reading or writing anything.
-    for p in [&est_path, &events_path, &summary_path] {
+    for p in est_path.iter().chain([&events_path, &summary_path]) {
         crate::out::check(p, req.overwrite, &inputs)?;
     }
+    let est_name = est_path.as_deref().unwrap_or(&req.out_dir).display().to_string();
     let cfg = &req.config;
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
-    let file = crate::out::create(&est_path, req.overwrite, &inputs)?;
-    let mut out =
-        EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{}: {e}", est_path.display()))?;
+    let file = match &est_path {
+        Some(p) => Some(crate::out::create(p, req.overwrite, &inputs)?),
+        None => None,
+    };
+    let mut out = EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{est_name}: {e}"))?;
 
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     let mut cls = Classifier::new(cfg.classifier.clone())?;
@@ -294,7 +311,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         cls.on_stage(s, |ev| events.push(ev));
         if write_err.is_none() {
             if let Err(e) = out.write(s) {
-                write_err = Some(format!("{}: {e}", est_path.display()));
+                write_err = Some(format!("{est_name}: {e}"));
             }
         }
     };
@@ -412,7 +429,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     if let Some(e) = write_err {
         return Err(e);
     }
-    out.finish().map_err(|e| format!("{}: {e}", est_path.display()))?;
+    out.finish().map_err(|e| format!("{est_name}: {e}"))?;
     summary.wall_s = started.elapsed().as_secs_f64();
     summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
     summary.samples_missing = stage.missing_samples();

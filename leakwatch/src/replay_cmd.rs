@@ -176,6 +176,10 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
             s.leak_filter.nis_outliers, cfg_nis_gate, s.leak_filter.first_nis_outlier_s, cfg_recovery_s
         );
     }
+    let (cold, warm) = s.leak_filter.oil_temp_range_c;
+    if cold.is_finite() {
+        eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
+    }
     if let Some(line) = estimator::oil_stiffness_line(
         s.leak_filter.bulk_scale,
         s.leak_filter.bulk_scale_sigma,

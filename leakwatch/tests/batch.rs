@@ -123,8 +123,17 @@ fn a_directory_replayed_on_two_threads_matches_each_file_replayed_alone() {
             .unwrap()
             .to_string()
     };
-    assert!(row("b").contains("| none |"), "{table}");
+    assert!(row("b").contains("| none | – |"), "{table}");
     assert!(!row("a").contains("| none |"), "{table}");
+    // the first alarm's kind, size and time
+    for name in ["a", "run_002/measured"] {
+        let first = row(name);
+        assert!(
+            first.contains(" L/min at ")
+                && (first.contains("| leak ") || first.contains("| ext1 ") || first.contains("| int ")),
+            "{first}"
+        );
+    }
     // the outputs exist now: a second batch refuses them without --force
     let o = leakwatch(&["replay", data.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(!o.status.success());

@@ -715,3 +715,86 @@ fn a_live_view_with_a_token_file_refuses_a_client_without_the_token() {
         "{log}"
     );
 }
+
+/// Foxglove's own client library, `@foxglove/ws-protocol` (node), on a running
+/// `leakwatch run --live-view` of a leak: with its default subprotocol it
+/// receives frames, estimates, health and the leak's event (ext1). It runs
+/// where `LEAKWATCH_NODE_MODULES` holds the package (.ci/setup installs it;
+/// required with LEAKWATCH_REQUIRE_NODE=1, skipped elsewhere).
+#[test]
+fn foxglove_ws_protocol_receives_every_topic_of_a_running_rig() {
+    let required = std::env::var("LEAKWATCH_REQUIRE_NODE").is_ok_and(|v| v == "1");
+    let modules = std::env::var("LEAKWATCH_NODE_MODULES").ok().filter(|m| {
+        Path::new(m)
+            .join("node_modules/@foxglove/ws-protocol/package.json")
+            .is_file()
+    });
+    let Some(modules) = modules else {
+        assert!(
+            !required,
+            "LEAKWATCH_NODE_MODULES must hold @foxglove/ws-protocol"
+        );
+        eprintln!("SKIPPED: LEAKWATCH_NODE_MODULES names no @foxglove/ws-protocol (optional check)");
+        return;
+    };
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmpdir("wsprotocol");
+    let cfg = short_warmup_config(&dir, "");
+    let port = free_port().to_string();
+    let run = Command::new(BIN)
+        .args([
+            "run",
+            "--rig",
+            "lv3",
+            "--seconds",
+            "16",
+            "--fault",
+            "ext1:1lpm@10s",
+        ])
+        .args(["--live-view", &port, "--config"])
+        .arg(&cfg)
+        .arg("--out")
+        .arg(dir.join("run"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // the live view starts with the run: retry the connection until it answers
+    let start = Instant::now();
+    let client = loop {
+        let o = Command::new("node")
+            .arg(example("liveview/ws_protocol_client.js"))
+            .arg(format!("ws://127.0.0.1:{port}"))
+            .args(["--seconds", "40"])
+            .env("NODE_PATH", Path::new(&modules).join("node_modules"))
+            .output()
+            .unwrap();
+        if o.status.success() || start.elapsed() > Duration::from_secs(20) {
+            break o;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    };
+    let run = run.wait_with_output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let stdout = String::from_utf8_lossy(&client.stdout);
+    assert!(
+        client.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&client.stderr)
+    );
+    let c: Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(c["subprotocol"], "foxglove.websocket.v1");
+    for t in ["frames", "estimates", "health", "events"] {
+        let topic = format!("/leakwatch/lv3/{t}");
+        assert!(c["counts"][&topic].as_u64().unwrap_or(0) >= 1, "no {topic}: {c}");
+    }
+    assert!(
+        c["counts"]["/leakwatch/lv3/frames"].as_u64().unwrap() > 100,
+        "{c}"
+    );
+    let event = &c["first"]["/leakwatch/lv3/events"];
+    assert!(
+        event["kind"] == "ext1" || event["kind"] == "leak",
+        "the first event is the leak: {event}"
+    );
+}

@@ -62,6 +62,16 @@ fn channels_and_one_thread_give_identical_results_and_find_the_leak() {
         std::fs::read(a.join("events.json")).unwrap(),
         std::fs::read(b.join("events.json")).unwrap()
     );
+    // without the estimates file: the same events
+    let c = d.join("c");
+    let o = replay(&input, &c, &["--single-thread", "--estimates", "none"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!c.join("estimates.csv").exists() && !c.join("estimates.parquet").exists());
+    assert_eq!(
+        std::fs::read(a.join("events.json")).unwrap(),
+        std::fs::read(c.join("events.json")).unwrap()
+    );
+    assert_eq!(json(&c.join("summary.json"))["samples"], 30_000);
     let text = String::from_utf8(ea).unwrap();
     assert_eq!(text.lines().count(), 30_001);
     assert!(text.starts_with("t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm"));
@@ -620,4 +630,58 @@ fn a_replay_says_how_long_it_watched_and_when_it_never_armed() {
 /// The command ran: exit status 0, or 3 when its detector never armed (a short file).
 fn ran(o: &std::process::Output) -> bool {
     matches!(o.status.code(), Some(0) | Some(3))
+}
+
+/// A rig with an oil thermometer: `simulate` writes the warming oil as the
+/// `temp_c` column (to 0.1 °C), and `replay` follows it: it says the range it
+/// followed, summary.json has it, and the oil-stiffness scale θ stays near 1
+/// (the model's bulk modulus is the oil's at each temperature).
+#[test]
+fn a_temp_c_column_is_followed_and_said() {
+    let d = tmpdir("temp");
+    let cfg = d.join("warming.toml");
+    std::fs::write(
+        &cfg,
+        "[model.oil_temperature]\nreference_c = 20.0\n\
+         [sim.oil]\nstart_c = 20.0\nend_c = 50.0\ntime_constant_s = 5.0\nmeasured = true\n",
+    )
+    .unwrap();
+    let csv = d.join("warm.csv");
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "closed-loop-sine",
+        "--seconds",
+        "20",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().ends_with(",temp_c"));
+    assert!(lines.next().unwrap().ends_with(",20.0"), "starts at 20 °C");
+    assert!(
+        text.lines().last().unwrap().ends_with(",49.5"),
+        "20 s of τ = 5 s: 49.45 °C"
+    );
+    let out = d.join("out");
+    let o = replay(&csv, &out, &["--config", cfg.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("oil temperature: 20.0 to 49.5 °C (temp_c): the model followed it"),
+        "{err}"
+    );
+    let s = json(&out.join("summary.json"));
+    let range = &s["leak_filter"]["oil_temp_range_c"];
+    assert_eq!(
+        (range[0].as_f64(), range[1].as_f64()),
+        (Some(20.0), Some(49.5)),
+        "{s:#}"
+    );
+    let theta = s["leak_filter"]["bulk_scale"].as_f64().unwrap();
+    assert!((theta - 1.0).abs() < 0.03, "θ {theta}");
 }
