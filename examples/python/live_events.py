@@ -12,6 +12,8 @@ names carry a layout version, which iceoryx2 checks with size and alignment.
 """
 import argparse
 import ctypes
+import os
+import stat
 import sys
 import time
 
@@ -94,6 +96,23 @@ def subscribe(node, rig, topic, frame_type, deadline):
             time.sleep(0.05)
 
 
+def private_dir():
+    """leakwatch's private directory of this user (bus::private_dir_path): where
+    a run's iceoryx2 root is, <private dir>/<prefix>/."""
+    d = os.environ.get("LEAKWATCH_RUNTIME_DIR")
+    if d:
+        return d
+    x = os.environ.get("XDG_RUNTIME_DIR")
+    if x and os.path.isabs(x):
+        try:
+            st = os.lstat(x)
+            if stat.S_ISDIR(st.st_mode) and st.st_uid == os.geteuid() and st.st_mode & 0o077 == 0:
+                return os.path.join(x, "leakwatch")
+        except OSError:
+            pass
+    return f"/tmp/leakwatch-{os.geteuid()}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rig", default="rig1")
@@ -104,7 +123,7 @@ def main():
     cfg = iox2.config.default()
     if args.prefix:
         cfg.global_cfg.prefix = iox2.FileName.new(f"lw_{args.prefix}_")
-        cfg.global_cfg.root_path = iox2.Path.new(f"/tmp/iceoryx2/lw_{args.prefix}/")
+        cfg.global_cfg.root_path = iox2.Path.new(f"{private_dir()}/{args.prefix}/")
     node = iox2.NodeBuilder.new().config(cfg).create(iox2.ServiceType.Ipc)
     end = time.monotonic() + args.seconds
     events = subscribe(node, args.rig, "events", LeakEventFrame, end)
