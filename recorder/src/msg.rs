@@ -176,10 +176,7 @@ impl<'a> CdrReader<'a> {
     /// A `float64` a later version appended: NaN (absent) when the message
     /// ends before it (a log of an earlier version).
     pub fn f64_added(&mut self, field: &str) -> Result<f64, String> {
-        if self.pos >= self.data.len() {
-            return Ok(f64::NAN);
-        }
-        self.f64(field)
+        self.f64s_added::<1>(field).map(|[v]| v)
     }
 
     /// `N` consecutive `float64`s.
