@@ -189,7 +189,8 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
         ),
         None => eprintln!(
             "  oil temperature: not recorded (no temp_c column): the identified values hold at the \
-             recording's temperature; the model takes [model.oil_temperature] reference_c = {:.1} °C for it",
+             recording's temperature; [model.oil_temperature] reference_c is {:.1} °C: set it to that \
+             temperature if the live samples will carry temp_c",
             m.oil_temperature.reference_c
         ),
     }
