@@ -182,7 +182,7 @@ pub struct Datasheet {
 
 /// The config fields a datasheet derives: (section, field, the datasheet fact
 /// it comes from). Written once: a config with a `[datasheet]` may not set them.
-pub const DERIVED_FIELDS: [(&str, &str, &str); 25] = [
+pub const DERIVED_FIELDS: [(&str, &str, &str); 26] = [
     ("model", "piston_area_m2", "cylinder.bore_m and rod_m"),
     ("model", "rod_side_area_m2", "cylinder.kind, bore_m and rod_m"),
     ("model", "mounting_angle_rad", "cylinder.mounting_angle_deg"),
@@ -219,6 +219,7 @@ pub const DERIVED_FIELDS: [(&str, &str, &str); 25] = [
     ("model", "supply_pressure_pa", "supply.pressure_pa"),
     ("model", "valve_null_leakage_m3_s_pa", "valve.null_leakage_l_min"),
     ("sensors", "encoder_resolution_m", "position_sensor.resolution_m"),
+    ("sensors", "position_noise_m", "position_sensor.noise_m"),
     (
         "sensors",
         "pressure_full_scale_pa",
@@ -535,6 +536,7 @@ impl Datasheet {
         let t = &self.pressure_transducers;
         SensorParams {
             encoder_resolution_m: self.position_sensor.resolution_m,
+            position_noise_m: self.position_sensor.noise_m,
             pressure_full_scale_pa: t.full_scale_pa,
             adc_bits: t.adc_bits,
             pressure_noise_pa: t.noise_pa,

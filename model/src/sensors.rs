@@ -11,6 +11,9 @@ use crate::rng::Rng;
 pub struct SensorParams {
     /// Encoder resolution (one count), m.
     pub encoder_resolution_m: f64,
+    /// Standard deviation of the position sensor's noise beyond its
+    /// quantisation, m (0: an encoder that only counts, as on the thesis rig).
+    pub position_noise_m: f64,
     /// Full scale of the pressure channels (0 to this), Pa.
     pub pressure_full_scale_pa: f64,
     /// ADC resolution of every analogue channel, bits.
@@ -44,6 +47,7 @@ impl Default for SensorParams {
     fn default() -> Self {
         SensorParams {
             encoder_resolution_m: 3.0e-5,
+            position_noise_m: 0.0,
             pressure_full_scale_pa: 20.7e6,
             adc_bits: 12,
             pressure_noise_pa: 5.0e3,
@@ -71,7 +75,7 @@ impl SensorParams {
         if !(1..=24).contains(&self.adc_bits) {
             return Err(bad("adc_bits", self.adc_bits as f64, "1 to 24 bits"));
         }
-        let ranges: [(&str, f64, f64, f64, &'static str); 7] = [
+        let ranges: [(&str, f64, f64, f64, &'static str); 8] = [
             (
                 "encoder_resolution_m",
                 self.encoder_resolution_m,
@@ -99,6 +103,13 @@ impl SensorParams {
                 1.0,
                 1e8,
                 "a full scale from 1 to 1e8 N",
+            ),
+            (
+                "position_noise_m",
+                self.position_noise_m,
+                0.0,
+                1e-2,
+                "a noise from 0 to 1e-2 m",
             ),
             (
                 "pressure_noise_pa",
@@ -199,18 +210,26 @@ impl SensorParams {
         (self.pressure_noise_pa.powi(2) + q * q / 12.0).sqrt()
     }
 
-    /// The standard deviation of the encoder quantisation error (count/√12), m.
+    /// The standard deviation of the position measurement error (noise plus
+    /// quantisation, count/√12), m.
     pub fn position_sigma_m(&self) -> f64 {
-        self.encoder_resolution_m / 12f64.sqrt()
+        let q = self.encoder_resolution_m;
+        (self.position_noise_m.powi(2) + q * q / 12.0).sqrt()
     }
 
-    /// Encoder reading of true position `x_m`, m.
+    /// Position reading of true position `x_m`, m: its noise (drawn only when
+    /// there is any, so a rig without keeps its random sequence), then the count.
     #[inline]
-    pub fn encoder(&self, x_m: f64) -> f64 {
+    pub fn encoder(&self, x_m: f64, rng: &mut Rng) -> f64 {
         if !self.enabled {
             return x_m;
         }
-        (x_m / self.encoder_resolution_m).round() * self.encoder_resolution_m
+        let x = if self.position_noise_m > 0.0 {
+            x_m + self.position_noise_m * rng.normal()
+        } else {
+            x_m
+        };
+        (x / self.encoder_resolution_m).round() * self.encoder_resolution_m
     }
 
     /// Quantises `value` over [lo, hi] with this ADC.
@@ -283,10 +302,10 @@ mod tests {
     #[test]
     fn quantisation_steps() {
         let s = SensorParams::default();
-        assert!((s.encoder(0.300_014) - 0.30).abs() < 1e-12);
-        assert!((s.encoder(0.300_016) - 0.30003).abs() < 1e-12);
-        assert!((s.pressure_lsb_pa() - 5054.9).abs() < 0.1);
         let mut rng = Rng::new(1);
+        assert!((s.encoder(0.300_014, &mut rng) - 0.30).abs() < 1e-12);
+        assert!((s.encoder(0.300_016, &mut rng) - 0.30003).abs() < 1e-12);
+        assert!((s.pressure_lsb_pa() - 5054.9).abs() < 0.1);
         let quiet = SensorParams {
             pressure_noise_pa: 0.0,
             ..s

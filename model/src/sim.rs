@@ -298,7 +298,7 @@ impl Simulator {
         }
         let leaks = self.leaks_at(t);
         let s = self.state;
-        let x_meas = self.sensors.encoder(s[I_X]);
+        let x_meas = self.sensors.encoder(s[I_X], &mut self.rng);
         let (p1_meas, p2_meas) = if self.sensors.has_installation_effects() {
             let [p1, p2] = self.at_transducers(&s);
             (
