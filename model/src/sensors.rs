@@ -300,6 +300,38 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_position_sensors_noise_is_drawn_and_counted_in_its_sigma() {
+        let s = SensorParams {
+            encoder_resolution_m: 2e-6,
+            position_noise_m: 3e-6,
+            ..SensorParams::default()
+        };
+        assert!((s.position_sigma_m() - (9e-12f64 + 4e-12 / 12.0).sqrt()).abs() < 1e-15);
+        let mut rng = Rng::new(7);
+        let n = 200_000;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for _ in 0..n {
+            let e = s.encoder(0.1234567, &mut rng) - 0.1234567;
+            sum += e;
+            sum2 += e * e;
+        }
+        let (mean, sd) = (
+            sum / n as f64,
+            (sum2 / n as f64 - (sum / n as f64).powi(2)).sqrt(),
+        );
+        assert!(mean.abs() < 5e-8, "mean {mean}");
+        assert!(
+            (sd / s.position_sigma_m() - 1.0).abs() < 0.01,
+            "σ {sd} against {}",
+            s.position_sigma_m()
+        );
+        // without noise the encoder draws nothing: the random sequence is the thesis rig's
+        let (mut a, mut b) = (Rng::new(3), Rng::new(3));
+        SensorParams::default().encoder(0.1, &mut a);
+        assert_eq!(a.normal(), b.normal());
+    }
+
+    #[test]
     fn quantisation_steps() {
         let s = SensorParams::default();
         let mut rng = Rng::new(1);
