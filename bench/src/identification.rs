@@ -67,9 +67,11 @@ fn row(name: &str, scale: f64, datasheet: f64, found: &Found, truth: Option<f64>
 
 /// Scores `id` and `mechanics` (found against the model `model`) with the truth of the rig
 /// instance `rig` (`truth_rig.json`) and of the recording `recording`
-/// (`commission_cold.truth.json`), either absent.
+/// (`commission_cold.truth.json`), either absent. `lag_bound_s` is the longest
+/// transducer lag the datasheet's response time allows, s (its "datasheet" value).
 pub fn score(
     model: &ActuatorParams,
+    lag_bound_s: Option<f64>,
     id: &Identification,
     mechanics: Option<&Mechanics>,
     rig: Option<&Value>,
@@ -151,9 +153,9 @@ pub fn score(
                 .as_f64()
         });
         params.push(row(
-            &format!("{channel} transducer lag (ms, apparent)"),
+            &format!("{channel} transducer lag (ms, apparent; datasheet: the most its response time allows)"),
             1e3,
-            0.0,
+            lag_bound_s.unwrap_or(0.0),
             &id.pressure_lag_s[k],
             tau,
         ));
@@ -235,7 +237,7 @@ impl IdentificationScore {
             ));
         }
         s.push_str(&format!(
-            "\nFlow-balance gap {:.3} → {:.3} L/min RMS (sensor floor {:.3} L/min; {:.1}× the floor), over {} windows of 20 samples ({} moving). Not identified: the load beyond a constant, transducer offsets (at rest an offset difference is a load; a common offset is a supply error), the transducers' lag and the line drop (the drop is in the apparent viscous friction).\n",
+            "\nFlow-balance gap {:.3} → {:.3} L/min RMS (sensor floor {:.3} L/min; {:.1}× the floor), over {} windows of 20 samples ({} moving). Not identified: the load beyond a constant, transducer offsets (at rest an offset difference is a load; a common offset is a supply error) and the line drop (it is in the apparent viscous friction).\n",
             self.gap_lpm[0],
             self.gap_lpm[1],
             self.gap_lpm[2],

@@ -324,7 +324,16 @@ fn identification_data(
     let wall_s = t0.elapsed().as_secs_f64();
     let rig = read_json(&dir.join("truth_rig.json"))?;
     let rec = read_json(&dir.join("commission_cold.truth.json"))?;
-    let score = bench::identification::score(&cfg.model, &id, mech.as_ref().ok(), rig.as_ref(), rec.as_ref());
+    let score = bench::identification::score(
+        &cfg.model,
+        cfg.datasheet
+            .as_ref()
+            .and_then(|d| d.pressure_transducers.lag_bound_s()),
+        &id,
+        mech.as_ref().ok(),
+        rig.as_ref(),
+        rec.as_ref(),
+    );
     let md = format!(
         "{}
 Identified in {wall_s:.2} s.

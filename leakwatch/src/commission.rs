@@ -63,6 +63,20 @@ fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model
     }
 }
 
+/// What an identified transducer lag `e` (s) says against the longest lag the
+/// datasheet's response time allows, `bound_s` (s; `None`: not given): a lag
+/// beyond it by more than 2 σ holds another delay.
+fn lag_against_datasheet(e: &identify::Estimate, bound_s: Option<f64>) -> String {
+    match bound_s {
+        None => String::new(),
+        Some(b) if e.value > b + 2.0 * e.sigma => format!(
+            "; above the {:.2} ms the datasheet's response time allows: another delay is in it (the hose, the DAQ's timing)",
+            b * 1e3
+        ),
+        Some(b) => format!("; within the {:.2} ms the datasheet's response time allows", b * 1e3),
+    }
+}
+
 /// What `identify` finds on one healthy recording: the flow balance's
 /// parameters, and the rod's mass and friction (or why not).
 pub struct Found {
@@ -170,12 +184,14 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             m.spool_natural_freq_rad_s / (2.0 * std::f64::consts::PI)
         )
     );
+    let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
     for (channel, found) in ["p1", "p2"].iter().zip(&id.pressure_lag_s) {
         match found {
             identify::Found::Identified(e) => eprintln!(
-                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters)",
+                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters){}",
                 e.value * 1e3,
-                e.sigma * 1e3
+                e.sigma * 1e3,
+                lag_against_datasheet(e, transducers.and_then(|t| t.lag_bound_s()))
             ),
             identify::Found::NotIdentifiable(why) => {
                 eprintln!("  {channel} transducer lag: not identifiable from this recording: {why}")
@@ -220,7 +236,12 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
                     f.stribeck_velocity_m_s,
                 ),
                 (
-                    "viscous friction (apparent)",
+                    match transducers.map(|t| t.location) {
+                        Some(model::datasheet::TransducerLocation::Manifold) => {
+                            "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
+                        }
+                        _ => "viscous friction (apparent)",
+                    },
                     &mech.viscous_n_s_per_m,
                     "N·s/m",
                     1.0,
@@ -413,4 +434,26 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
     crate::out::write(out, text.as_bytes(), force, &inputs)?;
     eprintln!("wrote {}", out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lag_is_held_against_the_datasheets_response_time() {
+        let lag = |value: f64, sigma: f64| identify::Estimate { value, sigma };
+        // plant_dev/double's p1: 1.64 ± 0.02 ms against 2.5 ms / ln 9 = 1.14 ms
+        let bound = Some(2.5e-3 / 9f64.ln());
+        let above = lag_against_datasheet(&lag(1.643e-3, 0.016e-3), bound);
+        assert!(
+            above.contains("above the 1.14 ms") && above.contains("another delay"),
+            "{above}"
+        );
+        let within = lag_against_datasheet(&lag(0.51e-3, 0.014e-3), bound);
+        assert!(within.contains("within the 1.14 ms"), "{within}");
+        // within 2 σ of the bound is within
+        assert!(lag_against_datasheet(&lag(1.16e-3, 0.02e-3), bound).contains("within"));
+        assert_eq!(lag_against_datasheet(&lag(1.643e-3, 0.016e-3), None), "");
+    }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use model::datasheet::{
     CylinderKind, CylinderSheet, Datasheet, HoseSheet, OilSheet, PositionSensorSheet, SupplySheet,
-    TransducerSheet, ValveSheet,
+    TransducerLocation, TransducerSheet, ValveSheet,
 };
 
 /// The example rig of the template: a horizontal double-rod press, or with
@@ -43,6 +43,8 @@ pub fn example(single_rod: bool) -> Datasheet {
             full_scale_pa: 25.0e6,
             adc_bits: 16,
             noise_pa: 8.0e3,
+            location: TransducerLocation::Manifold,
+            response_time_s: 2.0e-3,
         },
         position_sensor: PositionSensorSheet {
             resolution_m: 2.0e-6,
@@ -229,6 +231,19 @@ pub fn template(sheet: &Datasheet) -> String {
                     "noise_pa",
                     num(t.noise_pa),
                     "noise of a reading (standard deviation), Pa",
+                ),
+                (
+                    "location",
+                    match t.location {
+                        TransducerLocation::CylinderPorts => "\"cylinder-ports\"".to_string(),
+                        TransducerLocation::Manifold => "\"manifold\"".to_string(),
+                    },
+                    "\"cylinder-ports\" or \"manifold\" (at the valve: they read the hose's drop too)",
+                ),
+                (
+                    "response_time_s",
+                    num(t.response_time_s),
+                    "10-90 % response time, the datasheet's maximum, s (0: not given)",
                 ),
             ],
         ),

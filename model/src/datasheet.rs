@@ -148,6 +148,32 @@ pub struct TransducerSheet {
     pub adc_bits: u32,
     /// Noise of a reading (standard deviation), Pa.
     pub noise_pa: f64,
+    /// Where they sit. Default: at the cylinder's ports.
+    #[serde(default)]
+    pub location: TransducerLocation,
+    /// Their 10-90 % response time, the datasheet's maximum, s (0: not given, the default).
+    #[serde(default)]
+    pub response_time_s: f64,
+}
+
+/// Where the pressure transducers sit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TransducerLocation {
+    /// At the cylinder's ports (`"cylinder-ports"`): they read the chambers.
+    #[default]
+    CylinderPorts,
+    /// At the valve's manifold (`"manifold"`): they read a chamber plus the
+    /// hose's drop, which grows with the flow.
+    Manifold,
+}
+
+impl TransducerSheet {
+    /// The longest first-order lag the response time allows, s: a first-order
+    /// lag τ rises from 10 to 90 % in τ·ln 9. `None` when no response time is given.
+    pub fn lag_bound_s(&self) -> Option<f64> {
+        (self.response_time_s > 0.0).then(|| self.response_time_s / 9f64.ln())
+    }
 }
 
 /// The rod's position sensor.
@@ -441,6 +467,13 @@ impl Datasheet {
             1e7,
             "a noise from 0 to 1e7 Pa",
         )?;
+        check(
+            "pressure_transducers.response_time_s",
+            t.response_time_s,
+            0.0,
+            1.0,
+            "a time from 0 to 1 s",
+        )?;
         let p = &self.position_sensor;
         check(
             "position_sensor.resolution_m",
@@ -599,6 +632,8 @@ impl Datasheet {
                 full_scale_pa: 25.0e6,
                 adc_bits: 16,
                 noise_pa: 8.0e3,
+                location: TransducerLocation::CylinderPorts,
+                response_time_s: 0.0,
             },
             position_sensor: PositionSensorSheet {
                 resolution_m: 2.0e-6,
@@ -645,6 +680,8 @@ mod tests {
                 full_scale_pa: 25.0e6,
                 adc_bits: 16,
                 noise_pa: 8.0e3,
+                location: TransducerLocation::CylinderPorts,
+                response_time_s: 0.0,
             },
             position_sensor: PositionSensorSheet {
                 resolution_m: 2.0e-6,
@@ -769,5 +806,39 @@ mod tests {
         s.cylinder.kind = CylinderKind::SingleRod;
         s.cylinder.rod_m = 0.0; // a plunger: allowed single-rod... with no annulus
         assert!(s.validate().is_ok());
+        let mut s = press();
+        s.pressure_transducers.response_time_s = -1e-3;
+        let e = s.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("datasheet.pressure_transducers.response_time_s"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_response_time_bounds_a_first_order_lag_and_the_location_reads_in_kebab_case() {
+        let mut t = press().pressure_transducers;
+        assert_eq!(t.lag_bound_s(), None);
+        t.response_time_s = 2.5e-3;
+        // a first-order lag of τ = 1.1378 ms reaches 10 % at 0.1199 ms and 90 % at 2.6198 ms
+        let tau = t.lag_bound_s().expect("given");
+        let at = |frac: f64| -tau * (1.0 - frac).ln();
+        assert!((at(0.9) - at(0.1) - 2.5e-3).abs() < 1e-15);
+        assert!((tau - 1.1378e-3).abs() < 1e-7);
+        let read = |s: &str| {
+            toml::from_str::<TransducerSheet>(&format!(
+                "full_scale_pa = 25e6\nadc_bits = 16\nnoise_pa = 8000.0\n{s}"
+            ))
+        };
+        assert_eq!(
+            read("location = \"manifold\"").expect("reads").location,
+            TransducerLocation::Manifold
+        );
+        assert_eq!(
+            read("").expect("reads").location,
+            TransducerLocation::CylinderPorts
+        );
+        let e = read("location = \"valve\"").unwrap_err().to_string();
+        assert!(e.contains("cylinder-ports") && e.contains("manifold"), "{e}");
     }
 }
