@@ -309,3 +309,49 @@ fn the_transducers_lag_is_identified_per_channel() {
         }
     }
 }
+
+/// The sensor floor is what the sensors' noise alone leaves: with the model
+/// equal to the rig (the lift, the plant rigs' transducers: 16 bits over
+/// 25 MPa, 8 kPa and 3 µm of noise) the gap after identification is the floor.
+#[test]
+fn a_right_model_on_noisy_sensors_leaves_the_sensor_floor() {
+    let rig = ActuatorParams::vertical_lift();
+    let sensors = model::SensorParams {
+        encoder_resolution_m: 2e-6,
+        position_noise_m: 3e-6,
+        pressure_full_scale_pa: 25e6,
+        adc_bits: 16,
+        pressure_noise_pa: 8e3,
+        ..model::SensorParams::default()
+    };
+    let sc = Scenario::by_name("lift", 3, 60.0).expect("scenario");
+    let mut sim = model::Simulator::new(
+        rig.clone(),
+        sensors,
+        model::SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        7,
+    )
+    .expect("rig");
+    let rows: Vec<Row> = sim
+        .run(60.0)
+        .into_iter()
+        .map(|sample| Row {
+            sample,
+            after_gap: false,
+        })
+        .collect();
+    let noise = SensorNoise {
+        position_m: sensors.position_sigma_m(),
+        pressure_pa: sensors.pressure_sigma_pa(),
+    };
+    let id = identify(&rig, 1e-3, &rows, noise).expect("identified");
+    let ratio = id.gap_after_lpm / id.sensor_floor_lpm;
+    assert!(
+        (0.9..1.3).contains(&ratio),
+        "gap {} / floor {} = {ratio}",
+        id.gap_after_lpm,
+        id.sensor_floor_lpm
+    );
+}
