@@ -18,37 +18,18 @@ use bus::{Bus, BusConfig};
 use frames::{event_kind, event_phase, health_status, HealthFrame, LeakEventFrame};
 use serde_json::Value;
 
+mod common;
+use common::*;
+
 const BIN: &str = env!("CARGO_BIN_EXE_leakwatch");
 
 /// The tests that run a pipeline share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
 
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("live-{name}"))
-}
-
 fn example(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../examples")
         .join(path)
-}
-
-/// True if python3 imports `module`; false (the test skips) only where Python is not required.
-fn python_with(module: &str) -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", &format!("import {module}")])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
-            "python3 with {module} is required (.ci/setup installs it)"
-        );
-        eprintln!("SKIPPED: python3 with {module} is not installed");
-    }
-    ok
 }
 
 /// A TCP port free on the loopback interface now.
@@ -58,21 +39,6 @@ fn free_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
-}
-
-/// A config whose classifier learns its thresholds in time for a leak at 10 s.
-fn short_warmup_config(dir: &Path, extra: &str) -> PathBuf {
-    let p = dir.join("cfg.toml");
-    std::fs::write(
-        &p,
-        format!("[classifier]\nsettle_s = 2.0\nwarmup_s = 3.0\n{extra}"),
-    )
-    .unwrap();
-    p
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 fn sigterm(child: &Child) {
@@ -137,7 +103,7 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     }
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tmpdir("view");
-    let cfg = short_warmup_config(&dir, "");
+    let cfg = short_warmup_config_with(&dir, "");
     let out = dir.join("run");
     let port = free_port().to_string();
     let wall_before = bus::wall_clock_ns();
@@ -370,7 +336,7 @@ fn a_stalled_live_view_client_costs_the_pipeline_nothing() {
     }
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tmpdir("stall");
-    let cfg = short_warmup_config(&dir, "[live_view]\nframes_hz = 1000.0\nestimates_hz = 1000.0\n");
+    let cfg = short_warmup_config_with(&dir, "[live_view]\nframes_hz = 1000.0\nestimates_hz = 1000.0\n");
     let out = dir.join("run");
     let port = free_port().to_string();
     let run = Command::new(BIN)
@@ -490,7 +456,7 @@ fn two_rigs_gateways_reach_one_watch() {
         || publish_health(&mut health, &mut seq, health_status::HEALTHY, [0.0; 3]),
     );
     // rig zA: a whole run with its gateway
-    let cfg = short_warmup_config(&dir, "");
+    let cfg = short_warmup_config_with(&dir, "");
     let out = dir.join("run-zA");
     let run = Command::new(BIN)
         .args([
@@ -739,7 +705,7 @@ fn foxglove_ws_protocol_receives_every_topic_of_a_running_rig() {
     };
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tmpdir("wsprotocol");
-    let cfg = short_warmup_config(&dir, "");
+    let cfg = short_warmup_config_with(&dir, "");
     let port = free_port().to_string();
     let run = Command::new(BIN)
         .args([

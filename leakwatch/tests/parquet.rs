@@ -10,19 +10,10 @@
 //! they were skipped.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn leakwatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
-        .args(args)
-        .output()
-        .expect("the leakwatch binary runs")
-}
-
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("parquet-{name}"))
-}
+mod common;
+use common::*;
 
 /// Reads the Parquet file with pyarrow, compares every cell with the CSV
 /// (parsed as f64; NaN equals NaN) and every column chunk's statistics with
@@ -146,26 +137,8 @@ print(json.dumps({
 }))
 "#;
 
-/// Whether python3 has `module`; when not, skipped (a failure if
-/// LEAKWATCH_REQUIRE_PYTHON is set: CI installs it).
-fn python_has(module: &str) -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", &format!("import {module}")])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
-            "python3 with {module} is required (.ci/setup installs it)"
-        );
-        eprintln!("SKIPPED: python3 with {module} is not installed");
-    }
-    ok
-}
-
 fn pyarrow() -> bool {
-    python_has("pyarrow.parquet")
+    python_with("pyarrow.parquet")
 }
 
 fn replay(input: &Path, out: &Path, format: &str) {
@@ -272,7 +245,7 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
 fn duckdb_reads_the_parquet_estimates_with_their_statistics() {
     let d = tmpdir("duckdb");
     let (pq_file, csv_file) = estimates_both_ways(&d);
-    if !python_has("duckdb") {
+    if !python_with("duckdb") {
         return;
     }
     let v = python_json(DUCKDB_SCRIPT, &pq_file, &csv_file);

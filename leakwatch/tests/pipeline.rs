@@ -2,25 +2,16 @@
 //! estimator, classifier, recorder) over real iceoryx2 shared memory, started
 //! and supervised by `leakwatch run`. Each run has its own isolation prefix.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+mod common;
+use common::*;
+
 /// The runs share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
-
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("pipeline-{name}"))
-}
-
-/// A config whose classifier learns its thresholds in time for a leak at 10 s.
-fn short_warmup_config(dir: &Path) -> PathBuf {
-    let p = dir.join("cfg.toml");
-    std::fs::write(&p, "[classifier]\nsettle_s = 2.0\nwarmup_s = 3.0\n").unwrap();
-    p
-}
 
 fn start_run(rig: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Path) -> Child {
     start_run_with(rig, seconds, fault, out, cfg, &[])
@@ -138,10 +129,6 @@ fn event_keys(v: &serde_json::Value) -> Vec<EventKey> {
         .collect()
 }
 
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
 fn raised_leaks(events: &serde_json::Value) -> Vec<serde_json::Value> {
     events
         .as_array()
@@ -151,39 +138,6 @@ fn raised_leaks(events: &serde_json::Value) -> Vec<serde_json::Value> {
         .filter(|e| matches!(e["kind"].as_str(), Some("ext1" | "ext2" | "int")))
         .cloned()
         .collect()
-}
-
-/// The rig id a test with this tag runs on: this test process's id and the tag
-/// (`-` as `_`), so that the stages of two test runs on one machine (another
-/// checkout's, say, which may look for the plain tag in command lines) are never
-/// taken for each other.
-fn rig_id(tag: &str) -> String {
-    format!("t{}-{}", std::process::id(), tag.replace('-', "_"))
-}
-
-/// PIDs of the stage processes (`leakwatch stage NAME ...`; `stage`: that NAME,
-/// or any) of the rig of test tag `tag`, matched argument by argument.
-fn stage_pids(stage: Option<&str>, tag: &str) -> Vec<i32> {
-    let rig = rig_id(tag);
-    let mut out = Vec::new();
-    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
-            continue;
-        };
-        let Ok(cmd) = std::fs::read(entry.path().join("cmdline")) else {
-            continue;
-        };
-        let args: Vec<&[u8]> = cmd.split(|b| *b == 0).collect();
-        let is_stage =
-            args.get(1) == Some(&&b"stage"[..]) && stage.is_none_or(|s| args.get(2) == Some(&s.as_bytes()));
-        let on_rig = args
-            .windows(2)
-            .any(|w| w[0] == b"--rig" && w[1] == rig.as_bytes());
-        if is_stage && on_rig {
-            out.push(pid);
-        }
-    }
-    out
 }
 
 #[test]
@@ -427,18 +381,6 @@ fn the_binary_alone_runs_the_pipeline_without_cargo() {
     }
 }
 
-/// Waits for a stage process of `rig` to appear; returns its pid.
-fn wait_for_stage(stage: &str, rig: &str) -> i32 {
-    let t0 = Instant::now();
-    loop {
-        if let Some(p) = stage_pids(Some(stage), rig).first() {
-            return *p;
-        }
-        assert!(t0.elapsed() < Duration::from_secs(60), "{stage} never started");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
 /// The stages die with their supervisor: after a SIGKILL of `leakwatch run`,
 /// no stage of the run is alive 2 s later.
 #[test]
@@ -457,13 +399,6 @@ fn the_stages_die_with_a_killed_supervisor() {
     std::thread::sleep(Duration::from_secs(2));
     let alive = stage_pids(None, "e2e-orphans");
     assert!(alive.is_empty(), "stages still alive: {alive:?}");
-}
-
-fn signal(pid: i32, sig: i32) {
-    // SAFETY: kill(2) on a pid of this test's run.
-    unsafe {
-        libc::kill(pid, sig);
-    }
 }
 
 fn log_of(out: &Path) -> recorder::Log {

@@ -9,24 +9,11 @@ use std::process::{Child, Command, Output, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+mod common;
+use common::*;
+
 /// The runs share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
-
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("resilience-{name}"))
-}
-
-/// A config whose classifier learns its thresholds in time for a leak at 12 s.
-fn short_warmup_config(dir: &Path) -> PathBuf {
-    let p = dir.join("cfg.toml");
-    std::fs::write(&p, "[classifier]\nsettle_s = 2.0\nwarmup_s = 3.0\n").unwrap();
-    p
-}
-
-/// The rig id of test tag `tag`: unique to this test process.
-fn rig_id(tag: &str) -> String {
-    format!("t{}-{}", std::process::id(), tag.replace('-', "_"))
-}
 
 /// `leakwatch run` on rig `tag`, the loaded-sine scenario for `seconds`, not started.
 fn run_command(tag: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &Path) -> Command {
@@ -50,55 +37,6 @@ fn run_command(tag: &str, seconds: &str, fault: Option<&str>, out: &Path, cfg: &
         c.args(["--fault", f]);
     }
     c
-}
-
-/// PIDs of the stage processes `stage` (any: `None`) of test tag `tag`'s rig.
-fn stage_pids(stage: Option<&str>, tag: &str) -> Vec<i32> {
-    let rig = rig_id(tag);
-    let mut out = Vec::new();
-    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = entry.file_name().to_string_lossy().parse::<i32>() else {
-            continue;
-        };
-        let Ok(cmd) = std::fs::read(entry.path().join("cmdline")) else {
-            continue;
-        };
-        let args: Vec<&[u8]> = cmd.split(|b| *b == 0).collect();
-        let is_stage =
-            args.get(1) == Some(&&b"stage"[..]) && stage.is_none_or(|s| args.get(2) == Some(&s.as_bytes()));
-        let on_rig = args
-            .windows(2)
-            .any(|w| w[0] == b"--rig" && w[1] == rig.as_bytes());
-        if is_stage && on_rig {
-            out.push(pid);
-        }
-    }
-    out
-}
-
-/// Waits until `cond` holds (a minute at most: a run that never gets there failed).
-fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
-    let t0 = Instant::now();
-    while !cond() {
-        assert!(t0.elapsed() < Duration::from_secs(60), "never happened: {what}");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
-fn wait_for_stage(stage: &str, tag: &str) -> i32 {
-    let mut pid = 0;
-    wait_until(&format!("{stage} of {tag} started"), || {
-        pid = stage_pids(Some(stage), tag).first().copied().unwrap_or(0);
-        pid != 0
-    });
-    pid
-}
-
-fn signal(pid: i32, sig: i32) {
-    // SAFETY: kill(2) on a process of this test's run.
-    unsafe {
-        libc::kill(pid, sig);
-    }
 }
 
 fn text(b: &[u8]) -> String {

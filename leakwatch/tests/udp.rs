@@ -14,35 +14,16 @@ use std::process::{Command, Output, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+mod common;
+use common::*;
+
 /// The runs share two cores: one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
 
 const BIN: &str = env!("CARGO_BIN_EXE_leakwatch");
 
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("udp-{name}"))
-}
-
 fn sender() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/udp/send_csv.py")
-}
-
-/// True if python3 runs; false (the test skips) only where Python is not required.
-fn python3() -> bool {
-    let ok = Command::new("python3")
-        .arg("--version")
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var("LEAKWATCH_REQUIRE_PYTHON").is_err(),
-            "python3 is required for the UDP sender example"
-        );
-        eprintln!("SKIPPED: python3 is not installed");
-    }
-    ok
 }
 
 /// A UDP port free on the loopback interface now.
@@ -63,10 +44,6 @@ fn leakwatch(args: &[&str]) -> Output {
         String::from_utf8_lossy(&o.stderr)
     );
     o
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// Waits until `log` holds `needle` (a stage's start line).
@@ -118,7 +95,7 @@ fn sender_count(stdout: &str, key: &str) -> u64 {
 /// in the same order, so the same decisions at the same samples, bit for bit.
 #[test]
 fn a_leak_run_streamed_over_udp_gives_the_events_of_replay() {
-    if !python3() {
+    if !python_with("sys") {
         return;
     }
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
@@ -204,7 +181,7 @@ fn a_leak_run_streamed_over_udp_gives_the_events_of_replay() {
 /// (a swapped datagram leaves a gap, then arrives late), late = swapped.
 #[test]
 fn the_senders_injected_faults_are_counted_by_the_acquisition() {
-    if !python3() {
+    if !python_with("sys") {
         return;
     }
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
