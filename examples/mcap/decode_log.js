@@ -3,8 +3,10 @@
 // decoded with the ros2msg schema stored in the file (@foxglove/rosmsg parses
 // it, @foxglove/rosmsg2-serialization reads the CDR); zstd chunks with fzstd.
 // Prints one JSON object: the profile, per topic its schema, message count and
-// decode errors, the first message of each topic, and for the frames topic each
-// frame's seq and the bits of its p1_pa (hex, little-endian float64).
+// decode errors, the first message of each topic, and every frame's seq and the
+// bits of its p1_pa (hex, little-endian float64): from the frame_batches topic
+// (SensorFrameBatch, every frame in columns), or in a log of an earlier version
+// without it, from the frames topic.
 //
 //     npm install @mcap/core@2.2.2 @foxglove/rosmsg@5.0.5 @foxglove/rosmsg2-serialization@3.1.0 fzstd@0.1.1
 //     node examples/mcap/decode_log.js run/run.mcap
@@ -46,6 +48,7 @@ async function main(path) {
     topics[ch.topic] = { schema: schema.name, count: 0, errors: 0, first_error: null, first: null };
   }
   const frames = [];
+  const batched = [];
   const bits = Buffer.alloc(8);
   for await (const msg of reader.readMessages()) {
     const ch = reader.channelsById.get(msg.channelId);
@@ -65,6 +68,11 @@ async function main(path) {
     if (ch.topic.endsWith("/frames")) {
       bits.writeDoubleLE(m.p1_pa);
       frames.push([m.seq.toString(), bits.toString("hex")]);
+    } else if (ch.topic.endsWith("/frame_batches")) {
+      for (let i = 0; i < m.p1_pa.length; i++) {
+        bits.writeDoubleLE(m.p1_pa[i]);
+        batched.push([(BigInt(m.first_seq) + BigInt(i)).toString(), bits.toString("hex")]);
+      }
     }
   }
   await file.close();
@@ -74,7 +82,15 @@ async function main(path) {
   }
   const replacer = (_k, v) => (typeof v === "bigint" ? v.toString() : v);
   console.log(
-    JSON.stringify({ profile: reader.header.profile, statistics_messages: messages, topics, frames }, replacer),
+    JSON.stringify(
+      {
+        profile: reader.header.profile,
+        statistics_messages: messages,
+        topics,
+        frames: batched.length > 0 ? batched : frames,
+      },
+      replacer,
+    ),
   );
 }
 

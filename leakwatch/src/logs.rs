@@ -4,7 +4,9 @@
 //! A run whose recorder was restarted has its log in parts: `run.mcap`, then
 //! `run-1.mcap`, `run-2.mcap`, ... beside it. `export`, `replay`, `calibrate`,
 //! `plot` and `info` given the first part read them all as one log
-//! ([`log_parts`]); given a later part, that part alone.
+//! ([`log_parts`]); given a later part, that part alone (with its
+//! continuations: a recorder continues its file after an hour in
+//! `run.1.mcap`, `run.2.mcap`, ..., see `recorder::parts`).
 
 use std::path::{Path, PathBuf};
 
@@ -59,9 +61,11 @@ pub fn part_name(stem: &str, n: u32) -> String {
 
 /// The parts of the run's log that `first` starts: `first`, then the
 /// `<stem>-1.mcap`, `<stem>-2.mcap`, ... beside it that restarted recorders
-/// wrote, as many as follow one another without a missing number.
+/// wrote, as many as follow one another without a missing number; each
+/// followed by the continuations its recorder wrote after an hour
+/// (`<stem>.1.mcap`, ..., [`recorder::with_continuations`]).
 pub fn log_parts(first: &Path) -> Vec<PathBuf> {
-    let mut parts = vec![first.to_path_buf()];
+    let mut parts = recorder::with_continuations(first);
     let (Some(stem), Some("mcap")) = (
         first.file_stem().and_then(|s| s.to_str()),
         first.extension().and_then(|e| e.to_str()),
@@ -73,7 +77,7 @@ pub fn log_parts(first: &Path) -> Vec<PathBuf> {
         if !p.is_file() {
             break;
         }
-        parts.push(p);
+        parts.extend(recorder::with_continuations(&p));
     }
     parts
 }
@@ -186,8 +190,12 @@ mod tests {
         let d = scratch::ScratchDir::new("parts");
         for name in [
             "run.mcap",
+            "run.1.mcap",
+            "run.2.mcap",
             "run-1.mcap",
             "run-2.mcap",
+            "run-2.1.mcap",
+            "run-2.3.mcap",
             "run-4.mcap",
             "other-1.mcap",
         ] {
@@ -199,8 +207,20 @@ mod tests {
                 .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
                 .collect()
         };
-        assert_eq!(names("run.mcap"), ["run.mcap", "run-1.mcap", "run-2.mcap"]);
+        // each part followed by its recorder's continuations (run.1.mcap, ...)
+        assert_eq!(
+            names("run.mcap"),
+            [
+                "run.mcap",
+                "run.1.mcap",
+                "run.2.mcap",
+                "run-1.mcap",
+                "run-2.mcap",
+                "run-2.1.mcap"
+            ]
+        );
         assert_eq!(names("run-1.mcap"), ["run-1.mcap"], "a later part alone");
+        assert_eq!(names("run-2.mcap"), ["run-2.mcap", "run-2.1.mcap"]);
         assert_eq!(names("other.mcap"), ["other.mcap", "other-1.mcap"]);
         assert_eq!(names("data.csv"), ["data.csv"]);
     }

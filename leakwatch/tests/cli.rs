@@ -701,12 +701,19 @@ fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
         assert!(w.write(recorder::Entry::Frame(f, i)).unwrap());
     }
     w.finish().unwrap();
-    // a recorder killed mid-chunk: no summary, a cut last chunk
+    // a recorder killed mid-chunk: no summary, a cut last chunk (at 30 %: the
+    // frames compress so well that the index and summary are much of the file)
     let bytes = std::fs::read(&full).unwrap();
     let killed = d.join("killed.mcap");
-    std::fs::write(&killed, &bytes[..bytes.len() * 6 / 10]).unwrap();
+    std::fs::write(&killed, &bytes[..bytes.len() * 3 / 10]).unwrap();
     let kept = recorder::LogReader::open(&killed).unwrap().read().unwrap();
-    assert!(kept.truncated.is_some() && kept.frames.len() > 100 && kept.frames.len() < 1500);
+    assert!(
+        kept.truncated.is_some() && kept.frames.len() > 100 && kept.frames.len() < 1500,
+        "{:?}, {} frames of {} bytes",
+        kept.truncated,
+        kept.frames.len(),
+        bytes.len()
+    );
     let fixed = d.join("fixed.mcap");
     let o = leakwatch(&[
         "repair",
@@ -717,9 +724,16 @@ fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(err.contains("killed.mcap: ends early"), "{err}");
-    assert!(
-        err.contains(&format!("messages (frames {})", kept.frames.len())),
-        "{err}"
+    // every frame in the batches; the frames channel holds every 40th
+    assert!(err.contains("messages (frame_batches "), "{err}");
+    assert_eq!(
+        recorder::LogReader::open(&fixed)
+            .unwrap()
+            .read()
+            .unwrap()
+            .frames
+            .len(),
+        kept.frames.len()
     );
     // the repaired file is complete; export reads every frame of it without a warning
     let csv = d.join("csv");
@@ -752,7 +766,7 @@ fn repair_rewrites_a_killed_recorders_log_and_export_reads_it_whole() {
         "{}",
         stderr(&o)
     );
-    assert_eq!(std::fs::read(&killed).unwrap(), &bytes[..bytes.len() * 6 / 10]);
+    assert_eq!(std::fs::read(&killed).unwrap(), &bytes[..bytes.len() * 3 / 10]);
 }
 
 /// A log like `run`'s: 3 s of frames with the configuration stored, a leak raised.
@@ -814,9 +828,12 @@ fn info_summarises_a_log_and_writes_the_config_it_holds() {
     let out = String::from_utf8_lossy(&o.stdout);
     for want in [
         "File:        ",
-        "Duration:    2.999 s",
-        "frames          3000 msgs    1000.0 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
-        "health            30 msgs",
+        // from the first frame to the last on the frames channel (every 40th; a
+        // batch is logged at its first frame's time)
+        "Duration:    2.960 s",
+        "frames                75 msgs      25.0 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
+        "frame_batches         30 msgs    10.000 Hz  cdr leakwatch_msgs/msg/SensorFrameBatch (ros2msg)",
+        "health                30 msgs",
         "Gaps:        none recorded",
         "Events:      1 raised",
         "ext1             leak-size  id 1  onset 1.50 s  size 0.300 ± 0.010 L/min",
@@ -1322,7 +1339,9 @@ fn init_writes_a_datasheet_template_that_loads() {
 
 /// Prints, for a log, what `rosbags` (the pure-Python rosbag2 reader) reads:
 /// the message count, each connection's topic, type and count, the first log
-/// time, and every frame's seq and p1 (IEEE-754 bits) as JSON.
+/// time, and every frame's seq, p1 (IEEE-754 bits), log time and acquisition
+/// stamp as JSON: from the frame batches (every frame in columns; a batch's
+/// log time is its first frame's), the frames topic the plotting copy.
 const ROSBAGS_SCRIPT: &str = r#"
 import json, struct, sys
 from pathlib import Path
@@ -1332,10 +1351,15 @@ with AnyReader([Path(sys.argv[1])]) as reader:
     out = {"message_count": reader.message_count, "start_time": reader.start_time,
            "connections": {c.topic: [c.msgtype, c.msgcount] for c in reader.connections},
            "frames": []}
-    frames = [c for c in reader.connections if c.topic.endswith("/frames")]
-    for connection, timestamp, rawdata in reader.messages(connections=frames):
+    batches = [c for c in reader.connections if c.topic.endswith("/frame_batches")]
+    for connection, timestamp, rawdata in reader.messages(connections=batches):
         m = reader.deserialize(rawdata, connection.msgtype)
-        out["frames"].append([m.seq, struct.unpack("<Q", struct.pack("<d", m.p1_pa))[0], timestamp, m.acq_mono_ns])
+        n = len(m.p1_pa)
+        acq = bytes(m.acq_mono_ns_shuffled.tolist())  # byte j of stamp i at j*n + i
+        for i in range(n):
+            p1 = struct.unpack("<Q", struct.pack("<d", float(m.p1_pa[i])))[0]
+            stamp = int.from_bytes(bytes(acq[j * n + i] for j in range(8)), "little")
+            out["frames"].append([m.first_seq + i, p1, timestamp, stamp])
     print(json.dumps(out))
 "#;
 
@@ -1399,8 +1423,23 @@ fn a_runs_log_opens_in_rosbags_and_equals_the_export() {
             .collect()
     };
     let mut total = 0;
+    // the frames topic, for plotting: every 40th frame and every flagged one
+    let n = plotted_frames(&rows("frames"));
+    let topic = "/leakwatch/press-3/frames";
+    assert_eq!(
+        r["connections"][topic],
+        serde_json::json!(["leakwatch_msgs/msg/SensorFrame", n]),
+        "{}",
+        r["connections"]
+    );
+    total += n;
+    // every frame in the batches, 100 a message but where a chunk closes and at the end
+    let batches = &r["connections"]["/leakwatch/press-3/frame_batches"];
+    assert_eq!(batches[0], "leakwatch_msgs/msg/SensorFrameBatch", "{batches}");
+    let n = batches[1].as_u64().expect("a count");
+    assert!((30..=40).contains(&n), "{batches}");
+    total += n;
     for (name, msg) in [
-        ("frames", "SensorFrame"),
         ("estimates", "EstimateFrame"),
         ("events", "LeakEventFrame"),
         ("health", "HealthFrame"),
@@ -1529,8 +1568,9 @@ fn node_clients(package: &str) -> Option<std::path::PathBuf> {
 
 /// Foxglove's MCAP stack in Node.js (examples/mcap/decode_log.js: @mcap/core's
 /// indexed reader, @foxglove/rosmsg, @foxglove/rosmsg2-serialization) decodes
-/// every message of a run's log: per topic the count of `leakwatch export`,
-/// no decode error, and every frame's seq and p1 bit for bit.
+/// every message of a run's log: per topic the count of `leakwatch export`
+/// (the frames topic: the frames plotted), no decode error, and every frame's
+/// seq and p1 (from the batches) bit for bit.
 #[test]
 fn a_runs_log_decodes_with_foxglove_mcap_stack_in_node() {
     let Some(modules) = node_clients("@mcap/core") else {
@@ -1572,8 +1612,24 @@ fn a_runs_log_decodes_with_foxglove_mcap_stack_in_node() {
             .collect()
     };
     let mut total = 0;
+    // the frames topic, for plotting: every 40th frame and every flagged one
+    let t = &r["topics"]["/leakwatch/press-4/frames"];
+    assert_eq!(t["schema"], "leakwatch_msgs/msg/SensorFrame", "{t}");
+    let n = plotted_frames(&rows("frames"));
+    assert_eq!(
+        (t["errors"].as_u64(), t["count"].as_u64()),
+        (Some(0), Some(n)),
+        "{t}"
+    );
+    total += n;
+    // every frame in the batches, 100 a message but where a chunk closes and at the end
+    let t = &r["topics"]["/leakwatch/press-4/frame_batches"];
+    assert_eq!(t["schema"], "leakwatch_msgs/msg/SensorFrameBatch", "{t}");
+    assert_eq!(t["errors"], 0, "{t}");
+    let n = t["count"].as_u64().expect("a count");
+    assert!((30..=40).contains(&n), "{t}");
+    total += n;
     for (name, msg) in [
-        ("frames", "SensorFrame"),
         ("estimates", "EstimateFrame"),
         ("events", "LeakEventFrame"),
         ("health", "HealthFrame"),
@@ -1618,6 +1674,18 @@ fn a_runs_log_decodes_with_foxglove_mcap_stack_in_node() {
             row[seq]
         );
     }
+}
+
+/// How many of the exported frames (`frames.csv` rows, header first) the
+/// recorder also puts on the frames topic for plotting: every 40th by sequence
+/// number and every flagged one (`recorder::WriterOptions::frames_every`).
+fn plotted_frames(rows: &[Vec<String>]) -> u64 {
+    let col = |name: &str| rows[0].iter().position(|c| c == name).expect("a column");
+    let (seq, flags) = (col("seq"), col("flags"));
+    rows[1..]
+        .iter()
+        .filter(|r| r[seq].parse::<u64>().expect("a seq") % 40 == 0 || r[flags] != "0")
+        .count() as u64
 }
 
 /// The little-endian bytes of `x` in hex, as node's `Buffer.writeDoubleLE` gives them.

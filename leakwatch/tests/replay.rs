@@ -512,10 +512,22 @@ fn a_one_sample_pressure_spike_is_reported_not_taken_as_a_leak() {
 /// Writes the samples of `csv` as the sensor frames of a log (CDR, or JSON as
 /// logs were before), with a health frame at 10 Hz.
 fn log_of(csv: &Path, log: &Path, encoding: recorder::Encoding) {
+    log_in_parts(
+        csv,
+        log,
+        encoding,
+        recorder::WriterOptions::default().part_span_ns,
+    );
+}
+
+/// [`log_of`], the file continued in a new part (`run.1.mcap`, ...) after
+/// `part_span_ns` of the stream.
+fn log_in_parts(csv: &Path, log: &Path, encoding: recorder::Encoding, part_span_ns: u64) {
     let ds = dataset::read_csv(csv, dataset::Limits::default()).unwrap();
     let options = recorder::WriterOptions {
         encoding,
         queue_len: 1 << 16,
+        part_span_ns,
         ..recorder::WriterOptions::default()
     };
     let mut w = recorder::LogWriter::create(log, options).unwrap();
@@ -538,6 +550,74 @@ fn log_of(csv: &Path, log: &Path, encoding: recorder::Encoding) {
         }
     }
     w.finish().unwrap();
+}
+
+/// A log its recorder continued in parts (`run.1.mcap`, ... after each hour
+/// of the stream; here after 3 s) replays and exports as the same stream in
+/// one file: the same events and estimates, every frame bit for bit.
+#[test]
+fn a_log_continued_in_parts_replays_and_exports_as_one_file() {
+    let d = tmpdir("parts-log");
+    let csv = simulate(&d, "loaded-sine", "14", "ext2:0.5lpm@9s");
+    let (one, parts) = (d.join("one"), d.join("parts"));
+    std::fs::create_dir_all(&one).unwrap();
+    std::fs::create_dir_all(&parts).unwrap();
+    log_of(&csv, &one.join("run.mcap"), recorder::Encoding::Cdr);
+    log_in_parts(
+        &csv,
+        &parts.join("run.mcap"),
+        recorder::Encoding::Cdr,
+        3_000_000_000,
+    );
+    let files: Vec<String> = recorder::with_continuations(&parts.join("run.mcap"))
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        files,
+        ["run.mcap", "run.1.mcap", "run.2.mcap", "run.3.mcap", "run.4.mcap"]
+    );
+    let mut outputs = Vec::new();
+    for dir in [&one, &parts] {
+        let out = dir.join("replay");
+        let o = replay(&dir.join("run.mcap"), &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let csv_dir = dir.join("csv");
+        let o = leakwatch(&[
+            "export",
+            dir.join("run.mcap").to_str().unwrap(),
+            "--csv",
+            csv_dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let read = |p: PathBuf| std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        outputs.push([
+            read(out.join("events.json")),
+            read(out.join("estimates.csv")),
+            read(csv_dir.join("frames.csv")),
+            read(csv_dir.join("dataset.csv")),
+        ]);
+    }
+    for (k, name) in ["events.json", "estimates.csv", "frames.csv", "dataset.csv"]
+        .iter()
+        .enumerate()
+    {
+        assert!(
+            outputs[0][k] == outputs[1][k],
+            "{name}: the parts differ from one file"
+        );
+    }
+    let events = json(&parts.join("replay").join("events.json"));
+    assert!(
+        events
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["kind"] == "ext2" && e["phase"] == "raised"),
+        "{events:#}"
+    );
+    // 14 s at 1 kHz, each sample once
+    assert_eq!(String::from_utf8_lossy(&outputs[1][3]).lines().count(), 14_001);
 }
 
 /// A log of the JSON encoding (what earlier versions wrote) replays, exports and

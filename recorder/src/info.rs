@@ -10,7 +10,15 @@ use frames::{code_name, event_kind, event_phase, LeakEventFrame};
 use crate::{Log, LEAKWATCH_METADATA};
 
 /// The channels in the order [`Info`] lists them (others follow by name).
-pub const CHANNEL_ORDER: [&str; 6] = ["frames", "estimates", "events", "health", "stats", "gaps"];
+pub const CHANNEL_ORDER: [&str; 7] = [
+    "frames",
+    "frame_batches",
+    "estimates",
+    "events",
+    "health",
+    "stats",
+    "gaps",
+];
 
 /// One channel of [`Info`].
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,7 @@
 //! The leakwatch log: one MCAP file per run, a rosbag2 file (profile `ros2`),
 //! with a channel per topic (`/leakwatch/<rig>/frames`, `estimates`, `events`,
-//! `health`, `stats`) plus `gaps`: ROS 2 messages in CDR described by their
+//! `health`, `stats`) plus `gaps` and `frame_batches` (every sensor frame, in
+//! columns; `frames` then holds every 40th, for plotting): ROS 2 messages in CDR described by their
 //! ros2msg schemas ([`msg`], the `.msg` files in `leakwatch_msgs/msg/`), log times
 //! in Unix time (ns), so Foxglove, rosbag2 readers (`rosbags`) and Python's
 //! `mcap` with `mcap-ros2-support` open it without leakwatch. Logs of earlier
@@ -9,8 +10,9 @@
 //! a channel by the last part of its topic and follows its `message_encoding`.
 //!
 //! - [`LogWriter`]: a writer thread fed through a bounded channel; chunked,
-//!   zstd-compressed, flushed at least once a second, so a killed recorder
-//!   leaves a file readable up to its last complete chunk.
+//!   zstd-compressed, flushed at least every 2 s, so a killed recorder
+//!   leaves a file readable up to its last complete chunk; a new file every
+//!   hour ([`parts`]).
 //! - [`LogReader`]: every channel back into the frame types, bit for bit;
 //!   a truncated file yields everything up to its last complete chunk.
 //! - [`repair`]: a killed recorder's file (no summary, a cut last chunk) or a
@@ -29,6 +31,7 @@ use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame
 mod export;
 pub mod info;
 pub mod msg;
+pub mod parts;
 mod reader;
 pub mod record;
 mod repair;
@@ -39,7 +42,8 @@ mod writer;
 
 pub use export::export_csv;
 pub use info::{Info, CHANNEL_ORDER};
-pub use msg::Message;
+pub use msg::{Message, SensorFrameBatch};
+pub use parts::{rotated_part, with_continuations};
 pub use reader::{channel_name, ChannelInfo, Log, LogReader};
 pub use record::Record;
 pub use repair::{repair, RepairSummary};
@@ -51,6 +55,11 @@ pub const CONFIG_METADATA: &str = "leakwatch.config";
 pub const CONFIG_KEY: &str = "toml";
 /// The name of the metadata record of the recorder (rig, command, clocks, format).
 pub const LEAKWATCH_METADATA: &str = "leakwatch";
+
+/// The MCAP channel of the [`msg::SensorFrameBatch`]es: every sensor frame,
+/// in columns (the `frames` channel then holds every
+/// [`WriterOptions::frames_every`]-th frame, for plotting).
+pub const FRAME_BATCHES_CHANNEL: &str = "frame_batches";
 
 /// The MCAP channel of [`GapRecord`]s.
 pub const GAPS_CHANNEL: &str = "gaps";

@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame};
 use serde_json::Value;
 
-use crate::msg::{topic_of, Message};
+use crate::msg::{topic_of, Message, SensorFrameBatch};
 use crate::record::Record;
-use crate::{GapRecord, RecorderError, GAPS_CHANNEL};
+use crate::{GapRecord, RecorderError, FRAME_BATCHES_CHANNEL, GAPS_CHANNEL};
 
 /// One channel of a log as read: how it is encoded and what it held.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -37,7 +37,10 @@ pub struct ChannelInfo {
 /// Everything in a log, per channel, in file order.
 #[derive(Debug, Clone, Default)]
 pub struct Log {
-    /// The `frames` channel.
+    /// Every sensor frame: those of the `frame_batches` channel in a log that
+    /// has one (the `frames` channel then holds a thinned copy for plotting,
+    /// not read into this), else those of the `frames` channel (logs of
+    /// earlier versions).
     pub frames: Vec<SensorFrame>,
     /// The `estimates` channel.
     pub estimates: Vec<EstimateFrame>,
@@ -113,6 +116,7 @@ impl Log {
                 .map(|c| format!("{later_name}: {c}")),
         );
         self.frames_lost += later.frames_lost;
+        let batched = later.channels.contains_key(FRAME_BATCHES_CHANNEL);
         for (topic, c) in later.channels {
             match self.channels.get_mut(&topic) {
                 Some(mine) => {
@@ -124,7 +128,8 @@ impl Log {
                         };
                         mine.last_log_time = mine.last_log_time.max(c.last_log_time);
                     }
-                    mine.messages += if topic == frames::Topic::Frames.as_str() {
+                    // (with batches, the frames channel holds a thinned copy: its messages are counted as they are)
+                    mine.messages += if topic == frames::Topic::Frames.as_str() && !batched {
                         c.messages.saturating_sub(repeated as u64)
                     } else {
                         c.messages
@@ -165,7 +170,7 @@ struct ChannelDef {
     metadata: BTreeMap<String, String>,
 }
 
-/// Largest uncompressed chunk accepted, bytes (64 MiB; the recorder writes 256 KiB chunks).
+/// Largest uncompressed chunk accepted, bytes (64 MiB; the recorder writes chunks of up to 1 MiB).
 /// A chunk declaring more is skipped before anything is decompressed.
 pub const MAX_CHUNK_BYTES: u64 = 64 << 20;
 
@@ -253,8 +258,10 @@ impl LogReader {
                 schemas.insert(*id, (sc.name.clone(), sc.encoding.clone()));
             }
         }
-        // where in `log.frames` each skipped chunk was
-        let mut skipped_at: Vec<usize> = Vec::new();
+        // the frames of the `frames` channel, apart from the batches' (in `log.frames`)
+        let mut single: Vec<SensorFrame> = Vec::new();
+        // where in the batches' and the frames channel's frames each skipped chunk was
+        let mut skipped_at: Vec<(usize, usize)> = Vec::new();
         log.truncated = walk(&self.path, &self.data, |item| {
             match item {
                 Item::Channel(c) => {
@@ -270,10 +277,12 @@ impl LogReader {
                 Item::Schema(h, _) => {
                     schemas.insert(h.id, (h.name, h.encoding));
                 }
-                Item::Message(header, data) => self.decode(&mut log, &channels, &header, data)?,
+                Item::Message(header, data) => {
+                    self.decode(&mut log, &mut single, &channels, &header, data)?
+                }
                 Item::ChunkSkipped(why) => {
                     log.chunks_skipped.push(why);
-                    skipped_at.push(log.frames.len());
+                    skipped_at.push((log.frames.len(), single.len()));
                 }
                 Item::Metadata(m) => {
                     log.metadata.insert(m.name, m.metadata);
@@ -292,6 +301,14 @@ impl LogReader {
                 info.schema_encoding.clone_from(encoding);
             }
         }
+        // the batches hold every frame; a log without them, its frames channel
+        let batched = channels.values().any(|c| c.name == FRAME_BATCHES_CHANNEL);
+        let mut skipped_at: Vec<usize> = if batched {
+            skipped_at.into_iter().map(|(b, _)| b).collect()
+        } else {
+            log.frames = single;
+            skipped_at.into_iter().map(|(_, s)| s).collect()
+        };
         // (chunks skipped side by side share one gap in the frames)
         skipped_at.dedup();
         for p in skipped_at {
@@ -312,11 +329,29 @@ impl LogReader {
     /// numbers decoded. `None` if it holds no frame.
     pub fn last_frame_seq(&self) -> Result<Option<u64>, RecorderError> {
         let mut frames_channels: Vec<(u16, String)> = Vec::new();
+        let mut batch_channels: Vec<u16> = Vec::new();
+        // the last frame of the frames channel and of the batches: with batches,
+        // the frames channel's copy can run ahead of the batch being filled
         let mut last: Option<u64> = None;
+        let mut last_batched: Option<u64> = None;
         walk(&self.path, &self.data, |item| {
             match item {
                 Item::Channel(c) if channel_name(&c.topic) == "frames" => {
                     frames_channels.push((c.id, c.message_encoding))
+                }
+                Item::Channel(c) if channel_name(&c.topic) == FRAME_BATCHES_CHANNEL => {
+                    batch_channels.push(c.id)
+                }
+                Item::Message(header, data) if batch_channels.contains(&header.channel_id) => {
+                    let seq = SensorFrameBatch::last_seq_from_cdr(data).map_err(|problem| {
+                        RecorderError::Decode {
+                            path: self.path.clone(),
+                            channel: FRAME_BATCHES_CHANNEL.into(),
+                            sequence: header.sequence,
+                            problem,
+                        }
+                    })?;
+                    last_batched = last_batched.max(seq);
                 }
                 Item::Message(header, data) => {
                     if let Some((_, encoding)) =
@@ -336,12 +371,17 @@ impl LogReader {
             }
             Ok(())
         })?;
-        Ok(last)
+        Ok(if batch_channels.is_empty() {
+            last
+        } else {
+            last_batched
+        })
     }
 
     fn decode(
         &self,
         log: &mut Log,
+        single: &mut Vec<SensorFrame>,
         channels: &HashMap<u16, ChannelDef>,
         header: &mcap::records::MessageHeader,
         data: &[u8],
@@ -358,9 +398,16 @@ impl LogReader {
             problem,
         };
         match def.name.as_str() {
-            "frames" => log
-                .frames
-                .push(decode_as(&def.encoding, data).map_err(decode_err)?),
+            "frames" => single.push(decode_as(&def.encoding, data).map_err(decode_err)?),
+            FRAME_BATCHES_CHANNEL => {
+                if def.encoding != "cdr" {
+                    return Err(decode_err(format!(
+                        "message encoding `{}` is not supported (cdr)",
+                        def.encoding
+                    )));
+                }
+                SensorFrameBatch::append_frames_from_cdr(data, &mut log.frames).map_err(decode_err)?;
+            }
             "estimates" => log
                 .estimates
                 .push(decode_as(&def.encoding, data).map_err(decode_err)?),

@@ -97,13 +97,15 @@ impl Continuation {
     }
 }
 
-/// The earlier parts of the log `out` named on the command line, checked to exist
-/// (a part the killed recorder never created is left out).
+/// The earlier parts of the log `out` named on the command line, each followed
+/// by its continuations ([`crate::with_continuations`]: `run.1.mcap`, ... after
+/// `run.mcap`), checked to exist (a part the killed recorder never created is
+/// left out).
 pub(crate) fn existing_parts(parts: &[PathBuf], out: &Path) -> Vec<PathBuf> {
     parts
         .iter()
+        .flat_map(|p| crate::with_continuations(p))
         .filter(|p| p.as_path() != out && p.is_file())
-        .cloned()
         .collect()
 }
 

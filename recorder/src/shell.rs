@@ -22,6 +22,9 @@
 //! its own stats (stage 3): frames in = messages received, out = queued for
 //! the writer (not the estimates left out), deadline misses = messages dropped because the disk stalled.
 //!
+//! Every hour it closes its file and continues in the next, `run.1.mcap`, ...
+//! (see [`crate::parts`]), so its memory stays flat over days.
+//!
 //! A log it cannot write (a full disk, a file-size limit, an I/O error) ends it
 //! with the line `recorder: error: cannot write the log FILE: REASON` and exit
 //! status [`EXIT_LOG_UNWRITABLE`] (74), which `leakwatch run` does not restart.
@@ -93,7 +96,7 @@ struct Args {
     #[arg(long)]
     keep_running: bool,
     /// Target uncompressed chunk size, KiB (a killed recorder loses at most one chunk).
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 1024)]
     chunk_kib: u64,
     /// Time between two drains of every topic, ms. The recorder needs no low
     /// latency: waking once per batch instead of once per frame keeps it off the
@@ -314,9 +317,10 @@ fn run(args: &Args) -> Result<(), Failure> {
     writer.write(Entry::Stats(last, monotonic_ns()))?;
     let summary = writer.finish()?;
     say!(
-        "recorder: stopped by {reason}; {} bytes, messages {:?}, {} dropped, {} missing from sequences\n  \
-         latency since acquisition: {}",
+        "recorder: stopped by {reason}; {} bytes in {} files, messages {:?}, {} dropped, {} missing from \
+         sequences\n  latency since acquisition: {}",
         summary.bytes,
+        summary.parts.len(),
         summary.messages,
         summary.dropped,
         stats.seq_gaps,

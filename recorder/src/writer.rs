@@ -11,9 +11,13 @@ use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame
 use mcap::records::MessageHeader;
 use serde_json::json;
 
-use crate::msg::Message;
+use crate::msg::{Message, SensorFrameBatch};
+use crate::parts::rotated_part;
 use crate::record::Record;
-use crate::{Entry, GapRecord, RecorderError, CONFIG_KEY, CONFIG_METADATA, GAPS_CHANNEL, GAP_SCHEMA_NAME};
+use crate::{
+    Entry, GapRecord, RecorderError, CONFIG_KEY, CONFIG_METADATA, FRAME_BATCHES_CHANNEL, GAPS_CHANNEL,
+    GAP_SCHEMA_NAME,
+};
 
 /// How the messages of a log are encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -33,8 +37,29 @@ pub struct WriterOptions {
     /// Target uncompressed chunk size, bytes: a killed recorder loses at most
     /// the chunk being filled.
     pub chunk_size: u64,
-    /// Longest time a chunk stays open, ns: slow streams are flushed this often too.
+    /// Longest time a chunk stays open, ns, by the entries' receive times (the
+    /// span from the chunk's first entry to the newest) or by the clock since
+    /// its first entry came (a quiet stream): a killed recorder loses at most
+    /// this much.
     pub max_chunk_age_ns: u64,
+    /// Sensor frames per [`SensorFrameBatch`] message on the channel
+    /// [`FRAME_BATCHES_CHANNEL`] (100: 100 ms at 1 kHz), the lossless record of
+    /// every frame; a batch also ends at a jump in the sequence numbers, at
+    /// the end of a stream and before a chunk is closed. 0: no batches, every
+    /// frame a message on the `frames` channel (the layout of earlier versions).
+    /// Batches are CDR only ([`Encoding::Json`] writes every frame).
+    pub frame_batch_len: usize,
+    /// The time after which the file is closed (summary and footer) and the
+    /// log continues in the next part, [`rotated_part`] (`run.1.mcap`, ...),
+    /// ns, by the entries' receive times: the MCAP writer keeps an index entry
+    /// per chunk in memory until its file is closed, so a part of an hour
+    /// (the default; 1800 chunks of 2 s) keeps the recorder's memory flat over
+    /// days. The readers join the parts as one log. Tests make it small.
+    pub part_span_ns: u64,
+    /// With batches: the `frames` channel (for plotting, e.g. in Foxglove)
+    /// holds every `frames_every`-th frame by sequence number (40: 25 Hz at
+    /// 1 kHz) and every frame with a flag (after a gap, end of stream).
+    pub frames_every: u64,
     /// Entries the channel to the writer thread holds; when it is full (the
     /// disk stalled this long) entries are dropped and counted. The channel
     /// allocates and touches every slot up front (about 540 bytes each, an
@@ -43,8 +68,10 @@ pub struct WriterOptions {
     pub queue_len: usize,
     /// Compression of the chunks.
     pub compression: Option<mcap::Compression>,
-    /// zstd level of the chunks (1-22; 0: zstd's default, 3). Level 9 takes
-    /// about 1 % of a core for the 1 kHz streams and writes ~2 % less than 3.
+    /// zstd level of the chunks (1-22; 0: zstd's default, 3). 9 takes well
+    /// under 1 % of a core for a rig's streams; 18 writes about 10 % less but
+    /// takes ten times the CPU and tens of MB per chunk, and recorders beside
+    /// a loaded pipeline then lose frames (recorder/tests/size.rs measures).
     pub compression_level: u32,
     /// The encoding of the messages.
     pub encoding: Encoding,
@@ -68,8 +95,11 @@ pub struct WriterOptions {
 impl Default for WriterOptions {
     fn default() -> Self {
         WriterOptions {
-            chunk_size: 256 * 1024,
-            max_chunk_age_ns: 1_000_000_000,
+            chunk_size: 1024 * 1024,
+            max_chunk_age_ns: 2_000_000_000,
+            frame_batch_len: 100,
+            frames_every: 40,
+            part_span_ns: 3_600_000_000_000,
             queue_len: 8_192,
             compression: Some(mcap::Compression::Zstd),
             compression_level: 9,
@@ -88,12 +118,16 @@ impl Default for WriterOptions {
 pub struct WriterSummary {
     /// The file.
     pub path: PathBuf,
-    /// Messages written, per channel topic.
+    /// Records written, per channel (`frames`, ..., `gaps`, the last part of
+    /// its topic): `frames` counts every sensor frame logged, in a batch or
+    /// alone; `frame_batches` (with batches) the batch messages.
     pub messages: BTreeMap<String, u64>,
     /// Entries dropped because the queue was full.
     pub dropped: u64,
-    /// Bytes of the finished file.
+    /// Bytes of the finished files.
     pub bytes: u64,
+    /// Every file written: `path`, then its continuations ([`rotated_part`]).
+    pub parts: Vec<PathBuf>,
 }
 
 /// Writes one MCAP log: a channel per topic plus `gaps`, ROS 2 messages in CDR
@@ -126,6 +160,8 @@ pub struct LogWriter {
 
 struct Channels {
     frames: u16,
+    /// The channel of the frame batches (`None`: every frame on `frames`).
+    frame_batches: Option<u16>,
     estimates: u16,
     events: u16,
     health: u16,
@@ -154,6 +190,9 @@ pub const OFFERED_QOS_PROFILES: &str = "- history: keep_last
     nsec: 854775807
   avoid_ros_namespace_conventions: false
 ";
+
+/// The `leakwatch_type` of the [`FRAME_BATCHES_CHANNEL`] channel.
+const BATCH_TYPE_NAME: &str = "leakwatch.SensorFrameBatch.v1";
 
 /// The MCAP channel (ROS 2 topic) of `topic` (`frames`, ..., `gaps`) of `rig`:
 /// `/leakwatch/<rig>/<topic>`, the live view's topic name. The reader takes the
@@ -206,69 +245,102 @@ fn add_frame_channel<R: Record + Message>(
     })
 }
 
+/// Creates the log file `path` (an existing file only with `options.overwrite`;
+/// never through a symbolic link) and writes the header, the metadata, the
+/// schemas and the channels (log times: stamp + `offset`, ns), flushed to disk
+/// before any data; `part`: 0 for the file the recorder was given, k for its
+/// k-th continuation ([`rotated_part`]).
+fn open_part(
+    path: &Path,
+    options: &WriterOptions,
+    offset: i64,
+    part: u32,
+) -> Result<(mcap::Writer<File>, Channels), RecorderError> {
+    let mcap_err = |e: mcap::McapError| RecorderError::from_mcap(path, e);
+    let file = dataset::output::create_file(path, options.overwrite, &[])
+        .map_err(|e| RecorderError::Io(path.to_path_buf(), e))?;
+    let mut w = mcap::WriteOptions::new()
+        .compression(options.compression)
+        .compression_level(options.compression_level)
+        .chunk_size(Some(options.chunk_size))
+        .profile("ros2")
+        .create(file)
+        .map_err(mcap_err)?;
+    let mut meta = options.metadata.clone();
+    let format = match options.encoding {
+        Encoding::Cdr => {
+            "leakwatch frames as ROS 2 messages (CDR, ros2msg schemas in the file), see leakwatch_msgs/msg"
+        }
+        Encoding::Json => "leakwatch frames as JSON, see frames/README.md",
+    };
+    meta.insert("format".into(), format.into());
+    if part > 0 {
+        meta.insert("part".into(), part.to_string());
+    }
+    let mono = bus::monotonic_ns();
+    meta.insert("wall_clock_ns_at_start".into(), bus::wall_clock_ns().to_string());
+    meta.insert("monotonic_ns_at_start".into(), mono.to_string());
+    meta.insert("epoch_offset_ns".into(), offset.to_string());
+    meta.insert(
+        "clock".into(),
+        "log_time = publish_time = Unix time ns: the record's own CLOCK_MONOTONIC stamp \
+         (acq_mono_ns, mono_ns or recv_mono_ns) + epoch_offset_ns (wall clock minus \
+         CLOCK_MONOTONIC, fixed at the start of the run)"
+            .into(),
+    );
+    w.write_metadata(&mcap::records::Metadata {
+        name: "leakwatch".into(),
+        metadata: meta,
+    })
+    .map_err(mcap_err)?;
+    if let Some(toml) = &options.config_toml {
+        w.write_metadata(&mcap::records::Metadata {
+            name: CONFIG_METADATA.into(),
+            metadata: BTreeMap::from([(CONFIG_KEY.to_string(), toml.clone())]),
+        })
+        .map_err(mcap_err)?;
+    }
+    let enc = options.encoding;
+    let rig = options.rig.as_str();
+    let batches = enc == Encoding::Cdr && options.frame_batch_len > 0;
+    let channels = Channels {
+        frames: add_frame_channel::<SensorFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+        frame_batches: if batches {
+            let ch = add_channel::<SensorFrameBatch>(
+                &mut w,
+                enc,
+                rig,
+                FRAME_BATCHES_CHANNEL,
+                BATCH_TYPE_NAME,
+                || (String::new(), serde_json::Value::Null),
+            )
+            .map_err(mcap_err)?;
+            Some(ch)
+        } else {
+            None
+        },
+        estimates: add_frame_channel::<EstimateFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+        events: add_frame_channel::<LeakEventFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+        health: add_frame_channel::<HealthFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+        stats: add_frame_channel::<StatsFrame>(&mut w, enc, rig).map_err(mcap_err)?,
+        epoch_offset_ns: offset,
+        gaps: add_channel::<GapRecord>(&mut w, enc, rig, GAPS_CHANNEL, GAP_SCHEMA_NAME, || {
+            (GAP_SCHEMA_NAME.to_string(), GapRecord::schema())
+        })
+        .map_err(mcap_err)?,
+    };
+    // the header, schemas and channels are on disk before any data
+    w.flush().map_err(mcap_err)?;
+    Ok((w, channels))
+}
+
 impl LogWriter {
     /// Creates `path` (an existing file only with `options.overwrite`; never
     /// through a symbolic link), writes the header, schemas and channels, and
     /// starts the writer thread.
     pub fn create(path: &Path, options: WriterOptions) -> Result<LogWriter, RecorderError> {
-        let mcap_err = |e: mcap::McapError| RecorderError::from_mcap(path, e);
-        let file = dataset::output::create_file(path, options.overwrite, &[])
-            .map_err(|e| RecorderError::Io(path.to_path_buf(), e))?;
-        let mut w = mcap::WriteOptions::new()
-            .compression(options.compression)
-            .compression_level(options.compression_level)
-            .chunk_size(Some(options.chunk_size))
-            .profile("ros2")
-            .create(file)
-            .map_err(mcap_err)?;
-        let mut meta = options.metadata.clone();
-        let format = match options.encoding {
-            Encoding::Cdr => {
-                "leakwatch frames as ROS 2 messages (CDR, ros2msg schemas in the file), see leakwatch_msgs/msg"
-            }
-            Encoding::Json => "leakwatch frames as JSON, see frames/README.md",
-        };
-        meta.insert("format".into(), format.into());
         let offset = options.epoch_offset_ns.unwrap_or_else(bus::epoch_offset_ns);
-        let mono = bus::monotonic_ns();
-        meta.insert("wall_clock_ns_at_start".into(), bus::wall_clock_ns().to_string());
-        meta.insert("monotonic_ns_at_start".into(), mono.to_string());
-        meta.insert("epoch_offset_ns".into(), offset.to_string());
-        meta.insert(
-            "clock".into(),
-            "log_time = publish_time = Unix time ns: the record's own CLOCK_MONOTONIC stamp \
-             (acq_mono_ns, mono_ns or recv_mono_ns) + epoch_offset_ns (wall clock minus \
-             CLOCK_MONOTONIC, fixed at the start of the run)"
-                .into(),
-        );
-        w.write_metadata(&mcap::records::Metadata {
-            name: "leakwatch".into(),
-            metadata: meta,
-        })
-        .map_err(mcap_err)?;
-        if let Some(toml) = &options.config_toml {
-            w.write_metadata(&mcap::records::Metadata {
-                name: CONFIG_METADATA.into(),
-                metadata: BTreeMap::from([(CONFIG_KEY.to_string(), toml.clone())]),
-            })
-            .map_err(mcap_err)?;
-        }
-        let enc = options.encoding;
-        let rig = options.rig.as_str();
-        let channels = Channels {
-            frames: add_frame_channel::<SensorFrame>(&mut w, enc, rig).map_err(mcap_err)?,
-            estimates: add_frame_channel::<EstimateFrame>(&mut w, enc, rig).map_err(mcap_err)?,
-            events: add_frame_channel::<LeakEventFrame>(&mut w, enc, rig).map_err(mcap_err)?,
-            health: add_frame_channel::<HealthFrame>(&mut w, enc, rig).map_err(mcap_err)?,
-            stats: add_frame_channel::<StatsFrame>(&mut w, enc, rig).map_err(mcap_err)?,
-            epoch_offset_ns: offset,
-            gaps: add_channel::<GapRecord>(&mut w, enc, rig, GAPS_CHANNEL, GAP_SCHEMA_NAME, || {
-                (GAP_SCHEMA_NAME.to_string(), GapRecord::schema())
-            })
-            .map_err(mcap_err)?,
-        };
-        // the header, schemas and channels are on disk before any data
-        w.flush().map_err(mcap_err)?;
+        let (w, channels) = open_part(path, &options, offset, 0)?;
         let (tx, rx) = crossbeam_channel::bounded(options.queue_len.max(1));
         let path = path.to_path_buf();
         let thread = std::thread::Builder::new()
@@ -338,71 +410,236 @@ impl Drop for LogWriter {
     }
 }
 
+/// The open file of the writer thread: the MCAP writer, its channels, the
+/// frame batch being filled and the counts.
+struct Sink {
+    w: mcap::Writer<File>,
+    ch: Channels,
+    path: PathBuf,
+    options: WriterOptions,
+    /// Records written per channel: frames (every frame logged), estimates,
+    /// events, health, stats, gaps, frame batches.
+    counters: [u64; 7],
+    counter_gaps: u32,
+    buf: Vec<u8>,
+    /// The frames not yet written as a batch, and the `log_time` of its first, ns.
+    batch: SensorFrameBatch,
+    batch_time: u64,
+    /// The receive time of the open chunk's first entry, and `CLOCK_MONOTONIC`
+    /// when the writer took it, ns.
+    chunk_first: Option<(u64, u64)>,
+    /// The receive time of the open part's first entry, ns.
+    part_first: Option<u64>,
+    /// The files written, the open one last, and the bytes of those closed.
+    parts: Vec<PathBuf>,
+    closed_bytes: u64,
+}
+
+impl Sink {
+    fn new(w: mcap::Writer<File>, ch: Channels, path: PathBuf, options: WriterOptions) -> Sink {
+        let path_copy = path.clone();
+        let batch = SensorFrameBatch::with_capacity(options.frame_batch_len);
+        Sink {
+            w,
+            ch,
+            path,
+            options,
+            counters: [0; 7],
+            counter_gaps: 0,
+            buf: Vec::with_capacity(4096),
+            batch,
+            batch_time: 0,
+            chunk_first: None,
+            part_first: None,
+            parts: vec![path_copy],
+            closed_bytes: 0,
+        }
+    }
+
+    /// Closes the open part (the batch being filled, the summary and the
+    /// footer) and continues in the next ([`rotated_part`]) with the same
+    /// header, metadata, schemas and channels.
+    fn rotate(&mut self) -> Result<(), RecorderError> {
+        self.write_batch()?;
+        self.w.finish().map_err(|e| self.mcap_err(e))?;
+        self.closed_bytes += std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
+        let part = self.parts.len() as u32;
+        let next = rotated_part(&self.parts[0], part);
+        let (w, ch) = open_part(&next, &self.options, self.ch.epoch_offset_ns, part)?;
+        // (the closed writer is dropped here)
+        self.w = w;
+        self.ch = ch;
+        self.path = next.clone();
+        self.parts.push(next);
+        self.chunk_first = None;
+        self.part_first = None;
+        Ok(())
+    }
+
+    fn mcap_err(&self, e: mcap::McapError) -> RecorderError {
+        RecorderError::from_mcap(&self.path, e)
+    }
+
+    /// Writes the message in `self.buf` on `channel_id`.
+    fn put(&mut self, channel_id: u16, sequence: u32, time: u64) -> Result<(), RecorderError> {
+        let header = MessageHeader {
+            channel_id,
+            sequence,
+            log_time: time,
+            publish_time: time,
+        };
+        self.w
+            .write_to_known_channel(&header, &self.buf)
+            .map_err(|e| RecorderError::from_mcap(&self.path, e))
+    }
+
+    /// Writes the frames batched so far as one message (none if there are none).
+    fn write_batch(&mut self) -> Result<(), RecorderError> {
+        let Some(channel_id) = self.ch.frame_batches else {
+            return Ok(());
+        };
+        if self.batch.is_empty() {
+            return Ok(());
+        }
+        self.batch.to_cdr(&mut self.buf);
+        self.put(channel_id, self.batch.first_seq as u32, self.batch_time)?;
+        self.counters[6] += 1;
+        self.batch.clear();
+        Ok(())
+    }
+
+    /// Logs one entry.
+    fn entry(&mut self, entry: &Entry) -> Result<(), RecorderError> {
+        let (channel_id, idx, sequence, stamp) = match entry {
+            Entry::Frame(f, _) => (self.ch.frames, 0, f.seq as u32, f.acq_mono_ns),
+            Entry::Estimate(f, _) => (self.ch.estimates, 1, f.seq as u32, f.acq_mono_ns),
+            Entry::Event(f, _) => (self.ch.events, 2, f.seq as u32, f.acq_mono_ns),
+            Entry::Health(f, _) => (self.ch.health, 3, f.seq as u32, f.mono_ns),
+            Entry::Stats(f, _) => (self.ch.stats, 4, self.counters[4] as u32, f.mono_ns),
+            Entry::Gap(g) => {
+                self.counter_gaps = self.counter_gaps.wrapping_add(1);
+                (self.ch.gaps, 5, self.counter_gaps, g.recv_mono_ns)
+            }
+        };
+        // one clock for both: the record's own stamp (the receive time if it
+        // has none) as Unix time
+        let mono = if stamp > 0 { stamp } else { entry.recv_mono_ns() };
+        let time = bus::epoch_ns_with(mono, self.ch.epoch_offset_ns);
+        // by the recorder's receive times (its own clock, whatever the stamps
+        // say): a part holds at most part_span_ns of them, a chunk at most
+        // max_chunk_age_ns
+        let recv = entry.recv_mono_ns();
+        match self.part_first {
+            Some(first) if recv.saturating_sub(first) >= self.options.part_span_ns => {
+                self.rotate()?;
+                self.part_first = Some(recv);
+            }
+            Some(_) => {}
+            None => self.part_first = Some(recv),
+        }
+        match self.chunk_first {
+            Some((first, _)) if recv.saturating_sub(first) >= self.options.max_chunk_age_ns => {
+                self.flush()?;
+                self.chunk_first = Some((recv, bus::monotonic_ns()));
+            }
+            Some(_) => {}
+            None => self.chunk_first = Some((recv, bus::monotonic_ns())),
+        }
+        self.counters[idx] += 1;
+        if let (Entry::Frame(f, _), Some(_)) = (entry, self.ch.frame_batches) {
+            if !self.batch.continues_with(f) {
+                self.write_batch()?;
+            }
+            if self.batch.is_empty() {
+                self.batch_time = time;
+            }
+            self.batch.push(f);
+            if self.batch.len() >= self.options.frame_batch_len
+                || f.flags & frames::sensor_flags::END_OF_STREAM != 0
+            {
+                self.write_batch()?;
+            }
+            let every = self.options.frames_every.max(1);
+            if !f.seq.is_multiple_of(every) && f.flags == 0 {
+                // in its batch only
+                return Ok(());
+            }
+        }
+        encode(entry, self.options.encoding, &mut self.buf).map_err(RecorderError::Thread)?;
+        self.put(channel_id, sequence, time)
+    }
+
+    /// Whether the open chunk's first message came `max_chunk_age_ns` ago by
+    /// the clock, `now` (a stream that went quiet).
+    fn due(&self, now: u64) -> bool {
+        self.chunk_first
+            .is_some_and(|(_, came)| now.saturating_sub(came) >= self.options.max_chunk_age_ns)
+    }
+
+    /// Writes the open batch, closes the open chunk and hands it to the
+    /// kernel: a crash loses at most one chunk.
+    fn flush(&mut self) -> Result<(), RecorderError> {
+        self.write_batch()?;
+        self.w.flush().map_err(|e| self.mcap_err(e))?;
+        self.chunk_first = None;
+        Ok(())
+    }
+
+    /// Writes the open batch, the summary and the footer; what was written.
+    fn finish(mut self) -> Result<WriterSummary, RecorderError> {
+        self.write_batch()?;
+        self.w
+            .finish()
+            .map_err(|e| RecorderError::from_mcap(&self.path, e))?;
+        drop(self.w);
+        let bytes = self.closed_bytes + std::fs::metadata(&self.path).map(|m| m.len()).unwrap_or(0);
+        let names = [
+            "frames",
+            "estimates",
+            "events",
+            "health",
+            "stats",
+            GAPS_CHANNEL,
+            FRAME_BATCHES_CHANNEL,
+        ];
+        let n = if self.ch.frame_batches.is_some() { 7 } else { 6 };
+        Ok(WriterSummary {
+            path: self.parts[0].clone(),
+            messages: names
+                .iter()
+                .map(|n| n.to_string())
+                .zip(self.counters)
+                .take(n)
+                .collect(),
+            dropped: 0,
+            bytes,
+            parts: self.parts,
+        })
+    }
+}
+
 fn write_loop(
-    mut w: mcap::Writer<File>,
+    w: mcap::Writer<File>,
     ch: Channels,
     rx: Receiver<Entry>,
     path: PathBuf,
     options: WriterOptions,
 ) -> Result<WriterSummary, RecorderError> {
-    let mcap_err = |e: mcap::McapError| RecorderError::from_mcap(&path, e);
-    let mut counters = [0u64; 6];
-    let mut counter_gaps = 0u32;
-    let mut last_flush = bus::monotonic_ns();
-    let tick = std::time::Duration::from_nanos(options.max_chunk_age_ns.clamp(1_000_000, 10_000_000_000));
-    let mut buf = Vec::with_capacity(4096);
+    // a quiet stream's open chunk is flushed within a quarter of its age bound
+    let tick =
+        std::time::Duration::from_nanos((options.max_chunk_age_ns / 4).clamp(1_000_000, 1_000_000_000));
+    let mut sink = Sink::new(w, ch, path, options);
     loop {
-        let entry = match rx.recv_timeout(tick) {
-            Ok(e) => Some(e),
-            Err(crossbeam_channel::RecvTimeoutError::Timeout) => None,
+        match rx.recv_timeout(tick) {
+            Ok(e) => sink.entry(&e)?,
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
             Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
-        };
-        if let Some(entry) = entry {
-            let (channel_id, idx, sequence, stamp) = match &entry {
-                Entry::Frame(f, _) => (ch.frames, 0, f.seq as u32, f.acq_mono_ns),
-                Entry::Estimate(f, _) => (ch.estimates, 1, f.seq as u32, f.acq_mono_ns),
-                Entry::Event(f, _) => (ch.events, 2, f.seq as u32, f.acq_mono_ns),
-                Entry::Health(f, _) => (ch.health, 3, f.seq as u32, f.mono_ns),
-                Entry::Stats(f, _) => (ch.stats, 4, counters[4] as u32, f.mono_ns),
-                Entry::Gap(g) => {
-                    counter_gaps = counter_gaps.wrapping_add(1);
-                    (ch.gaps, 5, counter_gaps, g.recv_mono_ns)
-                }
-            };
-            // one clock for both: the record's own stamp (the receive time if it
-            // has none) as Unix time
-            let mono = if stamp > 0 { stamp } else { entry.recv_mono_ns() };
-            let time = bus::epoch_ns_with(mono, ch.epoch_offset_ns);
-            encode(&entry, options.encoding, &mut buf).map_err(RecorderError::Thread)?;
-            w.write_to_known_channel(
-                &MessageHeader {
-                    channel_id,
-                    sequence,
-                    log_time: time,
-                    publish_time: time,
-                },
-                &buf,
-            )
-            .map_err(mcap_err)?;
-            counters[idx] += 1;
         }
-        let now = bus::monotonic_ns();
-        if now.saturating_sub(last_flush) >= options.max_chunk_age_ns {
-            // close the open chunk and hand it to the kernel: a crash loses at most one chunk
-            w.flush().map_err(mcap_err)?;
-            last_flush = now;
+        if sink.due(bus::monotonic_ns()) {
+            sink.flush()?;
         }
     }
-    w.finish().map_err(mcap_err)?;
-    drop(w);
-    let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
-    let names = ["frames", "estimates", "events", "health", "stats", GAPS_CHANNEL];
-    Ok(WriterSummary {
-        path,
-        messages: names.iter().map(|n| n.to_string()).zip(counters).collect(),
-        dropped: 0,
-        bytes,
-    })
+    sink.finish()
 }
 
 /// The message of `entry` in `encoding`, written into `buf` (cleared first).

@@ -237,3 +237,62 @@ fn a_health_message_without_thresholds_reads_with_nan_ones() {
     let e = HealthFrame::from_cdr(&buf[..buf.len() - 4]).err().unwrap();
     assert!(e.contains("HealthFrame.leak_threshold_lpm"), "{e}");
 }
+
+/// A batch of frames round-trips through its CDR message bit for bit (NaN,
+/// infinities, −0, a subnormal, the largest stamps), its shuffled columns laid
+/// out byte plane by byte plane; a batch that is cut, empty or whose columns
+/// disagree in length is an error naming the field.
+#[test]
+fn a_frame_batch_round_trips_bit_for_bit_and_a_bad_one_is_named() {
+    use recorder::SensorFrameBatch;
+    let mut batch = SensorFrameBatch::with_capacity(3);
+    let mut frames = Vec::new();
+    for k in 0..3u64 {
+        let f = SensorFrame {
+            seq: u64::MAX - 2 + k,
+            acq_mono_ns: u64::MAX - k,
+            t_s: [0.1 + 0.2, f64::NAN, -0.0][k as usize],
+            u_v: [f64::INFINITY, 5e-324, -1.5][k as usize],
+            flags: k as u32,
+            ..sensor()
+        };
+        assert!(batch.push(&f));
+        frames.push(f);
+    }
+    let gap = SensorFrame { seq: 5, ..sensor() };
+    assert!(!batch.push(&gap), "a frame that does not follow the last");
+    let mut buf = Vec::new();
+    batch.to_cdr(&mut buf);
+    // first_seq, then the stamps' byte planes: the lowest bytes of the 3 stamps first
+    assert_eq!(&buf[4..12], &(u64::MAX - 2).to_le_bytes());
+    assert_eq!(&buf[12..16], &24u32.to_le_bytes());
+    assert_eq!(&buf[16..19], &[0xFF, 0xFE, 0xFD]);
+    let back = SensorFrameBatch::from_cdr(&buf).unwrap();
+    let got: Vec<Vec<u8>> = back.frames().map(|f| bits(&f)).collect();
+    assert_eq!(got, frames.iter().map(bits).collect::<Vec<_>>());
+    let mut out = Vec::new();
+    assert_eq!(SensorFrameBatch::append_frames_from_cdr(&buf, &mut out), Ok(3));
+    assert_eq!(SensorFrameBatch::last_seq_from_cdr(&buf), Ok(Some(u64::MAX)));
+    // cut: the error names a field
+    let e = SensorFrameBatch::from_cdr(&buf[..buf.len() - 3]).unwrap_err();
+    assert!(e.contains("SensorFrameBatch.temp_c"), "{e}");
+    // a t_s column of 2 values in a batch of 3
+    let mut bad = buf.clone();
+    let at = 40; // after the stamps' 24 bytes (16..40): the length of t_s_shuffled
+    assert_eq!(&bad[at..at + 4], &24u32.to_le_bytes());
+    bad[at..at + 4].copy_from_slice(&16u32.to_le_bytes());
+    let e = SensorFrameBatch::from_cdr(&bad).unwrap_err();
+    assert!(
+        e.contains("t_s_shuffled: 2 values, the batch has 3 frames"),
+        "{e}"
+    );
+    // an empty batch, and a length the message does not hold
+    let mut w = Vec::new();
+    SensorFrameBatch::default().to_cdr(&mut w);
+    let e = SensorFrameBatch::from_cdr(&w).unwrap_err();
+    assert!(e.contains("a batch of no frame"), "{e}");
+    let mut huge = buf.clone();
+    huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    let e = SensorFrameBatch::from_cdr(&huge).unwrap_err();
+    assert!(e.contains("acq_mono_ns_shuffled: an array of"), "{e}");
+}

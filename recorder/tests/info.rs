@@ -93,25 +93,40 @@ fn info_names_the_channels_gaps_events_and_config() {
     assert_eq!(log.channels["frames"].topic, "/leakwatch/rig7/frames");
     let bytes = std::fs::metadata(&path).unwrap().len();
     let info = Info::from_log(&path, bytes, &log);
-    // the span is the frames' acquisition stamps (5 s to 6.999 s) as Unix time
+    // the span is the messages' acquisition stamps as Unix time: from the first
+    // frame (5 s) to the last frame on the frames channel (every 40th: 6.960 s;
+    // the last batch, frames 1906-1999, is logged at its first frame's time)
     assert_eq!(
         info.span_ns,
-        Some((1_764_000_005_000_000_000, 1_764_000_006_999_000_000))
+        Some((1_764_000_005_000_000_000, 1_764_000_006_960_000_000))
     );
-    assert!((info.duration_s() - 1.999).abs() < 1e-9);
+    assert!((info.duration_s() - 1.96).abs() < 1e-9);
+    assert_eq!(log.frames.len(), 1995, "every frame, from the batches");
     let frames = &info.channels[0];
-    assert_eq!((frames.topic.as_str(), frames.messages), ("frames", 1995));
+    assert_eq!((frames.topic.as_str(), frames.messages), ("frames", 50));
     assert_eq!(frames.schema, "leakwatch_msgs/msg/SensorFrame (ros2msg)");
     assert_eq!(frames.message_encoding, "cdr");
-    // 1994 intervals over 1.999 s
-    assert!((frames.rate_hz.unwrap() - 1994.0 / 1.999).abs() < 1e-6);
+    // 49 intervals over 1.96 s
+    assert!((frames.rate_hz.unwrap() - 25.0).abs() < 1e-6);
+    // batches of 100 frames, one cut short by the jump after frame 500
+    let batches = &info.channels[1];
+    assert_eq!((batches.topic.as_str(), batches.messages), ("frame_batches", 21));
+    assert_eq!(batches.schema, "leakwatch_msgs/msg/SensorFrameBatch (ros2msg)");
     let names: Vec<&str> = info.channels.iter().map(|c| c.topic.as_str()).collect();
     assert_eq!(
         names,
-        ["frames", "estimates", "events", "health", "stats", "gaps"]
+        [
+            "frames",
+            "frame_batches",
+            "estimates",
+            "events",
+            "health",
+            "stats",
+            "gaps"
+        ]
     );
-    assert!((info.channels[1].rate_hz.unwrap() - 10.0).abs() < 0.01);
-    assert_eq!(info.channels[3].rate_hz, None); // no health frames
+    assert!((info.channels[2].rate_hz.unwrap() - 10.0).abs() < 0.01);
+    assert_eq!(info.channels[4].rate_hz, None); // no health frames
     assert_eq!(info.gap_records.len(), 1);
     assert_eq!(
         (info.gap_records[0].1.gaps, info.gap_records[0].1.missing),
@@ -123,13 +138,13 @@ fn info_names_the_channels_gaps_events_and_config() {
     assert_eq!(info.wall_offset_ns, Some(0));
     let text = info.render();
     for want in [
-        "Duration:    1.999 s",
+        "Duration:    1.960 s",
         "Rig:         rig7",
-        "Messages:    2020",
+        "Messages:    96",
         "Start:       2025-11-24 16:00:05.000 UTC\n",
-        "End:         2025-11-24 16:00:06.999 UTC\n",
-        "/leakwatch/rig7/frames          1995 msgs     997.5 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
-        "/leakwatch/rig7/estimates         20 msgs      10.0 Hz  cdr leakwatch_msgs/msg/EstimateFrame (ros2msg)",
+        "End:         2025-11-24 16:00:06.960 UTC\n",
+        "/leakwatch/rig7/frames                50 msgs      25.0 Hz  cdr leakwatch_msgs/msg/SensorFrame (ros2msg)",
+        "/leakwatch/rig7/estimates             20 msgs      10.0 Hz  cdr leakwatch_msgs/msg/EstimateFrame (ros2msg)",
         "Gaps:        frames 1 (5 missing)",
         "Frame seq:   1 jumps, 5 frames missing",
         "Events:      2 raised",

@@ -23,6 +23,8 @@ from mcap_ros2.decoder import DecoderFactory
 def plain(v):
     if hasattr(v, "__slots__"):
         return {k: plain(getattr(v, k)) for k in v.__slots__}
+    if isinstance(v, (bytes, bytearray)):
+        return list(v)
     if isinstance(v, float):
         return {"f64": struct.unpack("<Q", struct.pack("<d", v))[0]}
     if isinstance(v, (list, tuple)):
@@ -124,6 +126,103 @@ fn expected_sensor(x: &SensorFrame) -> Value {
         "p1_pa": f(x.p1_pa), "p2_pa": f(x.p2_pa), "x_sp_m": f(x.x_sp_m), "f_load_n": f(x.f_load_n),
         "ref_m": f(x.ref_m), "q_leak_lpm": f(x.q_leak_lpm), "flags": x.flags, "temp_c": f(x.temp_c),
     })
+}
+
+/// Whether the writer (default options) puts frame `x` on the `frames` channel
+/// as well as in a batch: every 40th and every flagged one.
+fn on_frames_channel(x: &SensorFrame) -> bool {
+    x.seq.is_multiple_of(WriterOptions::default().frames_every) || x.flags != 0
+}
+
+/// The frames of a decoded `SensorFrameBatch`, each as [`expected_sensor`]
+/// names it (the byte-shuffled columns, `uint8[]`, put back together).
+fn unbatch(msg: &Value) -> Vec<Value> {
+    let first = msg["first_seq"].as_u64().expect("first_seq");
+    let unshuffle = |name: &str| -> Vec<u64> {
+        let b: Vec<u64> = msg[name]
+            .as_array()
+            .unwrap_or_else(|| panic!("{name} in {msg}"))
+            .iter()
+            .map(|x| x.as_u64().expect("a byte"))
+            .collect();
+        assert_eq!(b.len() % 8, 0, "{name}: 8 bytes a value");
+        let n = b.len() / 8;
+        (0..n)
+            .map(|i| (0..8).fold(0, |v, j| v | b[j * n + i] << (8 * j)))
+            .collect()
+    };
+    let acq = unshuffle("acq_mono_ns_shuffled");
+    let t = unshuffle("t_s_shuffled");
+    let u = unshuffle("u_v_shuffled");
+    let n = acq.len();
+    assert_eq!((t.len(), u.len()), (n, n));
+    let columns = [
+        "x_m",
+        "p1_pa",
+        "p2_pa",
+        "x_sp_m",
+        "f_load_n",
+        "ref_m",
+        "q_leak_lpm",
+        "flags",
+        "temp_c",
+    ];
+    (0..n)
+        .map(|i| {
+            let mut m = serde_json::Map::new();
+            m.insert("seq".into(), json!(first + i as u64));
+            m.insert("acq_mono_ns".into(), json!(acq[i]));
+            m.insert("t_s".into(), json!({ "f64": t[i] }));
+            m.insert("u_v".into(), json!({ "f64": u[i] }));
+            for c in columns {
+                let column = msg[c].as_array().unwrap_or_else(|| panic!("{c} in {msg}"));
+                assert_eq!(column.len(), n, "{c}: one element per frame");
+                m.insert(c.into(), column[i].clone());
+            }
+            Value::Object(m)
+        })
+        .collect()
+}
+
+/// Checks one decoded message of `topic` against the next expected ones
+/// (`seen` counts them per topic): a batch against as many frames as it holds.
+fn check_message(
+    topic: &str,
+    msg: &Value,
+    expected: &std::collections::BTreeMap<&str, Vec<Value>>,
+    seen: &mut std::collections::BTreeMap<String, usize>,
+) {
+    let i = seen.entry(topic.to_string()).or_default();
+    if topic == "frame_batches" {
+        for frame in unbatch(msg) {
+            assert_eq!(&frame, &expected[topic][*i], "batched frame {i}");
+            *i += 1;
+        }
+    } else {
+        assert_eq!(msg, &expected[topic][*i], "{topic} message {i}");
+        *i += 1;
+    }
+}
+
+/// Every record of `log` as Python must decode it, per channel name: the
+/// batches hold every frame, the frames channel the thinned ones.
+fn expected_records(log: &recorder::Log) -> std::collections::BTreeMap<&'static str, Vec<Value>> {
+    let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();
+    expected.insert("frame_batches", log.frames.iter().map(expected_sensor).collect());
+    expected.insert(
+        "frames",
+        log.frames
+            .iter()
+            .filter(|f| on_frames_channel(f))
+            .map(expected_sensor)
+            .collect(),
+    );
+    expected.insert("estimates", log.estimates.iter().map(expected_estimate).collect());
+    expected.insert("events", log.events.iter().map(expected_event).collect());
+    expected.insert("health", log.health.iter().map(expected_health).collect());
+    expected.insert("stats", log.stats.iter().map(expected_stats).collect());
+    expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
+    expected
 }
 
 fn expected_estimate(x: &EstimateFrame) -> Value {
@@ -344,13 +443,7 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     // Rust's records per topic, in file order, as Python must name them
-    let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();
-    expected.insert("frames", log.frames.iter().map(expected_sensor).collect());
-    expected.insert("estimates", log.estimates.iter().map(expected_estimate).collect());
-    expected.insert("events", log.events.iter().map(expected_event).collect());
-    expected.insert("health", log.health.iter().map(expected_health).collect());
-    expected.insert("stats", log.stats.iter().map(expected_stats).collect());
-    expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
+    let expected = expected_records(&log);
     let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
     for line in &lines {
         // rosbag2 topics: /leakwatch/<rig>/<topic>
@@ -374,10 +467,7 @@ fn python_decodes_every_field_as_the_rust_reader_does() {
             line["log_time"].as_u64().unwrap() >= EPOCH_OFFSET_NS as u64,
             "{line}"
         );
-        let i = seen.entry(topic.to_string()).or_default();
-        let want = &expected[topic][*i];
-        assert_eq!(&line["msg"], want, "{topic} message {i}");
-        *i += 1;
+        check_message(topic, &line["msg"], &expected, &mut seen);
     }
     for (topic, want) in &expected {
         assert_eq!(seen.get(*topic).copied().unwrap_or(0), want.len(), "{topic}");
@@ -454,13 +544,8 @@ fn rosbags_reads_the_log_as_a_rosbag2_file() {
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
-    let total = log.frames.len()
-        + log.estimates.len()
-        + log.events.len()
-        + log.health.len()
-        + log.stats.len()
-        + log.gaps.len();
-    assert_eq!(lines[0]["message_count"], total as u64, "{}", lines[0]);
+    let total: u64 = log.channels.values().map(|c| c.messages).sum();
+    assert_eq!(lines[0]["message_count"], total, "{}", lines[0]);
     // the first message is the first frame, at its acquisition as Unix time
     assert_eq!(
         lines[0]["start_time"], 1_764_000_001_000_000_000u64,
@@ -492,19 +577,18 @@ fn rosbags_reads_the_log_as_a_rosbag2_file() {
                 "leakwatch_msgs/msg/LeakEventFrame",
                 2
             ),
-            ("/leakwatch/press-3/frames", "leakwatch_msgs/msg/SensorFrame", 50),
+            (
+                "/leakwatch/press-3/frame_batches",
+                "leakwatch_msgs/msg/SensorFrameBatch",
+                17
+            ),
+            ("/leakwatch/press-3/frames", "leakwatch_msgs/msg/SensorFrame", 34),
             ("/leakwatch/press-3/gaps", "leakwatch_msgs/msg/Gap", 1),
             ("/leakwatch/press-3/health", "leakwatch_msgs/msg/HealthFrame", 1),
             ("/leakwatch/press-3/stats", "leakwatch_msgs/msg/StatsFrame", 1),
         ]
     );
-    let mut expected: std::collections::BTreeMap<&str, Vec<Value>> = Default::default();
-    expected.insert("frames", log.frames.iter().map(expected_sensor).collect());
-    expected.insert("estimates", log.estimates.iter().map(expected_estimate).collect());
-    expected.insert("events", log.events.iter().map(expected_event).collect());
-    expected.insert("health", log.health.iter().map(expected_health).collect());
-    expected.insert("stats", log.stats.iter().map(expected_stats).collect());
-    expected.insert("gaps", log.gaps.iter().map(expected_gap).collect());
+    let expected = expected_records(&log);
     let mut seen: std::collections::BTreeMap<String, usize> = Default::default();
     for line in lines.iter().filter(|l| l.get("timestamp").is_some()) {
         let topic = line["topic"]
@@ -512,9 +596,7 @@ fn rosbags_reads_the_log_as_a_rosbag2_file() {
             .unwrap()
             .strip_prefix("/leakwatch/press-3/")
             .unwrap();
-        let i = seen.entry(topic.to_string()).or_default();
-        assert_eq!(&line["msg"], &expected[topic][*i], "{topic} message {i}");
-        *i += 1;
+        check_message(topic, &line["msg"], &expected, &mut seen);
     }
     for (topic, want) in &expected {
         assert_eq!(seen.get(*topic).copied().unwrap_or(0), want.len(), "{topic}");

@@ -42,7 +42,7 @@ fn written_definitions() -> BTreeMap<String, String> {
     w.finish().unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
-    assert_eq!(summary.schemas.len(), 6, "one schema per channel");
+    assert_eq!(summary.schemas.len(), 7, "one schema per channel");
     let package = recorder::msg::PACKAGE;
     let mut defs = BTreeMap::new();
     let mut add = |name: &str, text: &str| {
@@ -119,7 +119,7 @@ fn the_package_builds_every_msg_file() {
 /// double or trailing underscore); message names are CamelCase.
 #[test]
 fn the_msg_files_follow_rosidls_rules() {
-    const PRIMITIVES: [&str; 4] = ["uint32", "uint64", "float64", "string"];
+    const PRIMITIVES: [&str; 5] = ["uint32", "uint64", "float64", "string", "uint8"];
     let files = msg_files();
     let package = recorder::msg::PACKAGE;
     let snake = |s: &str, upper: bool| {
@@ -155,6 +155,8 @@ fn the_msg_files_follow_rosidls_rules() {
             let at = format!("{name}.msg line {}: {line:?}", i + 1);
             let mut parts = code.split_whitespace();
             let (ty, rest) = (parts.next().unwrap(), parts.collect::<Vec<_>>().join(" "));
+            // an unbounded array of a primitive: `float64[]`
+            let ty = ty.strip_suffix("[]").unwrap_or(ty);
             let known = PRIMITIVES.contains(&ty)
                 || ty
                     .strip_prefix(&format!("{package}/"))

@@ -101,11 +101,13 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
             outln!("UDP stream: {line}");
         }
     }
-    // a restarted recorder continues the log in run-1.mcap, run-2.mcap, ...
-    let parts = (1..=o.latency.restarts.get("recorder").copied().unwrap_or(0))
-        .map(|n| format!("run-{n}.mcap"))
-        .filter(|p| o.out_dir.join(p).is_file());
-    let log: Vec<String> = std::iter::once("run.mcap".to_string()).chain(parts).collect();
+    // a restarted recorder continues the log in run-1.mcap, run-2.mcap, ...; a
+    // recorder continues its file after an hour in run.1.mcap, ...
+    let restarted = o.latency.restarts.get("recorder").copied().unwrap_or(0) > 0;
+    let log: Vec<String> = crate::logs::log_parts(&o.out_dir.join("run.mcap"))
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
     // events.json and latency.json where they are (the temporary directory when the
     // output directory could not take them)
     let mut here = Vec::new();
@@ -127,8 +129,10 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
         here.join(", "),
         if o.log_failure.is_some() {
             " (incomplete: the recorder could not write it)"
-        } else if log.len() > 1 {
+        } else if restarted {
             " (the recorder was restarted: the log continues part after part, the frames in none recorded as a gap)"
+        } else if log.len() > 1 {
+            " (the log continues part after part, a new one every hour)"
         } else {
             ""
         }
