@@ -1,0 +1,779 @@
+// A C++17 / Eigen 3 peer of leakwatch's 7-state thesis filter (issue 32).
+//
+// The same model as model/src/process{,/rhs.rs,/discrete.rs} for 7 states on
+// the thesis rig's default parameters (model/src/params.rs), the same tuning
+// (filter/src/tuning.rs, Tuning::thesis) and the same per-sample sequence as
+// filter/src/lib.rs (Estimator::on_sample): thesis start, the command of the
+// previous sample over each interval, forward Euler with the analytic
+// Jacobian, the clamps after the prediction and after the update, all three
+// channels measured (H selects x, p1, p2). The covariance is carried in the
+// same scaled units as leakwatch's (z = x / scale) so the thesis' P0 = 1e4·I
+// does not span 22 orders of magnitude.
+//
+// Update variants (the prediction is the same dense F P Fᵀ + Q in all):
+//   joseph     covariance form, dense H (3×7 of 0/1), Joseph update
+//              P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ
+//   selector   the same Joseph update with H applied as a selector: H P is
+//              three rows of P, P Hᵀ three columns; A P = P − K (H P), then
+//              P⁺ = A P − (A P Hᵀ − K R) Kᵀ (algebraically the Joseph form
+//              for any gain K)
+//   sqrt       leakwatch's own algorithm (filter/src/ekf.rs): a factor S with
+//              P = S Sᵀ, predict by the sparse product F S and a Cholesky
+//              factor of W Wᵀ + Q, update by Potter's scalar updates
+//
+// Usage:
+//   ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json]
+//            [--compare LEAKWATCH_ESTIMATES.csv]
+// SAMPLES.csv is `leakwatch simulate`'s CSV (t,u,x,p1,p2,...). --compare
+// reads the th_* columns of `leakwatch replay --model 7`'s estimates.csv of
+// the same CSV and prints how far each variant's estimates are from them.
+// Timing: every predict + update timed on its own with the monotonic clock
+// (std::chrono::steady_clock, clock_gettime(CLOCK_MONOTONIC)), the stream
+// looped (the filter restarted at its end, as `leakwatch bench ekf` does)
+// until N steps; R rounds per variant, interleaved; the figures are the
+// median over rounds of each round's median (p99 likewise).
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr int N = 7;
+constexpr int M = 3;
+using Vec = Eigen::Matrix<double, N, 1>;
+using Mat = Eigen::Matrix<double, N, N>;
+using MatMN = Eigen::Matrix<double, M, N>;
+using MatNM = Eigen::Matrix<double, N, M>;
+using VecM = Eigen::Matrix<double, M, 1>;
+using MatM = Eigen::Matrix<double, M, M>;
+
+// ---------------------------------------------------------------- parameters
+// model/src/params.rs, ActuatorParams::default() (the thesis rig), with what
+// the 7-state layout leaves out at its neutral value: double-rod (A2 = A1),
+// horizontal (no gravity), no entrained air, no supply sag (the thesis layouts
+// drop it, filter/src/lib.rs), no valve null leakage, no built-in leaks, no end
+// stops (6/7 states have none), no spool bias state.
+struct Params {
+    double area_m2 = 6.33e-4;
+    double mass_kg = 10.0;
+    double x_min_m = 0.0;
+    double x_max_m = 0.6069;
+    double dead_volume_1_m3 = 2.14e-5;
+    double dead_volume_2_m3 = 2.14e-5;
+    double bulk_modulus_pa = 6.89e8;
+    double oil_density_kg_m3 = 847.15;
+    double discharge_coefficient = 0.6;
+    double area_gradient_m2_per_m = 2.075e-2;
+    double spool_gain_m_per_v = 2.794e-5;
+    double spool_natural_freq_rad_s = 200.0 * 3.14159265358979323846;
+    double spool_damping_ratio = 0.7;
+    double spool_null_bias_m = 0.0;
+    double supply_pressure_pa = 13.8e6;
+    double return_pressure_pa = 0.0;
+};
+
+// filter/src/tuning.rs, Tuning::thesis(): 7 states, T = 1 ms, 1 Euler step.
+struct Tuning {
+    double dt_s = 1e-3;
+    double init_pressure_pa = 6.8e6;
+    double q[N] = {1e-10, 1e4, 1e4, 1e-6, 1e-4, 1e-20, 1e2};
+    double r[M] = {1e-4, 1e6, 1e6};
+    double p0[N] = {1e4, 1e4, 1e4, 1e4, 1e4, 1e4, 1e4};
+};
+
+// filter/src/lib.rs SCALE: each state's typical magnitude (the covariance's unit).
+constexpr double SCALE[N] = {1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2};
+// The measurement y = [x, p1, p2] reads these states (model MEASURED_STATES).
+constexpr int SEL[M] = {3, 1, 2};
+// model/src/process.rs MIN_SLOPE_DROP_PA.
+constexpr double MIN_SLOPE_DROP_PA = 1.0e3;
+
+inline double signed_sqrt(double v) { return v >= 0.0 ? std::sqrt(v) : -std::sqrt(-v); }
+inline double sqrt_slope(double dp) { return 0.5 / std::sqrt(std::max(std::abs(dp), MIN_SLOPE_DROP_PA)); }
+
+// ---------------------------------------------------------------- the model
+struct Model {
+    Params p;
+    double dt_s;
+    double p_min_pa;  // ProcessModel::new: -1e5
+    double p_max_pa;  // 1.5 p_s
+
+    explicit Model(const Params& params, double dt) : p(params), dt_s(dt), p_min_pa(-1.0e5), p_max_pa(1.5 * params.supply_pressure_pa) {}
+
+    double nominal_chamber_pressure_pa() const { return 0.5 * (p.supply_pressure_pa + p.return_pressure_pa); }
+
+    // rhs.rs ProcessModel::linearise for N = 7: f(x, u) and A = ∂f/∂x.
+    void linearise(const Vec& s, double u_v, Vec& f, Mat& a) const {
+        const double x_sp = s[0], p1 = s[1], p2 = s[2], x = s[3], v = s[4], v_sp = s[5];
+        f.setZero();
+        a.setZero();
+        // spool: second order
+        const double wn = p.spool_natural_freq_rad_s;
+        f[0] = v_sp;
+        a(0, 5) = 1.0;
+        const double bias = p.spool_null_bias_m;
+        f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - bias) + p.spool_gain_m_per_v * wn * wn * u_v;
+        a(5, 0) = -wn * wn;
+        a(5, 5) = -2.0 * p.spool_damping_ratio * wn;
+
+        // valve (dynamics.rs orifice_flows / land_flow, no sag) and its partials (orifice_partials)
+        const double ps = p.supply_pressure_pa, pr = p.return_pressure_pa;
+        const double w = p.area_gradient_m2_per_m;
+        const double root = std::sqrt(2.0 / p.oil_density_kg_m3);
+        const double g = p.discharge_coefficient * w * root;
+        double q1, q2, dq1x, dq1p1, dq2x, dq2p2;
+        if (x_sp >= 0.0) {
+            q1 = p.discharge_coefficient * w * x_sp * root * signed_sqrt(ps - p1);
+            q2 = p.discharge_coefficient * w * x_sp * root * signed_sqrt(p2 - pr);
+            dq1x = g * signed_sqrt(ps - p1);
+            dq1p1 = -g * x_sp * sqrt_slope(ps - p1);
+            dq2x = g * signed_sqrt(p2 - pr);
+            dq2p2 = g * x_sp * sqrt_slope(p2 - pr);
+        } else {
+            q1 = -(p.discharge_coefficient * w * -x_sp * root * signed_sqrt(p1 - pr));
+            q2 = -(p.discharge_coefficient * w * -x_sp * root * signed_sqrt(ps - p2));
+            dq1x = g * signed_sqrt(p1 - pr);
+            dq1p1 = g * x_sp * sqrt_slope(p1 - pr);
+            dq2x = g * signed_sqrt(ps - p2);
+            dq2p2 = -g * x_sp * sqrt_slope(ps - p2);
+        }
+
+        // chambers (params.rs chamber_volumes_m3)
+        const double a1 = p.area_m2, a2 = p.area_m2;
+        const double v1 = std::max(p.dead_volume_1_m3 + a1 * (x - p.x_min_m), 0.01 * p.dead_volume_1_m3);
+        const double v2 = std::max(p.dead_volume_2_m3 + a2 * (p.x_max_m - x), 0.01 * p.dead_volume_2_m3);
+        const double b1 = p.bulk_modulus_pa, b2 = p.bulk_modulus_pa;
+        const double net1 = q1 - a1 * v;
+        const double net2 = a2 * v - q2;
+        f[1] = b1 / v1 * net1;
+        f[2] = b2 / v2 * net2;
+        a(1, 0) = b1 / v1 * dq1x;
+        a(1, 1) = b1 / v1 * dq1p1;
+        a(2, 0) = -b2 / v2 * dq2x;
+        a(2, 2) = b2 / v2 * -dq2p2;
+        a(1, 3) = -b1 * net1 * a1 / (v1 * v1);
+        a(2, 3) = b2 * net2 * a2 / (v2 * v2);
+        a(1, 4) = -b1 / v1 * a1;
+        a(2, 4) = b2 / v2 * a2;
+
+        // rod: the effective load F_e takes friction and environment
+        f[3] = v;
+        a(3, 4) = 1.0;
+        const double m = p.mass_kg;
+        f[4] = (p.area_m2 * (p1 - p2) - s[6]) / m;
+        a(4, 1) = a1 / m;
+        a(4, 2) = -a2 / m;
+        a(4, 6) = -1.0 / m;
+    }
+
+    // discrete.rs ProcessModel::keep_physical (7 states): pressures and rod position.
+    void keep_physical(Vec& x) const {
+        for (int i : {1, 2}) {
+            if (!std::isfinite(x[i]))
+                x[i] = nominal_chamber_pressure_pa();
+            else
+                x[i] = std::clamp(x[i], p_min_pa, p_max_pa);
+        }
+        x[3] = std::clamp(x[3], p.x_min_m - 0.01, p.x_max_m + 0.01);
+    }
+
+    // discrete.rs ProcessModel::step, one Euler step: x(k+1) = x + T f, F = I + T A.
+    void step(const Vec& s, double u_v, Vec& x, Mat& jac) const {
+        Vec f;
+        linearise(s, u_v, f, jac);
+        x = s + f * dt_s;
+        jac *= dt_s;
+        jac.diagonal().array() += 1.0;
+        keep_physical(x);
+    }
+};
+
+// ---------------------------------------------------------------- samples
+struct Sample {
+    double t, u, x, p1, p2;
+};
+
+std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> out;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) out.push_back(cell);
+    return out;
+}
+
+int column(const std::vector<std::string>& header, const std::string& name, const std::string& file) {
+    for (size_t i = 0; i < header.size(); ++i)
+        if (header[i] == name) return static_cast<int>(i);
+    std::fprintf(stderr, "ekf_peer: %s has no column %s\n", file.c_str(), name.c_str());
+    std::exit(2);
+}
+
+// A table of named columns (doubles; "NaN" and empty cells read as NaN).
+std::vector<std::vector<double>> read_columns(const std::string& file, const std::vector<std::string>& names) {
+    std::ifstream in(file);
+    if (!in) {
+        std::fprintf(stderr, "ekf_peer: cannot read %s\n", file.c_str());
+        std::exit(2);
+    }
+    std::string line;
+    std::getline(in, line);
+    const auto header = split(line);
+    std::vector<int> idx;
+    for (const auto& n : names) idx.push_back(column(header, n, file));
+    std::vector<std::vector<double>> cols(names.size());
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        const auto cells = split(line);
+        for (size_t k = 0; k < idx.size(); ++k) {
+            const auto i = static_cast<size_t>(idx[k]);
+            cols[k].push_back(i < cells.size() && !cells[i].empty() ? std::strtod(cells[i].c_str(), nullptr) : NAN);
+        }
+    }
+    return cols;
+}
+
+// ---------------------------------------------------------------- filters
+enum class Variant { Joseph, Selector, Sqrt };
+const char* variant_name(Variant v) {
+    switch (v) {
+        case Variant::Joseph: return "joseph";
+        case Variant::Selector: return "selector";
+        default: return "sqrt";
+    }
+}
+const char* variant_label(Variant v) {
+    switch (v) {
+        case Variant::Joseph: return "C++/Eigen, covariance form, Joseph update (dense H)";
+        case Variant::Selector: return "C++/Eigen, Joseph update with H as a selector";
+        default: return "C++/Eigen, leakwatch's algorithm (factor S, Cholesky predict, Potter updates)";
+    }
+}
+
+struct Filter {
+    const Model* model;
+    Vec x;         // state, SI
+    Mat P;         // covariance, scaled (Joseph variants)
+    Mat S;         // factor P = S Sᵀ, scaled (sqrt variant), lower triangular after a predict
+    Mat ratio;     // scale[j] / scale[i]
+    Vec qz;        // Q, scaled
+    Vec qz_sqrt;   // √Q, scaled
+    VecM rz;       // R, scaled to the measured states' units
+    VecM r;        // R, SI (sqrt variant: measurement units, as ekf.rs)
+    MatMN H;       // dense selector, scaled units
+    Vec scale;
+    double nis = 0.0;
+
+    Filter(const Model& m, const Tuning& t) : model(&m) {
+        for (int i = 0; i < N; ++i) scale[i] = SCALE[i];
+        for (int i = 0; i < N; ++i)
+            for (int j = 0; j < N; ++j) ratio(i, j) = SCALE[j] / SCALE[i];
+        for (int i = 0; i < N; ++i) {
+            qz_sqrt[i] = std::sqrt(std::max(t.q[i], 0.0)) / SCALE[i];
+            qz[i] = qz_sqrt[i] * qz_sqrt[i];
+        }
+        H.setZero();
+        for (int k = 0; k < M; ++k) {
+            H(k, SEL[k]) = 1.0;
+            rz[k] = t.r[k] / (SCALE[SEL[k]] * SCALE[SEL[k]]);
+            r[k] = t.r[k];
+        }
+        reset(t);
+    }
+
+    // Init::Thesis: zeros, both pressures at init_pressure_pa, P0 diagonal.
+    void reset(const Tuning& t) {
+        x.setZero();
+        x[1] = t.init_pressure_pa;
+        x[2] = t.init_pressure_pa;
+        P.setZero();
+        S.setZero();
+        for (int i = 0; i < N; ++i) {
+            const double d = std::sqrt(std::max(t.p0[i], 0.0)) / SCALE[i];
+            S(i, i) = d;
+            P(i, i) = d * d;
+        }
+    }
+
+    VecM innovation_scaled(const VecM& y) const {
+        VecM nu;
+        for (int k = 0; k < M; ++k) nu[k] = (y[k] - x[SEL[k]]) / SCALE[SEL[k]];
+        return nu;
+    }
+
+    // ---- covariance form
+    // P ← (P + Pᵀ)/2: rounding leaves the products' two triangles apart.
+    void symmetrise() {
+        const Mat Pt = P.transpose();
+        P = 0.5 * (P + Pt);
+    }
+
+    void predict_cov(const Vec& x_pred, const Mat& F) {
+        const Mat Fz = F.cwiseProduct(ratio);
+        const Mat tmp = Fz.lazyProduct(P);
+        P = tmp.lazyProduct(Fz.transpose());
+        P.diagonal() += qz;
+        x = x_pred;
+    }
+
+    void update_joseph(const VecM& y) {
+        const VecM nu = innovation_scaled(y);
+        MatNM PHt;
+        PHt.noalias() = P * H.transpose();
+        MatM C;
+        C.noalias() = H * PHt;
+        C.diagonal() += rz;
+        const MatM Ci = C.inverse();
+        MatNM K;
+        K.noalias() = PHt * Ci;
+        nis = nu.dot(Ci * nu);
+        x += (K * nu).cwiseProduct(scale);
+        Mat A = Mat::Identity();
+        A.noalias() -= K * H;
+        const Mat AP = A.lazyProduct(P);
+        P = AP.lazyProduct(A.transpose());
+        P.noalias() += (K * rz.asDiagonal()).lazyProduct(K.transpose());
+        symmetrise();
+        model->keep_physical(x);
+    }
+
+    void update_selector(const VecM& y) {
+        const VecM nu = innovation_scaled(y);
+        MatMN HP;  // H P: the measured states' rows of P
+        for (int k = 0; k < M; ++k) HP.row(k) = P.row(SEL[k]);
+        MatM C;  // H P Hᵀ + R
+        for (int k = 0; k < M; ++k)
+            for (int l = 0; l < M; ++l) C(k, l) = HP(k, SEL[l]);
+        C.diagonal() += rz;
+        const MatM Ci = C.inverse();
+        MatNM K;
+        K.noalias() = HP.transpose() * Ci;
+        nis = nu.dot(Ci * nu);
+        x += (K * nu).cwiseProduct(scale);
+        // A = I − K H is the identity but in the measured states' columns; its
+        // 3×3 block there, I − H K, is formed first (a gain near 1 leaves a
+        // small 1 − k, exact), as a dense A has it.
+        MatM Ah = MatM::Identity();
+        for (int k = 0; k < M; ++k) Ah.row(k) -= K.row(SEL[k]);
+        // A P = P − K (H P), and its measured rows (I − H K) H P
+        Mat AP = P;
+        AP.noalias() -= K.lazyProduct(HP);
+        const MatMN AhHP = Ah.lazyProduct(HP);
+        for (int k = 0; k < M; ++k) AP.row(SEL[k]) = AhHP.row(k);
+        // A P Aᵀ = A P − (A P Hᵀ) Kᵀ, and its measured columns (A P Hᵀ)(I − H K)ᵀ
+        MatNM APHt;
+        for (int k = 0; k < M; ++k) APHt.col(k) = AP.col(SEL[k]);
+        P = AP;
+        P.noalias() -= APHt.lazyProduct(K.transpose());
+        const MatNM APAtHt = APHt.lazyProduct(Ah.transpose());
+        for (int k = 0; k < M; ++k) P.col(SEL[k]) = APAtHt.col(k);
+        // + K R Kᵀ
+        P.noalias() += (K * rz.asDiagonal()).lazyProduct(K.transpose());
+        symmetrise();
+        model->keep_physical(x);
+    }
+
+    // ---- leakwatch's square-root algorithm (filter/src/ekf.rs)
+    static bool cholesky_lower(Mat& a) {
+        for (int j = 0; j < N; ++j) {
+            const double d = a(j, j);
+            if (!(d > 0.0 && std::isfinite(d))) return false;
+            const double ljj = std::sqrt(d);
+            a(j, j) = ljj;
+            const double inv = 1.0 / ljj;
+            for (int i = j + 1; i < N; ++i) a(i, j) *= inv;
+            for (int c = j + 1; c < N; ++c)
+                for (int i = c; i < N; ++i) a(i, c) -= a(i, j) * a(c, j);
+        }
+        return true;
+    }
+
+    static void lower_triangularise(Mat& w1, Mat& w2) {
+        for (int i = 0; i < N; ++i) {
+            double norm2 = 0.0;
+            for (int j = i; j < N; ++j) norm2 += w1(i, j) * w1(i, j);
+            for (int j = 0; j < N; ++j) norm2 += w2(i, j) * w2(i, j);
+            const double norm = std::sqrt(norm2);
+            if (norm == 0.0) continue;
+            const double x0 = w1(i, i);
+            const double alpha = x0 > 0.0 ? -norm : norm;
+            const double v0 = x0 - alpha;
+            const double vtv = 2.0 * (norm2 - alpha * x0);
+            if (vtv == 0.0) continue;
+            for (int r = i + 1; r < N; ++r) {
+                double d = w1(r, i) * v0;
+                for (int j = i + 1; j < N; ++j) d += w1(r, j) * w1(i, j);
+                for (int j = 0; j < N; ++j) d += w2(r, j) * w2(i, j);
+                const double gg = 2.0 * d / vtv;
+                w1(r, i) -= gg * v0;
+                for (int j = i + 1; j < N; ++j) w1(r, j) -= gg * w1(i, j);
+                for (int j = 0; j < N; ++j) w2(r, j) -= gg * w2(i, j);
+            }
+            w1(i, i) = alpha;
+            for (int j = i + 1; j < N; ++j) w1(i, j) = 0.0;
+            for (int j = 0; j < N; ++j) w2(i, j) = 0.0;
+        }
+    }
+
+    void predict_sqrt(const Vec& x_pred, const Mat& F) {
+        // W = F_z S, F sparse: each non-zero adds a multiple of a row of S
+        Mat W = Mat::Zero();
+        for (int j = 0; j < N; ++j)
+            for (int i = 0; i < N; ++i) {
+                const double fij = F(i, j);
+                if (fij != 0.0) W.row(i) += (fij * ratio(i, j)) * S.row(j);
+            }
+        Mat Pm;
+        Pm.template triangularView<Eigen::Lower>() = W.lazyProduct(W.transpose());
+        Pm.diagonal() += qz;
+        if (cholesky_lower(Pm)) {
+            S = Pm.template triangularView<Eigen::Lower>();
+        } else {
+            Mat w2 = qz_sqrt.asDiagonal();
+            lower_triangularise(W, w2);
+            S = W;
+        }
+        x = x_pred;
+    }
+
+    void update_potter(const VecM& y) {
+        VecM nu;
+        for (int k = 0; k < M; ++k) nu[k] = y[k] - x[SEL[k]];
+        // innovation statistics: C = H_z S Sᵀ H_zᵀ + R (measurement units), NIS
+        MatM C;
+        for (int i = 0; i < M; ++i)
+            for (int j = 0; j <= i; ++j) {
+                C(i, j) = SCALE[SEL[i]] * SCALE[SEL[j]] * S.row(SEL[i]).dot(S.row(SEL[j]));
+                C(j, i) = C(i, j);
+            }
+        C.diagonal() += r;
+        const Eigen::LLT<MatM> llt(C);
+        nis = llt.matrixL().solve(nu).squaredNorm();
+        Vec dz = Vec::Zero();
+        for (int i = 0; i < M; ++i) {
+            const int si = SEL[i];
+            const double ci = SCALE[si];
+            const Vec phi = ci * S.row(si).transpose();
+            const double denom = phi.dot(phi) + r[i];
+            const double a = 1.0 / denom;
+            const double gamma = 1.0 / (1.0 + std::sqrt(a * r[i]));
+            const Vec k = a * (S * phi);
+            const double resid = nu[i] - ci * dz[si];
+            dz += resid * k;
+            S.noalias() -= (gamma * k) * phi.transpose();
+        }
+        x += dz.cwiseProduct(scale);
+        model->keep_physical(x);
+    }
+
+    Mat covariance_scaled() const { return P; }
+};
+
+// Keeps the compiler from moving or dropping work across the clock reads.
+template <class T>
+inline void escape(T const& v) {
+    asm volatile("" : : "g"(&v) : "memory");
+}
+
+struct Runner {
+    const Model& model;
+    const Tuning& tuning;
+    const std::vector<Sample>& samples;
+
+    // One step of sample k (k = 0 starts the filter): predict with the command of
+    // the previous sample (the first: its own), then update with all three channels.
+    static inline void step(Filter& f, Variant v, const Model& model, double u, const VecM& y) {
+        Vec xp;
+        Mat F;
+        model.step(f.x, u, xp, F);
+        if (v == Variant::Sqrt) {
+            f.predict_sqrt(xp, F);
+            f.update_potter(y);
+        } else {
+            f.predict_cov(xp, F);
+            if (v == Variant::Joseph)
+                f.update_joseph(y);
+            else
+                f.update_selector(y);
+        }
+    }
+
+    // Estimates of every sample (x, p1, p2, v, F_e, NIS), one untimed pass.
+    std::vector<std::array<double, 6>> estimates(Variant v) const {
+        std::vector<std::array<double, 6>> out;
+        out.reserve(samples.size());
+        Filter f(model, tuning);
+        double last_u = samples.empty() ? 0.0 : samples[0].u;
+        for (size_t k = 0; k < samples.size(); ++k) {
+            const Sample& s = samples[k];
+            const double u = k == 0 ? s.u : last_u;
+            last_u = s.u;
+            step(f, v, model, u, VecM(s.x, s.p1, s.p2));
+            out.push_back({f.x[3], f.x[1], f.x[2], f.x[4], f.x[6], f.nis});
+        }
+        return out;
+    }
+
+    // Per-step times (ns) of at least `steps` steps.
+    std::vector<double> time_steps(Variant v, uint64_t steps) const {
+        std::vector<double> ns;
+        ns.reserve(steps + samples.size());
+        double sink = 0.0;
+        while (ns.size() < steps) {
+            Filter f(model, tuning);
+            double last_u = samples[0].u;
+            for (size_t k = 0; k < samples.size(); ++k) {
+                const Sample& s = samples[k];
+                const double u = k == 0 ? s.u : last_u;
+                last_u = s.u;
+                const VecM y(s.x, s.p1, s.p2);
+                escape(y);
+                const auto t0 = std::chrono::steady_clock::now();
+                step(f, v, model, u, y);
+                escape(f);
+                const auto t1 = std::chrono::steady_clock::now();
+                sink += f.nis;
+                ns.push_back(static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count()));
+            }
+        }
+        escape(sink);
+        return ns;
+    }
+};
+
+double quantile_sorted(const std::vector<double>& v, double q) {
+    if (v.empty()) return NAN;
+    return v[static_cast<size_t>(std::llround((static_cast<double>(v.size()) - 1.0) * q))];
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    if (v.empty()) return NAN;
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double timer_overhead_ns(int n) {
+    std::vector<double> d(n);
+    for (int i = 0; i < n; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        escape(t0);
+        const auto t1 = std::chrono::steady_clock::now();
+        d[i] = static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count());
+    }
+    std::sort(d.begin(), d.end());
+    return quantile_sorted(d, 0.5);
+}
+
+struct Agreement {
+    double max_abs[6] = {0, 0, 0, 0, 0, 0};
+    double ref_max[6] = {0, 0, 0, 0, 0, 0};
+    size_t worst_at[6] = {0, 0, 0, 0, 0, 0};
+    double final_rel = 0.0;  // largest |Δ|/|ref| of the last sample's five states
+    size_t compared = 0;
+};
+
+const char* COLS[6] = {"th_x", "th_p1", "th_p2", "th_v", "th_f_e", "th_nis"};
+
+Agreement compare(const std::vector<std::array<double, 6>>& mine, const std::vector<std::vector<double>>& ref) {
+    Agreement a;
+    const size_t n = std::min(mine.size(), ref[0].size());
+    a.compared = n;
+    for (size_t k = 0; k < n; ++k)
+        for (int c = 0; c < 6; ++c) {
+            const double r = ref[c][k], m = mine[k][c];
+            const double d = std::abs(m - r);
+            a.ref_max[c] = std::max(a.ref_max[c], std::abs(r));
+            if (!(d <= a.max_abs[c])) {
+                a.max_abs[c] = d;
+                a.worst_at[c] = k;
+            }
+        }
+    if (n > 0)
+        for (int c = 0; c < 5; ++c) {
+            const double r = ref[c][n - 1];
+            a.final_rel = std::max(a.final_rel, std::abs(mine[n - 1][c] - r) / std::max(std::abs(r), 1e-300));
+        }
+    return a;
+}
+
+void usage() {
+    std::fprintf(stderr,
+                 "usage: ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json] "
+                 "[--compare LEAKWATCH_ESTIMATES.csv] [--variants joseph,selector,sqrt]\n");
+    std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::string csv, json_out, compare_file, dump_prefix, variants_arg = "joseph,selector,sqrt";
+    uint64_t steps = 1000000;
+    int rounds = 3;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) usage();
+            return argv[++i];
+        };
+        if (a == "--csv") csv = next();
+        else if (a == "--steps") steps = std::strtoull(next().c_str(), nullptr, 10);
+        else if (a == "--rounds") rounds = std::max(1, std::atoi(next().c_str()));
+        else if (a == "--json") json_out = next();
+        else if (a == "--compare") compare_file = next();
+        else if (a == "--variants") variants_arg = next();
+        else if (a == "--dump") dump_prefix = next();
+        else usage();
+    }
+    if (csv.empty()) usage();
+    std::vector<Variant> variants;
+    for (const auto& v : split(variants_arg)) {
+        if (v == "joseph") variants.push_back(Variant::Joseph);
+        else if (v == "selector") variants.push_back(Variant::Selector);
+        else if (v == "sqrt") variants.push_back(Variant::Sqrt);
+        else usage();
+    }
+
+    const Params params;
+    const Tuning tuning;
+    const Model model(params, tuning.dt_s);
+    // The samples: every channel must be usable (the peer has no channel drop-out;
+    // leakwatch's measured range is [-0.02 p_s, 1.5 p_s] for the pressures).
+    const auto cols = read_columns(csv, {"t", "u", "x", "p1", "p2"});
+    std::vector<Sample> samples;
+    const double p_lo = -0.02 * params.supply_pressure_pa, p_hi = 1.5 * params.supply_pressure_pa;
+    for (size_t k = 0; k < cols[0].size(); ++k) {
+        const Sample s{cols[0][k], cols[1][k], cols[2][k], cols[3][k], cols[4][k]};
+        const bool ok = std::isfinite(s.u) && std::isfinite(s.x) && std::isfinite(s.p1) && std::isfinite(s.p2) &&
+                        s.p1 >= p_lo && s.p1 <= p_hi && s.p2 >= p_lo && s.p2 <= p_hi;
+        if (!ok) {
+            std::fprintf(stderr, "ekf_peer: %s row %zu has an unusable channel; the peer needs complete samples\n",
+                         csv.c_str(), k + 2);
+            return 2;
+        }
+        samples.push_back(s);
+    }
+    if (samples.empty()) {
+        std::fprintf(stderr, "ekf_peer: %s has no samples\n", csv.c_str());
+        return 2;
+    }
+    const Runner runner{model, tuning, samples};
+
+    // ---- every estimate of each variant, PREFIX.VARIANT.csv (for a closer look)
+    if (!dump_prefix.empty())
+        for (const Variant v : variants) {
+            const std::string path = dump_prefix + "." + variant_name(v) + ".csv";
+            std::FILE* out = std::fopen(path.c_str(), "w");
+            if (!out) {
+                std::fprintf(stderr, "ekf_peer: cannot write %s\n", path.c_str());
+                return 1;
+            }
+            std::fprintf(out, "t,th_x,th_p1,th_p2,th_v,th_f_e,th_nis\n");
+            const auto est = runner.estimates(v);
+            for (size_t k = 0; k < est.size(); ++k) {
+                std::fprintf(out, "%.17g", samples[k].t);
+                for (const double e : est[k]) std::fprintf(out, ",%.17g", e);
+                std::fprintf(out, "\n");
+            }
+            std::fclose(out);
+        }
+
+    // ---- agreement with leakwatch's estimates of the same CSV
+    std::ostringstream agreement_json;
+    if (!compare_file.empty()) {
+        const std::vector<std::string> names(COLS, COLS + 6);
+        const auto ref = read_columns(compare_file, names);
+        if (ref[0].size() != samples.size())
+            std::fprintf(stderr, "ekf_peer: %s has %zu rows, %s %zu samples\n", compare_file.c_str(), ref[0].size(),
+                         csv.c_str(), samples.size());
+        std::printf("Agreement with leakwatch's 7-state thesis filter (%s), %zu samples:\n", compare_file.c_str(),
+                    std::min(ref[0].size(), samples.size()));
+        std::printf("| variant | max |Δx|/max|x| | max |Δp1|/max|p1| | max |Δp2|/max|p2| | max |Δv|/max|v| | max |ΔF_e|/max|F_e| | max |ΔNIS|/max NIS | last sample, largest |Δ|/|value| |\n");
+        std::printf("|---|---|---|---|---|---|---|---|\n");
+        agreement_json << "[";
+        bool first = true;
+        for (const Variant v : variants) {
+            const auto a = compare(runner.estimates(v), ref);
+            std::printf("| %s |", variant_name(v));
+            for (int c = 0; c < 6; ++c) std::printf(" %.1e |", a.max_abs[c] / a.ref_max[c]);
+            std::printf(" %.1e |\n", a.final_rel);
+            agreement_json << (first ? "" : ",") << "\n    {\"variant\": \"" << variant_name(v) << "\", \"samples\": " << a.compared;
+            agreement_json.precision(3);
+            for (int c = 0; c < 6; ++c)
+                agreement_json << ", \"" << COLS[c] << "_max_rel\": " << std::scientific << a.max_abs[c] / a.ref_max[c]
+                               << ", \"" << COLS[c] << "_worst_sample\": " << std::defaultfloat << a.worst_at[c];
+            agreement_json << ", \"last_sample_max_rel\": " << std::scientific << a.final_rel << std::defaultfloat << "}";
+            first = false;
+        }
+        agreement_json << "\n  ]";
+        std::printf("(each column: the largest difference over the stream over the largest |value| of leakwatch's column)\n\n");
+    }
+
+    // ---- timing
+    if (steps == 0) return 0;
+    const double overhead = timer_overhead_ns(100000);
+    struct Row {
+        Variant v;
+        std::vector<double> medians, p99s, p999s, means;
+        uint64_t steps = 0;
+    };
+    std::vector<Row> rows;
+    for (const Variant v : variants) rows.push_back(Row{v, {}, {}, {}, {}, 0});
+    for (int r = 0; r < rounds; ++r)
+        for (auto& row : rows) {
+            auto ns = runner.time_steps(row.v, steps);
+            double sum = 0.0;
+            for (const double d : ns) sum += d;
+            std::sort(ns.begin(), ns.end());
+            row.medians.push_back(quantile_sorted(ns, 0.5));
+            row.p99s.push_back(quantile_sorted(ns, 0.99));
+            row.p999s.push_back(quantile_sorted(ns, 0.999));
+            row.means.push_back(sum / static_cast<double>(ns.size()));
+            row.steps = ns.size();
+        }
+    const double ref_median = median(rows[0].medians);
+    std::printf("Each predict + update timed on its own with the monotonic clock (steady_clock); every figure includes "
+                "the clock's own cost, %.0f ns here. %d rounds of %llu steps per variant (%zu samples, looped), "
+                "median over rounds.\n",
+                overhead, rounds, static_cast<unsigned long long>(rows[0].steps), samples.size());
+    std::printf("| filter | median ns | p99 ns | p99.9 ns | mean ns | vs %s |\n", variant_name(rows[0].v));
+    std::printf("|---|---|---|---|---|---|\n");
+    for (const auto& row : rows)
+        std::printf("| %s | %.0f | %.0f | %.0f | %.0f | %.2f |\n", variant_label(row.v), median(row.medians),
+                    median(row.p99s), median(row.p999s), median(row.means), median(row.medians) / ref_median);
+
+    if (!json_out.empty()) {
+        std::ofstream js(json_out);
+        js << "{\n  \"benchmark\": \"ekf_peer\",\n  \"states\": 7,\n  \"csv\": \"" << csv << "\",\n  \"samples\": " << samples.size()
+           << ",\n  \"steps_per_round\": " << rows[0].steps << ",\n  \"rounds\": " << rounds
+           << ",\n  \"timer_overhead_ns\": " << overhead << ",\n  \"filters\": [";
+        for (size_t i = 0; i < rows.size(); ++i) {
+            const auto& row = rows[i];
+            js << (i ? "," : "") << "\n    {\"variant\": \"" << variant_name(row.v) << "\", \"filter\": \"" << variant_label(row.v)
+               << "\", \"median_ns\": " << median(row.medians) << ", \"p99_ns\": " << median(row.p99s)
+               << ", \"p999_ns\": " << median(row.p999s) << ", \"mean_ns\": " << median(row.means) << ", \"round_medians_ns\": [";
+            for (size_t k = 0; k < row.medians.size(); ++k) js << (k ? ", " : "") << row.medians[k];
+            js << "]}";
+        }
+        js << "\n  ]";
+        if (!compare_file.empty()) js << ",\n  \"agreement\": " << agreement_json.str();
+        js << "\n}\n";
+        if (!js) {
+            std::fprintf(stderr, "ekf_peer: cannot write %s\n", json_out.c_str());
+            return 1;
+        }
+    }
+    return 0;
+}
