@@ -59,6 +59,7 @@ using MatMN = Eigen::Matrix<double, M, N>;
 using MatNM = Eigen::Matrix<double, N, M>;
 using VecM = Eigen::Matrix<double, M, 1>;
 using MatM = Eigen::Matrix<double, M, M>;
+using MatR = Eigen::Matrix<double, N, N, Eigen::RowMajor>;  // rows contiguous (the square-root form's S and W)
 
 // ---------------------------------------------------------------- parameters
 // model/src/params.rs, ActuatorParams::default() (the thesis rig), with what
@@ -266,7 +267,7 @@ struct Filter {
     const Model* model;
     Vec x;         // state, SI
     Mat P;         // covariance, scaled (Joseph variants)
-    Mat S;         // factor P = S Sᵀ, scaled (sqrt variant), lower triangular after a predict
+    MatR S;        // factor P = S Sᵀ, scaled (sqrt variant), lower triangular after a predict
     Mat ratio;     // scale[j] / scale[i]
     Vec qz;        // Q, scaled
     Vec qz_sqrt;   // √Q, scaled
@@ -386,7 +387,7 @@ struct Filter {
     }
 
     // ---- leakwatch's square-root algorithm (filter/src/ekf.rs)
-    static bool cholesky_lower(Mat& a) {
+    static bool cholesky_lower(MatR& a) {
         for (int j = 0; j < N; ++j) {
             const double d = a(j, j);
             if (!(d > 0.0 && std::isfinite(d))) return false;
@@ -400,7 +401,7 @@ struct Filter {
         return true;
     }
 
-    static void lower_triangularise(Mat& w1, Mat& w2) {
+    static void lower_triangularise(MatR& w1, MatR& w2) {
         for (int i = 0; i < N; ++i) {
             double norm2 = 0.0;
             for (int j = i; j < N; ++j) norm2 += w1(i, j) * w1(i, j);
@@ -429,19 +430,20 @@ struct Filter {
 
     void predict_sqrt(const Vec& x_pred, const Mat& F) {
         // W = F_z S, F sparse: each non-zero adds a multiple of a row of S
-        Mat W = Mat::Zero();
+        MatR W = MatR::Zero();
         for (int j = 0; j < N; ++j)
             for (int i = 0; i < N; ++i) {
                 const double fij = F(i, j);
                 if (fij != 0.0) W.row(i) += (fij * ratio(i, j)) * S.row(j);
             }
-        Mat Pm;
-        Pm.template triangularView<Eigen::Lower>() = W.lazyProduct(W.transpose());
+        MatR Pm;  // P⁻ = W Wᵀ + Q, its lower triangle (rows of W dotted)
+        for (int i = 0; i < N; ++i)
+            for (int j = 0; j <= i; ++j) Pm(i, j) = W.row(i).dot(W.row(j));
         Pm.diagonal() += qz;
         if (cholesky_lower(Pm)) {
             S = Pm.template triangularView<Eigen::Lower>();
         } else {
-            Mat w2 = qz_sqrt.asDiagonal();
+            MatR w2 = qz_sqrt.asDiagonal();
             lower_triangularise(W, w2);
             S = W;
         }
@@ -510,11 +512,15 @@ struct Runner {
         }
     }
 
-    // Estimates of every sample (x, p1, p2, v, F_e, NIS), one untimed pass.
-    std::vector<std::array<double, 6>> estimates(Variant v) const {
+    // Estimates of every sample (x, p1, p2, v, F_e, NIS), one untimed pass;
+    // `indefinite` counts the samples after whose update the covariance is not
+    // positive definite (its Cholesky factorisation fails; the square-root
+    // form's P = S Sᵀ cannot be indefinite).
+    std::vector<std::array<double, 6>> estimates(Variant v, size_t* indefinite = nullptr) const {
         std::vector<std::array<double, 6>> out;
         out.reserve(samples.size());
         Filter f(model, tuning);
+        if (indefinite) *indefinite = 0;
         double last_u = samples.empty() ? 0.0 : samples[0].u;
         for (size_t k = 0; k < samples.size(); ++k) {
             const Sample& s = samples[k];
@@ -522,6 +528,7 @@ struct Runner {
             last_u = s.u;
             step(f, v, model, u, VecM(s.x, s.p1, s.p2));
             out.push_back({f.x[3], f.x[1], f.x[2], f.x[4], f.x[6], f.nis});
+            if (indefinite && v != Variant::Sqrt && Eigen::LLT<Mat>(f.P).info() != Eigen::Success) ++*indefinite;
         }
         return out;
     }
@@ -577,51 +584,101 @@ double timer_overhead_ns(int n) {
     return quantile_sorted(d, 0.5);
 }
 
+// How far a variant's estimates are from leakwatch's, from sample `from` on:
+// per column, the largest |difference| over the largest |leakwatch's value|.
 struct Agreement {
-    double max_abs[6] = {0, 0, 0, 0, 0, 0};
-    double ref_max[6] = {0, 0, 0, 0, 0, 0};
+    double rel[6] = {0, 0, 0, 0, 0, 0};
     size_t worst_at[6] = {0, 0, 0, 0, 0, 0};
-    double final_rel = 0.0;  // largest |Δ|/|ref| of the last sample's five states
-    size_t compared = 0;
+    double worst() const { return *std::max_element(rel, rel + 5); }  // the five states
 };
 
 const char* COLS[6] = {"th_x", "th_p1", "th_p2", "th_v", "th_f_e", "th_nis"};
 
-Agreement compare(const std::vector<std::array<double, 6>>& mine, const std::vector<std::vector<double>>& ref) {
+Agreement compare(const std::vector<std::array<double, 6>>& mine, const std::vector<std::vector<double>>& ref, size_t from) {
     Agreement a;
     const size_t n = std::min(mine.size(), ref[0].size());
-    a.compared = n;
-    for (size_t k = 0; k < n; ++k)
-        for (int c = 0; c < 6; ++c) {
-            const double r = ref[c][k], m = mine[k][c];
-            const double d = std::abs(m - r);
-            a.ref_max[c] = std::max(a.ref_max[c], std::abs(r));
-            if (!(d <= a.max_abs[c])) {
-                a.max_abs[c] = d;
+    for (int c = 0; c < 6; ++c) {
+        double max_abs = 0.0, ref_max = 0.0;
+        for (size_t k = from; k < n; ++k) {
+            const double r = ref[c][k];
+            const double d = std::abs(mine[k][c] - r);
+            ref_max = std::max(ref_max, std::abs(r));
+            if (!(d <= max_abs)) {  // NaN counts as the worst
+                max_abs = d;
                 a.worst_at[c] = k;
             }
         }
-    if (n > 0)
-        for (int c = 0; c < 5; ++c) {
-            const double r = ref[c][n - 1];
-            a.final_rel = std::max(a.final_rel, std::abs(mine[n - 1][c] - r) / std::max(std::abs(r), 1e-300));
-        }
+        a.rel[c] = max_abs / ref_max;
+    }
     return a;
+}
+
+// The step-time rows of `leakwatch bench ekf --out DIR`'s ekf.json ("step_time":
+// objects with "filter", "states", "median_ns", "p99_ns"), read by a plain scan
+// so the peer needs no JSON library.
+struct RustRow {
+    std::string filter;
+    int states = 0;
+    double median_ns = NAN, p99_ns = NAN, timer_overhead_ns = NAN;
+};
+
+std::vector<RustRow> read_rust_json(const std::string& file) {
+    std::ifstream in(file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const std::string text = ss.str();
+    std::vector<RustRow> rows;
+    size_t pos = text.find("\"step_time\"");
+    if (pos == std::string::npos) return rows;
+    const size_t end = text.find(']', pos);
+    auto number = [&](size_t from, size_t to, const std::string& key) -> double {
+        const size_t k = text.find("\"" + key + "\"", from);
+        if (k == std::string::npos || k > to) return NAN;
+        const size_t colon = text.find(':', k);
+        return std::strtod(text.c_str() + colon + 1, nullptr);
+    };
+    while ((pos = text.find('{', pos)) != std::string::npos && pos < end) {
+        const size_t close = text.find('}', pos);
+        RustRow r;
+        const size_t f = text.find("\"filter\"", pos);
+        if (f != std::string::npos && f < close) {
+            const size_t q0 = text.find('"', text.find(':', f)) + 1;
+            r.filter = text.substr(q0, text.find('"', q0) - q0);
+        }
+        r.states = static_cast<int>(number(pos, close, "states"));
+        r.median_ns = number(pos, close, "median_ns");
+        r.p99_ns = number(pos, close, "p99_ns");
+        r.timer_overhead_ns = number(pos, close, "timer_overhead_ns");
+        rows.push_back(r);
+        pos = close;
+    }
+    return rows;
+}
+
+std::string json_string(const std::string& s) {
+    std::string out = "\"";
+    for (const char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "\"";
 }
 
 void usage() {
     std::fprintf(stderr,
                  "usage: ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json] "
-                 "[--compare LEAKWATCH_ESTIMATES.csv] [--variants joseph,selector,sqrt]\n");
+                 "[--compare LEAKWATCH_ESTIMATES.csv [--agree-from SECONDS]] [--variants joseph,selector,sqrt] "
+                 "[--dump PREFIX] [--leakwatch-json EKF.json]\n");
     std::exit(2);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string csv, json_out, compare_file, dump_prefix, variants_arg = "joseph,selector,sqrt";
+    std::string csv, json_out, compare_file, dump_prefix, rust_json, variants_arg = "joseph,selector,sqrt";
     uint64_t steps = 1000000;
     int rounds = 3;
+    double agree_from_s = 0.5;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         auto next = [&]() -> std::string {
@@ -633,8 +690,10 @@ int main(int argc, char** argv) {
         else if (a == "--rounds") rounds = std::max(1, std::atoi(next().c_str()));
         else if (a == "--json") json_out = next();
         else if (a == "--compare") compare_file = next();
+        else if (a == "--agree-from") agree_from_s = std::strtod(next().c_str(), nullptr);
         else if (a == "--variants") variants_arg = next();
         else if (a == "--dump") dump_prefix = next();
+        else if (a == "--leakwatch-json") rust_json = next();
         else usage();
     }
     if (csv.empty()) usage();
@@ -698,39 +757,56 @@ int main(int argc, char** argv) {
         if (ref[0].size() != samples.size())
             std::fprintf(stderr, "ekf_peer: %s has %zu rows, %s %zu samples\n", compare_file.c_str(), ref[0].size(),
                          csv.c_str(), samples.size());
-        std::printf("Agreement with leakwatch's 7-state thesis filter (%s), %zu samples:\n", compare_file.c_str(),
-                    std::min(ref[0].size(), samples.size()));
-        std::printf("| variant | max |Δx|/max|x| | max |Δp1|/max|p1| | max |Δp2|/max|p2| | max |Δv|/max|v| | max |ΔF_e|/max|F_e| | max |ΔNIS|/max NIS | last sample, largest |Δ|/|value| |\n");
-        std::printf("|---|---|---|---|---|---|---|---|\n");
-        agreement_json << "[";
+        const size_t n = std::min(ref[0].size(), samples.size());
+        size_t from = 0;
+        while (from < n && samples[from].t - samples[0].t < agree_from_s) ++from;
+        std::printf("Agreement with leakwatch's 7-state thesis filter (%s), %zu samples: per column the largest "
+                    "|difference| over the largest |value| of leakwatch's column, over the whole stream and from "
+                    "%g s on (sample %zu)\n",
+                    compare_file.c_str(), n, agree_from_s, from);
+        std::printf("| variant | from | x | p1 | p2 | v | F_e | NIS | covariance not positive definite after the update |\n");
+        std::printf("|---|---|---|---|---|---|---|---|---|\n");
+        agreement_json << "{\"from_s\": " << agree_from_s << ", \"from_sample\": " << from << ", \"samples\": " << n
+                       << ", \"variants\": [";
         bool first = true;
         for (const Variant v : variants) {
-            const auto a = compare(runner.estimates(v), ref);
-            std::printf("| %s |", variant_name(v));
-            for (int c = 0; c < 6; ++c) std::printf(" %.1e |", a.max_abs[c] / a.ref_max[c]);
-            std::printf(" %.1e |\n", a.final_rel);
-            agreement_json << (first ? "" : ",") << "\n    {\"variant\": \"" << variant_name(v) << "\", \"samples\": " << a.compared;
+            size_t indefinite = 0;
+            const auto est = runner.estimates(v, &indefinite);
+            const Agreement whole = compare(est, ref, 0), tail = compare(est, ref, from);
+            for (const auto& [label, a] : {std::pair<std::string, const Agreement&>{"0 s", whole},
+                                           std::pair<std::string, const Agreement&>{std::to_string(agree_from_s).substr(0, 4) + " s", tail}}) {
+                std::printf("| %s | %s |", variant_name(v), label.c_str());
+                for (int c = 0; c < 6; ++c) std::printf(" %.1e |", a.rel[c]);
+                std::printf(" %s |\n", v == Variant::Sqrt ? "– (S Sᵀ)" : std::to_string(indefinite).append(" samples").c_str());
+            }
+            agreement_json << (first ? "" : ",") << "\n    {\"variant\": \"" << variant_name(v)
+                           << "\", \"indefinite_samples\": " << indefinite;
             agreement_json.precision(3);
-            for (int c = 0; c < 6; ++c)
-                agreement_json << ", \"" << COLS[c] << "_max_rel\": " << std::scientific << a.max_abs[c] / a.ref_max[c]
-                               << ", \"" << COLS[c] << "_worst_sample\": " << std::defaultfloat << a.worst_at[c];
-            agreement_json << ", \"last_sample_max_rel\": " << std::scientific << a.final_rel << std::defaultfloat << "}";
+            for (const auto& [key, a] : {std::pair<std::string, const Agreement&>{"whole", whole},
+                                         std::pair<std::string, const Agreement&>{"from", tail}}) {
+                agreement_json << ", \"" << key << "\": {\"max_rel_states\": " << std::scientific << a.worst();
+                for (int c = 0; c < 6; ++c)
+                    agreement_json << ", \"" << COLS[c] << "\": " << std::scientific << a.rel[c] << std::defaultfloat;
+                agreement_json << "}";
+            }
+            agreement_json << "}";
             first = false;
         }
-        agreement_json << "\n  ]";
-        std::printf("(each column: the largest difference over the stream over the largest |value| of leakwatch's column)\n\n");
+        agreement_json << "\n  ]}";
+        std::printf("\n");
     }
 
     // ---- timing
-    if (steps == 0) return 0;
-    const double overhead = timer_overhead_ns(100000);
+    // (--steps 0: the agreement alone)
+    const double overhead = steps > 0 ? timer_overhead_ns(100000) : 0.0;
     struct Row {
         Variant v;
         std::vector<double> medians, p99s, p999s, means;
         uint64_t steps = 0;
     };
     std::vector<Row> rows;
-    for (const Variant v : variants) rows.push_back(Row{v, {}, {}, {}, {}, 0});
+    if (steps > 0)
+        for (const Variant v : variants) rows.push_back(Row{v, {}, {}, {}, {}, 0});
     for (int r = 0; r < rounds; ++r)
         for (auto& row : rows) {
             auto ns = runner.time_steps(row.v, steps);
@@ -743,6 +819,7 @@ int main(int argc, char** argv) {
             row.means.push_back(sum / static_cast<double>(ns.size()));
             row.steps = ns.size();
         }
+    if (!rows.empty()) {
     const double ref_median = median(rows[0].medians);
     std::printf("Each predict + update timed on its own with the monotonic clock (steady_clock); every figure includes "
                 "the clock's own cost, %.0f ns here. %d rounds of %llu steps per variant (%zu samples, looped), "
@@ -753,21 +830,50 @@ int main(int argc, char** argv) {
     for (const auto& row : rows)
         std::printf("| %s | %.0f | %.0f | %.0f | %.0f | %.2f |\n", variant_label(row.v), median(row.medians),
                     median(row.p99s), median(row.p999s), median(row.means), median(row.medians) / ref_median);
+    }
+    std::vector<RustRow> rust;
+    if (!rust_json.empty()) {
+        rust = read_rust_json(rust_json);
+        if (rust.empty()) std::fprintf(stderr, "ekf_peer: no step_time rows in %s\n", rust_json.c_str());
+    }
+    if (!rust.empty() && !rows.empty()) {
+        const double ref_median = median(rows[0].medians);
+        std::printf("\nBoth sides, one run (medians include each side's clock cost: C++ %.0f ns, leakwatch %.0f ns):\n", overhead,
+                    rust[0].timer_overhead_ns);
+        std::printf("| filter | states | median ns | p99 ns | vs C++ Joseph |\n|---|---|---|---|---|\n");
+        for (const auto& row : rows)
+            std::printf("| %s | 7 | %.0f | %.0f | %.2f |\n", variant_label(row.v), median(row.medians), median(row.p99s),
+                        median(row.medians) / ref_median);
+        for (const auto& r : rust)
+            std::printf("| leakwatch: %s (`bench ekf`) | %d | %.0f | %.0f | %.2f |\n", r.filter.c_str(), r.states, r.median_ns,
+                        r.p99_ns, r.median_ns / ref_median);
+    }
 
     if (!json_out.empty()) {
         std::ofstream js(json_out);
         js << "{\n  \"benchmark\": \"ekf_peer\",\n  \"states\": 7,\n  \"csv\": \"" << csv << "\",\n  \"samples\": " << samples.size()
-           << ",\n  \"steps_per_round\": " << rows[0].steps << ",\n  \"rounds\": " << rounds
+           << ",\n  \"steps_per_round\": " << (rows.empty() ? 0 : rows[0].steps) << ",\n  \"rounds\": " << rounds
            << ",\n  \"timer_overhead_ns\": " << overhead << ",\n  \"filters\": [";
         for (size_t i = 0; i < rows.size(); ++i) {
             const auto& row = rows[i];
             js << (i ? "," : "") << "\n    {\"variant\": \"" << variant_name(row.v) << "\", \"filter\": \"" << variant_label(row.v)
                << "\", \"median_ns\": " << median(row.medians) << ", \"p99_ns\": " << median(row.p99s)
-               << ", \"p999_ns\": " << median(row.p999s) << ", \"mean_ns\": " << median(row.means) << ", \"round_medians_ns\": [";
+               << ", \"p999_ns\": " << median(row.p999s) << ", \"mean_ns\": " << median(row.means)
+               << ", \"vs_cpp_joseph\": " << median(row.medians) / median(rows[0].medians) << ", \"round_medians_ns\": [";
             for (size_t k = 0; k < row.medians.size(); ++k) js << (k ? ", " : "") << row.medians[k];
             js << "]}";
         }
         js << "\n  ]";
+        if (!rust.empty()) {
+            const double ref_median = rows.empty() ? NAN : median(rows[0].medians);
+            js << ",\n  \"leakwatch_json\": " << json_string(rust_json) << ",\n  \"leakwatch\": [";
+            for (size_t i = 0; i < rust.size(); ++i)
+                js << (i ? "," : "") << "\n    {\"filter\": " << json_string(rust[i].filter) << ", \"states\": " << rust[i].states
+                   << ", \"median_ns\": " << rust[i].median_ns << ", \"p99_ns\": " << rust[i].p99_ns
+                   << ", \"timer_overhead_ns\": " << rust[i].timer_overhead_ns
+                   << ", \"vs_cpp_joseph\": " << rust[i].median_ns / ref_median << "}";
+            js << "\n  ]";
+        }
         if (!compare_file.empty()) js << ",\n  \"agreement\": " << agreement_json.str();
         js << "\n}\n";
         if (!js) {
