@@ -1,37 +1,46 @@
-// A C++17 / Eigen 3 peer of leakwatch's 7-state thesis filter (issue 32).
+// A C++17 / Eigen 3 peer of leakwatch's 7-state thesis filter (issue 32),
+// built and run by bench/cpp/compare.sh (docs/performance.md, "The C++ peer").
 //
 // The same model as model/src/process{,/rhs.rs,/discrete.rs} for 7 states on
 // the thesis rig's default parameters (model/src/params.rs), the same tuning
 // (filter/src/tuning.rs, Tuning::thesis) and the same per-sample sequence as
-// filter/src/lib.rs (Estimator::on_sample): thesis start, the command of the
-// previous sample over each interval, forward Euler with the analytic
-// Jacobian, the clamps after the prediction and after the update, all three
-// channels measured (H selects x, p1, p2). The covariance is carried in the
-// same scaled units as leakwatch's (z = x / scale) so the thesis' P0 = 1e4·I
-// does not span 22 orders of magnitude.
+// filter/src/lib.rs (Estimator::on_sample): the thesis start, the command of
+// the previous sample over each interval, one forward-Euler step with the
+// analytic Jacobian, the clamps after the prediction and after the update,
+// all three channels measured (H selects x, p1, p2). The covariance is carried
+// in leakwatch's scaled units (z = x / scale, filter/src/lib.rs SCALE).
 //
-// Update variants (the prediction is the same dense F P Fᵀ + Q in all):
-//   joseph     covariance form, dense H (3×7 of 0/1), Joseph update
-//              P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ
-//   selector   the same Joseph update with H applied as a selector: H P is
-//              three rows of P, P Hᵀ three columns; A P = P − K (H P), then
-//              P⁺ = A P − (A P Hᵀ − K R) Kᵀ (algebraically the Joseph form
-//              for any gain K)
+// Variants (all fixed-size Eigen matrices):
+//   joseph     covariance form: P⁻ = F P Fᵀ + Q (dense), dense H (3×7 of 0/1),
+//              the Joseph update P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ,
+//              P⁺ symmetrised
+//   selector   the same, with H applied as a selector: H P is three rows of P,
+//              P Hᵀ three columns, I − K H the identity but in three columns
+//              (A P = P − K (H P), A P Aᵀ = A P − (A P Hᵀ) Kᵀ, the measured
+//              rows and columns through the 3×3 block I − H K)
 //   sqrt       leakwatch's own algorithm (filter/src/ekf.rs): a factor S with
-//              P = S Sᵀ, predict by the sparse product F S and a Cholesky
+//              P = S Sᵀ, predict by the sparse product F S and the Cholesky
 //              factor of W Wᵀ + Q, update by Potter's scalar updates
 //
 // Usage:
 //   ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json]
-//            [--compare LEAKWATCH_ESTIMATES.csv]
-// SAMPLES.csv is `leakwatch simulate`'s CSV (t,u,x,p1,p2,...). --compare
-// reads the th_* columns of `leakwatch replay --model 7`'s estimates.csv of
-// the same CSV and prints how far each variant's estimates are from them.
-// Timing: every predict + update timed on its own with the monotonic clock
-// (std::chrono::steady_clock, clock_gettime(CLOCK_MONOTONIC)), the stream
-// looped (the filter restarted at its end, as `leakwatch bench ekf` does)
-// until N steps; R rounds per variant, interleaved; the figures are the
-// median over rounds of each round's median (p99 likewise).
+//            [--compare ESTIMATES.csv [--agree-from SECONDS]]
+//            [--leakwatch-json EKF.json] [--variants joseph,selector,sqrt]
+//            [--dump PREFIX]
+// SAMPLES.csv is `leakwatch simulate`'s CSV (t,u,x,p1,p2,...); every row
+// must have all channels usable. --compare reads the th_* columns of
+// `leakwatch replay SAMPLES.csv --model 7`'s estimates.csv and prints how far
+// each variant's estimates are from them, over the whole stream and from
+// --agree-from seconds on (default 0.5: the thesis' P0 = 1e4·I makes the
+// first steps' algebra ill-conditioned, so both sides' rounding differs
+// there until the filter has forgotten its start). --leakwatch-json reads
+// `leakwatch bench ekf --out DIR`'s ekf.json and prints one table of both
+// sides. --dump writes every estimate of each variant to PREFIX.VARIANT.csv.
+// Timing: every predict + update (model step, clamps and NIS included) timed
+// on its own with the monotonic clock (std::chrono::steady_clock), the stream
+// looped (the filter restarted at its end, as `bench ekf` does) until N steps
+// (default 1e6); R rounds per variant (default 3), interleaved; the figures
+// are the median over rounds of each round's median (p99 likewise).
 
 #include <Eigen/Dense>
 
