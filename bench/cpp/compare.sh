@@ -7,18 +7,19 @@
 # --leakwatch (or LEAKWATCH=PATH): the leakwatch binary, default
 #   target/release/leakwatch (`cargo build --release -p leakwatch`).
 # --out DIR: where everything goes, default target/cpp-peer.
-# --steps N: steps timed per filter and round (default 1000000), --rounds R:
-#   rounds of the C++ variants, interleaved (default 3; their median is shown).
+# --steps N: steps timed per filter and round (default 1000000); --rounds R:
+#   rounds (default 3), each the C++ variants then `leakwatch bench ekf`, so
+#   both sides see the same load; the tables show medians over rounds.
 # CXX (default g++) and EIGEN_INCLUDE (default /usr/include/eigen3) choose the
 # compiler and Eigen 3; without either the script says so and exits 0.
 #
 # It builds bench/cpp/ekf_peer.cpp with $CXX -O3 -march=native, simulates the
 # stream `bench ekf` times (loaded-sine, 60 s, seed 1, a 0.5 L/min chamber-1
 # leak from 30 s), replays it through leakwatch's 7-state thesis filter
-# (estimates.csv) and runs `leakwatch bench ekf`; the peer then prints how far
-# its estimates of the same CSV are from leakwatch's, its step times, and one
-# table with both sides' medians and their ratio to the C++ Joseph peer, and
-# writes it all to DIR/compare.json.
+# (estimates.csv); the peer then prints how far its estimates of the same CSV
+# are from leakwatch's, times its steps and leakwatch's (`bench ekf`, in
+# rounds), prints one table with both sides' medians and their ratio to the
+# C++ Joseph peer, and writes it all to DIR/compare.json.
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -69,12 +70,10 @@ echo "== the stream: $csv"
 echo "== leakwatch's 7-state thesis filter on it: $out/replay/estimates.csv"
 "$leakwatch" replay "$csv" --model 7 --single-thread --out "$out/replay" --force > "$out/replay.log" 2>&1
 
-echo "== leakwatch bench ekf --steps $steps"
-"$leakwatch" bench ekf --steps "$steps" --out "$out/bench" --force
-
+echo "== $rounds rounds: the C++ peer's variants, then leakwatch bench ekf ($out/bench/round-*), $steps steps each"
 echo
-echo "== the C++ peer, $rounds rounds of $steps steps per variant"
+mkdir -p "$out/bench"
 "$peer" --csv "$csv" --compare "$out/replay/estimates.csv" --steps "$steps" --rounds "$rounds" \
-    --leakwatch-json "$out/bench/ekf.json" --json "$out/compare.json"
+    --leakwatch "$leakwatch" --bench-dir "$out/bench" --json "$out/compare.json"
 echo
 echo "wrote $out/compare.json"

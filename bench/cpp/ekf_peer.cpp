@@ -25,17 +25,20 @@
 // Usage:
 //   ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json]
 //            [--compare ESTIMATES.csv [--agree-from SECONDS]]
-//            [--leakwatch-json EKF.json] [--variants joseph,selector,sqrt]
-//            [--dump PREFIX]
+//            [--leakwatch PATH [--bench-dir DIR]] [--leakwatch-json EKF.json]...
+//            [--variants joseph,selector,sqrt] [--dump PREFIX]
 // SAMPLES.csv is `leakwatch simulate`'s CSV (t,u,x,p1,p2,...); every row
 // must have all channels usable. --compare reads the th_* columns of
 // `leakwatch replay SAMPLES.csv --model 7`'s estimates.csv and prints how far
 // each variant's estimates are from them, over the whole stream and from
 // --agree-from seconds on (default 0.5: the thesis' P0 = 1e4·I makes the
 // first steps' algebra ill-conditioned, so both sides' rounding differs
-// there until the filter has forgotten its start). --leakwatch-json reads
-// `leakwatch bench ekf --out DIR`'s ekf.json and prints one table of both
-// sides. --dump writes every estimate of each variant to PREFIX.VARIANT.csv.
+// there until the filter has forgotten its start). --leakwatch runs
+// `PATH bench ekf --steps N --out DIR/round-K` after each round of the C++
+// variants (so both sides see the same load) and prints one table of both
+// sides' medians over rounds and their ratio to the C++ Joseph peer;
+// --leakwatch-json adds an ekf.json measured before as one more round.
+// --dump writes every estimate of each variant to PREFIX.VARIANT.csv.
 // Timing: every predict + update (model step, clamps and NIS included) timed
 // on its own with the monotonic clock (std::chrono::steady_clock), the stream
 // looped (the filter restarted at its end, as `bench ekf` does) until N steps
@@ -664,6 +667,13 @@ std::vector<RustRow> read_rust_json(const std::string& file) {
     return rows;
 }
 
+// `s` as one word for /bin/sh.
+std::string shell_quote(const std::string& s) {
+    std::string out = "'";
+    for (const char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
 std::string json_string(const std::string& s) {
     std::string out = "\"";
     for (const char c : s) {
@@ -677,14 +687,15 @@ void usage() {
     std::fprintf(stderr,
                  "usage: ekf_peer --csv SAMPLES.csv [--steps N] [--rounds R] [--json OUT.json] "
                  "[--compare LEAKWATCH_ESTIMATES.csv [--agree-from SECONDS]] [--variants joseph,selector,sqrt] "
-                 "[--dump PREFIX] [--leakwatch-json EKF.json]\n");
+                 "[--dump PREFIX] [--leakwatch PATH [--bench-dir DIR]] [--leakwatch-json EKF.json]...\n");
     std::exit(2);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string csv, json_out, compare_file, dump_prefix, rust_json, variants_arg = "joseph,selector,sqrt";
+    std::string csv, json_out, compare_file, dump_prefix, leakwatch_bin, bench_dir = ".", variants_arg = "joseph,selector,sqrt";
+    std::vector<std::string> rust_jsons;
     uint64_t steps = 1000000;
     int rounds = 3;
     double agree_from_s = 0.5;
@@ -702,7 +713,9 @@ int main(int argc, char** argv) {
         else if (a == "--agree-from") agree_from_s = std::strtod(next().c_str(), nullptr);
         else if (a == "--variants") variants_arg = next();
         else if (a == "--dump") dump_prefix = next();
-        else if (a == "--leakwatch-json") rust_json = next();
+        else if (a == "--leakwatch-json") rust_jsons.push_back(next());
+        else if (a == "--leakwatch") leakwatch_bin = next();
+        else if (a == "--bench-dir") bench_dir = next();
         else usage();
     }
     if (csv.empty()) usage();
@@ -806,83 +819,117 @@ int main(int argc, char** argv) {
     }
 
     // ---- timing
-    // (--steps 0: the agreement alone)
+    // (--steps 0: the agreement alone.) Each round times every C++ variant and
+    // then, with --leakwatch, runs `leakwatch bench ekf` once, so both sides
+    // see the same load; the figures are medians over rounds.
     const double overhead = steps > 0 ? timer_overhead_ns(100000) : 0.0;
     struct Row {
-        Variant v;
-        std::vector<double> medians, p99s, p999s, means;
+        std::string label;
+        int states = 7;
+        std::vector<double> medians, p99s, p999s, means, overheads;
         uint64_t steps = 0;
     };
-    std::vector<Row> rows;
+    std::vector<Row> rows;  // the C++ variants
+    std::vector<Row> rust;  // leakwatch's filters, in ekf.json's order
+    auto add_rust = [&](const std::string& file) {
+        const auto rr = read_rust_json(file);
+        if (rr.empty()) {
+            std::fprintf(stderr, "ekf_peer: no step_time rows in %s\n", file.c_str());
+            return false;
+        }
+        for (size_t i = 0; i < rr.size(); ++i) {
+            if (i >= rust.size()) rust.push_back(Row{rr[i].filter, rr[i].states, {}, {}, {}, {}, {}, 0});
+            rust[i].medians.push_back(rr[i].median_ns);
+            rust[i].p99s.push_back(rr[i].p99_ns);
+            rust[i].overheads.push_back(rr[i].timer_overhead_ns);
+        }
+        return true;
+    };
+    for (const auto& file : rust_jsons)
+        if (!add_rust(file)) return 1;
     if (steps > 0)
-        for (const Variant v : variants) rows.push_back(Row{v, {}, {}, {}, {}, 0});
-    for (int r = 0; r < rounds; ++r)
-        for (auto& row : rows) {
-            auto ns = runner.time_steps(row.v, steps);
+        for (const Variant v : variants) rows.push_back(Row{variant_label(v), 7, {}, {}, {}, {}, {}, 0});
+    for (int r = 0; r < rounds && steps > 0; ++r) {
+        for (size_t i = 0; i < rows.size(); ++i) {
+            auto ns = runner.time_steps(variants[i], steps);
             double sum = 0.0;
             for (const double d : ns) sum += d;
             std::sort(ns.begin(), ns.end());
-            row.medians.push_back(quantile_sorted(ns, 0.5));
-            row.p99s.push_back(quantile_sorted(ns, 0.99));
-            row.p999s.push_back(quantile_sorted(ns, 0.999));
-            row.means.push_back(sum / static_cast<double>(ns.size()));
-            row.steps = ns.size();
+            rows[i].medians.push_back(quantile_sorted(ns, 0.5));
+            rows[i].p99s.push_back(quantile_sorted(ns, 0.99));
+            rows[i].p999s.push_back(quantile_sorted(ns, 0.999));
+            rows[i].means.push_back(sum / static_cast<double>(ns.size()));
+            rows[i].steps = ns.size();
         }
-    if (!rows.empty()) {
-    const double ref_median = median(rows[0].medians);
-    std::printf("Each predict + update timed on its own with the monotonic clock (steady_clock); every figure includes "
-                "the clock's own cost, %.0f ns here. %d rounds of %llu steps per variant (%zu samples, looped), "
-                "median over rounds.\n",
-                overhead, rounds, static_cast<unsigned long long>(rows[0].steps), samples.size());
-    std::printf("| filter | median ns | p99 ns | p99.9 ns | mean ns | vs %s |\n", variant_name(rows[0].v));
-    std::printf("|---|---|---|---|---|---|\n");
-    for (const auto& row : rows)
-        std::printf("| %s | %.0f | %.0f | %.0f | %.0f | %.2f |\n", variant_label(row.v), median(row.medians),
-                    median(row.p99s), median(row.p999s), median(row.means), median(row.medians) / ref_median);
+        if (!leakwatch_bin.empty()) {
+            const std::string dir = bench_dir + "/round-" + std::to_string(r + 1);
+            const std::string cmd = shell_quote(leakwatch_bin) + " bench ekf --steps " + std::to_string(steps) + " --out " +
+                                    shell_quote(dir) + " --force > " + shell_quote(dir + ".log") + " 2>&1";
+            std::fprintf(stderr, "round %d: leakwatch bench ekf (%s.log)\n", r + 1, dir.c_str());
+            if (std::system(cmd.c_str()) != 0) {
+                std::fprintf(stderr, "ekf_peer: `%s` failed (see %s.log)\n", cmd.c_str(), dir.c_str());
+                return 1;
+            }
+            if (!add_rust(dir + "/ekf.json")) return 1;
+        }
     }
-    std::vector<RustRow> rust;
-    if (!rust_json.empty()) {
-        rust = read_rust_json(rust_json);
-        if (rust.empty()) std::fprintf(stderr, "ekf_peer: no step_time rows in %s\n", rust_json.c_str());
+    const double ref_median = rows.empty() ? NAN : median(rows[0].medians);
+    if (!rows.empty()) {
+        std::printf("Each predict + update timed on its own with the monotonic clock (steady_clock); every figure "
+                    "includes the clock's own cost, %.0f ns here. %d rounds of %llu steps per variant (%zu samples, "
+                    "looped), median over rounds.\n",
+                    overhead, rounds, static_cast<unsigned long long>(rows[0].steps), samples.size());
+        std::printf("| filter | median ns | p99 ns | p99.9 ns | mean ns | round medians ns | vs joseph |\n");
+        std::printf("|---|---|---|---|---|---|---|\n");
+        for (const auto& row : rows) {
+            std::string each;
+            for (const double m : row.medians) each += (each.empty() ? "" : ", ") + std::to_string(std::lround(m));
+            std::printf("| %s | %.0f | %.0f | %.0f | %.0f | %s | %.2f |\n", row.label.c_str(), median(row.medians),
+                        median(row.p99s), median(row.p999s), median(row.means), each.c_str(),
+                        median(row.medians) / ref_median);
+        }
     }
     if (!rust.empty() && !rows.empty()) {
-        const double ref_median = median(rows[0].medians);
-        std::printf("\nBoth sides, one run (medians include each side's clock cost: C++ %.0f ns, leakwatch %.0f ns):\n", overhead,
-                    rust[0].timer_overhead_ns);
+        std::printf("\nBoth sides, interleaved, medians over rounds (%zu of leakwatch's `bench ekf`); every figure "
+                    "includes its side's clock cost (C++ %.0f ns, leakwatch %.0f ns):\n",
+                    rust[0].medians.size(), overhead, median(rust[0].overheads));
         std::printf("| filter | states | median ns | p99 ns | vs C++ Joseph |\n|---|---|---|---|---|\n");
         for (const auto& row : rows)
-            std::printf("| %s | 7 | %.0f | %.0f | %.2f |\n", variant_label(row.v), median(row.medians), median(row.p99s),
-                        median(row.medians) / ref_median);
-        for (const auto& r : rust)
-            std::printf("| leakwatch: %s (`bench ekf`) | %d | %.0f | %.0f | %.2f |\n", r.filter.c_str(), r.states, r.median_ns,
-                        r.p99_ns, r.median_ns / ref_median);
+            std::printf("| %s | %d | %.0f | %.0f | %.2f |\n", row.label.c_str(), row.states, median(row.medians),
+                        median(row.p99s), median(row.medians) / ref_median);
+        for (const auto& row : rust)
+            std::printf("| leakwatch: %s (`bench ekf`) | %d | %.0f | %.0f | %.2f |\n", row.label.c_str(), row.states,
+                        median(row.medians), median(row.p99s), median(row.medians) / ref_median);
     }
 
     if (!json_out.empty()) {
         std::ofstream js(json_out);
-        js << "{\n  \"benchmark\": \"ekf_peer\",\n  \"states\": 7,\n  \"csv\": \"" << csv << "\",\n  \"samples\": " << samples.size()
-           << ",\n  \"steps_per_round\": " << (rows.empty() ? 0 : rows[0].steps) << ",\n  \"rounds\": " << rounds
-           << ",\n  \"timer_overhead_ns\": " << overhead << ",\n  \"filters\": [";
+        auto list = [&](const std::vector<double>& v) {
+            std::string out = "[";
+            for (size_t k = 0; k < v.size(); ++k) out += (k ? ", " : "") + std::to_string(v[k]);
+            return out + "]";
+        };
+        js << "{\n  \"benchmark\": \"ekf_peer\",\n  \"states\": 7,\n  \"csv\": " << json_string(csv)
+           << ",\n  \"samples\": " << samples.size() << ",\n  \"steps_per_round\": " << (rows.empty() ? 0 : rows[0].steps)
+           << ",\n  \"rounds\": " << rounds << ",\n  \"timer_overhead_ns\": " << overhead
+           << ",\n  \"ratio_to\": \"C++ Joseph (dense H), median ns\",\n  \"filters\": [";
         for (size_t i = 0; i < rows.size(); ++i) {
             const auto& row = rows[i];
-            js << (i ? "," : "") << "\n    {\"variant\": \"" << variant_name(row.v) << "\", \"filter\": \"" << variant_label(row.v)
-               << "\", \"median_ns\": " << median(row.medians) << ", \"p99_ns\": " << median(row.p99s)
-               << ", \"p999_ns\": " << median(row.p999s) << ", \"mean_ns\": " << median(row.means)
-               << ", \"vs_cpp_joseph\": " << median(row.medians) / median(rows[0].medians) << ", \"round_medians_ns\": [";
-            for (size_t k = 0; k < row.medians.size(); ++k) js << (k ? ", " : "") << row.medians[k];
-            js << "]}";
+            js << (i ? "," : "") << "\n    {\"side\": \"c++\", \"variant\": \"" << variant_name(variants[i])
+               << "\", \"filter\": " << json_string(row.label) << ", \"states\": 7, \"median_ns\": " << median(row.medians)
+               << ", \"p99_ns\": " << median(row.p99s) << ", \"p999_ns\": " << median(row.p999s)
+               << ", \"mean_ns\": " << median(row.means) << ", \"vs_cpp_joseph\": " << median(row.medians) / ref_median
+               << ", \"round_medians_ns\": " << list(row.medians) << "}";
+        }
+        for (size_t i = 0; i < rust.size(); ++i) {
+            const auto& row = rust[i];
+            js << (i || !rows.empty() ? "," : "") << "\n    {\"side\": \"leakwatch\", \"filter\": " << json_string(row.label)
+               << ", \"states\": " << row.states << ", \"median_ns\": " << median(row.medians)
+               << ", \"p99_ns\": " << median(row.p99s) << ", \"timer_overhead_ns\": " << median(row.overheads)
+               << ", \"vs_cpp_joseph\": " << median(row.medians) / ref_median
+               << ", \"round_medians_ns\": " << list(row.medians) << "}";
         }
         js << "\n  ]";
-        if (!rust.empty()) {
-            const double ref_median = rows.empty() ? NAN : median(rows[0].medians);
-            js << ",\n  \"leakwatch_json\": " << json_string(rust_json) << ",\n  \"leakwatch\": [";
-            for (size_t i = 0; i < rust.size(); ++i)
-                js << (i ? "," : "") << "\n    {\"filter\": " << json_string(rust[i].filter) << ", \"states\": " << rust[i].states
-                   << ", \"median_ns\": " << rust[i].median_ns << ", \"p99_ns\": " << rust[i].p99_ns
-                   << ", \"timer_overhead_ns\": " << rust[i].timer_overhead_ns
-                   << ", \"vs_cpp_joseph\": " << rust[i].median_ns / ref_median << "}";
-            js << "\n  ]";
-        }
         if (!compare_file.empty()) js << ",\n  \"agreement\": " << agreement_json.str();
         js << "\n}\n";
         if (!js) {
