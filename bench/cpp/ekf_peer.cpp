@@ -56,9 +56,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
-#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -548,8 +546,6 @@ struct Filter {
         x += dz.cwiseProduct(scale);
         model->keep_physical(x);
     }
-
-    Mat covariance_scaled() const { return P; }
 };
 
 // Keeps the compiler from moving or dropping work across the clock reads.
