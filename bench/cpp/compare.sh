@@ -59,6 +59,11 @@ if [ ! -x "$leakwatch" ]; then
 fi
 
 mkdir -p "$out"
+failed() {
+    echo "compare.sh: leakwatch $1 failed ($out/$1.log):" >&2
+    tail -n 5 "$out/$1.log" >&2
+    exit 1
+}
 peer=$out/ekf_peer
 csv=$out/loaded-sine-60s.csv
 echo "== building the C++ peer ($("$cxx" --version | head -n 1))"
@@ -66,9 +71,10 @@ echo "== building the C++ peer ($("$cxx" --version | head -n 1))"
 
 echo "== the stream: $csv"
 "$leakwatch" simulate --scenario loaded-sine --seconds 60 --seed 1 --fault ext1:0.5lpm@30s \
-    --out "$csv" --force > /dev/null 2>&1
+    --out "$csv" --force > "$out/simulate.log" 2>&1 || failed simulate
 echo "== leakwatch's 7-state thesis filter on it: $out/replay/estimates.csv"
-"$leakwatch" replay "$csv" --model 7 --single-thread --out "$out/replay" --force > "$out/replay.log" 2>&1
+"$leakwatch" replay "$csv" --model 7 --single-thread --out "$out/replay" --force > "$out/replay.log" 2>&1 ||
+    failed replay
 
 echo "== $rounds rounds: the C++ peer's variants, then leakwatch bench ekf ($out/bench/round-*), $steps steps each"
 echo
