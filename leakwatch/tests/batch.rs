@@ -5,21 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn leakwatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
-        .args(args)
-        .output()
-        .expect("the leakwatch binary runs")
-}
-
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("batch-{name}"))
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
+mod common;
+use common::*;
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).to_string()

@@ -2,21 +2,8 @@
 
 use std::process::{Command, Output};
 
-fn leakwatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
-        .args(args)
-        .output()
-        .expect("the leakwatch binary runs")
-}
-
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("cli-{name}"))
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
+mod common;
+use common::*;
 
 #[test]
 fn simulate_writes_the_documented_csv() {

@@ -3,19 +3,10 @@
 //! without poisoning the filter.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn leakwatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_leakwatch"))
-        .args(args)
-        .output()
-        .expect("the leakwatch binary runs")
-}
-
-/// A fresh folder for one test, removed when the test passes.
-fn tmpdir(name: &str) -> scratch::ScratchDir {
-    scratch::ScratchDir::new(&format!("replay-{name}"))
-}
+mod common;
+use common::*;
 
 fn simulate(dir: &Path, scenario: &str, seconds: &str, fault: &str) -> PathBuf {
     let out = dir.join("in.csv");

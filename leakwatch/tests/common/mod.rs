@@ -14,6 +14,11 @@ pub fn leakwatch(args: &[&str]) -> Output {
         .expect("the leakwatch binary runs")
 }
 
+/// The standard error of a finished command, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
 /// A fresh folder for one test, `<test file>-<name>`, removed when the test passes.
 pub fn tmpdir(name: &str) -> scratch::ScratchDir {
     scratch::ScratchDir::new(&format!("{}-{name}", env!("CARGO_CRATE_NAME")))
