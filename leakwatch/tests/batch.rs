@@ -3,7 +3,7 @@
 //! and the others complete, and the exit status says so.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 mod common;
 use common::*;

@@ -1,6 +1,6 @@
 //! The command line as a user meets it: real runs of the built binary.
 
-use std::process::{Command, Output};
+use std::process::Command;
 
 mod common;
 use common::*;
