@@ -40,14 +40,21 @@ pub enum EkfError {
 pub struct Ekf<const N: usize, const M: usize> {
     /// State estimate, SI units.
     x: SVector<f64, N>,
-    /// Covariance factor in scaled units: P_z = S·Sᵀ.
-    s: SMatrix<f64, N, N>,
+    /// Covariance factor in scaled units, P_z = S·Sᵀ, by rows (`s[i]` is row i:
+    /// the time update and the selector update read rows, contiguous here).
+    s: [[f64; N]; N],
+    /// Whether S is lower triangular (after a reset, a re-anchoring or a time
+    /// update; a measurement update fills it in): a selector update then reads
+    /// only the columns up to the highest measured state.
+    lower: bool,
     /// Typical magnitude of each state (its unit of scaling), SI.
     x_scale: SVector<f64, N>,
     /// Process noise standard deviations per step, scaled.
     q_sqrt: SVector<f64, N>,
     /// Measurement noise variances, SI.
     r: SVector<f64, M>,
+    /// Measurement noise standard deviations √r, SI (Potter's γ).
+    r_sqrt: SVector<f64, M>,
     /// x_scale[j] / x_scale[i], precomputed for scaling Jacobians.
     ratio: SMatrix<f64, N, N>,
 }
@@ -66,10 +73,12 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         let ratio = SMatrix::<f64, N, N>::from_fn(|i, j| x_scale[j] / x_scale[i]);
         let mut f = Ekf {
             x: x0,
-            s: SMatrix::zeros(),
+            s: [[0.0; N]; N],
+            lower: true,
             x_scale,
             q_sqrt: SVector::zeros(),
             r: r_diag,
+            r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
             ratio,
         };
         for i in 0..N {
@@ -82,10 +91,26 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// Restarts the filter at `x0` with covariance diag(`p0_diag`) (SI).
     pub fn reset(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>) {
         self.x = x0;
-        self.s = SMatrix::zeros();
+        self.s = [[0.0; N]; N];
         for i in 0..N {
-            self.s[(i, i)] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
+            self.s[i][i] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
         }
+        self.lower = true;
+    }
+
+    /// S as a matrix (scaled units).
+    fn factor(&self) -> SMatrix<f64, N, N> {
+        SMatrix::from_fn(|i, j| self.s[i][j])
+    }
+
+    /// Sets S from a matrix (scaled units).
+    fn set_factor(&mut self, m: &SMatrix<f64, N, N>, lower: bool) {
+        for (i, row) in self.s.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = m[(i, j)];
+            }
+        }
+        self.lower = lower;
     }
 
     /// Re-anchors the fast states after a gap: states `0..keep_from` restart at
@@ -94,7 +119,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// covariance (the slow parameters, e.g. leak sizes, survive a gap).
     /// Falls back to a full reset if the kept block is not positive definite.
     pub fn reanchor(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>, keep_from: usize) {
-        let pz = self.s * self.s.transpose();
+        let pz = self.scaled_covariance();
         let mut p = SMatrix::<f64, N, N>::zeros();
         for i in 0..N {
             if i < keep_from {
@@ -109,7 +134,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         let kept = self.x;
         match p.cholesky() {
             Some(c) if self.x.iter().skip(keep_from).all(|v| v.is_finite()) => {
-                self.s = c.l();
+                self.set_factor(&c.l(), true);
                 self.x = x0;
                 for i in keep_from..N {
                     self.x[i] = kept[i];
@@ -131,7 +156,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
 
     /// The covariance P in SI units (computed from the factor).
     pub fn covariance(&self) -> SMatrix<f64, N, N> {
-        let pz = self.s * self.s.transpose();
+        let pz = self.scaled_covariance();
         let mut p = pz;
         for i in 0..N {
             for j in 0..N {
@@ -143,52 +168,44 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
 
     /// The covariance in scaled units, P_z = S·Sᵀ.
     pub fn scaled_covariance(&self) -> SMatrix<f64, N, N> {
-        self.s * self.s.transpose()
+        let s = self.factor();
+        s * s.transpose()
     }
 
     /// Standard deviation of each state, SI.
     pub fn sigma(&self) -> SVector<f64, N> {
         let mut out = SVector::<f64, N>::zeros();
         for i in 0..N {
-            out[i] = self.s.row(i).norm() * self.x_scale[i];
+            out[i] = self.sigma_of(i);
         }
         out
     }
 
     /// Standard deviation of state `i`, SI.
     pub fn sigma_of(&self, i: usize) -> f64 {
-        self.s.row(i).norm() * self.x_scale[i]
+        dot(&self.s[i], &self.s[i]).sqrt() * self.x_scale[i]
     }
 
     /// Whether the state and the factor are finite.
     pub fn is_finite(&self) -> bool {
         // every value tested, without a branch per value (it vectorises)
         let finite = |m: &[f64]| m.iter().fold(true, |all, v| all & v.is_finite());
-        finite(self.x.as_slice()) & finite(self.s.as_slice())
+        finite(self.x.as_slice()) & finite(self.s.as_flattened())
     }
 
     /// Time update: the caller has propagated the state to `x_pred` (SI) with
     /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
     pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        // Rows of S (nalgebra is column-major: a row of S is strided, a row of
-        // this array is contiguous).
-        let s = self.s.as_slice();
-        let mut s_rows = [[0.0; N]; N];
-        for (c, col) in s.chunks_exact(N).enumerate() {
-            for (row, v) in s_rows.iter_mut().zip(col) {
-                row[c] = *v;
-            }
-        }
         // Rows of W = F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse
         // (the process couples each state to a few others), so each of its
         // non-zeros adds a multiple of one row of S to one row of W.
-        let mut w_rows = [[0.0; N]; N];
+        let mut w = [[0.0; N]; N];
         let (f, ratio) = (f_jac.as_slice(), self.ratio.as_slice());
-        for (j, (f_col, r_col)) in f.chunks_exact(N).zip(ratio.chunks_exact(N)).enumerate() {
-            for (i, (fij, rij)) in f_col.iter().zip(r_col).enumerate() {
+        for (s_j, (f_col, r_col)) in self.s.iter().zip(f.chunks_exact(N).zip(ratio.chunks_exact(N))) {
+            for (w_i, (fij, rij)) in w.iter_mut().zip(f_col.iter().zip(r_col)) {
                 if *fij != 0.0 {
                     let fz = fij * rij;
-                    for (w, s) in w_rows[i].iter_mut().zip(&s_rows[j]) {
+                    for (w, s) in w_i.iter_mut().zip(s_j) {
                         *w += fz * s;
                     }
                 }
@@ -200,19 +217,20 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         // contiguous rows of W. Should rounding make the factorisation fail (a
         // state with almost no variance), triangularise [W, Q^½] by Householder
         // reflections, which cannot fail.
-        let mut p_rows = [[0.0; N]; N];
+        let mut p = [[0.0; N]; N];
         for i in 0..N {
             for j in 0..=i {
-                p_rows[i][j] = dot(&w_rows[i], &w_rows[j]);
+                p[i][j] = dot(&w[i], &w[j]);
             }
-            p_rows[i][i] += self.q_sqrt[i] * self.q_sqrt[i];
+            p[i][i] += self.q_sqrt[i] * self.q_sqrt[i];
         }
-        if cholesky_rows(&mut p_rows) {
-            self.s = SMatrix::from_fn(|i, j| p_rows[i][j]);
+        if cholesky_rows(&mut p) {
+            self.s = p;
+            self.lower = true;
             self.x = x_pred;
             return self.finite_or_error();
         }
-        let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w_rows[i][c]);
+        let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w[i][c]);
         self.triangularise(x_pred, w1)
     }
 
@@ -230,7 +248,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 fz[(i, j)] *= self.ratio[(i, j)];
             }
         }
-        let w1 = fz * self.s;
+        let w1 = fz * self.factor();
         let mut p = w1 * w1.transpose();
         for i in 0..N {
             p[(i, i)] += self.q_sqrt[i] * self.q_sqrt[i];
@@ -238,11 +256,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         self.finish_predict(x_pred, p, w1)
     }
 
-    /// Ends a time update: S⁻ = the Cholesky factor of `p` (P⁻, lower triangle), or,
-    /// should that fail to rounding, the triangularised [`w1` = F·S, Q^½]; the state
-    /// becomes `x_pred`.
-    /// The end of a time update from P⁻ (its lower triangle, scaled) and W:
-    /// S⁻ by Cholesky, else by triangularising [W, Q^½].
+    /// The end of a time update from P⁻ (its lower triangle, scaled) and W = F·S:
+    /// S⁻ by Cholesky, else by triangularising [W, Q^½]; the state becomes `x_pred`.
     #[cfg(test)]
     fn finish_predict(
         &mut self,
@@ -257,7 +272,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             }
         }
         if cholesky_rows(&mut p_rows) {
-            self.s = SMatrix::from_fn(|i, j| p_rows[i][j]);
+            self.s = p_rows;
+            self.lower = true;
             self.x = x_pred;
             return self.finite_or_error();
         }
@@ -268,7 +284,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     fn triangularise(&mut self, x_pred: SVector<f64, N>, mut w1: SMatrix<f64, N, N>) -> Result<(), EkfError> {
         let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
         lower_triangularise(&mut w1, &mut w2);
-        self.s = w1;
+        self.set_factor(&w1, true);
         self.x = x_pred;
         self.finite_or_error()
     }
@@ -298,9 +314,10 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 hz[(i, j)] *= self.x_scale[j];
             }
         }
+        let mut s = self.factor();
         // Innovation statistics from the prior: C = H_z S Sᵀ H_zᵀ + R.
         let nu = y - h_pred;
-        let hs = hz * self.s;
+        let hs = hz * s;
         let mut c = hs * hs.transpose();
         for i in 0..M {
             c[(i, i)] += self.r[i];
@@ -314,19 +331,21 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 continue;
             }
             let h = hz.row(i).transpose();
-            let phi = self.s.transpose() * h;
+            let phi = s.transpose() * h;
             let denom = phi.dot(&phi) + self.r[i];
             if denom <= 0.0 || !denom.is_finite() {
+                self.set_factor(&s, false);
                 return Err(EkfError::SingularInnovation);
             }
             let a = 1.0 / denom;
             let gamma = 1.0 / (1.0 + (a * self.r[i]).sqrt());
-            let k = self.s * phi * a;
+            let k = s * phi * a;
             let resid = nu[i] - h.dot(&dz);
             dz += k * resid;
             // S ← S − γ k φᵀ, a rank-one update in place (no N×N temporary)
-            self.s.ger(-gamma, &k, &phi, 1.0);
+            s.ger(-gamma, &k, &phi, 1.0);
         }
+        self.set_factor(&s, false);
         for j in 0..N {
             self.x[j] += dz[j] * self.x_scale[j];
         }
@@ -341,8 +360,10 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// [`Ekf::update`] for a measurement that reads states directly:
     /// measurement i is state `states[i]` (H is a selector, as for the rod
     /// position and the two chamber pressures). Same result as `update` with
-    /// that H, without multiplying by its zeros: each scalar update reads one
-    /// row of the factor instead of forming Sᵀ·h.
+    /// that H (to rounding), without multiplying by its zeros: each scalar
+    /// update reads one row of the factor instead of forming Sᵀ·h, and the NIS
+    /// is summed from the scalar updates' own innovations and variances
+    /// (νᵀC⁻¹ν = Σ eᵢ²/cᵢ over the sequential innovations eᵢ, variances cᵢ).
     pub fn update_selected(
         &mut self,
         y: &SVector<f64, M>,
@@ -351,62 +372,63 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
         let nu = y - h_pred;
-        // C = H_z S Sᵀ H_zᵀ + R, with row i of H_z S = x_scale[s_i] · S.row(s_i).
-        let mut c = SMatrix::<f64, M, M>::zeros();
-        for i in 0..M {
+        // σ of each innovation from the prior: C_ii = c_i²·|row s_i of S|² + r_i.
+        let sigma = SVector::<f64, M>::from_fn(|i, _| {
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for j in 0..=i {
-                let (sj, cj) = (states[j], self.x_scale[states[j]]);
-                let mut dot = 0.0;
-                for col in 0..N {
-                    dot += self.s[(si, col)] * self.s[(sj, col)];
-                }
-                c[(i, j)] = ci * cj * dot;
-                c[(j, i)] = c[(i, j)];
-            }
-            c[(i, i)] += self.r[i];
-        }
-        let (sigma, nis) = innovation_statistics(&c, &nu, use_channel)?;
+            (ci * ci * dot(&self.s[si], &self.s[si]) + self.r[i])
+                .max(0.0)
+                .sqrt()
+        });
+        // The columns the measured rows of S can have non-zeros in: all, or, for
+        // a lower triangular S, those up to the highest measured state (the
+        // rank-one updates below write only these columns, so it stays so
+        // from one scalar update to the next).
+        let support = match states.iter().max() {
+            Some(m) if self.lower => (m + 1).min(N),
+            _ => N,
+        };
 
         // Potter's update, one scalar measurement at a time; φ = Sᵀh is a row of S.
-        let mut dz = SVector::<f64, N>::zeros();
-        let mut phi = SVector::<f64, N>::zeros();
-        let mut k = SVector::<f64, N>::zeros();
+        let mut dz = [0.0; N]; // scaled state correction so far
+        let mut phi = [0.0; N];
+        let mut nis = 0.0;
         for i in 0..M {
             if !use_channel[i] {
                 continue;
             }
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for col in 0..N {
-                phi[col] = ci * self.s[(si, col)];
+            for (p, s) in phi.iter_mut().zip(&self.s[si]).take(support) {
+                *p = ci * s;
             }
-            let denom = phi.dot(&phi) + self.r[i];
-            if denom <= 0.0 || !denom.is_finite() {
+            let denom = dot(&phi, &phi) + self.r[i];
+            if !(denom > 0.0 && denom.is_finite()) {
                 return Err(EkfError::SingularInnovation);
             }
+            // k = a·S·φ with a = 1/denom, and S ← S − γ k φᵀ with Potter's
+            // γ = 1/(1 + √(a·r)): a·γ = 1/(denom + √denom·√r), one division
+            // after the square root instead of two around it.
             let a = 1.0 / denom;
-            let gamma = 1.0 / (1.0 + (a * self.r[i]).sqrt());
-            // k = a·S·φ and S ← S − γ k φᵀ touch only the columns where φ is not
-            // zero: S is lower triangular after the time update and the measured
-            // states come first, so φ has a few non-zeros.
-            k.fill(0.0);
-            for (c, col) in self.s.column_iter().enumerate() {
-                let pc = phi[c];
-                if pc != 0.0 {
-                    k.axpy(a * pc, &col, 1.0);
-                }
+            let ag = 1.0 / (denom + denom.sqrt() * self.r_sqrt[i]);
+            let mut u = [0.0; N]; // S·φ
+            for (u, row) in u.iter_mut().zip(&self.s) {
+                *u = dot_prefix(row, &phi, support);
             }
             let resid = nu[i] - ci * dz[si];
-            dz.axpy(resid, &k, 1.0);
-            for (c, mut col) in self.s.column_iter_mut().enumerate() {
-                let pc = phi[c];
-                if pc != 0.0 {
-                    col.axpy(-gamma * pc, &k, 1.0);
+            nis += resid * resid * a;
+            let step = resid * a;
+            for (d, u) in dz.iter_mut().zip(&u) {
+                *d += u * step;
+            }
+            for (row, u) in self.s.iter_mut().zip(&u) {
+                let g = ag * u;
+                for (v, p) in row.iter_mut().zip(&phi).take(support) {
+                    *v -= g * p;
                 }
             }
+            self.lower = false;
         }
-        for j in 0..N {
-            self.x[j] += dz[j] * self.x_scale[j];
+        for ((x, d), c) in self.x.iter_mut().zip(&dz).zip(&self.x_scale) {
+            *x += d * c;
         }
         if !self.is_finite() {
             return Err(EkfError::NotFinite);
@@ -466,6 +488,16 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
         acc[k] += x * y;
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// The dot product of the first `len` entries of two rows.
+#[inline]
+fn dot_prefix<const N: usize>(a: &[f64; N], b: &[f64; N], len: usize) -> f64 {
+    let mut acc = 0.0;
+    for (x, y) in a.iter().zip(b).take(len) {
+        acc += x * y;
+    }
+    acc
 }
 
 /// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
