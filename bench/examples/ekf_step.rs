@@ -98,6 +98,9 @@ fn main() {
             r.median_ns, r.p99_ns, r.mean_ns
         );
     }
+    if std::env::var_os("EKF_STEP_NO_CHAIN").is_some() {
+        return;
+    }
     let tp = chain_throughput(&samples, 3);
     println!("{:>24}: {:.0} samples/s", "chain", tp.samples_per_s);
 }
