@@ -501,30 +501,41 @@ fn dot_prefix<const N: usize>(a: &[f64; N], b: &[f64; N], len: usize) -> f64 {
 }
 
 /// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
-/// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A
-/// (right-looking: each column, once scaled, updates the trailing lower
-/// triangle, whose entries are independent of each other). The upper triangle
-/// is neither read nor written. Returns false (and `a` is garbage) if A is not
-/// numerically positive definite.
+/// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A. The upper
+/// triangle is neither read nor written. Returns false (and `a` is garbage) if
+/// A is not numerically positive definite (a pivot not positive and finite).
+///
+/// Computed as A = L₁·D·L₁ᵀ (L₁ unit lower triangular), then L = L₁·D^½: the
+/// chain from one pivot to the next is one division, a product and a
+/// difference; the square roots come after, independent of each other.
+/// Right-looking: each column, once scaled, updates the trailing lower
+/// triangle, row by row over contiguous entries.
 fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
+    let mut pivots = [0.0; N];
     for j in 0..N {
         let d = a[j][j];
         if !(d > 0.0 && d.is_finite()) {
             return false;
         }
-        let ljj = d.sqrt();
-        a[j][j] = ljj;
-        let inv = 1.0 / ljj;
+        pivots[j] = d;
+        let inv = 1.0 / d;
         let mut col = [0.0; N];
-        for i in j + 1..N {
-            a[i][j] *= inv;
-            col[i] = a[i][j];
+        for (c, row) in col.iter_mut().zip(a.iter()).skip(j + 1) {
+            *c = row[j];
         }
-        for i in j + 1..N {
-            let lij = col[i];
-            for (c, lcj) in col.iter().enumerate().take(i + 1).skip(j + 1) {
-                a[i][c] -= lij * lcj;
+        for (i, row) in a.iter_mut().enumerate().skip(j + 1) {
+            let l = col[i] * inv;
+            for (v, c) in row[j + 1..=i].iter_mut().zip(&col[j + 1..=i]) {
+                *v -= l * c;
             }
+            row[j] = l;
+        }
+    }
+    for (j, d) in pivots.iter().enumerate() {
+        let root = d.sqrt();
+        a[j][j] = root;
+        for row in a[j + 1..].iter_mut() {
+            row[j] *= root;
         }
     }
     true
