@@ -57,6 +57,14 @@ pub struct Ekf<const N: usize, const M: usize> {
     r_sqrt: SVector<f64, M>,
     /// x_scale[j] / x_scale[i], precomputed for scaling Jacobians.
     ratio: SMatrix<f64, N, N>,
+    /// The sparsity of the last Jacobian: bit i of `f_masks[j]` is set when
+    /// F[i, j] ≠ 0, and `f_rows[j][..f_counts[j]]` lists those rows. A process
+    /// model's Jacobian keeps its pattern from one step to the next, so the
+    /// time update walks the list instead of testing every entry (a branch
+    /// per entry, whose pattern the branch predictor does not hold).
+    f_masks: [u64; N],
+    f_rows: [[u8; N]; N],
+    f_counts: [u8; N],
 }
 
 impl<const N: usize, const M: usize> Ekf<N, M> {
@@ -80,6 +88,9 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             r: r_diag,
             r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
             ratio,
+            f_masks: [0; N],
+            f_rows: [[0; N]; N],
+            f_counts: [0; N],
         };
         for i in 0..N {
             f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
@@ -199,15 +210,16 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         // Rows of W = F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse
         // (the process couples each state to a few others), so each of its
         // non-zeros adds a multiple of one row of S to one row of W.
-        let mut w = [[0.0; N]; N];
+        self.note_sparsity(f_jac.as_slice());
         let (f, ratio) = (f_jac.as_slice(), self.ratio.as_slice());
-        for (s_j, (f_col, r_col)) in self.s.iter().zip(f.chunks_exact(N).zip(ratio.chunks_exact(N))) {
-            for (w_i, (fij, rij)) in w.iter_mut().zip(f_col.iter().zip(r_col)) {
-                if *fij != 0.0 {
-                    let fz = fij * rij;
-                    for (w, s) in w_i.iter_mut().zip(s_j) {
-                        *w += fz * s;
-                    }
+        let mut w = [[0.0; N]; N];
+        for (j, (f_col, r_col)) in f.chunks_exact(N).zip(ratio.chunks_exact(N)).enumerate() {
+            let s_j = &self.s[j];
+            for &i in &self.f_rows[j][..usize::from(self.f_counts[j])] {
+                let i = usize::from(i);
+                let fz = f_col[i] * r_col[i];
+                for (w, s) in w[i].iter_mut().zip(s_j) {
+                    *w += fz * s;
                 }
             }
         }
@@ -232,6 +244,33 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         }
         let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w[i][c]);
         self.triangularise(x_pred, w1)
+    }
+
+    /// Brings the list of F's non-zeros (`f`, column-major) up to date: a test
+    /// of every entry without a branch, and the list built again only when the
+    /// pattern changed.
+    fn note_sparsity(&mut self, f: &[f64]) {
+        debug_assert!(N <= 64, "the sparsity masks hold 64 rows");
+        let mut masks = [0u64; N];
+        for (m, f_col) in masks.iter_mut().zip(f.chunks_exact(N)) {
+            for (i, v) in f_col.iter().enumerate() {
+                *m |= u64::from(*v != 0.0) << i;
+            }
+        }
+        if masks == self.f_masks {
+            return;
+        }
+        for (j, mask) in masks.iter().enumerate() {
+            let mut n = 0;
+            for i in 0..N {
+                if mask & (1 << i) != 0 {
+                    self.f_rows[j][n] = i as u8;
+                    n += 1;
+                }
+            }
+            self.f_counts[j] = n as u8;
+        }
+        self.f_masks = masks;
     }
 
     /// The time update as first written (the dense product W·Wᵀ), kept as the
@@ -388,16 +427,41 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             _ => N,
         };
 
-        // Potter's update, one scalar measurement at a time; φ = Sᵀh is a row of S.
+        // The measured rows of a lower triangular S reach 4 columns in the
+        // layouts here (the rod position is state 3): a pass with that many
+        // columns fixed at compile time; any other reach takes all N.
+        let nis = match support {
+            4 => self.potter::<4>(&nu, states, use_channel)?,
+            _ => self.potter::<N>(&nu, states, use_channel)?,
+        };
+        if !self.is_finite() {
+            return Err(EkfError::NotFinite);
+        }
+        Ok(Innovation { nu, sigma, nis })
+    }
+}
+
+impl<const N: usize, const M: usize> Ekf<N, M> {
+    /// Potter's update, one scalar measurement at a time (φ = Sᵀh is a row of
+    /// S), for an S whose measured rows have non-zeros in their first `K`
+    /// columns only (the rank-one updates write only these, so it stays so);
+    /// returns the NIS, Σ eᵢ²/cᵢ over the sequential innovations.
+    #[inline(always)]
+    fn potter<const K: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<f64, EkfError> {
         let mut dz = [0.0; N]; // scaled state correction so far
-        let mut phi = [0.0; N];
+        let mut phi = [0.0; K];
         let mut nis = 0.0;
         for i in 0..M {
             if !use_channel[i] {
                 continue;
             }
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for (p, s) in phi.iter_mut().zip(&self.s[si]).take(support) {
+            for (p, s) in phi.iter_mut().zip(&self.s[si]) {
                 *p = ci * s;
             }
             let denom = dot(&phi, &phi) + self.r[i];
@@ -411,7 +475,11 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             let ag = 1.0 / (denom + denom.sqrt() * self.r_sqrt[i]);
             let mut u = [0.0; N]; // S·φ
             for (u, row) in u.iter_mut().zip(&self.s) {
-                *u = dot_prefix(row, &phi, support);
+                let mut acc = 0.0;
+                for (x, p) in row.iter().zip(&phi) {
+                    acc += x * p;
+                }
+                *u = acc;
             }
             let resid = nu[i] - ci * dz[si];
             nis += resid * resid * a;
@@ -421,7 +489,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             }
             for (row, u) in self.s.iter_mut().zip(&u) {
                 let g = ag * u;
-                for (v, p) in row.iter_mut().zip(&phi).take(support) {
+                for (v, p) in row.iter_mut().zip(&phi) {
                     *v -= g * p;
                 }
             }
@@ -430,10 +498,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         for ((x, d), c) in self.x.iter_mut().zip(&dz).zip(&self.x_scale) {
             *x += d * c;
         }
-        if !self.is_finite() {
-            return Err(EkfError::NotFinite);
-        }
-        Ok(Innovation { nu, sigma, nis })
+        Ok(nis)
     }
 }
 
@@ -488,16 +553,6 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
         acc[k] += x * y;
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
-}
-
-/// The dot product of the first `len` entries of two rows.
-#[inline]
-fn dot_prefix<const N: usize>(a: &[f64; N], b: &[f64; N], len: usize) -> f64 {
-    let mut acc = 0.0;
-    for (x, y) in a.iter().zip(b).take(len) {
-        acc += x * y;
-    }
-    acc
 }
 
 /// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
