@@ -230,11 +230,17 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         // state with almost no variance), triangularise [W, Q^½] by Householder
         // reflections, which cannot fail.
         let mut p = [[0.0; N]; N];
-        for i in 0..N {
-            for j in 0..=i {
-                p[i][j] = dot(&w[i], &w[j]);
+        for (i, (p_i, w_i)) in p.iter_mut().zip(&w).enumerate() {
+            // two entries at a time, sharing the loads of row i
+            let mut j = 0;
+            while j < i {
+                (p_i[j], p_i[j + 1]) = dot_pair(w_i, &w[j], &w[j + 1]);
+                j += 2;
             }
-            p[i][i] += self.q_sqrt[i] * self.q_sqrt[i];
+            if j == i {
+                p_i[i] = dot(w_i, w_i);
+            }
+            p_i[i] += self.q_sqrt[i] * self.q_sqrt[i];
         }
         if cholesky_rows(&mut p) {
             self.s = p;
@@ -555,16 +561,43 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
+/// The dot products a·b and a·c, each summed as [`dot`] sums it (so the same
+/// bit for bit), with the loads of `a` shared.
+#[inline(always)]
+fn dot_pair<const N: usize>(a: &[f64; N], b: &[f64; N], c: &[f64; N]) -> (f64, f64) {
+    let mut ab = [0.0; 4];
+    let mut ac = [0.0; 4];
+    let (a4, b4, c4) = (a.chunks_exact(4), b.chunks_exact(4), c.chunks_exact(4));
+    let (ar, br, cr) = (a4.remainder(), b4.remainder(), c4.remainder());
+    for ((x, y), z) in a4.zip(b4).zip(c4) {
+        for k in 0..4 {
+            ab[k] += x[k] * y[k];
+            ac[k] += x[k] * z[k];
+        }
+    }
+    for (k, ((x, y), z)) in ar.iter().zip(br).zip(cr).enumerate() {
+        ab[k] += x * y;
+        ac[k] += x * z;
+    }
+    (
+        (ab[0] + ab[1]) + (ab[2] + ab[3]),
+        (ac[0] + ac[1]) + (ac[2] + ac[3]),
+    )
+}
+
 /// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
 /// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A. The upper
-/// triangle is neither read nor written. Returns false (and `a` is garbage) if
+/// triangle is scratch (what it held is ignored) and is left zero. Returns false (and `a` is garbage) if
 /// A is not numerically positive definite (a pivot not positive and finite).
 ///
 /// Computed as A = L₁·D·L₁ᵀ (L₁ unit lower triangular), then L = L₁·D^½: the
 /// chain from one pivot to the next is one division, a product and a
 /// difference; the square roots come after, independent of each other.
-/// Right-looking: each column, once scaled, updates the trailing lower
-/// triangle, row by row over contiguous entries.
+/// Right-looking: each column, once scaled, updates the trailing rows, each
+/// over its whole length (a fixed-length loop without a remainder; the
+/// column is zero up to the pivot, so the entries left of it keep their
+/// values, and what lands right of the diagonal is cleared at the end).
+#[allow(clippy::needless_range_loop)] // index loops: bounds the optimiser sees through
 fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
     let mut pivots = [0.0; N];
     for j in 0..N {
@@ -575,23 +608,28 @@ fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
         pivots[j] = d;
         let inv = 1.0 / d;
         let mut col = [0.0; N];
-        for (c, row) in col.iter_mut().zip(a.iter()).skip(j + 1) {
-            *c = row[j];
+        for i in j + 1..N {
+            col[i] = a[i][j];
         }
-        for (i, row) in a.iter_mut().enumerate().skip(j + 1) {
+        for i in j + 1..N {
             let l = col[i] * inv;
-            for (v, c) in row[j + 1..=i].iter_mut().zip(&col[j + 1..=i]) {
-                *v -= l * c;
+            // the whole row: col is 0 up to j, and what lands right of the
+            // diagonal is cleared below
+            for c in 0..N {
+                a[i][c] -= l * col[c];
             }
-            row[j] = l;
+            a[i][j] = l;
         }
     }
-    for (j, d) in pivots.iter().enumerate() {
-        let root = d.sqrt();
-        a[j][j] = root;
-        for row in a[j + 1..].iter_mut() {
-            row[j] *= root;
+    for i in 0..N {
+        for j in 0..N {
+            if j < i {
+                a[i][j] *= pivots[j].sqrt();
+            } else if j > i {
+                a[i][j] = 0.0;
+            }
         }
+        a[i][i] = pivots[i].sqrt();
     }
     true
 }
