@@ -46,9 +46,12 @@ impl ProcessModel {
         if n == 1 {
             // F = I + A·h, built in place (A is sparse: most entries stay 0 or 1).
             self.linearise_into(s, u_v, &mut f, jac);
-            *x = *s;
-            *x += f * h;
-            *jac *= h;
+            for ((x, s), f) in x.iter_mut().zip(s.iter()).zip(f.iter()) {
+                *x = s + f * h;
+            }
+            for v in jac.as_mut_slice() {
+                *v *= h;
+            }
             for d in 0..N {
                 jac[(d, d)] += 1.0;
             }

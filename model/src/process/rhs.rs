@@ -130,8 +130,8 @@ impl ProcessModel {
         let p = &self.params;
         let d = self.derived();
         let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
-        f.fill(0.0);
-        a.fill(0.0);
+        f.as_mut_slice().fill(0.0);
+        a.as_mut_slice().fill(0.0);
 
         // Spool: second order.
         let wn = p.spool_natural_freq_rad_s;
