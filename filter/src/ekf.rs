@@ -206,7 +206,30 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
 
     /// Time update: the caller has propagated the state to `x_pred` (SI) with
     /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
+    ///
+    /// On an x86-64 processor with AVX2 the same code runs compiled for it
+    /// (twice the vector width; Rust contracts no multiply-add into an FMA, so
+    /// the results are the same bit for bit either way).
     pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above), the only
+            // requirement of a `target_feature(enable = "avx2")` function.
+            return unsafe { self.predict_avx2(x_pred, f_jac) };
+        }
+        self.predict_lean(x_pred, f_jac)
+    }
+
+    /// [`Self::predict_lean`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn predict_avx2(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
+        self.predict_lean(x_pred, f_jac)
+    }
+
+    /// The time update (the body of [`Self::predict`]).
+    #[inline(always)]
+    fn predict_lean(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
         // Rows of W = F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse
         // (the process couples each state to a few others), so each of its
         // non-zeros adds a multiple of one row of S to one row of W.
@@ -255,6 +278,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// Brings the list of F's non-zeros (`f`, column-major) up to date: a test
     /// of every entry without a branch, and the list built again only when the
     /// pattern changed.
+    #[inline(always)]
     fn note_sparsity(&mut self, f: &[f64]) {
         debug_assert!(N <= 64, "the sparsity masks hold 64 rows");
         let mut masks = [0u64; N];
@@ -409,7 +433,40 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// update reads one row of the factor instead of forming Sᵀ·h, and the NIS
     /// is summed from the scalar updates' own innovations and variances
     /// (νᵀC⁻¹ν = Σ eᵢ²/cᵢ over the sequential innovations eᵢ, variances cᵢ).
+    ///
+    /// Compiled for AVX2 where the processor has it, as [`Self::predict`].
     pub fn update_selected(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above), the only
+            // requirement of a `target_feature(enable = "avx2")` function.
+            return unsafe { self.update_selected_avx2(y, h_pred, states, use_channel) };
+        }
+        self.update_selected_lean(y, h_pred, states, use_channel)
+    }
+
+    /// [`Self::update_selected_lean`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn update_selected_avx2(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
+        self.update_selected_lean(y, h_pred, states, use_channel)
+    }
+
+    /// The selector update (the body of [`Self::update_selected`]).
+    #[inline(always)]
+    fn update_selected_lean(
         &mut self,
         y: &SVector<f64, M>,
         h_pred: &SVector<f64, M>,
@@ -545,7 +602,7 @@ fn innovation_statistics<const M: usize>(
 
 /// The dot product of two rows, in four independent partial sums (a single
 /// running sum would wait on each addition in turn).
-#[inline]
+#[inline(always)]
 fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut acc = [0.0; 4];
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
@@ -598,6 +655,7 @@ fn dot_pair<const N: usize>(a: &[f64; N], b: &[f64; N], c: &[f64; N]) -> (f64, f
 /// column is zero up to the pivot, so the entries left of it keep their
 /// values, and what lands right of the diagonal is cleared at the end).
 #[allow(clippy::needless_range_loop)] // index loops: bounds the optimiser sees through
+#[inline(always)]
 fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
     let mut pivots = [0.0; N];
     for j in 0..N {
