@@ -280,7 +280,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// pattern changed.
     #[inline(always)]
     fn note_sparsity(&mut self, f: &[f64]) {
-        debug_assert!(N <= 64, "the sparsity masks hold 64 rows");
+        const { assert!(N <= 64, "the sparsity masks hold 64 rows") };
         let mut masks = [0u64; N];
         for (m, f_col) in masks.iter_mut().zip(f.chunks_exact(N)) {
             for (i, v) in f_col.iter().enumerate() {
