@@ -40,16 +40,31 @@ pub enum EkfError {
 pub struct Ekf<const N: usize, const M: usize> {
     /// State estimate, SI units.
     x: SVector<f64, N>,
-    /// Covariance factor in scaled units: P_z = S·Sᵀ.
-    s: SMatrix<f64, N, N>,
+    /// Covariance factor in scaled units, P_z = S·Sᵀ, by rows (`s[i]` is row i:
+    /// the time update and the selector update read rows, contiguous here).
+    s: [[f64; N]; N],
+    /// Whether S is lower triangular (after a reset, a re-anchoring or a time
+    /// update; a measurement update fills it in): a selector update then reads
+    /// only the columns up to the highest measured state.
+    lower: bool,
     /// Typical magnitude of each state (its unit of scaling), SI.
     x_scale: SVector<f64, N>,
     /// Process noise standard deviations per step, scaled.
     q_sqrt: SVector<f64, N>,
     /// Measurement noise variances, SI.
     r: SVector<f64, M>,
+    /// Measurement noise standard deviations √r, SI (Potter's γ).
+    r_sqrt: SVector<f64, M>,
     /// x_scale[j] / x_scale[i], precomputed for scaling Jacobians.
     ratio: SMatrix<f64, N, N>,
+    /// The sparsity of the last Jacobian: bit i of `f_masks[j]` is set when
+    /// F[i, j] ≠ 0, and `f_rows[j][..f_counts[j]]` lists those rows. A process
+    /// model's Jacobian keeps its pattern from one step to the next, so the
+    /// time update walks the list instead of testing every entry (a branch
+    /// per entry, whose pattern the branch predictor does not hold).
+    f_masks: [u64; N],
+    f_rows: [[u8; N]; N],
+    f_counts: [u8; N],
 }
 
 impl<const N: usize, const M: usize> Ekf<N, M> {
@@ -66,11 +81,16 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         let ratio = SMatrix::<f64, N, N>::from_fn(|i, j| x_scale[j] / x_scale[i]);
         let mut f = Ekf {
             x: x0,
-            s: SMatrix::zeros(),
+            s: [[0.0; N]; N],
+            lower: true,
             x_scale,
             q_sqrt: SVector::zeros(),
             r: r_diag,
+            r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
             ratio,
+            f_masks: [0; N],
+            f_rows: [[0; N]; N],
+            f_counts: [0; N],
         };
         for i in 0..N {
             f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
@@ -82,10 +102,26 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// Restarts the filter at `x0` with covariance diag(`p0_diag`) (SI).
     pub fn reset(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>) {
         self.x = x0;
-        self.s = SMatrix::zeros();
+        self.s = [[0.0; N]; N];
         for i in 0..N {
-            self.s[(i, i)] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
+            self.s[i][i] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
         }
+        self.lower = true;
+    }
+
+    /// S as a matrix (scaled units).
+    fn factor(&self) -> SMatrix<f64, N, N> {
+        SMatrix::from_fn(|i, j| self.s[i][j])
+    }
+
+    /// Sets S from a matrix (scaled units).
+    fn set_factor(&mut self, m: &SMatrix<f64, N, N>, lower: bool) {
+        for (i, row) in self.s.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = m[(i, j)];
+            }
+        }
+        self.lower = lower;
     }
 
     /// Re-anchors the fast states after a gap: states `0..keep_from` restart at
@@ -94,7 +130,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// covariance (the slow parameters, e.g. leak sizes, survive a gap).
     /// Falls back to a full reset if the kept block is not positive definite.
     pub fn reanchor(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>, keep_from: usize) {
-        let pz = self.s * self.s.transpose();
+        let pz = self.scaled_covariance();
         let mut p = SMatrix::<f64, N, N>::zeros();
         for i in 0..N {
             if i < keep_from {
@@ -109,7 +145,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         let kept = self.x;
         match p.cholesky() {
             Some(c) if self.x.iter().skip(keep_from).all(|v| v.is_finite()) => {
-                self.s = c.l();
+                self.set_factor(&c.l(), true);
                 self.x = x0;
                 for i in keep_from..N {
                     self.x[i] = kept[i];
@@ -131,7 +167,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
 
     /// The covariance P in SI units (computed from the factor).
     pub fn covariance(&self) -> SMatrix<f64, N, N> {
-        let pz = self.s * self.s.transpose();
+        let pz = self.scaled_covariance();
         let mut p = pz;
         for i in 0..N {
             for j in 0..N {
@@ -143,54 +179,70 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
 
     /// The covariance in scaled units, P_z = S·Sᵀ.
     pub fn scaled_covariance(&self) -> SMatrix<f64, N, N> {
-        self.s * self.s.transpose()
+        let s = self.factor();
+        s * s.transpose()
     }
 
     /// Standard deviation of each state, SI.
     pub fn sigma(&self) -> SVector<f64, N> {
         let mut out = SVector::<f64, N>::zeros();
         for i in 0..N {
-            out[i] = self.s.row(i).norm() * self.x_scale[i];
+            out[i] = self.sigma_of(i);
         }
         out
     }
 
     /// Standard deviation of state `i`, SI.
     pub fn sigma_of(&self, i: usize) -> f64 {
-        self.s.row(i).norm() * self.x_scale[i]
+        dot(&self.s[i], &self.s[i]).sqrt() * self.x_scale[i]
     }
 
     /// Whether the state and the factor are finite.
     pub fn is_finite(&self) -> bool {
         // every value tested, without a branch per value (it vectorises)
         let finite = |m: &[f64]| m.iter().fold(true, |all, v| all & v.is_finite());
-        finite(self.x.as_slice()) & finite(self.s.as_slice())
+        finite(self.x.as_slice()) & finite(self.s.as_flattened())
     }
 
     /// Time update: the caller has propagated the state to `x_pred` (SI) with
     /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
+    ///
+    /// On an x86-64 processor with AVX2 the same code runs compiled for it
+    /// (twice the vector width; Rust contracts no multiply-add into an FMA, so
+    /// the results are the same bit for bit either way).
     pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        // Rows of S (nalgebra is column-major: a row of S is strided, a row of
-        // this array is contiguous).
-        let s = self.s.as_slice();
-        let mut s_rows = [[0.0; N]; N];
-        for (c, col) in s.chunks_exact(N).enumerate() {
-            for (row, v) in s_rows.iter_mut().zip(col) {
-                row[c] = *v;
-            }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above), the only
+            // requirement of a `target_feature(enable = "avx2")` function.
+            return unsafe { self.predict_avx2(x_pred, f_jac) };
         }
+        self.predict_lean(x_pred, f_jac)
+    }
+
+    /// [`Self::predict_lean`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn predict_avx2(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
+        self.predict_lean(x_pred, f_jac)
+    }
+
+    /// The time update (the body of [`Self::predict`]).
+    #[inline(always)]
+    fn predict_lean(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
         // Rows of W = F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse
         // (the process couples each state to a few others), so each of its
         // non-zeros adds a multiple of one row of S to one row of W.
-        let mut w_rows = [[0.0; N]; N];
+        self.note_sparsity(f_jac.as_slice());
         let (f, ratio) = (f_jac.as_slice(), self.ratio.as_slice());
+        let mut w = [[0.0; N]; N];
         for (j, (f_col, r_col)) in f.chunks_exact(N).zip(ratio.chunks_exact(N)).enumerate() {
-            for (i, (fij, rij)) in f_col.iter().zip(r_col).enumerate() {
-                if *fij != 0.0 {
-                    let fz = fij * rij;
-                    for (w, s) in w_rows[i].iter_mut().zip(&s_rows[j]) {
-                        *w += fz * s;
-                    }
+            let s_j = &self.s[j];
+            for &i in &self.f_rows[j][..usize::from(self.f_counts[j])] {
+                let i = usize::from(i);
+                let fz = f_col[i] * r_col[i];
+                for (w, s) in w[i].iter_mut().zip(s_j) {
+                    *w += fz * s;
                 }
             }
         }
@@ -200,20 +252,55 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         // contiguous rows of W. Should rounding make the factorisation fail (a
         // state with almost no variance), triangularise [W, Q^½] by Householder
         // reflections, which cannot fail.
-        let mut p_rows = [[0.0; N]; N];
-        for i in 0..N {
-            for j in 0..=i {
-                p_rows[i][j] = dot(&w_rows[i], &w_rows[j]);
+        let mut p = [[0.0; N]; N];
+        for (i, (p_i, w_i)) in p.iter_mut().zip(&w).enumerate() {
+            // two entries at a time, sharing the loads of row i
+            let mut j = 0;
+            while j < i {
+                (p_i[j], p_i[j + 1]) = dot_pair(w_i, &w[j], &w[j + 1]);
+                j += 2;
             }
-            p_rows[i][i] += self.q_sqrt[i] * self.q_sqrt[i];
+            if j == i {
+                p_i[i] = dot(w_i, w_i);
+            }
+            p_i[i] += self.q_sqrt[i] * self.q_sqrt[i];
         }
-        if cholesky_rows(&mut p_rows) {
-            self.s = SMatrix::from_fn(|i, j| p_rows[i][j]);
+        if cholesky_rows(&mut p) {
+            self.s = p;
+            self.lower = true;
             self.x = x_pred;
             return self.finite_or_error();
         }
-        let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w_rows[i][c]);
+        let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w[i][c]);
         self.triangularise(x_pred, w1)
+    }
+
+    /// Brings the list of F's non-zeros (`f`, column-major) up to date: a test
+    /// of every entry without a branch, and the list built again only when the
+    /// pattern changed.
+    #[inline(always)]
+    fn note_sparsity(&mut self, f: &[f64]) {
+        const { assert!(N <= 64, "the sparsity masks hold 64 rows") };
+        let mut masks = [0u64; N];
+        for (m, f_col) in masks.iter_mut().zip(f.chunks_exact(N)) {
+            for (i, v) in f_col.iter().enumerate() {
+                *m |= u64::from(*v != 0.0) << i;
+            }
+        }
+        if masks == self.f_masks {
+            return;
+        }
+        for (j, mask) in masks.iter().enumerate() {
+            let mut n = 0;
+            for i in 0..N {
+                if mask & (1 << i) != 0 {
+                    self.f_rows[j][n] = i as u8;
+                    n += 1;
+                }
+            }
+            self.f_counts[j] = n as u8;
+        }
+        self.f_masks = masks;
     }
 
     /// The time update as first written (the dense product W·Wᵀ), kept as the
@@ -230,7 +317,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 fz[(i, j)] *= self.ratio[(i, j)];
             }
         }
-        let w1 = fz * self.s;
+        let w1 = fz * self.factor();
         let mut p = w1 * w1.transpose();
         for i in 0..N {
             p[(i, i)] += self.q_sqrt[i] * self.q_sqrt[i];
@@ -238,11 +325,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         self.finish_predict(x_pred, p, w1)
     }
 
-    /// Ends a time update: S⁻ = the Cholesky factor of `p` (P⁻, lower triangle), or,
-    /// should that fail to rounding, the triangularised [`w1` = F·S, Q^½]; the state
-    /// becomes `x_pred`.
-    /// The end of a time update from P⁻ (its lower triangle, scaled) and W:
-    /// S⁻ by Cholesky, else by triangularising [W, Q^½].
+    /// The end of a time update from P⁻ (its lower triangle, scaled) and W = F·S:
+    /// S⁻ by Cholesky, else by triangularising [W, Q^½]; the state becomes `x_pred`.
     #[cfg(test)]
     fn finish_predict(
         &mut self,
@@ -257,7 +341,8 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             }
         }
         if cholesky_rows(&mut p_rows) {
-            self.s = SMatrix::from_fn(|i, j| p_rows[i][j]);
+            self.s = p_rows;
+            self.lower = true;
             self.x = x_pred;
             return self.finite_or_error();
         }
@@ -268,7 +353,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     fn triangularise(&mut self, x_pred: SVector<f64, N>, mut w1: SMatrix<f64, N, N>) -> Result<(), EkfError> {
         let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
         lower_triangularise(&mut w1, &mut w2);
-        self.s = w1;
+        self.set_factor(&w1, true);
         self.x = x_pred;
         self.finite_or_error()
     }
@@ -298,9 +383,10 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 hz[(i, j)] *= self.x_scale[j];
             }
         }
+        let mut s = self.factor();
         // Innovation statistics from the prior: C = H_z S Sᵀ H_zᵀ + R.
         let nu = y - h_pred;
-        let hs = hz * self.s;
+        let hs = hz * s;
         let mut c = hs * hs.transpose();
         for i in 0..M {
             c[(i, i)] += self.r[i];
@@ -314,19 +400,21 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
                 continue;
             }
             let h = hz.row(i).transpose();
-            let phi = self.s.transpose() * h;
+            let phi = s.transpose() * h;
             let denom = phi.dot(&phi) + self.r[i];
             if denom <= 0.0 || !denom.is_finite() {
+                self.set_factor(&s, false);
                 return Err(EkfError::SingularInnovation);
             }
             let a = 1.0 / denom;
             let gamma = 1.0 / (1.0 + (a * self.r[i]).sqrt());
-            let k = self.s * phi * a;
+            let k = s * phi * a;
             let resid = nu[i] - h.dot(&dz);
             dz += k * resid;
             // S ← S − γ k φᵀ, a rank-one update in place (no N×N temporary)
-            self.s.ger(-gamma, &k, &phi, 1.0);
+            s.ger(-gamma, &k, &phi, 1.0);
         }
+        self.set_factor(&s, false);
         for j in 0..N {
             self.x[j] += dz[j] * self.x_scale[j];
         }
@@ -341,8 +429,12 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// [`Ekf::update`] for a measurement that reads states directly:
     /// measurement i is state `states[i]` (H is a selector, as for the rod
     /// position and the two chamber pressures). Same result as `update` with
-    /// that H, without multiplying by its zeros: each scalar update reads one
-    /// row of the factor instead of forming Sᵀ·h.
+    /// that H (to rounding), without multiplying by its zeros: each scalar
+    /// update reads one row of the factor instead of forming Sᵀ·h, and the NIS
+    /// is summed from the scalar updates' own innovations and variances
+    /// (νᵀC⁻¹ν = Σ eᵢ²/cᵢ over the sequential innovations eᵢ, variances cᵢ).
+    ///
+    /// Compiled for AVX2 where the processor has it, as [`Self::predict`].
     pub fn update_selected(
         &mut self,
         y: &SVector<f64, M>,
@@ -350,68 +442,126 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         states: [usize; M],
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
-        let nu = y - h_pred;
-        // C = H_z S Sᵀ H_zᵀ + R, with row i of H_z S = x_scale[s_i] · S.row(s_i).
-        let mut c = SMatrix::<f64, M, M>::zeros();
-        for i in 0..M {
-            let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for j in 0..=i {
-                let (sj, cj) = (states[j], self.x_scale[states[j]]);
-                let mut dot = 0.0;
-                for col in 0..N {
-                    dot += self.s[(si, col)] * self.s[(sj, col)];
-                }
-                c[(i, j)] = ci * cj * dot;
-                c[(j, i)] = c[(i, j)];
-            }
-            c[(i, i)] += self.r[i];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above), the only
+            // requirement of a `target_feature(enable = "avx2")` function.
+            return unsafe { self.update_selected_avx2(y, h_pred, states, use_channel) };
         }
-        let (sigma, nis) = innovation_statistics(&c, &nu, use_channel)?;
+        self.update_selected_lean(y, h_pred, states, use_channel)
+    }
 
-        // Potter's update, one scalar measurement at a time; φ = Sᵀh is a row of S.
-        let mut dz = SVector::<f64, N>::zeros();
-        let mut phi = SVector::<f64, N>::zeros();
-        let mut k = SVector::<f64, N>::zeros();
+    /// [`Self::update_selected_lean`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn update_selected_avx2(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
+        self.update_selected_lean(y, h_pred, states, use_channel)
+    }
+
+    /// The selector update (the body of [`Self::update_selected`]).
+    #[inline(always)]
+    fn update_selected_lean(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
+        let nu = y - h_pred;
+        // σ of each innovation from the prior: C_ii = c_i²·|row s_i of S|² + r_i.
+        let sigma = SVector::<f64, M>::from_fn(|i, _| {
+            let (si, ci) = (states[i], self.x_scale[states[i]]);
+            (ci * ci * dot(&self.s[si], &self.s[si]) + self.r[i])
+                .max(0.0)
+                .sqrt()
+        });
+        // The columns the measured rows of S can have non-zeros in: all, or, for
+        // a lower triangular S, those up to the highest measured state (the
+        // rank-one updates below write only these columns, so it stays so
+        // from one scalar update to the next).
+        let support = match states.iter().max() {
+            Some(m) if self.lower => (m + 1).min(N),
+            _ => N,
+        };
+
+        // The measured rows of a lower triangular S reach 4 columns in the
+        // layouts here (the rod position is state 3): a pass with that many
+        // columns fixed at compile time; any other reach takes all N.
+        let nis = match support {
+            4 => self.potter::<4>(&nu, states, use_channel)?,
+            _ => self.potter::<N>(&nu, states, use_channel)?,
+        };
+        if !self.is_finite() {
+            return Err(EkfError::NotFinite);
+        }
+        Ok(Innovation { nu, sigma, nis })
+    }
+}
+
+impl<const N: usize, const M: usize> Ekf<N, M> {
+    /// Potter's update, one scalar measurement at a time (φ = Sᵀh is a row of
+    /// S), for an S whose measured rows have non-zeros in their first `K`
+    /// columns only (the rank-one updates write only these, so it stays so);
+    /// returns the NIS, Σ eᵢ²/cᵢ over the sequential innovations.
+    #[inline(always)]
+    fn potter<const K: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        states: [usize; M],
+        use_channel: [bool; M],
+    ) -> Result<f64, EkfError> {
+        let mut dz = [0.0; N]; // scaled state correction so far
+        let mut phi = [0.0; K];
+        let mut nis = 0.0;
         for i in 0..M {
             if !use_channel[i] {
                 continue;
             }
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for col in 0..N {
-                phi[col] = ci * self.s[(si, col)];
+            for (p, s) in phi.iter_mut().zip(&self.s[si]) {
+                *p = ci * s;
             }
-            let denom = phi.dot(&phi) + self.r[i];
-            if denom <= 0.0 || !denom.is_finite() {
+            let denom = dot(&phi, &phi) + self.r[i];
+            if !(denom > 0.0 && denom.is_finite()) {
                 return Err(EkfError::SingularInnovation);
             }
+            // k = a·S·φ with a = 1/denom, and S ← S − γ k φᵀ with Potter's
+            // γ = 1/(1 + √(a·r)): a·γ = 1/(denom + √denom·√r), one division
+            // after the square root instead of two around it.
             let a = 1.0 / denom;
-            let gamma = 1.0 / (1.0 + (a * self.r[i]).sqrt());
-            // k = a·S·φ and S ← S − γ k φᵀ touch only the columns where φ is not
-            // zero: S is lower triangular after the time update and the measured
-            // states come first, so φ has a few non-zeros.
-            k.fill(0.0);
-            for (c, col) in self.s.column_iter().enumerate() {
-                let pc = phi[c];
-                if pc != 0.0 {
-                    k.axpy(a * pc, &col, 1.0);
+            let ag = 1.0 / (denom + denom.sqrt() * self.r_sqrt[i]);
+            let mut u = [0.0; N]; // S·φ
+            for (u, row) in u.iter_mut().zip(&self.s) {
+                let mut acc = 0.0;
+                for (x, p) in row.iter().zip(&phi) {
+                    acc += x * p;
                 }
+                *u = acc;
             }
             let resid = nu[i] - ci * dz[si];
-            dz.axpy(resid, &k, 1.0);
-            for (c, mut col) in self.s.column_iter_mut().enumerate() {
-                let pc = phi[c];
-                if pc != 0.0 {
-                    col.axpy(-gamma * pc, &k, 1.0);
+            nis += resid * resid * a;
+            let step = resid * a;
+            for (d, u) in dz.iter_mut().zip(&u) {
+                *d += u * step;
+            }
+            for (row, u) in self.s.iter_mut().zip(&u) {
+                let g = ag * u;
+                for (v, p) in row.iter_mut().zip(&phi) {
+                    *v -= g * p;
                 }
             }
+            self.lower = false;
         }
-        for j in 0..N {
-            self.x[j] += dz[j] * self.x_scale[j];
+        for ((x, d), c) in self.x.iter_mut().zip(&dz).zip(&self.x_scale) {
+            *x += d * c;
         }
-        if !self.is_finite() {
-            return Err(EkfError::NotFinite);
-        }
-        Ok(Innovation { nu, sigma, nis })
+        Ok(nis)
     }
 }
 
@@ -452,7 +602,7 @@ fn innovation_statistics<const M: usize>(
 
 /// The dot product of two rows, in four independent partial sums (a single
 /// running sum would wait on each addition in turn).
-#[inline]
+#[inline(always)]
 fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut acc = [0.0; 4];
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
@@ -468,32 +618,76 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
+/// The dot products a·b and a·c, each summed as [`dot`] sums it (so the same
+/// bit for bit), with the loads of `a` shared.
+#[inline(always)]
+fn dot_pair<const N: usize>(a: &[f64; N], b: &[f64; N], c: &[f64; N]) -> (f64, f64) {
+    let mut ab = [0.0; 4];
+    let mut ac = [0.0; 4];
+    let (a4, b4, c4) = (a.chunks_exact(4), b.chunks_exact(4), c.chunks_exact(4));
+    let (ar, br, cr) = (a4.remainder(), b4.remainder(), c4.remainder());
+    for ((x, y), z) in a4.zip(b4).zip(c4) {
+        for k in 0..4 {
+            ab[k] += x[k] * y[k];
+            ac[k] += x[k] * z[k];
+        }
+    }
+    for (k, ((x, y), z)) in ar.iter().zip(br).zip(cr).enumerate() {
+        ab[k] += x * y;
+        ac[k] += x * z;
+    }
+    (
+        (ab[0] + ab[1]) + (ab[2] + ab[3]),
+        (ac[0] + ac[1]) + (ac[2] + ac[3]),
+    )
+}
+
 /// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
-/// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A
-/// (right-looking: each column, once scaled, updates the trailing lower
-/// triangle, whose entries are independent of each other). The upper triangle
-/// is neither read nor written. Returns false (and `a` is garbage) if A is not
-/// numerically positive definite.
+/// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A. The upper
+/// triangle is scratch (what it held is ignored) and is left zero. Returns false (and `a` is garbage) if
+/// A is not numerically positive definite (a pivot not positive and finite).
+///
+/// Computed as A = L₁·D·L₁ᵀ (L₁ unit lower triangular), then L = L₁·D^½: the
+/// chain from one pivot to the next is one division, a product and a
+/// difference; the square roots come after, independent of each other.
+/// Right-looking: each column, once scaled, updates the trailing rows, each
+/// over its whole length (a fixed-length loop without a remainder; the
+/// column is zero up to the pivot, so the entries left of it keep their
+/// values, and what lands right of the diagonal is cleared at the end).
+#[allow(clippy::needless_range_loop)] // index loops: bounds the optimiser sees through
+#[inline(always)]
 fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
+    let mut pivots = [0.0; N];
     for j in 0..N {
         let d = a[j][j];
         if !(d > 0.0 && d.is_finite()) {
             return false;
         }
-        let ljj = d.sqrt();
-        a[j][j] = ljj;
-        let inv = 1.0 / ljj;
+        pivots[j] = d;
+        let inv = 1.0 / d;
         let mut col = [0.0; N];
         for i in j + 1..N {
-            a[i][j] *= inv;
             col[i] = a[i][j];
         }
         for i in j + 1..N {
-            let lij = col[i];
-            for (c, lcj) in col.iter().enumerate().take(i + 1).skip(j + 1) {
-                a[i][c] -= lij * lcj;
+            let l = col[i] * inv;
+            // the whole row: col is 0 up to j, and what lands right of the
+            // diagonal is cleared below
+            for c in 0..N {
+                a[i][c] -= l * col[c];
+            }
+            a[i][j] = l;
+        }
+    }
+    for i in 0..N {
+        for j in 0..N {
+            if j < i {
+                a[i][j] *= pivots[j].sqrt();
+            } else if j > i {
+                a[i][j] = 0.0;
             }
         }
+        a[i][i] = pivots[i].sqrt();
     }
     true
 }

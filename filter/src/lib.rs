@@ -16,7 +16,7 @@ pub mod tuning;
 
 use model::process::{ProcessModel, I_BULK, I_FE, I_QE1, I_QI, N_MEAS};
 use model::{ActuatorParams, Sample};
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 
 pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
@@ -423,7 +423,7 @@ impl Estimator {
         self.model
             .params
             .set_oil_temperature(&self.params_at_reference, temp_c);
-        self.model.leaks = model::LeakSet::from_params(&self.model.params);
+        self.model.params_changed();
         self.oil_temp_c = temp_c;
     }
 
@@ -654,7 +654,8 @@ fn step_filter<const N: usize>(
         use_channel,
         usable,
     } = *input;
-    let (x_pred, mut f, guard) = model.step(e.state(), u);
+    let (mut x_pred, mut f) = (SVector::<f64, N>::zeros(), SMatrix::<f64, N, N>::zeros());
+    let guard = model.step_into(e.state(), u, &mut x_pred, &mut f);
     if N == 12 {
         if e.state()[4].abs() < THETA_LEARNS_ABOVE_SIGMA_V * e.sigma_of(4) {
             *still_samples = still_samples.saturating_add(1);

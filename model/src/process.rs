@@ -91,6 +91,10 @@ pub struct ProcessModel {
     pub p_min_pa: f64,
     /// Highest pressure a prediction may hold, Pa.
     pub p_max_pa: f64,
+    /// Constants of the right-hand side derived from `params` (used while
+    /// `params` are those they were derived from; [`ProcessModel::set_params`]
+    /// derives them again).
+    derived: rhs::Derived,
 }
 
 /// The continuous right-hand side and its Jacobian at one state.
@@ -107,6 +111,7 @@ impl ProcessModel {
     pub fn new(params: ActuatorParams, dt_s: f64) -> Self {
         let leaks = LeakSet::from_params(&params);
         let p_max_pa = 1.5 * params.supply_pressure_pa;
+        let derived = rhs::Derived::of(&params);
         ProcessModel {
             params,
             dt_s,
@@ -114,7 +119,16 @@ impl ProcessModel {
             leaks,
             p_min_pa: -1.0e5,
             p_max_pa,
+            derived,
         }
+    }
+
+    /// Derives what the model keeps from `params` again (its own leaks and the
+    /// right-hand side's constants) after `params` were changed in place (as a
+    /// change of oil temperature does). Allocates nothing.
+    pub fn params_changed(&mut self) {
+        self.leaks = LeakSet::from_params(&self.params);
+        self.derived = rhs::Derived::of(&self.params);
     }
 
     /// The nominal pressure drop at which the 10-state layout's leak sizes are given, Pa (p_s/2).

@@ -2,6 +2,7 @@
 //! covariance form, and the lean step against the dense reference.
 
 use super::*;
+use model::process::ProcessModel;
 use model::rng::Rng;
 
 #[test]
@@ -135,4 +136,140 @@ fn the_lean_predict_equals_the_reference_over_a_long_run() {
         "{:e}",
         (pl - pr).abs().max()
     );
+}
+
+/// The lean step still equals the reference when the Jacobian's sparsity
+/// changes from one step to the next (the cached list of its non-zeros is
+/// rebuilt) and when a measurement update meets a factor that is not lower
+/// triangular (two updates without a time update between them).
+#[test]
+fn the_lean_step_follows_a_changing_sparsity_and_a_full_factor() {
+    const N: usize = 7;
+    let scale = SVector::<f64, N>::from_column_slice(&[1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2]);
+    let mut rng = Rng::new(5);
+    let mut couplings = Rng::new(6);
+    let mut jacobian = |pattern: usize| {
+        let mut f = SMatrix::<f64, N, N>::identity();
+        for (k, (i, j)) in [
+            (1, 0),
+            (2, 0),
+            (0, 5),
+            (5, 0),
+            (1, 4),
+            (2, 4),
+            (3, 4),
+            (4, 1),
+            (4, 2),
+            (4, 6),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if !(k + pattern).is_multiple_of(3) {
+                f[(i, j)] = 1e-3 * couplings.normal() * scale[i] / scale[j];
+            }
+        }
+        f
+    };
+    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
+    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
+    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
+    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
+    let h = ProcessModel::measurement_matrix::<N>();
+    let (mut lean, mut reference) = (
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+    );
+    for k in 0..3_000 {
+        let f = jacobian(k / 7);
+        let xl = f * lean.state();
+        lean.predict(xl, &f).expect("lean predict");
+        let xr = f * reference.state();
+        reference.predict_reference(xr, &f).expect("reference predict");
+        let updates = if k.is_multiple_of(4) { 2 } else { 1 };
+        for _ in 0..updates {
+            let y = SVector::<f64, 3>::new(
+                1e-3 + 1e-5 * rng.normal(),
+                1e6 + 5e4 * rng.normal(),
+                1e6 + 5e4 * rng.normal(),
+            );
+            let il = lean
+                .update_selected(&y, &(h * lean.state()), [3, 1, 2], [true; 3])
+                .expect("lean update");
+            let ir = reference
+                .update(&y, &(h * reference.state()), &h, [true; 3])
+                .expect("reference update");
+            assert!((il.nis - ir.nis).abs() <= 1e-9 * (1.0 + ir.nis), "step {k}: NIS");
+            assert!(
+                (il.sigma - ir.sigma).abs().max() <= 1e-12 * ir.sigma.abs().max(),
+                "step {k}: σ"
+            );
+        }
+        for i in 0..N {
+            let d = (lean.state()[i] - reference.state()[i]).abs() / scale[i];
+            assert!(d <= 1e-12, "step {k}, state {i}: {d:e} of scale");
+        }
+    }
+    let (pl, pr) = (lean.scaled_covariance(), reference.scaled_covariance());
+    assert!((pl - pr).abs().max() <= 1e-12 * pr.abs().max());
+}
+
+/// The time and selector updates give the same bits whichever way they were
+/// compiled (the dispatched entry points against their portable bodies).
+#[test]
+fn the_dispatched_step_equals_the_portable_one_bit_for_bit() {
+    const N: usize = 12;
+    let scale = SVector::<f64, N>::from_column_slice(&[
+        1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6, 1.0,
+    ]);
+    let mut rng = Rng::new(9);
+    let mut f = SMatrix::<f64, N, N>::identity();
+    for (i, j) in [
+        (1, 0),
+        (2, 0),
+        (0, 5),
+        (5, 0),
+        (1, 4),
+        (2, 4),
+        (3, 4),
+        (4, 1),
+        (4, 2),
+        (4, 6),
+        (1, 7),
+        (2, 8),
+        (1, 9),
+        (2, 9),
+        (5, 10),
+        (1, 11),
+    ] {
+        f[(i, j)] = 1e-3 * rng.normal() * scale[i] / scale[j];
+    }
+    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
+    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
+    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
+    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
+    let (mut dispatched, mut portable) = (
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+        Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
+    );
+    for k in 0..2_000u32 {
+        let x = f * dispatched.state();
+        dispatched.predict(x, &f).expect("predict");
+        portable.predict_lean(x, &f).expect("predict");
+        let y = SVector::<f64, 3>::new(
+            0.1 + 1e-5 * rng.normal(),
+            1e7 + 5e4 * rng.normal(),
+            1e7 + 5e4 * rng.normal(),
+        );
+        let h = ProcessModel::measure(dispatched.state());
+        let a = dispatched
+            .update_selected(&y, &h, [3, 1, 2], [true, true, !k.is_multiple_of(5)])
+            .expect("update");
+        let b = portable
+            .update_selected_lean(&y, &h, [3, 1, 2], [true, true, !k.is_multiple_of(5)])
+            .expect("update");
+        assert_eq!(a, b, "step {k}");
+        assert_eq!(dispatched.state(), portable.state(), "step {k}");
+        assert_eq!(dispatched.s, portable.s, "step {k}");
+    }
 }

@@ -17,6 +17,21 @@ impl ProcessModel {
         s: &SVector<f64, N>,
         u_v: f64,
     ) -> (SVector<f64, N>, SMatrix<f64, N, N>, Guard) {
+        let mut x = *s;
+        let mut jac = SMatrix::<f64, N, N>::zeros();
+        let guard = self.step_into(s, u_v, &mut x, &mut jac);
+        (x, jac, guard)
+    }
+
+    /// [`Self::step`] into `x` (x(k+1)) and `jac` (F), which it overwrites (a
+    /// filter's own buffers: nothing is copied on the way).
+    pub fn step_into<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+        x: &mut SVector<f64, N>,
+        jac: &mut SMatrix<f64, N, N>,
+    ) -> Guard {
         // In an end stop (a 1e8 N/m spring on a 10 kg rod, damped: its modes are
         // near −3000 1/s, past forward Euler's reach at 1 ms) the step is taken in
         // [`STOP_SUBSTEPS`] sub-steps (the layouts with stops: 10 states and more).
@@ -27,21 +42,34 @@ impl ProcessModel {
             self.substeps.max(1)
         };
         let h = self.dt_s / n as f64;
-        let mut x = *s;
-        let mut jac = SMatrix::<f64, N, N>::identity();
-        for i in 0..n {
-            let lin = self.linearise(&x, u_v);
-            x += lin.f * h;
-            // I + A·h, built in place (A is sparse: most entries stay 0 or 1).
-            let mut step_jac = lin.a;
-            step_jac *= h;
-            for d in 0..N {
-                step_jac[(d, d)] += 1.0;
+        let mut f = SVector::<f64, N>::zeros();
+        if n == 1 {
+            // F = I + A·h, built in place (A is sparse: most entries stay 0 or 1).
+            self.linearise_into(s, u_v, &mut f, jac);
+            for ((x, s), f) in x.iter_mut().zip(s.iter()).zip(f.iter()) {
+                *x = s + f * h;
             }
-            jac = if i == 0 { step_jac } else { step_jac * jac };
+            for v in jac.as_mut_slice() {
+                *v *= h;
+            }
+            for d in 0..N {
+                jac[(d, d)] += 1.0;
+            }
+        } else {
+            *x = *s;
+            let mut step_jac = SMatrix::<f64, N, N>::zeros();
+            for i in 0..n {
+                self.linearise_into(&x.clone_owned(), u_v, &mut f, &mut step_jac);
+                *x += f * h;
+                // I + A·h
+                step_jac *= h;
+                for d in 0..N {
+                    step_jac[(d, d)] += 1.0;
+                }
+                *jac = if i == 0 { step_jac } else { step_jac * *jac };
+            }
         }
-        let guard = self.keep_physical(&mut x);
-        (x, jac, guard)
+        self.keep_physical(x)
     }
 
     /// Clamps pressures into [p_min, p_max], the rod into its stroke plus

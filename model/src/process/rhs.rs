@@ -11,24 +11,127 @@ use crate::dynamics::{
 use crate::friction::{friction_dv, friction_force_n};
 use crate::params::ActuatorParams;
 
-/// d/dΔp of sgn(Δp)·√|Δp|, held finite near zero.
+/// The constants of the right-hand side that depend on the parameters alone
+/// (each computed as [`ProcessModel::linearise`] computed it inline, so the
+/// results are the same bit for bit), with the parameters they came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Derived {
+    /// The parameters these were derived from: C_d, w_A, w_B, ρ, p_s, p_r, m,
+    /// mounting angle, A1, A2 (a model whose `params` were changed in place
+    /// derives them afresh in every call instead of using stale ones).
+    key: [f64; 10],
+    /// √(2/ρ), √(m³/kg).
+    root: f64,
+    /// C_d·w_A·√(2/ρ) and C_d·w_B·√(2/ρ), the orifice gains per m of opening.
+    ga: f64,
+    gb: f64,
+    /// 1/√Δp_n, 1/√Pa.
+    inv_sqrt_n: f64,
+    /// √[`MIN_SLOPE_DROP_PA`], √Pa.
+    root_min_slope: f64,
+    /// The weight along the stroke, N.
+    gravity: f64,
+    /// A1/m, A2/m (m²/kg) and −1/m (1/kg).
+    a1_m: f64,
+    a2_m: f64,
+    neg_inv_m: f64,
+}
+
+impl Derived {
+    fn key(p: &ActuatorParams) -> [f64; 10] {
+        let (wa, wb) = p.area_gradients_m2_per_m();
+        let (a1, a2) = p.areas_m2();
+        [
+            p.discharge_coefficient,
+            wa,
+            wb,
+            p.oil_density_kg_m3,
+            p.supply_pressure_pa,
+            p.return_pressure_pa,
+            p.mass_kg,
+            p.mounting_angle_rad,
+            a1,
+            a2,
+        ]
+    }
+
+    /// The constants of parameters `p`.
+    pub(crate) fn of(p: &ActuatorParams) -> Derived {
+        let (wa, wb) = p.area_gradients_m2_per_m();
+        let (a1, a2) = p.areas_m2();
+        let root = (2.0 / p.oil_density_kg_m3).sqrt();
+        let m = p.mass_kg;
+        Derived {
+            key: Self::key(p),
+            root,
+            ga: p.discharge_coefficient * wa * root,
+            gb: p.discharge_coefficient * wb * root,
+            inv_sqrt_n: 1.0 / (0.5 * (p.supply_pressure_pa - p.return_pressure_pa)).sqrt(),
+            root_min_slope: MIN_SLOPE_DROP_PA.sqrt(),
+            gravity: p.gravity_force_n(),
+            a1_m: a1 / m,
+            a2_m: a2 / m,
+            neg_inv_m: -1.0 / m,
+        }
+    }
+}
+
+/// sgn(Δp)·√|Δp| from √|Δp|.
 #[inline]
-fn sqrt_slope(dp_pa: f64) -> f64 {
-    0.5 / dp_pa.abs().max(MIN_SLOPE_DROP_PA).sqrt()
+fn signed(dp_pa: f64, root: f64) -> f64 {
+    if dp_pa >= 0.0 {
+        root
+    } else {
+        -root
+    }
 }
 
 impl ProcessModel {
+    /// The parameter constants, from the cache when it was derived from the
+    /// parameters as they are now.
+    #[inline]
+    fn derived(&self) -> Derived {
+        if self.derived.key == Derived::key(&self.params) {
+            self.derived
+        } else {
+            Derived::of(&self.params)
+        }
+    }
+
     /// The continuous dynamics f(x, u) and ∂f/∂x for a layout of `N` states
     /// (6, 7, 10, 11 or 12), command `u_v` in V.
     pub fn linearise<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> Linearisation<N> {
+        let mut lin = Linearisation {
+            f: SVector::zeros(),
+            a: SMatrix::zeros(),
+        };
+        self.linearise_into(s, u_v, &mut lin.f, &mut lin.a);
+        lin
+    }
+
+    /// [`Self::linearise`] into `f` (dx/dt) and `a` (∂f/∂x), which it overwrites.
+    ///
+    /// Each square root of a pressure drop is taken once: the flow law's
+    /// sgn(Δp)·√|Δp| and its slope 1/(2√max(|Δp|, [`MIN_SLOPE_DROP_PA`])) share it
+    /// (√ is monotonic and correctly rounded, so √max(a, b) = max(√a, √b) and the
+    /// results are those of computing each on its own); the parameter constants
+    /// come from the model's cache.
+    pub fn linearise_into<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+        f: &mut SVector<f64, N>,
+        a: &mut SMatrix<f64, N, N>,
+    ) {
         assert!(
             N == 6 || N == 7 || N == 10 || N == 11 || N == 12,
             "process layouts have 6, 7, 10, 11 or 12 states"
         );
         let p = &self.params;
+        let d = self.derived();
         let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
-        let mut f = SVector::<f64, N>::zeros();
-        let mut a = SMatrix::<f64, N, N>::zeros();
+        f.as_mut_slice().fill(0.0);
+        a.as_mut_slice().fill(0.0);
 
         // Spool: second order.
         let wn = p.spool_natural_freq_rad_s;
@@ -43,12 +146,84 @@ impl ProcessModel {
         a[(5, 0)] = -wn * wn;
         a[(5, 5)] = -2.0 * p.spool_damping_ratio * wn;
 
+        // The square roots of the pressure drops the laws below use.
+        let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
+        let root = |dp: f64| dp.abs().sqrt();
+        let slope = |r: f64| 0.5 / r.max(d.root_min_slope);
+        let (dp1r, dp2r, dp12) = (p1 - pr, p2 - pr, p1 - p2);
+        let needs_leak_roots = N >= 10;
+        let r1r = if needs_leak_roots || x_sp < 0.0 || self.leaks.sqrt_m3_s_sqrt_pa[0] != 0.0 {
+            root(dp1r)
+        } else {
+            0.0
+        };
+        let r2r = root(dp2r);
+        let r12 = if needs_leak_roots || self.leaks.sqrt_m3_s_sqrt_pa[2] != 0.0 {
+            root(dp12)
+        } else {
+            0.0
+        };
+
         // Valve flows and their slopes.
-        let flows = valve_flows(p, x_sp, p1, p2);
-        let (dq1, dq2) = self.valve_partials(x_sp, p1, p2);
-        // Leaks built into the model.
-        let lq = self.leaks.flows(p1, p2, p.return_pressure_pa);
-        let dl = self.leak_partials(p1, p2);
+        let (flows, dq1, dq2) = if p.supply_sag_pa_per_m3_s != 0.0 {
+            let flows = valve_flows(p, x_sp, p1, p2);
+            let (dq1, dq2) = self.valve_partials(x_sp, p1, p2);
+            ((flows.q1_m3_s, flows.q2_m3_s), dq1, dq2)
+        } else {
+            let (cd, (wa, wb)) = (p.discharge_coefficient, p.area_gradients_m2_per_m());
+            let (ga, gb) = (d.ga, d.gb);
+            let (mut q, mut dq1, mut dq2) = if x_sp >= 0.0 {
+                // Q1 = g_A x_sp ssqrt(ps − p1), Q2 = g_B x_sp ssqrt(p2 − pr)
+                let dps1 = ps - p1;
+                let rs1 = root(dps1);
+                let (ss1, ss2) = (signed(dps1, rs1), signed(dp2r, r2r));
+                (
+                    (cd * wa * x_sp * d.root * ss1, cd * wb * x_sp * d.root * ss2),
+                    [ga * ss1, -ga * x_sp * slope(rs1), 0.0],
+                    [gb * ss2, 0.0, gb * x_sp * slope(r2r)],
+                )
+            } else {
+                // Q1 = g_A x_sp ssqrt(p1 − pr), Q2 = g_B x_sp ssqrt(ps − p2)
+                let dps2 = ps - p2;
+                let rs2 = root(dps2);
+                let (ss1, ss2) = (signed(dp1r, r1r), signed(dps2, rs2));
+                (
+                    (
+                        -(cd * wa * -x_sp * d.root * ss1),
+                        -(cd * wb * -x_sp * d.root * ss2),
+                    ),
+                    [ga * ss1, ga * x_sp * slope(r1r), 0.0],
+                    [gb * ss2, 0.0, -gb * x_sp * slope(rs2)],
+                )
+            };
+            if p.valve_null_leakage_m3_s_pa > 0.0 {
+                let n = null_leakage_flows(p, x_sp, p1, p2);
+                q.0 += n.q1_m3_s;
+                q.1 += n.q2_m3_s;
+                for i in 0..3 {
+                    dq1[i] += n.dq1[i];
+                    dq2[i] += n.dq2[i];
+                }
+            }
+            (q, dq1, dq2)
+        };
+        // Leaks built into the model, and their slopes: internal w.r.t. (p1, p2),
+        // ext1 w.r.t. p1, ext2 w.r.t. p2 (index order of LeakSet: ext1, ext2, int).
+        let lq = self.leaks.flows(p1, p2, pr);
+        let l = &self.leaks;
+        let leak_slope = |i: usize, r: f64| {
+            if l.sqrt_m3_s_sqrt_pa[i] == 0.0 {
+                l.linear_m3_s_pa[i]
+            } else {
+                l.linear_m3_s_pa[i] + l.sqrt_m3_s_sqrt_pa[i] * slope(r)
+            }
+        };
+        let d_int = leak_slope(2, r12);
+        let dl = LeakPartials {
+            ext1: leak_slope(0, r1r),
+            ext2: leak_slope(1, r2r),
+            int: [d_int, -d_int],
+        };
 
         // Chambers.
         let (a1, a2) = p.areas_m2();
@@ -60,21 +235,23 @@ impl ProcessModel {
         let db1 = theta * bulk_slope(p, p1, b1_model);
         let db2 = theta * bulk_slope(p, p2, b2_model);
         // Estimated leaks (10 states): q = q_n·ssqrt(Δp)/√Δp_n.
-        let pr = p.return_pressure_pa;
-        let inv_sqrt_n = 1.0 / self.nominal_drop_pa().sqrt();
-        let ss = crate::units::signed_sqrt;
-        let (g1, g2, gi) = (
-            ss(p1 - pr) * inv_sqrt_n,
-            ss(p2 - pr) * inv_sqrt_n,
-            ss(p1 - p2) * inv_sqrt_n,
-        );
+        let inv_sqrt_n = d.inv_sqrt_n;
+        let (g1, g2, gi) = if N >= 10 {
+            (
+                signed(dp1r, r1r) * inv_sqrt_n,
+                signed(dp2r, r2r) * inv_sqrt_n,
+                signed(dp12, r12) * inv_sqrt_n,
+            )
+        } else {
+            (0.0, 0.0, 0.0)
+        };
         let (qe1, qe2, qi) = if N >= 10 {
             (s[I_QE1], s[I_QE2], s[I_QI])
         } else {
             (0.0, 0.0, 0.0)
         };
-        let net1 = flows.q1_m3_s - a1 * v - lq.int_m3_s - lq.ext1_m3_s - qe1 * g1 - qi * gi;
-        let net2 = a2 * v - flows.q2_m3_s + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
+        let net1 = flows.0 - a1 * v - lq.int_m3_s - lq.ext1_m3_s - qe1 * g1 - qi * gi;
+        let net2 = a2 * v - flows.1 + lq.int_m3_s - lq.ext2_m3_s - qe2 * g2 + qi * gi;
         f[1] = b1 / v1 * net1;
         f[2] = b2 / v2 * net2;
         if N == 12 {
@@ -100,9 +277,9 @@ impl ProcessModel {
             a[(2, I_QE2)] = -b2 / v2 * g2;
             a[(2, I_QI)] = b2 / v2 * gi;
             let (s1, s2, si) = (
-                sqrt_slope(p1 - pr) * inv_sqrt_n,
-                sqrt_slope(p2 - pr) * inv_sqrt_n,
-                sqrt_slope(p1 - p2) * inv_sqrt_n,
+                slope(r1r) * inv_sqrt_n,
+                slope(r2r) * inv_sqrt_n,
+                slope(r12) * inv_sqrt_n,
             );
             a[(1, 1)] -= b1 / v1 * (qe1 * s1 + qi * si);
             a[(1, 2)] += b1 / v1 * qi * si;
@@ -114,7 +291,7 @@ impl ProcessModel {
         f[3] = v;
         a[(3, 4)] = 1.0;
         let m = p.mass_kg;
-        let gravity = p.gravity_force_n();
+        let gravity = d.gravity;
         // The end stops, as the rig has them, in leakwatch's own layouts (10 states
         // and more): a stiff spring-damper beyond each end of the stroke
         // ([`ProcessModel::step`] sub-steps while the rod is in one). The thesis'
@@ -127,11 +304,13 @@ impl ProcessModel {
         };
         if N >= 7 {
             f[4] = (p.pressure_force_n(p1, p2) - gravity - s[I_FE] + stop) / m;
-            a[(4, 1)] = a1 / m;
-            a[(4, 2)] = -a2 / m;
-            a[(4, 3)] = dstop_dx / m;
-            a[(4, 4)] = dstop_dv / m;
-            a[(4, I_FE)] = -1.0 / m;
+            a[(4, 1)] = d.a1_m;
+            a[(4, 2)] = -d.a2_m;
+            if dstop_dx != 0.0 || dstop_dv != 0.0 {
+                a[(4, 3)] = dstop_dx / m;
+                a[(4, 4)] = dstop_dv / m;
+            }
+            a[(4, I_FE)] = d.neg_inv_m;
         } else {
             let load = p.load.force_n(x, v);
             let (dload_dx, dload_dv) = if p.load.stiffness_n_per_m != 0.0 || p.load.preload_n != 0.0 {
@@ -148,93 +327,41 @@ impl ProcessModel {
             f[4] = (drive - friction) / m;
             if v.abs() > p.friction.zero_velocity_m_s {
                 // sliding: Stribeck + viscous
-                a[(4, 1)] = a1 / m;
-                a[(4, 2)] = -a2 / m;
+                a[(4, 1)] = d.a1_m;
+                a[(4, 2)] = -d.a2_m;
                 a[(4, 3)] = -dload_dx / m;
                 a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
             } else if friction != drive {
                 // breaking away: friction saturated at ±f_st
-                a[(4, 1)] = a1 / m;
-                a[(4, 2)] = -a2 / m;
+                a[(4, 1)] = d.a1_m;
+                a[(4, 2)] = -d.a2_m;
                 a[(4, 3)] = -dload_dx / m;
                 a[(4, 4)] = -dload_dv / m;
             }
             // stuck: friction balances the drive, dv/dt = 0 and its row is zero
         }
-        Linearisation { f, a }
     }
 
-    /// Partials of (Q1, Q2) with respect to (x_sp, p1, p2); no supply sag
-    /// (with sag, central differences of [`valve_flows`]).
+    /// Partials of the valve's (Q1, Q2) with respect to (x_sp, p1, p2) with
+    /// supply sag: central differences of [`valve_flows`] (without sag,
+    /// [`Self::linearise_into`] has them in closed form).
     fn valve_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
         let p = &self.params;
-        if p.supply_sag_pa_per_m3_s != 0.0 {
-            let q = |xs: f64, a: f64, b: f64| {
-                let f = valve_flows(p, xs, a, b);
-                (f.q1_m3_s, f.q2_m3_s)
-            };
-            let (hx, hp) = (
-                1e-9_f64.max(1e-6 * x_sp.abs()),
-                1.0_f64.max(1e-6 * p1.abs().max(p2.abs())),
-            );
-            let d = |plus: (f64, f64), minus: (f64, f64), h: f64| {
-                ((plus.0 - minus.0) / (2.0 * h), (plus.1 - minus.1) / (2.0 * h))
-            };
-            let dx = d(q(x_sp + hx, p1, p2), q(x_sp - hx, p1, p2), hx);
-            let d1 = d(q(x_sp, p1 + hp, p2), q(x_sp, p1 - hp, p2), hp);
-            let d2 = d(q(x_sp, p1, p2 + hp), q(x_sp, p1, p2 - hp), hp);
-            return ([dx.0, d1.0, d2.0], [dx.1, d1.1, d2.1]);
-        }
-        let (mut dq1, mut dq2) = self.orifice_partials(x_sp, p1, p2);
-        if p.valve_null_leakage_m3_s_pa > 0.0 {
-            let n = null_leakage_flows(p, x_sp, p1, p2);
-            for i in 0..3 {
-                dq1[i] += n.dq1[i];
-                dq2[i] += n.dq2[i];
-            }
-        }
-        (dq1, dq2)
-    }
-
-    /// Partials of the metering orifices' (Q1, Q2) with respect to (x_sp, p1, p2), no sag.
-    fn orifice_partials(&self, x_sp: f64, p1: f64, p2: f64) -> ([f64; 3], [f64; 3]) {
-        let p = &self.params;
-        let (wa, wb) = p.area_gradients_m2_per_m();
-        let root = (2.0 / p.oil_density_kg_m3).sqrt();
-        let (ga, gb) = (
-            p.discharge_coefficient * wa * root,
-            p.discharge_coefficient * wb * root,
+        let q = |xs: f64, a: f64, b: f64| {
+            let f = valve_flows(p, xs, a, b);
+            (f.q1_m3_s, f.q2_m3_s)
+        };
+        let (hx, hp) = (
+            1e-9_f64.max(1e-6 * x_sp.abs()),
+            1.0_f64.max(1e-6 * p1.abs().max(p2.abs())),
         );
-        let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
-        let ss = crate::units::signed_sqrt;
-        if x_sp >= 0.0 {
-            // Q1 = g_A x_sp ssqrt(ps − p1), Q2 = g_B x_sp ssqrt(p2 − pr)
-            (
-                [ga * ss(ps - p1), -ga * x_sp * sqrt_slope(ps - p1), 0.0],
-                [gb * ss(p2 - pr), 0.0, gb * x_sp * sqrt_slope(p2 - pr)],
-            )
-        } else {
-            // Q1 = g_A x_sp ssqrt(p1 − pr), Q2 = g_B x_sp ssqrt(ps − p2)
-            (
-                [ga * ss(p1 - pr), ga * x_sp * sqrt_slope(p1 - pr), 0.0],
-                [gb * ss(ps - p2), 0.0, -gb * x_sp * sqrt_slope(ps - p2)],
-            )
-        }
-    }
-
-    /// Partials of the model's own leak flows: internal w.r.t. (p1, p2), ext1 w.r.t. p1, ext2 w.r.t. p2.
-    fn leak_partials(&self, p1: f64, p2: f64) -> LeakPartials {
-        let l = &self.leaks;
-        let pr = self.params.return_pressure_pa;
-        // index order of LeakSet: ext1, ext2, int
-        let d_ext1 = l.linear_m3_s_pa[0] + l.sqrt_m3_s_sqrt_pa[0] * sqrt_slope(p1 - pr);
-        let d_ext2 = l.linear_m3_s_pa[1] + l.sqrt_m3_s_sqrt_pa[1] * sqrt_slope(p2 - pr);
-        let d_int = l.linear_m3_s_pa[2] + l.sqrt_m3_s_sqrt_pa[2] * sqrt_slope(p1 - p2);
-        LeakPartials {
-            ext1: d_ext1,
-            ext2: d_ext2,
-            int: [d_int, -d_int],
-        }
+        let d = |plus: (f64, f64), minus: (f64, f64), h: f64| {
+            ((plus.0 - minus.0) / (2.0 * h), (plus.1 - minus.1) / (2.0 * h))
+        };
+        let dx = d(q(x_sp + hx, p1, p2), q(x_sp - hx, p1, p2), hx);
+        let d1 = d(q(x_sp, p1 + hp, p2), q(x_sp, p1 - hp, p2), hp);
+        let d2 = d(q(x_sp, p1, p2 + hp), q(x_sp, p1, p2 - hp), hp);
+        ([dx.0, d1.0, d2.0], [dx.1, d1.1, d2.1])
     }
 }
 
