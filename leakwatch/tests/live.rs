@@ -538,8 +538,15 @@ fn python_zenoh_subscriber_decodes_a_gateways_messages() {
     let endpoint = format!("tcp/127.0.0.1:{}", free_port());
     let prefix = format!("lwp{}", std::process::id());
     let gw_log = std::fs::File::create(dir.join("gateway.log")).unwrap();
+    // listen only: without it the gateway also connects to this machine's default
+    // endpoint, where a user's `leakwatch watch` would print the test's leak
+    let cfg = dir.join("listen_only.toml");
+    std::fs::write(&cfg, "[zenoh]\nconnect = []\n").unwrap();
     let mut gw = Command::new(BIN)
-        .args(["stage", "gateway", "--rig", "py1", "--listen", &endpoint])
+        .args([
+            "stage", "gateway", "--rig", "py1", "--listen", &endpoint, "--config",
+        ])
+        .arg(&cfg)
         .env(bus::PREFIX_ENV, &prefix)
         .stderr(gw_log)
         .spawn()
