@@ -7,8 +7,27 @@ use model::{FaultSchedule, Scenario, Simulator};
 /// `seconds` of `scenario` on `rig` (default sensors, seed 7), as rows; every
 /// `drop_every`-th sample missing (0: none).
 fn record(rig: &ActuatorParams, scenario: &str, seconds: f64, drop_every: usize) -> Vec<Row> {
+    record_with(rig, model::SensorParams::default(), scenario, seconds, drop_every)
+}
+
+/// [`record`] with the sensors `sensors`.
+fn record_with(
+    rig: &ActuatorParams,
+    sensors: model::SensorParams,
+    scenario: &str,
+    seconds: f64,
+    drop_every: usize,
+) -> Vec<Row> {
     let sc = Scenario::by_name(scenario, 3, seconds).expect("scenario");
-    let mut sim = Simulator::with_default_sensors(rig.clone(), sc, FaultSchedule::default(), 7).expect("rig");
+    let mut sim = Simulator::new(
+        rig.clone(),
+        sensors,
+        model::SimSettings::default(),
+        sc,
+        FaultSchedule::default(),
+        7,
+    )
+    .expect("rig");
     let mut out = Vec::new();
     let mut gap = false;
     for (k, s) in sim.run(seconds).into_iter().enumerate() {
@@ -324,24 +343,7 @@ fn a_right_model_on_noisy_sensors_leaves_the_sensor_floor() {
         pressure_noise_pa: 8e3,
         ..model::SensorParams::default()
     };
-    let sc = Scenario::by_name("lift", 3, 60.0).expect("scenario");
-    let mut sim = model::Simulator::new(
-        rig.clone(),
-        sensors,
-        model::SimSettings::default(),
-        sc,
-        FaultSchedule::default(),
-        7,
-    )
-    .expect("rig");
-    let rows: Vec<Row> = sim
-        .run(60.0)
-        .into_iter()
-        .map(|sample| Row {
-            sample,
-            after_gap: false,
-        })
-        .collect();
+    let rows = record_with(&rig, sensors, "lift", 60.0, 0);
     let noise = SensorNoise {
         position_m: sensors.position_sigma_m(),
         pressure_pa: sensors.pressure_sigma_pa(),
