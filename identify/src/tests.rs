@@ -281,27 +281,11 @@ fn a_hold_does_not_identify_the_mechanics() {
 fn the_transducers_lag_is_identified_per_channel() {
     let rig = ActuatorParams::vertical_lift();
     let record_with = |lag_s: f64| {
-        let sc = Scenario::by_name("lift", 3, 60.0).expect("scenario");
         let sensors = model::SensorParams {
             pressure_lag_s: lag_s,
             ..model::SensorParams::default()
         };
-        let mut sim = Simulator::new(
-            rig.clone(),
-            sensors,
-            model::SimSettings::default(),
-            sc,
-            FaultSchedule::default(),
-            7,
-        )
-        .expect("rig");
-        sim.run(60.0)
-            .into_iter()
-            .map(|sample| Row {
-                sample,
-                after_gap: false,
-            })
-            .collect::<Vec<_>>()
+        record_with(&rig, sensors, "lift", 60.0, 0)
     };
     let id = identify(&rig, 1e-3, &record_with(6e-4), noise()).expect("identified");
     let a = 1.0 - (-1e-3f64 / 6e-4).exp();
