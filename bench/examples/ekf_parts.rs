@@ -13,7 +13,7 @@ use nalgebra::SVector;
 
 const SCALE: [f64; 12] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6, 1.0];
 
-fn parts<const N: usize>(name: &str, tuning: &Tuning, reps: u32) {
+fn parts<const N: usize, const W: usize>(name: &str, tuning: &Tuning, reps: u32) {
     let samples = recorded_samples(6.0);
     let mut params = ActuatorParams::default();
     if N < 10 {
@@ -29,7 +29,7 @@ fn parts<const N: usize>(name: &str, tuning: &Tuning, reps: u32) {
         x0[11] = 1.0;
     }
     let scale = SVector::<f64, N>::from_fn(|i, _| SCALE[i]);
-    let mut e = Ekf::<N, 3>::new(
+    let mut e = Ekf::<N, 3, W>::new(
         x0,
         &tuning.p0_diag::<N>(),
         &tuning.q_diag::<N>(),
@@ -97,6 +97,6 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(200_000);
-    parts::<7>("7 states", &Tuning::thesis(), reps);
-    parts::<12>("12 states", &Tuning::sensor_derived(), reps);
+    parts::<7, 8>("7 states", &Tuning::thesis(), reps);
+    parts::<12, 12>("12 states", &Tuning::sensor_derived(), reps);
 }

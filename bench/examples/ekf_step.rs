@@ -6,6 +6,15 @@ use bench::speed::{chain_throughput, recorded_samples, step_time, timer_overhead
 use filter::Tuning;
 
 fn main() {
+    // `profile chain`: the chain (both filters and the classifier) once over
+    // 60 s, untimed (for `valgrind --tool=callgrind`).
+    if std::env::args().nth(1).as_deref() == Some("profile")
+        && std::env::args().nth(2).as_deref() == Some("chain")
+    {
+        let samples = recorded_samples(60.0);
+        println!("{}", chain_throughput(&samples, 1).samples);
+        return;
+    }
     // `profile 7|12 SECONDS`: the layout's steps in a loop, untimed (for `perf record`).
     if std::env::args().nth(1).as_deref() == Some("profile") {
         let states: u32 = std::env::args().nth(2).and_then(|a| a.parse().ok()).unwrap_or(7);

@@ -11,7 +11,12 @@
 //!   (F·S)(F·S)ᵀ + Q, or, should that fail to rounding, Householder reflections.
 //! - Update: Potter's square-root update, one measurement at a time (R diagonal).
 //!
-//! Nothing here allocates: all matrices are nalgebra static sizes.
+//! The factor is held by columns, padded to a width of whole vector
+//! registers: every step of both updates adds a multiple of one column to
+//! another, with no sum across a register. On x86-64 with AVX2 and FMA the
+//! steps run compiled for them, each multiply-add fused.
+//!
+//! Nothing here allocates: all matrices are static sizes.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -35,39 +40,37 @@ pub enum EkfError {
     SingularInnovation,
 }
 
-/// A square-root EKF with `N` states and `M` measurements.
+/// A square-root EKF with `N` states and `M` measurements, its factor held
+/// in `W` ≥ `N` rows and columns (default `N`): a width of whole vector
+/// registers (8 for 6 or 7 states, 12 for 10 to 12) lets every column
+/// operation run without a remainder. The padding is zero and nothing reads it.
 #[derive(Debug, Clone)]
-pub struct Ekf<const N: usize, const M: usize> {
+pub struct Ekf<const N: usize, const M: usize, const W: usize = N> {
     /// State estimate, SI units.
     x: SVector<f64, N>,
-    /// Covariance factor in scaled units, P_z = S·Sᵀ, by rows (`s[i]` is row i:
-    /// the time update and the selector update read rows, contiguous here).
-    s: [[f64; N]; N],
-    /// Whether S is lower triangular (after a reset, a re-anchoring or a time
-    /// update; a measurement update fills it in): a selector update then reads
-    /// only the columns up to the highest measured state.
-    lower: bool,
+    /// Covariance factor in scaled units, P_z = S·Sᵀ, by columns (`s[k]` is
+    /// column k; rows and columns `N..W` are zero). Every step is a sum of
+    /// multiples of whole columns: no sum across a vector register.
+    s: [[f64; W]; W],
+    /// Columns `0..full_cols` of S may be full; the others are lower
+    /// triangular (zero above the diagonal). A time update leaves S lower
+    /// triangular (0); a selector update fills the columns up to the highest
+    /// measured state, a general update all.
+    full_cols: usize,
     /// Typical magnitude of each state (its unit of scaling), SI.
     x_scale: SVector<f64, N>,
-    /// Process noise standard deviations per step, scaled.
-    q_sqrt: SVector<f64, N>,
+    /// Process noise variances per step, scaled (q_i / scale_i²).
+    q_var: [f64; N],
     /// Measurement noise variances, SI.
     r: SVector<f64, M>,
     /// Measurement noise standard deviations √r, SI (Potter's γ).
     r_sqrt: SVector<f64, M>,
-    /// x_scale[j] / x_scale[i], precomputed for scaling Jacobians.
-    ratio: SMatrix<f64, N, N>,
-    /// The sparsity of the last Jacobian: bit i of `f_masks[j]` is set when
-    /// F[i, j] ≠ 0, and `f_rows[j][..f_counts[j]]` lists those rows. A process
-    /// model's Jacobian keeps its pattern from one step to the next, so the
-    /// time update walks the list instead of testing every entry (a branch
-    /// per entry, whose pattern the branch predictor does not hold).
-    f_masks: [u64; N],
-    f_rows: [[u8; N]; N],
-    f_counts: [u8; N],
+    /// x_scale[j] / x_scale[i] by columns (`ratio[j][i]`), zero in the
+    /// padding: scales column j of a Jacobian.
+    ratio: [[f64; W]; N],
 }
 
-impl<const N: usize, const M: usize> Ekf<N, M> {
+impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// A filter starting at `x0` (SI) with covariance diag(`p0_diag`), process noise
     /// diag(`q_diag`) per step and measurement noise diag(`r_diag`), all in SI squared
     /// units; `x_scale` gives each state's typical magnitude for the internal scaling.
@@ -78,23 +81,28 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         r_diag: SVector<f64, M>,
         x_scale: SVector<f64, N>,
     ) -> Self {
-        let ratio = SMatrix::<f64, N, N>::from_fn(|i, j| x_scale[j] / x_scale[i]);
+        const { assert!(W >= N, "the factor's width holds every state") };
+        let mut ratio = [[0.0; W]; N];
+        for (j, col) in ratio.iter_mut().enumerate() {
+            for (i, v) in col.iter_mut().enumerate().take(N) {
+                *v = x_scale[j] / x_scale[i];
+            }
+        }
+        let mut q_var = [0.0; N];
+        for (i, q) in q_var.iter_mut().enumerate() {
+            let sd = q_diag[i].max(0.0).sqrt() / x_scale[i];
+            *q = sd * sd;
+        }
         let mut f = Ekf {
             x: x0,
-            s: [[0.0; N]; N],
-            lower: true,
+            s: [[0.0; W]; W],
+            full_cols: 0,
             x_scale,
-            q_sqrt: SVector::zeros(),
+            q_var,
             r: r_diag,
             r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
             ratio,
-            f_masks: [0; N],
-            f_rows: [[0; N]; N],
-            f_counts: [0; N],
         };
-        for i in 0..N {
-            f.q_sqrt[i] = q_diag[i].max(0.0).sqrt() / x_scale[i];
-        }
         f.reset(x0, p0_diag);
         f
     }
@@ -102,26 +110,27 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// Restarts the filter at `x0` with covariance diag(`p0_diag`) (SI).
     pub fn reset(&mut self, x0: SVector<f64, N>, p0_diag: &SVector<f64, N>) {
         self.x = x0;
-        self.s = [[0.0; N]; N];
+        self.s = [[0.0; W]; W];
         for i in 0..N {
             self.s[i][i] = p0_diag[i].max(0.0).sqrt() / self.x_scale[i];
         }
-        self.lower = true;
+        self.full_cols = 0;
     }
 
     /// S as a matrix (scaled units).
     fn factor(&self) -> SMatrix<f64, N, N> {
-        SMatrix::from_fn(|i, j| self.s[i][j])
+        SMatrix::from_fn(|i, j| self.s[j][i])
     }
 
-    /// Sets S from a matrix (scaled units).
+    /// Sets S from a matrix (scaled units); `lower`: it is lower triangular.
     fn set_factor(&mut self, m: &SMatrix<f64, N, N>, lower: bool) {
-        for (i, row) in self.s.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
+        self.s = [[0.0; W]; W];
+        for (j, col) in self.s.iter_mut().enumerate().take(N) {
+            for (i, v) in col.iter_mut().enumerate().take(N) {
                 *v = m[(i, j)];
             }
         }
-        self.lower = lower;
+        self.full_cols = if lower { 0 } else { N };
     }
 
     /// Re-anchors the fast states after a gap: states `0..keep_from` restart at
@@ -183,124 +192,126 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         s * s.transpose()
     }
 
-    /// Standard deviation of each state, SI.
+    /// Standard deviation of each state, SI: the rows' norms of S, summed
+    /// over its columns.
     pub fn sigma(&self) -> SVector<f64, N> {
-        let mut out = SVector::<f64, N>::zeros();
-        for i in 0..N {
-            out[i] = self.sigma_of(i);
+        let mut var = [0.0; W];
+        for col in &self.s[..N] {
+            for (v, s) in var.iter_mut().zip(col) {
+                *v += s * s;
+            }
         }
-        out
+        SVector::<f64, N>::from_fn(|i, _| var[i].sqrt() * self.x_scale[i])
     }
 
     /// Standard deviation of state `i`, SI.
     pub fn sigma_of(&self, i: usize) -> f64 {
-        dot(&self.s[i], &self.s[i]).sqrt() * self.x_scale[i]
+        self.row_norm2(i).sqrt() * self.x_scale[i]
+    }
+
+    /// |row i of S|², scaled (the variance of state i).
+    fn row_norm2(&self, i: usize) -> f64 {
+        let mut acc = [0.0; 4];
+        for (k, col) in self.s[..N].iter().enumerate() {
+            acc[k % 4] += col[i] * col[i];
+        }
+        (acc[0] + acc[1]) + (acc[2] + acc[3])
     }
 
     /// Whether the state and the factor are finite.
     pub fn is_finite(&self) -> bool {
         // every value tested, without a branch per value (it vectorises)
-        let finite = |m: &[f64]| m.iter().fold(true, |all, v| all & v.is_finite());
-        finite(self.x.as_slice()) & finite(self.s.as_flattened())
+        all_finite(self.x.as_slice()) & all_finite(self.s.as_flattened())
     }
 
     /// Time update: the caller has propagated the state to `x_pred` (SI) with
     /// discrete Jacobian `f_jac` = ∂x(k+1)/∂x(k) (SI).
     ///
-    /// On an x86-64 processor with AVX2 the same code runs compiled for it
-    /// (twice the vector width; Rust contracts no multiply-add into an FMA, so
-    /// the results are the same bit for bit either way).
+    /// On an x86-64 processor with AVX2 and FMA the same code runs compiled
+    /// for them, each multiply-add fused (one rounding instead of two; the
+    /// portable build computes the same fused form where asked, [`Fused`]).
     pub fn predict(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above), the only
-            // requirement of a `target_feature(enable = "avx2")` function.
-            return unsafe { self.predict_avx2(x_pred, f_jac) };
+        if fused_vector_unit() {
+            // SAFETY: the processor has AVX2 and FMA (checked just above),
+            // the only requirement of a `target_feature` function.
+            return unsafe { self.predict_fma(x_pred, f_jac) };
         }
-        self.predict_lean(x_pred, f_jac)
+        self.predict_lean::<Separate>(x_pred, f_jac)
     }
 
-    /// [`Self::predict_lean`] compiled for AVX2.
+    /// [`Self::predict_lean`] compiled for AVX2 and FMA, its multiply-adds fused.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn predict_avx2(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        self.predict_lean(x_pred, f_jac)
+    #[target_feature(enable = "avx2,fma")]
+    fn predict_fma(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
+        self.predict_lean::<Fused>(x_pred, f_jac)
     }
 
-    /// The time update (the body of [`Self::predict`]).
+    /// The time update (the body of [`Self::predict`]), column by column:
+    /// every operation adds a multiple of one whole column to another.
     #[inline(always)]
-    fn predict_lean(&mut self, x_pred: SVector<f64, N>, f_jac: &SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        // Rows of W = F_z·S with the scaled Jacobian F_z = D⁻¹ F D; F is sparse
-        // (the process couples each state to a few others), so each of its
-        // non-zeros adds a multiple of one row of S to one row of W.
-        self.note_sparsity(f_jac.as_slice());
-        let (f, ratio) = (f_jac.as_slice(), self.ratio.as_slice());
-        let mut w = [[0.0; N]; N];
-        for (j, (f_col, r_col)) in f.chunks_exact(N).zip(ratio.chunks_exact(N)).enumerate() {
-            let s_j = &self.s[j];
-            for &i in &self.f_rows[j][..usize::from(self.f_counts[j])] {
-                let i = usize::from(i);
-                let fz = f_col[i] * r_col[i];
-                for (w, s) in w[i].iter_mut().zip(s_j) {
-                    *w += fz * s;
-                }
-            }
-        }
-        // Fast path: P⁻ = W Wᵀ + Q is a sum of positive semi-definite terms; its
-        // Cholesky factor is S⁻. Only its lower triangle is formed (the
-        // factorisation reads nothing else), each entry a dot product of two
-        // contiguous rows of W. Should rounding make the factorisation fail (a
-        // state with almost no variance), triangularise [W, Q^½] by Householder
-        // reflections, which cannot fail.
-        let mut p = [[0.0; N]; N];
-        for (i, (p_i, w_i)) in p.iter_mut().zip(&w).enumerate() {
-            // two entries at a time, sharing the loads of row i
-            let mut j = 0;
-            while j < i {
-                (p_i[j], p_i[j + 1]) = dot_pair(w_i, &w[j], &w[j + 1]);
-                j += 2;
-            }
-            if j == i {
-                p_i[i] = dot(w_i, w_i);
-            }
-            p_i[i] += self.q_sqrt[i] * self.q_sqrt[i];
-        }
-        if cholesky_rows(&mut p) {
-            self.s = p;
-            self.lower = true;
-            self.x = x_pred;
-            return self.finite_or_error();
-        }
-        let w1 = SMatrix::<f64, N, N>::from_fn(|i, c| w[i][c]);
-        self.triangularise(x_pred, w1)
-    }
-
-    /// Brings the list of F's non-zeros (`f`, column-major) up to date: a test
-    /// of every entry without a branch, and the list built again only when the
-    /// pattern changed.
-    #[inline(always)]
-    fn note_sparsity(&mut self, f: &[f64]) {
-        const { assert!(N <= 64, "the sparsity masks hold 64 rows") };
-        let mut masks = [0u64; N];
-        for (m, f_col) in masks.iter_mut().zip(f.chunks_exact(N)) {
-            for (i, v) in f_col.iter().enumerate() {
-                *m |= u64::from(*v != 0.0) << i;
-            }
-        }
-        if masks == self.f_masks {
-            return;
-        }
-        for (j, mask) in masks.iter().enumerate() {
-            let mut n = 0;
+    fn predict_lean<A: MulAdd>(
+        &mut self,
+        x_pred: SVector<f64, N>,
+        f_jac: &SMatrix<f64, N, N>,
+    ) -> Result<(), EkfError> {
+        // The scaled Jacobian F_z = D⁻¹ F D by columns (nalgebra's are too).
+        let mut fz = [[0.0; W]; N];
+        for ((fz, f), r) in fz
+            .iter_mut()
+            .zip(f_jac.as_slice().chunks_exact(N))
+            .zip(&self.ratio)
+        {
             for i in 0..N {
-                if mask & (1 << i) != 0 {
-                    self.f_rows[j][n] = i as u8;
-                    n += 1;
+                fz[i] = f[i] * r[i];
+            }
+        }
+        // Columns of G = F_z·S: g_c = Σ_j S[j][c]·fz_j, over the rows j where
+        // column c of S can be non-zero (from c down, where it is lower triangular).
+        let mut g = [[0.0; W]; N];
+        for (c, g) in g.iter_mut().enumerate() {
+            let first = if c < self.full_cols { 0 } else { c };
+            let s = &self.s[c];
+            for j in first..N {
+                let s_j = s[j];
+                for r in 0..W {
+                    g[r] = A::mul_add(fz[j][r], s_j, g[r]);
                 }
             }
-            self.f_counts[j] = n as u8;
         }
-        self.f_masks = masks;
+        // P⁻ = G·Gᵀ + Q by columns, p_c = Σ_k G[c][k]·g_k, formed in place of
+        // S and factorised there. Should rounding make the factorisation fail
+        // (a state with almost no variance), triangularise [G, Q^½] by
+        // Householder reflections, which cannot fail.
+        let (p, _) = self.s.split_at_mut(N);
+        let p: &mut [[f64; W]; N] = match p.try_into() {
+            Ok(p) => p,
+            Err(_) => unreachable!("N ≤ W columns"),
+        };
+        for (c, p) in p.iter_mut().enumerate() {
+            // only the lower triangle is read: the blocks of 4 rows from c's
+            *p = match c / 4 {
+                0 => product_column::<N, W, 0, A>(&g, c),
+                1 => product_column::<N, W, 4, A>(&g, c),
+                2 => product_column::<N, W, 8, A>(&g, c),
+                3 => product_column::<N, W, 12, A>(&g, c),
+                _ => product_column::<N, W, 16, A>(&g, c),
+            };
+            p[c] += self.q_var[c];
+        }
+        if cholesky_columns::<N, W, A>(p) {
+            // every pivot was positive and finite, so is every entry of the
+            // factor: only the state is left to test
+            self.full_cols = 0;
+            self.x = x_pred;
+            return if all_finite(self.x.as_slice()) {
+                Ok(())
+            } else {
+                Err(EkfError::NotFinite)
+            };
+        }
+        let g = SMatrix::<f64, N, N>::from_fn(|i, c| g[c][i]);
+        self.triangularise(x_pred, g)
     }
 
     /// The time update as first written (the dense product W·Wᵀ), kept as the
@@ -314,44 +325,27 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         let mut fz = *f_jac;
         for i in 0..N {
             for j in 0..N {
-                fz[(i, j)] *= self.ratio[(i, j)];
+                fz[(i, j)] *= self.x_scale[j] / self.x_scale[i];
             }
         }
         let w1 = fz * self.factor();
         let mut p = w1 * w1.transpose();
         for i in 0..N {
-            p[(i, i)] += self.q_sqrt[i] * self.q_sqrt[i];
+            p[(i, i)] += self.q_var[i];
         }
-        self.finish_predict(x_pred, p, w1)
-    }
-
-    /// The end of a time update from P⁻ (its lower triangle, scaled) and W = F·S:
-    /// S⁻ by Cholesky, else by triangularising [W, Q^½]; the state becomes `x_pred`.
-    #[cfg(test)]
-    fn finish_predict(
-        &mut self,
-        x_pred: SVector<f64, N>,
-        p: SMatrix<f64, N, N>,
-        w1: SMatrix<f64, N, N>,
-    ) -> Result<(), EkfError> {
-        let mut p_rows = [[0.0; N]; N];
-        for (i, row) in p_rows.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate().take(i + 1) {
-                *v = p[(i, j)];
+        match p.cholesky() {
+            Some(c) => {
+                self.set_factor(&c.l(), true);
+                self.x = x_pred;
+                self.finite_or_error()
             }
+            None => self.triangularise(x_pred, w1),
         }
-        if cholesky_rows(&mut p_rows) {
-            self.s = p_rows;
-            self.lower = true;
-            self.x = x_pred;
-            return self.finite_or_error();
-        }
-        self.triangularise(x_pred, w1)
     }
 
     /// S⁻ from [W, Q^½] by Householder reflections (the fallback that cannot fail).
     fn triangularise(&mut self, x_pred: SVector<f64, N>, mut w1: SMatrix<f64, N, N>) -> Result<(), EkfError> {
-        let mut w2 = SMatrix::<f64, N, N>::from_diagonal(&self.q_sqrt);
+        let mut w2 = SMatrix::<f64, N, N>::from_fn(|i, j| if i == j { self.q_var[i].sqrt() } else { 0.0 });
         lower_triangularise(&mut w1, &mut w2);
         self.set_factor(&w1, true);
         self.x = x_pred;
@@ -425,7 +419,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     }
 }
 
-impl<const N: usize, const M: usize> Ekf<N, M> {
+impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// [`Ekf::update`] for a measurement that reads states directly:
     /// measurement i is state `states[i]` (H is a selector, as for the rod
     /// position and the two chamber pressures). Same result as `update` with
@@ -434,7 +428,7 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
     /// is summed from the scalar updates' own innovations and variances
     /// (νᵀC⁻¹ν = Σ eᵢ²/cᵢ over the sequential innovations eᵢ, variances cᵢ).
     ///
-    /// Compiled for AVX2 where the processor has it, as [`Self::predict`].
+    /// Compiled for AVX2 and FMA where the processor has them, as [`Self::predict`].
     pub fn update_selected(
         &mut self,
         y: &SVector<f64, M>,
@@ -443,30 +437,30 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above), the only
-            // requirement of a `target_feature(enable = "avx2")` function.
-            return unsafe { self.update_selected_avx2(y, h_pred, states, use_channel) };
+        if fused_vector_unit() {
+            // SAFETY: the processor has AVX2 and FMA (checked just above),
+            // the only requirement of a `target_feature` function.
+            return unsafe { self.update_selected_fma(y, h_pred, states, use_channel) };
         }
-        self.update_selected_lean(y, h_pred, states, use_channel)
+        self.update_selected_lean::<Separate>(y, h_pred, states, use_channel)
     }
 
-    /// [`Self::update_selected_lean`] compiled for AVX2.
+    /// [`Self::update_selected_lean`] compiled for AVX2 and FMA, its multiply-adds fused.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn update_selected_avx2(
+    #[target_feature(enable = "avx2,fma")]
+    fn update_selected_fma(
         &mut self,
         y: &SVector<f64, M>,
         h_pred: &SVector<f64, M>,
         states: [usize; M],
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
-        self.update_selected_lean(y, h_pred, states, use_channel)
+        self.update_selected_lean::<Fused>(y, h_pred, states, use_channel)
     }
 
     /// The selector update (the body of [`Self::update_selected`]).
     #[inline(always)]
-    fn update_selected_lean(
+    fn update_selected_lean<A: MulAdd>(
         &mut self,
         y: &SVector<f64, M>,
         h_pred: &SVector<f64, M>,
@@ -477,57 +471,58 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
         // σ of each innovation from the prior: C_ii = c_i²·|row s_i of S|² + r_i.
         let sigma = SVector::<f64, M>::from_fn(|i, _| {
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            (ci * ci * dot(&self.s[si], &self.s[si]) + self.r[i])
-                .max(0.0)
-                .sqrt()
+            (ci * ci * self.row_norm2(si) + self.r[i]).max(0.0).sqrt()
         });
-        // The columns the measured rows of S can have non-zeros in: all, or, for
-        // a lower triangular S, those up to the highest measured state (the
-        // rank-one updates below write only these columns, so it stays so
-        // from one scalar update to the next).
+        // The columns the measured rows of S can have non-zeros in: those up
+        // to the highest measured state, and any full ones (the rank-one
+        // updates below write only these columns, so the rest stay lower
+        // triangular from one scalar update to the next).
         let support = match states.iter().max() {
-            Some(m) if self.lower => (m + 1).min(N),
-            _ => N,
+            Some(m) => (m + 1).max(self.full_cols).min(N),
+            None => N,
         };
 
-        // The measured rows of a lower triangular S reach 4 columns in the
-        // layouts here (the rod position is state 3): a pass with that many
-        // columns fixed at compile time; any other reach takes all N.
+        // The measured rows reach 4 columns in the layouts here (the rod
+        // position is state 3): a pass with that many columns fixed at
+        // compile time; any other reach takes all N.
         let nis = match support {
-            4 => self.potter::<4>(&nu, states, use_channel)?,
-            _ => self.potter::<N>(&nu, states, use_channel)?,
+            4 if N >= 4 => self.potter::<4, A>(&nu, states, use_channel)?,
+            _ => self.potter::<N, A>(&nu, states, use_channel)?,
         };
-        if !self.is_finite() {
+        // Each scalar update passed a positive finite variance, so the
+        // factor's new columns are finite; a non-finite innovation shows in
+        // the state and the NIS.
+        if !(all_finite(self.x.as_slice()) && nis.is_finite()) {
             return Err(EkfError::NotFinite);
         }
         Ok(Innovation { nu, sigma, nis })
     }
 }
 
-impl<const N: usize, const M: usize> Ekf<N, M> {
+impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// Potter's update, one scalar measurement at a time (φ = Sᵀh is a row of
     /// S), for an S whose measured rows have non-zeros in their first `K`
     /// columns only (the rank-one updates write only these, so it stays so);
     /// returns the NIS, Σ eᵢ²/cᵢ over the sequential innovations.
     #[inline(always)]
-    fn potter<const K: usize>(
+    fn potter<const K: usize, A: MulAdd>(
         &mut self,
         nu: &SVector<f64, M>,
         states: [usize; M],
         use_channel: [bool; M],
     ) -> Result<f64, EkfError> {
-        let mut dz = [0.0; N]; // scaled state correction so far
-        let mut phi = [0.0; K];
+        let mut dz = [0.0; W]; // scaled state correction so far
         let mut nis = 0.0;
         for i in 0..M {
             if !use_channel[i] {
                 continue;
             }
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            for (p, s) in phi.iter_mut().zip(&self.s[si]) {
-                *p = ci * s;
+            let mut phi = [0.0; K];
+            for (p, col) in phi.iter_mut().zip(&self.s) {
+                *p = ci * col[si];
             }
-            let denom = dot(&phi, &phi) + self.r[i];
+            let denom = dot::<K, A>(&phi, &phi) + self.r[i];
             if !(denom > 0.0 && denom.is_finite()) {
                 return Err(EkfError::SingularInnovation);
             }
@@ -536,33 +531,100 @@ impl<const N: usize, const M: usize> Ekf<N, M> {
             // after the square root instead of two around it.
             let a = 1.0 / denom;
             let ag = 1.0 / (denom + denom.sqrt() * self.r_sqrt[i]);
-            let mut u = [0.0; N]; // S·φ
-            for (u, row) in u.iter_mut().zip(&self.s) {
-                let mut acc = 0.0;
-                for (x, p) in row.iter().zip(&phi) {
-                    acc += x * p;
+            let mut u = [0.0; W]; // S·φ = Σ_k φ_k·s_k
+            for (col, p) in self.s.iter().zip(&phi) {
+                for (u, s) in u.iter_mut().zip(col) {
+                    *u = A::mul_add(*s, *p, *u);
                 }
-                *u = acc;
             }
             let resid = nu[i] - ci * dz[si];
             nis += resid * resid * a;
             let step = resid * a;
             for (d, u) in dz.iter_mut().zip(&u) {
-                *d += u * step;
+                *d = A::mul_add(*u, step, *d);
             }
-            for (row, u) in self.s.iter_mut().zip(&u) {
-                let g = ag * u;
-                for (v, p) in row.iter_mut().zip(&phi) {
-                    *v -= g * p;
+            for (col, p) in self.s.iter_mut().zip(&phi) {
+                let g = ag * p;
+                for (v, u) in col.iter_mut().zip(&u) {
+                    *v = A::mul_add(-g, *u, *v);
                 }
             }
-            self.lower = false;
+            self.full_cols = self.full_cols.max(K);
         }
         for ((x, d), c) in self.x.iter_mut().zip(&dz).zip(&self.x_scale) {
             *x += d * c;
         }
         Ok(nis)
     }
+}
+
+/// Whether this x86-64 processor has AVX2 and FMA (detected once, then cached by std).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn fused_vector_unit() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
+/// How the filter's kernels compute a·b + c.
+trait MulAdd {
+    /// a·b + c.
+    fn mul_add(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// a·b + c rounded once (an FMA instruction where the code is compiled for
+/// one, else the C library's correctly rounded `fma`: the same bits).
+pub(crate) struct Fused;
+
+/// a·b rounded, then the sum rounded: what a processor without FMA does fast.
+pub(crate) struct Separate;
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+}
+
+impl MulAdd for Separate {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a * b + c
+    }
+}
+
+/// Column c of G·Gᵀ (G by columns) in the rows from `R` on (the others zero).
+#[inline(always)]
+fn product_column<const N: usize, const W: usize, const R: usize, A: MulAdd>(
+    g: &[[f64; W]; N],
+    c: usize,
+) -> [f64; W] {
+    let mut acc = [0.0; W]; // in registers
+    for g_k in g {
+        let a = g_k[c];
+        for r in R.min(W)..W {
+            acc[r] = A::mul_add(g_k[r], a, acc[r]);
+        }
+    }
+    acc
+}
+
+/// Whether every value is finite: v·0 is 0 for a finite v and NaN for an
+/// infinity or a NaN, summed in 4 independent lanes (no branch per value,
+/// and no sum waiting on each addition in turn).
+#[inline(always)]
+fn all_finite(values: &[f64]) -> bool {
+    let mut lanes = [0.0; 4];
+    let chunks = values.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (l, v) in lanes.iter_mut().zip(c) {
+            *l += v * 0.0;
+        }
+    }
+    for (l, v) in lanes.iter_mut().zip(rest) {
+        *l += v * 0.0;
+    }
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) == 0.0
 }
 
 /// The σ of each innovation (√ of C's diagonal) and the NIS νᵀC⁻¹ν over the
@@ -603,61 +665,36 @@ fn innovation_statistics<const M: usize>(
 /// The dot product of two rows, in four independent partial sums (a single
 /// running sum would wait on each addition in turn).
 #[inline(always)]
-fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut acc = [0.0; 4];
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
     let (ar, br) = (a4.remainder(), b4.remainder());
     for (x, y) in a4.zip(b4) {
         for k in 0..4 {
-            acc[k] += x[k] * y[k];
+            acc[k] = A::mul_add(x[k], y[k], acc[k]);
         }
     }
     for (k, (x, y)) in ar.iter().zip(br).enumerate() {
-        acc[k] += x * y;
+        acc[k] = A::mul_add(*x, *y, acc[k]);
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// The dot products a·b and a·c, each summed as [`dot`] sums it (so the same
-/// bit for bit), with the loads of `a` shared.
-#[inline(always)]
-fn dot_pair<const N: usize>(a: &[f64; N], b: &[f64; N], c: &[f64; N]) -> (f64, f64) {
-    let mut ab = [0.0; 4];
-    let mut ac = [0.0; 4];
-    let (a4, b4, c4) = (a.chunks_exact(4), b.chunks_exact(4), c.chunks_exact(4));
-    let (ar, br, cr) = (a4.remainder(), b4.remainder(), c4.remainder());
-    for ((x, y), z) in a4.zip(b4).zip(c4) {
-        for k in 0..4 {
-            ab[k] += x[k] * y[k];
-            ac[k] += x[k] * z[k];
-        }
-    }
-    for (k, ((x, y), z)) in ar.iter().zip(br).zip(cr).enumerate() {
-        ab[k] += x * y;
-        ac[k] += x * z;
-    }
-    (
-        (ab[0] + ab[1]) + (ab[2] + ab[3]),
-        (ac[0] + ac[1]) + (ac[2] + ac[3]),
-    )
-}
-
-/// Overwrites the lower triangle of `a` (rows; the symmetric matrix A whose
-/// lower triangle it holds) with its Cholesky factor L, L·Lᵀ = A. The upper
-/// triangle is scratch (what it held is ignored) and is left zero. Returns false (and `a` is garbage) if
-/// A is not numerically positive definite (a pivot not positive and finite).
+/// Overwrites `a` (the columns of a symmetric N×N matrix A, padded to `W`
+/// rows that are zero) with its Cholesky factor L by columns, L·Lᵀ = A.
+/// Only the lower triangle of A is read; L is zero above the diagonal and
+/// in the padding. Returns false (and `a` is garbage) if A is not
+/// numerically positive definite (a pivot not positive and finite).
 ///
 /// Computed as A = L₁·D·L₁ᵀ (L₁ unit lower triangular), then L = L₁·D^½: the
 /// chain from one pivot to the next is one division, a product and a
 /// difference; the square roots come after, independent of each other.
-/// Right-looking: each column, once scaled, updates the trailing rows, each
-/// over its whole length (a fixed-length loop without a remainder; the
-/// column is zero up to the pivot, so the entries left of it keep their
-/// values, and what lands right of the diagonal is cleared at the end).
-#[allow(clippy::needless_range_loop)] // index loops: bounds the optimiser sees through
+/// Right-looking: each pivot's column, once scaled, is subtracted from every
+/// later column whole (the rows above the diagonal take garbage, cleared at
+/// the end), so every operation is a multiple of one column added to another.
 #[inline(always)]
-fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
-    let mut pivots = [0.0; N];
+fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]; N]) -> bool {
+    let (mut pivots, mut inverses) = ([0.0; N], [0.0; N]);
     for j in 0..N {
         let d = a[j][j];
         if !(d > 0.0 && d.is_finite()) {
@@ -665,29 +702,46 @@ fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
         }
         pivots[j] = d;
         let inv = 1.0 / d;
-        let mut col = [0.0; N];
-        for i in j + 1..N {
-            col[i] = a[i][j];
-        }
-        for i in j + 1..N {
-            let l = col[i] * inv;
-            // the whole row: col is 0 up to j, and what lands right of the
-            // diagonal is cleared below
-            for c in 0..N {
-                a[i][c] -= l * col[c];
+        let col = a[j];
+        for c in j + 1..N {
+            let l = col[c] * inv;
+            let a_c = &mut a[c];
+            for r in 0..W {
+                a_c[r] = A::mul_add(-l, col[r], a_c[r]);
             }
-            a[i][j] = l;
+        }
+        inverses[j] = inv;
+    }
+    // column j of L is column j of L₁·D (as it stands) times 1/d_j·√d_j
+    for (j, col) in a.iter_mut().enumerate() {
+        let root = pivots[j].sqrt();
+        let scale = inverses[j] * root;
+        for v in col.iter_mut() {
+            *v *= scale;
+        }
+        col[..j].fill(0.0);
+        col[j] = root;
+    }
+    true
+}
+
+/// The Cholesky factor of the lower triangle of `a` (rows) in place, by
+/// [`cholesky_columns`] on its transpose (a symmetric matrix is its own).
+fn cholesky_rows<const N: usize>(a: &mut [[f64; N]; N]) -> bool {
+    let mut cols = [[0.0; N]; N];
+    for (i, row) in a.iter().enumerate() {
+        for (j, v) in row.iter().enumerate().take(i + 1) {
+            cols[j][i] = *v;
+            cols[i][j] = *v;
         }
     }
-    for i in 0..N {
-        for j in 0..N {
-            if j < i {
-                a[i][j] *= pivots[j].sqrt();
-            } else if j > i {
-                a[i][j] = 0.0;
-            }
+    if !cholesky_columns::<N, N, Separate>(&mut cols) {
+        return false;
+    }
+    for (i, row) in a.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = cols[j][i];
         }
-        a[i][i] = pivots[i].sqrt();
     }
     true
 }

@@ -163,11 +163,11 @@ pub struct EstimatorCounters {
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 enum Filter {
-    S6(Ekf<6, 3>),
-    S7(Ekf<7, 3>),
-    S10(Ekf<10, 3>),
-    S11(Ekf<11, 3>),
-    S12(Ekf<12, 3>),
+    S6(Ekf<6, 3, 8>),
+    S7(Ekf<7, 3, 8>),
+    S10(Ekf<10, 3, 12>),
+    S11(Ekf<11, 3, 12>),
+    S12(Ekf<12, 3, 12>),
 }
 
 /// The estimator stage.
@@ -230,11 +230,11 @@ impl Estimator {
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
         model.substeps = tuning.substeps;
         let filter = match tuning.states {
-            6 => Filter::S6(make_filter::<6>(&tuning, &model, None)),
-            7 => Filter::S7(make_filter::<7>(&tuning, &model, None)),
-            10 => Filter::S10(make_filter::<10>(&tuning, &model, None)),
-            11 => Filter::S11(make_filter::<11>(&tuning, &model, None)),
-            _ => Filter::S12(make_filter::<12>(&tuning, &model, None)),
+            6 => Filter::S6(make_filter::<6, 8>(&tuning, &model, None)),
+            7 => Filter::S7(make_filter::<7, 8>(&tuning, &model, None)),
+            10 => Filter::S10(make_filter::<10, 12>(&tuning, &model, None)),
+            11 => Filter::S11(make_filter::<11, 12>(&tuning, &model, None)),
+            _ => Filter::S12(make_filter::<12, 12>(&tuning, &model, None)),
         };
         let w = tuning.mae_window_samples;
         Ok(Estimator {
@@ -262,9 +262,9 @@ impl Estimator {
     /// brings the filter's matrices, the model and the step's code back into the
     /// caches, so the frame's own step does not pay for them. Allocates nothing.
     pub fn warm_up(&mut self) {
-        fn step<const N: usize>(
-            w: &mut Ekf<N, 3>,
-            f: &Ekf<N, 3>,
+        fn step<const N: usize, const W: usize>(
+            w: &mut Ekf<N, 3, W>,
+            f: &Ekf<N, 3, W>,
             model: &ProcessModel,
             u: f64,
             out: &mut Estimate,
@@ -313,7 +313,7 @@ impl Estimator {
     /// The covariance of the current estimate, row-major n×n in SI units, into `out`
     /// (which must hold n² values); returns n.
     pub fn covariance_into(&self, out: &mut [f64]) -> usize {
-        fn copy<const N: usize>(e: &Ekf<N, 3>, out: &mut [f64]) -> usize {
+        fn copy<const N: usize, const W: usize>(e: &Ekf<N, 3, W>, out: &mut [f64]) -> usize {
             let p = e.covariance();
             for i in 0..N {
                 for j in 0..N {
@@ -462,11 +462,11 @@ impl Estimator {
             let measured = [s.x_m, s.p1_pa, s.p2_pa];
             let tuning = &self.tuning;
             match &mut self.filter {
-                Filter::S6(e) => *e = make_filter::<6>(tuning, &self.model, Some(measured)),
-                Filter::S7(e) => *e = make_filter::<7>(tuning, &self.model, Some(measured)),
-                Filter::S10(e) => *e = make_filter::<10>(tuning, &self.model, Some(measured)),
-                Filter::S11(e) => *e = make_filter::<11>(tuning, &self.model, Some(measured)),
-                Filter::S12(e) => *e = make_filter::<12>(tuning, &self.model, Some(measured)),
+                Filter::S6(e) => *e = make_filter::<6, 8>(tuning, &self.model, Some(measured)),
+                Filter::S7(e) => *e = make_filter::<7, 8>(tuning, &self.model, Some(measured)),
+                Filter::S10(e) => *e = make_filter::<10, 12>(tuning, &self.model, Some(measured)),
+                Filter::S11(e) => *e = make_filter::<11, 12>(tuning, &self.model, Some(measured)),
+                Filter::S12(e) => *e = make_filter::<12, 12>(tuning, &self.model, Some(measured)),
             }
             if self.counters.samples > 1 {
                 flags |= FLAG_RESET;
@@ -482,11 +482,11 @@ impl Estimator {
             let measured = [s.x_m, s.p1_pa, s.p2_pa];
             let tuning = &self.tuning;
             match &mut self.filter {
-                Filter::S6(e) => reanchor_filter::<6>(e, tuning, &self.model, measured),
-                Filter::S7(e) => reanchor_filter::<7>(e, tuning, &self.model, measured),
-                Filter::S10(e) => reanchor_filter::<10>(e, tuning, &self.model, measured),
-                Filter::S11(e) => reanchor_filter::<11>(e, tuning, &self.model, measured),
-                Filter::S12(e) => reanchor_filter::<12>(e, tuning, &self.model, measured),
+                Filter::S6(e) => reanchor_filter::<6, 8>(e, tuning, &self.model, measured),
+                Filter::S7(e) => reanchor_filter::<7, 8>(e, tuning, &self.model, measured),
+                Filter::S10(e) => reanchor_filter::<10, 12>(e, tuning, &self.model, measured),
+                Filter::S11(e) => reanchor_filter::<11, 12>(e, tuning, &self.model, measured),
+                Filter::S12(e) => reanchor_filter::<12, 12>(e, tuning, &self.model, measured),
             }
             self.reanchor_pending = false;
             self.diverged_samples = 0;
@@ -580,11 +580,11 @@ impl Estimator {
     }
 }
 
-fn make_filter<const N: usize>(
+fn make_filter<const N: usize, const W: usize>(
     tuning: &Tuning,
     model: &ProcessModel,
     measured: Option<[f64; 3]>,
-) -> Ekf<N, 3> {
+) -> Ekf<N, 3, W> {
     let mut x0 = SVector::<f64, N>::zeros();
     let p0 = tuning.p0_diag::<N>();
     let q = tuning.q_diag::<N>();
@@ -612,17 +612,17 @@ fn make_filter<const N: usize>(
     Ekf::new(x0, &p0, &q, r, scale)
 }
 
-fn reanchor_filter<const N: usize>(
-    e: &mut Ekf<N, 3>,
+fn reanchor_filter<const N: usize, const W: usize>(
+    e: &mut Ekf<N, 3, W>,
     tuning: &Tuning,
     model: &ProcessModel,
     measured: [f64; 3],
 ) {
-    let fresh = make_filter::<N>(tuning, model, Some(measured));
+    let fresh = make_filter::<N, W>(tuning, model, Some(measured));
     e.reanchor(*fresh.state(), &tuning.p0_diag::<N>(), FIRST_SLOW_STATE.min(N));
 }
 
-fn predict_only<const N: usize>(e: &mut Ekf<N, 3>, model: &ProcessModel, u: f64) -> bool {
+fn predict_only<const N: usize, const W: usize>(e: &mut Ekf<N, 3, W>, model: &ProcessModel, u: f64) -> bool {
     let (x, f, _) = model.step(e.state(), u);
     e.predict(x, &f).is_ok()
 }
@@ -641,8 +641,8 @@ struct StepInput {
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
 /// (`still_samples` counts the samples the rod has rested, for θ's hold.)
-fn step_filter<const N: usize>(
-    e: &mut Ekf<N, 3>,
+fn step_filter<const N: usize, const W: usize>(
+    e: &mut Ekf<N, 3, W>,
     model: &ProcessModel,
     input: &StepInput,
     out: &mut Estimate,
