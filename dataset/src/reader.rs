@@ -337,6 +337,10 @@ const EXACT_POWERS_OF_TEN: [f64; 23] = [
 /// product or quotient, correctly rounded); the others are parsed by
 /// `str::parse`.
 fn parse_plain_f64(cell: &str) -> Option<f64> {
+    if cell == "NaN" {
+        // what `simulate` and `export` write for a value that is absent
+        return Some(f64::NAN);
+    }
     let b = cell.as_bytes();
     let digit = |i: usize| b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d < 10);
     let (negative, start) = match b.first()? {
@@ -464,6 +468,7 @@ mod tests {
             "0.35228911569157584",
             "0.000010341256119938336",
             "2.564102564102432e-7",
+            "NaN",
             "1e22",
             "1e23",
             "9007199254740993",

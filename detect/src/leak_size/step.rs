@@ -212,12 +212,16 @@ impl LeakSizeDetector {
         // σ of each hypothesis' size: the filter's marginal σ (correlations ignored)
         // combined with the spread the healthy estimate showed in the warm-up (the
         // filter alone is overconfident about model error).
+        // (√(a² + b²) directly: these are L/min, far from where `hypot`'s
+        // guard against overflow matters, and it costs five library calls a sample)
+        let root_sum_square = |a: f64, b: f64| (a * a + b * b).sqrt();
         let sigma_filter = [
-            sigma_q[0].hypot(sigma_q[2]),
-            sigma_q[1].hypot(sigma_q[2]),
+            root_sum_square(sigma_q[0], sigma_q[2]),
+            root_sum_square(sigma_q[1], sigma_q[2]),
             0.5 * (sigma_q[0].powi(2) + sigma_q[1].powi(2) + 4.0 * sigma_q[2].powi(2)).sqrt(),
         ];
-        let sigma_lpm: [f64; 3] = std::array::from_fn(|k| sigma_filter[k].hypot(self.stats[k].std()));
+        let sigma_lpm: [f64; 3] =
+            std::array::from_fn(|k| root_sum_square(sigma_filter[k], self.stats[k].std()));
         if self.active.is_none()
             && !blind
             && self.strong_since_s.is_none()
