@@ -641,7 +641,43 @@ struct StepInput {
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
 /// (`still_samples` counts the samples the rod has rested, for θ's hold.)
+///
+/// On an x86-64 processor with AVX2 and FMA the whole step (the model's too)
+/// runs compiled for them: the model's arithmetic gives the same bits either
+/// way (Rust fuses no multiply-add it is not asked to), the filter's fuses
+/// its own ([`Ekf::predict`]).
 fn step_filter<const N: usize, const W: usize>(
+    e: &mut Ekf<N, 3, W>,
+    model: &ProcessModel,
+    input: &StepInput,
+    out: &mut Estimate,
+    still_samples: &mut u32,
+) -> Result<bool, EkfError> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor has AVX2 and FMA (checked just above), the
+        // only requirement of a `target_feature` function.
+        return unsafe { step_filter_fma(e, model, input, out, still_samples) };
+    }
+    step_filter_body(e, model, input, out, still_samples)
+}
+
+/// [`step_filter_body`] compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn step_filter_fma<const N: usize, const W: usize>(
+    e: &mut Ekf<N, 3, W>,
+    model: &ProcessModel,
+    input: &StepInput,
+    out: &mut Estimate,
+    still_samples: &mut u32,
+) -> Result<bool, EkfError> {
+    step_filter_body(e, model, input, out, still_samples)
+}
+
+/// The body of [`step_filter`].
+#[inline(always)]
+fn step_filter_body<const N: usize, const W: usize>(
     e: &mut Ekf<N, 3, W>,
     model: &ProcessModel,
     input: &StepInput,

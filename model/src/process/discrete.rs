@@ -25,6 +25,7 @@ impl ProcessModel {
 
     /// [`Self::step`] into `x` (x(k+1)) and `jac` (F), which it overwrites (a
     /// filter's own buffers: nothing is copied on the way).
+    #[inline(always)]
     pub fn step_into<const N: usize>(
         &self,
         s: &SVector<f64, N>,

@@ -116,6 +116,7 @@ impl ProcessModel {
     /// (√ is monotonic and correctly rounded, so √max(a, b) = max(√a, √b) and the
     /// results are those of computing each on its own); the parameter constants
     /// come from the model's cache.
+    #[inline(always)]
     pub fn linearise_into<const N: usize>(
         &self,
         s: &SVector<f64, N>,
