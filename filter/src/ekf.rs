@@ -269,10 +269,18 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         // Columns of G = F_z·S: g_c = Σ_j S[j][c]·fz_j, over the rows j where
         // column c of S can be non-zero (from c down, where it is lower triangular).
         let mut g = [[0.0; W]; N];
-        for (c, g) in g.iter_mut().enumerate() {
-            let first = if c < self.full_cols { 0 } else { c };
-            let s = &self.s[c];
-            for j in first..N {
+        let full = self.full_cols.min(N);
+        for (g, s) in g[..full].iter_mut().zip(&self.s[..full]) {
+            // a full column: every row (a loop of fixed length)
+            for (fz, s_j) in fz.iter().zip(&s[..N]) {
+                for r in 0..W {
+                    g[r] = A::mul_add(fz[r], *s_j, g[r]);
+                }
+            }
+        }
+        for c in full..N {
+            let (g, s) = (&mut g[c], &self.s[c]);
+            for j in c..N {
                 let s_j = s[j];
                 for r in 0..W {
                     g[r] = A::mul_add(fz[j][r], s_j, g[r]);
