@@ -569,7 +569,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 /// Whether this x86-64 processor has AVX2 and FMA (detected once, then cached by std).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn fused_vector_unit() -> bool {
+pub(crate) fn fused_vector_unit() -> bool {
     std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
@@ -581,6 +581,7 @@ trait MulAdd {
 
 /// a·b + c rounded once (an FMA instruction where the code is compiled for
 /// one, else the C library's correctly rounded `fma`: the same bits).
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // dispatched to on x86-64 only
 pub(crate) struct Fused;
 
 /// a·b rounded, then the sum rounded: what a processor without FMA does fast.

@@ -654,7 +654,7 @@ fn step_filter<const N: usize, const W: usize>(
     still_samples: &mut u32,
 ) -> Result<bool, EkfError> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if ekf::fused_vector_unit() {
         // SAFETY: the processor has AVX2 and FMA (checked just above), the
         // only requirement of a `target_feature` function.
         return unsafe { step_filter_fma(e, model, input, out, still_samples) };

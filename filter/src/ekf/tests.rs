@@ -224,6 +224,18 @@ fn the_lean_step_follows_a_changing_sparsity_and_a_full_factor() {
     assert!((pl - pr).abs().max() <= 1e-12 * pr.abs().max());
 }
 
+/// Whether [`Ekf::predict`] and [`Ekf::update_selected`] run fused here.
+fn dispatch_fuses() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        fused_vector_unit()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// The time and selector updates give the same bits whichever way they were
 /// compiled (the dispatched entry points against their portable bodies with
 /// fused multiply-adds, which the C library rounds as the instruction does),
@@ -269,9 +281,7 @@ fn the_dispatched_step_equals_the_portable_one_bit_for_bit() {
     for k in 0..2_000u32 {
         let x = f * dispatched.state();
         dispatched.predict(x, &f).expect("predict");
-        let fused_vectors = cfg!(target_arch = "x86_64")
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma");
+        let fused_vectors = dispatch_fuses();
         if fused_vectors {
             portable.predict_lean::<Fused>(x, &f).expect("predict");
         } else {
