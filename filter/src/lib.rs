@@ -103,7 +103,7 @@ pub struct Estimate {
 }
 
 impl Estimate {
-    fn empty(t_s: f64, n_states: u32) -> Self {
+    pub(crate) fn empty(t_s: f64, n_states: u32) -> Self {
         Estimate {
             t_s,
             n_states: n_states.min(MAX_STATES as u32),

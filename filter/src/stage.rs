@@ -108,6 +108,8 @@ fn step_kind(t_prev_s: f64, t_s: f64, period_s: f64, flagged: bool) -> StepKind 
 pub struct EstimatorStage {
     leak: Estimator,
     thesis: Estimator,
+    /// Whether the thesis filter runs ([`EstimatorStage::without_thesis`]).
+    thesis_runs: bool,
     period_s: f64,
     last_t_s: Option<f64>,
     missing: u64,
@@ -122,6 +124,7 @@ impl EstimatorStage {
         Ok(EstimatorStage {
             leak: Estimator::new(params.clone(), leak)?,
             thesis: Estimator::new(params, thesis)?,
+            thesis_runs: true,
             period_s,
             last_t_s: None,
             missing: 0,
@@ -133,6 +136,20 @@ impl EstimatorStage {
     /// The leak filter.
     pub fn leak(&self) -> &Estimator {
         &self.leak
+    }
+
+    /// The stage without its thesis filter, for a consumer that reads only
+    /// the leak filter: each [`StageEstimate::thesis`] is then empty (NaN,
+    /// flagged [`crate::FLAG_SKIPPED`]) and costs nothing. The thesis filter is
+    /// about a third of the stage's work.
+    pub fn without_thesis(mut self) -> Self {
+        self.thesis_runs = false;
+        self
+    }
+
+    /// Whether the thesis filter runs (see [`Self::without_thesis`]).
+    pub fn thesis_runs(&self) -> bool {
+        self.thesis_runs
     }
 
     /// The thesis filter.
@@ -159,7 +176,9 @@ impl EstimatorStage {
     /// [`crate::Estimator::warm_up`]); nothing they estimate changes.
     pub fn warm_up(&mut self) {
         self.leak.warm_up();
-        self.thesis.warm_up();
+        if self.thesis_runs {
+            self.thesis.warm_up();
+        }
     }
 
     /// Processes one sample (gaps and restarts from its time alone).
@@ -182,14 +201,18 @@ impl EstimatorStage {
                 StepKind::Gap(missing) => {
                     missing_before = missing;
                     self.leak.on_gap(missing_before);
-                    self.thesis.on_gap(missing_before);
+                    if self.thesis_runs {
+                        self.thesis.on_gap(missing_before);
+                    }
                     self.missing += missing_before;
                 }
                 StepKind::Restart => {
                     // the new time against the one the next sample was due at
                     let time_shift_s = s.t_s - (t_prev_s + self.period_s);
                     self.leak.on_restart(time_shift_s);
-                    self.thesis.on_restart(time_shift_s);
+                    if self.thesis_runs {
+                        self.thesis.on_restart(time_shift_s);
+                    }
                     self.restarts += 1;
                     self.last_restart = Some(StreamRestart {
                         t_before_s: t_prev_s,
@@ -203,7 +226,13 @@ impl EstimatorStage {
             self.last_t_s = Some(s.t_s);
         }
         let mut leak = self.leak.on_sample(s);
-        let mut thesis = self.thesis.on_sample(s);
+        let mut thesis = if self.thesis_runs {
+            self.thesis.on_sample(s)
+        } else {
+            let mut e = Estimate::empty(s.t_s, self.thesis.tuning().states);
+            e.flags = crate::FLAG_SKIPPED;
+            e
+        };
         if missing_before > 0 || restarted {
             leak.flags |= crate::FLAG_AFTER_GAP;
             thesis.flags |= crate::FLAG_AFTER_GAP;

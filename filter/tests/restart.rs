@@ -222,3 +222,30 @@ fn a_restart_before_the_filter_started_just_starts_it() {
     assert_eq!(e.leak.flags & (FLAG_SKIPPED | FLAG_REANCHORED), 0);
     assert!((x_m(&e.leak) - samples[0].x_m).abs() < 5e-6);
 }
+
+/// Without its thesis filter the stage gives the leak filter's estimates bit
+/// for bit, across a gap and a restart too, and each thesis estimate empty and
+/// flagged skipped.
+#[test]
+fn a_stage_without_the_thesis_filter_gives_the_same_leak_estimates() {
+    let mut samples = record(3.0, 5);
+    samples.drain(1200..1250); // a gap of 50 samples: re-anchored
+    let mut restarted = record(1.0, 6); // then the sender reboots: time back to 0
+    samples.append(&mut restarted);
+    let (mut both, mut leak_only) = (stage(), stage().without_thesis());
+    assert!(both.thesis_runs() && !leak_only.thesis_runs());
+    for s in &samples {
+        let (a, b) = (both.on_sample(s), leak_only.on_sample(s));
+        assert_eq!(
+            format!("{:?}", a.leak),
+            format!("{:?}", b.leak),
+            "t = {} s",
+            s.t_s
+        );
+        assert_eq!(a.missing_before, b.missing_before);
+        assert!(b.thesis.flags & FLAG_SKIPPED != 0 && b.thesis.state[3].is_nan());
+    }
+    assert_eq!(leak_only.thesis().counters().samples, 0);
+    assert_eq!(both.stream_restarts(), 1);
+    assert_eq!(leak_only.stream_restarts(), 1);
+}

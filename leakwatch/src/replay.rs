@@ -150,8 +150,10 @@ pub struct Summary {
     pub samples_per_s: f64,
     /// The leak filter's residuals.
     pub leak_filter: ResidualRms,
-    /// The thesis filter's residuals.
-    pub thesis_filter: ResidualRms,
+    /// The thesis filter's residuals; absent when nothing read the thesis
+    /// filter (no per-sample estimates and no thesis baseline), which then did not run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thesis_filter: Option<ResidualRms>,
     /// Number of events written to events.json.
     pub events: usize,
     /// How much of the run the leak detector watched.
@@ -277,6 +279,11 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let mut out = EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{est_name}: {e}"))?;
 
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
+    // The thesis filter feeds the per-sample estimates (`th_*`) and the thesis'
+    // baseline only: without either it does not run (a third of the work).
+    if req.estimates.file_name().is_none() && !cfg.classifier.thesis_baseline {
+        stage = stage.without_thesis();
+    }
     let mut cls = Classifier::new(cfg.classifier.clone())?;
     if req.progress {
         eprintln!("note: {}", cls.start_note());
@@ -291,6 +298,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         },
         ..Summary::default()
     };
+    let thesis_runs = stage.thesis_runs();
     let gate = req.config.classifier.nis_gate;
     let mut acc = (Acc::new(gate), Acc::new(gate));
     let mut last_t = 0.0;
@@ -307,7 +315,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             first_t = s.leak.t_s;
         }
         acc.0.push(&s.leak);
-        acc.1.push(&s.thesis);
+        if thesis_runs {
+            acc.1.push(&s.thesis);
+        }
         cls.on_stage(s, |ev| events.push(ev));
         if write_err.is_none() {
             if let Err(e) = out.write(s) {
@@ -434,7 +444,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
     summary.samples_missing = stage.missing_samples();
     summary.leak_filter = acc.0.finish(stage.leak().counters().resets);
-    summary.thesis_filter = acc.1.finish(stage.thesis().counters().resets);
+    summary.thesis_filter = thesis_runs.then(|| acc.1.finish(stage.thesis().counters().resets));
     summary.events = events.len();
     let armed_at_s = cls.leak_size.armed_at_s();
     let blind_s = cls.leak_size.blind_s();

@@ -150,7 +150,13 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
     let cfg = &settings.cfg;
     let (cfg_nis_gate, cfg_recovery_s) = (cfg.classifier.nis_gate, cfg.classifier.recovery_s);
     let model_bulk_modulus_pa = cfg.model.bulk_modulus_pa;
-    for (name, f) in [("leak", &s.leak_filter), ("thesis", &s.thesis_filter)] {
+    for (name, f) in [
+        ("leak", Some(&s.leak_filter)),
+        ("thesis", s.thesis_filter.as_ref()),
+    ]
+    .into_iter()
+    .filter_map(|(name, f)| Some((name, f?)))
+    {
         if f.resets * 10 > s.samples {
             eprintln!(
                 "warning: the {name} filter was reset {} times in {} samples: its tuning does not fit \

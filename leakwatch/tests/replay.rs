@@ -63,6 +63,15 @@ fn channels_and_one_thread_give_identical_results_and_find_the_leak() {
         std::fs::read(c.join("events.json")).unwrap()
     );
     assert_eq!(json(&c.join("summary.json"))["samples"], 30_000);
+    // nothing read the thesis filter there, so it did not run: no residuals of
+    // it, and the same leak events without it
+    assert!(json(&c.join("summary.json")).get("thesis_filter").is_none());
+    assert!(json(&a.join("summary.json"))["thesis_filter"]["mean_nis"].is_number());
+    // asked for its baseline, it runs without an estimates file too
+    let e = d.join("e");
+    let o = replay(&input, &e, &["--estimates", "none", "--thesis-baseline"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(json(&e.join("summary.json"))["thesis_filter"]["mean_nis"].is_number());
     let text = String::from_utf8(ea).unwrap();
     assert_eq!(text.lines().count(), 30_001);
     assert!(text.starts_with("t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm"));
