@@ -32,6 +32,54 @@ fn triangularisation_preserves_the_product() {
     }
 }
 
+/// Where the actuator's fast states couple, (row, column): spool ↔ pressures,
+/// pressures ↔ rod, rod ↔ load.
+const FAST_COUPLINGS: &[(usize, usize)] = &[
+    (1, 0),
+    (2, 0),
+    (0, 5),
+    (5, 0),
+    (1, 4),
+    (2, 4),
+    (3, 4),
+    (4, 1),
+    (4, 2),
+    (4, 6),
+];
+
+/// Where the leak sizes act on the pressures, (row, column).
+const LEAK_COUPLINGS: &[(usize, usize)] = &[(1, 7), (2, 8), (1, 9), (2, 9)];
+
+/// A Jacobian of the actuator's shape: the identity plus a coupling of
+/// 1e-3·N(0, 1) in each state's own units at each of `couplings` (i, j),
+/// drawn from `rng` in that order.
+fn coupled_jacobian<const N: usize>(
+    scale: &SVector<f64, N>,
+    couplings: &[(usize, usize)],
+    rng: &mut Rng,
+) -> SMatrix<f64, N, N> {
+    let mut f = SMatrix::<f64, N, N>::identity();
+    for &(i, j) in couplings {
+        f[(i, j)] = 1e-3 * rng.normal() * scale[i] / scale[j];
+    }
+    f
+}
+
+/// The tests' filter settings for states of typical size `scale`: process
+/// noise 1e-4 and start uncertainty 0.1 of each scale, start at the scale,
+/// measurement noise of a 10 µm encoder and 0.16 MPa transducers: (q, p0, x0, r).
+#[allow(clippy::type_complexity)]
+fn settings<const N: usize>(
+    scale: &SVector<f64, N>,
+) -> (SVector<f64, N>, SVector<f64, N>, SVector<f64, N>, SVector<f64, 3>) {
+    (
+        SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2)),
+        SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2)),
+        SVector::<f64, N>::from_fn(|i, _| scale[i]),
+        SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10),
+    )
+}
+
 /// The square-root filter agrees with the textbook covariance-form EKF on a
 /// linear system.
 #[test]
@@ -72,38 +120,15 @@ fn the_lean_predict_equals_the_reference_over_a_long_run() {
     const N: usize = 11;
     let scale =
         SVector::<f64, N>::from_column_slice(&[1e-4, 1e7, 1e7, 0.1, 0.1, 1e-2, 1e3, 1e-6, 1e-6, 1e-6, 1e-5]);
-    let mut f = SMatrix::<f64, N, N>::identity();
     let mut rng = Rng::new(11);
     // couplings where the actuator has them: spool <-> pressures, pressures <-> rod, rod <-> load, leaks -> pressures
-    for (i, j) in [
-        (1, 0),
-        (2, 0),
-        (0, 5),
-        (5, 0),
-        (1, 4),
-        (2, 4),
-        (3, 4),
-        (4, 1),
-        (4, 2),
-        (4, 6),
-        (1, 7),
-        (2, 8),
-        (1, 9),
-        (2, 9),
-        (0, 10),
-        (1, 3),
-        (2, 3),
-    ] {
-        f[(i, j)] = 1e-3 * rng.normal() * scale[i] / scale[j];
-    }
-    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
-    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
-    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
-    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
-    let mut h = SMatrix::<f64, 3, N>::zeros();
-    h[(0, 3)] = 1.0;
-    h[(1, 1)] = 1.0;
-    h[(2, 2)] = 1.0;
+    let f = coupled_jacobian(
+        &scale,
+        &[FAST_COUPLINGS, LEAK_COUPLINGS, &[(0, 10), (1, 3), (2, 3)]].concat(),
+        &mut rng,
+    );
+    let (q, p0, x0, r) = settings(&scale);
+    let h = ProcessModel::measurement_matrix::<N>();
     // the lean filter in the width the estimator gives 11 states
     let (mut lean, mut reference) = (
         Ekf::<N, 3, 12>::new(x0, &p0, &q, r, scale),
@@ -151,31 +176,14 @@ fn the_lean_step_follows_a_changing_sparsity_and_a_full_factor() {
     let mut couplings = Rng::new(6);
     let mut jacobian = |pattern: usize| {
         let mut f = SMatrix::<f64, N, N>::identity();
-        for (k, (i, j)) in [
-            (1, 0),
-            (2, 0),
-            (0, 5),
-            (5, 0),
-            (1, 4),
-            (2, 4),
-            (3, 4),
-            (4, 1),
-            (4, 2),
-            (4, 6),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        for (k, &(i, j)) in FAST_COUPLINGS.iter().enumerate() {
             if !(k + pattern).is_multiple_of(3) {
                 f[(i, j)] = 1e-3 * couplings.normal() * scale[i] / scale[j];
             }
         }
         f
     };
-    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
-    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
-    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
-    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
+    let (q, p0, x0, r) = settings(&scale);
     let h = ProcessModel::measurement_matrix::<N>();
     // the lean filter padded to 8 rows, as the estimator runs 7 states, and
     // the same unpadded: the padding changes no bit
@@ -248,31 +256,12 @@ fn the_dispatched_step_equals_the_portable_one_bit_for_bit() {
         1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6, 1.0,
     ]);
     let mut rng = Rng::new(9);
-    let mut f = SMatrix::<f64, N, N>::identity();
-    for (i, j) in [
-        (1, 0),
-        (2, 0),
-        (0, 5),
-        (5, 0),
-        (1, 4),
-        (2, 4),
-        (3, 4),
-        (4, 1),
-        (4, 2),
-        (4, 6),
-        (1, 7),
-        (2, 8),
-        (1, 9),
-        (2, 9),
-        (5, 10),
-        (1, 11),
-    ] {
-        f[(i, j)] = 1e-3 * rng.normal() * scale[i] / scale[j];
-    }
-    let q = SVector::<f64, N>::from_fn(|i, _| (1e-4 * scale[i]).powi(2));
-    let p0 = SVector::<f64, N>::from_fn(|i, _| (0.1 * scale[i]).powi(2));
-    let x0 = SVector::<f64, N>::from_fn(|i, _| scale[i]);
-    let r = SVector::<f64, 3>::new(1e-10, 2.5e10, 2.5e10);
+    let f = coupled_jacobian(
+        &scale,
+        &[FAST_COUPLINGS, LEAK_COUPLINGS, &[(5, 10), (1, 11)]].concat(),
+        &mut rng,
+    );
+    let (q, p0, x0, r) = settings(&scale);
     let (mut dispatched, mut portable, mut separate) = (
         Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
         Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
