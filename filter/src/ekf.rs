@@ -193,7 +193,9 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     }
 
     /// Standard deviation of each state, SI: the rows' norms of S, summed
-    /// over its columns.
+    /// over its columns. (Inlined: the filter's step compiles it with its own
+    /// vector unit.)
+    #[inline(always)]
     pub fn sigma(&self) -> SVector<f64, N> {
         let mut var = [0.0; W];
         for col in &self.s[..N] {
