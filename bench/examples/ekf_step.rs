@@ -2,17 +2,25 @@
 //! of this example is quick to make): `cargo run --release -p bench --example
 //! ekf_step -- [STEPS]`. One line per layout: median, p99 and mean ns per
 //! predict + update (each including the clock's cost), then the chain's throughput.
-use bench::speed::{chain_throughput, recorded_samples, step_time, timer_overhead_ns};
+use bench::speed::{
+    chain_throughput, chain_throughput_with_thesis, recorded_samples, step_time, timer_overhead_ns,
+};
 use filter::Tuning;
 
 fn main() {
-    // `profile chain`: the chain (both filters and the classifier) once over
-    // 60 s, untimed (for `valgrind --tool=callgrind`).
-    if std::env::args().nth(1).as_deref() == Some("profile")
-        && std::env::args().nth(2).as_deref() == Some("chain")
-    {
+    // `profile chain`: the default chain (the leak filter and the classifier)
+    // once over 60 s, untimed (for `valgrind --tool=callgrind`); `profile
+    // chain-thesis`: the same with the thesis' baseline.
+    let profile = std::env::args().nth(1).as_deref() == Some("profile");
+    let chain = std::env::args().nth(2);
+    if profile && matches!(chain.as_deref(), Some("chain" | "chain-thesis")) {
         let samples = recorded_samples(60.0);
-        println!("{}", chain_throughput(&samples, 1).samples);
+        let tp = if chain.as_deref() == Some("chain") {
+            chain_throughput(&samples, 1)
+        } else {
+            chain_throughput_with_thesis(&samples, 1)
+        };
+        println!("{}", tp.samples);
         return;
     }
     // `profile 7|12 SECONDS`: the layout's steps in a loop, untimed (for `perf record`).
@@ -112,4 +120,9 @@ fn main() {
     }
     let tp = chain_throughput(&samples, 3);
     println!("{:>24}: {:.0} samples/s", "chain", tp.samples_per_s);
+    let tp = chain_throughput_with_thesis(&samples, 3);
+    println!(
+        "{:>24}: {:.0} samples/s",
+        "chain, thesis baseline", tp.samples_per_s
+    );
 }

@@ -231,7 +231,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         set.model.clone(),
         set.leak_filter.clone(),
         set.thesis_filter.clone(),
-    )?;
+    )?
+    .with_thesis(set.classifier.thesis_baseline);
     let mut cls = Classifier::new(set.classifier.clone())?;
     let mut events = Vec::new();
     let floors = [set.classifier.min_size_lpm, set.classifier.min_internal_size_lpm];

@@ -139,32 +139,53 @@ pub fn step_time(
     }
 }
 
-/// Samples per second through the estimator stage (both filters) and the classifier, one core, in memory.
+/// Samples per second through the estimator stage and the classifier as
+/// `leakwatch run` runs them by default (the leak filter; the thesis filter
+/// runs only with its baseline), one core, in memory.
 pub fn chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
     chain_throughput_on(
-        "estimator stage (12-state leak filter + 7-state thesis filter) + classifier",
+        "estimator stage (12-state leak filter) + classifier",
         &ActuatorParams::default(),
         samples,
         repeat,
+        false,
     )
 }
 
-/// [`chain_throughput`] with `model` in both filters, labelled `chain`.
+/// [`chain_throughput`] with the thesis' baseline on (`--thesis-baseline`:
+/// the 7-state thesis filter and its MAE detector too).
+pub fn chain_throughput_with_thesis(samples: &[Sample], repeat: u32) -> Throughput {
+    chain_throughput_on(
+        "the same with the thesis' baseline (+ 7-state thesis filter and its MAE detector)",
+        &ActuatorParams::default(),
+        samples,
+        repeat,
+        true,
+    )
+}
+
+/// [`chain_throughput`] with `model` in both filters, labelled `chain`, with
+/// the thesis' baseline on or off (`thesis_baseline`).
 pub fn chain_throughput_on(
     chain: &str,
     model: &ActuatorParams,
     samples: &[Sample],
     repeat: u32,
+    thesis_baseline: bool,
 ) -> Throughput {
     let mut n = 0u64;
     let mut events = 0usize;
     let t0 = Instant::now();
     for _ in 0..repeat.max(1) {
         let mut stage = match EstimatorStage::new(model.clone(), Tuning::sensor_derived(), Tuning::thesis()) {
-            Ok(s) => s,
+            Ok(s) => s.with_thesis(thesis_baseline),
             Err(_) => break,
         };
-        let mut cls = match Classifier::new(ClassifierConfig::default()) {
+        let cfg = ClassifierConfig {
+            thesis_baseline,
+            ..ClassifierConfig::default()
+        };
+        let mut cls = match Classifier::new(cfg) {
             Ok(c) => c,
             Err(_) => break,
         };

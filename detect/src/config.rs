@@ -131,7 +131,8 @@ pub struct ClassifierConfig {
     /// the filters hold each command over the interval after its sample
     /// (2026-11-25; the gate was 3 Hz before).
     pub max_command_hz: f64,
-    /// Emit the thesis' MAE baseline detector's events too (a comparison, off by default).
+    /// Emit the thesis' MAE baseline detector's events too (a comparison, off by
+    /// default; the live estimator runs the thesis filter only then).
     pub thesis_baseline: bool,
     /// The healthy state learned by commissioning (absent: learned in a warm-up,
     /// and a leak present at start cannot be seen).

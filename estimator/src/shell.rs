@@ -33,6 +33,16 @@ struct StageConfig {
     model: ActuatorParams,
     estimator: Tuning,
     leak_filter: Tuning,
+    classifier: Baseline,
+}
+
+/// The one classifier setting this stage reads (the rest of `[classifier]`
+/// is the classifier's, checked there).
+#[derive(Debug, Default, Deserialize)]
+#[serde(default)]
+struct Baseline {
+    /// The thesis' baseline detector is on: only then does the thesis filter run.
+    thesis_baseline: bool,
 }
 
 impl Default for StageConfig {
@@ -41,15 +51,20 @@ impl Default for StageConfig {
             model: ActuatorParams::default(),
             estimator: Tuning::thesis(),
             leak_filter: Tuning::sensor_derived(),
+            classifier: Baseline::default(),
         }
     }
 }
 
 /// The estimator stage the configuration file `path` describes (`[model]`,
-/// `[estimator]`, `[leak_filter]`; the defaults without a file).
+/// `[estimator]`, `[leak_filter]`; the defaults without a file). The thesis
+/// filter runs only with the thesis' baseline (`[classifier] thesis_baseline`,
+/// `leakwatch run --thesis-baseline`): nothing else reads it, and it is a
+/// third of the stage's work. Without it the estimates' thesis fields are NaN.
 pub fn load_stage(path: Option<&Path>) -> Result<EstimatorStage, String> {
     let cfg = load(path)?;
-    EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)
+    Ok(EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)?
+        .with_thesis(cfg.classifier.thesis_baseline))
 }
 
 /// Where an estimator process joins its sensor stream.
@@ -236,9 +251,57 @@ mod tests {
     /// one, time back to 0 s, the frame flagged after a gap): the estimate frame
     /// of its first sample says re-anchored and after-gap, and so does the
     /// estimate the classifier reads back from the wire.
+    /// The thesis filter runs with the thesis' baseline only: a configuration
+    /// without it (and no configuration) gives frames whose thesis fields are
+    /// NaN and flagged skipped, and the leak filter's fields are the same bits.
+    #[test]
+    fn the_thesis_filter_runs_with_its_baseline_only() {
+        let dir = std::env::temp_dir().join(format!("leakwatch-shell-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = |name: &str, text: &str| {
+            let p = dir.join(name);
+            std::fs::write(&p, text).expect("config written");
+            p
+        };
+        let on = path(
+            "on.toml",
+            "[classifier]\nthesis_baseline = true\nwarmup_s = 3.0\n",
+        );
+        let off = path("off.toml", "[classifier]\nthesis_baseline = false\n");
+        let mut stages = [
+            load_stage(None).expect("stage"),
+            load_stage(Some(&off)).expect("stage"),
+            load_stage(Some(&on)).expect("stage"),
+        ];
+        assert_eq!(stages.each_ref().map(|s| s.thesis_runs()), [false, false, true]);
+        let mut joins = [Join::new(None), Join::new(None), Join::new(None)];
+        let mut out = [EstimateFrame::default(); 3];
+        for (seq, s) in record(0.5, 3).iter().enumerate() {
+            for k in 0..3 {
+                estimate_frame(
+                    &mut stages[k],
+                    &received(seq as u64, s, 0),
+                    &mut out[k],
+                    &mut joins[k],
+                );
+            }
+            for o in &out[..2] {
+                assert!(o.th_state.iter().all(|v| v.is_nan()), "{:?}", o.th_state);
+                assert_ne!(o.th_flags & estimate_flags::SKIPPED, 0);
+            }
+            assert!(out[2].th_state.iter().all(|v| v.is_finite()));
+            assert_eq!(out[2].th_flags & estimate_flags::SKIPPED, 0);
+            let bits = |o: &EstimateFrame| o.state.map(f64::to_bits);
+            assert_eq!(bits(&out[0]), bits(&out[2]));
+            assert_eq!(bits(&out[1]), bits(&out[2]));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn a_sensor_stream_that_restarts_reanchors_and_the_wire_says_so() {
-        let mut stage = load_stage(None).expect("stage");
+        // both filters: the thesis filter re-anchors too
+        let mut stage = load_stage(None).expect("stage").with_thesis(true);
         let mut join = Join::new(None);
         let mut out = EstimateFrame::default();
         let mut seq = 0;

@@ -108,7 +108,7 @@ fn step_kind(t_prev_s: f64, t_s: f64, period_s: f64, flagged: bool) -> StepKind 
 pub struct EstimatorStage {
     leak: Estimator,
     thesis: Estimator,
-    /// Whether the thesis filter runs ([`EstimatorStage::without_thesis`]).
+    /// Whether the thesis filter runs ([`EstimatorStage::with_thesis`]).
     thesis_runs: bool,
     period_s: f64,
     last_t_s: Option<f64>,
@@ -138,16 +138,17 @@ impl EstimatorStage {
         &self.leak
     }
 
-    /// The stage without its thesis filter, for a consumer that reads only
-    /// the leak filter: each [`StageEstimate::thesis`] is then empty (NaN,
-    /// flagged [`crate::FLAG_SKIPPED`]) and costs nothing. The thesis filter is
-    /// about a third of the stage's work.
-    pub fn without_thesis(mut self) -> Self {
-        self.thesis_runs = false;
+    /// The stage with its thesis filter running (`runs`, the default) or not,
+    /// for a consumer that reads only the leak filter: each
+    /// [`StageEstimate::thesis`] is then empty (NaN, flagged
+    /// [`crate::FLAG_SKIPPED`]) and costs nothing. The thesis filter is about
+    /// a third of the stage's work.
+    pub fn with_thesis(mut self, runs: bool) -> Self {
+        self.thesis_runs = runs;
         self
     }
 
-    /// Whether the thesis filter runs (see [`Self::without_thesis`]).
+    /// Whether the thesis filter runs (see [`Self::with_thesis`]).
     pub fn thesis_runs(&self) -> bool {
         self.thesis_runs
     }

@@ -232,7 +232,7 @@ fn a_stage_without_the_thesis_filter_gives_the_same_leak_estimates() {
     samples.drain(1200..1250); // a gap of 50 samples: re-anchored
     let mut restarted = record(1.0, 6); // then the sender reboots: time back to 0
     samples.append(&mut restarted);
-    let (mut both, mut leak_only) = (stage(), stage().without_thesis());
+    let (mut both, mut leak_only) = (stage(), stage().with_thesis(false));
     assert!(both.thesis_runs() && !leak_only.thesis_runs());
     for s in &samples {
         let (a, b) = (both.on_sample(s), leak_only.on_sample(s));

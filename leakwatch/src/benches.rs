@@ -135,16 +135,18 @@ pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> 
         );
     }
     let tp = speed::chain_throughput(&samples, 5);
+    let tp_thesis = speed::chain_throughput_with_thesis(&samples, 5);
     let plant = speed::plant_model();
     let plant_samples = speed::recorded_samples_on(&plant, "lift", 60.0);
     let tp_plant = speed::chain_throughput_on(
-        "the same on the plant model (single-rod lift, gravity, null leakage, supply sag)",
+        "the default chain on the plant model (single-rod lift, gravity, null leakage, supply sag)",
         &plant,
         &plant_samples,
         5,
+        false,
     );
     outln!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
-    for t in [&tp, &tp_plant] {
+    for t in [&tp, &tp_thesis, &tp_plant] {
         outln!(
             "| {} | {} | {:.3} | {:.0} |",
             t.chain,
@@ -157,6 +159,7 @@ pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> 
         "step_time": rows,
         "timing": "per step (std::time::Instant around each predict + update; figures include timer_overhead_ns)",
         "throughput": tp,
+        "throughput_thesis_baseline": tp_thesis,
         "throughput_plant": tp_plant,
     });
     match out {

@@ -95,7 +95,8 @@ pub(crate) enum Command {
         /// How stages wait for input: event, low-latency or busy-poll.
         #[arg(long, default_value = "event")]
         mode: String,
-        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        /// Also run the thesis filter and report its MAE detector's decisions (a
+        /// comparison, labelled as such; without it the thesis filter does not run).
         #[arg(long)]
         thesis_baseline: bool,
         /// Output directory (default ./leakwatch-run-YYYYMMDD-HHMMSS, its UTC start time: a new folder each run).

@@ -297,7 +297,7 @@ fn replay_estimates(
 ) -> Result<(), String> {
     let limits = Limits::for_model(&cfg.model, tuning.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(cfg.model.clone(), tuning, cfg.estimator.clone())?;
+    let mut stage = EstimatorStage::new(cfg.model.clone(), tuning, cfg.estimator.clone())?.with_thesis(false);
     while let Some(row) = reader.next_row() {
         match row {
             Row::Sample(s) | Row::AfterGap(s, _) => each(&stage.on_sample(&s).leak),

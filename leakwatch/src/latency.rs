@@ -92,7 +92,8 @@ fn threads_run<S: Send + 'static, R: Send + 'static>(
             Tuning::sensor_derived(),
             Tuning::thesis(),
         )
-        .expect("default tuning is valid");
+        .expect("default tuning is valid")
+        .with_thesis(false);
         let mut hop = Histogram::<u64>::new_with_bounds(1, 60_000_000_000, 3).expect("histogram bounds");
         let cpu0 = bus::stats::process_cpu_ns();
         let w0 = Instant::now();
@@ -118,7 +119,8 @@ fn threads_run<S: Send + 'static, R: Send + 'static>(
         Tuning::sensor_derived(),
         Tuning::thesis(),
     )
-    .expect("default tuning is valid");
+    .expect("default tuning is valid")
+    .with_thesis(false);
     while let Some((stamp, s)) = recv(&r2) {
         if s.t_s.is_nan() {
             break;

@@ -278,12 +278,11 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     };
     let mut out = EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{est_name}: {e}"))?;
 
-    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?;
     // The thesis filter feeds the per-sample estimates (`th_*`) and the thesis'
     // baseline only: without either it does not run (a third of the work).
-    if req.estimates.file_name().is_none() && !cfg.classifier.thesis_baseline {
-        stage = stage.without_thesis();
-    }
+    let thesis_wanted = req.estimates.file_name().is_some() || cfg.classifier.thesis_baseline;
+    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?
+        .with_thesis(thesis_wanted);
     let mut cls = Classifier::new(cfg.classifier.clone())?;
     if req.progress {
         eprintln!("note: {}", cls.start_note());
