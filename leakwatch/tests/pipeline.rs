@@ -872,9 +872,10 @@ fn a_stopped_acquisition_skips_the_missed_samples_without_a_burst() {
     let log = log_of(&out);
     assert_eq!(frame_gaps(&log), [est_gap], "{:?}", log.gaps);
     // No burst after the stall: of the 500 frames after the longest pause, fewer
-    // than 50 published less than 0.2 ms after the one before (a catch-up would
-    // publish the 2 s missed back to back). Only those: on a busy machine the
-    // scheduler makes short bursts anywhere, which this test is not about.
+    // than half published less than 0.2 ms after the one before (a catch-up would
+    // publish the 2 s missed back to back: all 500). Only those: on a busy machine
+    // the scheduler makes short bursts anywhere, which this test is not about
+    // (57 of 500 seen with the pipeline tests running side by side on 2 cores).
     let pause_ends = log
         .frames
         .windows(2)
@@ -888,7 +889,7 @@ fn a_stopped_acquisition_skips_the_missed_samples_without_a_burst() {
         .windows(2)
         .filter(|w| w[1].acq_mono_ns.saturating_sub(w[0].acq_mono_ns) < 200_000)
         .count();
-    assert!(burst < 50, "{burst} of the 500 frames after the pause in bursts");
+    assert!(burst < 250, "{burst} of the 500 frames after the pause in bursts");
     assert!(lat["restarts"].as_object().unwrap().is_empty(), "{lat:#}");
     let events = json(&out.join("events.json"));
     assert!(raised_leaks(&events).is_empty(), "{events:#}");
