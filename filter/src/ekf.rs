@@ -711,14 +711,13 @@ fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
 /// Right-looking: each pivot's column, once scaled, is subtracted from every
 /// later column whole (the rows above the diagonal take garbage, cleared at
 /// the end), so every operation is a multiple of one column added to another.
+/// The pivots are tested together at the end (a bad one makes the later ones
+/// garbage, never a panic): one test instead of one per pivot.
 #[inline(always)]
 fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]; N]) -> bool {
     let (mut pivots, mut inverses) = ([0.0; N], [0.0; N]);
     for j in 0..N {
         let d = a[j][j];
-        if !positive_finite(d) {
-            return false;
-        }
         pivots[j] = d;
         let inv = 1.0 / d;
         let col = a[j];
@@ -730,6 +729,10 @@ fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]
             }
         }
         inverses[j] = inv;
+    }
+    // every pivot finite (NaN and infinities fail all_finite) and the least positive
+    if !(all_finite(&pivots) && pivots.iter().fold(f64::INFINITY, |m, d| m.min(*d)) > 0.0) {
+        return false;
     }
     // column j of L is column j of L₁·D (as it stands) times 1/d_j·√d_j
     for (j, col) in a.iter_mut().enumerate() {

@@ -82,6 +82,48 @@ fn settings<const N: usize>(
 
 /// The square-root filter agrees with the textbook covariance-form EKF on a
 /// linear system.
+/// The column Cholesky: L·Lᵀ = A for positive definite matrices (padded to 8
+/// rows, the padding left zero), and `false` for a matrix with a pivot that
+/// is zero, negative, infinite or NaN, wherever that pivot comes.
+#[test]
+fn the_column_cholesky_factors_or_refuses() {
+    let mut rng = Rng::new(11);
+    for _ in 0..50 {
+        let b = SMatrix::<f64, 7, 7>::from_fn(|_, _| rng.normal());
+        let a = b * b.transpose() + SMatrix::<f64, 7, 7>::identity() * 0.1;
+        let mut cols = [[0.0; 8]; 7];
+        for (c, col) in cols.iter_mut().enumerate() {
+            for r in 0..7 {
+                col[r] = a[(r, c)];
+            }
+        }
+        assert!(cholesky_columns::<7, 8, Separate>(&mut cols));
+        let l = SMatrix::<f64, 7, 7>::from_fn(|r, c| cols[c][r]);
+        let back = l * l.transpose();
+        assert!((back - a).abs().max() <= 1e-12 * a.abs().max());
+        assert!(cols.iter().all(|col| col[7] == 0.0));
+        for (c, col) in cols.iter().enumerate() {
+            assert!(col[..c].iter().all(|v| *v == 0.0));
+        }
+    }
+    // a diagonal matrix with one bad pivot, first, in the middle or last
+    for bad in [0.0, -1.0, f64::INFINITY, f64::NAN] {
+        for at in [0, 3, 6] {
+            let mut cols = [[0.0; 8]; 7];
+            for (c, col) in cols.iter_mut().enumerate() {
+                col[c] = if c == at { bad } else { 2.0 };
+            }
+            assert!(
+                !cholesky_columns::<7, 8, Separate>(&mut cols),
+                "pivot {bad} at {at}"
+            );
+        }
+    }
+    // positive definite but for the last pivot: [[1, 1], [1, 1]]
+    let mut cols = [[1.0, 1.0], [1.0, 1.0]];
+    assert!(!cholesky_columns::<2, 2, Separate>(&mut cols));
+}
+
 #[test]
 fn matches_the_covariance_form_on_a_linear_system() {
     let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
