@@ -75,7 +75,8 @@ impl ProcessModel {
 
     /// Clamps pressures into [p_min, p_max], the rod into its stroke plus
     /// 1 cm and the oil-stiffness scale θ (12 states) into [`BULK_SCALE_RANGE`];
-    /// reports what was done.
+    /// reports what was done. (Inlined: a filter's step compiles it with its own.)
+    #[inline(always)]
     pub fn keep_physical<const N: usize>(&self, x: &mut SVector<f64, N>) -> Guard {
         let mut g = Guard::default();
         for i in [1, 2] {
