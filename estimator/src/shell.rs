@@ -247,10 +247,6 @@ mod tests {
         }
     }
 
-    /// A rebooted UDP sender as the acquisition publishes it (sequence on by
-    /// one, time back to 0 s, the frame flagged after a gap): the estimate frame
-    /// of its first sample says re-anchored and after-gap, and so does the
-    /// estimate the classifier reads back from the wire.
     /// The thesis filter runs with the thesis' baseline only: a configuration
     /// without it (and no configuration) gives frames whose thesis fields are
     /// NaN and flagged skipped, and the leak filter's fields are the same bits.
@@ -298,6 +294,10 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// A rebooted UDP sender as the acquisition publishes it (sequence on by
+    /// one, time back to 0 s, the frame flagged after a gap): the estimate frame
+    /// of its first sample says re-anchored and after-gap, and so does the
+    /// estimate the classifier reads back from the wire.
     #[test]
     fn a_sensor_stream_that_restarts_reanchors_and_the_wire_says_so() {
         // both filters: the thesis filter re-anchors too

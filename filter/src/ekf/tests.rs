@@ -80,8 +80,6 @@ fn settings<const N: usize>(
     )
 }
 
-/// The square-root filter agrees with the textbook covariance-form EKF on a
-/// linear system.
 /// The column Cholesky: L·Lᵀ = A for positive definite matrices (padded to 8
 /// rows, the padding left zero), and `false` for a matrix with a pivot that
 /// is zero, negative, infinite or NaN, wherever that pivot comes.
@@ -124,6 +122,8 @@ fn the_column_cholesky_factors_or_refuses() {
     assert!(!cholesky_columns::<2, 2, Separate>(&mut cols));
 }
 
+/// The square-root filter agrees with the textbook covariance-form EKF on a
+/// linear system.
 #[test]
 fn matches_the_covariance_form_on_a_linear_system() {
     let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
