@@ -709,27 +709,28 @@ fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
 /// Computed as A = L₁·D·L₁ᵀ (L₁ unit lower triangular), then L = L₁·D^½: the
 /// chain from one pivot to the next is one division, a product and a
 /// difference; the square roots come after, independent of each other.
-/// Right-looking: each pivot's column, once scaled, is subtracted from every
-/// later column whole (the rows above the diagonal take garbage, cleared at
-/// the end), so every operation is a multiple of one column added to another.
+/// Left-looking: each column, held in registers, takes from every earlier
+/// finished column a multiple of it, whole (the rows above the diagonal take
+/// garbage, cleared at the end), so every operation is a multiple of one
+/// column added to another. These are the right-looking order's operations,
+/// in the same order for each column (the same bits), without storing and
+/// loading a column once per pivot before it.
 /// The pivots are tested together at the end (a bad one makes the later ones
 /// garbage, never a panic): one test instead of one per pivot.
 #[inline(always)]
 fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]; N]) -> bool {
     let (mut pivots, mut inverses) = ([0.0; N], [0.0; N]);
-    for j in 0..N {
-        let d = a[j][j];
-        pivots[j] = d;
-        let inv = 1.0 / d;
-        let col = a[j];
-        for c in j + 1..N {
-            let l = col[c] * inv;
-            let a_c = &mut a[c];
+    for c in 0..N {
+        let mut col = a[c];
+        for (j, done) in a[..c].iter().enumerate() {
+            let l = done[c] * inverses[j];
             for r in 0..W {
-                a_c[r] = A::mul_add(-l, col[r], a_c[r]);
+                col[r] = A::mul_add(-l, done[r], col[r]);
             }
         }
-        inverses[j] = inv;
+        a[c] = col;
+        pivots[c] = col[c];
+        inverses[c] = 1.0 / col[c];
     }
     // every pivot finite (NaN and infinities fail all_finite) and the least positive
     if !all_positive_finite(&pivots) {
