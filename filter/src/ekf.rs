@@ -252,7 +252,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// The time update (the body of [`Self::predict`]), column by column:
     /// every operation adds a multiple of one whole column to another.
     #[inline(always)]
-    fn predict_lean<A: MulAdd>(
+    pub(crate) fn predict_lean<A: MulAdd>(
         &mut self,
         x_pred: SVector<f64, N>,
         f_jac: &SMatrix<f64, N, N>,
@@ -470,7 +470,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 
     /// The selector update (the body of [`Self::update_selected`]).
     #[inline(always)]
-    fn update_selected_lean<A: MulAdd>(
+    pub(crate) fn update_selected_lean<A: MulAdd>(
         &mut self,
         y: &SVector<f64, M>,
         h_pred: &SVector<f64, M>,
@@ -577,7 +577,7 @@ pub(crate) fn fused_vector_unit() -> bool {
 }
 
 /// How the filter's kernels compute a·b + c.
-trait MulAdd {
+pub(crate) trait MulAdd {
     /// a·b + c.
     fn mul_add(a: f64, b: f64, c: f64) -> f64;
 }

@@ -659,7 +659,7 @@ fn step_filter<const N: usize, const W: usize>(
         // only requirement of a `target_feature` function.
         return unsafe { step_filter_fma(e, model, input, out, still_samples) };
     }
-    step_filter_body(e, model, input, out, still_samples)
+    step_filter_body::<N, W, ekf::Separate>(e, model, input, out, still_samples)
 }
 
 /// [`step_filter_body`] compiled for AVX2 and FMA.
@@ -672,12 +672,13 @@ fn step_filter_fma<const N: usize, const W: usize>(
     out: &mut Estimate,
     still_samples: &mut u32,
 ) -> Result<bool, EkfError> {
-    step_filter_body(e, model, input, out, still_samples)
+    step_filter_body::<N, W, ekf::Fused>(e, model, input, out, still_samples)
 }
 
-/// The body of [`step_filter`].
+/// The body of [`step_filter`], its multiply-adds computed by `A` (the filter's
+/// own bodies are called directly: the processor was checked once, above).
 #[inline(always)]
-fn step_filter_body<const N: usize, const W: usize>(
+fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     e: &mut Ekf<N, 3, W>,
     model: &ProcessModel,
     input: &StepInput,
@@ -709,10 +710,10 @@ fn step_filter_body<const N: usize, const W: usize>(
         f[(1, I_BULK)] -= from_v1;
         f[(2, I_BULK)] -= from_v2;
     }
-    e.predict(x_pred, &f)?;
+    e.predict_lean::<A>(x_pred, &f)?;
     let y_pred = ProcessModel::measure(e.state());
     if usable {
-        let inn = e.update_selected(y, &y_pred, ProcessModel::MEASURED_STATES, use_channel)?;
+        let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, use_channel)?;
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
