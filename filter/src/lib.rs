@@ -14,7 +14,7 @@ pub mod mae;
 pub mod stage;
 pub mod tuning;
 
-use model::process::{ProcessModel, I_BULK, I_FE, I_QE1, I_QI, N_MEAS};
+use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE, I_QE1, I_QI, N_MEAS};
 use model::{ActuatorParams, Sample};
 use nalgebra::{SMatrix, SVector};
 
@@ -609,7 +609,9 @@ fn make_filter<const N: usize, const W: usize>(
     if N == 12 {
         x0[I_BULK] = 1.0;
     }
-    Ekf::new(x0, &p0, &q, r, scale)
+    let mut e = Ekf::new(x0, &p0, &q, r, scale);
+    e.set_random_walks_from(FIRST_RANDOM_WALK);
+    e
 }
 
 fn reanchor_filter<const N: usize, const W: usize>(

@@ -157,6 +157,8 @@ fn matches_the_covariance_form_on_a_linear_system() {
 /// The lean time update and the selector update give the reference's result
 /// (dense W·Wᵀ, dense H) to 1e-12 of each state's scale over a long run (a sparse 11-state Jacobian of the actuator's shape,
 /// three selector measurements, states spanning twenty orders of magnitude).
+/// Declaring states 6.. random walks (F's rows there the identity's) gives
+/// the same bits.
 #[test]
 fn the_lean_predict_equals_the_reference_over_a_long_run() {
     const N: usize = 11;
@@ -176,9 +178,13 @@ fn the_lean_predict_equals_the_reference_over_a_long_run() {
         Ekf::<N, 3, 12>::new(x0, &p0, &q, r, scale),
         Ekf::<N, 3>::new(x0, &p0, &q, r, scale),
     );
+    let mut walks = lean.clone();
+    walks.set_random_walks_from(6);
     for k in 0..20_000 {
         let xl = f * lean.state();
         lean.predict(xl, &f).expect("lean predict");
+        let xw = f * walks.state();
+        walks.predict(xw, &f).expect("predict with random walks");
         let xr = f * reference.state();
         reference.predict_reference(xr, &f).expect("reference predict");
         let y = SVector::<f64, 3>::new(
@@ -189,6 +195,9 @@ fn the_lean_predict_equals_the_reference_over_a_long_run() {
         if k % 3 != 2 {
             lean.update_selected(&y, &(h * lean.state()), [3, 1, 2], [true, true, k % 5 != 0])
                 .expect("lean update");
+            walks
+                .update_selected(&y, &(h * walks.state()), [3, 1, 2], [true, true, k % 5 != 0])
+                .expect("update with random walks");
             reference
                 .update(&y, &(h * reference.state()), &h, [true, true, k % 5 != 0])
                 .expect("reference update");
@@ -196,7 +205,13 @@ fn the_lean_predict_equals_the_reference_over_a_long_run() {
         for i in 0..N {
             let d = (lean.state()[i] - reference.state()[i]).abs() / scale[i];
             assert!(d <= 1e-12, "step {k}, state {i}: {d:e} of scale");
+            assert_eq!(
+                walks.state()[i].to_bits(),
+                lean.state()[i].to_bits(),
+                "step {k}, state {i}"
+            );
         }
+        assert_eq!(walks.s, lean.s, "step {k}: the factors differ");
     }
     let (pl, pr) = (lean.scaled_covariance(), reference.scaled_covariance());
     assert!(
@@ -348,4 +363,20 @@ fn the_dispatched_step_equals_the_portable_one_bit_for_bit() {
         assert_eq!(dispatched.state(), portable.state(), "step {k}");
         assert_eq!(dispatched.s, portable.s, "step {k}");
     }
+}
+
+/// A Jacobian whose declared random-walk rows are not the identity's is
+/// refused in a debug build (the contract [`Ekf::set_random_walks_from`] states).
+#[cfg(debug_assertions)]
+#[test]
+#[should_panic(expected = "rows 6..11 of F are not the identity's")]
+fn a_random_walk_row_that_moves_is_refused_in_debug_builds() {
+    const N: usize = 11;
+    let scale = SVector::<f64, N>::from_element(1.0);
+    let (q, p0, x0, r) = settings(&scale);
+    let mut e = Ekf::<N, 3, 12>::new(x0, &p0, &q, r, scale);
+    e.set_random_walks_from(6);
+    let mut f = SMatrix::<f64, N, N>::identity();
+    f[(9, 1)] = 1e-3;
+    let _ = e.predict(f * e.state(), &f);
 }

@@ -639,3 +639,44 @@ fn bulk_column_from_velocity_is_the_velocity_term_of_the_step_jacobian() {
         assert!(c.abs() > 1e3, "row {row}: {c} Pa per unit θ");
     }
 }
+
+#[test]
+fn the_random_walk_states_step_as_they_are() {
+    // x(k+1) = x(k) and rows of the identity in F, exactly: in free travel
+    // (one Euler step) and in an end stop (the product of sub-steps).
+    fn check<const N: usize>(m: &ProcessModel, rng: &mut Rng) -> usize {
+        let mut in_stop = 0;
+        for k in 0..200 {
+            let band = if k % 2 == 0 { Band::Sliding } else { Band::Stick };
+            let mut s = random_state::<N>(rng, &m.params, band, Pressures::Mixed);
+            if k % 4 == 3 {
+                s[3] = m.params.x_max_m + 1e-4;
+            } else if k % 4 == 1 {
+                s[3] = m.params.x_min_m - 1e-4;
+            }
+            in_stop += usize::from(s[3] > m.params.x_max_m || s[3] < m.params.x_min_m);
+            let u = rng.uniform_in(-10.0, 10.0);
+            let (x, f, _) = m.step(&s, u);
+            for r in FIRST_RANDOM_WALK..N {
+                assert_eq!(x[r].to_bits(), s[r].to_bits(), "{N} states: state {r} moved");
+                for c in 0..N {
+                    let identity = if r == c { 1.0 } else { 0.0 };
+                    assert!(f[(r, c)] == identity, "{N} states: F[{r}][{c}] = {}", f[(r, c)]);
+                }
+            }
+            // the other rows are not the identity's (the check can tell)
+            assert!(f[(4, 1)] != 0.0, "{N} states: F[4][1] = 0");
+        }
+        in_stop
+    }
+    let p = ActuatorParams::default();
+    let mut rng = Rng::new(71);
+    for substeps in [1, 4] {
+        let mut m = ProcessModel::new(p.clone(), 1e-3);
+        m.substeps = substeps;
+        assert_eq!(check::<7>(&m, &mut rng), 100);
+        assert_eq!(check::<10>(&m, &mut rng), 100);
+        assert_eq!(check::<11>(&m, &mut rng), 100);
+        assert_eq!(check::<12>(&m, &mut rng), 100);
+    }
+}
