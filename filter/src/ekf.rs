@@ -71,6 +71,9 @@ pub struct Ekf<const N: usize, const M: usize, const W: usize = N> {
     /// The first random-walk state: rows `walks_from..N` of every F are the
     /// identity's (N when none is declared).
     walks_from: usize,
+    /// Room for G = F_z·S during a time update; it means nothing between
+    /// steps. (A field, so that no step spends time zeroing it.)
+    work: [[f64; W]; N],
 }
 
 impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
@@ -106,6 +109,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
             r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
             ratio,
             walks_from: N,
+            work: [[0.0; W]; N],
         };
         f.reset(x0, p0_diag);
         f
@@ -275,12 +279,12 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
             "rows {}..{N} of F are not the identity's",
             self.walks_from
         );
-        let mut g = [[0.0; W]; N];
         if W > 8 && self.walks_from <= 8 {
-            self.scaled_product::<8, A>(f_jac, &mut g);
+            self.scaled_product::<8, A>(f_jac);
         } else {
-            self.scaled_product::<W, A>(f_jac, &mut g);
+            self.scaled_product::<W, A>(f_jac);
         }
+        let g = &self.work;
         // P⁻ = G·Gᵀ + Q by columns, p_c = Σ_k G[c][k]·g_k, formed in place of
         // S and factorised there. Should rounding make the factorisation fail
         // (a state with almost no variance), triangularise [G, Q^½] by
@@ -293,11 +297,11 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         for (c, p) in p.iter_mut().enumerate() {
             // only the lower triangle is read: the blocks of 4 rows from c's
             *p = match c / 4 {
-                0 => product_column::<N, W, 0, A>(&g, c),
-                1 => product_column::<N, W, 4, A>(&g, c),
-                2 => product_column::<N, W, 8, A>(&g, c),
-                3 => product_column::<N, W, 12, A>(&g, c),
-                _ => product_column::<N, W, 16, A>(&g, c),
+                0 => product_column::<N, W, 0, A>(g, c),
+                1 => product_column::<N, W, 4, A>(g, c),
+                2 => product_column::<N, W, 8, A>(g, c),
+                3 => product_column::<N, W, 12, A>(g, c),
+                _ => product_column::<N, W, 16, A>(g, c),
             };
             p[c] += self.q_var[c];
         }
@@ -316,11 +320,11 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         self.triangularise(x_pred, g)
     }
 
-    /// G = F_z·S by columns into `g` (zero on entry), F_z = D⁻¹ F D the
-    /// scaled Jacobian, summed in rows `0..R`. Rows `R..W` are S's: the
-    /// caller has declared F's rows there the identity's (or R = W).
+    /// G = F_z·S by columns into `work`, F_z = D⁻¹ F D the scaled Jacobian,
+    /// summed in rows `0..R`. Rows `R..W` are S's: the caller has declared
+    /// F's rows there the identity's (or R = W).
     #[inline(always)]
-    fn scaled_product<const R: usize, A: MulAdd>(&self, f_jac: &SMatrix<f64, N, N>, g: &mut [[f64; W]; N]) {
+    fn scaled_product<const R: usize, A: MulAdd>(&mut self, f_jac: &SMatrix<f64, N, N>) {
         // F_z's rows 0..R by columns (nalgebra's are columns too)
         let mut fz = [[0.0; R]; N];
         for ((fz, f), r) in fz
@@ -335,24 +339,24 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         // g_c = Σ_j S[j][c]·fz_j, over the rows j where column c of S can be
         // non-zero (from c down, where it is lower triangular)
         let full = self.full_cols.min(N);
-        for (g, s) in g[..full].iter_mut().zip(&self.s[..full]) {
-            // a full column: every row (a loop of fixed length)
-            for (fz, s_j) in fz.iter().zip(&s[..N]) {
-                for r in 0..R {
-                    g[r] = A::mul_add(fz[r], *s_j, g[r]);
+        for (c, (g, s)) in self.work.iter_mut().zip(&self.s[..N]).enumerate() {
+            let mut acc = [0.0; R]; // in registers
+            if c < full {
+                // a full column: every row (a loop of fixed length)
+                for (fz, s_j) in fz.iter().zip(&s[..N]) {
+                    for r in 0..R {
+                        acc[r] = A::mul_add(fz[r], *s_j, acc[r]);
+                    }
+                }
+            } else {
+                for j in c..N {
+                    let s_j = s[j];
+                    for r in 0..R {
+                        acc[r] = A::mul_add(fz[j][r], s_j, acc[r]);
+                    }
                 }
             }
-        }
-        for c in full..N {
-            let (g, s) = (&mut g[c], &self.s[c]);
-            for j in c..N {
-                let s_j = s[j];
-                for r in 0..R {
-                    g[r] = A::mul_add(fz[j][r], s_j, g[r]);
-                }
-            }
-        }
-        for (g, s) in g.iter_mut().zip(&self.s[..N]) {
+            g[..R].copy_from_slice(&acc);
             g[R..].copy_from_slice(&s[R..]);
         }
     }
