@@ -747,9 +747,9 @@ fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
 /// chain from one pivot to the next is one division, a product and a
 /// difference; the square roots come after, independent of each other.
 /// Left-looking: each column, held in registers, takes from every earlier
-/// finished column a multiple of it, whole (the rows above the diagonal take
-/// garbage, cleared at the end), so every operation is a multiple of one
-/// column added to another. These are the right-looking order's operations,
+/// finished column a multiple of it, in the rows from the column's block of
+/// 4 down (the rows above the diagonal there take garbage, cleared at the
+/// end), so every operation is a multiple of one column added to another. These are the right-looking order's operations,
 /// in the same order for each column (the same bits), without storing and
 /// loading a column once per pivot before it.
 /// The pivots are tested together at the end (a bad one makes the later ones
@@ -758,13 +758,14 @@ fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
 fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]; N]) -> bool {
     let (mut pivots, mut inverses) = ([0.0; N], [0.0; N]);
     for c in 0..N {
-        let mut col = a[c];
-        for (j, done) in a[..c].iter().enumerate() {
-            let l = done[c] * inverses[j];
-            for r in 0..W {
-                col[r] = A::mul_add(-l, done[r], col[r]);
-            }
-        }
+        // only the rows from c's block of 4 down are read again
+        let col = match c / 4 {
+            0 => eliminated_column::<N, W, 0, A>(a, &inverses, c),
+            1 => eliminated_column::<N, W, 4, A>(a, &inverses, c),
+            2 => eliminated_column::<N, W, 8, A>(a, &inverses, c),
+            3 => eliminated_column::<N, W, 12, A>(a, &inverses, c),
+            _ => eliminated_column::<N, W, 16, A>(a, &inverses, c),
+        };
         a[c] = col;
         pivots[c] = col[c];
         inverses[c] = 1.0 / col[c];
@@ -784,6 +785,25 @@ fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]
         col[j] = root;
     }
     true
+}
+
+/// Column `c` of `a` less the multiples of the finished columns before it
+/// (`inverses`: their pivots' inverses), in rows `R..W`; rows above keep
+/// `a`'s values.
+#[inline(always)]
+fn eliminated_column<const N: usize, const W: usize, const R: usize, A: MulAdd>(
+    a: &[[f64; W]; N],
+    inverses: &[f64; N],
+    c: usize,
+) -> [f64; W] {
+    let mut col = a[c];
+    for (j, done) in a[..c].iter().enumerate() {
+        let l = done[c] * inverses[j];
+        for r in R.min(W)..W {
+            col[r] = A::mul_add(-l, done[r], col[r]);
+        }
+    }
+    col
 }
 
 /// The Cholesky factor of the lower triangle of `a` (rows) in place, by
