@@ -648,7 +648,18 @@ fn product_column<const N: usize, const W: usize, const R: usize, A: MulAdd>(
     c: usize,
 ) -> [f64; W] {
     let mut acc = [0.0; W]; // in registers
-    for g_k in g {
+                            // two columns of G a turn (the same sums in the same order), so that
+                            // the loop's own count and jump come half as often
+    let pairs = g.chunks_exact(2);
+    let rest = pairs.remainder();
+    for pair in pairs {
+        let (a0, a1) = (pair[0][c], pair[1][c]);
+        for r in R.min(W)..W {
+            acc[r] = A::mul_add(pair[0][r], a0, acc[r]);
+            acc[r] = A::mul_add(pair[1][r], a1, acc[r]);
+        }
+    }
+    for g_k in rest {
         let a = g_k[c];
         for r in R.min(W)..W {
             acc[r] = A::mul_add(g_k[r], a, acc[r]);
