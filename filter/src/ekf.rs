@@ -342,8 +342,17 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         for (c, (g, s)) in self.work.iter_mut().zip(&self.s[..N]).enumerate() {
             let mut acc = [0.0; R]; // in registers
             if c < full {
-                // a full column: every row (a loop of fixed length)
-                for (fz, s_j) in fz.iter().zip(&s[..N]) {
+                // a full column: every row (a loop of fixed length), two a
+                // turn (the same sums in the same order)
+                let pairs = fz.chunks_exact(2);
+                let rest = pairs.remainder();
+                for (pair, s_j) in pairs.zip(s[..N].chunks_exact(2)) {
+                    for r in 0..R {
+                        acc[r] = A::mul_add(pair[0][r], s_j[0], acc[r]);
+                        acc[r] = A::mul_add(pair[1][r], s_j[1], acc[r]);
+                    }
+                }
+                for (fz, s_j) in rest.iter().zip(&s[N - rest.len()..N]) {
                     for r in 0..R {
                         acc[r] = A::mul_add(fz[r], *s_j, acc[r]);
                     }
