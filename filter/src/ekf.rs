@@ -795,16 +795,29 @@ fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]
         return false;
     }
     // column j of L is column j of L₁·D (as it stands) times 1/d_j·√d_j
+    // (below the diagonal: the rows above are cleared, from j's block of 4 down)
     for (j, col) in a.iter_mut().enumerate() {
         let root = pivots[j].sqrt();
         let scale = inverses[j] * root;
-        for v in col.iter_mut() {
-            *v *= scale;
+        match j / 4 {
+            0 => scale_below::<W, 0>(col, scale),
+            1 => scale_below::<W, 4>(col, scale),
+            2 => scale_below::<W, 8>(col, scale),
+            3 => scale_below::<W, 12>(col, scale),
+            _ => scale_below::<W, 16>(col, scale),
         }
         col[..j].fill(0.0);
         col[j] = root;
     }
     true
+}
+
+/// Multiplies rows `R..W` of `col` by `scale`.
+#[inline(always)]
+fn scale_below<const W: usize, const R: usize>(col: &mut [f64; W], scale: f64) {
+    for v in &mut col[R.min(W)..] {
+        *v *= scale;
+    }
 }
 
 /// Column `c` of `a` less the multiples of the finished columns before it
