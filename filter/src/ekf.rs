@@ -524,11 +524,6 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
         let nu = y - h_pred;
-        // σ of each innovation from the prior: C_ii = c_i²·|row s_i of S|² + r_i.
-        let sigma = SVector::<f64, M>::from_fn(|i, _| {
-            let (si, ci) = (states[i], self.x_scale[states[i]]);
-            (ci * ci * self.row_norm2(si) + self.r[i]).max(0.0).sqrt()
-        });
         // The columns the measured rows of S can have non-zeros in: those up
         // to the highest measured state, and any full ones (the rank-one
         // updates below write only these columns, so the rest stay lower
@@ -541,9 +536,16 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         // The measured rows reach 4 columns in the layouts here (the rod
         // position is state 3): a pass with that many columns fixed at
         // compile time; any other reach takes all N.
-        let nis = match support {
-            4 if N >= 4 => self.potter::<4, A>(&nu, states, use_channel)?,
-            _ => self.potter::<N, A>(&nu, states, use_channel)?,
+        // σ of each innovation from the prior, then the updates.
+        let (sigma, nis) = match support {
+            4 if N >= 4 => (
+                self.innovation_sigma::<4>(states),
+                self.potter::<4, A>(&nu, states, use_channel)?,
+            ),
+            _ => (
+                self.innovation_sigma::<N>(states),
+                self.potter::<N, A>(&nu, states, use_channel)?,
+            ),
         };
         // Each scalar update passed a positive finite variance, so the
         // factor's new columns are finite; a non-finite innovation shows in
@@ -556,6 +558,23 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 }
 
 impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
+    /// σ of each innovation from the prior, C_ii = c_i²·|row s_i of S|² + r_i
+    /// (measurement units), for an S whose measured rows have non-zeros in
+    /// their first `K` columns only: |row|² over those, in [`Self::row_norm2`]'s
+    /// lanes and order (the zeros it adds beyond them are exact).
+    #[inline(always)]
+    fn innovation_sigma<const K: usize>(&self, states: [usize; M]) -> SVector<f64, M> {
+        SVector::<f64, M>::from_fn(|i, _| {
+            let (si, ci) = (states[i], self.x_scale[states[i]]);
+            let mut acc = [0.0; 4];
+            for (k, col) in self.s[..K].iter().enumerate() {
+                acc[k % 4] += col[si] * col[si];
+            }
+            let norm2 = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            (ci * ci * norm2 + self.r[i]).max(0.0).sqrt()
+        })
+    }
+
     /// Potter's update, one scalar measurement at a time (φ = Sᵀh is a row of
     /// S), for an S whose measured rows have non-zeros in their first `K`
     /// columns only (the rank-one updates write only these, so it stays so);
