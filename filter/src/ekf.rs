@@ -228,10 +228,22 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         self.row_norm2(i).sqrt() * self.x_scale[i]
     }
 
-    /// |row i of S|², scaled (the variance of state i).
+    /// |row i of S|², scaled (the variance of state i): for a row among the
+    /// first 8 of a wider S whose full columns are among the first 8, over
+    /// those 8 columns (the zeros beyond them would add nothing, exactly).
     fn row_norm2(&self, i: usize) -> f64 {
+        if W > 8 && i < 8 && self.full_cols <= 8 {
+            self.row_norm2_within::<8>(i)
+        } else {
+            self.row_norm2_within::<N>(i)
+        }
+    }
+
+    /// |row i of S|² over its first `K` columns, in 4 lanes.
+    #[inline(always)]
+    fn row_norm2_within<const K: usize>(&self, i: usize) -> f64 {
         let mut acc = [0.0; 4];
-        for (k, col) in self.s[..N].iter().enumerate() {
+        for (k, col) in self.s[..K].iter().enumerate() {
             acc[k % 4] += col[i] * col[i];
         }
         (acc[0] + acc[1]) + (acc[2] + acc[3])
@@ -560,18 +572,15 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// σ of each innovation from the prior, C_ii = c_i²·|row s_i of S|² + r_i
     /// (measurement units), for an S whose measured rows have non-zeros in
-    /// their first `K` columns only: |row|² over those, in [`Self::row_norm2`]'s
-    /// lanes and order (the zeros it adds beyond them are exact).
+    /// their first `K` columns only: |row|² over those (the zeros beyond
+    /// them would add nothing, exactly).
     #[inline(always)]
     fn innovation_sigma<const K: usize>(&self, states: [usize; M]) -> SVector<f64, M> {
         SVector::<f64, M>::from_fn(|i, _| {
             let (si, ci) = (states[i], self.x_scale[states[i]]);
-            let mut acc = [0.0; 4];
-            for (k, col) in self.s[..K].iter().enumerate() {
-                acc[k % 4] += col[si] * col[si];
-            }
-            let norm2 = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-            (ci * ci * norm2 + self.r[i]).max(0.0).sqrt()
+            (ci * ci * self.row_norm2_within::<K>(si) + self.r[i])
+                .max(0.0)
+                .sqrt()
         })
     }
 
