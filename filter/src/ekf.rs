@@ -684,9 +684,9 @@ fn product_column<const N: usize, const W: usize, const R: usize, A: MulAdd>(
     g: &[[f64; W]; N],
     c: usize,
 ) -> [f64; W] {
-    let mut acc = [0.0; W]; // in registers
-                            // two columns of G a turn (the same sums in the same order), so that
-                            // the loop's own count and jump come half as often
+    // in registers; two columns of G a turn (the same sums in the same
+    // order), so that the loop's own count and jump come half as often
+    let mut acc = [0.0; W];
     let pairs = g.chunks_exact(2);
     let rest = pairs.remainder();
     for pair in pairs {
@@ -797,9 +797,10 @@ fn dot<const N: usize, A: MulAdd>(a: &[f64; N], b: &[f64; N]) -> f64 {
 /// Left-looking: each column, held in registers, takes from every earlier
 /// finished column a multiple of it, in the rows from the column's block of
 /// 4 down (the rows above the diagonal there take garbage, cleared at the
-/// end), so every operation is a multiple of one column added to another. These are the right-looking order's operations,
-/// in the same order for each column (the same bits), without storing and
-/// loading a column once per pivot before it.
+/// end), so every operation is a multiple of one column added to another.
+/// These are the right-looking order's operations, in the same order for
+/// each column (the same bits), without storing and loading a column once
+/// per pivot before it.
 /// The pivots are tested together at the end (a bad one makes the later ones
 /// garbage, never a panic): one test instead of one per pivot.
 #[inline(always)]
