@@ -38,9 +38,10 @@ mod tests;
 
 /// Index of the effective load F_e (N) in the 7- and 9-state layouts.
 pub const I_FE: usize = 6;
-/// The first of the random-walk states (F_e, the leaks, b, θ): the step
-/// leaves every state from this index on as it is, so their rows of the step
-/// Jacobian are the identity's (a filter may take them as such).
+/// The first of the random-walk states (F_e, the leaks, b, θ): the step's
+/// dynamics move no state from this index on (only [`ProcessModel::keep_physical`]
+/// may clamp θ into its range), so their rows of the step Jacobian are the
+/// identity's (a filter may take them as such).
 pub const FIRST_RANDOM_WALK: usize = I_FE;
 /// Index of q_e1, the chamber-1 external leak at nominal drop (m³/s), in the 10-state layout.
 pub const I_QE1: usize = 7;
