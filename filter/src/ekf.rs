@@ -20,6 +20,37 @@
 
 use nalgebra::{SMatrix, SVector};
 
+/// `$body` with the constant `$R` the first row of column `$c`'s block of 4
+/// rows (0, 4, 8, 12; 16 for any column from 16 on): the rows from there
+/// down are the column's lower triangle in whole vector registers, and a
+/// constant bound keeps the loops over them of fixed length.
+macro_rules! from_block {
+    ($c:expr, $R:ident => $body:expr) => {
+        match $c / 4 {
+            0 => {
+                const $R: usize = 0;
+                $body
+            }
+            1 => {
+                const $R: usize = 4;
+                $body
+            }
+            2 => {
+                const $R: usize = 8;
+                $body
+            }
+            3 => {
+                const $R: usize = 12;
+                $body
+            }
+            _ => {
+                const $R: usize = 16;
+                $body
+            }
+        }
+    };
+}
+
 /// What one measurement update saw.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Innovation<const M: usize> {
@@ -308,13 +339,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         };
         for (c, p) in p.iter_mut().enumerate() {
             // only the lower triangle is read: the blocks of 4 rows from c's
-            *p = match c / 4 {
-                0 => product_column::<N, W, 0, A>(g, c),
-                1 => product_column::<N, W, 4, A>(g, c),
-                2 => product_column::<N, W, 8, A>(g, c),
-                3 => product_column::<N, W, 12, A>(g, c),
-                _ => product_column::<N, W, 16, A>(g, c),
-            };
+            *p = from_block!(c, R => product_column::<N, W, R, A>(g, c));
             p[c] += self.q_var[c];
         }
         if cholesky_columns::<N, W, A>(p) {
@@ -808,13 +833,7 @@ fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]
     let (mut pivots, mut inverses) = ([0.0; N], [0.0; N]);
     for c in 0..N {
         // only the rows from c's block of 4 down are read again
-        let col = match c / 4 {
-            0 => eliminated_column::<N, W, 0, A>(a, &inverses, c),
-            1 => eliminated_column::<N, W, 4, A>(a, &inverses, c),
-            2 => eliminated_column::<N, W, 8, A>(a, &inverses, c),
-            3 => eliminated_column::<N, W, 12, A>(a, &inverses, c),
-            _ => eliminated_column::<N, W, 16, A>(a, &inverses, c),
-        };
+        let col = from_block!(c, R => eliminated_column::<N, W, R, A>(a, &inverses, c));
         a[c] = col;
         pivots[c] = col[c];
         inverses[c] = 1.0 / col[c];
@@ -828,13 +847,7 @@ fn cholesky_columns<const N: usize, const W: usize, A: MulAdd>(a: &mut [[f64; W]
     for (j, col) in a.iter_mut().enumerate() {
         let root = pivots[j].sqrt();
         let scale = inverses[j] * root;
-        match j / 4 {
-            0 => scale_below::<W, 0>(col, scale),
-            1 => scale_below::<W, 4>(col, scale),
-            2 => scale_below::<W, 8>(col, scale),
-            3 => scale_below::<W, 12>(col, scale),
-            _ => scale_below::<W, 16>(col, scale),
-        }
+        from_block!(j, R => scale_below::<W, R>(col, scale));
         col[..j].fill(0.0);
         col[j] = root;
     }
