@@ -571,6 +571,7 @@ pub fn replay(
         cfg,
         config: None,
         estimates,
+        thesis_estimates: false,
         max_bad_rows: dataset::DEFAULT_MAX_BAD_FRACTION,
         force: true,
     };

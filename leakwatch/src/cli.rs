@@ -223,7 +223,8 @@ pub(crate) enum Command {
         /// Configuration file (TOML; defaults for everything missing).
         #[arg(long)]
         config: Option<PathBuf>,
-        /// States of the thesis filter: 6 (friction from the model) or 7 (estimated load F_e).
+        /// Also run the thesis filter, with 6 states (friction from the model) or 7
+        /// (estimated load F_e), and write its estimates (the th_* columns)
         #[arg(long)]
         model: Option<u32>,
         /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
@@ -235,7 +236,8 @@ pub(crate) enum Command {
         /// Run all stages in one thread instead of over channels (same results).
         #[arg(long)]
         single_thread: bool,
-        /// Also report the thesis' MAE detector's decisions (a comparison, labelled as such).
+        /// Also run the thesis filter, write its estimates (the th_* columns) and report its
+        /// MAE detector's decisions (a comparison, labelled as such)
         #[arg(long)]
         thesis_baseline: bool,
         /// Largest fraction of unusable input rows (0 to 1) before the file is refused

@@ -40,8 +40,9 @@ enum Cell {
     Flags(u32),
 }
 
-/// Calls `cell` with each value of the row of `s`, in [`ESTIMATES_HEADER`]'s order.
-fn for_each_cell(s: &StageEstimate, mut cell: impl FnMut(Cell)) {
+/// Calls `cell` with each value of the row of `s`, in [`LEAK_COLUMNS`]'s order,
+/// then, when `thesis`, in [`THESIS_COLUMNS`]'s.
+fn for_each_cell(s: &StageEstimate, thesis: bool, mut cell: impl FnMut(Cell)) {
     let e = &s.leak;
     let t = &s.thesis;
     let lpm = |v: f64| v * 6.0e4;
@@ -65,6 +66,9 @@ fn for_each_cell(s: &StageEstimate, mut cell: impl FnMut(Cell)) {
     }
     cell(Cell::F64(e.nis));
     cell(Cell::Flags(e.flags));
+    if !thesis {
+        return;
+    }
     for v in [t.state[3], t.state[1], t.state[2], t.state[4], t.state[6]] {
         cell(Cell::F64(v));
     }
@@ -77,10 +81,20 @@ fn for_each_cell(s: &StageEstimate, mut cell: impl FnMut(Cell)) {
     cell(Cell::Flags(t.flags));
 }
 
-/// The columns of estimates.parquet: [`ESTIMATES_HEADER`]'s names, `flags`
-/// and `th_flags` as i32, the rest f64.
-pub fn parquet_columns() -> Vec<Column> {
-    ESTIMATES_HEADER
+/// The column names of an estimates file, comma-separated: [`LEAK_COLUMNS`],
+/// then [`THESIS_COLUMNS`] when the thesis filter ran (`thesis`).
+pub fn header(thesis: bool) -> String {
+    if thesis {
+        format!("{LEAK_COLUMNS},{THESIS_COLUMNS}")
+    } else {
+        LEAK_COLUMNS.to_string()
+    }
+}
+
+/// The columns of estimates.parquet: [`header`]'s names, `flags` and
+/// `th_flags` as i32, the rest f64.
+pub fn parquet_columns(thesis: bool) -> Vec<Column> {
+    header(thesis)
         .split(',')
         .map(|name| {
             if name.ends_with("flags") {
@@ -96,16 +110,18 @@ pub fn parquet_columns() -> Vec<Column> {
 pub enum EstimatesWriter {
     /// Text rows.
     Csv(Box<CsvOut>),
-    /// Columns, a row group of 65,536 rows at a time.
-    Parquet(Box<ParquetWriter<BufWriter<File>>>),
+    /// Columns, a row group of 65,536 rows at a time; with the thesis
+    /// filter's columns or not.
+    Parquet(Box<ParquetWriter<BufWriter<File>>>, bool),
     /// No file: the estimates are not written.
     None,
 }
 
 impl EstimatesWriter {
-    /// Starts the file (the CSV header, or the Parquet magic); `file` is
-    /// ignored (and may be none) for [`EstimatesFormat::None`].
-    pub fn new(file: Option<File>, format: EstimatesFormat) -> std::io::Result<Self> {
+    /// Starts the file (the CSV header, or the Parquet magic), with the thesis
+    /// filter's columns when `thesis`; `file` is ignored (and may be none) for
+    /// [`EstimatesFormat::None`].
+    pub fn new(file: Option<File>, format: EstimatesFormat, thesis: bool) -> std::io::Result<Self> {
         let Some(file) = file.filter(|_| format != EstimatesFormat::None) else {
             if format == EstimatesFormat::None {
                 return Ok(EstimatesWriter::None);
@@ -115,14 +131,17 @@ impl EstimatesWriter {
         Ok(match format {
             EstimatesFormat::None => EstimatesWriter::None,
             EstimatesFormat::Csv => {
-                let mut out = Box::new(CsvOut::new(file));
-                out.buf.extend_from_slice(ESTIMATES_HEADER.as_bytes());
+                let mut out = Box::new(CsvOut::new(file, thesis));
+                out.buf.extend_from_slice(header(thesis).as_bytes());
                 out.buf.push(b'\n');
                 EstimatesWriter::Csv(out)
             }
             EstimatesFormat::Parquet => {
                 let out = BufWriter::with_capacity(1 << 20, file);
-                EstimatesWriter::Parquet(Box::new(ParquetWriter::new(out, &parquet_columns())?))
+                EstimatesWriter::Parquet(
+                    Box::new(ParquetWriter::new(out, &parquet_columns(thesis))?),
+                    thesis,
+                )
             }
         })
     }
@@ -131,9 +150,9 @@ impl EstimatesWriter {
     pub fn write(&mut self, s: &StageEstimate) -> std::io::Result<()> {
         match self {
             EstimatesWriter::Csv(out) => out.row(s),
-            EstimatesWriter::Parquet(pq) => {
+            EstimatesWriter::Parquet(pq, thesis) => {
                 let mut col = 0;
-                for_each_cell(s, |c| {
+                for_each_cell(s, *thesis, |c| {
                     match c {
                         Cell::F64(v) => pq.push_f64(col, v),
                         Cell::Flags(v) => pq.push_i32(col, v as i32),
@@ -150,22 +169,27 @@ impl EstimatesWriter {
     pub fn finish(self) -> std::io::Result<()> {
         match self {
             EstimatesWriter::Csv(out) => out.finish(),
-            EstimatesWriter::Parquet(pq) => pq.finish().map(|_| ()),
+            EstimatesWriter::Parquet(pq, _) => pq.finish().map(|_| ()),
             EstimatesWriter::None => Ok(()),
         }
     }
 }
 
-/// Header of estimates.csv.
-pub const ESTIMATES_HEADER: &str =
+/// The leak filter's columns of an estimates file (every replay writes them).
+pub const LEAK_COLUMNS: &str =
     "t,u,x_meas,p1_meas,p2_meas,x_sp,p1,p2,x,v,v_sp,f_e,q_e1_lpm,q_e2_lpm,q_i_lpm,\
-spool_bias,bulk_scale,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags,th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
+spool_bias,bulk_scale,r_x,r_p1,r_p2,nu_x,nu_p1,nu_p2,nis,flags";
+
+/// The thesis filter's columns, after [`LEAK_COLUMNS`] when it ran (the
+/// thesis baseline or `--model` asked for it).
+pub const THESIS_COLUMNS: &str = "th_x,th_p1,th_p2,th_v,th_f_e,th_r_x,th_r_p1,th_r_p2,\
 th_nu_p1,th_nu_p2,th_mae_p1,th_mae_p2,th_nis,th_flags";
 
 /// The text writer of estimates.csv: rows formatted straight into one reused
 /// buffer (no per-row allocation or copy), written to the file a MiB at a time.
 pub struct CsvOut {
     file: File,
+    thesis: bool,
     buf: Vec<u8>,
     floats: zmij::Buffer,
     digits: itoa::Buffer,
@@ -175,9 +199,10 @@ pub struct CsvOut {
 const CSV_CHUNK: usize = 1 << 20;
 
 impl CsvOut {
-    fn new(file: File) -> Self {
+    fn new(file: File, thesis: bool) -> Self {
         CsvOut {
             file,
+            thesis,
             buf: Vec::with_capacity(CSV_CHUNK + 4096),
             floats: zmij::Buffer::new(),
             digits: itoa::Buffer::new(),
@@ -188,7 +213,7 @@ impl CsvOut {
     /// a cell gives back the exact f64; NaN is `NaN`, infinities `inf`/`-inf`).
     fn row(&mut self, s: &StageEstimate) -> std::io::Result<()> {
         let (buf, floats, digits) = (&mut self.buf, &mut self.floats, &mut self.digits);
-        for_each_cell(s, |c| {
+        for_each_cell(s, self.thesis, |c| {
             match c {
                 Cell::F64(v) => buf.extend_from_slice(floats.format(v).as_bytes()),
                 Cell::Flags(v) => buf.extend_from_slice(digits.format(v).as_bytes()),

@@ -145,8 +145,9 @@ fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
 }
 
 /// Draws a replay directory (estimates.csv, events.json): measured against
-/// estimated position and pressures, the thesis filter's residuals and MAE, and
-/// the leak filter's leak sizes, with detections and onsets marked.
+/// estimated position and pressures, the residuals (and MAE) of the thesis
+/// filter when it ran, else of the leak filter, and the leak filter's leak
+/// sizes, with detections and onsets marked.
 pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
     let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
     crate::out::check(
@@ -196,35 +197,49 @@ pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
         }
         p
     };
-    let pos = Panel::new("Rod position: measured and estimated", "x [mm]")
-        .with_series(series("thesis filter", &t, scaled("th_x", 1e3)?))
-        .with_series(series("leak filter", &t, scaled("x", 1e3)?))
-        .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
-    let pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
-        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
-        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?))
-        .with_series(series("p1 thesis filter", &t, scaled("th_p1", 1e-6)?))
-        .with_series(series("p2 thesis filter", &t, scaled("th_p2", 1e-6)?));
-    let resid = Panel::new("Thesis filter: a-posteriori pressure residuals", "e [kPa]")
-        .with_series(series("e p1", &t, scaled("th_r_p1", 1e-3)?))
-        .with_series(series("e p2", &t, scaled("th_r_p2", 1e-3)?));
-    let mae = with_markers(
-        Panel::new(
-            "Thesis filter: MAE of the pressure residuals (4000 samples)",
-            "MAE [kPa]",
-        )
-        .with_series(series("MAE p1", &t, scaled("th_mae_p1", 1e-3)?))
-        .with_series(series("MAE p2", &t, scaled("th_mae_p2", 1e-3)?)),
-    );
     let leaks = with_markers(
         Panel::new("Leak filter: estimated leak sizes at nominal drop", "q [L/min]")
             .with_series(series("q_e1", &t, scaled("q_e1_lpm", 1.0)?))
             .with_series(series("q_e2", &t, scaled("q_e2_lpm", 1.0)?))
             .with_series(series("q_i", &t, scaled("q_i_lpm", 1.0)?)),
     );
+    let mut pos = Panel::new("Rod position: measured and estimated", "x [mm]");
+    let mut pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
+        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
+        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?));
+    // the thesis filter's columns are there when it ran (--model, --thesis-baseline)
+    let panels = if col("th_x").is_ok() {
+        pos = pos.with_series(series("thesis filter", &t, scaled("th_x", 1e3)?));
+        pres = pres
+            .with_series(series("p1 thesis filter", &t, scaled("th_p1", 1e-6)?))
+            .with_series(series("p2 thesis filter", &t, scaled("th_p2", 1e-6)?));
+        let resid = Panel::new("Thesis filter: a-posteriori pressure residuals", "e [kPa]")
+            .with_series(series("e p1", &t, scaled("th_r_p1", 1e-3)?))
+            .with_series(series("e p2", &t, scaled("th_r_p2", 1e-3)?));
+        let mae = with_markers(
+            Panel::new(
+                "Thesis filter: MAE of the pressure residuals (4000 samples)",
+                "MAE [kPa]",
+            )
+            .with_series(series("MAE p1", &t, scaled("th_mae_p1", 1e-3)?))
+            .with_series(series("MAE p2", &t, scaled("th_mae_p2", 1e-3)?)),
+        );
+        vec![resid, mae, leaks]
+    } else {
+        pres = pres
+            .with_series(series("p1 leak filter", &t, scaled("p1", 1e-6)?))
+            .with_series(series("p2 leak filter", &t, scaled("p2", 1e-6)?));
+        let resid = Panel::new("Leak filter: a-posteriori pressure residuals", "e [kPa]")
+            .with_series(series("e p1", &t, scaled("r_p1", 1e-3)?))
+            .with_series(series("e p2", &t, scaled("r_p2", 1e-3)?));
+        vec![resid, leaks]
+    };
+    pos = pos
+        .with_series(series("leak filter", &t, scaled("x", 1e3)?))
+        .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
     let title = format!("replay {}", dir.display());
     let mut fig = Figure::new(&title, "t [s]");
-    fig.panels = vec![pos, pres, resid, mae, leaks];
+    fig.panels = [pos, pres].into_iter().chain(panels).collect();
     crate::out::png(
         &fig,
         out,

@@ -48,6 +48,9 @@ pub struct ReplayRequest {
     pub log: Option<LogDamage>,
     /// Format of the estimates file (estimates.csv or estimates.parquet).
     pub estimates: EstimatesFormat,
+    /// The thesis filter's estimates were asked for (`--model`): it runs and
+    /// the estimates file has its `th_*` columns (as with the thesis baseline).
+    pub thesis_estimates: bool,
     /// Samples processed so far, added to as the replay goes (a batch's progress
     /// across its worker threads); none: not counted.
     pub samples_done: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
@@ -276,11 +279,12 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         Some(p) => Some(crate::out::create(p, req.overwrite, &inputs)?),
         None => None,
     };
-    let mut out = EstimatesWriter::new(file, req.estimates).map_err(|e| format!("{est_name}: {e}"))?;
-
-    // The thesis filter feeds the per-sample estimates (`th_*`) and the thesis'
-    // baseline only: without either it does not run (a third of the work).
-    let thesis_wanted = req.estimates.file_name().is_some() || cfg.classifier.thesis_baseline;
+    // The thesis filter runs when its output is asked for: its estimates
+    // (`--model`, the `th_*` columns) or the thesis' baseline; otherwise it
+    // does not (a third of the work).
+    let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
+    let mut out =
+        EstimatesWriter::new(file, req.estimates, thesis_wanted).map_err(|e| format!("{est_name}: {e}"))?;
     let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?
         .with_thesis(thesis_wanted);
     let mut cls = Classifier::new(cfg.classifier.clone())?;

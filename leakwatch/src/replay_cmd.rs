@@ -43,6 +43,8 @@ pub struct Settings {
     pub config: Option<PathBuf>,
     /// Format of the estimates file.
     pub estimates: crate::estimates_out::EstimatesFormat,
+    /// The thesis filter's estimates were asked for (`--model`).
+    pub thesis_estimates: bool,
     /// Largest fraction of unusable input rows (0 to 1).
     pub max_bad_rows: f64,
     /// Replace existing outputs.
@@ -77,6 +79,7 @@ impl Settings {
             cfg,
             config,
             estimates,
+            thesis_estimates: model.is_some(),
             max_bad_rows,
             force,
         })
@@ -117,6 +120,7 @@ pub fn replay_file(
         protect,
         log,
         estimates: settings.estimates,
+        thesis_estimates: settings.thesis_estimates,
         samples_done,
     };
     replay::run(&req)

@@ -141,12 +141,16 @@ fn pyarrow() -> bool {
     python_with("pyarrow.parquet")
 }
 
+/// Replays `input` into `out` with the thesis filter's columns (`--model 7`):
+/// both flag columns.
 fn replay(input: &Path, out: &Path, format: &str) {
     let o = leakwatch(&[
         "replay",
         input.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--model",
+        "7",
         "--estimates",
         format,
     ]);

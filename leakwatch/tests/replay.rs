@@ -41,9 +41,10 @@ fn channels_and_one_thread_give_identical_results_and_find_the_leak() {
     let input = simulate(&d, "closed-loop-sine", "30", "ext2:0.5lpm@18s");
     let a = d.join("a");
     let b = d.join("b");
-    let o = replay(&input, &a, &[]);
+    // with the thesis filter's columns (--model 7): both filters' estimates compared
+    let o = replay(&input, &a, &["--model", "7"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = replay(&input, &b, &["--single-thread"]);
+    let o = replay(&input, &b, &["--single-thread", "--model", "7"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let ea = std::fs::read(a.join("estimates.csv")).unwrap();
     let eb = std::fs::read(b.join("estimates.csv")).unwrap();
@@ -135,7 +136,8 @@ fn bad_rows_are_reported_skipped_and_do_not_poison_the_filter() {
     let bad = d.join("bad.csv");
     std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
     let out = d.join("out");
-    let o = replay(&bad, &out, &[]);
+    // with the thesis filter (--model 7): neither filter is poisoned
+    let o = replay(&bad, &out, &["--model", "7"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(ran(&o), "{err}");
     let summary = json(&out.join("summary.json"));
@@ -218,7 +220,21 @@ fn plot_draws_a_replay_directory() {
     assert_eq!(&bytes[1..4], b"PNG");
     assert!(
         bytes.len() > 20_000,
-        "a figure with five panels: {} bytes",
+        "a figure with four panels: {} bytes",
+        bytes.len()
+    );
+    // with the thesis filter's columns (--model 7): its residuals and MAE, a fifth panel
+    let with = d.join("with");
+    assert!(replay(&input, &with, &["--model", "7"]).status.success());
+    let png5 = d.join("replay5.png");
+    let o = leakwatch(&["plot", with.to_str().unwrap(), "--out", png5.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes5 = std::fs::read(&png5).unwrap();
+    assert_eq!(&bytes5[1..4], b"PNG");
+    assert!(
+        bytes5.len() > bytes.len() + 5_000,
+        "five panels {} bytes, four {} bytes",
+        bytes5.len(),
         bytes.len()
     );
 }
@@ -272,6 +288,26 @@ fn model_6_replays_the_six_state_thesis_filter() {
     assert_eq!(s6["leak_filter"]["p1_pa"], s7["leak_filter"]["p1_pa"]);
     assert_ne!(s6["thesis_filter"]["p1_pa"], s7["thesis_filter"]["p1_pa"]);
 
+    // Without --model (or the thesis baseline) the thesis filter does not run:
+    // the estimates are the leak filter's 25 columns, the same text as the
+    // first 25 columns of a --model replay, row for row.
+    let plain = d.join("plain");
+    let o = replay(&input, &plain, &["--single-thread"]);
+    assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(plain.join("estimates.csv")).unwrap();
+    let with = std::fs::read_to_string(seven.join("estimates.csv")).unwrap();
+    let header = text.lines().next().unwrap();
+    assert_eq!(header.split(',').count(), 25, "{header}");
+    assert!(!header.contains("th_"), "{header}");
+    assert_eq!(text.lines().count(), 6001);
+    assert_eq!(with.lines().count(), 6001);
+    for (a, b) in text.lines().zip(with.lines()) {
+        assert!(b.starts_with(a) && b[a.len()..].starts_with(','), "{a}\n{b}");
+    }
+    let s = json(&plain.join("summary.json"));
+    assert!(s["thesis_filter"].is_null(), "{}", s["thesis_filter"]);
+    assert_eq!(s["leak_filter"]["p1_pa"], s7["leak_filter"]["p1_pa"]);
+
     let o = replay(&input, &d.join("eight"), &["--model", "8"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--model 8"));
@@ -312,7 +348,7 @@ fn values_outside_physical_ranges_are_rejected_counted_and_too_many_fail_the_fil
         ]),
     );
     let out = d.join("out");
-    let o = replay(&bad, &out, &["--max-bad-rows", "0.002"]);
+    let o = replay(&bad, &out, &["--max-bad-rows", "0.002", "--model", "7"]);
     assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
     let s = json(&out.join("summary.json"));
     assert_eq!(s["rows"], 3000, "{s:#}");
@@ -426,7 +462,8 @@ fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samp
     let bad = d.join("bad.mcap");
     std::fs::write(&bad, &bytes).unwrap();
     let out = d.join("out");
-    let o = replay(&bad, &out, &[]);
+    // with the thesis filter (--model 7): neither filter is poisoned
+    let o = replay(&bad, &out, &["--model", "7"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(ran(&o), "{err}");
     assert!(
