@@ -372,7 +372,10 @@ fn commissioning_calibrate_a_healthy_record_then_replay_a_leak_with_the_model() 
     // with the thesis filter (--model 7), whose model is fixed
     let nominal = summary("nominal", &["--model", "7"]);
     let model = cal.join("model.toml");
-    let calibrated = summary("calibrated", &["--config", model.to_str().unwrap(), "--model", "7"]);
+    let calibrated = summary(
+        "calibrated",
+        &["--config", model.to_str().unwrap(), "--model", "7"],
+    );
     let f = |s: &serde_json::Value, filter: &str, k: &str| s[filter][k].as_f64().unwrap();
     eprintln!("nominal {nominal:#}\ncalibrated {calibrated:#}");
     // the calibrated model explains the rig: the thesis filter, whose model is
