@@ -203,43 +203,52 @@ pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
             .with_series(series("q_e2", &t, scaled("q_e2_lpm", 1.0)?))
             .with_series(series("q_i", &t, scaled("q_i_lpm", 1.0)?)),
     );
+    // the thesis filter's columns are there when it ran (--model, --thesis-baseline):
+    // then its pressures and residuals are drawn, else the leak filter's
+    let thesis = col("th_x").is_ok();
+    let (name, who, pre) = if thesis {
+        ("Thesis filter", "thesis filter", "th_")
+    } else {
+        ("Leak filter", "leak filter", "")
+    };
     let mut pos = Panel::new("Rod position: measured and estimated", "x [mm]");
-    let mut pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
-        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
-        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?));
-    // the thesis filter's columns are there when it ran (--model, --thesis-baseline)
-    let panels = if col("th_x").is_ok() {
+    if thesis {
         pos = pos.with_series(series("thesis filter", &t, scaled("th_x", 1e3)?));
-        pres = pres
-            .with_series(series("p1 thesis filter", &t, scaled("th_p1", 1e-6)?))
-            .with_series(series("p2 thesis filter", &t, scaled("th_p2", 1e-6)?));
-        let resid = Panel::new("Thesis filter: a-posteriori pressure residuals", "e [kPa]")
-            .with_series(series("e p1", &t, scaled("th_r_p1", 1e-3)?))
-            .with_series(series("e p2", &t, scaled("th_r_p2", 1e-3)?));
-        let mae = with_markers(
+    }
+    let pos = pos
+        .with_series(series("leak filter", &t, scaled("x", 1e3)?))
+        .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
+    let pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
+        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
+        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?))
+        .with_series(series(
+            &format!("p1 {who}"),
+            &t,
+            scaled(&format!("{pre}p1"), 1e-6)?,
+        ))
+        .with_series(series(
+            &format!("p2 {who}"),
+            &t,
+            scaled(&format!("{pre}p2"), 1e-6)?,
+        ));
+    let resid = Panel::new(&format!("{name}: a-posteriori pressure residuals"), "e [kPa]")
+        .with_series(series("e p1", &t, scaled(&format!("{pre}r_p1"), 1e-3)?))
+        .with_series(series("e p2", &t, scaled(&format!("{pre}r_p2"), 1e-3)?));
+    let mut panels = vec![pos, pres, resid];
+    if thesis {
+        panels.push(with_markers(
             Panel::new(
                 "Thesis filter: MAE of the pressure residuals (4000 samples)",
                 "MAE [kPa]",
             )
             .with_series(series("MAE p1", &t, scaled("th_mae_p1", 1e-3)?))
             .with_series(series("MAE p2", &t, scaled("th_mae_p2", 1e-3)?)),
-        );
-        vec![resid, mae, leaks]
-    } else {
-        pres = pres
-            .with_series(series("p1 leak filter", &t, scaled("p1", 1e-6)?))
-            .with_series(series("p2 leak filter", &t, scaled("p2", 1e-6)?));
-        let resid = Panel::new("Leak filter: a-posteriori pressure residuals", "e [kPa]")
-            .with_series(series("e p1", &t, scaled("r_p1", 1e-3)?))
-            .with_series(series("e p2", &t, scaled("r_p2", 1e-3)?));
-        vec![resid, leaks]
-    };
-    pos = pos
-        .with_series(series("leak filter", &t, scaled("x", 1e3)?))
-        .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
+        ));
+    }
+    panels.push(leaks);
     let title = format!("replay {}", dir.display());
     let mut fig = Figure::new(&title, "t [s]");
-    fig.panels = [pos, pres].into_iter().chain(panels).collect();
+    fig.panels = panels;
     crate::out::png(
         &fig,
         out,

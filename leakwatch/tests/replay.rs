@@ -211,32 +211,22 @@ fn a_missing_column_is_an_error_naming_it() {
 fn plot_draws_a_replay_directory() {
     let d = tmpdir("plot");
     let input = simulate(&d, "closed-loop-sine", "12", "int:0.5lpm@8s");
-    let out = d.join("out");
-    assert!(replay(&input, &out, &[]).status.success());
-    let png = d.join("replay.png");
-    let o = leakwatch(&["plot", out.to_str().unwrap(), "--out", png.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bytes = std::fs::read(&png).unwrap();
-    assert_eq!(&bytes[1..4], b"PNG");
-    assert!(
-        bytes.len() > 20_000,
-        "a figure with four panels: {} bytes",
-        bytes.len()
-    );
+    // the PNG of a replay with `extra` arguments
+    let figure = |name: &str, extra: &[&str]| -> Vec<u8> {
+        let out = d.join(name);
+        assert!(replay(&input, &out, extra).status.success());
+        let png = d.join(format!("{name}.png"));
+        let o = leakwatch(&["plot", out.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(&png).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        bytes
+    };
+    let four = figure("out", &[]).len();
+    assert!(four > 20_000, "a figure with four panels: {four} bytes");
     // with the thesis filter's columns (--model 7): its residuals and MAE, a fifth panel
-    let with = d.join("with");
-    assert!(replay(&input, &with, &["--model", "7"]).status.success());
-    let png5 = d.join("replay5.png");
-    let o = leakwatch(&["plot", with.to_str().unwrap(), "--out", png5.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bytes5 = std::fs::read(&png5).unwrap();
-    assert_eq!(&bytes5[1..4], b"PNG");
-    assert!(
-        bytes5.len() > bytes.len() + 5_000,
-        "five panels {} bytes, four {} bytes",
-        bytes5.len(),
-        bytes.len()
-    );
+    let five = figure("with", &["--model", "7"]).len();
+    assert!(five > four + 5_000, "five panels {five} bytes, four {four} bytes");
 }
 
 /// `--model 6` runs the thesis filter with 6 states (friction from the model, no
