@@ -141,19 +141,15 @@ fn pyarrow() -> bool {
     python_with("pyarrow.parquet")
 }
 
-/// Replays `input` into `out` with the thesis filter's columns (`--model 7`):
-/// both flag columns.
-fn replay(input: &Path, out: &Path, format: &str) {
-    let o = leakwatch(&[
-        "replay",
-        input.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--model",
-        "7",
-        "--estimates",
-        format,
-    ]);
+/// Replays `input` into `out` in `format`, with the thesis filter's columns
+/// (`--model 7`: both flag columns) when `thesis`.
+fn replay(input: &Path, out: &Path, format: &str, thesis: bool) {
+    let mut args = vec!["replay", input.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    if thesis {
+        args.extend(["--model", "7"]);
+    }
+    args.extend(["--estimates", format]);
+    let o = leakwatch(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
@@ -175,8 +171,8 @@ fn estimates_both_ways(d: &Path) -> (PathBuf, PathBuf) {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (csv_dir, pq_dir) = (d.join("csv"), d.join("parquet"));
-    replay(&input, &csv_dir, "csv");
-    replay(&input, &pq_dir, "parquet");
+    replay(&input, &csv_dir, "csv", true);
+    replay(&input, &pq_dir, "parquet", true);
     assert!(!pq_dir.join("estimates.csv").exists());
     let pq_file = pq_dir.join("estimates.parquet");
     let bytes = std::fs::read(&pq_file).unwrap();
@@ -245,6 +241,66 @@ fn parquet_estimates_equal_the_csv_bit_for_bit_and_pyarrow_reads_them() {
 
 /// DuckDB reads estimates.parquet: the CSV's columns, types and values, bit
 /// for bit, and min/max statistics on every column chunk that equal its values.
+/// Reads the Parquet file with pyarrow and compares every cell with the CSV's.
+const SHORT_SCRIPT: &str = r#"
+import csv, json, math, sys
+import pyarrow.parquet as pq
+table = pq.read_table(sys.argv[1])
+cols = {n: table.column(n).to_pylist() for n in table.column_names}
+with open(sys.argv[2]) as fh:
+    rows = csv.reader(fh)
+    header = next(rows)
+    mismatches = n = 0
+    for i, row in enumerate(rows):
+        n += 1
+        for j, name in enumerate(header):
+            a, b = float(row[j]), cols[name][i]
+            if not (a == b or (math.isnan(a) and math.isnan(b))):
+                mismatches += 1
+print(json.dumps({"names": table.column_names, "csv_header": header, "csv_rows": n,
+                  "mismatches": mismatches, "flags": str(table.schema.field("flags").type)}))
+"#;
+
+/// Without `--model` or the thesis baseline both formats hold the leak
+/// filter's 25 columns (no `th_*`), the same values bit for bit.
+#[test]
+fn a_default_replays_estimates_are_the_leak_filters_columns_in_both_formats() {
+    let d = tmpdir("default");
+    let input = d.join("in.csv");
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "closed-loop-sine",
+        "--seconds",
+        "15",
+        "--out",
+        input.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // (15 s: a replay too short to arm the detector exits non-zero)
+    let (csv_dir, pq_dir) = (d.join("csv"), d.join("parquet"));
+    replay(&input, &csv_dir, "csv", false);
+    replay(&input, &pq_dir, "parquet", false);
+    if !pyarrow() {
+        return;
+    }
+    let v = python_json(
+        SHORT_SCRIPT,
+        &pq_dir.join("estimates.parquet"),
+        &csv_dir.join("estimates.csv"),
+    );
+    assert_eq!(v["names"], v["csv_header"]);
+    let names = v["names"].as_array().unwrap();
+    assert_eq!(names.len(), 25, "{v}");
+    assert!(
+        names.iter().all(|n| !n.as_str().unwrap().starts_with("th_")),
+        "{v}"
+    );
+    assert_eq!(v["csv_rows"], 15_000);
+    assert_eq!(v["mismatches"], 0, "{v}");
+    assert_eq!(v["flags"], "int32");
+}
+
 #[test]
 fn duckdb_reads_the_parquet_estimates_with_their_statistics() {
     let d = tmpdir("duckdb");
