@@ -248,8 +248,15 @@ pub fn detection_data(
     let (sheet, recording) = rig_files(dir);
     let config_path = config.map(Path::to_path_buf).or(sheet);
     let mut cfg = crate::config::Config::load_or_default(config_path.as_deref())?;
-    if let Some(p) = &config_path {
-        eprintln!("config: {}", p.display());
+    match &config_path {
+        Some(p) => eprintln!("config: {}", p.display()),
+        // a rig with a commissioning recording but no description: say what stands in for it
+        None if recording.is_some() => eprintln!(
+            "note: no --config and no datasheet.toml in {}: the rig is taken to be the built-in one \
+             (the thesis rig, double-rod); describe the rig (`leakwatch init`) for any other",
+            dir.display()
+        ),
+        None => {}
     }
     if let Some(rec) = &recording {
         if cfg.classifier.commissioning.is_none() {

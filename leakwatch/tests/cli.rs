@@ -987,6 +987,35 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
     }
 }
 
+/// A plant-style folder with a commissioning recording but no datasheet.toml
+/// (and no --config) is scored on the built-in rig, and `bench detection` says
+/// so before it commissions; with a datasheet.toml it names that file instead
+/// ([`bench_detection_on_a_plant_folder_commissions_then_scores`]).
+#[test]
+fn bench_detection_says_when_a_plant_folder_has_no_datasheet() {
+    let d = tmpdir("plant_no_sheet");
+    let sheet = d.join("elsewhere.toml");
+    std::fs::write(&sheet, "[rig]\n").unwrap();
+    let data = d.join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    simulate_random(&sheet, "12", "5", "none", &data.join("commission_cold.csv"));
+    let o = leakwatch(&[
+        "bench",
+        "detection",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        d.join("scored").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    let note = err.lines().next().unwrap_or_default();
+    assert!(
+        note.starts_with("note: no --config and no datasheet.toml in") && note.contains("built-in one"),
+        "{err}"
+    );
+    assert!(!err.contains("config: "), "{err}");
+}
+
 /// `bench detection --data DIR` on a folder laid out like plant_dev runs the
 /// README's workflow itself: its `datasheet.toml` is the config, `commission`
 /// runs on its `commission_cold.csv` (the spool bias identified and held), then
@@ -1028,6 +1057,8 @@ fn bench_detection_on_a_plant_folder_commissions_then_scores() {
     ]);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
+    assert!(err.contains(&format!("config: {}", sheet.display())), "{err}");
+    assert!(!err.contains("no datasheet.toml"), "{err}");
     assert!(err.contains("commissioning on"), "{err}");
     let bias_um: f64 = err
         .split("spool null bias: ")
