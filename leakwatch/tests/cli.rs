@@ -956,6 +956,14 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("spool null bias: -"), "{}", stderr(&o));
+    // without --config it says whose model it starts from
+    assert!(
+        stderr(&o).starts_with(
+            "note: no --config and no ./leakwatch.toml: the rig is taken to be the built-in one"
+        ),
+        "{}",
+        stderr(&o)
+    );
     // it says from what size on it will see a leak (measured 0.033/0.030/0.040 L/min)
     let err = stderr(&o);
     let line = err
