@@ -51,6 +51,12 @@ macro_rules! from_block {
     };
 }
 
+/// Rows summed in registers ahead of a wider factor's rest: two AVX2
+/// registers of 4. The random-walk rows of F·S past them are copied from S,
+/// and a row among them is summed over as many columns when no full column
+/// lies beyond.
+const LEAD_ROWS: usize = 8;
+
 /// What one measurement update saw.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Innovation<const M: usize> {
@@ -148,9 +154,9 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 
     /// Declares states `first..N` random walks: rows `first..N` of every
     /// Jacobian F given to [`Self::predict`] are the identity's. The time
-    /// update then takes those rows of F·S from S, past the first 8 (two
-    /// AVX2 registers), instead of summing them: for 10 to 12 states a third
-    /// of F·S's multiply-adds. Debug builds check each F against it.
+    /// update then takes those rows of F·S from S, past the first
+    /// [`LEAD_ROWS`], instead of summing them: for 10 to 12 states a third of
+    /// F·S's multiply-adds. Debug builds check each F against it.
     pub fn set_random_walks_from(&mut self, first: usize) {
         self.walks_from = first.min(N);
     }
@@ -260,11 +266,12 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     }
 
     /// |row i of S|², scaled (the variance of state i): for a row among the
-    /// first 8 of a wider S whose full columns are among the first 8, over
-    /// those 8 columns (the zeros beyond them would add nothing, exactly).
+    /// first [`LEAD_ROWS`] of a wider S whose full columns are among the
+    /// first [`LEAD_ROWS`], over those columns (the zeros beyond them would
+    /// add nothing, exactly).
     fn row_norm2(&self, i: usize) -> f64 {
-        if W > 8 && i < 8 && self.full_cols <= 8 {
-            self.row_norm2_within::<8>(i)
+        if W > LEAD_ROWS && i < LEAD_ROWS && self.full_cols <= LEAD_ROWS {
+            self.row_norm2_within::<LEAD_ROWS>(i)
         } else {
             self.row_norm2_within::<N>(i)
         }
@@ -322,8 +329,8 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
             "rows {}..{N} of F are not the identity's",
             self.walks_from
         );
-        if W > 8 && self.walks_from <= 8 {
-            self.scaled_product::<8, A>(f_jac);
+        if W > LEAD_ROWS && self.walks_from <= LEAD_ROWS {
+            self.scaled_product::<LEAD_ROWS, A>(f_jac);
         } else {
             self.scaled_product::<W, A>(f_jac);
         }
