@@ -251,11 +251,9 @@ pub fn detection_data(
     match &config_path {
         Some(p) => eprintln!("config: {}", p.display()),
         // a rig with a commissioning recording but no description: say what stands in for it
-        None if recording.is_some() => eprintln!(
-            "note: no --config and no datasheet.toml in {}: the rig is taken to be the built-in one \
-             (the thesis rig, double-rod); describe the rig (`leakwatch init`) for any other",
-            dir.display()
-        ),
+        None if recording.is_some() => {
+            crate::config::Config::note_builtin_rig(&format!("datasheet.toml in {}", dir.display()))
+        }
         None => {}
     }
     if let Some(rec) = &recording {

@@ -418,11 +418,7 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
     // refused before the learning, not after
     crate::out::check(out, force, &inputs)?;
     if config.is_none() {
-        eprintln!(
-            "note: no --config and no ./leakwatch.toml: the rig is taken to be the built-in one (the \
-             thesis rig, double-rod: \"the datasheet's\" values below are its); describe your rig \
-             with `leakwatch init`"
-        );
+        Config::note_builtin_rig("./leakwatch.toml");
     }
     let cfg = commission(input, &Config::load_or_default(config)?)?;
     let body = toml::to_string(&cfg).map_err(|e| e.to_string())?;

@@ -258,6 +258,15 @@ impl Config {
         None
     }
 
+    /// Says on stderr that no description of the rig was found (`missing`:
+    /// what was looked for), so the built-in rig stands in for it.
+    pub fn note_builtin_rig(missing: &str) {
+        eprintln!(
+            "note: no --config and no {missing}: the rig is taken to be the built-in one (the thesis \
+             rig, double-rod: \"the datasheet's\" values are its); describe your rig with `leakwatch init`"
+        );
+    }
+
     /// Loads `path` if given, else the defaults.
     pub fn load_or_default(path: Option<&Path>) -> Result<Config, String> {
         match path {
