@@ -263,7 +263,8 @@ pub(crate) enum Command {
     },
     /// Simulate a scenario on the rig and write a CSV (t,u,x,p1,p2,x_sp,f_load,ref,q_leak,temp_c).
     Simulate {
-        /// Scenario: open-loop-sine, open-loop-chirp, closed-loop-sine, closed-loop-random, loaded-sine, loaded-random.
+        /// Scenario: open-loop-sine, open-loop-chirp, closed-loop-sine, closed-loop-random, loaded-sine,
+        /// loaded-random, lift, press, handling.
         #[arg(long)]
         scenario: String,
         /// Run length in seconds (default: the scenario's own, 40 or 60 s).

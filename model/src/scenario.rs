@@ -1,18 +1,27 @@
-//! The test scenarios of the thesis (MODEL.md §6) and a lift-and-lower cycle,
-//! by name, with the proportional position controller of the closed-loop runs.
+//! The test scenarios of the thesis (MODEL.md §6), a lift-and-lower cycle and
+//! two plant duty cycles (a press cycle, pseudorandom handling), by name, with
+//! the proportional position controller of the closed-loop runs.
 
 use crate::params::SpringLoad;
 use crate::rng::Rng;
 
+pub mod duty;
+
+pub use duty::Move;
+
 /// Proportional gain of the thesis' position controller, V/m.
 pub const KP_V_PER_M: f64 = 50.0;
+/// Proportional gain of the position controller of the plant duty cycles
+/// (`press`, `handling`), V/m: their smooth references are followed within
+/// about 2 cm at 0.5 m/s on the in-repo plant rigs.
+pub const KP_PROFILE_V_PER_M: f64 = 250.0;
 /// Saturation of the valve command, V.
 pub const U_MAX_V: f64 = 10.0;
 /// Length of one sweep of the open-loop chirp, s (0.5 to 10.5 Hz).
 pub const CHIRP_PERIOD_S: f64 = 40.0;
 
 /// The named scenarios.
-pub const SCENARIO_NAMES: [&str; 7] = [
+pub const SCENARIO_NAMES: [&str; 9] = [
     "open-loop-sine",
     "open-loop-chirp",
     "closed-loop-sine",
@@ -20,6 +29,8 @@ pub const SCENARIO_NAMES: [&str; 7] = [
     "loaded-sine",
     "loaded-random",
     "lift",
+    "press",
+    "handling",
 ];
 
 /// How the valve is driven.
@@ -44,6 +55,9 @@ pub enum Drive {
     },
     /// Closed loop on a piecewise-constant reference: (start time s, level m), sorted.
     ClosedLoopSteps { levels: Vec<(f64, f64)> },
+    /// Closed loop, with gain `kp_v_per_m` (V/m), on a smooth reference: the
+    /// `moves` (sorted, each starting where the one before ended) and holds between them.
+    ClosedLoopProfile { moves: Vec<Move>, kp_v_per_m: f64 },
 }
 
 /// A scenario: drive, load environment, initial position and default length.
@@ -173,6 +187,30 @@ impl Scenario {
                 60.0,
                 20.0,
             ),
+            // A press cycle (any rig with a stroke of 0.3 m or more): approach from
+            // 0.05 to 0.195 m, press into a workpiece of 2e6 N/m touching at 0.20 m
+            // to 0.202 m, hold, retract, dwell (scenario::duty).
+            "press" => (
+                Drive::ClosedLoopProfile {
+                    moves: duty::press_moves(seed, span),
+                    kp_v_per_m: KP_PROFILE_V_PER_M,
+                },
+                duty::press_workpiece(),
+                duty::PRESS_HOME_M,
+                60.0,
+                20.0,
+            ),
+            // Point-to-point handling within 0.03-0.27 m (scenario::duty).
+            "handling" => (
+                Drive::ClosedLoopProfile {
+                    moves: duty::handling_moves(seed, span),
+                    kp_v_per_m: KP_PROFILE_V_PER_M,
+                },
+                unloaded,
+                duty::HANDLING_START_M,
+                60.0,
+                20.0,
+            ),
             other => return Err(UnknownScenario(other.to_string())),
         };
         Ok(Scenario {
@@ -189,7 +227,7 @@ impl Scenario {
     pub fn is_closed_loop(&self) -> bool {
         matches!(
             self.drive,
-            Drive::ClosedLoopSine { .. } | Drive::ClosedLoopSteps { .. }
+            Drive::ClosedLoopSine { .. } | Drive::ClosedLoopSteps { .. } | Drive::ClosedLoopProfile { .. }
         )
     }
 
@@ -205,12 +243,14 @@ impl Scenario {
                 let i = levels.partition_point(|(t0, _)| *t0 <= t_s);
                 levels[i.saturating_sub(1)].1
             }
+            Drive::ClosedLoopProfile { moves, .. } => duty::reference_of(moves, t_s),
             _ => f64::NAN,
         }
     }
 
     /// The valve command at `t_s` given the measured rod position `x_meas_m`, V
-    /// (open loop: the scheduled input; closed loop: K_p·(r − x) saturated at ±10 V).
+    /// (open loop: the scheduled input; closed loop: K_p·(r − x) saturated at ±10 V,
+    /// K_p [`KP_V_PER_M`] or a profile's own).
     pub fn command_v(&self, t_s: f64, x_meas_m: f64) -> f64 {
         match &self.drive {
             Drive::OpenLoopSine {
@@ -221,6 +261,9 @@ impl Scenario {
             Drive::OpenLoopChirp { amplitude_v } => {
                 let t = t_s.rem_euclid(CHIRP_PERIOD_S);
                 amplitude_v * (std::f64::consts::PI * (1.0 + t / 4.0) * t).sin()
+            }
+            Drive::ClosedLoopProfile { kp_v_per_m, .. } => {
+                (kp_v_per_m * (self.reference_m(t_s) - x_meas_m)).clamp(-U_MAX_V, U_MAX_V)
             }
             _ => (KP_V_PER_M * (self.reference_m(t_s) - x_meas_m)).clamp(-U_MAX_V, U_MAX_V),
         }
