@@ -12,6 +12,7 @@ pub mod friction;
 pub mod leakage;
 pub mod params;
 pub mod process;
+pub mod rigs;
 pub mod rng;
 pub mod sample;
 pub mod scenario;
