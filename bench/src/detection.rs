@@ -1,4 +1,4 @@
-//! The seeded detection suite of BENCHMARKS.md §2: both detectors side by
+//! The seeded detection suite (docs/detection/README.md): both detectors side by
 //! side on the same simulated runs, in parallel over the cores.
 //!
 //! Each run draws (from its own seed) a scenario, a rig that differs from the

@@ -1,7 +1,7 @@
-//! Detection scored on recorded runs with their truth: any directory laid out
-//! like `../shared/data/leaks_dev` (`run_*/measured.csv[.gz]` and
-//! `run_*/truth.json`), the runs fed through the estimator stage and the
-//! classifier exactly as `leakwatch replay` feeds them.
+//! Detection scored on recorded runs with their truth: any directory of run
+//! folders, `run_*/measured.csv[.gz]` with `run_*/truth.json`, the runs fed
+//! through the estimator stage and the classifier exactly as `leakwatch replay`
+//! feeds them.
 //!
 //! Per run: detected (a leak raised at or after the onset), the kind at the
 //! first alarm and after its updates, the delay from the onset, the size at

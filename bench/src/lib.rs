@@ -1,4 +1,4 @@
-//! Benchmark harnesses run from `leakwatch bench ...` (BENCHMARKS.md). They
+//! Benchmark harnesses run from `leakwatch bench ...` (docs/performance.md). They
 //! print tables and return JSON-ready results; they are never timed assertions.
 
 pub mod alarms;

@@ -1,4 +1,4 @@
-//! Speed: EKF step time and replay throughput (BENCHMARKS.md §1).
+//! Speed: EKF step time and replay throughput (docs/performance.md#estimation).
 
 use std::time::Instant;
 

@@ -1,4 +1,4 @@
-//! Runs the hidden-effect suite and prints the table of BENCHMARKS.md §3.
+//! Runs the hidden-effect suite and prints its table (docs/calibration/README.md#results).
 //!
 //! `cargo run -p calibrate --example bench_suite [CASE-SUBSTRING]`; with
 //! `MATRIX=1` every effect under every input (`suite::matrix_cases`); with

@@ -64,7 +64,7 @@ impl Effect {
     /// [`crate::CalibrateOptions::candidates`]), not searched by default.
     pub const ON_REQUEST: [Effect; 1] = [Effect::Friction];
 
-    /// The effect names of the library (BENCHMARKS.md §3, issue 6; `friction` on request).
+    /// The effect names of the library (docs/calibration/README.md; `friction` on request).
     pub const NAMES: [&'static str; 10] = [
         "friction",
         "friction-asymmetry",

@@ -16,9 +16,10 @@
 //! calibrate::fit_effect(measured, model, effect_name: &str, opts) -> Result<EffectFit, CalibrateError>
 //!     // one named effect; Err(NotIdentifiable) when the data does not excite it
 //! calibrate::load_measured(path: &Path) -> Result<Vec<Sample>, CalibrateError>   // dataset CSV, .csv.gz
-//! calibrate::suite::bench(opts) -> BenchReport           // BENCHMARKS.md §3, smooth rig, 16 cases
+//! calibrate::suite::bench(opts) -> BenchReport           // smooth rig, 16 cases
 //! calibrate::suite::bench_thesis(opts) -> BenchReport    // the stick-slip rig, 32 cases
 //! calibrate::suite::bench_matrix(opts) -> BenchReport    // smooth rig, every effect under every input, 44 cases
+//!     // the suites and their results: docs/calibration/README.md
 //!     // BenchReport::markdown(), ::to_json(), ::write(dir) -> [calibration_bench.md, .json];
 //!     // suite::cases(), thesis_cases(), matrix_cases(), run_case(), bench_cases(list, opts, threads)
 //! calibrate::external::bench_dir(dir, model, opts, threads, &progress) -> BenchReport
@@ -42,7 +43,7 @@
 //!    has none; the piston's measured displacement; leaks) against the
 //!    measured one; the mean force balance A(p1 − p2) − friction − load − m·Δv/T;
 //!    and the model's spool against the measured spool. Nothing is simulated
-//!    freely, so the chaos of a stick-slipping rod (MODEL.md §8), which makes
+//!    freely, so the chaos of a stick-slipping rod (docs/model.md#stick-slip), which makes
 //!    a free simulation diverge within tens of ms whatever the effect, does
 //!    not enter. A chamber at tank or supply pressure is left out of that
 //!    window (the orifice law is too stiff there). Velocity from a central

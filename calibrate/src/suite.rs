@@ -1,4 +1,4 @@
-//! The hidden-effect suite (BENCHMARKS.md §3): rigs simulated with one or
+//! The hidden-effect suite (docs/calibration/README.md#results): rigs simulated with one or
 //! two effects the nominal model lacks (sensor noise on, inputs from the
 //! thesis' scenarios), plus clean controls; and the benchmark over it.
 

@@ -1,4 +1,4 @@
-//! The hidden-effect suite (BENCHMARKS.md §3): for each effect of the
+//! The hidden-effect suite (docs/calibration/README.md#results): for each effect of the
 //! library, a rig simulated with that effect (sensor noise on, a small
 //! mismatch in mass and viscous friction elsewhere, inputs from the thesis'
 //! scenarios); the workflow must name it first, fit its parameters within

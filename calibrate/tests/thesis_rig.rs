@@ -1,5 +1,5 @@
 //! The hidden-effect suite on the stick-slip rig (thesis friction as
-//! published, rig and nominal model alike; MODEL.md §8): every single effect
+//! published, rig and nominal model alike; docs/model.md#stick-slip): every single effect
 //! under the open-loop sine, the open-loop chirp and the closed-loop
 //! pseudorandom steps (the spring under the loaded sine and the steps), and
 //! three clean controls, 15 s each. A freely simulated window diverges on

@@ -26,10 +26,10 @@
 //!   is largest relative to its threshold. Size: the rise above the baseline,
 //!   with the filter's σ. Onset: the last time the rise was below a
 //!   quarter of the threshold.
-//! - [`MaeDetector`] (the thesis' baseline, MODEL.md §5): the moving averages of
-//!   |residual| of p1 and p2; thresholds = `margin` × the largest healthy MAE
-//!   seen in the warm-up; p1 only → ext1, p2 only → ext2, both → internal. It
-//!   cannot size a leak.
+//! - [`MaeDetector`] (the thesis' baseline, docs/model.md#the-baseline-detector):
+//!   the moving averages of |residual| of p1 and p2; thresholds = `margin` × the
+//!   largest healthy MAE seen in the warm-up; p1 only → ext1, p2 only → ext2,
+//!   both → internal. It cannot size a leak.
 //!
 //! Both debounce: one leak gives one `raised` event, then `updated` events as
 //! the size estimate moves, and `cleared` when it goes away. Sensor checks

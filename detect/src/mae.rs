@@ -1,5 +1,6 @@
-//! The thesis' detector (MODEL.md §5), kept as a baseline: moving averages of the
-//! pressure residuals against thresholds learned in a warm-up. It cannot size a leak.
+//! The thesis' detector (docs/model.md#the-baseline-detector), kept as a baseline:
+//! moving averages of the pressure residuals against thresholds learned in a
+//! warm-up. It cannot size a leak.
 
 use crate::track::{arm_step, Active, Arming, Stats};
 use crate::{ClassifierConfig, EventKind, LeakEvent, Phase};

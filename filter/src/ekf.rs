@@ -4,8 +4,9 @@
 //! positive semi-definite by construction and never loses definiteness to
 //! rounding, whatever the units (the thesis' P0 = 1e4·I mixes m² and Pa² over
 //! twenty orders of magnitude; a Joseph-form update loses definiteness on it,
-//! MODEL.md §8). On top of that, all covariance algebra runs in scaled units
-//! z = x / scale, so that every state is O(1).
+//! docs/model.md#covariance-at-the-thesis-start). On top of that, all
+//! covariance algebra runs in scaled units z = x / scale, so that every state
+//! is O(1).
 //!
 //! - Predict: S⁻ = triangular factor of [F·S, Q^½]: the Cholesky factor of
 //!   (F·S)(F·S)ᵀ + Q, or, should that fail to rounding, Householder reflections.

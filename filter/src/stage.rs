@@ -5,7 +5,8 @@
 //!   the three leak sizes, the spool bias and the oil's stiffness for
 //!   leakwatch's detector;
 //! - the **thesis filter** (default: 7 states, the thesis' tuning) gives the
-//!   residuals and MAE of MODEL.md §5 for the baseline detector.
+//!   residuals and MAE (docs/model.md#residuals-and-the-mae-pattern) for the
+//!   baseline detector.
 //!
 //! The time step from one sample to the next, `round(Δt / T)` sample periods
 //! `T`, is the one place gaps and restarts are decided ([`StepKind`]):

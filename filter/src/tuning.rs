@@ -95,7 +95,8 @@ impl Default for Tuning {
 }
 
 impl Tuning {
-    /// The thesis' tuning (MODEL.md §4): Q = diag(1e-10, 1e4, 1e4, 1e-6, 1e-4, 1e-20, 1e2),
+    /// The thesis' tuning (docs/model.md#tuning):
+    /// Q = diag(1e-10, 1e4, 1e4, 1e-6, 1e-4, 1e-20, 1e2),
     /// R = diag(1e-4, 1e6, 1e6), x0 with pressures at 6.8 MPa, P0 = 1e4·I, 7 states.
     pub fn thesis() -> Self {
         Tuning {

@@ -7,7 +7,7 @@ use nalgebra::{SMatrix, SVector};
 
 /// The covariance factor keeps P symmetric positive definite over 1e6 steps of
 /// random commands and random measurements, from the thesis' P0 = 1e4·I (the
-/// case that breaks a Joseph-form update, MODEL.md §8).
+/// case that breaks a Joseph-form update, docs/model.md#covariance-at-the-thesis-start).
 #[test]
 fn covariance_stays_positive_definite_over_a_million_random_steps() {
     let mut rng = Rng::new(99);
@@ -185,8 +185,8 @@ fn healthy_run(scenario: &str, tuning: Tuning, smooth: bool, seconds: f64, pos_t
 ///   thesis tuning has its pressures within 0.3 MPa from the second sample on.
 ///
 /// The thesis tuning's position estimate does not converge (R_x = 1e-4 m² trusts the
-/// encoder to 1 cm only, and the forward-Euler bursts of MODEL.md §8 run it into the
-/// stroke clamp): measured RMS error 1.8–4.7 cm over 5 s, asserted below 10 cm.
+/// encoder to 1 cm only, and the forward-Euler bursts of docs/model.md#forward-euler-bursts
+/// run it into the stroke clamp): measured RMS error 1.8–4.7 cm over 5 s, asserted below 10 cm.
 /// The figures are printed (`--nocapture`) and tabulated in docs/estimator.md.
 #[test]
 fn converges_from_the_thesis_start_in_every_scenario() {
@@ -565,8 +565,8 @@ fn the_oil_stiffness_of_a_soft_rig_is_estimated_and_no_longer_reads_as_leaks() {
 }
 
 /// The command of a sample drives the interval after it (the rig's zero-order
-/// hold, MODEL.md §4: x(k+1) = x(k) + T·f(x(k), u(k))): the estimate at a sample
-/// cannot depend on that sample's own command, only on the ones before. Two
+/// hold, docs/model.md#discretisation: x(k+1) = x(k) + T·f(x(k), u(k))): the estimate at
+/// a sample cannot depend on that sample's own command, only on the ones before. Two
 /// estimators fed the same samples, except ±10 V in the last one's command,
 /// agree to the bit at that sample and part at the next. (Until 2026-11-25 the
 /// prediction into sample k used u(k): the valve acted 1 ms early, and on a

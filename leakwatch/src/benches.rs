@@ -221,9 +221,9 @@ pub fn detection(
     write_json(out, "detection.json", &json, force)
 }
 
-/// The rig's own description and commissioning recording in a data directory
-/// laid out like `../shared/data/plant_dev/double`: `datasheet.toml` and
-/// `commission_cold.csv[.gz]` (either may be absent).
+/// The rig's own description and commissioning recording in a plant-style data
+/// directory: `datasheet.toml` and `commission_cold.csv[.gz]` beside its `run_*/`
+/// folders (either file may be absent).
 fn rig_files(dir: &Path) -> (Option<PathBuf>, Option<PathBuf>) {
     let sheet = dir.join("datasheet.toml");
     let recording = ["commission_cold.csv.gz", "commission_cold.csv"]
@@ -233,8 +233,8 @@ fn rig_files(dir: &Path) -> (Option<PathBuf>, Option<PathBuf>) {
     (sheet.is_file().then_some(sheet), recording)
 }
 
-/// Detection scored on recorded runs with truth (a directory like
-/// ../shared/data/leaks_dev). A directory laid out like plant_dev runs the README's
+/// Detection scored on recorded runs with truth (`run_*/measured.csv[.gz]` with
+/// `truth.json`). A directory laid out like plant_dev runs the README's
 /// workflow first: without `--config`, its `datasheet.toml` is the config; with a
 /// commissioning recording, `commission` runs on it (bias identified, healthy
 /// state learned) before the runs are scored.

@@ -36,7 +36,8 @@ pub struct Config {
     pub sensors: SensorParams,
     /// Integration settings of the simulated rig.
     pub sim: SimSettings,
-    /// The thesis filter (baseline detector): by default the thesis' 7-state tuning (MODEL.md §4).
+    /// The thesis filter (baseline detector): by default the thesis' 7-state tuning
+    /// (docs/model.md#tuning).
     pub estimator: Tuning,
     /// The leak filter (leakwatch's detector): by default 12 states, tuning from the sensors.
     pub leak_filter: Tuning,
@@ -286,7 +287,7 @@ impl Config {
         format!(
             "# leakwatch configuration: SI units everywhere (m, s, Pa, m³/s, N, V);\n\
              # every field is optional and defaults to the value shown.\n\
-             # [model]: the actuator as the estimator believes it (MODEL.md §2).\n\
+             # [model]: the actuator as the estimator believes it (docs/model.md).\n\
              # [rig]: optional, the simulated rig's own parameters (same fields as [model]);\n\
              #        when absent the simulated rig equals [model].\n\
              # [sensors]: the simulated rig's sensors; [sim]: its integrator.\n\

@@ -1,4 +1,5 @@
-//! Prints the open-loop sine reference figures (MODEL.md §8) for both friction presets.
+//! Prints the open-loop sine reference figures (docs/model.md#reference-figures) for both
+//! friction presets.
 use model::*;
 fn main() {
     for preset in [FrictionPreset::Thesis, FrictionPreset::Smooth] {

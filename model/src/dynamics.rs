@@ -1,9 +1,9 @@
-//! The continuous dynamics of the actuator (MODEL.md §3): spool, orifice
+//! The continuous dynamics of the actuator (docs/model.md): spool, orifice
 //! flows, compressible oil in two chambers, rod with friction, load and end
 //! stops, and leaks.
 //!
 //! The state order is the estimator's, `[x_sp, p1, p2, x, v, v_sp]`
-//! (MODEL.md §4), so rig and filter states compare index by index.
+//! (docs/model.md#layouts), so rig and filter states compare index by index.
 
 use crate::friction::friction_force_n;
 use crate::leakage::{LeakFlows, LeakLaw, LeakPath};
@@ -188,7 +188,7 @@ pub struct NullLeakage {
     pub dq2: [f64; 3],
 }
 
-/// Valve flows for spool position `x_sp_m` and chamber pressures (MODEL.md §3,
+/// Valve flows for spool position `x_sp_m` and chamber pressures (docs/model.md#orifice-flows,
 /// critical centre, signed square root), plus the null leakage of an
 /// underlapped valve when the parameters have one ([`null_leakage_flows`]).
 #[inline]
@@ -258,7 +258,7 @@ pub struct Forces {
 
 /// Time constant with which stiction pulls a residual velocity inside the
 /// stick band to zero in the rig simulator, s. (The estimator's model keeps
-/// the plain Karnopp form, MODEL.md §4.)
+/// the plain Karnopp form, docs/model.md#friction.)
 pub const STICK_VELOCITY_DECAY_S: f64 = 5.0e-4;
 
 /// Force of the end stops on the rod at position `x` m and velocity `v` m/s, N
@@ -397,7 +397,7 @@ mod tests {
 
     #[test]
     fn rated_flow_at_full_command() {
-        // MODEL.md §2: 10 V at a 10.35 MPa drop per land gives about 33 L/min.
+        // docs/model.md#parameters: 10 V at a 10.35 MPa drop per land gives about 33 L/min.
         let p = ActuatorParams::default();
         let x_sp = 10.0 * p.spool_gain_m_per_v;
         let ps = p.supply_pressure_pa;

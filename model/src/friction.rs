@@ -1,4 +1,4 @@
-//! Karnopp friction with the LaVal Stribeck form (MODEL.md §3).
+//! Karnopp friction with the LaVal Stribeck form (docs/model.md#friction).
 
 use crate::params::Friction;
 
@@ -27,7 +27,7 @@ pub fn friction_force_n(f: &Friction, v_m_s: f64, drive_n: f64) -> f64 {
 
 /// Partial derivative of the friction force with respect to velocity, N·s/m:
 /// the Stribeck slope plus viscous term outside the stick band, zero inside it
-/// (MODEL.md §4).
+/// (docs/model.md#jacobians).
 #[inline]
 pub fn friction_dv(f: &Friction, v_m_s: f64) -> f64 {
     if v_m_s.abs() > f.zero_velocity_m_s {

@@ -1,4 +1,4 @@
-//! Leakage laws for the three leak paths (MODEL.md §3, "Leakage laws").
+//! Leakage laws for the three leak paths (docs/model.md#leak-paths).
 
 use serde::{Deserialize, Serialize};
 
@@ -135,7 +135,7 @@ mod tests {
 
     #[test]
     fn thesis_reference_linear_leak() {
-        // MODEL.md §3: at p1 ≈ 6.9 MPa, 2e-12 m³/(s·Pa) is about 0.83 L/min.
+        // docs/model.md#sizes-in-lmin: at p1 ≈ 6.9 MPa, 2e-12 m³/(s·Pa) is about 0.83 L/min.
         let q = LeakLaw::Linear.flow_m3_s(2e-12, 6.9e6);
         assert!((m3_s_to_lpm(q) - 0.828).abs() < 0.005, "{}", m3_s_to_lpm(q));
     }

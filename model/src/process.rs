@@ -1,4 +1,4 @@
-//! The EKF's process models (MODEL.md §4): the healthy actuator integrated
+//! The EKF's process models (docs/model.md#process-model): the healthy actuator integrated
 //! with forward Euler at the sample period, with analytic Jacobians on every
 //! branch (valve sign, stick band, spring contact).
 //!

@@ -1,4 +1,4 @@
-//! Sensor models of the rig (MODEL.md §1 and §7): optical encoder, pressure
+//! Sensor models of the rig (docs/model.md#sensors): optical encoder, pressure
 //! transducers through a 12-bit ADC, spool position and load cell.
 
 use serde::{Deserialize, Serialize};

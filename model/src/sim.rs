@@ -1,4 +1,4 @@
-//! The simulated rig (MODEL.md §7): the continuous model integrated with RK4
+//! The simulated rig (docs/model.md#the-simulator): the continuous model integrated with RK4
 //! sub-steps, sampled at 1 kHz through the sensor models, driven by a
 //! scenario, with a fault schedule. It is deliberately not the estimator's
 //! forward-Euler model.
@@ -178,7 +178,7 @@ pub struct Simulator {
 
 impl Simulator {
     /// [`Simulator::new`] with the default sensors and settings (the encoder,
-    /// pressure channels and integrator of MODEL.md).
+    /// pressure channels and integrator of docs/model.md#the-simulator).
     pub fn with_default_sensors(
         rig: ActuatorParams,
         scenario: Scenario,

@@ -1,4 +1,4 @@
-//! Physics of the rig simulator asserted against references (MODEL.md §3, §8).
+//! Physics of the rig simulator asserted against references (docs/model.md, "Known behaviour").
 
 use model::dynamics::{derivative, rk4_step, state_at_rest, LeakSet, I_P1, I_P2, I_V, I_X};
 use model::fault::{Fault, FaultSchedule};
@@ -130,7 +130,7 @@ fn mass_balance(mut p: ActuatorParams) {
     assert!(e1 < 1e-6 && e2 < 1e-6, "mass balance errors {e1:e}, {e2:e}");
 }
 
-/// Reference figures of MODEL.md §8 for the open-loop sine from x = 0.3 m.
+/// Reference figures (docs/model.md#reference-figures) for the open-loop sine from x = 0.3 m.
 #[test]
 fn open_loop_sine_matches_reference_figures() {
     let mut s = sim(
@@ -173,16 +173,16 @@ fn open_loop_sine_matches_reference_figures() {
         (0.35..0.65).contains(&stuck_frac),
         "stuck {stuck_frac} of the time (reference: about half)"
     );
-    // Stick-slip (MODEL.md §8 says a 30-40 Hz cycle with about ±1.5 MPa of chatter).
+    // Stick-slip (docs/model.md#stick-slip).
     // Measured here: 56 break-aways per second over the 8 s (the rod stuck 52 % of
     // the time), a median cycle of 15 ms (10-90 %: 14-21 ms, i.e. 48-71 Hz) and a
     // velocity spectrum peaking at 71 Hz; chatter 1.20 MPa (p1) and 1.42 MPa (p2).
-    // The cycle is faster than §8's 30-40 Hz: at the peak command, half a hydraulic
+    // The cycle's length: at the peak command, half a hydraulic
     // period π/ω_h (ω_h = √(βA²(1/V1 + 1/V2)/m) ≈ 508 rad/s: 6.2 ms) plus refilling
     // 2(f_st − f_sl)/A = 4.1 MPa of pressure difference at the valve's flow
     // (d(p1 − p2)/dt ≈ βQ(1/V1 + 1/V2) ≈ 0.86 GPa/s: 4.8 ms) gives about 11 ms, the
     // same order as the fastest cycles measured (14 ms); 25-33 ms cycles would need
-    // the chambers to fill several times slower than the §8 valve flow allows.
+    // the chambers to fill several times slower than the valve's flow allows.
     let ss = stick_slip_figures(&tail);
     eprintln!("open-loop sine, thesis friction: {ss:?}");
     assert!(
@@ -203,7 +203,7 @@ fn open_loop_sine_matches_reference_figures() {
     for (k, c) in ss.chatter_pa.iter().enumerate() {
         assert!(
             (1.0e6..1.8e6).contains(c),
-            "p{} chatter ±{c} Pa (measured ±1.20 / ±1.42 MPa, §8: about ±1.5 MPa)",
+            "p{} chatter ±{c} Pa (measured ±1.20 / ±1.42 MPa)",
             k + 1
         );
     }
@@ -509,7 +509,7 @@ fn leak_flow_column_reports_the_delivered_flow() {
         let expect = m3_s_to_lpm(f.coefficient * smp.p1_pa.sqrt());
         assert!((smp.q_leak_lpm - expect).abs() < 1e-9);
     }
-    // delivered flow is within MODEL.md §8's 0.56..1.25 of the nominal 0.5 L/min
+    // delivered flow: 0.56..1.25 of the nominal 0.5 L/min (docs/model.md#delivered-leak-flow)
     let mean = samples[1000..].iter().map(|s| s.q_leak_lpm).sum::<f64>() / 2000.0;
     assert!((0.28..0.63).contains(&mean), "{mean}");
 }

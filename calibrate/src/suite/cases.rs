@@ -21,12 +21,12 @@ pub struct SuiteCase {
     /// [`Effect::parameter_names`]). Empty for a clean control.
     pub hidden: Vec<(Effect, Vec<f64>)>,
     /// Friction of the rig and of the nominal model: `Smooth` (no
-    /// stick-slip) or `Thesis` (as published: the rod stick-slips, MODEL.md §8).
+    /// stick-slip) or `Thesis` (as published: the rod stick-slips, docs/model.md#stick-slip).
     pub friction: FrictionPreset,
 }
 
 /// The nominal model of the suite: the thesis' parameters with the smooth
-/// friction preset (no stick-slip chatter, MODEL.md §8).
+/// friction preset (no stick-slip chatter, docs/model.md#stick-slip).
 pub fn nominal_model() -> ActuatorParams {
     nominal_model_for(FrictionPreset::Smooth)
 }

@@ -3,7 +3,7 @@
 use super::{BenchReport, CaseResult};
 
 impl BenchReport {
-    /// The table of BENCHMARKS.md §3 as Markdown.
+    /// The suite's table (docs/calibration/README.md#results) as Markdown.
     pub fn markdown(&self) -> String {
         let mut s = self.effect_by_input();
         s.push_str("| case | scenario | hidden | named | right | max param error | gap shrink | time |\n");

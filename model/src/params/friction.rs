@@ -8,14 +8,14 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionPreset {
     /// The thesis' friction as published (f_st = 2.4 kN, f_sl = 1.1 kN): the
-    /// rod falls into a 30–40 Hz stick-slip cycle (MODEL.md §8).
+    /// rod falls into a stick-slip cycle (docs/model.md#stick-slip).
     Thesis,
     /// A smoother rig: no Stribeck drop (f_st = f_sl = 1.1 kN), so no stick-slip.
     Smooth,
 }
 
 /// Friction parameters of one direction of motion (Karnopp with the LaVal
-/// Stribeck form, MODEL.md §3).
+/// Stribeck form, docs/model.md#friction).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FrictionParams {
