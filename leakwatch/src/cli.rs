@@ -341,20 +341,21 @@ pub(crate) enum BenchCommand {
     },
     /// EKF step time (median, p99 ns per predict + update) and in-process chain throughput.
     Ekf {
-        /// Steps timed per filter (≥ 1e6 for the figures of BENCHMARKS.md).
+        /// Steps timed per filter (≥ 1e6 for the figures of docs/performance.md).
         #[arg(long, default_value_t = 1_000_000)]
         steps: u64,
         /// Output directory for ekf.json.
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// The calibration workflow over its hidden-effect suites (BENCHMARKS.md §3): the smooth rig
-    /// (16 cases) and the stick-slip rig (32 cases); or a directory of cases with truth.
+    /// The calibration workflow over its hidden-effect suites (docs/calibration/README.md):
+    /// the smooth rig (16 cases) and the stick-slip rig (32 cases); or a directory of cases
+    /// with truth.
     Calibration {
         /// Run the full smooth-rig matrix (every effect under every input, 44 cases, multiple shooting).
         #[arg(long)]
         matrix: bool,
-        /// Score a directory laid out like ../shared/data/hidden_dev: DIR/case_*/measured.csv[.gz] + truth.json;
+        /// Score a directory of cases: DIR/case_*/measured.csv[.gz] + truth.json;
         /// or, laid out like plant_dev (a commission_cold.csv[.gz]), identify the rig on its recording and
         /// score it against its truth_rig.json.
         #[arg(long)]
@@ -416,7 +417,7 @@ pub(crate) enum BenchCommand {
         #[arg(long)]
         out: PathBuf,
     },
-    /// The seeded detection suite (BENCHMARKS.md §2), both detectors side by side.
+    /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.
         #[arg(long, default_value_t = 20)]
@@ -431,7 +432,7 @@ pub(crate) enum BenchCommand {
         #[arg(long)]
         threads: Option<usize>,
         /// Score recorded runs instead of simulating: a directory of run folders, each
-        /// with measured.csv[.gz] and truth.json (laid out like ../shared/data/leaks_dev).
+        /// with measured.csv[.gz] and truth.json (e.g. DIR/run_000/).
         #[arg(long)]
         data: Option<PathBuf>,
         /// Configuration file (model, filters, classifier) for the chain, with --data.

@@ -1,4 +1,4 @@
-//! Physics of a servovalve-driven hydraulic cylinder (MODEL.md), double-rod
+//! Physics of a servovalve-driven hydraulic cylinder (docs/model.md), double-rod
 //! or single-rod: parameters (also from a rig's datasheet), valve, chambers, friction, leakage laws and load; the
 //! continuous dynamics; the simulated rig (RK4 with sub-steps, sensors,
 //! seeded noise, fault schedule); and the scenarios of the thesis.

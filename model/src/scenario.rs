@@ -1,4 +1,4 @@
-//! The test scenarios of the thesis (MODEL.md §6), a lift-and-lower cycle and
+//! The test scenarios of the thesis (docs/model.md#scenarios), a lift-and-lower cycle and
 //! two plant duty cycles (a press cycle, pseudorandom handling), by name, with
 //! the proportional position controller of the closed-loop runs.
 
