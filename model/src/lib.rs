@@ -9,6 +9,7 @@ pub mod datasheet;
 pub mod dynamics;
 pub mod fault;
 pub mod friction;
+pub mod instance;
 pub mod leakage;
 pub mod params;
 pub mod process;
