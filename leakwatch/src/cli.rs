@@ -417,6 +417,42 @@ pub(crate) enum BenchCommand {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Plant-style folders of simulated rig instances, each drawn over its datasheet's tolerances
+    /// (docs/plant.md): OUT/inst_NNN/ with datasheet.toml (the catalogue's, as a user writes it),
+    /// instance.toml (the drawn rig, for the simulator), commission_cold.csv (the rig's duty cycle
+    /// at 20, 30 or 50 °C), and run_NNN/measured.csv + truth.json: healthy runs on each duty cycle
+    /// and a leak run of 0.1, 0.25 and 0.5 L/min of each kind, under oil warming or cooling across
+    /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one.
+    Instances {
+        /// The rig: `press` (double-rod; press and handling cycles) or `lift` (vertical single-rod;
+        /// lift and handling cycles).
+        #[arg(long, value_parser = ["press", "lift"])]
+        rig: String,
+        /// Number of instances.
+        #[arg(long, default_value_t = 1)]
+        instances: usize,
+        /// Seed of the set (instance i is drawn from it and i).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Healthy time per instance, hours (in runs of --run-seconds, on the duty cycles in turn).
+        #[arg(long, default_value_t = 0.05)]
+        hours_healthy: f64,
+        /// Length of every run, s.
+        #[arg(long, default_value_t = 90.0)]
+        run_seconds: f64,
+        /// Length of the commissioning recording, s.
+        #[arg(long, default_value_t = 120.0)]
+        commission_seconds: f64,
+        /// The samples carry the oil's temperature (a `temp_c` column).
+        #[arg(long)]
+        temp_c: bool,
+        /// Worker threads, each simulating whole recordings (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.

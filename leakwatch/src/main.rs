@@ -13,6 +13,7 @@ mod demo;
 mod estimates_out;
 mod floors;
 mod init;
+mod instances;
 mod latency;
 mod logs;
 mod model_file;
@@ -208,6 +209,32 @@ fn run(cli: Cli) -> Result<(), String> {
                 out,
             } => benches::replay(data.as_deref(), &threads, files, seconds, estimates, &out, force),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
+            BenchCommand::Instances {
+                rig,
+                instances,
+                seed,
+                out,
+                hours_healthy,
+                run_seconds,
+                commission_seconds,
+                temp_c,
+                threads,
+            } => instances::command(
+                &instances::InstancesRequest {
+                    rig,
+                    instances,
+                    seed,
+                    out,
+                    hours_healthy,
+                    run_seconds,
+                    commission_seconds,
+                    temp_c,
+                    threads: threads.unwrap_or_else(|| {
+                        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+                    }),
+                },
+                force,
+            ),
             BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
             BenchCommand::Detection {
                 threads,

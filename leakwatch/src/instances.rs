@@ -1,0 +1,457 @@
+//! `leakwatch bench instances`: plant-style folders of simulated rig
+//! instances, each drawn over its datasheet's tolerances
+//! ([`model::instance`]), that `leakwatch bench detection --data` scores.
+//!
+//! Per instance, `OUT/inst_NNN/` holds:
+//! - `datasheet.toml`: what a user writes from the catalogues (`[datasheet]`
+//!   and the `[model]` facts no datasheet gives), never the drawn values;
+//! - `instance.toml`: the simulated rig's config (`[model]`, `[sensors]`,
+//!   `[sim]`: the drawn instance; `leakwatch simulate --config` reads it);
+//! - `commission_cold.csv`: the rig's duty cycle at a constant oil temperature;
+//! - `run_NNN/measured.csv` and `truth.json`: healthy runs on every duty cycle
+//!   and leak runs, each under a drawn oil warm-up or cool-down.
+//!
+//! Every CSV comes from [`crate::simulate::build`], the `simulate` command's path.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use model::instance::{Instance, NominalRig};
+use model::rng::Rng;
+use model::sim::OilWarmUp;
+
+use crate::config::Config;
+use crate::simulate::{self, SimulateRequest};
+
+/// The oil temperatures a commissioning recording is held at, °C (one drawn per instance).
+pub const COMMISSION_TEMPS_C: [f64; 3] = [20.0, 30.0, 50.0];
+/// The range a run's oil starts and ends in, °C.
+pub const RUN_TEMP_RANGE_C: (f64, f64) = (20.0, 60.0);
+/// The range of a run's oil time constant, s.
+pub const RUN_TEMP_TAU_S: (f64, f64) = (60.0, 600.0);
+/// The leak sizes of the leak runs, L/min at the nominal drop (each of ext1, ext2, int).
+pub const LEAK_SIZES_LPM: [f64; 3] = [0.1, 0.25, 0.5];
+/// The leak kinds of the leak runs.
+pub const LEAK_KINDS: [&str; 3] = ["ext1", "ext2", "int"];
+
+/// What to generate.
+#[derive(Debug, Clone)]
+pub struct InstancesRequest {
+    /// `press` or `lift`.
+    pub rig: String,
+    /// Number of instances.
+    pub instances: usize,
+    /// Seed of the whole set: instance i is drawn from it and i.
+    pub seed: u64,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Healthy time per instance, h (split into runs of `run_seconds`).
+    pub hours_healthy: f64,
+    /// Length of each run, s.
+    pub run_seconds: f64,
+    /// Length of the commissioning recording, s.
+    pub commission_seconds: f64,
+    /// Whether the samples carry the oil's temperature (`temp_c`).
+    pub temp_c: bool,
+    /// Worker threads (each simulates whole runs).
+    pub threads: usize,
+}
+
+/// The rig named `rig` and its duty cycles (scenario names).
+fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str]), String> {
+    match rig {
+        "press" => Ok((NominalRig::press(), &["press", "handling"])),
+        "lift" => Ok((NominalRig::lift(), &["lift", "handling"])),
+        other => Err(format!("--rig {other}: expected press or lift")),
+    }
+}
+
+/// `datasheet.toml`: the catalogue datasheet and the nominal `[model]` fields
+/// no datasheet gives (as a user writes them), nothing of the drawn instance.
+fn catalogue_toml(n: &NominalRig) -> Result<String, String> {
+    let mut rest = toml::Table::try_from(&n.model).map_err(|e| e.to_string())?;
+    for (section, field, _) in model::datasheet::DERIVED_FIELDS {
+        if section != "model" {
+            continue;
+        }
+        match field.split_once('.') {
+            Some((table, key)) => {
+                if let Some(t) = rest.get_mut(table).and_then(|v| v.as_table_mut()) {
+                    t.remove(key);
+                }
+            }
+            None => {
+                rest.remove(field);
+            }
+        }
+    }
+    let mut cfg = toml::Table::new();
+    cfg.insert(
+        "datasheet".into(),
+        toml::Value::try_from(n.datasheet).map_err(|e| e.to_string())?,
+    );
+    cfg.insert("model".into(), toml::Value::Table(rest));
+    let body = toml::to_string(&cfg).map_err(|e| e.to_string())?;
+    Ok(format!(
+        "# The {} rig as its catalogues give it (docs/rig.md), and the [model] facts no datasheet gives.\n\
+         # The simulated instance differs from it within the datasheet's tolerances: instance.toml.\n\n{body}",
+        n.name
+    ))
+}
+
+/// The simulated instance's config: `[model]` the drawn rig, `[sensors]` its
+/// sensors and installation, `[sim]` its pump (and `oil`, when given).
+fn instance_config(inst: &Instance, oil: Option<OilWarmUp>) -> Config {
+    let mut cfg = Config {
+        model: inst.rig.clone(),
+        sensors: inst.sensors,
+        ..Config::default()
+    };
+    cfg.sim.supply_ripple_fraction = inst.supply_ripple_fraction;
+    cfg.sim.supply_ripple_hz = inst.supply_ripple_hz;
+    cfg.sim.oil = oil;
+    cfg.derive_rig_facts();
+    cfg
+}
+
+/// `instance.toml`: [`instance_config`] without an oil course, as TOML.
+fn instance_toml(inst: &Instance, rig: &str, index: usize) -> Result<String, String> {
+    let cfg = instance_config(inst, None);
+    let mut t = toml::Table::new();
+    for (name, value) in [
+        ("model", toml::Value::try_from(&cfg.model)),
+        ("sensors", toml::Value::try_from(cfg.sensors)),
+        ("sim", toml::Value::try_from(cfg.sim)),
+    ] {
+        t.insert(name.into(), value.map_err(|e| e.to_string())?);
+    }
+    let body = toml::to_string(&t).map_err(|e| e.to_string())?;
+    Ok(format!(
+        "# Instance {index} of the {rig} rig (seed {}), drawn over its datasheet's tolerances: the simulated\n\
+         # rig's truth for `leakwatch simulate --config`. Each run's oil course is in its truth.json.\n\n{body}",
+        inst.seed
+    ))
+}
+
+/// One recording to simulate.
+#[derive(Debug, Clone)]
+struct Plan {
+    /// Instance index.
+    instance: usize,
+    /// Folder under the instance's (empty: the commissioning recording).
+    run: String,
+    scenario: &'static str,
+    seed: u64,
+    seconds: f64,
+    oil: OilWarmUp,
+    /// (kind, size L/min, onset s).
+    leak: Option<(&'static str, f64, f64)>,
+}
+
+/// Milliseconds: a drawn time on the sample grid, s.
+fn on_grid(t_s: f64) -> f64 {
+    (t_s * 1000.0).round() / 1000.0
+}
+
+/// The recordings of instance `index` (seed `inst_seed`): the commissioning
+/// recording, the healthy runs on each duty cycle in turn, then a leak run of
+/// each size and kind, each with a drawn oil course and onset.
+fn plan_instance(req: &InstancesRequest, cycles: &[&'static str], index: usize, inst_seed: u64) -> Vec<Plan> {
+    let mut rng = Rng::new(inst_seed ^ 0x7E3A_55C1_0B9D_2F48);
+    let commission_temp = COMMISSION_TEMPS_C[(rng.next_u64() % COMMISSION_TEMPS_C.len() as u64) as usize];
+    let mut out = vec![Plan {
+        instance: index,
+        run: String::new(),
+        scenario: cycles[0],
+        seed: rng.next_u64() >> 12,
+        seconds: req.commission_seconds,
+        oil: OilWarmUp {
+            start_c: commission_temp,
+            end_c: commission_temp,
+            time_constant_s: 60.0,
+            measured: req.temp_c,
+        },
+        leak: None,
+    }];
+    let healthy = (req.hours_healthy * 3600.0 / req.run_seconds).ceil().max(0.0) as usize;
+    let leaks: Vec<(&'static str, f64)> = LEAK_SIZES_LPM
+        .iter()
+        .flat_map(|&s| LEAK_KINDS.iter().map(move |&k| (k, s)))
+        .collect();
+    let (lo, hi) = RUN_TEMP_RANGE_C;
+    for k in 0..healthy + leaks.len() {
+        let oil = OilWarmUp {
+            start_c: rng.uniform_in(lo, hi),
+            end_c: rng.uniform_in(lo, hi),
+            time_constant_s: rng.uniform_in(RUN_TEMP_TAU_S.0, RUN_TEMP_TAU_S.1),
+            measured: req.temp_c,
+        };
+        let leak = k.checked_sub(healthy).map(|j| {
+            let (kind, size) = leaks[j];
+            let onset = rng.uniform_in(req.run_seconds / 3.0, 2.0 * req.run_seconds / 3.0);
+            (kind, size, on_grid(onset))
+        });
+        let cycle = match k.checked_sub(healthy) {
+            Some(j) => cycles[j % cycles.len()],
+            None => cycles[k % cycles.len()],
+        };
+        out.push(Plan {
+            instance: index,
+            run: format!("run_{k:03}"),
+            scenario: cycle,
+            seed: rng.next_u64() >> 12,
+            seconds: req.run_seconds,
+            oil,
+            leak,
+        });
+    }
+    out
+}
+
+/// Instance `index`'s seed in a set seeded `seed`.
+fn instance_seed(seed: u64, index: usize) -> u64 {
+    Rng::new(seed.wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))).next_u64() >> 12
+}
+
+/// The folder of instance `index`.
+fn instance_dir(out: &Path, index: usize) -> PathBuf {
+    out.join(format!("inst_{index:03}"))
+}
+
+/// Simulates one recording and writes it with its truth; returns its samples.
+fn write_recording(
+    req: &InstancesRequest,
+    plan: &Plan,
+    inst: &Instance,
+    force: bool,
+) -> Result<usize, String> {
+    let dir = instance_dir(&req.out, plan.instance);
+    let (csv, truth) = if plan.run.is_empty() {
+        (
+            dir.join("commission_cold.csv"),
+            dir.join("commission_cold.truth.json"),
+        )
+    } else {
+        let d = dir.join(&plan.run);
+        crate::out::dir(&d)?;
+        (d.join("measured.csv"), d.join("truth.json"))
+    };
+    let cfg = instance_config(inst, Some(plan.oil));
+    let faults = match plan.leak {
+        Some((kind, size, onset)) => vec![format!("{kind}:{size}lpm@{onset}s")],
+        None => vec![],
+    };
+    let sim_req = SimulateRequest {
+        scenario: plan.scenario.into(),
+        seconds: Some(plan.seconds),
+        seed: plan.seed,
+        faults: faults.clone(),
+        rig_variant: None,
+    };
+    let file = crate::out::create(&csv, force, &[])?;
+    let (mut sim, seconds) = simulate::build(&cfg, &sim_req)?;
+    let samples = sim.run(seconds);
+    let mut w = std::io::BufWriter::new(file);
+    simulate::write_csv(&mut w, &samples).map_err(|e| dataset::output::message(&csv, &e))?;
+    let fault = plan.leak.map(|(kind, size, onset)| {
+        let after: Vec<f64> = samples
+            .iter()
+            .filter(|s| s.t_s >= onset)
+            .map(|s| s.q_leak_lpm.abs())
+            .collect();
+        let mean = after.iter().sum::<f64>() / after.len().max(1) as f64;
+        let max = after.iter().cloned().fold(0.0, f64::max);
+        serde_json::json!({
+            "kind": kind,
+            "law": "sqrt",
+            "size_lpm": size,
+            "t_on_s": onset,
+            "ramp_s": 0.0,
+            "observed_mean_abs_flow_lpm_after_ramp": mean,
+            "observed_max_abs_flow_lpm": max,
+        })
+    });
+    let temps = [plan.oil.at(0.0), plan.oil.at(seconds)];
+    let truth_json = serde_json::json!({
+        "run": if plan.run.is_empty() { "commission_cold" } else { plan.run.as_str() },
+        "rig": req.rig,
+        "healthy": plan.leak.is_none(),
+        "fault": fault,
+        "scenario": {"name": plan.scenario, "seed": plan.seed, "duration_s": seconds},
+        "oil_temperature": {
+            "start_c": plan.oil.start_c,
+            "end_c": plan.oil.end_c,
+            "time_constant_s": plan.oil.time_constant_s,
+            "measured": plan.oil.measured,
+            "range_c": [temps[0].min(temps[1]), temps[0].max(temps[1])],
+        },
+        "simulate": {
+            "config": "instance.toml, with [sim.oil] as oil_temperature",
+            "scenario": plan.scenario,
+            "seconds": seconds,
+            "seed": plan.seed,
+            "faults": faults,
+        },
+        "instance": {"index": plan.instance, "seed": inst.seed, "drawn": inst.describe()},
+        "samples": samples.len(),
+    });
+    let text = serde_json::to_string_pretty(&truth_json).map_err(|e| e.to_string())?;
+    crate::out::write(&truth, (text + "\n").as_bytes(), force, &[])?;
+    Ok(samples.len())
+}
+
+/// Checks a request's numbers before anything is written.
+fn check(req: &InstancesRequest) -> Result<(), String> {
+    if req.instances == 0 {
+        return Err("--instances 0: nothing to generate".into());
+    }
+    if !(0.0..=1000.0).contains(&req.hours_healthy) {
+        return Err(format!(
+            "--hours-healthy {}: expected 0 to 1000 hours",
+            req.hours_healthy
+        ));
+    }
+    for (name, s) in [
+        ("--run-seconds", req.run_seconds),
+        ("--commission-seconds", req.commission_seconds),
+    ] {
+        if s.is_nan() || s < 3.0 {
+            return Err(format!("{name} {s}: expected at least 3 s"));
+        }
+        simulate::check_seconds(s, 1e-3)?;
+    }
+    Ok(())
+}
+
+/// `leakwatch bench instances`: draws `req.instances` instances of the rig and
+/// writes each one's folder (see the module's documentation), the recordings
+/// simulated on `req.threads` threads; says how much and how long.
+pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
+    check(req)?;
+    let (nominal, cycles) = nominal(&req.rig)?;
+    let t0 = std::time::Instant::now();
+    let mut instances = Vec::with_capacity(req.instances);
+    let mut plans = Vec::new();
+    let catalogue = catalogue_toml(&nominal)?;
+    for i in 0..req.instances {
+        let inst = Instance::draw(&nominal, instance_seed(req.seed, i));
+        let dir = instance_dir(&req.out, i);
+        crate::out::dir(&dir)?;
+        crate::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
+        let text = instance_toml(&inst, &req.rig, i)?;
+        crate::out::write(&dir.join("instance.toml"), text.as_bytes(), force, &[])?;
+        plans.extend(plan_instance(req, cycles, i, inst.seed));
+        instances.push(inst);
+    }
+    let simulated: f64 = plans.iter().map(|p| p.seconds).sum();
+    eprintln!(
+        "{} instances of the {} rig: {} recordings, {:.2} simulated hours, {} threads",
+        req.instances,
+        req.rig,
+        plans.len(),
+        simulated / 3600.0,
+        req.threads
+    );
+    let next = AtomicUsize::new(0);
+    let failed: Mutex<Option<String>> = Mutex::new(None);
+    let bar = indicatif::ProgressBar::new(plans.len() as u64);
+    std::thread::scope(|scope| {
+        for _ in 0..req.threads.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(plan) = plans.get(i) else { break };
+                if let Err(e) = write_recording(req, plan, &instances[plan.instance], force) {
+                    if let Ok(mut f) = failed.lock() {
+                        f.get_or_insert(e);
+                    }
+                    next.store(plans.len(), Ordering::Relaxed);
+                    break;
+                }
+                bar.inc(1);
+            });
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = failed.into_inner().map_err(|_| "a worker panicked".to_string())? {
+        return Err(e);
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "wrote {} instances to {} in {wall:.1} s ({:.0}x real time); score one with \
+         `leakwatch bench detection --data {}`",
+        req.instances,
+        req.out.display(),
+        simulated / wall,
+        instance_dir(&req.out, 0).display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request() -> InstancesRequest {
+        InstancesRequest {
+            rig: "press".into(),
+            instances: 2,
+            seed: 3,
+            out: PathBuf::from("unused"),
+            hours_healthy: 0.05,
+            run_seconds: 90.0,
+            commission_seconds: 120.0,
+            temp_c: false,
+            threads: 1,
+        }
+    }
+
+    #[test]
+    fn a_plan_has_healthy_runs_on_each_cycle_and_every_leak_under_drawn_temperatures() {
+        let req = request();
+        let plans = plan_instance(&req, &["press", "handling"], 0, instance_seed(3, 0));
+        // the commissioning, 180 s of healthy runs (2 of 90 s) and 9 leaks
+        assert_eq!(plans.len(), 1 + 2 + 9);
+        let c = &plans[0];
+        assert!(c.run.is_empty() && c.scenario == "press" && c.seconds == 120.0);
+        assert!(COMMISSION_TEMPS_C.contains(&c.oil.start_c) && c.oil.start_c == c.oil.end_c);
+        assert_eq!((plans[1].scenario, plans[2].scenario), ("press", "handling"));
+        for p in &plans[1..] {
+            for t in [p.oil.start_c, p.oil.end_c] {
+                assert!((20.0..60.0).contains(&t), "{t}");
+            }
+            assert!((60.0..600.0).contains(&p.oil.time_constant_s));
+            if let Some((_, _, onset)) = p.leak {
+                assert!((30.0..=60.0).contains(&onset), "{onset}");
+            }
+        }
+        let leaks: Vec<_> = plans.iter().filter_map(|p| p.leak).collect();
+        assert_eq!(leaks.len(), 9);
+        for kind in LEAK_KINDS {
+            for size in LEAK_SIZES_LPM {
+                assert_eq!(leaks.iter().filter(|l| l.0 == kind && l.1 == size).count(), 1);
+            }
+        }
+        // another instance, other draws
+        let other = plan_instance(&req, &["press", "handling"], 1, instance_seed(3, 1));
+        assert_ne!(other[1].oil, plans[1].oil);
+        assert_ne!(instance_seed(3, 0), instance_seed(3, 1));
+        assert_ne!(instance_seed(3, 0), instance_seed(4, 0));
+    }
+
+    #[test]
+    fn the_catalogue_config_loads_and_is_the_datasheet_not_the_instance() {
+        let (n, _) = nominal("press").expect("rig");
+        let text = catalogue_toml(&n).expect("toml");
+        let cfg = Config::parse(&text).expect("loads");
+        assert_eq!(cfg.model, n.model);
+        assert_eq!(cfg.datasheet, Some(n.datasheet));
+        let inst = Instance::draw(&n, 5);
+        assert_ne!(cfg.model.mass_kg, inst.rig.mass_kg);
+        let sim = Config::parse(&instance_toml(&inst, "press", 0).expect("toml")).expect("loads");
+        assert_eq!(sim.model, inst.rig);
+        assert_eq!(sim.sensors, inst.sensors);
+        assert_eq!(sim.sim.supply_ripple_hz, inst.supply_ripple_hz);
+        assert!(nominal("crane").is_err());
+    }
+}
