@@ -29,6 +29,11 @@ pub struct LeakSizeDetector {
     /// Threshold on the rise of each kind, in healthy spreads.
     threshold_z: [f64; 3],
     threshold_lpm: [f64; 3],
+    /// What the oil's temperature adds to each threshold now, L/min: the
+    /// laminar flows' uncertainty since the commissioning's temperature
+    /// ([`filter::Estimate::laminar_factor_sigma`]) on the model's null leakage
+    /// and on the healthy offsets, which the commissioning learned at its temperature.
+    oil_band_lpm: [f64; 3],
     /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
     baseline_lpm: [f64; 3],
     /// The baseline when each rise was last low (before a possible onset), L/min.
@@ -393,6 +398,7 @@ impl LeakSizeDetector {
             stats: [Stats::default(); 3],
             threshold_z: [f64::NAN; 3],
             threshold_lpm: [f64::NAN; 3],
+            oil_band_lpm: [0.0; 3],
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
             last_t_s: f64::NAN,

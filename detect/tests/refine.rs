@@ -55,6 +55,9 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         mae_pa: [0.0; 2],
         nis: 3.0,
         oil_temp_c: f64::NAN,
+        oil_temp_sigma_k: f64::NAN,
+        laminar_factor_sigma: f64::NAN,
+        null_leakage_band_lpm: f64::NAN,
     }
 }
 
@@ -153,6 +156,12 @@ fn only_patterns_leaks_can_make_are_evidence() {
 /// drop) at 20 s to the first alarm, s, on a healthy stream of spread 0.01 L/min
 /// with the chambers at 9.9 and 3.0 MPa (every kind's drop near p_s/2).
 fn delay_of_step(cfg: &ClassifierConfig, step_lpm: [f64; 3]) -> f64 {
+    delay_of_step_with_band(cfg, step_lpm, 0.0)
+}
+
+/// As [`delay_of_step`], with estimates whose null-leakage band is `band_lpm`
+/// (L/min: the oil has moved from the commissioning's temperature).
+fn delay_of_step_with_band(cfg: &ClassifierConfig, step_lpm: [f64; 3], band_lpm: f64) -> f64 {
     let mut det = LeakSizeDetector::new(cfg.clone());
     let mut noise = Noise(0x2545_f491_4f6c_dd1d);
     let mut held = [0.0; 3];
@@ -165,6 +174,7 @@ fn delay_of_step(cfg: &ClassifierConfig, step_lpm: [f64; 3]) -> f64 {
         let mut e = estimate(t, std::array::from_fn(|k| held[k] + on * step_lpm[k]));
         (e.state[1], e.state[2]) = (9.9e6, 3.0e6);
         (e.measured[1], e.measured[2]) = (9.9e6, 3.0e6);
+        e.null_leakage_band_lpm = band_lpm;
         let mut out = None;
         det.on_estimate(&e, &mut out);
         if let Some(ev) = out.filter(|ev| ev.phase == Phase::Raised) {
@@ -332,4 +342,18 @@ fn commissioning_takes_the_factors_where_the_pressure_difference_keeps_its_sign(
     // A double-rod rig reversing its load: the nominal factors.
     let r = learned_factors(|t| (10.5e6 + 1.5e6 * (3.0 * t).sin(), 10.5e6 - 1.5e6 * (3.0 * t).sin()));
     assert_eq!(r, NOMINAL_INTERNAL_FACTORS);
+}
+
+/// The oil's band widens every threshold by itself: a 0.1 L/min ext1 step is
+/// found on a healthy stream of spread 0.01 L/min, not when the model's null
+/// leakage is uncertain by 0.15 L/min; a 0.5 L/min step is found either way.
+#[test]
+fn the_oils_null_leakage_band_widens_the_thresholds() {
+    let cfg = ClassifierConfig::default();
+    let plain = delay_of_step_with_band(&cfg, [0.1, 0.0, 0.0], 0.0);
+    assert!(plain < 1.0, "{plain} s");
+    let banded = delay_of_step_with_band(&cfg, [0.1, 0.0, 0.0], 0.15);
+    assert!(banded.is_infinite(), "{banded} s");
+    let large = delay_of_step_with_band(&cfg, [0.5, 0.0, 0.0], 0.15);
+    assert!(large < 1.0, "{large} s");
 }

@@ -1,6 +1,7 @@
 //! The EKF core of the estimator stage: a square-root EKF tracking the
-//! actuator at 1 kHz against the healthy model of `model::process` (MODEL.md §4), with the
-//! residuals and moving averages the detectors read (MODEL.md §5).
+//! actuator at 1 kHz against the healthy model of `model::process`
+//! (docs/model.md#process-model), with the residuals and moving averages the
+//! detectors read (docs/model.md#residuals-and-the-mae-pattern).
 //!
 //! The stage is pure and allocation-free per sample: one [`Estimator::on_sample`]
 //! call per sensor sample returns one [`Estimate`]. The same type runs in the
@@ -11,6 +12,7 @@
 
 pub mod ekf;
 pub mod mae;
+pub mod oil;
 pub mod stage;
 pub mod tuning;
 
@@ -20,6 +22,7 @@ use nalgebra::{SMatrix, SVector};
 
 pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
+pub use oil::OilFromStiffness;
 pub use stage::{EstimatorStage, StageEstimate};
 pub use tuning::{Init, Tuning};
 
@@ -98,8 +101,18 @@ pub struct Estimate {
     pub mae_pa: [f64; 2],
     /// Normalised innovation squared (χ² with 3 degrees of freedom when consistent).
     pub nis: f64,
-    /// The oil temperature the model was at, °C (NaN: no sample carried `temp_c`).
+    /// The oil temperature the model was at, °C: the sample's `temp_c`, else
+    /// the one read from θ ([`oil`]); NaN: neither.
     pub oil_temp_c: f64,
+    /// One standard deviation of [`Self::oil_temp_c`], K: 0 when measured, from θ's
+    /// σ when read from θ, NaN when unknown.
+    pub oil_temp_sigma_k: f64,
+    /// One standard deviation of the laminar flows' factor since the reference
+    /// temperature (1): how far the model's null leakage may have moved from
+    /// what the commissioning saw ([`oil::laminar_factor_with_sigma`]); 0 at the reference.
+    pub laminar_factor_sigma: f64,
+    /// That σ times the model's null leakage per path at p_s/2, L/min.
+    pub null_leakage_band_lpm: f64,
 }
 
 impl Estimate {
@@ -120,6 +133,9 @@ impl Estimate {
             mae_pa: [f64::NAN; 2],
             nis: f64::NAN,
             oil_temp_c: f64::NAN,
+            oil_temp_sigma_k: f64::NAN,
+            laminar_factor_sigma: 0.0,
+            null_leakage_band_lpm: 0.0,
         }
     }
 }
@@ -197,6 +213,12 @@ pub struct Estimator {
     params_at_reference: ActuatorParams,
     /// The oil temperature the model was last set to, °C (NaN: none yet).
     oil_temp_c: f64,
+    /// The oil's temperature read from θ, while no sample carried `temp_c`
+    /// (12 states with a bulk modulus identified at the reference temperature).
+    oil_from_stiffness: Option<OilFromStiffness>,
+    /// σ of the laminar flows' factor at the model's temperature (1), and that
+    /// times the model's null leakage per path at p_s/2 (L/min).
+    laminar_sigma: (f64, f64),
 }
 
 /// The model follows the samples' oil temperature (`temp_c`) in steps of this
@@ -227,6 +249,11 @@ impl Estimator {
             params.supply_sag_pa_per_m3_s = 0.0;
         }
         let params_at_reference = params.clone();
+        let oil_from_stiffness = if tuning.states == 12 && params.oil_temperature.stiffness_at_reference {
+            OilFromStiffness::new(&params.oil_temperature)
+        } else {
+            None
+        };
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
         model.substeps = tuning.substeps;
         let filter = match tuning.states {
@@ -254,7 +281,10 @@ impl Estimator {
             counters: EstimatorCounters::default(),
             params_at_reference,
             oil_temp_c: f64::NAN,
-        })
+            oil_from_stiffness,
+            laminar_sigma: (0.0, 0.0),
+        }
+        .with_laminar_sigma_at_start())
     }
 
     /// One throw-away step on a copy of the filter (the estimate is unchanged): run
@@ -425,18 +455,72 @@ impl Estimator {
             .set_oil_temperature(&self.params_at_reference, temp_c);
         self.model.params_changed();
         self.oil_temp_c = temp_c;
+        self.set_laminar_sigma(temp_c, 0.0);
+    }
+
+    /// The stage as it starts: a temperature still to be read from θ is as
+    /// uncertain as [`OilFromStiffness::sigma_k`] says before it settled.
+    fn with_laminar_sigma_at_start(mut self) -> Self {
+        if let Some(oil) = self.oil_from_stiffness {
+            self.set_laminar_sigma(oil.applied_c(), oil.sigma_k(0.0));
+        }
+        self
+    }
+
+    /// The laminar flows' uncertainty at oil temperature `temp_c` (°C) known to
+    /// `sigma_t_k` (K). Allocates nothing.
+    fn set_laminar_sigma(&mut self, temp_c: f64, sigma_t_k: f64) {
+        let p = &self.params_at_reference;
+        let (_, sigma) = oil::laminar_factor_with_sigma(&p.oil_temperature, temp_c, sigma_t_k);
+        let q_null_m3_s = p.valve_null_leakage_m3_s_pa * 0.5 * (p.supply_pressure_pa - p.return_pressure_pa);
+        self.laminar_sigma = (sigma, model::units::m3_s_to_lpm(sigma * q_null_m3_s));
     }
 
     /// Processes one sensor sample (one sample period after the previous one).
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
-        if s.temp_c.is_finite() {
+        let measured_temp = s.temp_c.is_finite();
+        if measured_temp {
+            // a thermometer: the model follows it, not θ
+            self.oil_from_stiffness = None;
             self.follow_oil_temperature(s.temp_c);
         }
         let mut e = self.on_sample_inner(s);
         e.measured = [s.x_m, s.p1_pa, s.p2_pa];
         e.u_v = s.u_v;
+        if measured_temp {
+            e.oil_temp_sigma_k = 0.0;
+        } else if self.oil_from_stiffness.is_some() {
+            self.follow_oil_stiffness(&mut e);
+        }
         e.oil_temp_c = self.oil_temp_c;
+        (e.laminar_factor_sigma, e.null_leakage_band_lpm) = self.laminar_sigma;
         e
+    }
+
+    /// Reads the oil's temperature from θ of estimate `e` (once the filter has
+    /// converged) and sets the model's viscous terms to it when it moved by
+    /// [`oil::OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_viscosity_temperature`]).
+    /// Allocates nothing.
+    fn follow_oil_stiffness(&mut self, e: &mut Estimate) {
+        let usable = self.started && e.flags & (FLAG_CONVERGING | FLAG_SKIPPED | FLAG_RESET) == 0;
+        let Some(oil) = self.oil_from_stiffness.as_mut() else {
+            return;
+        };
+        let moved = if usable {
+            oil.observe(e.bulk_scale, self.tuning.sample_period_s)
+        } else {
+            None
+        };
+        let (applied_c, sigma_t_k) = (oil.applied_c(), oil.sigma_k(e.bulk_scale_sigma));
+        if let Some(t) = moved {
+            self.model
+                .params
+                .set_oil_viscosity_temperature(&self.params_at_reference, t);
+            self.model.params_changed();
+            self.set_laminar_sigma(t, sigma_t_k);
+        }
+        self.oil_temp_c = applied_c;
+        e.oil_temp_sigma_k = sigma_t_k;
     }
 
     fn on_sample_inner(&mut self, s: &Sample) -> Estimate {

@@ -205,8 +205,9 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
         ),
         None => eprintln!(
             "  oil temperature: not recorded (no temp_c column): the identified values hold at the \
-             recording's temperature; [model.oil_temperature] reference_c is {:.1} °C: set it to that \
-             temperature if the live samples will carry temp_c",
+             recording's temperature, taken as [model.oil_temperature] reference_c = {:.1} °C; set it \
+             to the oil's temperature during the recording (the tank's thermometer): the live model \
+             moves from it, with temp_c or with the temperature the leak filter reads from the oil's stiffness",
             m.oil_temperature.reference_c
         ),
     }

@@ -96,8 +96,10 @@ pub struct ResidualRms {
     /// One standard deviation of [`Self::bulk_scale`] (1; NaN without that state).
     pub bulk_scale_sigma: f64,
     /// The oil temperatures the model followed, °C, lowest and highest
-    /// (`temp_c` of the samples; NaN: none carried it).
+    /// (`temp_c` of the samples, else read from θ; NaN: neither).
     pub oil_temp_range_c: (f64, f64),
+    /// Whether those temperatures were read from the oil's stiffness θ (no `temp_c`).
+    pub oil_temp_from_stiffness: bool,
 }
 
 /// How much of a run the leak-size detector watched: from arming to the end,
@@ -181,6 +183,8 @@ struct Acc {
     bulk_scale: (f64, f64),
     /// Lowest and highest oil temperature the model was at, °C.
     oil_temp_c: (f64, f64),
+    /// Some of them were read from θ.
+    oil_temp_from_stiffness: bool,
 }
 
 impl Acc {
@@ -194,6 +198,7 @@ impl Acc {
             first_outlier_s: f64::NAN,
             bulk_scale: (f64::NAN, f64::NAN),
             oil_temp_c: (f64::NAN, f64::NAN),
+            oil_temp_from_stiffness: false,
         }
     }
 
@@ -213,6 +218,7 @@ impl Acc {
                 self.oil_temp_c.0.min(e.oil_temp_c),
                 self.oil_temp_c.1.max(e.oil_temp_c),
             );
+            self.oil_temp_from_stiffness |= e.oil_temp_sigma_k > 0.0;
         }
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
             return;
@@ -241,6 +247,7 @@ impl Acc {
             bulk_scale: self.bulk_scale.0,
             bulk_scale_sigma: self.bulk_scale.1,
             oil_temp_range_c: self.oil_temp_c,
+            oil_temp_from_stiffness: self.oil_temp_from_stiffness,
         }
     }
 }

@@ -188,7 +188,14 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
     }
     let (cold, warm) = s.leak_filter.oil_temp_range_c;
     if cold.is_finite() {
-        eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
+        if s.leak_filter.oil_temp_from_stiffness {
+            eprintln!(
+                "oil temperature: {cold:.1} to {warm:.1} °C, read from the oil's stiffness (no temp_c): \
+                 the null leakage and the viscous friction followed it"
+            );
+        } else {
+            eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
+        }
     }
     if let Some(line) = estimator::oil_stiffness_line(
         s.leak_filter.bulk_scale,

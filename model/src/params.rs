@@ -1,4 +1,4 @@
-//! Physical parameters of the actuator (MODEL.md §2), with every field
+//! Physical parameters of the actuator (docs/model.md#parameters), with every field
 //! defaulted to the thesis' value and named with its unit.
 //!
 //! The same type describes the model the estimator believes in and the
@@ -19,7 +19,7 @@ pub use oil::{OilFactors, OilTemperature};
 pub use validate::InvalidParam;
 
 /// A spring in front of the rod: F_l = k·max(0, x − x_c) + preload + damping
-/// while in contact (MODEL.md §2, Chapters 6 and 7).
+/// while in contact (docs/model.md#load; the thesis' Chapters 6 and 7).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SpringLoad {
@@ -209,8 +209,18 @@ impl ActuatorParams {
     /// Writes fields in place (no allocation); `self.leaks` must be `base.leaks`
     /// in length. Returns the factors.
     pub fn set_oil_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
-        let f = base.oil_temperature.factors(temp_c);
+        let f = self.set_oil_viscosity_temperature(base, temp_c);
         self.bulk_modulus_pa = base.bulk_modulus_pa * f.bulk_modulus;
+        f
+    }
+
+    /// As [`Self::set_oil_temperature`], but only the terms that follow the
+    /// oil's viscosity (the seals' viscous friction, the valve's null leakage
+    /// and the linear leaks); the bulk modulus stays as it is. A filter whose
+    /// oil-stiffness state θ carries the bulk modulus uses this with the
+    /// temperature it infers from θ. Allocates nothing. Returns the factors.
+    pub fn set_oil_viscosity_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
+        let f = base.oil_temperature.factors(temp_c);
         self.friction.viscous_n_s_per_m = base.friction.viscous_n_s_per_m * f.viscous_friction;
         if let (Some(r), Some(b)) = (self.friction.retract.as_mut(), base.friction.retract) {
             r.viscous_n_s_per_m = b.viscous_n_s_per_m * f.viscous_friction;

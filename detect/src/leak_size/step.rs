@@ -16,11 +16,30 @@ use filter::{Estimate, FLAG_CONVERGING, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPE
 const MIN_FLOW_FACTOR: f64 = 0.1;
 
 impl LeakSizeDetector {
+    /// The thresholds in force, L/min at p_s/2: the commissioning's (or the
+    /// refined ones) widened by what the oil's temperature leaves uncertain.
+    fn thresholds_now(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.threshold_lpm[k] + self.oil_band_lpm[k])
+    }
+
+    /// Takes the laminar flows' uncertainty of estimate `e` into
+    /// [`Self::thresholds_now`]: the model's null leakage (its band) and the
+    /// healthy offsets, each as uncertain as the laminar factor.
+    fn widen_for_the_oil(&mut self, e: &Estimate) {
+        let finite_or_zero = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
+        let sigma = finite_or_zero(e.laminar_factor_sigma);
+        let band = finite_or_zero(e.null_leakage_band_lpm);
+        for k in 0..3 {
+            self.oil_band_lpm[k] = band + sigma * finite_or_zero(self.stats[k].mean.abs());
+        }
+    }
+
     /// Reads one estimate; pushes any event into `out` (at most one per call).
     pub fn on_estimate(&mut self, e: &Estimate, out: &mut Option<LeakEvent>) {
         if e.n_states < 10 {
             return;
         }
+        self.widen_for_the_oil(e);
         let dt_s = if self.last_t_s.is_finite() {
             (e.t_s - self.last_t_s).clamp(0.0, 1.0)
         } else {
@@ -167,9 +186,9 @@ impl LeakSizeDetector {
         // follow kicks the leak estimates down, and they relax back over seconds); a
         // baseline that followed the kick would take the relaxation for a leak.
         let settled = e.t_s - self.armed_at_s >= self.cfg.baseline_tau_s;
-        let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.threshold_lpm[k]);
+        let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.thresholds_now()[k]);
         let rise_now: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
-        let leak_like = crate::leak_can_make_with(rise_now, self.threshold_lpm, self.internal_factors);
+        let leak_like = crate::leak_can_make_with(rise_now, self.thresholds_now(), self.internal_factors);
         let up = settled && leak_like && (0..3).any(|k| rise_now[k] > band[k]);
         let down = !leak_like && (0..3).any(|k| rise_now[k].abs() > band[k]);
         let longest = if up {
@@ -225,7 +244,7 @@ impl LeakSizeDetector {
         if self.active.is_none()
             && !blind
             && self.strong_since_s.is_none()
-            && (0..3).all(|k| rise[k] < self.cfg.baseline_hold * self.threshold_lpm[k])
+            && (0..3).all(|k| rise[k] < self.cfg.baseline_hold * self.thresholds_now()[k])
         {
             self.refine_thresholds(e.t_s, dt_s, rise);
         }
@@ -241,7 +260,7 @@ impl LeakSizeDetector {
             } else {
                 m
             };
-            self.threshold_lpm[k].max(floor)
+            self.thresholds_now()[k].max(floor)
         });
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
@@ -265,7 +284,7 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
-        let physical = crate::leak_can_make_with(rise, self.threshold_lpm, self.internal_factors);
+        let physical = crate::leak_can_make_with(rise, self.thresholds_now(), self.internal_factors);
         let mut strong = None;
         for k in 0..3 {
             let thr = thr[k];
@@ -420,11 +439,11 @@ impl LeakSizeDetector {
                 let avg = self.pending_rise_lpm;
                 let avg_misfit = misfits_with(avg, self.internal_factors);
                 let lead = (0..3)
-                    .map(|k| (k, (avg[k] - avg_misfit[k]) / self.threshold_lpm[k]))
+                    .map(|k| (k, (avg[k] - avg_misfit[k]) / self.thresholds_now()[k]))
                     .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
                     .0;
                 let leads = !invalid
-                    && avg[lead] > 0.5 * self.threshold_lpm[lead]
+                    && avg[lead] > 0.5 * self.thresholds_now()[lead]
                     && avg_misfit[lead] <= self.cfg.isolation_max_misfit * avg[lead];
                 a.other_since_s = match a.other_since_s {
                     Some((j, t0)) if leads && j == lead => Some((j, t0)),
@@ -454,7 +473,7 @@ impl LeakSizeDetector {
                         return;
                     }
                 }
-                let low = (0..3).all(|k| rise[k] < 0.5 * self.threshold_lpm[k]);
+                let low = (0..3).all(|k| rise[k] < 0.5 * self.thresholds_now()[k]);
                 if a.low_for(low && !invalid, e.t_s, self.cfg.clear_s) {
                     self.active = None;
                     let mut ev = self.event(
@@ -523,7 +542,7 @@ impl LeakSizeDetector {
                 }
                 let size = rise[k];
                 if a.low_for(
-                    size < 0.5 * self.threshold_lpm[k] && !invalid,
+                    size < 0.5 * self.thresholds_now()[k] && !invalid,
                     e.t_s,
                     self.cfg.clear_s,
                 ) {

@@ -1,0 +1,191 @@
+//! The oil's temperature inferred from its stiffness, for a rig without a
+//! thermometer (docs/plant.md, "Oil temperature").
+//!
+//! The 12-state filter's θ is the oil's stiffness as a multiple of the model's
+//! bulk modulus. When that bulk modulus was identified at the oil law's
+//! reference temperature, θ = 1 + k_β·(T − T_ref), so θ tells the temperature.
+//! The terms that follow the viscosity (the valve's null leakage, the linear
+//! leaks, the seals' viscous friction) are then set from that temperature.
+//! θ itself keeps carrying the bulk modulus.
+
+use model::params::OilTemperature;
+
+/// Time constant of the low-pass on θ that the temperature is read from, s:
+/// the oil warms over minutes, θ jitters over a duty cycle's strokes.
+pub const OIL_STIFFNESS_TAU_S: f64 = 10.0;
+
+/// The inferred temperature moves the model in steps of this much, K: the
+/// viscosity changes 2-4 % over it.
+pub const OIL_ESTIMATE_STEP_K: f64 = 0.5;
+
+/// Farthest the inferred temperature may lie from the reference, K: beyond
+/// it θ says more than the oil's temperature (air, a softened hose).
+pub const OIL_ESTIMATE_SPAN_K: f64 = 40.0;
+
+/// Relative uncertainty of the laminar flows' change with temperature (1):
+/// Walther's law through a catalogue's two viscosities, against oils whose
+/// viscosity index lies 60 above or below the one the law assumes, and a
+/// reference temperature read off a tank's thermometer.
+pub const VISCOSITY_LAW_UNCERTAINTY: f64 = 0.4;
+
+/// Relative uncertainty of the bulk modulus' temperature slope k_β (1): the
+/// temperature read from θ is uncertain by this share of its distance from
+/// the reference.
+pub const BULK_SLOPE_UNCERTAINTY: f64 = 0.2;
+
+/// The laminar flows' factor at oil temperature `temp_c` (°C) against the
+/// reference of `oil`, and its standard deviation (1, 1): the law's
+/// uncertainty ([`VISCOSITY_LAW_UNCERTAINTY`] of the change) and the
+/// temperature's (`sigma_t_k`, K, through the law's slope).
+pub fn laminar_factor_with_sigma(oil: &OilTemperature, temp_c: f64, sigma_t_k: f64) -> (f64, f64) {
+    let f = oil.factors(temp_c).laminar_flow;
+    let slope_per_k = 0.5 * (oil.factors(temp_c + 1.0).laminar_flow - oil.factors(temp_c - 1.0).laminar_flow);
+    let sigma = VISCOSITY_LAW_UNCERTAINTY * (f - 1.0).abs() + slope_per_k.abs() * sigma_t_k.max(0.0);
+    (f, sigma)
+}
+
+/// The smallest |k_β| a temperature is inferred with, 1/K (below it θ says
+/// nothing about the temperature).
+const MIN_BULK_PER_K: f64 = 1e-4;
+
+/// The temperature read from θ, and when it last moved the model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OilFromStiffness {
+    /// θ low-passed over [`OIL_STIFFNESS_TAU_S`] (1).
+    theta_mean: f64,
+    /// The temperature the model was last set to, °C.
+    applied_c: f64,
+    /// Time θ has been observed, s (the low-pass is a running mean until
+    /// [`OIL_STIFFNESS_TAU_S`] has passed, so a run that starts warm is read
+    /// as warm within seconds).
+    observed_s: f64,
+    reference_c: f64,
+    bulk_per_k: f64,
+}
+
+impl OilFromStiffness {
+    /// An inference for the oil law `oil`, or `None` when its bulk modulus
+    /// does not follow the temperature.
+    pub fn new(oil: &OilTemperature) -> Option<Self> {
+        if oil.bulk_modulus_per_k.abs() < MIN_BULK_PER_K {
+            return None;
+        }
+        Some(OilFromStiffness {
+            theta_mean: 1.0,
+            applied_c: oil.reference_c,
+            observed_s: 0.0,
+            reference_c: oil.reference_c,
+            bulk_per_k: oil.bulk_modulus_per_k,
+        })
+    }
+
+    /// The temperature θ's low-pass says now, °C (within
+    /// [`OIL_ESTIMATE_SPAN_K`] of the reference).
+    pub fn temperature_c(&self) -> f64 {
+        let dt = ((self.theta_mean - 1.0) / self.bulk_per_k).clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
+        self.reference_c + dt
+    }
+
+    /// The temperature the model is at, °C.
+    pub fn applied_c(&self) -> f64 {
+        self.applied_c
+    }
+
+    /// Whether θ has been observed for [`OIL_STIFFNESS_TAU_S`].
+    pub fn settled(&self) -> bool {
+        self.observed_s >= OIL_STIFFNESS_TAU_S
+    }
+
+    /// One standard deviation of the temperature for θ's `theta_sigma` (1), K:
+    /// θ's own and k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
+    /// reference); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
+    pub fn sigma_k(&self, theta_sigma: f64) -> f64 {
+        let from_theta = theta_sigma / self.bulk_per_k.abs();
+        let from_slope = BULK_SLOPE_UNCERTAINTY * (self.applied_c - self.reference_c);
+        let unsettled = if self.settled() {
+            0.0
+        } else {
+            0.5 * OIL_ESTIMATE_SPAN_K
+        };
+        from_theta.hypot(from_slope) + unsettled
+    }
+
+    /// Takes θ (1) after a sample period `dt_s` (s); returns the temperature
+    /// to set the model to (°C) when it moved by [`OIL_ESTIMATE_STEP_K`], or
+    /// when the estimate has just [`Self::settled`].
+    pub fn observe(&mut self, theta: f64, dt_s: f64) -> Option<f64> {
+        if !theta.is_finite() {
+            return None;
+        }
+        let was_settled = self.settled();
+        self.observed_s += dt_s;
+        let weight = (dt_s / OIL_STIFFNESS_TAU_S.min(self.observed_s)).min(1.0);
+        self.theta_mean += weight * (theta - self.theta_mean);
+        let t = self.temperature_c();
+        if (t - self.applied_c).abs() < OIL_ESTIMATE_STEP_K && was_settled == self.settled() {
+            return None;
+        }
+        self.applied_c = t;
+        Some(t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stiffness_13_percent_down_reads_as_30_k_above_the_reference() {
+        let oil = OilTemperature {
+            reference_c: 30.0,
+            ..OilTemperature::default()
+        };
+        let mut o = OilFromStiffness::new(&oil).expect("k_β −0.0045");
+        assert_eq!(o.observe(1.0, 1e-3), None);
+        // unsettled, the temperature is as unsure as half the span
+        assert!(o.sigma_k(0.0) >= 0.5 * OIL_ESTIMATE_SPAN_K);
+        let theta = 1.0 - 0.0045 * 30.0;
+        let mut last = None;
+        for _ in 0..200_000 {
+            last = o.observe(theta, 1e-3).or(last);
+        }
+        let t = last.expect("moved");
+        assert!((t - 60.0).abs() < OIL_ESTIMATE_STEP_K, "{t}");
+        assert!((o.temperature_c() - 60.0).abs() < 1e-6);
+        assert!(o.settled());
+        // θ's σ of 0.0045 is 1 K; k_β's share of the 30 K is 6 K
+        assert!((o.sigma_k(0.0045) - 1f64.hypot(0.2 * (o.applied_c() - 30.0))).abs() < 1e-9);
+        // a stiffness far below the law's range is held at its span
+        for _ in 0..200_000 {
+            o.observe(0.3, 1e-3);
+        }
+        assert!((o.applied_c() - (30.0 + OIL_ESTIMATE_SPAN_K)).abs() < OIL_ESTIMATE_STEP_K);
+        assert_eq!(o.observe(f64::NAN, 1e-3), None);
+    }
+
+    #[test]
+    fn the_laminar_factor_is_sure_at_the_reference_and_less_so_away_from_it() {
+        let oil = OilTemperature {
+            reference_c: 30.0,
+            ..OilTemperature::default()
+        };
+        let (f, s) = laminar_factor_with_sigma(&oil, 30.0, 0.0);
+        assert!((f - 1.0).abs() < 1e-12 && s.abs() < 1e-12);
+        let (f, s) = laminar_factor_with_sigma(&oil, 55.0, 0.0);
+        // ν(30)/ν(55) of an HLP 46 of VI 100 is about 3
+        assert!((2.8..3.3).contains(&f), "{f}");
+        assert!((s - VISCOSITY_LAW_UNCERTAINTY * (f - 1.0)).abs() < 1e-12);
+        let (_, s2) = laminar_factor_with_sigma(&oil, 55.0, 2.0);
+        // about 4 % a kelvin at 55 °C
+        assert!((s2 - s) / f > 0.06 && (s2 - s) / f < 0.1, "{}", (s2 - s) / f);
+    }
+
+    #[test]
+    fn an_oil_law_without_a_stiffness_slope_infers_nothing() {
+        let oil = OilTemperature {
+            bulk_modulus_per_k: 0.0,
+            ..OilTemperature::default()
+        };
+        assert!(OilFromStiffness::new(&oil).is_none());
+    }
+}
