@@ -152,3 +152,20 @@ pub fn leak_can_make(rise: [f64; 3], threshold_lpm: [f64; 3]) -> bool {
 
 /// Names of the measured channels, in measurement order.
 pub const CHANNELS: [&str; 3] = ["x", "p1", "p2"];
+
+/// What the oil's temperature adds to each leak kind's threshold (ext1, ext2,
+/// int), L/min at p_s/2: the model's null leakage band `null_leakage_band_lpm`
+/// (L/min) plus the laminar factor's σ `laminar_factor_sigma` (1) times each
+/// healthy offset `offsets_lpm` (L/min, learned at the commissioning's
+/// temperature: flow the model lacks, which may be laminar). Non-finite
+/// inputs count as 0 (docs/plant.md, "What the temperature leaves uncertain").
+pub fn oil_band_lpm(
+    laminar_factor_sigma: f64,
+    null_leakage_band_lpm: f64,
+    offsets_lpm: [f64; 3],
+) -> [f64; 3] {
+    let finite_or_zero = |v: f64| if v.is_finite() { v.abs() } else { 0.0 };
+    let sigma = finite_or_zero(laminar_factor_sigma);
+    let band = finite_or_zero(null_leakage_band_lpm);
+    std::array::from_fn(|k| band + sigma * finite_or_zero(offsets_lpm[k]))
+}

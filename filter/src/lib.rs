@@ -249,10 +249,11 @@ impl Estimator {
             params.supply_sag_pa_per_m3_s = 0.0;
         }
         let params_at_reference = params.clone();
-        let oil_from_stiffness = if tuning.states == 12 && params.oil_temperature.stiffness_at_reference {
-            OilFromStiffness::new(&params.oil_temperature)
-        } else {
-            None
+        let oil_from_stiffness = match params.oil_temperature.reference_stiffness {
+            Some(theta_ref) if tuning.states == 12 => {
+                OilFromStiffness::new(&params.oil_temperature, theta_ref)
+            }
+            _ => None,
         };
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
         model.substeps = tuning.substeps;
@@ -470,10 +471,7 @@ impl Estimator {
     /// The laminar flows' uncertainty at oil temperature `temp_c` (°C) known to
     /// `sigma_t_k` (K). Allocates nothing.
     fn set_laminar_sigma(&mut self, temp_c: f64, sigma_t_k: f64) {
-        let p = &self.params_at_reference;
-        let (_, sigma) = oil::laminar_factor_with_sigma(&p.oil_temperature, temp_c, sigma_t_k);
-        let q_null_m3_s = p.valve_null_leakage_m3_s_pa * 0.5 * (p.supply_pressure_pa - p.return_pressure_pa);
-        self.laminar_sigma = (sigma, model::units::m3_s_to_lpm(sigma * q_null_m3_s));
+        self.laminar_sigma = oil::null_leakage_band(&self.params_at_reference, temp_c, sigma_t_k);
     }
 
     /// Processes one sensor sample (one sample period after the previous one).
@@ -512,6 +510,7 @@ impl Estimator {
             None
         };
         let (applied_c, sigma_t_k) = (oil.applied_c(), oil.sigma_k(e.bulk_scale_sigma));
+        let settled = oil.settled();
         if let Some(t) = moved {
             self.model
                 .params
@@ -521,6 +520,10 @@ impl Estimator {
         }
         self.oil_temp_c = applied_c;
         e.oil_temp_sigma_k = sigma_t_k;
+        if !settled {
+            // the oil's state is not known yet: the model's viscous terms may be far off
+            e.flags |= FLAG_CONVERGING;
+        }
     }
 
     fn on_sample_inner(&mut self, s: &Sample) -> Estimate {

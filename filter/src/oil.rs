@@ -2,13 +2,14 @@
 //! thermometer (docs/plant.md, "Oil temperature").
 //!
 //! The 12-state filter's θ is the oil's stiffness as a multiple of the model's
-//! bulk modulus. When that bulk modulus was identified at the oil law's
-//! reference temperature, θ = 1 + k_β·(T − T_ref), so θ tells the temperature.
+//! bulk modulus. Commissioning saw θ_ref at the oil law's reference
+//! temperature, so θ/θ_ref = 1 + k_β·(T − T_ref) tells the temperature.
 //! The terms that follow the viscosity (the valve's null leakage, the linear
 //! leaks, the seals' viscous friction) are then set from that temperature.
 //! θ itself keeps carrying the bulk modulus.
 
 use model::params::OilTemperature;
+use model::ActuatorParams;
 
 /// Time constant of the low-pass on θ that the temperature is read from, s:
 /// the oil warms over minutes, θ jitters over a duty cycle's strokes.
@@ -44,6 +45,23 @@ pub fn laminar_factor_with_sigma(oil: &OilTemperature, temp_c: f64, sigma_t_k: f
     (f, sigma)
 }
 
+/// The laminar factor's σ at oil temperature `temp_c` (°C) known to
+/// `sigma_t_k` (K) for the model `params` at its reference temperature (1),
+/// and that σ times its null leakage a path at p_s/2, L/min.
+pub fn null_leakage_band(params: &ActuatorParams, temp_c: f64, sigma_t_k: f64) -> (f64, f64) {
+    let (_, sigma) = laminar_factor_with_sigma(&params.oil_temperature, temp_c, sigma_t_k);
+    let q_null_m3_s =
+        params.valve_null_leakage_m3_s_pa * 0.5 * (params.supply_pressure_pa - params.return_pressure_pa);
+    (sigma, model::units::m3_s_to_lpm(sigma * q_null_m3_s))
+}
+
+/// The temperature's σ once θ has settled, K, at `temp_c` (°C) for the oil
+/// law `oil`: k_β's share of the distance from the reference (θ's own σ is
+/// small beside it).
+pub fn settled_sigma_k(oil: &OilTemperature, temp_c: f64) -> f64 {
+    BULK_SLOPE_UNCERTAINTY * (temp_c - oil.reference_c).abs()
+}
+
 /// The smallest |k_β| a temperature is inferred with, 1/K (below it θ says
 /// nothing about the temperature).
 const MIN_BULK_PER_K: f64 = 1e-4;
@@ -53,6 +71,8 @@ const MIN_BULK_PER_K: f64 = 1e-4;
 pub struct OilFromStiffness {
     /// θ low-passed over [`OIL_STIFFNESS_TAU_S`] (1).
     theta_mean: f64,
+    /// θ at the reference temperature (1).
+    theta_ref: f64,
     /// The temperature the model was last set to, °C.
     applied_c: f64,
     /// Time θ has been observed, s (the low-pass is a running mean until
@@ -64,14 +84,16 @@ pub struct OilFromStiffness {
 }
 
 impl OilFromStiffness {
-    /// An inference for the oil law `oil`, or `None` when its bulk modulus
-    /// does not follow the temperature.
-    pub fn new(oil: &OilTemperature) -> Option<Self> {
-        if oil.bulk_modulus_per_k.abs() < MIN_BULK_PER_K {
+    /// An inference for the oil law `oil` from a θ of `theta_ref` (1) at its
+    /// reference temperature, or `None` when its bulk modulus does not follow
+    /// the temperature or `theta_ref` is not a stiffness.
+    pub fn new(oil: &OilTemperature, theta_ref: f64) -> Option<Self> {
+        if oil.bulk_modulus_per_k.abs() < MIN_BULK_PER_K || !(theta_ref.is_finite() && theta_ref > 0.0) {
             return None;
         }
         Some(OilFromStiffness {
-            theta_mean: 1.0,
+            theta_mean: theta_ref,
+            theta_ref,
             applied_c: oil.reference_c,
             observed_s: 0.0,
             reference_c: oil.reference_c,
@@ -82,7 +104,8 @@ impl OilFromStiffness {
     /// The temperature θ's low-pass says now, °C (within
     /// [`OIL_ESTIMATE_SPAN_K`] of the reference).
     pub fn temperature_c(&self) -> f64 {
-        let dt = ((self.theta_mean - 1.0) / self.bulk_per_k).clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
+        let dt = ((self.theta_mean / self.theta_ref - 1.0) / self.bulk_per_k)
+            .clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
         self.reference_c + dt
     }
 
@@ -100,7 +123,7 @@ impl OilFromStiffness {
     /// θ's own and k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
     /// reference); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
     pub fn sigma_k(&self, theta_sigma: f64) -> f64 {
-        let from_theta = theta_sigma / self.bulk_per_k.abs();
+        let from_theta = theta_sigma / (self.theta_ref * self.bulk_per_k.abs());
         let from_slope = BULK_SLOPE_UNCERTAINTY * (self.applied_c - self.reference_c);
         let unsettled = if self.settled() {
             0.0
@@ -140,7 +163,7 @@ mod tests {
             reference_c: 30.0,
             ..OilTemperature::default()
         };
-        let mut o = OilFromStiffness::new(&oil).expect("k_β −0.0045");
+        let mut o = OilFromStiffness::new(&oil, 1.0).expect("k_β −0.0045");
         assert_eq!(o.observe(1.0, 1e-3), None);
         // unsettled, the temperature is as unsure as half the span
         assert!(o.sigma_k(0.0) >= 0.5 * OIL_ESTIMATE_SPAN_K);
@@ -186,6 +209,14 @@ mod tests {
             bulk_modulus_per_k: 0.0,
             ..OilTemperature::default()
         };
-        assert!(OilFromStiffness::new(&oil).is_none());
+        assert!(OilFromStiffness::new(&oil, 1.0).is_none());
+        let oil = OilTemperature::default();
+        assert!(OilFromStiffness::new(&oil, f64::NAN).is_none());
+        // relative to the commissioning's θ: 0.9 there, 0.9·(1 − 0.0045·10) is 10 K warmer
+        let mut o = OilFromStiffness::new(&oil, 0.9).expect("a stiffness");
+        for _ in 0..100_000 {
+            o.observe(0.9 * (1.0 - 0.0045 * 10.0), 1e-3);
+        }
+        assert!((o.temperature_c() - 50.0).abs() < 1e-6, "{}", o.temperature_c());
     }
 }

@@ -766,7 +766,7 @@ fn leaky_valve_warming_run(identified: bool) -> (f64, f64, f64, f64) {
     let sensors = model::SensorParams::default();
     let mut sim = Simulator::new(rig.clone(), sensors, settings, sc, FaultSchedule::default(), 31).unwrap();
     let mut model = rig.clone();
-    model.oil_temperature.stiffness_at_reference = identified;
+    model.oil_temperature.reference_stiffness = identified.then_some(1.0);
     let mut est = Estimator::new(model, Tuning::sensor_derived()).unwrap();
     let (mut worst, mut sum, mut n, mut band) = (0.0f64, [0.0; 3], 0, f64::NAN);
     for k in 0..60_000 {

@@ -668,7 +668,6 @@ impl Identification {
         }
         if let Some(b) = self.bulk_modulus_pa.estimate() {
             out.bulk_modulus_pa = b.value;
-            out.oil_temperature.stiffness_at_reference = true;
         }
         if let Some(s) = self.supply_sag_pa_per_m3_s.estimate() {
             out.supply_sag_pa_per_m3_s = s.value;

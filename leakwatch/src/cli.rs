@@ -419,7 +419,7 @@ pub(crate) enum BenchCommand {
     },
     /// Plant-style folders of simulated rig instances, each drawn over its datasheet's tolerances
     /// (docs/plant.md): OUT/inst_NNN/ with datasheet.toml (the catalogue's, as a user writes it),
-    /// instance.toml (the drawn rig, for the simulator), commission_cold.csv (the rig's duty cycle
+    /// instance.toml (the drawn rig, for the simulator), commission_cold.csv (each duty cycle in turn
     /// at 20, 30 or 50 °C), and run_NNN/measured.csv + truth.json: healthy runs on each duty cycle
     /// and a leak run of 0.1, 0.25 and 0.5 L/min of each kind, under oil warming or cooling across
     /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one.

@@ -356,8 +356,11 @@ pub fn with_null_bias(cfg: &Config, bias: &NullBias) -> Config {
     out
 }
 
-/// Learns the commissioning of `input` under the config `cfg` as it is.
-pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, String> {
+/// Learns the commissioning of `input` under the config `cfg` as it is, and the
+/// leak filter's mean oil stiffness θ over it (1; `None` without that state):
+/// the θ at the recording's oil temperature, which the filter reads the
+/// temperature against when no `temp_c` comes ([`estimator::oil`]).
+pub fn learn(input: &Path, cfg: &Config) -> Result<(classifier::Commissioning, Option<f64>), String> {
     if cfg.leak_filter.states < 10 {
         return Err(format!(
             "[leak_filter] states = {}: commissioning needs the leak filter (10, 11 or 12 states)",
@@ -365,10 +368,22 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<classifier::Commissioning, St
         ));
     }
     let mut learner = CommissioningLearner::new(cfg.classifier.settle_s);
-    replay_estimates(input, cfg, cfg.leak_filter.clone(), |e| learner.on_estimate(e))?;
-    learner
+    // the model as the recording's oil has it: nothing read from θ yet
+    let mut at_reference = cfg.clone();
+    at_reference.model.oil_temperature.reference_stiffness = None;
+    let (mut theta_sum, mut theta_n) = (0.0, 0u64);
+    let unsettled = estimator::FLAG_CONVERGING | estimator::FLAG_SKIPPED | estimator::FLAG_RESET;
+    replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
+        learner.on_estimate(e);
+        if e.bulk_scale.is_finite() && e.flags & unsettled == 0 {
+            theta_sum += e.bulk_scale;
+            theta_n += 1;
+        }
+    })?;
+    let c = learner
         .finish(MIN_HEALTHY_S, &input.display().to_string())
-        .map_err(|e| format!("{}: cannot commission: {e}", input.display()))
+        .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
+    Ok((c, (theta_n > 0).then(|| theta_sum / theta_n as f64)))
 }
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
@@ -388,7 +403,15 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
         );
         cfg = with_null_bias(&cfg, &bias);
     }
-    let c = learn(input, &cfg)?;
+    let (c, theta) = learn(input, &cfg)?;
+    cfg.model.oil_temperature.reference_stiffness = theta;
+    if let Some(theta) = theta {
+        eprintln!(
+            "oil stiffness on this recording: {theta:.3} of the model's bulk modulus, at {:.1} °C: \
+             without temp_c the leak filter reads the oil's temperature against it",
+            cfg.model.oil_temperature.reference_c
+        );
+    }
     eprintln!(
         "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
         c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
@@ -404,12 +427,45 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
         "the detector will raise leaks from {:.3}/{:.3}/{:.3} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
         thr[0], thr[1], thr[2], cfg.classifier.false_alarms_per_hour
     );
+    eprintln!("{}", detectable_over_temperature(&cfg.model, thr, c.offsets_lpm));
     eprintln!(
         "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
         c.nis_mean
     );
     cfg.classifier.commissioning = Some(c);
     Ok(cfg)
+}
+
+/// Oil temperatures at which commissioning states the smallest detectable leaks, °C.
+const STATED_TEMPERATURES_C: [f64; 3] = [20.0, 40.0, 60.0];
+
+/// The line that states the smallest detectable leak of each kind at
+/// [`STATED_TEMPERATURES_C`]: the thresholds `thr` (L/min at p_s/2) widened by
+/// what the oil's temperature leaves uncertain for the model `model` with
+/// healthy offsets `offsets_lpm` (L/min), the temperature read from θ once it
+/// settled (no thermometer: the widest band; docs/plant.md).
+fn detectable_over_temperature(
+    model: &model::ActuatorParams,
+    thr: [f64; 3],
+    offsets_lpm: [f64; 3],
+) -> String {
+    let oil = &model.oil_temperature;
+    let at = STATED_TEMPERATURES_C.map(|t| {
+        let (sigma, band) =
+            estimator::oil::null_leakage_band(model, t, estimator::oil::settled_sigma_k(oil, t));
+        let widen = classifier::oil_band_lpm(sigma, band, offsets_lpm);
+        format!(
+            "{t:.0} °C {:.3}/{:.3}/{:.3}",
+            thr[0] + widen[0],
+            thr[1] + widen[1],
+            thr[2] + widen[2]
+        )
+    });
+    format!(
+        "smallest detectable leak (ext1/ext2/int, L/min at p_s/2) as the oil moves from the commissioning's {:.1} °C: {}",
+        oil.reference_c,
+        at.join(", ")
+    )
 }
 
 /// The command: learn, then write the config with its commissioning.

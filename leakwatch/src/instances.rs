@@ -7,7 +7,7 @@
 //!   and the `[model]` facts no datasheet gives), never the drawn values;
 //! - `instance.toml`: the simulated rig's config (`[model]`, `[sensors]`,
 //!   `[sim]`: the drawn instance; `leakwatch simulate --config` reads it);
-//! - `commission_cold.csv`: the rig's duty cycle at a constant oil temperature;
+//! - `commission_cold.csv`: each duty cycle in turn at a constant oil temperature;
 //! - `run_NNN/measured.csv` and `truth.json`: healthy runs on every duty cycle
 //!   and leak runs, each under a drawn oil warm-up or cool-down.
 //!
@@ -67,10 +67,22 @@ fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str]), String> {
     }
 }
 
+/// How far the tank thermometer a user reads during the commissioning
+/// recording may be off the oil in the chambers, K (either way).
+const TANK_READING_ERROR_K: f64 = 2.0;
+
 /// `datasheet.toml`: the catalogue datasheet and the nominal `[model]` fields
-/// no datasheet gives (as a user writes them), nothing of the drawn instance.
-fn catalogue_toml(n: &NominalRig) -> Result<String, String> {
+/// no datasheet gives (as a user writes them), nothing of the drawn instance;
+/// and, as the README asks, the tank thermometer's reading during the
+/// commissioning recording, `tank_c` (°C), as the oil law's reference.
+fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
     let mut rest = toml::Table::try_from(&n.model).map_err(|e| e.to_string())?;
+    if let Some(oil) = rest.get_mut("oil_temperature").and_then(|v| v.as_table_mut()) {
+        oil.insert(
+            "reference_c".into(),
+            toml::Value::Float((tank_c * 10.0).round() / 10.0),
+        );
+    }
     for (section, field, _) in model::datasheet::DERIVED_FIELDS {
         if section != "model" {
             continue;
@@ -142,6 +154,9 @@ struct Plan {
     /// Folder under the instance's (empty: the commissioning recording).
     run: String,
     scenario: &'static str,
+    /// The commissioning recording's duty cycles, recorded in turn for an
+    /// equal share of its length (empty for a run).
+    segments: Vec<&'static str>,
     seed: u64,
     seconds: f64,
     oil: OilWarmUp,
@@ -164,6 +179,7 @@ fn plan_instance(req: &InstancesRequest, cycles: &[&'static str], index: usize, 
         instance: index,
         run: String::new(),
         scenario: cycles[0],
+        segments: cycles.to_vec(),
         seed: rng.next_u64() >> 12,
         seconds: req.commission_seconds,
         oil: OilWarmUp {
@@ -200,6 +216,7 @@ fn plan_instance(req: &InstancesRequest, cycles: &[&'static str], index: usize, 
             instance: index,
             run: format!("run_{k:03}"),
             scenario: cycle,
+            segments: Vec::new(),
             seed: rng.next_u64() >> 12,
             seconds: req.run_seconds,
             oil,
@@ -217,6 +234,41 @@ fn instance_seed(seed: u64, index: usize) -> u64 {
 /// The folder of instance `index`.
 fn instance_dir(out: &Path, index: usize) -> PathBuf {
     out.join(format!("inst_{index:03}"))
+}
+
+/// Pause between the commissioning recording's segments, s: a gap in its
+/// samples, after which the filter re-anchors (as after any long gap).
+const SEGMENT_GAP_S: f64 = 1.0;
+
+/// The samples of `plan` under config `cfg` with `faults`, and their span, s:
+/// one simulation, or for the commissioning recording one per duty cycle in
+/// turn, joined with a gap of [`SEGMENT_GAP_S`].
+fn simulate_plan(cfg: &Config, plan: &Plan, faults: &[String]) -> Result<(Vec<model::Sample>, f64), String> {
+    let cycles: Vec<&str> = if plan.segments.is_empty() {
+        vec![plan.scenario]
+    } else {
+        plan.segments.clone()
+    };
+    let share = plan.seconds / cycles.len() as f64;
+    let (mut all, mut t0) = (Vec::new(), 0.0);
+    for (i, cycle) in cycles.iter().enumerate() {
+        let sim_req = SimulateRequest {
+            scenario: (*cycle).into(),
+            seconds: Some(share),
+            seed: plan.seed.wrapping_add(i as u64),
+            faults: faults.to_vec(),
+            rig_variant: None,
+        };
+        let (mut sim, seconds) = simulate::build(cfg, &sim_req)?;
+        let mut samples = sim.run(seconds);
+        for s in &mut samples {
+            s.t_s = on_grid(s.t_s + t0);
+        }
+        t0 = samples.last().map_or(t0, |s| s.t_s) + SEGMENT_GAP_S;
+        all.extend(samples);
+    }
+    let span = all.last().map_or(0.0, |s| s.t_s);
+    Ok((all, span))
 }
 
 /// Simulates one recording and writes it with its truth; returns its samples.
@@ -242,16 +294,8 @@ fn write_recording(
         Some((kind, size, onset)) => vec![format!("{kind}:{size}lpm@{onset}s")],
         None => vec![],
     };
-    let sim_req = SimulateRequest {
-        scenario: plan.scenario.into(),
-        seconds: Some(plan.seconds),
-        seed: plan.seed,
-        faults: faults.clone(),
-        rig_variant: None,
-    };
     let file = crate::out::create(&csv, force, &[])?;
-    let (mut sim, seconds) = simulate::build(&cfg, &sim_req)?;
-    let samples = sim.run(seconds);
+    let (samples, seconds) = simulate_plan(&cfg, plan, &faults)?;
     let mut w = std::io::BufWriter::new(file);
     simulate::write_csv(&mut w, &samples).map_err(|e| dataset::output::message(&csv, &e))?;
     let fault = plan.leak.map(|(kind, size, onset)| {
@@ -278,7 +322,7 @@ fn write_recording(
         "rig": req.rig,
         "healthy": plan.leak.is_none(),
         "fault": fault,
-        "scenario": {"name": plan.scenario, "seed": plan.seed, "duration_s": seconds},
+        "scenario": {"name": plan.scenario, "segments": plan.segments, "seed": plan.seed, "duration_s": seconds},
         "oil_temperature": {
             "start_c": plan.oil.start_c,
             "end_c": plan.oil.end_c,
@@ -333,15 +377,19 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
     let t0 = std::time::Instant::now();
     let mut instances = Vec::with_capacity(req.instances);
     let mut plans = Vec::new();
-    let catalogue = catalogue_toml(&nominal)?;
     for i in 0..req.instances {
         let inst = Instance::draw(&nominal, instance_seed(req.seed, i));
         let dir = instance_dir(&req.out, i);
         crate::out::dir(&dir)?;
+        let plan = plan_instance(req, cycles, i, inst.seed);
+        let commission_c = plan.first().map_or(40.0, |p| p.oil.start_c);
+        let misread =
+            Rng::new(inst.seed ^ 0x5EED_7A4C).uniform_in(-TANK_READING_ERROR_K, TANK_READING_ERROR_K);
+        let catalogue = catalogue_toml(&nominal, commission_c + misread)?;
         crate::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
         let text = instance_toml(&inst, &req.rig, i)?;
         crate::out::write(&dir.join("instance.toml"), text.as_bytes(), force, &[])?;
-        plans.extend(plan_instance(req, cycles, i, inst.seed));
+        plans.extend(plan);
         instances.push(inst);
     }
     let simulated: f64 = plans.iter().map(|p| p.seconds).sum();
@@ -442,9 +490,13 @@ mod tests {
     #[test]
     fn the_catalogue_config_loads_and_is_the_datasheet_not_the_instance() {
         let (n, _) = nominal("press").expect("rig");
-        let text = catalogue_toml(&n).expect("toml");
+        let text = catalogue_toml(&n, 31.26).expect("toml");
         let cfg = Config::parse(&text).expect("loads");
-        assert_eq!(cfg.model, n.model);
+        // the tank's reading, to 0.1 °C, is the one fact beyond the catalogue
+        assert_eq!(cfg.model.oil_temperature.reference_c, 31.3);
+        let mut model = cfg.model.clone();
+        model.oil_temperature.reference_c = n.model.oil_temperature.reference_c;
+        assert_eq!(model, n.model);
         assert_eq!(cfg.datasheet, Some(n.datasheet));
         let inst = Instance::draw(&n, 5);
         assert_ne!(cfg.model.mass_kg, inst.rig.mass_kg);

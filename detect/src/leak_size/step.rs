@@ -26,12 +26,11 @@ impl LeakSizeDetector {
     /// [`Self::thresholds_now`]: the model's null leakage (its band) and the
     /// healthy offsets, each as uncertain as the laminar factor.
     fn widen_for_the_oil(&mut self, e: &Estimate) {
-        let finite_or_zero = |v: f64| if v.is_finite() { v.max(0.0) } else { 0.0 };
-        let sigma = finite_or_zero(e.laminar_factor_sigma);
-        let band = finite_or_zero(e.null_leakage_band_lpm);
-        for k in 0..3 {
-            self.oil_band_lpm[k] = band + sigma * finite_or_zero(self.stats[k].mean.abs());
-        }
+        self.oil_band_lpm = crate::oil_band_lpm(
+            e.laminar_factor_sigma,
+            e.null_leakage_band_lpm,
+            self.offsets_lpm(),
+        );
     }
 
     /// Reads one estimate; pushes any event into `out` (at most one per call).

@@ -30,11 +30,12 @@ pub struct OilTemperature {
     pub viscosity_100c_mm2_s: f64,
     /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
     pub bulk_modulus_per_k: f64,
-    /// Whether the model's bulk modulus was identified on a recording at
-    /// `reference_c` (identification sets it). Without `temp_c` the 12-state
-    /// filter then reads the oil's temperature from its stiffness θ and sets
-    /// the viscous terms from it; false: those terms stay as given.
-    pub stiffness_at_reference: bool,
+    /// The leak filter's oil stiffness θ on the commissioning recording, at
+    /// `reference_c` (1; `commission` sets it). Without `temp_c` the 12-state
+    /// filter then reads the oil's temperature from θ relative to it and sets
+    /// the viscous terms from it; absent: those terms stay as given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_stiffness: Option<f64>,
 }
 
 impl Default for OilTemperature {
@@ -44,7 +45,7 @@ impl Default for OilTemperature {
             viscosity_40c_mm2_s: 46.0,
             viscosity_100c_mm2_s: 6.8,
             bulk_modulus_per_k: -0.0045,
-            stiffness_at_reference: false,
+            reference_stiffness: None,
         }
     }
 }

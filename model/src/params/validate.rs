@@ -129,6 +129,15 @@ impl ActuatorParams {
             0.0,
             "a relative change per kelvin from -0.02 to 0 (1/K)",
         )?;
+        if let Some(theta) = oil.reference_stiffness {
+            r(
+                "oil_temperature.reference_stiffness",
+                theta,
+                crate::process::BULK_SCALE_RANGE.0,
+                crate::process::BULK_SCALE_RANGE.1,
+                "a stiffness from 0.2 to 2 times the model's bulk modulus",
+            )?;
+        }
         check(
             "entrained_air_fraction",
             self.entrained_air_fraction,
