@@ -11,6 +11,8 @@
 use model::params::OilTemperature;
 use model::ActuatorParams;
 
+use crate::{Estimate, Estimator, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED, OIL_TEMP_STEP_K};
+
 /// Time constant of the low-pass on θ that the temperature is read from, s:
 /// the oil warms over minutes, θ jitters over a duty cycle's strokes.
 pub const OIL_STIFFNESS_TAU_S: f64 = 10.0;
@@ -150,6 +152,71 @@ impl OilFromStiffness {
         }
         self.applied_c = t;
         Some(t)
+    }
+}
+
+/// How the stage's model follows the oil: a thermometer's `temp_c`, or the
+/// temperature read from θ.
+impl Estimator {
+    /// Sets the model to oil temperature `temp_c` (°C) when it moved by
+    /// [`OIL_TEMP_STEP_K`] or more ([`ActuatorParams::set_oil_temperature`]:
+    /// bulk modulus, viscous friction, laminar flows). Allocates nothing.
+    pub(crate) fn follow_oil_temperature(&mut self, temp_c: f64) {
+        if (temp_c - self.oil_temp_c).abs() < OIL_TEMP_STEP_K {
+            return;
+        }
+        self.model
+            .params
+            .set_oil_temperature(&self.params_at_reference, temp_c);
+        self.model.params_changed();
+        self.oil_temp_c = temp_c;
+        self.set_laminar_sigma(temp_c, 0.0);
+    }
+
+    /// The stage as it starts: a temperature still to be read from θ is as
+    /// uncertain as [`OilFromStiffness::sigma_k`] says before it settled.
+    pub(crate) fn with_laminar_sigma_at_start(mut self) -> Self {
+        if let Some(oil) = self.oil_from_stiffness {
+            self.set_laminar_sigma(oil.applied_c(), oil.sigma_k(0.0));
+        }
+        self
+    }
+
+    /// The laminar flows' uncertainty at oil temperature `temp_c` (°C) known to
+    /// `sigma_t_k` (K). Allocates nothing.
+    pub(crate) fn set_laminar_sigma(&mut self, temp_c: f64, sigma_t_k: f64) {
+        self.laminar_sigma = null_leakage_band(&self.params_at_reference, temp_c, sigma_t_k);
+    }
+
+    /// Reads the oil's temperature from θ of estimate `e` (once the filter has
+    /// converged) and sets the model's viscous terms to it when it moved by
+    /// [`OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_viscosity_temperature`]).
+    /// Allocates nothing.
+    pub(crate) fn follow_oil_stiffness(&mut self, e: &mut Estimate) {
+        let usable = self.started && e.flags & (FLAG_CONVERGING | FLAG_SKIPPED | FLAG_RESET) == 0;
+        let Some(oil) = self.oil_from_stiffness.as_mut() else {
+            return;
+        };
+        let moved = if usable {
+            oil.observe(e.bulk_scale, self.tuning.sample_period_s)
+        } else {
+            None
+        };
+        let (applied_c, sigma_t_k) = (oil.applied_c(), oil.sigma_k(e.bulk_scale_sigma));
+        let settled = oil.settled();
+        if let Some(t) = moved {
+            self.model
+                .params
+                .set_oil_viscosity_temperature(&self.params_at_reference, t);
+            self.model.params_changed();
+            self.set_laminar_sigma(t, sigma_t_k);
+        }
+        self.oil_temp_c = applied_c;
+        e.oil_temp_sigma_k = sigma_t_k;
+        if !settled {
+            // the oil's state is not known yet: the model's viscous terms may be far off
+            e.flags |= FLAG_CONVERGING;
+        }
     }
 }
 
