@@ -993,6 +993,28 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
         let o = o.as_float().unwrap();
         assert!(o.abs() < 0.05, "healthy offset {o} L/min");
     }
+    // the leak filter's stiffness at the recording's temperature is kept (the
+    // built-in model's bulk modulus is the rig's: about 1)
+    let theta = t["model"]["oil_temperature"]["reference_stiffness"]
+        .as_float()
+        .unwrap();
+    assert!((theta - 1.0).abs() < 0.1, "θ_ref {theta}");
+    // and the smallest detectable leaks at 20, 40 and 60 °C: the thresholds at
+    // the reference (40 °C), wider away from it
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("smallest detectable leak"))
+        .expect("stated over the temperature");
+    let at = |t: &str| -> Vec<f64> {
+        let rest = line.split(&format!("{t} °C ")).nth(1).expect(t);
+        let v = rest.split([',', ' ']).next().unwrap();
+        v.split('/').map(|x| x.parse().unwrap()).collect()
+    };
+    let (cold, reference, warm) = (at("20"), at("40"), at("60"));
+    for k in 0..3 {
+        assert!((reference[k] - sizes[k]).abs() < 1.5e-3, "{line}");
+        assert!(cold[k] >= reference[k] && warm[k] >= reference[k], "{line}");
+    }
 }
 
 /// A plant-style folder with a commissioning recording but no datasheet.toml
