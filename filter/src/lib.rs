@@ -457,6 +457,9 @@ impl Estimator {
         e.u_v = s.u_v;
         if measured_temp {
             e.oil_temp_sigma_k = 0.0;
+            if self.started && s.t_s - self.t0_s < oil::OIL_STIFFNESS_TAU_S {
+                e.flags |= FLAG_CONVERGING;
+            }
         } else if self.oil_from_stiffness.is_some() {
             self.follow_oil_stiffness(&mut e);
         }
