@@ -4,14 +4,21 @@
 //!
 //! At every used sample (the rod sliding, away from the end stops):
 //!
-//! A1·p1 − A2·p2 = m·a + F_c·sgn v + ΔF·e^(−|v|/α)·sgn v + d·v + F_s
+//! A1·p1 − A2·p2 − F_l = m·a + F_c·sgn v + ΔF·e^(−|v|/α)·sgn v + d·v + F_s + k·max(0, x − x_c)
 //!
 //! v and a come from a centred quadratic fit (Savitzky-Golay) over
 //! [`HALF_WINDOW`] samples either side of the measured position, the pressures
 //! from the same fit's centre value. The equation is linear in m, F_c, ΔF, d
 //! and F_s for a given Stribeck velocity α: α is the one of a log grid with the
-//! least squared error. Outliers (a stiff workpiece, a stop) are weighted down
-//! (Huber, three passes).
+//! least squared error. Outliers (a stop, a burst) are weighted down (Huber,
+//! three passes).
+//!
+//! A workpiece: where the model has no load of its own, a contact spring
+//! k·max(0, x − x_c) is a sixth column, x_c the best of a grid over the
+//! stroke. It is kept when it removes 15 % or more of the force gap and k is
+//! resolved (5 σ). Without it, a press's contact force is taken for static
+//! friction (a slow press-in looks like a Stribeck peak). The model's own load
+//! is taken off the pressure force.
 //!
 //! F_s is the static force: the weight m·g·sin φ plus any constant load. The
 //! weight's column (g·sin φ, constant) cannot be told from a constant load's,
@@ -60,7 +67,13 @@ const ALPHA_GRID: (f64, f64, usize) = (1.0e-3, 0.2, 40);
 /// Huber's constant, in robust standard deviations.
 const HUBER_K: f64 = 2.5;
 
-const N: usize = 5;
+/// Contact positions tried for a workpiece spring, evenly over the stroke.
+const CONTACT_GRID: usize = 24;
+/// Share of the force gap a contact spring must remove to be kept (1).
+const CONTACT_GAIN: f64 = 0.15;
+
+/// Unknowns: m, F_c, ΔF, d, F_s and a contact spring's stiffness k.
+const N: usize = 6;
 type Mat = SMatrix<f64, N, N>;
 type Vec5 = SVector<f64, N>;
 
@@ -79,6 +92,10 @@ pub struct Mechanics {
     pub viscous_n_s_per_m: Found,
     /// Static force F_s: the weight plus any constant load (positive against extension), N.
     pub static_force_n: Found,
+    /// A workpiece: a contact spring's stiffness (N/m, with its σ) and where
+    /// the rod touches it (m, a grid point of the stroke); `None` when none
+    /// explains enough of the force gap or the model has a load of its own.
+    pub contact_spring: Option<(Estimate, f64)>,
     /// The mass of the check fit (±80 ms), kg (see the module docs).
     pub check_fit_mass_kg: f64,
     /// Equations used (sliding samples, one per [`STRIDE`]).
@@ -89,8 +106,9 @@ pub struct Mechanics {
     pub gap_after_n: f64,
 }
 
-/// One equation: the regressors and the pressure force.
+/// One equation: the regressors and the pressure force (less the model's own load).
 struct Eq {
+    x: f64,
     a: f64,
     v: f64,
     force: f64,
@@ -143,9 +161,10 @@ fn equations(p: &ActuatorParams, dt_s: f64, rows: &[Row], half: usize) -> Vec<Eq
             let steady_sign = a.abs() * half as f64 * dt_s < 0.5 * v.abs();
             if v.abs() > SLIDING_M_S && in_stroke && steady_sign {
                 out.push(Eq {
+                    x,
                     a,
                     v,
-                    force: p.pressure_force_n(p1, p2),
+                    force: p.pressure_force_n(p1, p2) - p.load.force_n(x, v),
                 });
             }
         }
@@ -154,36 +173,44 @@ fn equations(p: &ActuatorParams, dt_s: f64, rows: &[Row], half: usize) -> Vec<Eq
     out
 }
 
-fn regressors(e: &Eq, alpha: f64) -> Vec5 {
+/// The regressors of `e` for Stribeck velocity `alpha` and a contact spring
+/// touching at `contact_m` (m; `None`: no spring, its column 0).
+fn regressors(e: &Eq, alpha: f64, contact_m: Option<f64>) -> Vec5 {
     let s = e.v.signum();
-    Vec5::new(e.a, s, (-e.v.abs() / alpha).exp() * s, e.v, 1.0)
+    let spring = contact_m.map_or(0.0, |c| (e.x - c).max(0.0));
+    Vec5::from([e.a, s, (-e.v.abs() / alpha).exp() * s, e.v, 1.0, spring])
 }
 
-/// Weighted least squares for Stribeck velocity `alpha` with weights `w`:
-/// (θ, covariance with unit residual variance, weighted SSR).
-fn solve(eqs: &[Eq], alpha: f64, w: &[f64]) -> Option<(Vec5, Mat, f64)> {
+/// Weighted least squares for Stribeck velocity `alpha` with weights `w` and
+/// a contact spring at `contact_m` (without one, its stiffness is held at 0 by
+/// a unit prior on its empty column): (θ, covariance with unit residual
+/// variance, weighted SSR).
+fn solve(eqs: &[Eq], alpha: f64, contact_m: Option<f64>, w: &[f64]) -> Option<(Vec5, Mat, f64)> {
     let mut ata = Mat::zeros();
     let mut aty = Vec5::zeros();
     for (e, wi) in eqs.iter().zip(w) {
-        let r = regressors(e, alpha);
+        let r = regressors(e, alpha, contact_m);
         ata += *wi * r * r.transpose();
         aty += *wi * e.force * r;
+    }
+    if contact_m.is_none() {
+        ata[(N - 1, N - 1)] += 1.0;
     }
     let inv = ata.try_inverse()?;
     let theta = inv * aty;
     let ssr: f64 = eqs
         .iter()
         .zip(w)
-        .map(|(e, wi)| wi * (e.force - regressors(e, alpha).dot(&theta)).powi(2))
+        .map(|(e, wi)| wi * (e.force - regressors(e, alpha, contact_m).dot(&theta)).powi(2))
         .sum();
     Some((theta, inv, ssr))
 }
 
 /// Huber weights for the residuals of `theta` (scale: 1.4826 × their median absolute value).
-fn huber(eqs: &[Eq], alpha: f64, theta: &Vec5) -> Vec<f64> {
+fn huber(eqs: &[Eq], alpha: f64, contact_m: Option<f64>, theta: &Vec5) -> Vec<f64> {
     let res: Vec<f64> = eqs
         .iter()
-        .map(|e| e.force - regressors(e, alpha).dot(theta))
+        .map(|e| e.force - regressors(e, alpha, contact_m).dot(theta))
         .collect();
     let mut abs: Vec<f64> = res.iter().map(|r| r.abs()).collect();
     abs.sort_by(f64::total_cmp);
@@ -201,12 +228,12 @@ fn huber(eqs: &[Eq], alpha: f64, theta: &Vec5) -> Vec<f64> {
 }
 
 /// The best Stribeck velocity of the grid for weights `w`, with its fit.
-fn best_alpha(eqs: &[Eq], w: &[f64]) -> Option<(f64, Vec5, Mat, f64)> {
+fn best_alpha(eqs: &[Eq], contact_m: Option<f64>, w: &[f64]) -> Option<(f64, Vec5, Mat, f64)> {
     let (lo, hi, n) = ALPHA_GRID;
     (0..n)
         .filter_map(|k| {
             let alpha = lo * (hi / lo).powf(k as f64 / (n - 1) as f64);
-            solve(eqs, alpha, w).map(|(t, c, s)| (alpha, t, c, s))
+            solve(eqs, alpha, contact_m, w).map(|(t, c, s)| (alpha, t, c, s))
         })
         .min_by(|a, b| a.3.total_cmp(&b.3))
 }
@@ -226,24 +253,20 @@ pub fn identify_mechanics(p: &ActuatorParams, dt_s: f64, rows: &[Row]) -> Result
         ));
     }
     let f = p.friction.extend();
-    let model = Vec5::new(
+    let model = Vec5::from([
         p.mass_kg,
         f.slip_n,
         f.static_n - f.slip_n,
         f.viscous_n_s_per_m,
         p.gravity_force_n(),
-    );
-    let rms = |theta: &Vec5, alpha: f64| {
-        (eqs.iter()
-            .map(|e| (e.force - regressors(e, alpha).dot(theta)).powi(2))
-            .sum::<f64>()
-            / eqs.len() as f64)
-            .sqrt()
-    };
-    let gap_before_n = rms(&model, f.stribeck_velocity_m_s);
+        0.0,
+    ]);
+    let gap_before_n = rms_of(&eqs, &model, f.stribeck_velocity_m_s, None);
     let fail = || "the force balance could not be solved (the rod's motion does not excite it)".to_string();
-    let (alpha, theta, cov, ssr, w) = robust_fit(&eqs).ok_or_else(fail)?;
-    let check = robust_fit(&equations(p, dt_s, rows, CHECK_HALF_WINDOW)).ok_or_else(fail)?;
+    // a workpiece's spring is searched for only where the model has no load of its own
+    let stroke = (p.load.stiffness_n_per_m == 0.0).then_some((p.x_min_m, p.x_max_m));
+    let ((alpha, theta, cov, ssr, w), contact_m) = fit_with_contact(&eqs, stroke).ok_or_else(fail)?;
+    let check = robust_fit(&equations(p, dt_s, rows, CHECK_HALF_WINDOW), contact_m).ok_or_else(fail)?;
     let check_mass = check.1[0];
     let sw: f64 = w.iter().sum();
     let var = ssr / (sw - N as f64).max(1.0);
@@ -298,7 +321,12 @@ pub fn identify_mechanics(p: &ActuatorParams, dt_s: f64, rows: &[Row]) -> Result
         }),
         _ => Found::NotIdentifiable("without a Stribeck drop there is no Stribeck velocity".to_string()),
     };
+    let contact_spring = match contact_m {
+        Some(c) => Found::Identified(est(N - 1)).estimate().map(|k| (k, c)),
+        None => None,
+    };
     Ok(Mechanics {
+        contact_spring,
         mass_kg,
         coulomb_n: positive(coulomb, "the Coulomb friction"),
         static_n,
@@ -308,21 +336,67 @@ pub fn identify_mechanics(p: &ActuatorParams, dt_s: f64, rows: &[Row]) -> Result
         check_fit_mass_kg: check_mass,
         equations: eqs.len(),
         gap_before_n,
-        gap_after_n: rms(&theta, alpha),
+        gap_after_n: rms_of(&eqs, &theta, alpha, contact_m),
     })
 }
 
 /// The fit with the best Stribeck velocity, reweighted three times (Huber):
 /// (α, θ, covariance, SSR, weights).
-fn robust_fit(eqs: &[Eq]) -> Option<(f64, Vec5, Mat, f64, Vec<f64>)> {
+fn robust_fit(eqs: &[Eq], contact_m: Option<f64>) -> Option<RobustFit> {
     let mut w = vec![1.0; eqs.len()];
-    let mut fit = best_alpha(eqs, &w)?;
+    let mut fit = best_alpha(eqs, contact_m, &w)?;
     for _ in 0..3 {
-        w = huber(eqs, fit.0, &fit.1);
-        fit = best_alpha(eqs, &w)?;
+        w = huber(eqs, fit.0, contact_m, &fit.1);
+        fit = best_alpha(eqs, contact_m, &w)?;
     }
     Some((fit.0, fit.1, fit.2, fit.3, w))
 }
+
+/// The RMS force error of `theta` at Stribeck velocity `alpha` and contact
+/// `contact_m` over `eqs`, N (every equation counted alike).
+fn rms_of(eqs: &[Eq], theta: &Vec5, alpha: f64, contact_m: Option<f64>) -> f64 {
+    (eqs.iter()
+        .map(|e| (e.force - regressors(e, alpha, contact_m).dot(theta)).powi(2))
+        .sum::<f64>()
+        / eqs.len().max(1) as f64)
+        .sqrt()
+}
+
+/// A robust fit: (α, θ, covariance, SSR, weights).
+type RobustFit = (f64, Vec5, Mat, f64, Vec<f64>);
+
+/// The fit of [`robust_fit`], with a contact spring (a workpiece) where one
+/// explains [`CONTACT_GAIN`] or more of the force gap and its stiffness is
+/// resolved (5 σ): the contact the one of [`CONTACT_GRID`] positions over the
+/// stroke `x_range_m` (m) with the least error; `None` for no search (the
+/// model has a load of its own). Returns the fit and the contact, m.
+fn fit_with_contact(eqs: &[Eq], x_range_m: Option<(f64, f64)>) -> Option<(RobustFit, Option<f64>)> {
+    let plain = robust_fit(eqs, None)?;
+    let Some((lo, hi)) = x_range_m else {
+        return Some((plain, None));
+    };
+    let plain_rms = rms_of(eqs, &plain.1, plain.0, None);
+    let best = (1..CONTACT_GRID)
+        .map(|k| lo + (hi - lo) * k as f64 / CONTACT_GRID as f64)
+        .filter(|c| eqs.iter().filter(|e| e.x > *c).count() >= MIN_CONTACT_EQUATIONS)
+        .filter_map(|c| robust_fit(eqs, Some(c)).map(|f| (rms_of(eqs, &f.1, f.0, Some(c)), c, f)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    match best {
+        Some((rms, c, f)) => {
+            let var = f.3 / (f.4.iter().sum::<f64>() - N as f64).max(1.0);
+            let (k, k_sigma) = (f.1[N - 1], (f.2[(N - 1, N - 1)] * var).sqrt());
+            if rms < (1.0 - CONTACT_GAIN) * plain_rms && k > 5.0 * k_sigma {
+                Some((f, Some(c)))
+            } else {
+                Some((plain, None))
+            }
+        }
+        None => Some((plain, None)),
+    }
+}
+
+/// Fewest equations in contact a spring is fitted on.
+const MIN_CONTACT_EQUATIONS: usize = 50;
 
 impl Mechanics {
     /// `p` with what was identified put in: the mass and, in both directions,
@@ -347,6 +421,10 @@ impl Mechanics {
         }
         out.friction.set_extend(f);
         out.friction.retract = None;
+        if let Some((k, contact_m)) = self.contact_spring {
+            out.load.stiffness_n_per_m = k.value;
+            out.load.contact_m = contact_m;
+        }
         out
     }
 }

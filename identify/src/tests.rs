@@ -252,9 +252,58 @@ fn single_rod_friction_and_weight_are_recovered() {
     );
     assert!(m.gap_after_n < 0.2 * m.gap_before_n, "{m:?}");
     assert!(matches!(m.mass_kg, Found::NotIdentifiable(_)), "{m:?}");
+    // no workpiece on this cycle: no contact spring
+    assert!(m.contact_spring.is_none(), "{m:?}");
     let applied = m.apply(&model);
     assert_eq!(applied.mass_kg, model.mass_kg);
     assert_eq!(applied.friction.extend().slip_n, coulomb);
+}
+
+/// The press rig (double-rod, 27.5 kg) on its press cycle, whose workpiece
+/// (2e6 N/m touching at 0.20 m) no model holds: the force balance finds the
+/// workpiece's spring (stiffness within 10 %, contact within 1 cm), and with
+/// it the Coulomb friction within 10 % and the mass within 10 %; the gap falls
+/// to a fifth. `apply` puts the spring into the model's load.
+#[test]
+fn a_workpieces_spring_is_found_and_the_mechanics_fitted_with_it() {
+    let rig = ActuatorParams::press();
+    let rows = record(&rig, "press", 60.0, 0);
+    let m = identify_mechanics(&rig, 1e-3, &rows).expect("identified");
+    let workpiece = Scenario::by_name("press", 3, 60.0).expect("scenario").spring;
+    let (k, contact_m) = m.contact_spring.expect("a contact spring");
+    assert!(
+        (k.value / workpiece.stiffness_n_per_m - 1.0).abs() < 0.1,
+        "stiffness {k:?} (the workpiece's {})",
+        workpiece.stiffness_n_per_m
+    );
+    assert!(
+        (contact_m - workpiece.contact_m).abs() < 0.01,
+        "contact {contact_m} m"
+    );
+    let coulomb = value(&m.coulomb_n);
+    let f = rig.friction.extend();
+    assert!(
+        (coulomb / f.slip_n - 1.0).abs() < 0.1,
+        "Coulomb {coulomb} N (rig {})",
+        f.slip_n
+    );
+    let mass = value(&m.mass_kg);
+    assert!(
+        (mass / rig.mass_kg - 1.0).abs() < 0.1,
+        "mass {mass} kg (rig {})",
+        rig.mass_kg
+    );
+    assert!(m.gap_after_n < 0.2 * m.gap_before_n, "{m:?}");
+    let applied = m.apply(&rig);
+    assert_eq!(applied.load.stiffness_n_per_m, k.value);
+    assert_eq!(applied.load.contact_m, contact_m);
+    // with the spring in the model, the fit does not look for another
+    let again = identify_mechanics(&applied, 1e-3, &rows).expect("identified");
+    assert!(again.contact_spring.is_none(), "{again:?}");
+    assert!(
+        (value(&again.coulomb_n) / coulomb - 1.0).abs() < 0.05,
+        "{again:?}"
+    );
 }
 
 /// A hold (the rod never slides) is refused with the reason.

@@ -258,6 +258,14 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
             ] {
                 eprintln!("{}", found_line(name, found, unit, scale, model));
             }
+            if let Some((k, contact_m)) = mech.contact_spring {
+                eprintln!(
+                    "  a workpiece: a contact spring of {:.4e} ± {:.1e} N/m from {:.1} mm on (in the force balance, and now in the model's load)",
+                    k.value,
+                    k.sigma,
+                    contact_m * 1e3
+                );
+            }
             mechanics = Some(mech);
         }
         Err(e) => eprintln!("  mass and friction: not identified: {e}"),
