@@ -276,6 +276,12 @@ pub(crate) enum Command {
         /// A leak, KIND:SIZE@ONSET[,ramp=SECONDS][,law=sqrt|linear], e.g. ext1:0.3lpm@20s or int:k=6e-12@18s,law=linear (`none`: healthy).
         #[arg(long = "fault")]
         faults: Vec<String>,
+        /// A sensor fault (repeatable): CHANNEL:KIND@ONSET, CHANNEL p1, p2 or x, KIND drift=RATE[,max=SIZE],
+        /// span=±PERCENT%, stuck or spikes=SIZE,rate=COUNT/s; e.g. p1:drift=200kPa/min,max=500kPa@30s,
+        /// p2:span=+2%@20s, p1:stuck@40s, x:drift=1mm/min@10s, p2:spikes=2MPa,rate=0.5/s@0s. It changes the
+        /// readings only (a closed loop's controller reads the faulty x), not the rig.
+        #[arg(long = "sensor-fault", value_name = "SPEC")]
+        sensor_faults: Vec<String>,
         /// Friction variant of the rig (default: as configured, the thesis' friction).
         #[arg(long, value_enum)]
         rig_variant: Option<RigVariant>,

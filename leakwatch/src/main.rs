@@ -159,6 +159,7 @@ fn run(cli: Cli) -> Result<(), String> {
             seconds,
             seed,
             faults,
+            sensor_faults,
             rig_variant,
             config,
             out,
@@ -170,7 +171,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 faults,
                 rig_variant: rig_variant.map(Into::into),
             };
-            simulate::command(config, req, &out, force)
+            simulate::command(config, req, &sensor_faults, &out, force)
         }
         Command::Plot { input, out } => plots::command(&input, &out, force),
         Command::Init { single_rod, out } => init::command(single_rod, &out, force),

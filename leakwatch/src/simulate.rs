@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use model::fault::{Fault, FaultSchedule};
 use model::params::FrictionPreset;
 use model::scenario::Scenario;
+use model::sensor_fault::SensorFaultSchedule;
 use model::sim::Simulator;
 
 use crate::config::Config;
@@ -47,6 +48,17 @@ pub fn check_seconds(seconds: f64, period_s: f64) -> Result<(), String> {
 
 /// Builds the simulator for a request.
 pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), String> {
+    build_with_sensor_faults(cfg, req, &[])
+}
+
+/// Builds the simulator for a request with the sensor faults `sensor_faults`
+/// (specs `CHANNEL:KIND@ONSET`, [`model::sensor_fault::SensorFault::parse`]; `none` is skipped).
+pub fn build_with_sensor_faults(
+    cfg: &Config,
+    req: &SimulateRequest,
+    sensor_faults: &[String],
+) -> Result<(Simulator, f64), String> {
+    let sensor_schedule = SensorFaultSchedule::parse_all(sensor_faults).map_err(|e| e.to_string())?;
     if let Some(s) = req.seconds {
         check_seconds(s, cfg.sim.sample_period_s)?;
     }
@@ -65,8 +77,9 @@ pub fn build(cfg: &Config, req: &SimulateRequest) -> Result<(Simulator, f64), St
             .faults
             .push(Fault::parse(spec, &rig).map_err(|e| e.to_string())?);
     }
-    let sim =
-        Simulator::new(rig, cfg.sensors, cfg.sim, scenario, schedule, req.seed).map_err(|e| e.to_string())?;
+    let sim = Simulator::new(rig, cfg.sensors, cfg.sim, scenario, schedule, req.seed)
+        .and_then(|sim| sim.with_sensor_faults(sensor_schedule))
+        .map_err(|e| e.to_string())?;
     Ok((sim, seconds))
 }
 
@@ -80,7 +93,16 @@ pub fn run(
     force: bool,
     config: Option<&Path>,
 ) -> Result<usize, String> {
-    let (mut sim, seconds) = build(cfg, req)?;
+    write_run(build(cfg, req)?, out, force, config)
+}
+
+/// Runs the simulator `sim` for `seconds` (s) and writes the CSV to `out`, as [`run`].
+fn write_run(
+    (mut sim, seconds): (Simulator, f64),
+    out: &Path,
+    force: bool,
+    config: Option<&Path>,
+) -> Result<usize, String> {
     if out == Path::new("-") {
         let samples = sim.run(seconds);
         let mut w = std::io::BufWriter::new(std::io::stdout().lock());
@@ -95,12 +117,20 @@ pub fn run(
     write_csv(&mut w, &samples).map_err(|e| dataset::output::message(out, &e))
 }
 
-/// `leakwatch simulate`: simulates `req` with the configuration `config` (or
-/// ./leakwatch.toml, or the defaults), writes the CSV to `out` and says how much.
-pub fn command(config: Option<PathBuf>, req: SimulateRequest, out: &Path, force: bool) -> Result<(), String> {
+/// `leakwatch simulate`: simulates `req` with the sensor faults `sensor_faults`
+/// and the configuration `config` (or ./leakwatch.toml, or the defaults), writes
+/// the CSV to `out` and says how much.
+pub fn command(
+    config: Option<PathBuf>,
+    req: SimulateRequest,
+    sensor_faults: &[String],
+    out: &Path,
+    force: bool,
+) -> Result<(), String> {
     let config = Config::pick(config);
     let cfg = Config::load_or_default(config.as_deref())?;
-    let n = run(&cfg, &req, out, force, config.as_deref())?;
+    let built = build_with_sensor_faults(&cfg, &req, sensor_faults)?;
+    let n = write_run(built, out, force, config.as_deref())?;
     if out.as_os_str() == "-" {
         eprintln!("wrote {n} samples to standard output");
     } else {

@@ -39,6 +39,61 @@ fn simulate_writes_the_documented_csv() {
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
 }
 
+/// `--sensor-fault` drifts the p1 column by its equation, against the healthy
+/// run of the same seed, to one ADC step (5.05 kPa); the other columns and the
+/// rows before the onset are the healthy ones.
+#[test]
+fn simulate_drifts_a_pressure_transducer() {
+    let d = tmpdir("sim-sensor-fault");
+    let (healthy, faulty) = (d.join("healthy.csv"), d.join("drift.csv"));
+    let args = |out: &std::path::Path, fault: &[&str]| {
+        let mut a = vec!["simulate", "--scenario", "loaded-sine", "--seconds", "30"];
+        a.extend_from_slice(fault);
+        a.extend(["--out", out.to_str().unwrap()]);
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    // 600 kPa/min = 10 kPa/s from 10 s, at most 100 kPa (from 20 s)
+    let spec = ["--sensor-fault", "p1:drift=600kPa/min,max=100kPa@10s"];
+    for (out, fault) in [(&healthy, &[][..]), (&faulty, &spec[..])] {
+        let a = args(out, fault);
+        let o = leakwatch(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |p: &std::path::Path| dataset::read_csv(p, dataset::Limits::default()).unwrap().samples;
+    let (h, f) = (read(&healthy), read(&faulty));
+    assert_eq!((h.len(), f.len()), (30_000, 30_000));
+    for (t, want_pa) in [(15.0, 50e3), (25.0, 100e3)] {
+        let i = (t * 1000.0) as usize;
+        assert_eq!(f[i].t_s, t);
+        let offset = f[i].p1_pa - h[i].p1_pa;
+        assert!(
+            (offset - want_pa).abs() <= 5.06e3,
+            "t = {t} s: p1 offset {offset} Pa"
+        );
+    }
+    assert!(f[..10_000].iter().zip(&h).all(|(a, b)| a.p1_pa == b.p1_pa));
+    assert!(f
+        .iter()
+        .zip(&h)
+        .all(|(a, b)| (a.x_m, a.p2_pa, a.u_v) == (b.x_m, b.p2_pa, b.u_v)));
+    // a bad spec names its bad part
+    let o = leakwatch(&[
+        "simulate",
+        "--scenario",
+        "loaded-sine",
+        "--sensor-fault",
+        "p1:drift=1mm/min@1s",
+        "--out",
+        "-",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("p1 reads a pressure, so the unit is one of Pa, kPa, MPa or bar, not `mm`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// `--out -` writes the CSV to standard output (the same bytes as the file); a
 /// reader that stops early (`| head`) ends it with a named error, not a panic.
 #[test]

@@ -1,7 +1,7 @@
 //! Physics of a servovalve-driven hydraulic cylinder (docs/model.md), double-rod
 //! or single-rod: parameters (also from a rig's datasheet), valve, chambers, friction, leakage laws and load; the
 //! continuous dynamics; the simulated rig (RK4 with sub-steps, sensors,
-//! seeded noise, fault schedule); and the scenarios of the thesis.
+//! seeded noise, leak and sensor fault schedules); and the scenarios of the thesis.
 //!
 //! All quantities are SI (m, s, Pa, m³/s, N, V) unless a name says otherwise.
 
@@ -17,6 +17,7 @@ pub mod rigs;
 pub mod rng;
 pub mod sample;
 pub mod scenario;
+pub mod sensor_fault;
 pub mod sensors;
 pub mod sim;
 pub mod units;
@@ -28,5 +29,6 @@ pub use leakage::{LeakLaw, LeakPath};
 pub use params::{ActuatorParams, FrictionPreset};
 pub use sample::Sample;
 pub use scenario::Scenario;
+pub use sensor_fault::{SensorFault, SensorFaultSchedule};
 pub use sensors::SensorParams;
 pub use sim::{OilWarmUp, SimSettings, Simulator};

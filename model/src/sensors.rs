@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::rng::Rng;
+use crate::sensor_fault::Distortion;
 
 /// Sensor characteristics of the simulated rig.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -221,15 +222,24 @@ impl SensorParams {
     /// there is any, so a rig without keeps its random sequence), then the count.
     #[inline]
     pub fn encoder(&self, x_m: f64, rng: &mut Rng) -> f64 {
+        self.encoder_distorted(x_m, Distortion::NONE, rng)
+    }
+
+    /// [`SensorParams::encoder`] of a faulty transducer, m: the distortion's gain
+    /// and offset before the noise, its spike after it, then the count (with
+    /// ideal sensors: the true position distorted).
+    #[inline]
+    pub fn encoder_distorted(&self, x_m: f64, d: Distortion, rng: &mut Rng) -> f64 {
+        let x = d.before_noise(x_m);
         if !self.enabled {
-            return x_m;
+            return x + d.spike_si;
         }
         let x = if self.position_noise_m > 0.0 {
-            x_m + self.position_noise_m * rng.normal()
+            x + self.position_noise_m * rng.normal()
         } else {
-            x_m
+            x
         };
-        (x / self.encoder_resolution_m).round() * self.encoder_resolution_m
+        ((x + d.spike_si) / self.encoder_resolution_m).round() * self.encoder_resolution_m
     }
 
     /// Quantises `value` over [lo, hi] with this ADC.
@@ -257,12 +267,23 @@ impl SensorParams {
     /// transducer, Pa: its span error and offset, then noise and the ADC.
     #[inline]
     pub fn pressure_channel(&self, ch: usize, p_pa: f64, rng: &mut Rng) -> f64 {
+        self.pressure_channel_distorted(ch, p_pa, Distortion::NONE, rng)
+    }
+
+    /// [`SensorParams::pressure_channel`] of a faulty transducer, Pa: the
+    /// installation's span error and offset, the distortion's gain and offset,
+    /// the noise, the distortion's spike, then the ADC (with ideal sensors: the
+    /// pressure at the transducer distorted).
+    #[inline]
+    pub fn pressure_channel_distorted(&self, ch: usize, p_pa: f64, d: Distortion, rng: &mut Rng) -> f64 {
         if !self.enabled {
-            return p_pa;
+            return d.before_noise(p_pa) + d.spike_si;
         }
-        self.pressure(
-            p_pa * (1.0 + self.pressure_gain_error[ch]) + self.pressure_offset_pa[ch],
-            rng,
+        let p = d.before_noise(p_pa * (1.0 + self.pressure_gain_error[ch]) + self.pressure_offset_pa[ch]);
+        self.adc(
+            p + self.pressure_noise_pa * rng.normal() + d.spike_si,
+            0.0,
+            self.pressure_full_scale_pa,
         )
     }
 

@@ -1,6 +1,6 @@
 //! The simulated rig (docs/model.md#the-simulator): the continuous model integrated with RK4
 //! sub-steps, sampled at 1 kHz through the sensor models, driven by a
-//! scenario, with a fault schedule. It is deliberately not the estimator's
+//! scenario, with a leak fault schedule and sensor faults. It is deliberately not the estimator's
 //! forward-Euler model.
 
 use serde::{Deserialize, Serialize};
@@ -12,6 +12,7 @@ use crate::params::{ActuatorParams, InvalidParam};
 use crate::rng::Rng;
 use crate::sample::Sample;
 use crate::scenario::Scenario;
+use crate::sensor_fault::{Channel, SensorFaultRun, SensorFaultSchedule};
 use crate::sensors::SensorParams;
 use crate::units::m3_s_to_lpm;
 
@@ -174,6 +175,10 @@ pub struct Simulator {
     lagged: Option<[f64; 2]>,
     /// The rig at its oil law's reference temperature (with a warm-up only).
     rig_at_reference: Option<ActuatorParams>,
+    /// The noise seed.
+    seed: u64,
+    /// The sensor faults at work (None: healthy transducers).
+    sensor_faults: Option<SensorFaultRun>,
 }
 
 impl Simulator {
@@ -227,6 +232,8 @@ impl Simulator {
             k: 0,
             lagged: None,
             rig_at_reference,
+            seed,
+            sensor_faults: None,
             truth: Truth {
                 t_s: 0.0,
                 state,
@@ -234,6 +241,16 @@ impl Simulator {
                 leaks: LeakFlows::default(),
             },
         })
+    }
+
+    /// The simulator with sensor faults (docs/model.md#sensor-faults): they
+    /// distort the readings, the controller of a closed-loop scenario included
+    /// (it reads the measured position), and never the rig's physics; spikes are
+    /// drawn from a generator of their own, seeded from the run's seed.
+    pub fn with_sensor_faults(mut self, schedule: SensorFaultSchedule) -> Result<Simulator, InvalidParam> {
+        schedule.validate()?;
+        self.sensor_faults = (!schedule.faults.is_empty()).then(|| SensorFaultRun::new(schedule, self.seed));
+        Ok(self)
     }
 
     /// The rig's parameters (may be changed between samples, e.g. to model
@@ -298,19 +315,7 @@ impl Simulator {
         }
         let leaks = self.leaks_at(t);
         let s = self.state;
-        let x_meas = self.sensors.encoder(s[I_X], &mut self.rng);
-        let (p1_meas, p2_meas) = if self.sensors.has_installation_effects() {
-            let [p1, p2] = self.at_transducers(&s);
-            (
-                self.sensors.pressure_channel(0, p1, &mut self.rng),
-                self.sensors.pressure_channel(1, p2, &mut self.rng),
-            )
-        } else {
-            (
-                self.sensors.pressure(s[1], &mut self.rng),
-                self.sensors.pressure(s[2], &mut self.rng),
-            )
-        };
+        let [x_meas, p1_meas, p2_meas] = self.read_sensors(&s, t);
         let x_sp_meas = self.sensors.spool(s[0], &mut self.rng);
         let u = self.scenario.command_v(t, x_meas);
         let ripple = self.settings.supply_ripple_fraction;
@@ -366,6 +371,35 @@ impl Simulator {
         self.state = y;
         self.k += 1;
         sample
+    }
+
+    /// The readings [x (m), p1 (Pa), p2 (Pa)] of state `s` at time `t_s` (s):
+    /// the transducers' values (with the installation's effects), distorted by
+    /// the sensor faults, through the sensor models. The noise is drawn in the
+    /// same order with and without faults.
+    fn read_sensors(&mut self, s: &State, t_s: f64) -> [f64; 3] {
+        let p = if self.sensors.has_installation_effects() {
+            self.at_transducers(s)
+        } else {
+            [s[1], s[2]]
+        };
+        let (sensors, rng) = (&self.sensors, &mut self.rng);
+        let Some(run) = self.sensor_faults.as_mut() else {
+            return [
+                sensors.encoder(s[I_X], rng),
+                sensors.pressure_channel(0, p[0], rng),
+                sensors.pressure_channel(1, p[1], rng),
+            ];
+        };
+        let dt = self.settings.sample_period_s;
+        let x = run.read(Channel::X, t_s, dt, |d| sensors.encoder_distorted(s[I_X], d, rng));
+        let p1 = run.read(Channel::P1, t_s, dt, |d| {
+            sensors.pressure_channel_distorted(0, p[0], d, rng)
+        });
+        let p2 = run.read(Channel::P2, t_s, dt, |d| {
+            sensors.pressure_channel_distorted(1, p[1], d, rng)
+        });
+        [x, p1, p2]
     }
 
     /// The pressures at the transducers, Pa: at the valve manifold the chambers'
