@@ -39,6 +39,8 @@ impl WireCode for EventKind {
             EventKind::SensorSaturated => event_kind::SENSOR_SATURATED,
             EventKind::SensorDead => event_kind::SENSOR_DEAD,
             EventKind::NotArmed => event_kind::NOT_ARMED,
+            EventKind::SensorOffset => event_kind::SENSOR_OFFSET,
+            EventKind::SensorSpikes => event_kind::SENSOR_SPIKES,
         }
     }
 
@@ -53,6 +55,8 @@ impl WireCode for EventKind {
             event_kind::SENSOR_SATURATED => EventKind::SensorSaturated,
             event_kind::SENSOR_DEAD => EventKind::SensorDead,
             event_kind::NOT_ARMED => EventKind::NotArmed,
+            event_kind::SENSOR_OFFSET => EventKind::SensorOffset,
+            event_kind::SENSOR_SPIKES => EventKind::SensorSpikes,
             other => return Err(format!("unknown event kind code {other}")),
         })
     }
@@ -140,6 +144,8 @@ mod tests {
             EventKind::SensorSaturated,
             EventKind::SensorDead,
             EventKind::NotArmed,
+            EventKind::SensorOffset,
+            EventKind::SensorSpikes,
         ];
         for k in kinds {
             assert_eq!(EventKind::from_code(k.code()), Ok(k));

@@ -26,6 +26,11 @@ pub enum EventKind {
     SensorDead,
     /// The warm-up was too short (or too disturbed) to learn thresholds: detection is not armed.
     NotArmed,
+    /// A pressure transducer reads off (an offset or a span error): the leak
+    /// sizes move as the filter's response to an offset on that channel predicts.
+    SensorOffset,
+    /// A transducer gives outliers: single readings that jump away and straight back.
+    SensorSpikes,
 }
 
 impl EventKind {
@@ -44,6 +49,8 @@ impl EventKind {
             EventKind::SensorSaturated => "sensor-saturated",
             EventKind::SensorDead => "sensor-dead",
             EventKind::NotArmed => "not-armed",
+            EventKind::SensorOffset => "sensor-offset",
+            EventKind::SensorSpikes => "sensor-spikes",
         }
     }
 

@@ -80,6 +80,10 @@ pub struct LeakSizeDetector {
     strong_since_s: Option<f64>,
     active: Option<Active>,
     next_id: u64,
+    /// A pressure transducer that reads off, told from a leak.
+    offsets: crate::offset::OffsetWatch,
+    /// A `sensor-offset` event waiting for [`Self::take_sensor_event`].
+    sensor_event: Option<LeakEvent>,
 }
 
 /// The threshold in spreads for a requested false-alarm rate `rate_per_h`, with
@@ -384,6 +388,7 @@ impl CommissioningLearner {
 impl LeakSizeDetector {
     /// A detector with settings `cfg`.
     pub fn new(cfg: ClassifierConfig) -> Self {
+        let offsets = crate::offset::OffsetWatch::new(cfg.pressure_full_scale_pa);
         LeakSizeDetector {
             internal_factors: cfg
                 .commissioning
@@ -422,7 +427,24 @@ impl LeakSizeDetector {
             strong_since_s: None,
             active: None,
             next_id: 1,
+            offsets,
+            sensor_event: None,
         }
+    }
+
+    /// No leak evidence before `t_s` (s): a reading the filter took in was an outlier.
+    pub fn hold_evidence_until(&mut self, t_s: f64) {
+        self.invalid_until_s = self.invalid_until_s.max(t_s);
+    }
+
+    /// The `sensor-offset` event the last estimate gave, if any (taken once).
+    pub fn take_sensor_event(&mut self) -> Option<LeakEvent> {
+        self.sensor_event.take()
+    }
+
+    /// The pressure transducer named as reading off, if one stands.
+    pub fn standing_offset(&self) -> Option<crate::offset::StandingOffset> {
+        self.offsets.standing()
     }
 
     /// Whether a leak event (kind pending or named) is open.
@@ -494,6 +516,7 @@ impl LeakSizeDetector {
     /// evidence until the filter has converged again and `recovery_s` has passed;
     /// one not yet armed starts its warm-up again.
     pub fn restart(&mut self) {
+        self.offsets.restart();
         if self.is_armed() {
             self.awaiting_convergence = true;
             return;

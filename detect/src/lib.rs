@@ -43,6 +43,8 @@ mod config;
 mod events;
 mod leak_size;
 mod mae;
+pub mod offset;
+pub mod spikes;
 mod stage;
 mod track;
 

@@ -4,14 +4,27 @@
 use crate::{ClassifierConfig, EventKind, LeakEvent, LeakSizeDetector, MaeDetector, Phase, CHANNELS};
 use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET};
 
+/// A pressure reading repeated exactly this many times holds the leak decision
+/// (for `recovery_s` after) until it is judged stuck or moves again: a healthy
+/// transducer's noise spans several ADC counts (the longest repeat in the
+/// development recordings is 22 samples), and a stuck one kicks the leak
+/// sizes at once, long before `stuck_samples` names it.
+pub const STUCK_SUSPECT_SAMPLES: u32 = 200;
+
 /// Per-channel sensor watch: stuck, saturated, dead.
 #[derive(Debug, Clone, Copy, Default)]
 struct ChannelWatch {
+    /// Time of the last reading, s.
+    last_t_s: f64,
     last: f64,
     same: u32,
     saturated: u32,
     dead: u32,
     raised: Option<(EventKind, u64)>,
+    /// Outliers.
+    spikes: crate::spikes::SpikeWatch,
+    /// The `sensor-spikes` event raised on this channel, by id.
+    spikes_raised: Option<u64>,
 }
 
 /// The classifier stage: both detectors plus sensor and filter-health checks.
@@ -145,6 +158,9 @@ impl Classifier {
         if let Some(ev) = ev.take() {
             emit(ev);
         }
+        if let Some(ev) = self.leak_size.take_sensor_event() {
+            emit(ev);
+        }
         if self.cfg.thesis_baseline {
             self.thesis.on_estimate(thesis, &mut ev);
             if let Some(ev) = ev {
@@ -182,6 +198,51 @@ impl Classifier {
         ev
     }
 
+    /// Outliers on channel `c` (watch `w`) at reading `v` (time `t_s`, `dt_s`
+    /// after the last): each blinds the leak detector for `recovery_s` (the
+    /// filter took it in); three in 30 s raise `sensor-spikes`.
+    fn check_spikes(
+        &mut self,
+        c: usize,
+        w: &mut ChannelWatch,
+        t_s: f64,
+        dt_s: f64,
+        v: f64,
+        emit: &mut impl FnMut(LeakEvent),
+    ) {
+        let unit = if c == 0 { ("mm", 1e3) } else { ("MPa", 1e-6) };
+        let floor = if c == 0 {
+            crate::spikes::X_SPIKE_FLOOR_M
+        } else {
+            crate::spikes::PRESSURE_SPIKE_FLOOR * self.cfg.pressure_full_scale_pa
+        };
+        if w.spikes.on_reading(t_s, dt_s, v, floor).is_some() {
+            self.leak_size.hold_evidence_until(t_s + self.cfg.recovery_s);
+            if w.spikes_raised.is_none() && w.spikes.is_spiking(t_s) {
+                let detail = format!(
+                    "{} gives outliers: {} readings in {:.0} s jumped away and straight back (largest {:.2} {}); \
+                     each one blinds the leak decision for {:.0} s",
+                    CHANNELS[c],
+                    crate::spikes::SPIKES_TO_RAISE,
+                    crate::spikes::SPIKE_WINDOW_S,
+                    w.spikes.largest * unit.1,
+                    unit.0,
+                    self.cfg.recovery_s
+                );
+                let ev = self.plain(EventKind::SensorSpikes, t_s, CHANNELS[c], &detail);
+                w.spikes_raised = Some(ev.event_id);
+                emit(ev);
+            }
+        } else if let (Some(id), true) = (w.spikes_raised, w.spikes.is_quiet(t_s)) {
+            let mut ev = self.plain(EventKind::SensorSpikes, t_s, CHANNELS[c], "no outlier for 30 s");
+            ev.phase = Phase::Cleared;
+            ev.event_id = id;
+            w.spikes_raised = None;
+            w.spikes.largest = 0.0;
+            emit(ev);
+        }
+    }
+
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
         for c in 0..3 {
             let v = e.measured[c];
@@ -207,6 +268,16 @@ impl Classifier {
             } else {
                 None
             };
+            if c > 0 && w.same >= STUCK_SUSPECT_SAMPLES {
+                self.leak_size.hold_evidence_until(e.t_s + self.cfg.recovery_s);
+            }
+            let dt_s = if w.last_t_s > 0.0 {
+                (e.t_s - w.last_t_s).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            w.last_t_s = e.t_s;
+            self.check_spikes(c, &mut w, e.t_s, dt_s, v, emit);
             match (now, w.raised) {
                 (Some(k), None) => {
                     let detail = match k {

@@ -58,6 +58,7 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         oil_temp_sigma_k: f64::NAN,
         laminar_factor_sigma: f64::NAN,
         null_leakage_band_lpm: f64::NAN,
+        offset_response_lpm_per_mpa: [[0.0; 3]; 2],
     }
 }
 

@@ -83,6 +83,7 @@ impl EstimateWire for StageEstimate {
             oil_temp_sigma_k: f64::NAN,
             laminar_factor_sigma: f64::NAN,
             null_leakage_band_lpm: f64::NAN,
+            offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,

@@ -80,7 +80,8 @@ class EstimateFrame(ctypes.Structure):
 
 
 KINDS = {1: "ext1", 2: "ext2", 3: "int", 10: "estimator-reset", 11: "sensor-stuck",
-         12: "sensor-saturated", 13: "sensor-dead", 14: "not-armed"}
+         12: "sensor-saturated", 13: "sensor-dead", 14: "not-armed",
+         15: "sensor-offset", 16: "sensor-spikes"}
 PHASES = {0: "raised", 1: "updated", 2: "cleared"}
 
 

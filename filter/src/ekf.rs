@@ -288,6 +288,24 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         (acc[0] + acc[1]) + (acc[2] + acc[3])
     }
 
+    /// Column `i` of the gain of the update just made, SI (state units per
+    /// unit of measurement `i`): K[:, i] = P⁺[:, s]/r_i for measured state `s`,
+    /// the batch gain the scalar updates amount to (R is diagonal).
+    pub fn gain_column(&self, s: usize, i: usize) -> SVector<f64, N> {
+        let mut g = SVector::<f64, N>::zeros();
+        for col in &self.s[..N] {
+            let c = col[s];
+            for (j, v) in g.iter_mut().enumerate() {
+                *v += col[j] * c;
+            }
+        }
+        let k = self.x_scale[s] / self.r[i];
+        for (j, v) in g.iter_mut().enumerate() {
+            *v *= self.x_scale[j] * k;
+        }
+        g
+    }
+
     /// Whether the state and the factor are finite.
     pub fn is_finite(&self) -> bool {
         // every value tested, without a branch per value (it vectorises)

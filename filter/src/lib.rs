@@ -10,6 +10,7 @@
 //! This crate is pure (no bus, command line or config files); the `estimator`
 //! crate is the process around it and re-exports everything here.
 
+pub mod bias;
 pub mod ekf;
 pub mod mae;
 pub mod oil;
@@ -20,6 +21,7 @@ use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE, I_QE1, I_QI,
 use model::{ActuatorParams, Sample};
 use nalgebra::{SMatrix, SVector};
 
+pub use bias::BiasResponse;
 pub use ekf::{Ekf, EkfError, Innovation};
 pub use mae::MovingMae;
 pub use oil::OilFromStiffness;
@@ -113,6 +115,10 @@ pub struct Estimate {
     pub laminar_factor_sigma: f64,
     /// That σ times the model's null leakage per path at p_s/2, L/min.
     pub null_leakage_band_lpm: f64,
+    /// How an offset of 1 MPa on p1 (row 0) and on p2 (row 1) would have moved
+    /// the leak sizes q_e1, q_e2, q_i by now, L/min per MPa ([`bias`]); zero
+    /// for the layouts without leak sizes.
+    pub offset_response_lpm_per_mpa: [[f64; 3]; 2],
 }
 
 impl Estimate {
@@ -136,6 +142,7 @@ impl Estimate {
             oil_temp_sigma_k: f64::NAN,
             laminar_factor_sigma: 0.0,
             null_leakage_band_lpm: 0.0,
+            offset_response_lpm_per_mpa: [[0.0; 3]; 2],
         }
     }
 }
@@ -202,6 +209,8 @@ pub struct Estimator {
     leaks_converged: bool,
     /// Samples in a row the rod's velocity estimate has been within noise of zero.
     still_samples: u32,
+    /// How the estimate answers a pressure transducer's offset.
+    offset_response: BiasResponse,
     diverged_samples: u32,
     /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
     reanchor_pending: bool,
@@ -276,6 +285,7 @@ impl Estimator {
             t0_s: 0.0,
             leaks_converged: false,
             still_samples: 0,
+            offset_response: BiasResponse::default(),
             diverged_samples: 0,
             reanchor_pending: false,
             measured_p_range_pa,
@@ -309,7 +319,11 @@ impl Estimator {
                 use_channel: [true; 3],
                 usable: true,
             };
-            let _ = step_filter(w, model, &input, out, &mut 0);
+            let memory = StepMemory {
+                still_samples: &mut 0,
+                offset_response: &mut BiasResponse::default(),
+            };
+            let _ = step_filter(w, model, &input, out, memory);
         }
         if !self.started {
             return;
@@ -501,6 +515,7 @@ impl Estimator {
                 flags |= FLAG_RESET;
             }
             self.started = true;
+            self.offset_response.clear();
             self.t0_s = s.t_s;
             self.leaks_converged = false;
             self.diverged_samples = 0;
@@ -518,6 +533,7 @@ impl Estimator {
                 Filter::S12(e) => reanchor_filter::<12, 12>(e, tuning, &self.model, measured),
             }
             self.reanchor_pending = false;
+            self.offset_response.clear();
             self.diverged_samples = 0;
             flags |= FLAG_REANCHORED;
         }
@@ -538,13 +554,16 @@ impl Estimator {
             use_channel,
             usable,
         };
-        let still = &mut self.still_samples;
+        let memory = StepMemory {
+            still_samples: &mut self.still_samples,
+            offset_response: &mut self.offset_response,
+        };
         let step = match &mut self.filter {
-            Filter::S6(e) => step_filter(e, &self.model, &input, &mut out, still),
-            Filter::S7(e) => step_filter(e, &self.model, &input, &mut out, still),
-            Filter::S10(e) => step_filter(e, &self.model, &input, &mut out, still),
-            Filter::S11(e) => step_filter(e, &self.model, &input, &mut out, still),
-            Filter::S12(e) => step_filter(e, &self.model, &input, &mut out, still),
+            Filter::S6(e) => step_filter(e, &self.model, &input, &mut out, memory),
+            Filter::S7(e) => step_filter(e, &self.model, &input, &mut out, memory),
+            Filter::S10(e) => step_filter(e, &self.model, &input, &mut out, memory),
+            Filter::S11(e) => step_filter(e, &self.model, &input, &mut out, memory),
+            Filter::S12(e) => step_filter(e, &self.model, &input, &mut out, memory),
         };
         match step {
             Ok(clamped) => {
@@ -658,6 +677,14 @@ fn predict_only<const N: usize, const W: usize>(e: &mut Ekf<N, 3, W>, model: &Pr
     e.predict(x, &f).is_ok()
 }
 
+/// What a filter step carries from one sample to the next besides the filter.
+struct StepMemory<'a> {
+    /// Samples the rod has rested, for θ's hold.
+    still_samples: &'a mut u32,
+    /// How the estimate answers a pressure offset.
+    offset_response: &'a mut BiasResponse,
+}
+
 /// What one sample gives a filter step.
 struct StepInput {
     /// Valve command, V.
@@ -671,7 +698,6 @@ struct StepInput {
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
-/// (`still_samples` counts the samples the rod has rested, for θ's hold.)
 ///
 /// On an x86-64 processor with AVX2 and FMA the whole step (the model's too)
 /// runs compiled for them: the model's arithmetic gives the same bits either
@@ -682,15 +708,15 @@ fn step_filter<const N: usize, const W: usize>(
     model: &ProcessModel,
     input: &StepInput,
     out: &mut Estimate,
-    still_samples: &mut u32,
+    memory: StepMemory,
 ) -> Result<bool, EkfError> {
     #[cfg(target_arch = "x86_64")]
     if ekf::fused_vector_unit() {
         // SAFETY: the processor has AVX2 and FMA (checked just above), the
         // only requirement of a `target_feature` function.
-        return unsafe { step_filter_fma(e, model, input, out, still_samples) };
+        return unsafe { step_filter_fma(e, model, input, out, memory) };
     }
-    step_filter_body::<N, W, ekf::Separate>(e, model, input, out, still_samples)
+    step_filter_body::<N, W, ekf::Separate>(e, model, input, out, memory)
 }
 
 /// [`step_filter_body`] compiled for AVX2 and FMA.
@@ -701,9 +727,9 @@ fn step_filter_fma<const N: usize, const W: usize>(
     model: &ProcessModel,
     input: &StepInput,
     out: &mut Estimate,
-    still_samples: &mut u32,
+    memory: StepMemory,
 ) -> Result<bool, EkfError> {
-    step_filter_body::<N, W, ekf::Fused>(e, model, input, out, still_samples)
+    step_filter_body::<N, W, ekf::Fused>(e, model, input, out, memory)
 }
 
 /// The body of [`step_filter`], its multiply-adds computed by `A` (the filter's
@@ -714,7 +740,7 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     model: &ProcessModel,
     input: &StepInput,
     out: &mut Estimate,
-    still_samples: &mut u32,
+    memory: StepMemory,
 ) -> Result<bool, EkfError> {
     let StepInput {
         u,
@@ -722,6 +748,10 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         use_channel,
         usable,
     } = *input;
+    let StepMemory {
+        still_samples,
+        offset_response,
+    } = memory;
     let (mut x_pred, mut f) = (SVector::<f64, N>::zeros(), SMatrix::<f64, N, N>::zeros());
     let guard = model.step_into(e.state(), u, &mut x_pred, &mut f);
     if N == 12 {
@@ -742,9 +772,11 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         f[(2, I_BULK)] -= from_v2;
     }
     e.predict_lean::<A>(x_pred, &f)?;
+    offset_response.predict(&f);
     let y_pred = ProcessModel::measure(e.state());
     if usable {
         let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, use_channel)?;
+        offset_response.update(e, ProcessModel::MEASURED_STATES, use_channel);
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
@@ -767,6 +799,7 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         out.state[i] = x[i];
         out.sigma[i] = sig[i];
     }
+    out.offset_response_lpm_per_mpa = offset_response.leak_sizes_lpm_per_mpa();
     if N == 12 {
         out.bulk_scale = x[I_BULK];
         out.bulk_scale_sigma = sig[I_BULK];

@@ -53,9 +53,14 @@ pub mod event_kind {
     pub const SENSOR_DEAD: u32 = 13;
     /// The warm-up was too short to learn thresholds: detection is not armed.
     pub const NOT_ARMED: u32 = 14;
+    /// A pressure transducer reads off: an offset or span error that the flow
+    /// balance shows while the valve passes flow.
+    pub const SENSOR_OFFSET: u32 = 15;
+    /// A transducer gives outliers: single readings that jump away and back.
+    pub const SENSOR_SPIKES: u32 = 16;
 
     /// Every kind with its name (the names of events.json).
-    pub const NAMES: [(u32, &str); 9] = [
+    pub const NAMES: [(u32, &str); 11] = [
         (EXT1, "ext1"),
         (EXT2, "ext2"),
         (INTERNAL, "int"),
@@ -65,6 +70,8 @@ pub mod event_kind {
         (SENSOR_SATURATED, "sensor-saturated"),
         (SENSOR_DEAD, "sensor-dead"),
         (NOT_ARMED, "not-armed"),
+        (SENSOR_OFFSET, "sensor-offset"),
+        (SENSOR_SPIKES, "sensor-spikes"),
     ];
 }
 

@@ -277,7 +277,7 @@ pub(crate) enum Command {
         #[arg(long = "fault")]
         faults: Vec<String>,
         /// A sensor fault (repeatable): CHANNEL:KIND@ONSET, CHANNEL p1, p2 or x, KIND drift=RATE[,max=SIZE],
-        /// span=±PERCENT%, stuck or spikes=SIZE,rate=COUNT/s; e.g. p1:drift=200kPa/min,max=500kPa@30s,
+        /// span=±PERCENT%[,ramp=S], stuck or spikes=SIZE,rate=COUNT/s; e.g. p1:drift=200kPa/min,max=500kPa@30s,
         /// p2:span=+2%@20s, p1:stuck@40s, x:drift=1mm/min@10s, p2:spikes=2MPa,rate=0.5/s@0s. It changes the
         /// readings only (a closed loop's controller reads the faulty x), not the rig.
         #[arg(long = "sensor-fault", value_name = "SPEC")]

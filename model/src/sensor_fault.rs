@@ -76,10 +76,13 @@ pub enum SensorFaultKind {
         /// Largest |offset|, Pa or m (infinite: no limit).
         max_abs_si: f64,
     },
-    /// The reading times (1 + g) from the onset, applied to the value before the noise.
+    /// The reading times (1 + g·min(1, (t − t_on)/ramp)) from the onset, applied
+    /// to the value before the noise: the error grows over `ramp_s` (0: at once).
     Span {
         /// g, relative (0.02: reads 2 % high).
         gain_error: f64,
+        /// Time the error takes to grow to g, s (0: at once).
+        ramp_s: f64,
     },
     /// The reading frozen at its value at the onset, noise and all.
     Stuck,
@@ -186,13 +189,16 @@ impl SensorFault {
                     return Err(bad("drift.max_abs_si", max_abs_si, "a positive largest offset"));
                 }
             }
-            SensorFaultKind::Span { gain_error } => {
+            SensorFaultKind::Span { gain_error, ramp_s } => {
                 if !(gain_error.is_finite() && gain_error.abs() <= 0.5) {
                     return Err(bad(
                         "span.gain_error",
                         gain_error,
                         "a span error from -0.5 to 0.5",
                     ));
+                }
+                if !(ramp_s.is_finite() && ramp_s >= 0.0) {
+                    return Err(bad("span.ramp_s", ramp_s, "a ramp of 0 s or more"));
                 }
             }
             SensorFaultKind::Stuck => {}
@@ -271,7 +277,14 @@ impl SensorFaultSchedule {
         for f in self.faults.iter().filter(|f| f.channel == ch && f.active_at(t_s)) {
             match f.kind {
                 SensorFaultKind::Drift { .. } => d.offset_si += f.drift_offset_si(t_s),
-                SensorFaultKind::Span { gain_error } => d.gain *= 1.0 + gain_error,
+                SensorFaultKind::Span { gain_error, ramp_s } => {
+                    let grown = if ramp_s > 0.0 {
+                        ((t_s - f.onset_s) / ramp_s).min(1.0)
+                    } else {
+                        1.0
+                    };
+                    d.gain *= 1.0 + gain_error * grown
+                }
                 SensorFaultKind::Stuck => {}
                 SensorFaultKind::Spikes {
                     amplitude_si,

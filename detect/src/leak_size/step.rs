@@ -172,7 +172,9 @@ impl LeakSizeDetector {
         // even a large rise; during an excursion only a very large one does.
         let reacquiring = e.t_s >= self.reacquire_after_s && e.t_s < self.reacquire_after_s + REACQUIRE_S;
         let invalid = e.t_s < self.invalid_until_s || self.awaiting_convergence || reacquiring;
-        let blind = invalid || e.t_s < self.blind_until_s;
+        // A transducer named as reading off: the sizes carry its offset, no leak is decided.
+        let misreading = self.offsets.standing().is_some();
+        let blind = invalid || misreading || e.t_s < self.blind_until_s;
         if blind {
             self.blind_s += dt_s;
         }
@@ -262,13 +264,29 @@ impl LeakSizeDetector {
             self.thresholds_now()[k].max(floor)
         });
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / thr[k]);
+        if !invalid {
+            let change = self.offsets.on_rise(
+                e.t_s,
+                dt_s,
+                rise,
+                &e.offset_response_lpm_per_mpa,
+                self.internal_factors,
+                thr,
+                &mut self.next_id,
+            );
+            if let Some(change) = change {
+                self.sensor_event = Some(crate::offset::offset_event(change, e.t_s, "leak-size"));
+            }
+        }
+        // Rises an offset on a transducer explains better than any leak are no leak evidence.
+        let offset_like = misreading || self.offsets.vetoes();
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
         let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
         let drift_misfit = misfits_with(drift, self.internal_factors);
         let slow_lead = (0..3)
             .map(|k| (k, (drift[k] - drift_misfit[k]) / self.cfg.slow_leak_lpm.max(1e-9)))
             .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 && slow_lead.1 > 1.0 {
+        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 && slow_lead.1 > 1.0 && !offset_like {
             match self.slow_since_s {
                 Some((j, _)) if j == slow_lead.0 => {}
                 _ => self.slow_since_s = Some((slow_lead.0, e.t_s)),
@@ -291,7 +309,10 @@ impl LeakSizeDetector {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
-            let evidence = !invalid && physical && (!blind || rise[k] > self.cfg.excursion_override * thr);
+            let evidence = !invalid
+                && !offset_like
+                && physical
+                && (!blind || rise[k] > self.cfg.excursion_override * thr);
             let ratio = rise[k] / thr;
             if evidence
                 && self.cfg.pending_factor > 0.0

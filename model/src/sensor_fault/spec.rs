@@ -141,9 +141,18 @@ fn kind(name: &str, value: Option<&str>, opts: &mut Options, ch: Channel) -> Res
             let Some(pct) = v.strip_suffix('%') else {
                 return Err(format!("span `{v}` needs a unit: a percentage, e.g. +2%"));
             };
-            opts.none_left("span", "it has none")?;
+            let ramp_s = match opts.take("ramp") {
+                Some(r) => {
+                    let r = r.trim();
+                    let secs = r.strip_suffix('s').unwrap_or(r);
+                    number(secs, "span ramp")?
+                }
+                None => 0.0,
+            };
+            opts.none_left("span", "expected ramp")?;
             SensorFaultKind::Span {
                 gain_error: number(pct, "span")? / 100.0,
+                ramp_s,
             }
         }
         "stuck" => {
@@ -182,7 +191,7 @@ fn kind(name: &str, value: Option<&str>, opts: &mut Options, ch: Channel) -> Res
 impl SensorFault {
     /// Parses `CHANNEL:KIND[=VALUE][,KEY=VALUE]@ONSET` (options may also follow
     /// the onset): CHANNEL is `p1`, `p2` or `x`; KIND is `drift=RATE[,max=SIZE]`,
-    /// `span=±PERCENT%`, `stuck` or `spikes=SIZE,rate=COUNT/s`. Pressures in Pa,
+    /// `span=±PERCENT%[,ramp=SECONDS]`, `stuck` or `spikes=SIZE,rate=COUNT/s`. Pressures in Pa,
     /// kPa, MPa or bar, positions in m, mm or um, rates per s or per min; the
     /// onset in s. The values are checked ([`SensorFault::validate`]).
     pub fn parse(spec: &str) -> Result<SensorFault, SensorFaultSpecError> {
@@ -239,7 +248,12 @@ impl std::fmt::Display for SensorFault {
                     write!(f, ",max={max_abs_si}{unit}")?;
                 }
             }
-            SensorFaultKind::Span { gain_error } => write!(f, "span={:+}%", gain_error * 100.0)?,
+            SensorFaultKind::Span { gain_error, ramp_s } => {
+                write!(f, "span={:+}%", gain_error * 100.0)?;
+                if ramp_s > 0.0 {
+                    write!(f, ",ramp={ramp_s}s")?;
+                }
+            }
             SensorFaultKind::Stuck => write!(f, "stuck")?,
             SensorFaultKind::Spikes {
                 amplitude_si,
@@ -274,8 +288,18 @@ mod tests {
             f.drift_offset_si(70.0)
         );
         assert_eq!(
+            SensorFault::parse("p1:span=+3%,ramp=90s@5s").unwrap().kind,
+            SensorFaultKind::Span {
+                gain_error: 0.03,
+                ramp_s: 90.0
+            }
+        );
+        assert_eq!(
             SensorFault::parse("p2:span=-1.5%@20").unwrap().kind,
-            SensorFaultKind::Span { gain_error: -0.015 }
+            SensorFaultKind::Span {
+                gain_error: -0.015,
+                ramp_s: 0.0
+            }
         );
         assert_eq!(
             SensorFault::parse("p2:spikes=20bar,rate=30/min@0s").unwrap().kind,
@@ -292,6 +316,7 @@ mod tests {
         for spec in [
             "p1:drift=200kPa/min,max=500kPa@30s",
             "p2:span=+2%@20s",
+            "p1:span=-1.5%,ramp=60s@10s",
             "p1:stuck@40s",
             "x:drift=1mm/min@10s",
             "p2:spikes=2MPa,rate=0.5/s@0s",

@@ -1,0 +1,93 @@
+//! Seeded sensor-fault tests on the thesis rig (12-state filter, no
+//! commissioning): a drifting pressure transducer is named `sensor-offset` on
+//! its channel with the sign of its offset, and no leak is raised while it
+//! stands; outliers are named `sensor-spikes` and raise no leak event; the
+//! same healthy run raises no sensor event.
+
+use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
+use filter::{Estimator, Tuning};
+use model::sensor_fault::SensorFaultSchedule;
+use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
+
+/// Events of a `seconds`-long run of `scenario` with the sensor faults `specs`.
+fn run(scenario: &str, seconds: f64, seed: u64, specs: &[&str]) -> Vec<LeakEvent> {
+    let rig = ActuatorParams::default();
+    let scenario = Scenario::by_name(scenario, seed, seconds).unwrap();
+    let schedule = SensorFaultSchedule::parse_all(specs).unwrap();
+    let mut sim = Simulator::with_default_sensors(rig.clone(), scenario, FaultSchedule::default(), seed)
+        .unwrap()
+        .with_sensor_faults(schedule)
+        .unwrap();
+    let mut est = Estimator::new(rig, Tuning::sensor_derived()).unwrap();
+    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let mut events = Vec::new();
+    let mut t = 0.0;
+    for _ in 0..(seconds * 1000.0).round() as usize {
+        let s = sim.step();
+        t = s.t_s;
+        let e = est.on_sample(&s);
+        cls.on_estimate(&e, |ev| events.push(ev));
+    }
+    cls.finish(t, |ev| events.push(ev));
+    events
+}
+
+fn leak_alarms(events: &[LeakEvent]) -> Vec<&LeakEvent> {
+    events.iter().filter(|e| e.kind.is_leak_alarm()).collect()
+}
+
+fn raised(events: &[LeakEvent], kind: EventKind) -> Option<&LeakEvent> {
+    events.iter().find(|e| e.kind == kind && e.phase == Phase::Raised)
+}
+
+#[test]
+fn a_drifting_pressure_transducer_is_named_and_then_raises_no_leak() {
+    for (spec, channel, low) in [
+        ("p1:drift=-150kPa/min,max=500kPa@20s", "p1", true),
+        ("p2:drift=200kPa/min,max=500kPa@20s", "p2", false),
+    ] {
+        let events = run("loaded-random", 240.0, 11, &[spec]);
+        let named = raised(&events, EventKind::SensorOffset).unwrap_or_else(|| panic!("{spec}: not named"));
+        assert_eq!(named.channel, channel, "{spec}");
+        assert_eq!(named.detail.contains("kPa low"), low, "{spec}: {}", named.detail);
+        assert_eq!(
+            named.detail.contains("kPa high"),
+            !low,
+            "{spec}: {}",
+            named.detail
+        );
+        // named once past 1 % of the range (207 kPa here), not before
+        let rate_pa_s = if low { 150e3 / 60.0 } else { 200e3 / 60.0 };
+        assert!(
+            named.t_detect_s > 20.0 + 0.8 * 207e3 / rate_pa_s,
+            "{spec}: named at {}",
+            named.t_detect_s
+        );
+        // while it stands, no leak is raised
+        let after: Vec<_> = leak_alarms(&events)
+            .into_iter()
+            .filter(|e| e.t_detect_s >= named.t_detect_s && e.phase == Phase::Raised)
+            .collect();
+        assert!(after.is_empty(), "{spec}: {after:?}");
+    }
+}
+
+#[test]
+fn outliers_are_named_and_raise_no_leak() {
+    let events = run("loaded-random", 90.0, 12, &["p2:spikes=2MPa,rate=0.5/s@20s"]);
+    assert!(leak_alarms(&events).is_empty(), "{:?}", leak_alarms(&events));
+    let named = raised(&events, EventKind::SensorSpikes).expect("spikes named");
+    assert_eq!(named.channel, "p2");
+    assert!(named.t_detect_s > 20.0);
+}
+
+#[test]
+fn a_healthy_run_raises_no_sensor_event() {
+    let events = run("loaded-random", 240.0, 11, &[]);
+    let sensor: Vec<_> = events
+        .iter()
+        .filter(|e| e.kind.name().starts_with("sensor"))
+        .collect();
+    assert!(sensor.is_empty(), "{sensor:?}");
+    assert!(leak_alarms(&events).is_empty(), "{:?}", leak_alarms(&events));
+}

@@ -1,0 +1,97 @@
+//! How the filter's estimates answer an offset on a pressure transducer.
+//!
+//! A constant offset b on channel c (p1 or p2) moves the estimate by δ·b,
+//! where δ follows the filter's own linear recursion along the trajectory:
+//!
+//! - time update: δ⁻ = F·δ⁺ (F the step's Jacobian);
+//! - measurement update: δ⁺ = δ⁻ + K·(e_c − H·δ⁻) (K the step's gain, e_c the
+//!   unit vector of channel c, H the measured states).
+//!
+//! The leak sizes' part of δ is the pattern an offset leaves on them: it
+//! swings with the valve's flow (an offset moves the orifice's drop), while a
+//! leak's is steady. The detector compares the two ([`BiasResponse::leak_sizes_lpm_per_mpa`]).
+
+use model::process::{FIRST_RANDOM_WALK, I_QE1, I_QI};
+use nalgebra::{SMatrix, SVector};
+
+use crate::ekf::Ekf;
+use crate::MAX_LAYOUT_STATES;
+
+/// The measured pressures an offset is followed on (index into the measurement
+/// [x, p1, p2]).
+pub const OFFSET_CHANNELS: [usize; 2] = [1, 2];
+
+/// Cubic metres per second per pascal in one L/min per MPa.
+const M3_S_PA_PER_LPM_MPA: f64 = 1.0e-3 / 60.0 / 1.0e6;
+
+/// δ for an offset of 1 Pa on p1 and on p2, state units per Pa (zero until
+/// the filter has stepped with leak sizes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiasResponse {
+    delta: [[f64; MAX_LAYOUT_STATES]; 2],
+}
+
+impl Default for BiasResponse {
+    fn default() -> Self {
+        BiasResponse {
+            delta: [[0.0; MAX_LAYOUT_STATES]; 2],
+        }
+    }
+}
+
+impl BiasResponse {
+    /// Forgets the past: an offset is measured from here on (a start or a re-anchoring).
+    pub fn clear(&mut self) {
+        *self = BiasResponse::default();
+    }
+
+    /// The time update, δ⁻ = F·δ⁺, with the step's Jacobian `f` (SI), whose
+    /// rows from [`FIRST_RANDOM_WALK`] on are the identity's (random walks).
+    #[inline(always)]
+    pub(crate) fn predict<const N: usize>(&mut self, f: &SMatrix<f64, N, N>) {
+        if N <= I_QI {
+            return;
+        }
+        for d in &mut self.delta {
+            let before = *d;
+            for (i, v) in d.iter_mut().enumerate().take(FIRST_RANDOM_WALK) {
+                *v = (0..N).map(|j| f[(i, j)] * before[j]).sum();
+            }
+        }
+    }
+
+    /// The measurement update with the gain of the update `e` just made, over
+    /// the channels `use_channel` of the measured states `states`.
+    #[inline(always)]
+    pub(crate) fn update<const N: usize, const W: usize>(
+        &mut self,
+        e: &Ekf<N, 3, W>,
+        states: [usize; 3],
+        use_channel: [bool; 3],
+    ) {
+        if N <= I_QI {
+            return;
+        }
+        let gains: [Option<SVector<f64, N>>; 3] =
+            std::array::from_fn(|i| use_channel[i].then(|| e.gain_column(states[i], i)));
+        for (c, d) in OFFSET_CHANNELS.iter().zip(&mut self.delta) {
+            let before = *d;
+            for (i, gain) in gains.iter().enumerate() {
+                if let Some(k) = gain {
+                    let unit = if i == *c { 1.0 } else { 0.0 };
+                    let innovation = unit - before[states[i]];
+                    for j in 0..N {
+                        d[j] += k[j] * innovation;
+                    }
+                }
+            }
+        }
+    }
+
+    /// How an offset of 1 MPa on p1 (row 0) and on p2 (row 1) moves the leak
+    /// sizes q_e1, q_e2, q_i, L/min per MPa (nominal drop).
+    pub fn leak_sizes_lpm_per_mpa(&self) -> [[f64; 3]; 2] {
+        self.delta
+            .map(|d| std::array::from_fn(|k| d[I_QE1 + k] / M3_S_PA_PER_LPM_MPA))
+    }
+}
