@@ -189,6 +189,8 @@ pub struct OffsetWatch {
     watched_s: f64,
     /// The smallest of the last thresholds read, L/min.
     smallest_threshold_lpm: f64,
+    /// A sample period (s) and the window's decay over it (1).
+    keep_for: (f64, f64),
 }
 
 impl OffsetWatch {
@@ -215,6 +217,7 @@ impl Default for OffsetWatch {
             least_offset_mpa: 0.0,
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
+            keep_for: (0.0, 1.0),
         }
     }
 }
@@ -281,7 +284,11 @@ impl OffsetWatch {
         let response = &response;
         let rise3 = rise;
         let rise = [rise3[0], rise3[1]];
-        let keep = (-dt_s / OFFSET_WINDOW_S).exp();
+        // (the samples come at one period: the decay is computed once per period)
+        if dt_s != self.keep_for.0 {
+            self.keep_for = (dt_s, (-dt_s / OFFSET_WINDOW_S).exp());
+        }
+        let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
         let high = (0..3).any(|k| rise3[k].abs() > EPISODE_LEVEL * thresholds_lpm[k]);
