@@ -1,3 +1,4 @@
+// Over 600 lines: the UDP source is one state machine (sequence, restarts, time jumps, rate); its counters and scaling move out with the app crate split.
 //! The UDP sensor stream of a real rig as a [`Source`]: a DAQ board or PLC
 //! sends one datagram per sample in the format of [`frames::udp`] (72 bytes,
 //! little-endian); [`UdpSource`] receives them, scales raw values to SI

@@ -1,3 +1,4 @@
+// Over 600 lines: the detector's state (33 fields) and its healthy record; they become typed parts with the detector's split.
 //! leakwatch's detector: thresholds on the rise of the estimated leak sizes above
 //! a healthy baseline, the kind decided by the chamber flows each hypothesis
 //! implies (the per-sample decision is in `step.rs`).

@@ -1,3 +1,4 @@
+// Over 600 lines: every message type with its schema and encoding, kept side by side so that a field changes in one place.
 //! The log's message encoding: every record as a ROS 2 message, serialised
 //! as CDR (`message_encoding = "cdr"`) and described by its `.msg` definition
 //! (`schema encoding = "ros2msg"`, the files in `leakwatch_msgs/msg/`).

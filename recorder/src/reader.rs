@@ -1,3 +1,4 @@
+// Over 600 lines: one reader for both log encodings; the CDR decoding moves to a module of its own with the recorder's split.
 //! Reading a leakwatch MCAP log back into frames: CDR messages (this
 //! version) and JSON ones (earlier versions), by each channel's `message_encoding`.
 

@@ -1,3 +1,4 @@
+// Over 600 lines: the writer and its rotation; the rotation moves to a module of its own with the recorder's split.
 //! The MCAP log writer: a thread that owns the file, fed through a bounded
 //! crossbeam channel, so a slow disk never stalls the subscribing loop.
 

@@ -1,3 +1,4 @@
+// Over 600 lines: one decision per estimate, in order; it is split into typed parts (validity gate, baseline, arming, evidence) with the detector's split.
 //! The leak-size detector's decision on each estimate: the validity gate, the
 //! baseline, the alarm (kind pending or named), re-isolation, updates and clearing.
 
