@@ -11,7 +11,7 @@ pub mod shell;
 pub mod udp;
 use std::path::Path;
 
-pub use udp::{parse_udp_address, ChannelScale, UdpCounts, UdpEnd, UdpOptions, UdpScaling, UdpSource};
+pub use udp::{scaled_sample, UdpCounts, UdpEnd, UdpOptions, UdpSource};
 
 use model::sim::Simulator;
 use model::Sample;

@@ -39,17 +39,16 @@
 //!     --resume-seq 12345 --resume-t-s 12.345 --resume-mono-ns 81234567890  # a restart
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use crate::{Acquired, CsvSource, SimSource, Source, UdpOptions, UdpScaling, UdpSource};
+use crate::{Acquired, CsvSource, SimSource, Source, UdpOptions, UdpSource};
 use bus::{monotonic_ns, Bus, BusConfig, Pacer, Publisher, StageStats};
 use clap::Parser;
 use frames::{sensor_flags, SensorFrame, StatsFrame};
-use model::{ActuatorParams, Fault, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
-use serde::Deserialize;
+use model::{Fault, FaultSchedule, Scenario, Simulator};
 
 /// Publish rig samples on the leakwatch bus.
 #[derive(Debug, Parser)]
@@ -144,45 +143,9 @@ impl Args {
     }
 }
 
-/// The parts of the leakwatch configuration file the sources need: the
-/// simulated rig, the physical ranges of measured data ([model]) and the
-/// scaling of the UDP stream ([udp]). Unknown sections are ignored (they
-/// belong to other stages).
-#[derive(Debug, Default, Deserialize)]
-#[serde(default)]
-struct RigConfig {
-    model: ActuatorParams,
-    rig: Option<ActuatorParams>,
-    sensors: SensorParams,
-    sim: SimSettings,
-    udp: UdpScaling,
-}
-
-impl RigConfig {
-    fn load(path: Option<&Path>) -> Result<RigConfig, String> {
-        let Some(path) = path else {
-            return Ok(RigConfig::default());
-        };
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
-        let cfg: RigConfig = toml::from_str(&text)
-            .map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))?;
-        cfg.model
-            .validate()
-            .map_err(|e| format!("config {}: [model] {e}", path.display()))?;
-        if let Some(rig) = &cfg.rig {
-            rig.validate()
-                .map_err(|e| format!("config {}: [rig] {e}", path.display()))?;
-        }
-        cfg.udp
-            .validate()
-            .map_err(|e| format!("config {}: {e}", path.display()))?;
-        Ok(cfg)
-    }
-}
-
 fn build_source(args: &Args, stop: &'static AtomicBool) -> Result<Box<dyn Source>, String> {
-    let cfg = RigConfig::load(args.config.as_deref())?;
+    // the simulated rig, the physical ranges of measured data ([model]), the UDP stream's scaling ([udp])
+    let cfg = config::Config::load_or_default(args.config.as_deref())?;
     if let Some(addr) = &args.udp {
         let idle = args.udp_idle_timeout_s;
         if !(idle > 0.0 && idle <= 1e6) {
@@ -190,7 +153,7 @@ fn build_source(args: &Args, stop: &'static AtomicBool) -> Result<Box<dyn Source
                 "--udp-idle-timeout-s {idle}: must be a number of seconds in (0, 1e6]"
             ));
         }
-        let addr = crate::parse_udp_address(addr).map_err(|e| format!("--udp {e}"))?;
+        let addr = config::udp::parse_udp_address(addr).map_err(|e| format!("--udp {e}"))?;
         // measured data: the ranges of the rig the estimator models, as for replay
         let opts = UdpOptions {
             scaling: cfg.udp,

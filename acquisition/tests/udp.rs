@@ -8,8 +8,9 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use acquisition::{Acquired, ChannelScale, Source, UdpCounts, UdpEnd, UdpOptions, UdpScaling, UdpSource};
+use acquisition::{Acquired, Source, UdpCounts, UdpEnd, UdpOptions, UdpSource};
 use bus::{Bus, BusConfig, WaitMode};
+use config::udp::{ChannelScale, UdpScaling};
 use frames::udp::{flags, UdpDatagram};
 use frames::{sensor_flags, SensorFrame};
 use model::Sample;
@@ -322,7 +323,7 @@ fn a_signal_stops_a_waiting_source() {
 
 #[test]
 fn addresses_are_checked() {
-    use acquisition::parse_udp_address;
+    use config::udp::parse_udp_address;
     assert_eq!(
         parse_udp_address("udp://127.0.0.1:5005").unwrap(),
         "127.0.0.1:5005".parse::<SocketAddr>().unwrap()

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # leakwatch's EKF step beside a C++/Eigen peer of its 7-state thesis filter
-# (issue 32), in one run, on one machine.
+# in one run, on one machine.
 #
 #   bench/cpp/compare.sh [--leakwatch PATH] [--out DIR] [--steps N] [--rounds R]
 #

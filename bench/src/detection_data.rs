@@ -15,9 +15,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use crate::stats::quantile;
-use detect::{Classifier, ClassifierConfig, LeakEvent};
-use filter::{EstimatorStage, Tuning};
-use model::ActuatorParams;
+use detect::LeakEvent;
+use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
 
 /// What a run's truth says about its leak.
@@ -143,30 +142,6 @@ pub struct SizeRow {
     pub size_error_p95: f64,
 }
 
-/// The chain's settings (the model, both filters, the classifier).
-#[derive(Debug, Clone)]
-pub struct ChainSettings {
-    /// The model the filters believe in.
-    pub model: ActuatorParams,
-    /// The leak filter.
-    pub leak_filter: Tuning,
-    /// The thesis filter.
-    pub thesis_filter: Tuning,
-    /// The detectors.
-    pub classifier: ClassifierConfig,
-}
-
-impl Default for ChainSettings {
-    fn default() -> Self {
-        ChainSettings {
-            model: ActuatorParams::default(),
-            leak_filter: Tuning::sensor_derived(),
-            thesis_filter: Tuning::thesis(),
-            classifier: ClassifierConfig::default(),
-        }
-    }
-}
-
 fn num(v: &serde_json::Value, key: &str) -> f64 {
     v.get(key).and_then(|x| x.as_f64()).unwrap_or(f64::NAN)
 }
@@ -227,13 +202,7 @@ fn measured_file(dir: &Path) -> Result<PathBuf, String> {
 pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> {
     let limits = dataset::Limits::for_model(&set.model, set.leak_filter.sample_period_s);
     let mut reader = dataset::CsvReader::open(path, limits).map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(
-        set.model.clone(),
-        set.leak_filter.clone(),
-        set.thesis_filter.clone(),
-    )?
-    .with_thesis(set.classifier.thesis_baseline);
-    let mut cls = Classifier::new(set.classifier.clone())?;
+    let mut chain = Chain::new(set)?;
     let mut events = Vec::new();
     let floors = [set.classifier.min_size_lpm, set.classifier.min_internal_size_lpm];
     let (mut n, mut t_end, mut t_detectable) = (0u64, 0.0, [f64::NAN; 2]);
@@ -249,8 +218,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
                 *t = s.t_s;
             }
         }
-        let e = stage.on_sample(&s);
-        cls.on_stage(&e, |ev| {
+        chain.step(&s, |ev| {
             if ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 events.push(ev)
             }
@@ -262,9 +230,9 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         events,
         samples: n,
         t_end_s: t_end,
-        thresholds_lpm: cls.leak_size.thresholds_lpm(),
-        thresholds_sigma: cls.leak_size.thresholds_sigma(),
-        blind_s: cls.leak_size.blind_s(),
+        thresholds_lpm: chain.classifier().leak_size.thresholds_lpm(),
+        thresholds_sigma: chain.classifier().leak_size.thresholds_sigma(),
+        blind_s: chain.classifier().leak_size.blind_s(),
         t_detectable_s: t_detectable,
     })
 }

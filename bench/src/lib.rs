@@ -1,6 +1,8 @@
 //! Benchmark harnesses run from `leakwatch bench ...` (docs/performance.md). They
 //! print tables and return JSON-ready results; they are never timed assertions.
 
+#![forbid(unsafe_code)]
+
 pub mod alarms;
 pub mod detection;
 pub mod detection_data;

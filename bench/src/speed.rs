@@ -2,9 +2,10 @@
 
 use std::time::Instant;
 
-use detect::{Classifier, ClassifierConfig};
-use filter::{Estimator, EstimatorStage, Tuning};
+use detect::ClassifierConfig;
+use filter::{Estimator, Tuning};
 use model::{ActuatorParams, FaultSchedule, Sample, Scenario, Simulator};
+use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
 
 /// Throughput of the in-process chain.
@@ -177,21 +178,17 @@ pub fn chain_throughput_on(
     let mut events = 0usize;
     let t0 = Instant::now();
     for _ in 0..repeat.max(1) {
-        let mut stage = match EstimatorStage::new(model.clone(), Tuning::sensor_derived(), Tuning::thesis()) {
-            Ok(s) => s.with_thesis(thesis_baseline),
-            Err(_) => break,
+        let set = ChainSettings {
+            model: model.clone(),
+            classifier: ClassifierConfig {
+                thesis_baseline,
+                ..ClassifierConfig::default()
+            },
+            ..ChainSettings::default()
         };
-        let cfg = ClassifierConfig {
-            thesis_baseline,
-            ..ClassifierConfig::default()
-        };
-        let mut cls = match Classifier::new(cfg) {
-            Ok(c) => c,
-            Err(_) => break,
-        };
+        let Ok(mut chain) = Chain::new(&set) else { break };
         for s in samples {
-            let e = stage.on_sample(s);
-            cls.on_stage(&e, |_| events += 1);
+            chain.step(s, |_| events += 1);
             n += 1;
         }
     }

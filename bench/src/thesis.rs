@@ -1,4 +1,4 @@
-//! The thesis' experiment in simulation (issue 3, docs/model.md#the-thesis-pattern): leaks of
+//! The thesis' experiment in simulation (docs/model.md#the-thesis-pattern): leaks of
 //! 0.5 L/min of each kind under the open-loop sine and the loaded closed-loop
 //! scenario, with the thesis' tuning and with a tuning derived from the
 //! sensors; the MAE of the a-posteriori pressure residuals before and after the

@@ -11,8 +11,8 @@ pub const PREFIX_ENV: &str = "LEAKWATCH_IOX_PREFIX";
 
 /// The longest isolation prefix, characters. Measured with iceoryx2 0.10
 /// (bus/tests/prefix.rs): an event listener's Unix socket is
-/// `<root>/lw_<prefix>_<id>.event`, the prefix twice (the root, since issue 29
-/// `<private dir>/<prefix>/`, was `/tmp/iceoryx2/lw_<prefix>/`), and
+/// `<root>/lw_<prefix>_<id>.event`, the prefix twice (the root is
+/// `<private dir>/<prefix>/`), and
 /// its path must fit the 108 bytes of a socket address (a 24-character prefix
 /// worked with a 32-digit id, 108 bytes, and failed with `ResourceCreationFailed`
 /// at 33 digits, 109 bytes). The id is a 128-bit number whose top 32 bits

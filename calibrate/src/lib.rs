@@ -1,4 +1,4 @@
-//! The calibration workflow (issues 6 and 10): find where the simulated
+//! The calibration workflow: find where the simulated
 //! actuator and the measured one disagree, name the physical effect the model
 //! lacks, fit it, add it, and show the gap shrink on held-out data; on a
 //! smooth rig and on one whose rod stick-slips (the thesis friction).
@@ -91,6 +91,8 @@
 //!    accepted, up to `max_effects`.
 //!
 //! All quantities are SI (m, s, Pa, m³/s, N, V).
+
+#![forbid(unsafe_code)]
 
 pub mod effects;
 pub mod equation;

@@ -1,5 +1,5 @@
-//! Every effect of the library under varied inputs (issue 6,
-//! docs/calibration/README.md): `suite::matrix_cases` puts each effect (both forms of
+//! Every effect of the library under varied inputs
+//! (docs/calibration/README.md): `suite::matrix_cases` puts each effect (both forms of
 //! `bulk-modulus`) on a rig with sensor noise and a small mismatch in mass
 //! and viscous friction, under each of the open-loop sine, the open-loop
 //! chirp and the closed-loop pseudorandom steps, and the spring also under

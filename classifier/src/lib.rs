@@ -4,6 +4,8 @@
 //! [`node`]: its work on each estimate), the estimator and classifier fused in
 //! one process ([`fused`]) and the classifier's side of the wire ([`wire`]).
 
+#![forbid(unsafe_code)]
+
 pub use detect::*;
 
 pub mod fused;

@@ -16,7 +16,6 @@ use crate::ClassifierConfig;
 use bus::monotonic_ns;
 use clap::Parser;
 use frames::{EstimateFrame, Frame};
-use serde::Deserialize;
 
 #[derive(Parser)]
 #[command(
@@ -28,22 +27,11 @@ struct Args {
     stage: bus::StageArgs,
 }
 
-#[derive(Debug, Default, Deserialize)]
-#[serde(default)]
-struct StageConfig {
-    classifier: ClassifierConfig,
-}
-
-/// The `[classifier]` settings of the configuration file `path` (the defaults without one).
+/// The `[classifier]` settings of the configuration file `path` (the defaults
+/// without one), with the rig facts the loader derives: the supply pressure
+/// from `[model]` (or `[datasheet]`), the transducers' range from `[sensors]`.
 pub(crate) fn load(path: Option<&Path>) -> Result<ClassifierConfig, String> {
-    let Some(path) = path else {
-        return Ok(ClassifierConfig::default());
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
-    let cfg: StageConfig =
-        toml::from_str(&text).map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))?;
-    Ok(cfg.classifier)
+    Ok(config::Config::load_or_default(path)?.classifier)
 }
 
 fn run(args: Args) -> Result<(), String> {
@@ -87,5 +75,29 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
             bus::say!("classifier: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The classifier process takes the rig facts from where the config writes
+    /// them once (`[datasheet]`: the example lift's 21 MPa supply and 25 MPa
+    /// transducers), as `leakwatch` does, not the thesis rig's defaults.
+    #[test]
+    fn the_stage_takes_the_rig_facts_from_the_datasheet() {
+        let dir = std::env::temp_dir().join(format!("leakwatch-cls-ds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join("lift.toml");
+        std::fs::write(&path, config::init::template(&config::init::example(true))).expect("written");
+        let cfg = load(Some(&path)).expect("loads");
+        assert_eq!(
+            (cfg.supply_pressure_pa, cfg.pressure_full_scale_pa),
+            (21.0e6, 25.0e6)
+        );
+        let default = load(None).expect("defaults");
+        assert_eq!(default.supply_pressure_pa, 13.8e6);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -19,6 +19,8 @@
 //! the consumer can bridge it. [`check_bad_fraction`] decides whether a file
 //! with many unusable rows is usable at all.
 
+#![forbid(unsafe_code)]
+
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 

@@ -36,6 +36,7 @@
 //! raise `sensor-stuck`, `sensor-saturated` and `sensor-dead` events, and a
 //! filter reset raises `estimator-reset` (and restarts the warm-up).
 
+#![forbid(unsafe_code)]
 // The detectors walk parallel per-kind arrays by index; iterators would hide that.
 #![allow(clippy::needless_range_loop)]
 

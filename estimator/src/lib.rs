@@ -3,6 +3,8 @@
 //! adds the process around it ([`shell`]: iceoryx2, command line, config file)
 //! and the estimator's side of the wire ([`wire`]).
 
+#![forbid(unsafe_code)]
+
 pub use filter::*;
 
 pub mod shell;

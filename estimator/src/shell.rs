@@ -9,12 +9,11 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
-use crate::{EstimatorStage, StageEstimate, Tuning, FLAG_AFTER_GAP, FLAG_RESET};
+use crate::{EstimatorStage, StageEstimate, FLAG_AFTER_GAP, FLAG_RESET};
 use bus::{run_stage_with, Received, StageOptions};
 use clap::Parser;
 use frames::{sensor_flags, EstimateFrame, SensorFrame};
-use model::{ActuatorParams, Sample};
-use serde::Deserialize;
+use model::Sample;
 
 #[derive(Parser)]
 #[command(
@@ -26,43 +25,13 @@ struct Args {
     stage: bus::StageArgs,
 }
 
-/// The sections of the configuration this stage reads; the rest belongs to others.
-#[derive(Debug, Deserialize)]
-#[serde(default)]
-struct StageConfig {
-    model: ActuatorParams,
-    estimator: Tuning,
-    leak_filter: Tuning,
-    classifier: Baseline,
-}
-
-/// The one classifier setting this stage reads (the rest of `[classifier]`
-/// is the classifier's, checked there).
-#[derive(Debug, Default, Deserialize)]
-#[serde(default)]
-struct Baseline {
-    /// The thesis' baseline detector is on: only then does the thesis filter run.
-    thesis_baseline: bool,
-}
-
-impl Default for StageConfig {
-    fn default() -> Self {
-        StageConfig {
-            model: ActuatorParams::default(),
-            estimator: Tuning::thesis(),
-            leak_filter: Tuning::sensor_derived(),
-            classifier: Baseline::default(),
-        }
-    }
-}
-
 /// The estimator stage the configuration file `path` describes (`[model]`,
 /// `[estimator]`, `[leak_filter]`; the defaults without a file). The thesis
 /// filter runs only with the thesis' baseline (`[classifier] thesis_baseline`,
 /// `leakwatch run --thesis-baseline`): nothing else reads it, and it is a
 /// third of the stage's work. Without it the estimates' thesis fields are NaN.
 pub fn load_stage(path: Option<&Path>) -> Result<EstimatorStage, String> {
-    let cfg = load(path)?;
+    let cfg = config::Config::load_or_default(path)?;
     Ok(EstimatorStage::new(cfg.model, cfg.leak_filter, cfg.estimator)?
         .with_thesis(cfg.classifier.thesis_baseline))
 }
@@ -153,15 +122,6 @@ pub fn restarts_line(stage: &EstimatorStage) -> Option<String> {
     }
 }
 
-fn load(path: Option<&Path>) -> Result<StageConfig, String> {
-    let Some(path) = path else {
-        return Ok(StageConfig::default());
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
-    toml::from_str(&text).map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))
-}
-
 fn run(args: Args) -> Result<(), String> {
     let mut stage = load_stage(args.stage.config.as_deref())?;
     let mode = args.stage.wait_mode()?;
@@ -226,9 +186,13 @@ mod tests {
     /// `seconds` of the closed-loop sine on the default rig (seed `seed`), times from 0 s.
     fn record(seconds: f64, seed: u64) -> Vec<Sample> {
         let sc = Scenario::by_name("closed-loop-sine", 3, seconds).expect("scenario");
-        let mut sim =
-            Simulator::with_default_sensors(ActuatorParams::default(), sc, FaultSchedule::default(), seed)
-                .expect("rig");
+        let mut sim = Simulator::with_default_sensors(
+            model::ActuatorParams::default(),
+            sc,
+            FaultSchedule::default(),
+            seed,
+        )
+        .expect("rig");
         sim.run(seconds)
     }
 
@@ -291,6 +255,29 @@ mod tests {
             assert_eq!(bits(&out[0]), bits(&out[2]));
             assert_eq!(bits(&out[1]), bits(&out[2]));
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A stage process started on a config with a `[datasheet]` and a partial
+    /// `[leak_filter]` believes the rig `leakwatch` derives from it: the model
+    /// from the datasheet, the rest of the leak filter's tuning its own defaults.
+    #[test]
+    fn a_stage_on_a_datasheet_config_models_the_derived_rig() {
+        let dir = std::env::temp_dir().join(format!("leakwatch-shell-ds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let text =
+            config::init::template(&config::init::example(true)) + "\n[leak_filter]\nq_leak_m6_s2 = 3e-18\n";
+        let path = dir.join("lift.toml");
+        std::fs::write(&path, &text).expect("config written");
+        let cfg = config::Config::parse(&text).expect("valid");
+        let stage = load_stage(Some(&path)).expect("stage");
+        assert_eq!(stage.leak().model().params, cfg.model);
+        assert!(cfg.model.rod_side_area_m2.is_some());
+        // the leak filter: 12 states (its own default, not the thesis' 7), R from the datasheet
+        let tuning = stage.leak().tuning();
+        assert_eq!((tuning.states, tuning.q_leak_m6_s2), (12, 3e-18));
+        assert_eq!(tuning, &cfg.leak_filter);
+        assert_ne!(cfg.model, model::ActuatorParams::default());
         let _ = std::fs::remove_dir_all(&dir);
     }
 

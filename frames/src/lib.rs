@@ -17,6 +17,8 @@
 //! [`udp`] is the other wire format: the little-endian datagrams in which a
 //! DAQ board or PLC sends rig samples to the acquisition stage.
 
+#![forbid(unsafe_code)]
+
 use core::fmt;
 
 use iceoryx2::prelude::*;

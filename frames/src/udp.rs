@@ -92,7 +92,7 @@ pub mod offset {
 }
 
 /// One decoded datagram. The channel values are as sent (SI, or raw counts
-/// that `acquisition::UdpScaling` turns into SI); absent optional channels
+/// that `config::udp::UdpScaling` turns into SI); absent optional channels
 /// are NaN.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UdpDatagram {

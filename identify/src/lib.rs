@@ -27,6 +27,8 @@
 //! window errors, so they are a floor: model errors that persist over many
 //! windows (supply sag, a line drop) bias a value by more than its σ.
 
+#![forbid(unsafe_code)]
+
 mod mechanics;
 
 pub use mechanics::{identify_mechanics, Mechanics, HALF_WINDOW, MIN_EQUATIONS, SLIDING_M_S};

@@ -6,9 +6,9 @@ use bench::speed::{step_time, timer_overhead_ns};
 use bench::{detection, speed};
 use estimator::Tuning;
 
-use crate::config::Config;
 use crate::out::{self, outln};
 use crate::simulate;
+use config::Config;
 
 fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) -> Result<(), String> {
     out::dir(dir)?;
@@ -247,12 +247,12 @@ pub fn detection_data(
 ) -> Result<(), String> {
     let (sheet, recording) = rig_files(dir);
     let config_path = config.map(Path::to_path_buf).or(sheet);
-    let mut cfg = crate::config::Config::load_or_default(config_path.as_deref())?;
+    let mut cfg = config::Config::load_or_default(config_path.as_deref())?;
     match &config_path {
         Some(p) => eprintln!("config: {}", p.display()),
         // a rig with a commissioning recording but no description: say what stands in for it
         None if recording.is_some() => {
-            crate::config::Config::note_builtin_rig(&format!("datasheet.toml in {}", dir.display()))
+            config::Config::note_builtin_rig(&format!("datasheet.toml in {}", dir.display()))
         }
         None => {}
     }
@@ -268,7 +268,7 @@ pub fn detection_data(
     for name in ["detection.md", "detection.json"] {
         out::check(&out.join(name), force, &inputs)?;
     }
-    let set = bench::detection_data::ChainSettings {
+    let set = pipeline::ChainSettings {
         model: cfg.model.clone(),
         leak_filter: cfg.leak_filter.clone(),
         thesis_filter: cfg.estimator.clone(),
@@ -321,7 +321,7 @@ fn identification_data(
 ) -> Result<(), String> {
     let (sheet, _) = rig_files(dir);
     let config_path = config.map(Path::to_path_buf).or(sheet);
-    let cfg = crate::config::Config::load_or_default(config_path.as_deref())?;
+    let cfg = config::Config::load_or_default(config_path.as_deref())?;
     if let Some(p) = &config_path {
         eprintln!("config: {}", p.display());
     }

@@ -36,7 +36,7 @@ pub fn run(
     if identify || datasheet {
         // A datasheet's model is a prior within its tolerances: its values are
         // identified first, so that the search names what the rig has beyond them.
-        let cfg = crate::config::Config::load_or_default(config)?;
+        let cfg = config::Config::load_or_default(config)?;
         match crate::commission::identify_rig(&input, &cfg) {
             Ok(identified) => {
                 eprintln!("the search for missing effects starts from the identified model");
@@ -81,7 +81,7 @@ pub fn run(
     let mut inputs = vec![original, input.as_path()];
     inputs.extend(config);
     let model_file = match whole {
-        Some(cfg) => crate::model_file::config_toml(&crate::config::Config {
+        Some(cfg) => crate::model_file::config_toml(&config::Config {
             datasheet: None,
             model: cal.model_after.clone(),
             ..cfg

@@ -18,10 +18,10 @@ use std::path::Path;
 
 use classifier::CommissioningLearner;
 use dataset::{CsvReader, Limits, Row};
-use estimator::{EstimatorStage, Tuning};
+use estimator::Tuning;
 use model::process::I_BIAS;
 
-use crate::config::Config;
+use config::Config;
 
 /// Reads `input` into the rows [`identify::identify`] takes.
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
@@ -306,7 +306,11 @@ fn replay_estimates(
 ) -> Result<(), String> {
     let limits = Limits::for_model(&cfg.model, tuning.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(cfg.model.clone(), tuning, cfg.estimator.clone())?.with_thesis(false);
+    let mut stage = pipeline::ChainSettings {
+        leak_filter: tuning,
+        ..pipeline::ChainSettings::from(cfg)
+    }
+    .leak_stage()?;
     while let Some(row) = reader.next_row() {
         match row {
             Row::Sample(s) | Row::AfterGap(s, _) => each(&stage.on_sample(&s).leak),

@@ -1,11 +1,10 @@
 //! `leakwatch demo`: the whole chain in one process on the simulated rig.
 
-use classifier::{Classifier, Phase};
-use estimator::EstimatorStage;
+use classifier::Phase;
 use model::{Fault, FaultSchedule, Scenario, Simulator};
 
-use crate::config::Config;
 use crate::out::outln;
+use config::Config;
 
 /// A rig that differs from the model the way real ones do: friction 15 % higher
 /// extending and 10 % lower retracting, bulk modulus 15 % lower (air), a spool
@@ -74,9 +73,7 @@ pub fn run(
     );
     let mut sim = Simulator::new(rig, cfg.sensors, cfg.sim, sc, schedule, seed).map_err(|e| e.to_string())?;
     // (the thesis filter runs for its baseline only, which the demonstration does not report)
-    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?
-        .with_thesis(cfg.classifier.thesis_baseline);
-    let mut cls = Classifier::new(cfg.classifier.clone())?;
+    let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(&cfg))?;
     let n = (seconds / sim.sample_period_s()).round() as u64;
     let t0 = std::time::Instant::now();
     let mut leak_found = false;
@@ -85,8 +82,7 @@ pub fn run(
     for _ in 0..n {
         let s = sim.step();
         last_t = s.t_s;
-        let e = stage.on_sample(&s);
-        cls.on_stage(&e, |ev| {
+        chain.step(&s, |ev| {
             if ev.phase == Phase::Raised && ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 leak_found = true;
             }
@@ -117,7 +113,7 @@ pub fn run(
             return Err(e);
         }
     }
-    cls.finish(last_t, |ev| {
+    chain.finish(last_t, |ev| {
         if let Err(e) = crate::out::stdout(&format!("  {} {}\n", ev.kind.name(), ev.detail)) {
             out_err.get_or_insert(e);
         }
@@ -152,8 +148,7 @@ fn commission_lift(cfg: &Config, seed: u64) -> Result<classifier::Commissioning,
         seed.wrapping_add(1),
     )
     .map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?
-        .with_thesis(false);
+    let mut stage = pipeline::ChainSettings::from(cfg).leak_stage()?;
     let mut learner = classifier::CommissioningLearner::new(cfg.classifier.settle_s);
     let n = (LIFT_COMMISSIONING_S / sim.sample_period_s()).round() as u64;
     for _ in 0..n {

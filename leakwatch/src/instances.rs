@@ -21,8 +21,8 @@ use model::instance::{Instance, NominalRig};
 use model::rng::Rng;
 use model::sim::OilWarmUp;
 
-use crate::config::Config;
 use crate::simulate::{self, SimulateRequest};
+use config::Config;
 
 /// The oil temperatures a commissioning recording is held at, °C (one drawn per instance).
 pub const COMMISSION_TEMPS_C: [f64; 3] = [20.0, 30.0, 50.0];

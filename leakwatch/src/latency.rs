@@ -9,10 +9,8 @@ use std::path::Path;
 use crate::out::outln;
 use std::time::{Duration, Instant};
 
-use classifier::{Classifier, ClassifierConfig};
-use estimator::{EstimatorStage, Tuning};
 use hdrhistogram::Histogram;
-use model::{ActuatorParams, Sample};
+use model::Sample;
 use serde::Serialize;
 
 /// One transport's figures.
@@ -87,13 +85,9 @@ fn threads_run<S: Send + 'static, R: Send + 'static>(
         send(&s1, 0, &end);
     });
     let est = std::thread::spawn(move || {
-        let mut stage = EstimatorStage::new(
-            ActuatorParams::default(),
-            Tuning::sensor_derived(),
-            Tuning::thesis(),
-        )
-        .expect("default tuning is valid")
-        .with_thesis(false);
+        let mut stage = pipeline::ChainSettings::default()
+            .leak_stage()
+            .expect("default tuning is valid");
         let mut hop = Histogram::<u64>::new_with_bounds(1, 60_000_000_000, 3).expect("histogram bounds");
         let cpu0 = bus::stats::process_cpu_ns();
         let w0 = Instant::now();
@@ -111,24 +105,17 @@ fn threads_run<S: Send + 'static, R: Send + 'static>(
         let cpu = (bus::stats::process_cpu_ns() - cpu0) as f64 / w0.elapsed().as_nanos().max(1) as f64;
         (hop, cpu)
     });
-    let mut cls = Classifier::new(ClassifierConfig::default()).expect("default config is valid");
     let mut e2e = Histogram::<u64>::new_with_bounds(1, 60_000_000_000, 3).expect("histogram bounds");
     let mut got = 0;
-    let mut stage = EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .expect("default tuning is valid")
-    .with_thesis(false);
+    let mut chain =
+        pipeline::Chain::new(&pipeline::ChainSettings::default()).expect("default config is valid");
     while let Some((stamp, s)) = recv(&r2) {
         if s.t_s.is_nan() {
             break;
         }
         // The classifier's own work on an estimate (the estimate is recomputed here
         // only to have one to classify; its cost is not part of the latency below).
-        let e = stage.on_sample(&s);
-        cls.on_stage(&e, |_| {});
+        chain.step(&s, |_| {});
         let _ = e2e.record(now_ns(t0).saturating_sub(stamp).max(1));
         got += 1;
     }
@@ -179,7 +166,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     let floors = crate::floors::measure(seconds.min(10.0))?;
     let mut rows = Vec::new();
     // (wait mode, placement, pinned): the estimator and classifier as two processes,
-    // and as one; the low-latency configuration of issue 15 pins the acquisition alone to
+    // and as one; the low-latency configuration pins the acquisition alone to
     // one CPU and the fused estimator+classifier with the recorder to the other ([run] cpus).
     let cpus = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     let mut runs = vec![

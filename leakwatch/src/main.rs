@@ -6,9 +6,6 @@ mod benches;
 mod calibrate_cmd;
 mod cli;
 mod commission;
-mod config;
-#[cfg(test)]
-mod config_fuzz;
 mod demo;
 mod estimates_out;
 mod floors;

@@ -21,7 +21,7 @@ pub fn load_model(path: &Path) -> Result<ActuatorParams, CalibrateError> {
     let table: toml::Table = toml::from_str(&text).map_err(|e| err(format!("not valid TOML: {e}")))?;
     if table.contains_key("datasheet") {
         // the model's rig facts are derived from the datasheet: the whole config is read
-        let cfg = crate::config::Config::parse(&text).map_err(err)?;
+        let cfg = config::Config::parse(&text).map_err(err)?;
         return Ok(cfg.model);
     }
     let params = match table.get("model") {
@@ -69,7 +69,7 @@ pub fn model_toml(params: &ActuatorParams) -> Result<String, CalibrateError> {
 /// A whole calibrated configuration as `model.toml` (written when the starting
 /// config described the rig by a `[datasheet]`: its sensors and noise are kept,
 /// the datasheet itself is not, its model being now the calibrated one).
-pub fn config_toml(cfg: &crate::config::Config) -> Result<String, CalibrateError> {
+pub fn config_toml(cfg: &config::Config) -> Result<String, CalibrateError> {
     let body = toml::to_string(cfg).map_err(|e| CalibrateError::Serialize(e.to_string()))?;
     Ok(format!(
         "# Written by `leakwatch calibrate`: the configuration it started from (derived from its\n\
@@ -135,5 +135,38 @@ mod tests {
                 && written.contains("leakwatch run --config model.toml"),
             "{written}"
         );
+    }
+
+    #[test]
+    fn the_model_toml_calibrate_writes_is_a_config() {
+        // a calibrated model with every kind of effect the library adds
+        let mut m = model::ActuatorParams::default();
+        for (e, theta) in [
+            (calibrate::Effect::FrictionAsymmetryViscous, vec![1500.0, 300.0]),
+            (calibrate::Effect::SpoolBias, vec![-5.0e-6]),
+            (calibrate::Effect::SpringLoad, vec![3.0e4, 0.3]),
+            (calibrate::Effect::EntrainedAir, vec![0.01]),
+            (calibrate::Effect::SupplySag, vec![5.0e9]),
+            (calibrate::Effect::ValveBandwidth, vec![320.0]),
+            (calibrate::Effect::LeakExt1, vec![4.0e-9]),
+        ] {
+            m = e.apply(&m, &theta);
+        }
+        let text = model_toml(&m).unwrap();
+        // the file says how to use it, and `--config model.toml` takes it as it is
+        assert!(
+            text.contains("leakwatch replay MEASURED.csv --config model.toml"),
+            "{text}"
+        );
+        let cfg = config::Config::parse(&text).unwrap();
+        assert_eq!(cfg.model, m);
+        assert_eq!(cfg.model.spool_null_bias_m, -5.0e-6);
+        assert_eq!(cfg.model.leaks.len(), 1);
+        let r = cfg.model.friction.for_direction(-1.0);
+        assert_eq!((r.slip_n, r.viscous_n_s_per_m), (1500.0, 300.0));
+        // everything else keeps its default
+        assert_eq!(cfg.estimator, config::Config::default().estimator);
+        assert_eq!(cfg.classifier, config::Config::default().classifier);
+        assert!(cfg.rig.is_none());
     }
 }

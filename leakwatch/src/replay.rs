@@ -6,14 +6,14 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use classifier::{Classifier, LeakEvent};
+use classifier::LeakEvent;
 use dataset::{CsvReader, Issue, Limits, Row};
-use estimator::{EstimatorStage, StageEstimate};
+use estimator::StageEstimate;
 use model::Sample;
 use serde::Serialize;
 
-use crate::config::Config;
 use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
+use config::Config;
 
 /// How the stages are connected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -292,9 +292,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
     let mut out =
         EstimatesWriter::new(file, req.estimates, thesis_wanted).map_err(|e| format!("{est_name}: {e}"))?;
-    let mut stage = EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())?
-        .with_thesis(thesis_wanted);
-    let mut cls = Classifier::new(cfg.classifier.clone())?;
+    let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(cfg))?.with_thesis(thesis_wanted);
+    // (the channel wiring runs the stage and the detectors on two threads)
+    let (stage, cls) = chain.parts_mut();
     if req.progress {
         eprintln!("note: {}", cls.start_note());
     }
@@ -417,7 +417,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                     let _ = tx_in.send(Batch::Samples(batch));
                     reader.absent
                 });
-                let stage = &mut stage;
+                let stage = &mut *stage;
                 scope.spawn(move || {
                     for b in rx_in {
                         let msg = match b {

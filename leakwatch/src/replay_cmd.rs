@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
 
-use crate::config::Config;
 use crate::logs::export_log;
 use crate::{out, replay};
+use config::Config;
 
 /// What `leakwatch replay` was asked to do: its arguments (`cli::Command::Replay`) and `--force`.
 pub struct ReplayArgs {

@@ -8,7 +8,7 @@ use model::scenario::Scenario;
 use model::sensor_fault::SensorFaultSchedule;
 use model::sim::Simulator;
 
-use crate::config::Config;
+use config::Config;
 
 /// Most samples one `simulate` writes (an hour at 1 kHz; about 260 MB in memory).
 pub const MAX_SAMPLES: f64 = 3.6e6;

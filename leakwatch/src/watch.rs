@@ -11,13 +11,13 @@ pub fn command(
     config: Option<&Path>,
 ) -> Result<(), String> {
     let mut cfg = match config {
-        Some(p) => crate::config::Config::load(p)?.zenoh,
-        None => live::ZenohConfig::default(),
+        Some(p) => config::Config::load(p)?.zenoh,
+        None => config::live::ZenohConfig::default(),
     };
     cfg.listen = listen;
     cfg.connect = connect;
     if cfg.listen.is_empty() && cfg.connect.is_empty() {
-        cfg.listen = vec![live::config::DEFAULT_WATCH_ENDPOINT.to_string()];
+        cfg.listen = vec![config::live::DEFAULT_WATCH_ENDPOINT.to_string()];
     }
     cfg.validate()?;
     if let Some(s) = seconds {

@@ -1,4 +1,4 @@
-//! Monitoring goes on when what is around it fails (issue 29), with real
+//! Monitoring goes on when what is around it fails, with real
 //! processes and real files: a recorder whose log hits a file-size limit (a full
 //! disk without root: RLIMIT_FSIZE set on the running recorder, which ignores
 //! SIGXFSZ, so its write fails with EFBIG), and the shared memory a killed run

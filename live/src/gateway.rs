@@ -13,7 +13,8 @@ use zenoh::qos::CongestionControl;
 use zenoh::{Session, Wait};
 
 use crate::sign::Signer;
-use crate::{LiveTopic, Sink, ZenohConfig};
+use crate::{LiveTopic, Sink};
+use config::live::ZenohConfig;
 
 /// The first part of every key leakwatch publishes.
 pub const KEY_ROOT: &str = "leakwatch";

@@ -20,7 +20,6 @@
 //! ([`json`]): SI units in the field names (`p1_pa`, `f_e_n`, `leak_ext1_lpm`),
 //! codes as names (`"ext1"`, `"raised"`, `"healthy"`), NaN as `null`.
 
-pub mod config;
 pub mod gateway;
 pub mod json;
 pub mod layout;
@@ -30,7 +29,6 @@ pub mod tap;
 pub mod view;
 pub mod watch;
 
-pub use config::{LiveViewConfig, ZenohConfig};
 pub use tap::{Decimator, LiveTopic, Sink, Tap, TapCounts};
 
 /// CPU time this process has used (user + system), s; NaN if unknown.

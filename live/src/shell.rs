@@ -12,7 +12,6 @@ use std::time::{Duration, Instant};
 use bus::{Bus, BusConfig};
 use clap::Parser;
 
-use crate::config::LiveSections;
 use crate::{LiveTopic, Sink, Tap};
 
 /// Serve a rig's frames, estimates, events and health to Foxglove over its
@@ -116,7 +115,7 @@ fn serve(stage: &str, tap: &mut Tap, sink: &mut impl Sink, batch: Duration) -> R
 }
 
 fn liveview(args: ViewArgs) -> Result<(), String> {
-    let mut cfg = LiveSections::load(args.config.as_deref())?.live_view;
+    let mut cfg = config::Config::load_or_default(args.config.as_deref())?.live_view;
     if let Some(b) = args.bind {
         cfg.bind = b;
     }
@@ -152,7 +151,7 @@ fn liveview(args: ViewArgs) -> Result<(), String> {
 }
 
 fn gateway(args: GatewayArgs) -> Result<(), String> {
-    let mut cfg = LiveSections::load(args.config.as_deref())?.zenoh;
+    let mut cfg = config::Config::load_or_default(args.config.as_deref())?.zenoh;
     if !args.listen.is_empty() {
         cfg.listen = args.listen;
     }

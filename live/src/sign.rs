@@ -16,7 +16,6 @@
 //! then `seq`).
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use hmac::{Hmac, Mac};
 use sha2::Sha256;
@@ -26,9 +25,6 @@ type HmacSha256 = Hmac<Sha256>;
 /// The first word of a signature attachment (the format's version).
 pub const SIGNATURE_TAG: &str = "lw1";
 
-/// The shortest shared key, bytes (its file's first line).
-pub const MIN_KEY_LEN: usize = 32;
-
 /// The bytes a signature covers: a domain tag, the key expression, `boot`,
 /// `seq`, `time` and the payload, separated by newlines.
 pub fn signed_bytes(key_expr: &str, boot: u64, seq: u64, time_ns: u64, payload: &[u8]) -> Vec<u8> {
@@ -36,23 +32,6 @@ pub fn signed_bytes(key_expr: &str, boot: u64, seq: u64, time_ns: u64, payload: 
         format!("leakwatch-zenoh-{SIGNATURE_TAG}\n{key_expr}\n{boot}\n{seq}\n{time_ns}\n").into_bytes();
     b.extend_from_slice(payload);
     b
-}
-
-/// The shared key from `[zenoh] key_file` `path`: its first line, at least
-/// [`MIN_KEY_LEN`] bytes, from a file of this user with mode 0600 (checked:
-/// [`crate::config::read_secret_file`]).
-pub fn read_key(path: &Path) -> Result<Vec<u8>, String> {
-    let what = "[zenoh] key_file";
-    let key = crate::config::read_secret_file(what, path)?;
-    if key.len() < MIN_KEY_LEN {
-        return Err(format!(
-            "{what} {}: the key has {} bytes; at least {MIN_KEY_LEN} are needed (e.g. `head -c 32 /dev/urandom | \
-             base64 > FILE; chmod 600 FILE`, the same file on the gateway's and the watch's machine)",
-            path.display(),
-            key.len()
-        ));
-    }
-    Ok(key.into_bytes())
 }
 
 /// The current Unix time, ns (0 if the clock is before 1970).

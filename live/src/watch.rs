@@ -19,7 +19,7 @@ use zenoh::Wait;
 
 use crate::gateway::{open_session, parse_key, KEY_ROOT};
 use crate::sign::{unix_ns, Verdict, Verifier};
-use crate::ZenohConfig;
+use config::live::ZenohConfig;
 
 /// What one rig sent, as `watch` counts it.
 #[derive(Debug, Clone, Default)]

@@ -12,9 +12,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use config::live::ZenohConfig;
 use live::gateway::{open_session, Gateway};
 use live::sign::{unix_ns, Signer};
-use live::{LiveTopic, Sink, ZenohConfig};
+use live::{LiveTopic, Sink};
 use zenoh::Wait;
 
 /// What the watch printed, shared with the test.

@@ -5,6 +5,8 @@
 //!
 //! All quantities are SI (m, s, Pa, m³/s, N, V) unless a name says otherwise.
 
+#![forbid(unsafe_code)]
+
 pub mod datasheet;
 pub mod dynamics;
 pub mod fault;

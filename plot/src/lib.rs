@@ -16,6 +16,8 @@
 //! plot::render_png(&fig, std::path::Path::new("demo.png")).unwrap();
 //! ```
 
+#![forbid(unsafe_code)]
+
 use std::fmt;
 use std::path::{Path, PathBuf};
 

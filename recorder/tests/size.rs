@@ -135,9 +135,8 @@ fn mb_per_hour(bytes: u64, seconds: f64) -> f64 {
 }
 
 /// The reference: a rig's stream (no truth channels) at 1 kHz, with the
-/// estimates and health at 10 Hz, in at most 100 MB per hour (issue 30's
-/// goal): 86.5 MB/h when written (± 5 % allowed), 226 MB/h with every frame a
-/// message.
+/// estimates and health at 10 Hz, in at most 100 MB per hour: 86.5 MB/h when
+/// written (± 5 % allowed), 226 MB/h with every frame a message.
 #[test]
 fn a_rig_stream_takes_at_most_100_mb_an_hour_and_reads_back_bit_for_bit() {
     let dir = scratch::ScratchDir::new("recorder-size");

@@ -7,6 +7,8 @@
 //! MB, so a test suite that left its folders behind would fill the disk of
 //! the machine it runs on.
 
+#![forbid(unsafe_code)]
+
 use std::ffi::OsStr;
 use std::ops::Deref;
 use std::path::{Path, PathBuf};

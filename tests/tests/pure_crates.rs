@@ -1,8 +1,9 @@
-//! The workspace's layering rule (issue 12): the pure crates (the model, the
+//! The workspace's layering rule: the pure crates (the model, the
 //! EKF, the detectors, the calibration and what they build on) depend on no
 //! process machinery: not on iceoryx2 (nor `bus` or `frames`, which carry it),
 //! clap or toml. The process shells live in the stage crates (`estimator`,
-//! `classifier`, ...) and in `leakwatch`.
+//! `classifier`, ...) and in `leakwatch`. The `config` crate (the config
+//! file's schema) is pure but for `toml`: every stage loads it.
 //!
 //! Read from each pure crate's Cargo.toml (normal and build dependencies; dev
 //! dependencies may be anything): a forbidden name fails, and so does a
@@ -95,7 +96,7 @@ fn pure_crates_depend_on_no_process_machinery() {
     }
     assert!(
         problems.is_empty(),
-        "pure crates must not depend on iceoryx2, clap or toml (issue 12): {problems:?}"
+        "pure crates must not depend on iceoryx2, clap or toml: {problems:?}"
     );
 }
 
@@ -120,4 +121,23 @@ fn the_stage_crates_reexport_the_pure_ones() {
             "{stage} must re-export {pure}"
         );
     }
+}
+
+#[test]
+fn the_config_crate_needs_no_process_machinery_but_toml() {
+    let members = workspace_members();
+    let text = std::fs::read_to_string(root().join("config/Cargo.toml")).expect("config/Cargo.toml");
+    let deps = dependencies(&text);
+    assert!(deps.iter().any(|d| d == "toml"), "{deps:?}");
+    let problems: Vec<&String> = deps
+        .iter()
+        .filter(|d| {
+            (FORBIDDEN.contains(&d.as_str()) && d.as_str() != "toml")
+                || (members.contains(d) && !PURE.contains(&d.as_str()))
+        })
+        .collect();
+    assert!(
+        problems.is_empty(),
+        "config may depend on pure crates and toml only: {problems:?}"
+    );
 }

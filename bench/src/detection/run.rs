@@ -4,10 +4,10 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use detect::{Classifier, ClassifierConfig, LeakEvent};
-use filter::{EstimatorStage, Tuning};
+use detect::{ClassifierConfig, LeakEvent};
 use model::rng::Rng;
-use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
+use model::{FaultSchedule, Scenario, Simulator};
+use pipeline::{Chain, ChainSettings};
 
 use super::{
     draw_rig, simulator_for, summarise, Case, GapSchedule, GapStep, Outcome, RunResult, SuiteResult,
@@ -24,12 +24,10 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
         cfg.commissioning = Some(commission_rig(case)?);
     }
     let mut sim = simulator_for(case)?;
-    let mut stage = EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )?;
-    let mut cls = Classifier::new(cfg)?;
+    let mut chain = Chain::new(&ChainSettings {
+        classifier: cfg,
+        ..ChainSettings::default()
+    })?;
     let mut events: Vec<LeakEvent> = Vec::new();
     let n = (case.seconds / sim.sample_period_s()).round() as u64;
     let (mut flow, mut flow_n) = (0.0f64, 0.0f64);
@@ -43,8 +41,7 @@ pub fn run_case(case: &Case) -> Result<RunResult, String> {
         if case.variant == GAPS && gaps.step(s.t_s) != GapStep::Kept {
             continue;
         }
-        let e = stage.on_sample(&s);
-        cls.on_stage(&e, |ev| {
+        chain.step(&s, |ev| {
             if ev.kind.is_leak_alarm() {
                 events.push(ev)
             }
@@ -94,11 +91,7 @@ pub fn commission_rig(case: &Case) -> Result<detect::Commissioning, String> {
         Scenario::by_name(&healthy.scenario, case.seed ^ 1, healthy.seconds).map_err(|e| e.to_string())?;
     let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), case.seed ^ 1)
         .map_err(|e| e.to_string())?;
-    let mut stage = EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )?;
+    let mut stage = ChainSettings::default().leak_stage()?;
     let mut learner = detect::CommissioningLearner::new(ClassifierConfig::default().settle_s);
     for _ in 0..40_000 {
         learner.on_estimate(&stage.on_sample(&sim.step()).leak);

@@ -52,7 +52,7 @@ pub enum RunSource {
 pub fn parse_source(text: Option<&str>) -> Result<RunSource, String> {
     match text {
         None | Some("sim") => Ok(RunSource::Sim),
-        Some(t) if t.starts_with("udp://") => acquisition::parse_udp_address(t)
+        Some(t) if t.starts_with("udp://") => config::udp::parse_udp_address(t)
             .map(RunSource::Udp)
             .map_err(|e| format!("--source {e}")),
         Some(t) => Err(format!(

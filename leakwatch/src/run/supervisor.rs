@@ -22,8 +22,8 @@ use super::placement::Placement;
 use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
 use super::stages::{spawn, stage_program, terminate, FUSED};
 use super::watchdog::{stall_cause, Alarm, Watchdog};
-use crate::config::Config;
 use crate::out::{errln, outln};
+use config::Config;
 
 /// The result of a run.
 #[derive(Debug)]

@@ -3,18 +3,21 @@
 
 use std::path::{Path, PathBuf};
 
-use acquisition::UdpScaling;
-use classifier::ClassifierConfig;
-use estimator::Tuning;
+use detect::ClassifierConfig;
+use filter::Tuning;
 use model::params::ActuatorParams;
 use model::sensors::SensorParams;
 use model::sim::SimSettings;
 use serde::{Deserialize, Serialize};
 
+pub mod init;
+pub mod live;
 mod reference;
 mod run_settings;
-pub use reference::reference_markdown;
+pub mod udp;
+pub use reference::{reference_markdown, REGENERATE};
 pub use run_settings::RunSettings;
+use udp::UdpScaling;
 
 /// The config file `run`, `replay`, `simulate`, `calibrate` and `commission` pick
 /// up from the working directory when no `--config` is given.
@@ -487,5 +490,7 @@ fn leaf_mut<'a>(t: &'a mut toml::Table, path: &[&str]) -> Option<&'a mut toml::V
     }
 }
 
+#[cfg(test)]
+mod fuzz;
 #[cfg(test)]
 mod tests;

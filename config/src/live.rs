@@ -160,7 +160,7 @@ pub fn read_secret_file(what: &str, path: &Path) -> Result<String, String> {
         .open(path)
         .map_err(|e| format!("{what} {shown}: cannot open it: {e} (a symbolic link is not followed)"))?;
     let meta = f.metadata().map_err(|e| format!("{what} {shown}: {e}"))?;
-    let me = bus::current_uid();
+    let me = current_uid();
     let mode = meta.mode() & 0o7777;
     if !meta.is_file() {
         return Err(format!("{what} {shown}: not a regular file"));
@@ -263,37 +263,34 @@ impl ZenohConfig {
     /// The shared key of `key_file` (checked: this user's, mode 0600, at least
     /// 32 bytes); `None` without one.
     pub fn key(&self) -> Result<Option<Vec<u8>>, String> {
-        self.key_file.as_deref().map(crate::sign::read_key).transpose()
+        self.key_file.as_deref().map(read_key).transpose()
     }
 }
 
-/// The two sections as a stage reads them from the run's config file (every
-/// other section ignored).
-#[derive(Debug, Default, Deserialize)]
-#[serde(default)]
-pub struct LiveSections {
-    /// `[live_view]`.
-    pub live_view: LiveViewConfig,
-    /// `[zenoh]`.
-    pub zenoh: ZenohConfig,
+/// The shortest shared key, bytes (its file's first line).
+pub const MIN_KEY_LEN: usize = 32;
+
+/// The shared key from `[zenoh] key_file` `path`: its first line, at least
+/// [`MIN_KEY_LEN`] bytes, from a file of this user with mode 0600 (checked:
+/// [`read_secret_file`]).
+pub fn read_key(path: &Path) -> Result<Vec<u8>, String> {
+    let what = "[zenoh] key_file";
+    let key = read_secret_file(what, path)?;
+    if key.len() < MIN_KEY_LEN {
+        return Err(format!(
+            "{what} {}: the key has {} bytes; at least {MIN_KEY_LEN} are needed (e.g. `head -c 32 /dev/urandom | \
+             base64 > FILE; chmod 600 FILE`, the same file on the gateway's and the watch's machine)",
+            path.display(),
+            key.len()
+        ));
+    }
+    Ok(key.into_bytes())
 }
 
-impl LiveSections {
-    /// Reads `[live_view]` and `[zenoh]` from a config file (defaults without one).
-    pub fn load(path: Option<&std::path::Path>) -> Result<LiveSections, String> {
-        let Some(path) = path else {
-            return Ok(LiveSections::default());
-        };
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read config {}: {e}", path.display()))?;
-        let s: LiveSections = toml::from_str(&text)
-            .map_err(|e| format!("config {}: {}", path.display(), e.message().trim()))?;
-        s.live_view
-            .validate()
-            .and_then(|_| s.zenoh.validate())
-            .map_err(|e| format!("config {}: {e}", path.display()))?;
-        Ok(s)
-    }
+/// This process's effective user id.
+fn current_uid() -> u32 {
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    unsafe { libc::geteuid() }
 }
 
 #[cfg(test)]

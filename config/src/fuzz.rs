@@ -4,11 +4,11 @@
 //! own validation again, or an error message.
 //!
 //! Case counts are small by default; `LEAKWATCH_FUZZ_CASES=20000 cargo test -p
-//! leakwatch config_fuzz` runs longer.
+//! config fuzz` runs longer.
 
 use proptest::prelude::*;
 
-use crate::config::Config;
+use crate::Config;
 
 /// The seed files: valid configurations.
 const SEEDS: [&str; 3] = [

@@ -13,49 +13,28 @@ use super::{probe_range, Config};
 /// workspace root, text). A section whose type is in none of them is an error
 /// that names the type.
 const SOURCES: [(&str, &str); 13] = [
-    ("leakwatch/src/config.rs", include_str!("../config.rs")),
-    (
-        "leakwatch/src/config/run_settings.rs",
-        include_str!("run_settings.rs"),
-    ),
-    (
-        "model/src/params.rs",
-        include_str!("../../../model/src/params.rs"),
-    ),
+    ("config/src/lib.rs", include_str!("lib.rs")),
+    ("config/src/run_settings.rs", include_str!("run_settings.rs")),
+    ("model/src/params.rs", include_str!("../../model/src/params.rs")),
     (
         "model/src/params/friction.rs",
-        include_str!("../../../model/src/params/friction.rs"),
+        include_str!("../../model/src/params/friction.rs"),
     ),
     (
         "model/src/params/oil.rs",
-        include_str!("../../../model/src/params/oil.rs"),
+        include_str!("../../model/src/params/oil.rs"),
     ),
     (
         "model/src/datasheet.rs",
-        include_str!("../../../model/src/datasheet.rs"),
+        include_str!("../../model/src/datasheet.rs"),
     ),
-    (
-        "model/src/sensors.rs",
-        include_str!("../../../model/src/sensors.rs"),
-    ),
-    ("model/src/sim.rs", include_str!("../../../model/src/sim.rs")),
-    (
-        "model/src/leakage.rs",
-        include_str!("../../../model/src/leakage.rs"),
-    ),
-    (
-        "filter/src/tuning.rs",
-        include_str!("../../../filter/src/tuning.rs"),
-    ),
-    (
-        "detect/src/config.rs",
-        include_str!("../../../detect/src/config.rs"),
-    ),
-    (
-        "acquisition/src/udp.rs",
-        include_str!("../../../acquisition/src/udp.rs"),
-    ),
-    ("live/src/config.rs", include_str!("../../../live/src/config.rs")),
+    ("model/src/sensors.rs", include_str!("../../model/src/sensors.rs")),
+    ("model/src/sim.rs", include_str!("../../model/src/sim.rs")),
+    ("model/src/leakage.rs", include_str!("../../model/src/leakage.rs")),
+    ("filter/src/tuning.rs", include_str!("../../filter/src/tuning.rs")),
+    ("detect/src/config.rs", include_str!("../../detect/src/config.rs")),
+    ("config/src/udp.rs", include_str!("udp.rs")),
+    ("config/src/live.rs", include_str!("live.rs")),
 ];
 
 /// The command that writes the committed reference (named in the page and by its test).
@@ -156,7 +135,7 @@ fn find_struct(name: &str) -> Result<StructDoc, String> {
         return Ok(StructDoc { file, fields });
     }
     Err(format!(
-        "the config type {name} is in none of the reference's sources (add its file to SOURCES in leakwatch/src/config/reference.rs)"
+        "the config type {name} is in none of the reference's sources (add its file to SOURCES in config/src/reference.rs)"
     ))
 }
 

@@ -38,7 +38,7 @@ fn default_round_trips_and_errors_name_the_problem() {
     // [udp]: raw counts to SI per channel; an unknown channel or field is named
     let c = Config::parse("[udp.p1]\ngain = 250.0\noffset = -1.0e6\n").unwrap();
     assert_eq!((c.udp.p1.gain, c.udp.p1.offset), (250.0, -1.0e6));
-    assert_eq!(c.udp.p2, acquisition::ChannelScale::default());
+    assert_eq!(c.udp.p2, udp::ChannelScale::default());
     let e = Config::parse("[udp.p3]\ngain = 2.0\n").unwrap_err();
     assert!(e.contains("p3"), "{e}");
     let e = Config::parse("[udp.x]\nscale = 2.0\n").unwrap_err();
@@ -86,19 +86,21 @@ fn set(t: &mut toml::Table, path: &[String], v: toml::Value) {
 /// Runs 0.3 s of the loaded scenario on the configured rig through both filters and
 /// the classifier; every measurement and every filter state must stay finite.
 fn runs_finite(cfg: &Config, what: &str) -> Result<(), String> {
-    let req = crate::simulate::SimulateRequest {
-        scenario: "loaded-sine".into(),
-        seconds: Some(0.3),
-        seed: 1,
-        faults: vec![],
-        rig_variant: None,
-    };
-    let (mut sim, seconds) = crate::simulate::build(cfg, &req).unwrap();
-    let samples = sim.run(seconds);
+    let scenario = model::Scenario::by_name("loaded-sine", 1, 0.3).unwrap();
+    let mut sim = model::Simulator::new(
+        cfg.rig_params(),
+        cfg.sensors,
+        cfg.sim,
+        scenario,
+        model::FaultSchedule::default(),
+        1,
+    )
+    .unwrap();
+    let samples = sim.run(0.3);
     let mut stage =
-        estimator::EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())
+        filter::EstimatorStage::new(cfg.model.clone(), cfg.leak_filter.clone(), cfg.estimator.clone())
             .unwrap();
-    let mut cls = classifier::Classifier::new(cfg.classifier.clone()).unwrap();
+    let mut cls = detect::Classifier::new(cfg.classifier.clone()).unwrap();
     for s in &samples {
         if ![s.t_s, s.u_v, s.x_m, s.p1_pa, s.p2_pa]
             .iter()
@@ -311,39 +313,6 @@ fn ranges_name_the_unit() {
         let e = Config::parse(text).unwrap_err();
         assert!(e.contains(expect), "{text}: {e}");
     }
-}
-
-#[test]
-fn the_model_toml_calibrate_writes_is_a_config() {
-    // a calibrated model with every kind of effect the library adds
-    let mut m = ActuatorParams::default();
-    for (e, theta) in [
-        (calibrate::Effect::FrictionAsymmetryViscous, vec![1500.0, 300.0]),
-        (calibrate::Effect::SpoolBias, vec![-5.0e-6]),
-        (calibrate::Effect::SpringLoad, vec![3.0e4, 0.3]),
-        (calibrate::Effect::EntrainedAir, vec![0.01]),
-        (calibrate::Effect::SupplySag, vec![5.0e9]),
-        (calibrate::Effect::ValveBandwidth, vec![320.0]),
-        (calibrate::Effect::LeakExt1, vec![4.0e-9]),
-    ] {
-        m = e.apply(&m, &theta);
-    }
-    let text = crate::model_file::model_toml(&m).unwrap();
-    // the file says how to use it, and `--config model.toml` takes it as it is
-    assert!(
-        text.contains("leakwatch replay MEASURED.csv --config model.toml"),
-        "{text}"
-    );
-    let cfg = Config::parse(&text).unwrap();
-    assert_eq!(cfg.model, m);
-    assert_eq!(cfg.model.spool_null_bias_m, -5.0e-6);
-    assert_eq!(cfg.model.leaks.len(), 1);
-    let r = cfg.model.friction.for_direction(-1.0);
-    assert_eq!((r.slip_n, r.viscous_n_s_per_m), (1500.0, 300.0));
-    // everything else keeps its default
-    assert_eq!(cfg.estimator, Config::default().estimator);
-    assert_eq!(cfg.classifier, Config::default().classifier);
-    assert!(cfg.rig.is_none());
 }
 
 #[test]
