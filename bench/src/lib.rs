@@ -4,6 +4,7 @@
 #![forbid(unsafe_code)]
 
 pub mod alarms;
+pub mod commands;
 pub mod detection;
 pub mod detection_data;
 pub mod identification;

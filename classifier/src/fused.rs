@@ -47,30 +47,28 @@ fn run(args: Args) -> Result<(), String> {
     let mut failed: Option<String> = None;
     // (in low-latency mode both filters take a throw-away step after each sleep,
     // just before the frame is due: the frame's own step finds them in the caches)
-    let on_input = |stage: &mut estimator::EstimatorStage,
-                    input: &bus::Received<SensorFrame>,
-                    out: &mut EstimateFrame| {
-        estimator::shell::estimate_frame(stage, input, out, &mut join);
-        if failed.is_none() {
-            let ready = out.est_done_mono_ns;
-            let done = node
-                .tick(ready)
-                .map_err(|e| e.to_string())
-                .and_then(|()| node.on_estimate(out, input.missing_before, ready, input.is_end_of_stream()));
-            if let Err(e) = done {
-                failed = Some(e);
-                stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let on_input =
+        |stage: &mut filter::EstimatorStage, input: &bus::Received<SensorFrame>, out: &mut EstimateFrame| {
+            estimator::shell::estimate_frame(stage, input, out, &mut join);
+            if failed.is_none() {
+                let ready = out.est_done_mono_ns;
+                let done = node.tick(ready).map_err(|e| e.to_string()).and_then(|()| {
+                    node.on_estimate(out, input.missing_before, ready, input.is_end_of_stream())
+                });
+                if let Err(e) = done {
+                    failed = Some(e);
+                    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                }
             }
-        }
-        true
-    };
+            true
+        };
     let report = run_stage_with(
         &bus,
         &opts,
         stop,
         &mut stage,
         on_input,
-        estimator::EstimatorStage::warm_up,
+        filter::EstimatorStage::warm_up,
     )
     .map_err(|e| e.to_string())?;
     if let Some(e) = failed {

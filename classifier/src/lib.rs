@@ -1,12 +1,9 @@
-//! The `classifier` process crate: the detectors are the pure [`detect`] crate
-//! (re-exported here whole, so `classifier::X` paths keep working); this crate
-//! adds the process around them ([`shell`]: iceoryx2, command line, config file;
+//! The `classifier` process crate: the detectors are the pure [`detect`]
+//! crate; this crate adds the process around them ([`shell`]: iceoryx2, command line, config file;
 //! [`node`]: its work on each estimate), the estimator and classifier fused in
 //! one process ([`fused`]) and the classifier's side of the wire ([`wire`]).
 
 #![forbid(unsafe_code)]
-
-pub use detect::*;
 
 pub mod fused;
 pub mod node;

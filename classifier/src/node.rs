@@ -8,10 +8,10 @@
 //! decoded by [`EstimateWire::from_frame`]) in both, so both give the same events.
 
 use crate::wire::EventWire;
-use crate::{Classifier, ClassifierConfig, LeakEvent};
 use bus::{monotonic_ns, Bus, BusError, Publisher, StageStats};
+use detect::{Classifier, ClassifierConfig, LeakEvent};
 use estimator::wire::EstimateWire;
-use estimator::StageEstimate;
+use filter::StageEstimate;
 use frames::{health_status, EstimateFrame, HealthFrame, LeakEventFrame, StatsFrame};
 
 /// Stats frames come this often, ns.

@@ -1,6 +1,6 @@
 //! The `classifier` process: estimate frames in, leak events (and a 10 Hz
 //! health summary) out, over iceoryx2; a thin shell around
-//! [`classifier::Classifier`].
+//! [`detect::Classifier`].
 //!
 //! ```text
 //! classifier --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
@@ -12,9 +12,9 @@ use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use crate::node::ClassifierNode;
-use crate::ClassifierConfig;
 use bus::monotonic_ns;
 use clap::Parser;
+use detect::ClassifierConfig;
 use frames::{EstimateFrame, Frame};
 
 #[derive(Parser)]

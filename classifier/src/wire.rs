@@ -5,7 +5,7 @@
 //! in the pure `detect` crate and the frame in `frames`, so neither may hold a
 //! `From` between them here.
 
-use crate::{EventKind, LeakEvent, Phase};
+use detect::{EventKind, LeakEvent, Phase};
 use frames::{event_kind, event_phase, LeakEventFrame};
 
 /// A value carried as an integer code on the wire.

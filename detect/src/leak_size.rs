@@ -1,12 +1,14 @@
-// Over 600 lines: the detector's state (33 fields) and its healthy record; they become typed parts with the detector's split.
+// Over 600 lines: the detector's state (33 fields), its arming and its healthy record; the per-estimate step is in step.rs, evidence.rs and decide.rs.
 //! leakwatch's detector: thresholds on the rise of the estimated leak sizes above
 //! a healthy baseline, the kind decided by the chamber flows each hypothesis
-//! implies (the per-sample decision is in `step.rs`).
+//! implies (the per-sample step is in `step.rs`, `evidence.rs` and `decide.rs`).
 
 use crate::track::{Active, Arming, Stats};
 use crate::{signatures_with, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
 use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 
+mod decide;
+mod evidence;
 mod step;
 
 /// leakwatch's detector: thresholds on the estimated leak sizes.

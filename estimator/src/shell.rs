@@ -1,5 +1,5 @@
 //! The `estimator` process: sensor frames in, estimate frames out, over
-//! iceoryx2 (a thin shell around [`estimator::EstimatorStage`]).
+//! iceoryx2 (a thin shell around [`filter::EstimatorStage`]).
 //!
 //! ```text
 //! estimator --rig rig1 [--config leakwatch.toml] [--mode event|low-latency|busy-poll]
@@ -9,9 +9,9 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use crate::wire::EstimateWire;
-use crate::{EstimatorStage, StageEstimate, FLAG_AFTER_GAP, FLAG_RESET};
 use bus::{run_stage_with, Received, StageOptions};
 use clap::Parser;
+use filter::{EstimatorStage, StageEstimate, FLAG_AFTER_GAP, FLAG_RESET};
 use frames::{sensor_flags, EstimateFrame, SensorFrame};
 use model::Sample;
 
@@ -107,7 +107,7 @@ pub fn estimate_frame(
 pub fn oil_stiffness(stage: &EstimatorStage) -> Option<String> {
     let leak = stage.leak();
     let (theta, sigma) = leak.bulk_scale()?;
-    crate::oil_stiffness_line(theta, sigma, leak.model().params.bulk_modulus_pa)
+    filter::oil_stiffness_line(theta, sigma, leak.model().params.bulk_modulus_pa)
 }
 
 /// How often the sensor stream of `stage` restarted, as a line for the process
@@ -179,7 +179,7 @@ pub fn main(args: impl IntoIterator<Item = std::ffi::OsString>) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::FLAG_REANCHORED;
+    use filter::FLAG_REANCHORED;
     use frames::estimate_flags;
     use model::{FaultSchedule, Scenario, Simulator};
 

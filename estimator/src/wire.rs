@@ -1,7 +1,7 @@
 //! The estimator's side of the wire: [`StageEstimate`] ⇄ [`EstimateFrame`],
 //! the one place where the two are converted.
 //!
-//! The flag bits are shared ([`crate::FLAG_RESET`] … equal `frames::estimate_flags`,
+//! The flag bits are shared ([`filter::FLAG_RESET`] … equal `frames::estimate_flags`,
 //! checked at compile time below), so flags are copied, not recoded; the wire's
 //! end-of-stream bit is dropped on the way in. The thesis filter's σ and
 //! innovation σ are not carried (NaN on the way back).
@@ -10,18 +10,18 @@
 //! pure `filter` crate and the frame in `frames`, so neither may hold a `From`
 //! between them here.
 
-use crate::{Estimate, StageEstimate, FLAGS_ALL, MAX_STATES};
+use filter::{Estimate, StageEstimate, FLAGS_ALL, MAX_STATES};
 use frames::{estimate_flags, EstimateFrame, THESIS_STATES};
 
 // `filter` is pure and does not see the wire: its flag bits must be the wire's.
 const _: () = {
-    assert!(crate::FLAG_RESET == estimate_flags::RESET);
-    assert!(crate::FLAG_SKIPPED == estimate_flags::SKIPPED);
-    assert!(crate::FLAG_CLAMPED == estimate_flags::CLAMPED);
-    assert!(crate::FLAG_CONVERGING == estimate_flags::CONVERGING);
-    assert!(crate::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
-    assert!(crate::FLAG_END_STOP == estimate_flags::END_STOP);
-    assert!(crate::FLAG_REANCHORED == estimate_flags::REANCHORED);
+    assert!(filter::FLAG_RESET == estimate_flags::RESET);
+    assert!(filter::FLAG_SKIPPED == estimate_flags::SKIPPED);
+    assert!(filter::FLAG_CLAMPED == estimate_flags::CLAMPED);
+    assert!(filter::FLAG_CONVERGING == estimate_flags::CONVERGING);
+    assert!(filter::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
+    assert!(filter::FLAG_END_STOP == estimate_flags::END_STOP);
+    assert!(filter::FLAG_REANCHORED == estimate_flags::REANCHORED);
     assert!(FLAGS_ALL & estimate_flags::END_OF_STREAM == 0);
     assert!(MAX_STATES == frames::MAX_STATES);
 };
@@ -65,6 +65,16 @@ impl EstimateWire for StageEstimate {
         out.th_innovation = t.innovation;
         out.th_mae_pa = t.mae_pa;
         out.th_nis = t.nis;
+        out.bulk_scale = l.bulk_scale;
+        out.bulk_scale_sigma = l.bulk_scale_sigma;
+        out.oil_temp_c = l.oil_temp_c;
+        out.oil_temp_sigma_k = l.oil_temp_sigma_k;
+        out.laminar_factor_sigma = l.laminar_factor_sigma;
+        out.null_leakage_band_lpm = l.null_leakage_band_lpm;
+        [
+            out.offset_response_p1_lpm_per_mpa,
+            out.offset_response_p2_lpm_per_mpa,
+        ] = l.offset_response_lpm_per_mpa;
     }
 
     fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
@@ -76,14 +86,13 @@ impl EstimateWire for StageEstimate {
             u_v: f.u_v,
             state: f.state,
             sigma: f.state_sigma,
-            // (not on the wire)
-            bulk_scale: f64::NAN,
-            bulk_scale_sigma: f64::NAN,
-            oil_temp_c: f64::NAN,
-            oil_temp_sigma_k: f64::NAN,
-            laminar_factor_sigma: f64::NAN,
-            null_leakage_band_lpm: f64::NAN,
-            offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
+            bulk_scale: f.bulk_scale,
+            bulk_scale_sigma: f.bulk_scale_sigma,
+            oil_temp_c: f.oil_temp_c,
+            oil_temp_sigma_k: f.oil_temp_sigma_k,
+            laminar_factor_sigma: f.laminar_factor_sigma,
+            null_leakage_band_lpm: f.null_leakage_band_lpm,
+            offset_response_lpm_per_mpa: [f.offset_response_p1_lpm_per_mpa, f.offset_response_p2_lpm_per_mpa],
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,
@@ -102,6 +111,14 @@ impl EstimateWire for StageEstimate {
             innovation_sigma: [f64::NAN; 3],
             mae_pa: f.th_mae_pa,
             nis: f.th_nis,
+            // (the thesis filter has no θ, oil state or offset response)
+            bulk_scale: f64::NAN,
+            bulk_scale_sigma: f64::NAN,
+            oil_temp_c: f64::NAN,
+            oil_temp_sigma_k: f64::NAN,
+            laminar_factor_sigma: f64::NAN,
+            null_leakage_band_lpm: f64::NAN,
+            offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
             ..leak
         };
         StageEstimate {
@@ -115,7 +132,7 @@ impl EstimateWire for StageEstimate {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{EstimatorStage, Tuning, FLAG_AFTER_GAP, FLAG_CONVERGING};
+    use filter::{EstimatorStage, Tuning, FLAG_AFTER_GAP, FLAG_CONVERGING};
     use model::{ActuatorParams, Sample};
 
     /// Same floats, NaN equal to NaN.
@@ -153,6 +170,23 @@ mod tests {
         assert!(same(&a.residual, &b.residual) && same(&a.innovation, &b.innovation));
         assert!(same(&a.innovation_sigma, &b.innovation_sigma) && same(&a.measured, &b.measured));
         assert!(same(&[a.nis], &[b.nis]) && same(&a.mae_pa, &b.mae_pa));
+        // the oil's state and band and the offset response: what the detector reads
+        let oil = |x: &Estimate| {
+            [
+                x.bulk_scale,
+                x.bulk_scale_sigma,
+                x.oil_temp_c,
+                x.oil_temp_sigma_k,
+                x.laminar_factor_sigma,
+                x.null_leakage_band_lpm,
+            ]
+        };
+        assert!(a.bulk_scale.is_finite() && a.offset_response_lpm_per_mpa[0].iter().any(|v| *v != 0.0));
+        assert!(same(&oil(a), &oil(b)));
+        assert!(same(
+            a.offset_response_lpm_per_mpa.as_flattened(),
+            b.offset_response_lpm_per_mpa.as_flattened()
+        ));
         let (a, b) = (&e.thesis, &back.thesis);
         assert_eq!(a.flags, b.flags);
         assert!(same(&a.state[..THESIS_STATES], &b.state[..THESIS_STATES]));

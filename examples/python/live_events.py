@@ -72,11 +72,19 @@ class EstimateFrame(ctypes.Structure):
         ("th_innovation", ctypes.c_double * 3),
         ("th_mae_pa", ctypes.c_double * 2),
         ("th_nis", ctypes.c_double),
+        ("bulk_scale", ctypes.c_double),
+        ("bulk_scale_sigma", ctypes.c_double),
+        ("oil_temp_c", ctypes.c_double),
+        ("oil_temp_sigma_k", ctypes.c_double),
+        ("laminar_factor_sigma", ctypes.c_double),
+        ("null_leakage_band_lpm", ctypes.c_double),
+        ("offset_response_p1_lpm_per_mpa", ctypes.c_double * 3),
+        ("offset_response_p2_lpm_per_mpa", ctypes.c_double * 3),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.EstimateFrame.v2"
+        return "leakwatch.EstimateFrame.v3"
 
 
 KINDS = {1: "ext1", 2: "ext2", 3: "int", 10: "estimator-reset", 11: "sensor-stuck",

@@ -15,7 +15,7 @@ pub const THESIS_STATES: usize = 7;
 /// The estimator's output for one sensor frame (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.EstimateFrame.v2")]
+#[type_name("leakwatch.EstimateFrame.v3")]
 pub struct EstimateFrame {
     /// Sequence number of the sensor frame this estimate is for.
     pub seq: u64,
@@ -65,6 +65,28 @@ pub struct EstimateFrame {
     pub th_mae_pa: [f64; 2],
     /// Thesis filter: normalised innovation squared.
     pub th_nis: f64,
+    /// Leak filter: the oil's stiffness θ, a multiple of the model's bulk
+    /// modulus (1); NaN when the filter does not estimate it.
+    pub bulk_scale: f64,
+    /// One standard deviation of [`Self::bulk_scale`] (1).
+    pub bulk_scale_sigma: f64,
+    /// The oil's temperature the leak filter works with, °C: measured, or
+    /// read from θ; NaN when it has none.
+    pub oil_temp_c: f64,
+    /// One standard deviation of [`Self::oil_temp_c`], K.
+    pub oil_temp_sigma_k: f64,
+    /// One standard deviation of the laminar flows' factor at that
+    /// temperature (1): how uncertain the null leakage and linear leaks are.
+    pub laminar_factor_sigma: f64,
+    /// The model's null leakage as a leak size, L/min at p_s/2: the band the
+    /// detector widens its thresholds by, scaled by [`Self::laminar_factor_sigma`].
+    pub null_leakage_band_lpm: f64,
+    /// The leak sizes' response to a constant offset on p1, L/min per MPa:
+    /// ext1, ext2, int.
+    pub offset_response_p1_lpm_per_mpa: [f64; 3],
+    /// The leak sizes' response to a constant offset on p2, L/min per MPa:
+    /// ext1, ext2, int.
+    pub offset_response_p2_lpm_per_mpa: [f64; 3],
 }
 
 impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
@@ -96,6 +118,14 @@ impl Default for EstimateFrame {
             th_innovation: [f64::NAN; 3],
             th_mae_pa: [f64::NAN; 2],
             th_nis: f64::NAN,
+            bulk_scale: f64::NAN,
+            bulk_scale_sigma: f64::NAN,
+            oil_temp_c: f64::NAN,
+            oil_temp_sigma_k: f64::NAN,
+            laminar_factor_sigma: f64::NAN,
+            null_leakage_band_lpm: f64::NAN,
+            offset_response_p1_lpm_per_mpa: [f64::NAN; 3],
+            offset_response_p2_lpm_per_mpa: [f64::NAN; 3],
         }
     }
 }

@@ -21,6 +21,28 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
 }
 
+/// The format of an estimates file, as `--estimates` names it.
+#[derive(Clone, Copy, Debug, Default, ValueEnum)]
+pub(crate) enum EstimatesArg {
+    /// estimates.csv: one text row per sample.
+    #[default]
+    Csv,
+    /// estimates.parquet: one typed column per field (f64; the two flag columns i32).
+    Parquet,
+    /// No estimates file (events.json and summary.json only): the fastest replay.
+    None,
+}
+
+impl From<EstimatesArg> for pipeline::estimates_out::EstimatesFormat {
+    fn from(v: EstimatesArg) -> Self {
+        match v {
+            EstimatesArg::Csv => Self::Csv,
+            EstimatesArg::Parquet => Self::Parquet,
+            EstimatesArg::None => Self::None,
+        }
+    }
+}
+
 /// Friction variant of the simulated rig.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub(crate) enum RigVariant {
@@ -232,7 +254,7 @@ pub(crate) enum Command {
         out: PathBuf,
         /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
         #[arg(long, value_enum, default_value_t)]
-        estimates: crate::estimates_out::EstimatesFormat,
+        estimates: EstimatesArg,
         /// Run all stages in one thread instead of over channels (same results).
         #[arg(long)]
         single_thread: bool,
@@ -418,7 +440,7 @@ pub(crate) enum BenchCommand {
         seconds: f64,
         /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
         #[arg(long, value_enum, default_value_t)]
-        estimates: crate::estimates_out::EstimatesFormat,
+        estimates: EstimatesArg,
         /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
         #[arg(long)]
         out: PathBuf,

@@ -1,28 +1,15 @@
 //! `leakwatch`: watch a hydraulic actuator for leaks. One command line for
 //! simulation, offline replay, the live pipeline, calibration and benchmarks.
 
-mod batch;
-mod benches;
 mod calibrate_cmd;
 mod cli;
-mod commission;
-mod demo;
-mod estimates_out;
-mod floors;
 mod init;
-mod instances;
-mod latency;
-mod logs;
-mod model_file;
-mod out;
 mod plots;
-mod replay;
-mod replay_cmd;
-mod run;
-mod scale;
-mod simulate;
-mod status;
 mod watch;
+
+use bench::commands::{self as benches, instances, latency, scale};
+use pipeline::{commission, demo, logs, model_file, out, replay_cmd, simulate, status};
+use runtime as run;
 
 use std::process::ExitCode;
 
@@ -45,7 +32,7 @@ fn main() -> ExitCode {
         Ok(()) if watches && status::output_failed() => ExitCode::from(status::OUTPUT_FAILED),
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            out::errln!("leakwatch: error: {msg}");
+            bus::say!("leakwatch: error: {msg}");
             ExitCode::FAILURE
         }
     }
@@ -144,7 +131,7 @@ fn run(cli: Cli) -> Result<(), String> {
             config,
             model,
             out,
-            estimates,
+            estimates: estimates.into(),
             single_thread,
             thesis_baseline,
             max_bad_rows,
@@ -205,7 +192,15 @@ fn run(cli: Cli) -> Result<(), String> {
                 seconds,
                 estimates,
                 out,
-            } => benches::replay(data.as_deref(), &threads, files, seconds, estimates, &out, force),
+            } => benches::replay(
+                data.as_deref(),
+                &threads,
+                files,
+                seconds,
+                estimates.into(),
+                &out,
+                force,
+            ),
             BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
             BenchCommand::Instances {
                 rig,

@@ -52,7 +52,7 @@ macro_rules! dependency {
 }
 
 /// `LeakState.msg`: the leak filter's first 11 states by name, SI units (the
-/// 12th, the oil-stiffness scale θ, is not on the wire).
+/// 12th, the oil-stiffness scale θ, is the frame's `bulk_scale`).
 pub const LEAK_STATE: &str = include_str!("../../leakwatch_msgs/msg/LeakState.msg");
 /// `ThesisState.msg`: the thesis filter's 7 states by name, SI units.
 pub const THESIS_STATE: &str = include_str!("../../leakwatch_msgs/msg/ThesisState.msg");
@@ -403,6 +403,7 @@ impl Message for EstimateFrame {
         dependency!("Measurement"),
         dependency!("Pressures"),
         dependency!("ThesisState"),
+        dependency!("LeakFlows"),
     );
 
     cdr_fields!(EstimateFrame {
@@ -429,6 +430,14 @@ impl Message for EstimateFrame {
         th_innovation: f64s,
         th_mae_pa: f64s,
         th_nis: f64,
+        bulk_scale: f64_added,
+        bulk_scale_sigma: f64_added,
+        oil_temp_c: f64_added,
+        oil_temp_sigma_k: f64_added,
+        laminar_factor_sigma: f64_added,
+        null_leakage_band_lpm: f64_added,
+        offset_response_p1_lpm_per_mpa: f64s_added,
+        offset_response_p2_lpm_per_mpa: f64s_added,
     });
 }
 

@@ -249,8 +249,8 @@ fn field_csv_names<F: Field>(_: &F, name: &str, out: &mut Vec<String>) {
 }
 
 // The fields are the frames crate's lists (frames::frame_fields!); the
-// SensorFrame's, LeakEventFrame's and HealthFrame's are written out here, split
-// by the version that brought them.
+// SensorFrame's, EstimateFrame's, LeakEventFrame's and HealthFrame's are written
+// out here, split by the version that brought them.
 record!(
     SensorFrame,
     "leakwatch.SensorFrame.v2",
@@ -270,9 +270,43 @@ record!(
     ],
     added[temp_c]
 );
-frames::frame_fields!(
+record!(
     EstimateFrame,
-    record!(@unpadded EstimateFrame, "leakwatch.EstimateFrame.v2", [])
+    "leakwatch.EstimateFrame.v2",
+    [
+        seq,
+        acq_mono_ns,
+        est_recv_mono_ns,
+        est_done_mono_ns,
+        t_s,
+        n_states,
+        flags,
+        state,
+        state_sigma,
+        residual,
+        innovation,
+        innovation_sigma,
+        measured,
+        u_v,
+        nis,
+        mae_pa,
+        th_flags,
+        th_state,
+        th_residual,
+        th_innovation,
+        th_mae_pa,
+        th_nis
+    ],
+    added[
+        bulk_scale,
+        bulk_scale_sigma,
+        oil_temp_c,
+        oil_temp_sigma_k,
+        laminar_factor_sigma,
+        null_leakage_band_lpm,
+        offset_response_p1_lpm_per_mpa,
+        offset_response_p2_lpm_per_mpa
+    ]
 );
 record!(
     LeakEventFrame,

@@ -235,7 +235,11 @@ fn expected_estimate(x: &EstimateFrame) -> Value {
         "u_v": f(x.u_v), "nis": f(x.nis), "mae_pa": fs(&PRESSURES, &x.mae_pa), "th_flags": x.th_flags,
         "th_state": fs(&LEAK_STATE[..7], &x.th_state), "th_residual": fs(&MEASUREMENT, &x.th_residual),
         "th_innovation": fs(&MEASUREMENT, &x.th_innovation), "th_mae_pa": fs(&PRESSURES, &x.th_mae_pa),
-        "th_nis": f(x.th_nis),
+        "th_nis": f(x.th_nis), "bulk_scale": f(x.bulk_scale), "bulk_scale_sigma": f(x.bulk_scale_sigma),
+        "oil_temp_c": f(x.oil_temp_c), "oil_temp_sigma_k": f(x.oil_temp_sigma_k),
+        "laminar_factor_sigma": f(x.laminar_factor_sigma), "null_leakage_band_lpm": f(x.null_leakage_band_lpm),
+        "offset_response_p1_lpm_per_mpa": fs(&LEAK_FLOWS, &x.offset_response_p1_lpm_per_mpa),
+        "offset_response_p2_lpm_per_mpa": fs(&LEAK_FLOWS, &x.offset_response_p2_lpm_per_mpa),
     })
 }
 
@@ -327,6 +331,10 @@ fn write_log(path: &Path) {
             nis: 1.25,
             th_flags: 1,
             th_nis: 2.5,
+            bulk_scale: 0.95,
+            oil_temp_c: 41.5,
+            laminar_factor_sigma: 0.02,
+            offset_response_p1_lpm_per_mpa: [0.1, -0.2, 0.3],
             ..EstimateFrame::default()
         };
         for k in 0..11 {

@@ -1,14 +1,19 @@
 //! `leakwatch bench ...`: thin shells over the `bench` crate that print tables and write JSON.
 
+pub mod floors;
+pub mod instances;
+pub mod latency;
+pub mod scale;
+
 use std::path::{Path, PathBuf};
 
-use bench::speed::{step_time, timer_overhead_ns};
-use bench::{detection, speed};
-use estimator::Tuning;
+use crate::speed::{step_time, timer_overhead_ns};
+use crate::{detection, speed};
+use filter::Tuning;
 
-use crate::out::{self, outln};
-use crate::simulate;
 use config::Config;
+use pipeline::out::{self, outln};
+use pipeline::simulate;
 
 fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) -> Result<(), String> {
     out::dir(dir)?;
@@ -21,7 +26,7 @@ fn write_json(dir: &Path, name: &str, value: &serde_json::Value, force: bool) ->
 
 /// The loaded scenario's samples for benchmarks, `seconds` long.
 pub(crate) fn samples(seconds: f64) -> Vec<model::Sample> {
-    bench::speed::recorded_samples(seconds)
+    crate::speed::recorded_samples(seconds)
 }
 
 /// The rig simulator's speed on the loaded scenario (median of `repeat` runs of
@@ -259,7 +264,7 @@ pub fn detection_data(
     if let Some(rec) = &recording {
         if cfg.classifier.commissioning.is_none() {
             eprintln!("commissioning on {}", rec.display());
-            cfg = crate::commission::commission(rec, &cfg)?;
+            cfg = pipeline::commission::commission(rec, &cfg)?;
         }
     }
     out::dir(out)?;
@@ -278,12 +283,12 @@ pub fn detection_data(
         threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
     eprintln!("scoring the runs of {} on {threads} threads", dir.display());
     let bar = indicatif::ProgressBar::new(0);
-    let r = bench::detection_data::score_dir(dir, &set, threads, |done, total| {
+    let r = crate::detection_data::score_dir(dir, &set, threads, |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
-    let md = bench::detection_data::data_markdown(&r);
+    let md = crate::detection_data::data_markdown(&r);
     outln!("{md}");
     outln!("wall time {:.1} s", r.wall_s);
     out::write(
@@ -327,12 +332,12 @@ fn identification_data(
     }
     eprintln!("identifying the rig on {}", recording.display());
     let t0 = std::time::Instant::now();
-    let found = crate::commission::identify_on(recording, &cfg)?;
+    let found = pipeline::commission::identify_on(recording, &cfg)?;
     let (id, mech) = (found.rig, found.mechanics);
     let wall_s = t0.elapsed().as_secs_f64();
     let rig = read_json(&dir.join("truth_rig.json"))?;
     let rec = read_json(&dir.join("commission_cold.truth.json"))?;
-    let score = bench::identification::score(
+    let score = crate::identification::score(
         &cfg.model,
         cfg.datasheet
             .as_ref()
@@ -397,7 +402,7 @@ pub fn calibration(
         .min(2);
     let reports: Vec<(&str, calibrate::BenchReport)> = if let Some(dir) = data {
         let model = match config {
-            Some(p) => crate::model_file::load_model(&p).map_err(|e| e.to_string())?,
+            Some(p) => pipeline::model_file::load_model(&p).map_err(|e| e.to_string())?,
             None => model::ActuatorParams::default(),
         };
         let bar = indicatif::ProgressBar::new(0);
@@ -483,12 +488,12 @@ pub fn replay(
     threads: &[usize],
     files: usize,
     seconds: f64,
-    estimates: crate::estimates_out::EstimatesFormat,
+    estimates: pipeline::estimates_out::EstimatesFormat,
     out: &Path,
     force: bool,
 ) -> Result<(), String> {
-    use crate::batch;
-    use crate::replay_cmd::Settings;
+    use pipeline::batch;
+    use pipeline::replay_cmd::Settings;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
@@ -580,7 +585,7 @@ pub fn replay(
         max_bad_rows: dataset::DEFAULT_MAX_BAD_FRACTION,
         force: true,
     };
-    let mut passes: Vec<bench::replay::ReplayPass> = Vec::new();
+    let mut passes: Vec<crate::replay::ReplayPass> = Vec::new();
     for &n in &counts {
         let pass_out = pass_dir(n);
         let jobs = batch::jobs(std::slice::from_ref(&dir), &pass_out)?;
@@ -591,7 +596,7 @@ pub fn replay(
         let per_file = jobs
             .iter()
             .zip(&b.done)
-            .map(|(job, d)| bench::replay::FileTime {
+            .map(|(job, d)| crate::replay::FileTime {
                 file: job.name.clone(),
                 samples: d.result.as_ref().map_or(0, |s| s.samples),
                 wall_s: d.wall_s,
@@ -599,21 +604,21 @@ pub fn replay(
             })
             .collect();
         let first = passes.first().map(|p| p.samples_per_s);
-        passes.push(bench::replay::ReplayPass::new(threads, per_file, b.wall_s, first));
+        passes.push(crate::replay::ReplayPass::new(threads, per_file, b.wall_s, first));
         std::fs::remove_dir_all(&pass_out)
             .map_err(|e| format!("cannot remove {}: {e}", pass_out.display()))?;
     }
     if generated {
         std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot remove {}: {e}", dir.display()))?;
     }
-    let report = bench::replay::ReplayBench {
+    let report = crate::replay::ReplayBench {
         data: dir.display().to_string(),
         generated,
         cores,
         estimates: format!("{estimates:?}").to_lowercase(),
         passes,
     };
-    outln!("{}", bench::replay::table(&report));
+    outln!("{}", crate::replay::table(&report));
     for p in &report.passes {
         if let Some(f) = p.per_file.iter().find(|f| f.error.is_some()) {
             eprintln!(

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use bus::BusConfig;
 
-use crate::out::errln;
+use bus::say as errln;
 
 /// The start of the line a stage writes when its iceoryx2 node cannot be created.
 const NODE_FAILURE: &str = "cannot create the iceoryx2 node";

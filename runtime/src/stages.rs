@@ -5,7 +5,7 @@ use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
-use crate::out::errln;
+use bus::say as errln;
 
 /// The four stage processes of the split placement, in the order they start.
 pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
@@ -95,7 +95,7 @@ pub(super) fn spawn(
 ) -> Result<Child, String> {
     let args = &with_run_config(name, args);
     // the outputs were checked at start (an earlier run's only with --force)
-    let err = crate::out::create(log, true, &[])?;
+    let err = pipeline::out::create(log, true, &[])?;
     let mut cmd = Command::new(program);
     // The stage dies with its supervisor (SIGTERM when the supervisor's thread
     // that spawned it ends, whatever the cause, SIGKILL included).

@@ -6,7 +6,7 @@
 use std::os::unix::net::UnixDatagram;
 use std::path::Path;
 
-use crate::out::outln;
+use pipeline::out::outln;
 use std::time::{Duration, Instant};
 
 use hdrhistogram::Histogram;
@@ -160,10 +160,10 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     if !(seconds > 0.0 && seconds.is_finite()) {
         return Err(format!("--seconds {seconds}: must be a positive number"));
     }
-    crate::out::dir(out)?;
-    crate::out::check(&out.join("latency.json"), force, &[])?;
+    pipeline::out::dir(out)?;
+    pipeline::out::check(&out.join("latency.json"), force, &[])?;
     // the machine's floors first, on an otherwise idle machine
-    let floors = crate::floors::measure(seconds.min(10.0))?;
+    let floors = crate::commands::floors::measure(seconds.min(10.0))?;
     let mut rows = Vec::new();
     // (wait mode, placement, pinned): the estimator and classifier as two processes,
     // and as one; the low-latency configuration pins the acquisition alone to
@@ -192,17 +192,17 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             Some(_) => format!("run-{mode}-fused"),
         } + if pinned { "-pinned" } else { "" };
         let config = if pinned {
-            crate::out::dir(out)?;
+            pipeline::out::dir(out)?;
             let p = out.join("pinned.toml");
             // (the recorder's bursts beside the spinning pacer cost it 60-140 µs at p99:
             // the pacer gets CPU 0 alone)
             let text = "[run]\ncpus = { acquisition = 0, recorder = 1, \"estimator+classifier\" = 1 }\n";
-            crate::out::write(&p, text.as_bytes(), true, &[])?;
+            pipeline::out::write(&p, text.as_bytes(), true, &[])?;
             Some(p)
         } else {
             None
         };
-        let args = crate::run::RunArgs {
+        let args = runtime::RunArgs {
             seconds: Some(seconds),
             scenario: Some("loaded-sine".into()),
             faults: Vec::new(),
@@ -225,7 +225,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             zenoh_connect: Vec::new(),
         };
         eprintln!("iceoryx2, {label}: {seconds} s ...");
-        let o = crate::run::run_pipeline(&args, true)?;
+        let o = runtime::run_pipeline(&args, true)?;
         let log = std::fs::read_to_string(out.join(&dir).join("acquisition.log")).unwrap_or_default();
         let pacer_whole_run_us = pacer_lateness_us(&log).unwrap_or([f64::NAN; 4]);
         let st = &o.latency.stages;
@@ -247,7 +247,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
             pacer_whole_run_us,
         });
     }
-    let samples = crate::benches::samples(seconds);
+    let samples = crate::commands::samples(seconds);
     eprintln!("threads over Unix datagram sockets: {seconds} s ...");
     rows.push(threads_run(
         "threads, Unix datagram sockets",
@@ -312,11 +312,11 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
         );
     }
     outln!("");
-    crate::floors::print(&floors)?;
+    crate::commands::floors::print(&floors)?;
     let p = out.join("latency.json");
     let json = serde_json::json!({ "pipeline": rows, "floors": floors });
     let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())? + "\n";
-    crate::out::write(&p, text.as_bytes(), force, &[])?;
+    pipeline::out::write(&p, text.as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())
 }

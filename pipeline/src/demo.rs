@@ -1,6 +1,6 @@
 //! `leakwatch demo`: the whole chain in one process on the simulated rig.
 
-use classifier::Phase;
+use detect::Phase;
 use model::{Fault, FaultSchedule, Scenario, Simulator};
 
 use crate::out::outln;
@@ -73,7 +73,7 @@ pub fn run(
     );
     let mut sim = Simulator::new(rig, cfg.sensors, cfg.sim, sc, schedule, seed).map_err(|e| e.to_string())?;
     // (the thesis filter runs for its baseline only, which the demonstration does not report)
-    let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(&cfg))?;
+    let mut chain = crate::Chain::new(&crate::ChainSettings::from(&cfg))?;
     let n = (seconds / sim.sample_period_s()).round() as u64;
     let t0 = std::time::Instant::now();
     let mut leak_found = false;
@@ -135,7 +135,7 @@ const LIFT_COMMISSIONING_S: f64 = 60.0;
 
 /// The lift's commissioning, as `leakwatch commission` would learn it: a minute
 /// of the healthy off-nominal rig (another seed) through the leak filter.
-fn commission_lift(cfg: &Config, seed: u64) -> Result<classifier::Commissioning, String> {
+fn commission_lift(cfg: &Config, seed: u64) -> Result<detect::Commissioning, String> {
     let rig = off_nominal_rig(&cfg.model);
     let sc =
         Scenario::by_name("lift", seed.wrapping_add(1), LIFT_COMMISSIONING_S).map_err(|e| e.to_string())?;
@@ -148,8 +148,8 @@ fn commission_lift(cfg: &Config, seed: u64) -> Result<classifier::Commissioning,
         seed.wrapping_add(1),
     )
     .map_err(|e| e.to_string())?;
-    let mut stage = pipeline::ChainSettings::from(cfg).leak_stage()?;
-    let mut learner = classifier::CommissioningLearner::new(cfg.classifier.settle_s);
+    let mut stage = crate::ChainSettings::from(cfg).leak_stage()?;
+    let mut learner = detect::CommissioningLearner::new(cfg.classifier.settle_s);
     let n = (LIFT_COMMISSIONING_S / sim.sample_period_s()).round() as u64;
     for _ in 0..n {
         let s = sim.step();

@@ -1,6 +1,6 @@
 //! `leakwatch replay DIR` (or several files): a batch of replays spread over
 //! worker threads. Each file is replayed whole on one thread by the single
-//! replay's path ([`replay_cmd::replay_file`], its one-thread wiring), so its
+//! replay's path ([`crate::replay_cmd::replay_file`], its one-thread wiring), so its
 //! outputs, in `OUT/<relative name without extension>/`, are the bytes a
 //! replay of that file alone writes. A file that fails is reported and the
 //! others go on; the command then ends with an error (a non-zero exit).
@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use classifier::{EventKind, LeakEvent, Phase};
+use detect::{EventKind, LeakEvent, Phase};
 
 use crate::out::outln;
 use crate::replay::{Summary, Wiring};

@@ -1,7 +1,7 @@
 //! The supervisor: checks every argument, starts the four stages, restarts
-//! those that exit (with backoff: [`super::restart`]; the acquisition
+//! those that exit (with backoff: [`crate::restart`]; the acquisition
 //! continuing its stream after the last frame it published), watches that each
-//! makes progress ([`super::watchdog`]), gathers events and stats, and writes
+//! makes progress ([`crate::watchdog`]), gathers events and stats, and writes
 //! the outputs at the end, whatever ended the run.
 
 use std::collections::BTreeMap;
@@ -11,19 +11,20 @@ use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
-use classifier::LeakEvent;
+use detect::LeakEvent;
 use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
-use super::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
-use super::events::{own_event, print_event};
-use super::figures::{LatencyReport, StageAcc, STAGE_NAMES};
-use super::launch::{is_log_part, Resume, Samples, StageArgs, FRAME_SUBSCRIBERS};
-use super::placement::Placement;
-use super::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
-use super::stages::{spawn, stage_program, terminate, FUSED};
-use super::watchdog::{stall_cause, Alarm, Watchdog};
-use crate::out::{errln, outln};
+use crate::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
+use crate::events::{own_event, print_event};
+use crate::figures::{LatencyReport, StageAcc, STAGE_NAMES};
+use crate::launch::{is_log_part, Resume, Samples, StageArgs, FRAME_SUBSCRIBERS};
+use crate::placement::Placement;
+use crate::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
+use crate::stages::{spawn, stage_program, terminate, FUSED};
+use crate::watchdog::{stall_cause, Alarm, Watchdog};
+use bus::say as errln;
 use config::Config;
+use pipeline::out::outln;
 
 /// The result of a run.
 #[derive(Debug)]
@@ -70,7 +71,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         Some(dir) => dir.clone(),
         None => default_out_dir(),
     };
-    crate::out::dir(&out_dir)?;
+    pipeline::out::dir(&out_dir)?;
     // An earlier run's outputs are replaced only with --force; refused before anything starts.
     let mut outputs: Vec<String> = [
         "config.toml",
@@ -90,7 +91,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     }
     let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
     for name in outputs {
-        crate::out::check(&out_dir.join(name), args.force, &inputs)?;
+        pipeline::out::check(&out_dir.join(name), args.force, &inputs)?;
     }
     // The demonstration (a leak on an off-nominal rig) is what `run` does without
     // faults or a config; naming the default scenario explicitly changes nothing.
@@ -123,7 +124,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
     cfg.classifier.thesis_baseline |= args.thesis_baseline;
     if demo {
-        cfg.rig = Some(crate::demo::off_nominal_rig(&cfg.model));
+        cfg.rig = Some(pipeline::demo::off_nominal_rig(&cfg.model));
     }
     let stages = live_stages(args, &mut cfg, &out_dir, &inputs, quiet, processes)?;
     // A private iceoryx2 prefix per run, unless the user names one (to attach
@@ -146,17 +147,17 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     // before it could touch the first one's shared memory.
     let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
     // what a killed run on this prefix left in shared memory: removed, and said
-    super::clean::remove_at_start(&bus_cfg);
+    crate::clean::remove_at_start(&bus_cfg);
     // a management segment of another user, or a damaged one that could not be
     // removed (a process of the prefix still runs): no stage could start
-    if let Some(why) = super::blocked::why_blocked(&bus_cfg, None) {
+    if let Some(why) = crate::blocked::why_blocked(&bus_cfg, None) {
         return Err(format!("cannot start on the iceoryx2 prefix {prefix:?}: {why}"));
     }
     // a start that fails from here on removes what it made on the prefix
-    let start_cleanup = super::clean::StartCleanup::new(&bus_cfg);
+    let start_cleanup = crate::clean::StartCleanup::new(&bus_cfg);
     let cfg_path = out_dir.join("config.toml");
     let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
-    crate::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
+    pipeline::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
     let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
     let mut events_rx = bus
         .subscriber::<LeakEventFrame>(WaitMode::Event)
@@ -224,7 +225,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                 out_dir.display()
             ),
         }
-        if let Ok(c) = classifier::Classifier::new(cfg.classifier.clone()) {
+        if let Ok(c) = detect::Classifier::new(cfg.classifier.clone()) {
             outln!("note: {}", c.start_note());
         }
     }
@@ -374,7 +375,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                         {
                             // a full disk or an I/O error: a restart would fail the same way
                             let part = launch.log_part(restarts.get(name).copied().unwrap_or(0));
-                            let why = super::clean::log_write_error(&log, &part);
+                            let why = crate::clean::log_write_error(&log, &part);
                             errln!(
                                 "leakwatch run: error: {why}; the recorder is not restarted: monitoring goes on \
                                  without a log (events are printed here and written to events.json at the end)"
@@ -384,8 +385,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
                             continue;
                         }
                         // a prefix on which no node can start: a restart would fail the same way
-                        if let Some(why) = super::blocked::why_blocked(&bus_cfg, Some(&log)) {
-                            if let Some(f) = super::blocked::give_up(
+                        if let Some(why) = crate::blocked::why_blocked(&bus_cfg, Some(&log)) {
+                            if let Some(f) = crate::blocked::give_up(
                                 name,
                                 &why,
                                 OPTIONAL_STAGES.contains(&name),
@@ -461,8 +462,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             if restart_at.get(name).is_some_and(|t| now >= *t) {
                 restart_at.remove(name);
                 // checked again: the prefix may have been damaged while the stage waited
-                if let Some(why) = super::blocked::why_blocked(&bus_cfg, None) {
-                    if let Some(f) = super::blocked::give_up(
+                if let Some(why) = crate::blocked::why_blocked(&bus_cfg, None) {
+                    if let Some(f) = crate::blocked::give_up(
                         name,
                         &why,
                         OPTIONAL_STAGES.contains(&name),
@@ -564,21 +565,21 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     // Written whatever ended the run; one that cannot be written into the output
     // directory (a full disk) goes to the temporary directory, said on stderr, and
     // masks no earlier failure.
-    let events_path = super::clean::write_somewhere(
+    let events_path = crate::clean::write_somewhere(
         &out_dir,
         "events.json",
         &args.rig,
         &mut output_failures,
-        |path, force| crate::replay::write_events(path, &events, force, &inputs),
+        |path, force| pipeline::replay::write_events(path, &events, force, &inputs),
         args.force,
     );
     let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())? + "\n";
-    let latency_path = super::clean::write_somewhere(
+    let latency_path = crate::clean::write_somewhere(
         &out_dir,
         "latency.json",
         &args.rig,
         &mut output_failures,
-        |path, force| crate::out::write(path, text.as_bytes(), force, &inputs),
+        |path, force| pipeline::out::write(path, text.as_bytes(), force, &inputs),
         args.force,
     );
     write_bag_metadata(&out_dir, args.force, &inputs);
@@ -624,7 +625,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     })
 }
 
-/// The stages of the run ([`super::stages::run_stages`]): the live view
+/// The stages of the run ([`crate::stages::run_stages`]): the live view
 /// (`--live-view [PORT]` or `[live_view] enabled`) and the Zenoh gateway
 /// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) set in `cfg` for the
 /// stages to read, checked (the live view's port free), and said on the console.
@@ -663,7 +664,7 @@ fn live_stages(
     if v.enabled {
         // the shipped Foxglove layout with this rig's topics, beside the run's outputs
         let layout = out_dir.join(live::layout::LAYOUT_FILE_NAME);
-        crate::out::write(
+        pipeline::out::write(
             &layout,
             live::layout::for_rig(&args.rig).as_bytes(),
             args.force,
@@ -700,9 +701,9 @@ fn live_stages(
             cfg.zenoh.connect.join(", ")
         );
     }
-    let stages = super::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
+    let stages = crate::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
     for name in stages.iter().filter(|n| ["liveview", "gateway"].contains(n)) {
-        crate::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
+        pipeline::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
     }
     Ok(stages)
 }
@@ -739,11 +740,11 @@ fn write_bag_metadata(out_dir: &Path, force: bool, inputs: &[&Path]) {
     if !log.is_file() {
         return;
     }
-    let written = crate::logs::read_log(&log).and_then(|(l, parts, bytes)| {
+    let written = pipeline::logs::read_log(&log).and_then(|(l, parts, bytes)| {
         let mut info = recorder::Info::from_log(&log, bytes, &l);
         info.later_parts = parts.into_iter().skip(1).collect();
         let text = recorder::rosbag2::metadata_yaml(&info);
-        crate::out::write(&out_dir.join("metadata.yaml"), text.as_bytes(), force, inputs)
+        pipeline::out::write(&out_dir.join("metadata.yaml"), text.as_bytes(), force, inputs)
     });
     if let Err(e) = written {
         eprintln!("leakwatch run: no rosbag2 metadata.yaml beside the log: {e}");

@@ -5,11 +5,12 @@ use std::collections::BTreeMap;
 use std::process::Child;
 
 use classifier::wire::EventWire;
-use classifier::LeakEvent;
+use detect::LeakEvent;
 use frames::LeakEventFrame;
 
-use super::stages::FUSED;
-use crate::out::{errln, outln};
+use crate::stages::FUSED;
+use bus::say as errln;
+use pipeline::out::outln;
 
 /// The classifier's process id in `children` (a map of running children, or of pids).
 pub(super) trait ClassifierPid {

@@ -85,7 +85,7 @@ pub fn log_parts(first: &Path) -> Vec<PathBuf> {
 /// Reads the run's log that `log` starts, every part of it ([`log_parts`]) in
 /// order, as one; returns it, the parts and their total size in bytes. A part
 /// that cannot be read is an error naming it.
-pub(crate) fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64), String> {
+pub fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64), String> {
     let parts = log_parts(log);
     let mut whole: Option<recorder::Log> = None;
     let mut bytes = 0;

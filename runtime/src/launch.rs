@@ -63,7 +63,7 @@ impl StageArgs {
     /// The log part the recorder's `restart`-th process writes: `run.mcap`, then
     /// `run-1.mcap`, `run-2.mcap`, ...
     pub(super) fn log_part(&self, restart: u32) -> std::path::PathBuf {
-        self.out_dir.join(crate::logs::part_name("run", restart))
+        self.out_dir.join(pipeline::logs::part_name("run", restart))
     }
 
     /// The arguments of `stage`'s `restart`-th restart (0: the first start). A
@@ -87,7 +87,7 @@ impl StageArgs {
                     a.push(s("--force"));
                 }
             }
-            "classifier" | "estimator" | super::stages::FUSED => {
+            "classifier" | "estimator" | crate::stages::FUSED => {
                 a.extend([s("--config"), self.config.clone(), s("--mode"), self.mode.clone()]);
                 if let Some(seq) = resume.after_estimate.filter(|_| restart > 0) {
                     a.extend([s("--resume-after-seq"), seq.to_string()]);

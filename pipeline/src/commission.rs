@@ -16,9 +16,9 @@
 
 use std::path::Path;
 
-use classifier::CommissioningLearner;
 use dataset::{CsvReader, Limits, Row};
-use estimator::Tuning;
+use detect::CommissioningLearner;
+use filter::Tuning;
 use model::process::I_BIAS;
 
 use config::Config;
@@ -302,13 +302,13 @@ fn replay_estimates(
     input: &Path,
     cfg: &Config,
     tuning: Tuning,
-    mut each: impl FnMut(&estimator::Estimate),
+    mut each: impl FnMut(&filter::Estimate),
 ) -> Result<(), String> {
     let limits = Limits::for_model(&cfg.model, tuning.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
-    let mut stage = pipeline::ChainSettings {
+    let mut stage = crate::ChainSettings {
         leak_filter: tuning,
-        ..pipeline::ChainSettings::from(cfg)
+        ..crate::ChainSettings::from(cfg)
     }
     .leak_stage()?;
     while let Some(row) = reader.next_row() {
@@ -332,7 +332,7 @@ pub fn identify_null_bias(input: &Path, cfg: &Config) -> Result<NullBias, String
     let (mut n, mut sum, mut sum2) = (0u64, 0.0, 0.0);
     let mut converged_at = None;
     replay_estimates(input, cfg, tuning, |e| {
-        if e.flags & estimator::FLAG_CONVERGING != 0 || e.flags & estimator::FLAG_RESET != 0 {
+        if e.flags & filter::FLAG_CONVERGING != 0 || e.flags & filter::FLAG_RESET != 0 {
             converged_at = None;
             return;
         }
@@ -371,8 +371,8 @@ pub fn with_null_bias(cfg: &Config, bias: &NullBias) -> Config {
 /// Learns the commissioning of `input` under the config `cfg` as it is, and the
 /// leak filter's mean oil stiffness θ over it (1; `None` without that state):
 /// the θ at the recording's oil temperature, which the filter reads the
-/// temperature against when no `temp_c` comes ([`estimator::oil`]).
-pub fn learn(input: &Path, cfg: &Config) -> Result<(classifier::Commissioning, Option<f64>), String> {
+/// temperature against when no `temp_c` comes ([`filter::oil`]).
+pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Option<f64>), String> {
     if cfg.leak_filter.states < 10 {
         return Err(format!(
             "[leak_filter] states = {}: commissioning needs the leak filter (10, 11 or 12 states)",
@@ -384,7 +384,7 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<(classifier::Commissioning, O
     let mut at_reference = cfg.clone();
     at_reference.model.oil_temperature.reference_stiffness = None;
     let (mut theta_sum, mut theta_n) = (0.0, 0u64);
-    let unsettled = estimator::FLAG_CONVERGING | estimator::FLAG_SKIPPED | estimator::FLAG_RESET;
+    let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
     replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
         learner.on_estimate(e);
         if e.bulk_scale.is_finite() && e.flags & unsettled == 0 {
@@ -428,13 +428,13 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
         "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
         c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
     );
-    if c.internal_factors != classifier::NOMINAL_INTERNAL_FACTORS {
+    if c.internal_factors != detect::NOMINAL_INTERNAL_FACTORS {
         eprintln!(
             "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",
             c.internal_factors[0], c.internal_factors[1]
         );
     }
-    let (_, thr) = classifier::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
+    let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     eprintln!(
         "the detector will raise leaks from {:.3}/{:.3}/{:.3} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
         thr[0], thr[1], thr[2], cfg.classifier.false_alarms_per_hour
@@ -463,9 +463,8 @@ fn detectable_over_temperature(
 ) -> String {
     let oil = &model.oil_temperature;
     let at = STATED_TEMPERATURES_C.map(|t| {
-        let (sigma, band) =
-            estimator::oil::null_leakage_band(model, t, estimator::oil::settled_sigma_k(oil, t));
-        let widen = classifier::oil_band_lpm(sigma, band, offsets_lpm);
+        let (sigma, band) = filter::oil::null_leakage_band(model, t, filter::oil::settled_sigma_k(oil, t));
+        let widen = detect::oil_band_lpm(sigma, band, offsets_lpm);
         format!(
             "{t:.0} °C {:.3}/{:.3}/{:.3}",
             thr[0] + widen[0],

@@ -11,7 +11,7 @@
 //! - `run_NNN/measured.csv` and `truth.json`: healthy runs on every duty cycle
 //!   and leak runs, each under a drawn oil warm-up or cool-down.
 //!
-//! Every CSV comes from [`crate::simulate::build`], the `simulate` command's path.
+//! Every CSV comes from [`pipeline::simulate::build`], the `simulate` command's path.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -21,8 +21,8 @@ use model::instance::{Instance, NominalRig};
 use model::rng::Rng;
 use model::sim::OilWarmUp;
 
-use crate::simulate::{self, SimulateRequest};
 use config::Config;
+use pipeline::simulate::{self, SimulateRequest};
 
 /// The oil temperatures a commissioning recording is held at, °C (one drawn per instance).
 pub const COMMISSION_TEMPS_C: [f64; 3] = [20.0, 30.0, 50.0];
@@ -286,7 +286,7 @@ fn write_recording(
         )
     } else {
         let d = dir.join(&plan.run);
-        crate::out::dir(&d)?;
+        pipeline::out::dir(&d)?;
         (d.join("measured.csv"), d.join("truth.json"))
     };
     let cfg = instance_config(inst, Some(plan.oil));
@@ -294,7 +294,7 @@ fn write_recording(
         Some((kind, size, onset)) => vec![format!("{kind}:{size}lpm@{onset}s")],
         None => vec![],
     };
-    let file = crate::out::create(&csv, force, &[])?;
+    let file = pipeline::out::create(&csv, force, &[])?;
     let (samples, seconds) = simulate_plan(&cfg, plan, &faults)?;
     let mut w = std::io::BufWriter::new(file);
     simulate::write_csv(&mut w, &samples).map_err(|e| dataset::output::message(&csv, &e))?;
@@ -341,7 +341,7 @@ fn write_recording(
         "samples": samples.len(),
     });
     let text = serde_json::to_string_pretty(&truth_json).map_err(|e| e.to_string())?;
-    crate::out::write(&truth, (text + "\n").as_bytes(), force, &[])?;
+    pipeline::out::write(&truth, (text + "\n").as_bytes(), force, &[])?;
     Ok(samples.len())
 }
 
@@ -380,15 +380,15 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
     for i in 0..req.instances {
         let inst = Instance::draw(&nominal, instance_seed(req.seed, i));
         let dir = instance_dir(&req.out, i);
-        crate::out::dir(&dir)?;
+        pipeline::out::dir(&dir)?;
         let plan = plan_instance(req, cycles, i, inst.seed);
         let commission_c = plan.first().map_or(40.0, |p| p.oil.start_c);
         let misread =
             Rng::new(inst.seed ^ 0x5EED_7A4C).uniform_in(-TANK_READING_ERROR_K, TANK_READING_ERROR_K);
         let catalogue = catalogue_toml(&nominal, commission_c + misread)?;
-        crate::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
+        pipeline::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
         let text = instance_toml(&inst, &req.rig, i)?;
-        crate::out::write(&dir.join("instance.toml"), text.as_bytes(), force, &[])?;
+        pipeline::out::write(&dir.join("instance.toml"), text.as_bytes(), force, &[])?;
         plans.extend(plan);
         instances.push(inst);
     }

@@ -141,7 +141,7 @@ pub fn command(
 
 /// Writes `samples` as a leakwatch CSV (header and rows) to `w` and flushes it;
 /// returns the number of samples.
-pub(crate) fn write_csv(w: &mut impl std::io::Write, samples: &[model::Sample]) -> std::io::Result<usize> {
+pub fn write_csv(w: &mut impl std::io::Write, samples: &[model::Sample]) -> std::io::Result<usize> {
     dataset::write_header(&mut *w)?;
     for s in samples {
         dataset::write_row(&mut *w, s)?;

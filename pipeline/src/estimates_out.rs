@@ -6,10 +6,10 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 
 use dataset::parquet::{Column, ParquetWriter};
-use estimator::StageEstimate;
+use filter::StageEstimate;
 
 /// The format of the estimates file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum EstimatesFormat {
     /// estimates.csv: one text row per sample.
     #[default]

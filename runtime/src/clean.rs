@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use bus::{BusConfig, Leftover};
 
-use crate::out::{errln, outln};
+use bus::say as errln;
+use pipeline::out::outln;
 
 /// Bytes as MB with one decimal (10^6 bytes).
 fn mb(bytes: u64) -> f64 {
@@ -296,7 +297,7 @@ mod tests {
             "events.json",
             &rig,
             &mut failures,
-            |p, force| crate::out::write(p, b"[]\n", force, &[]),
+            |p, force| pipeline::out::write(p, b"[]\n", force, &[]),
             false,
         )
         .expect("written somewhere");
@@ -329,7 +330,7 @@ mod tests {
                     p.display()
                 ))
             } else {
-                crate::out::write(p, b"[]\n", force, &[])
+                pipeline::out::write(p, b"[]\n", force, &[])
             }
         };
         let mut failures = Vec::new();

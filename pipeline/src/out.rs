@@ -11,12 +11,12 @@ pub fn write(path: &Path, bytes: &[u8], force: bool, inputs: &[&Path]) -> Result
     dataset::output::write_file(path, bytes, force, inputs).map_err(|e| dataset::output::message(path, &e))
 }
 
-/// Opens `path` for writing as [`write`] would.
+/// Opens `path` for writing as [`write()`] would.
 pub fn create(path: &Path, force: bool, inputs: &[&Path]) -> Result<std::fs::File, String> {
     dataset::output::create_file(path, force, inputs).map_err(|e| dataset::output::message(path, &e))
 }
 
-/// Checks that `path` may be written (see [`write`]) without touching it.
+/// Checks that `path` may be written (see [`write()`]) without touching it.
 pub fn check(path: &Path, force: bool, inputs: &[&Path]) -> Result<(), String> {
     dataset::output::check_replaceable(path, force, inputs).map_err(|e| dataset::output::message(path, &e))
 }
@@ -26,7 +26,7 @@ pub fn dir(dir: &Path) -> Result<(), String> {
     dataset::output::create_dir(dir).map_err(|e| format!("cannot create directory {}: {e}", dir.display()))
 }
 
-/// Renders `fig` and writes it as a PNG file (see [`write`]).
+/// Renders `fig` and writes it as a PNG file (see [`write()`]).
 pub fn png(fig: &plot::Figure, path: &Path, force: bool, inputs: &[&Path]) -> Result<(), String> {
     let img = plot::render(fig).map_err(|e| format!("{}: {e}", path.display()))?;
     let bytes = plot::encode_png(&img).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -45,13 +45,10 @@ pub fn stdout(text: &str) -> Result<(), String> {
 
 /// `println!` that returns the error (`cannot write to standard output: ...`)
 /// from the enclosing function instead of panicking.
+#[macro_export]
 macro_rules! outln {
     ($($arg:tt)*) => {
         $crate::out::stdout(&format!("{}\n", format_args!($($arg)*)))?
     };
 }
-pub(crate) use outln;
-
-/// `eprintln!` that never panics: a standard error that cannot be written
-/// (closed, its file on a full disk) loses the line (`bus::say!`).
-pub(crate) use bus::say as errln;
+pub use crate::outln;

@@ -197,7 +197,7 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
             eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
         }
     }
-    if let Some(line) = estimator::oil_stiffness_line(
+    if let Some(line) = filter::oil_stiffness_line(
         s.leak_filter.bulk_scale,
         s.leak_filter.bulk_scale_sigma,
         model_bulk_modulus_pa,

@@ -6,9 +6,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use classifier::LeakEvent;
 use dataset::{CsvReader, Issue, Limits, Row};
-use estimator::StageEstimate;
+use detect::LeakEvent;
+use filter::StageEstimate;
 use model::Sample;
 use serde::Serialize;
 
@@ -202,7 +202,7 @@ impl Acc {
         }
     }
 
-    fn push(&mut self, e: &estimator::Estimate) {
+    fn push(&mut self, e: &filter::Estimate) {
         if e.nis > self.nis_gate {
             if self.outliers == 0 {
                 self.first_outlier_s = e.t_s;
@@ -220,7 +220,7 @@ impl Acc {
             );
             self.oil_temp_from_stiffness |= e.oil_temp_sigma_k > 0.0;
         }
-        if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & estimator::FLAG_CONVERGING == 0) {
+        if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & filter::FLAG_CONVERGING == 0) {
             return;
         }
         self.n += 1.0;
@@ -292,7 +292,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
     let mut out =
         EstimatesWriter::new(file, req.estimates, thesis_wanted).map_err(|e| format!("{est_name}: {e}"))?;
-    let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(cfg))?.with_thesis(thesis_wanted);
+    let mut chain = crate::Chain::new(&crate::ChainSettings::from(cfg))?.with_thesis(thesis_wanted);
     // (the channel wiring runs the stage and the detectors on two threads)
     let (stage, cls) = chain.parts_mut();
     if req.progress {
@@ -469,7 +469,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         blind_s: if armed_at_s.is_some() { blind_s } else { 0.0 },
         not_armed: events
             .iter()
-            .find(|e| e.kind == classifier::EventKind::NotArmed)
+            .find(|e| e.kind == detect::EventKind::NotArmed)
             .map(|e| e.detail.to_string()),
     };
     summary.rows = summary.samples + summary.rows_skipped;

@@ -128,7 +128,7 @@ pub struct LatencyReport {
     pub restarts: BTreeMap<String, u32>,
     /// Times each stage made no progress for more than 1.5 s (stopped, hung),
     /// the longest such time, and kills after 5 s (see `run::watchdog`).
-    pub stalls: BTreeMap<String, super::watchdog::StallFigures>,
+    pub stalls: BTreeMap<String, crate::watchdog::StallFigures>,
 }
 
 pub(super) const STAGE_NAMES: [&str; 4] = ["acquisition", "estimator", "classifier", "recorder"];

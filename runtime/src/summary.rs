@@ -1,11 +1,11 @@
 //! What `leakwatch run` prints at the end: the per-stage table, the leak it
 //! detected (or none), the UDP stream's counts, and the files written.
 
-use classifier::{LeakEvent, Phase};
+use detect::{LeakEvent, Phase};
 
-use super::args::{parse_source, RunArgs, RunSource};
-use super::supervisor::RunOutcome;
-use crate::out::outln;
+use crate::args::{parse_source, RunArgs, RunSource};
+use crate::supervisor::RunOutcome;
+use pipeline::out::outln;
 
 /// Prints the summary of the run `o` made for `args`.
 pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
@@ -69,17 +69,13 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
                 e.t_onset_s,
                 e.detail
             ),
-            None => match o
-                .events
-                .iter()
-                .find(|e| e.kind == classifier::EventKind::NotArmed)
-            {
+            None => match o.events.iter().find(|e| e.kind == detect::EventKind::NotArmed) {
                 Some(e) => {
                     outln!(
                         "\nNOT WATCHED: the leak detector never armed in this run ({}): no leak could have been seen",
                         e.detail
                     );
-                    crate::status::set_not_watched();
+                    pipeline::status::set_not_watched();
                 }
                 None => outln!("\nno leak detected"),
             },
@@ -88,11 +84,11 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
     // monitoring went on; what did not is said plainly, with exit status 4 (status.rs)
     if let Some(why) = &o.log_failure {
         outln!("LOG FAILED: {why}; monitoring went on to the end without a log (the events above are all of them)");
-        crate::status::set_output_failed();
+        pipeline::status::set_output_failed();
     }
     for why in &o.output_failures {
         outln!("OUTPUT FAILED: {why}");
-        crate::status::set_output_failed();
+        pipeline::status::set_output_failed();
     }
     if matches!(parse_source(args.source.as_deref()), Ok(RunSource::Udp(_))) {
         // the stream's counts (lost, duplicated, late, malformed), from the acquisition's closing line
@@ -104,7 +100,7 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
     // a restarted recorder continues the log in run-1.mcap, run-2.mcap, ...; a
     // recorder continues its file after an hour in run.1.mcap, ...
     let restarted = o.latency.restarts.get("recorder").copied().unwrap_or(0) > 0;
-    let log: Vec<String> = crate::logs::log_parts(&o.out_dir.join("run.mcap"))
+    let log: Vec<String> = pipeline::logs::log_parts(&o.out_dir.join("run.mcap"))
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();

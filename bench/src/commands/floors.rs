@@ -14,7 +14,7 @@ use frames::SensorFrame;
 use hdrhistogram::Histogram;
 use serde::Serialize;
 
-use crate::out::outln;
+use pipeline::out::outln;
 
 /// One floor: what was measured and its percentiles.
 #[derive(Debug, Clone, Serialize)]

@@ -2,7 +2,7 @@
 //! estimator and the classifier in one (`estimator+classifier`: one iceoryx2
 //! hop fewer between a sample and its event; the same events).
 
-use super::stages::{FUSED, STAGES};
+use crate::stages::{FUSED, STAGES};
 
 /// The processes of a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

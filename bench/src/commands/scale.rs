@@ -10,7 +10,7 @@ use std::time::Instant;
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::out::outln;
+use pipeline::out::outln;
 
 /// The figures of one N.
 #[derive(Debug, Clone, Serialize)]
@@ -37,17 +37,6 @@ pub struct ScaleRow {
     pub frames_sent: u64,
     /// Acquisition deadlines missed (ticks over a period late), all rigs.
     pub deadline_misses: u64,
-}
-
-/// User + system CPU time of this process's waited-for descendants, s.
-fn children_cpu_s() -> f64 {
-    // SAFETY: getrusage fills the struct it is given.
-    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) } != 0 {
-        return f64::NAN;
-    }
-    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
-    t(ru.ru_utime) + t(ru.ru_stime)
 }
 
 /// Busy and total jiffies of all CPUs (/proc/stat's first line).
@@ -88,7 +77,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> Result<ScaleRow, String> {
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) as f64;
     let before = cpu_jiffies();
-    let tree_before = children_cpu_s();
+    let tree_before = bus::stats::children_cpu_s();
     let started = Instant::now();
     let mut children = Vec::new();
     let mut dirs: Vec<PathBuf> = Vec::new();
@@ -116,7 +105,7 @@ fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> R
         let o = c.wait_with_output().map_err(|e| format!("rig {i}: {e}"))?;
         // 3: the run worked, but its detector never armed (a short run): not a failure here
         let code = o.status.code();
-        if code != Some(0) && code != Some(i32::from(crate::status::NOT_WATCHED)) {
+        if code != Some(0) && code != Some(i32::from(pipeline::status::NOT_WATCHED)) {
             let err = String::from_utf8_lossy(&o.stderr);
             failures.push(format!("rig {i}: {}", err.lines().last().unwrap_or("failed")));
         }
@@ -129,7 +118,7 @@ fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> R
         (Some((b0, t0)), Some((b1, t1))) if t1 > t0 => (b1 - b0) as f64 / (t1 - t0) as f64 * cores * 100.0,
         _ => f64::NAN,
     };
-    let tree_cpu_per_rig_pct = (children_cpu_s() - tree_before) / wall / rigs as f64 * 100.0;
+    let tree_cpu_per_rig_pct = (bus::stats::children_cpu_s() - tree_before) / wall / rigs as f64 * 100.0;
     let mut cpu = Vec::new();
     let (mut hop50, mut e2e50) = (Vec::new(), Vec::new());
     let mut hop99: f64 = 0.0;
@@ -190,8 +179,8 @@ pub fn bench(rigs: &[usize], seconds: f64, out: &Path, force: bool) -> Result<()
     if rigs.is_empty() || rigs.iter().any(|&n| n == 0 || n > 64) {
         return Err(format!("--rigs {rigs:?}: each from 1 to 64"));
     }
-    crate::out::dir(out)?;
-    crate::out::check(&out.join("scale.json"), force, &[])?;
+    pipeline::out::dir(out)?;
+    pipeline::out::check(&out.join("scale.json"), force, &[])?;
     let exe = std::env::current_exe().map_err(|e| format!("cannot find the leakwatch binary: {e}"))?;
     let mut rows = Vec::new();
     for &n in rigs {
@@ -241,7 +230,7 @@ pub fn bench(rigs: &[usize], seconds: f64, out: &Path, force: bool) -> Result<()
     });
     let p = out.join("scale.json");
     let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())? + "\n";
-    crate::out::write(&p, text.as_bytes(), force, &[])?;
+    pipeline::out::write(&p, text.as_bytes(), force, &[])?;
     eprintln!("wrote {}", p.display());
     Ok(())
 }
