@@ -163,46 +163,70 @@ fn run(cli: Cli) -> Result<(), String> {
             print_default,
             check,
             reference,
-        } => {
-            if let Some(path) = check {
-                let cfg = Config::load(&path)?;
-                out::stdout(&toml::to_string(&cfg).map_err(|e| e.to_string())?)
-            } else if print_default {
-                out::stdout(&Config::default_toml())
-            } else if reference {
-                out::stdout(&config::reference_markdown()?)
-            } else {
-                Err("nothing to do: use --print-default, --reference or --check FILE".into())
-            }
-        }
-        Command::Bench { which } => match which {
-            BenchCommand::Sim { seconds, repeat, out } => benches::sim(seconds, repeat, out, force),
-            BenchCommand::Ekf { steps, out } => benches::ekf(steps, out, force),
-            BenchCommand::Calibration {
-                matrix,
-                data,
-                config,
-                json,
-                out,
-            } => benches::calibration(matrix, data, config, json, out, force),
-            BenchCommand::Replay {
-                data,
-                threads,
-                files,
-                seconds,
-                estimates,
-                out,
-            } => benches::replay(
-                data.as_deref(),
-                &threads,
-                files,
-                seconds,
-                estimates.into(),
-                &out,
-                force,
-            ),
-            BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
-            BenchCommand::Instances {
+        } => config_command(print_default, check, reference),
+        Command::Bench { which } => bench(which, force),
+    }
+}
+
+/// `leakwatch config`: checks a file, or prints the defaults or the reference.
+fn config_command(
+    print_default: bool,
+    check: Option<std::path::PathBuf>,
+    reference: bool,
+) -> Result<(), String> {
+    if let Some(path) = check {
+        let cfg = Config::load(&path)?;
+        out::stdout(&toml::to_string(&cfg).map_err(|e| e.to_string())?)
+    } else if print_default {
+        out::stdout(&Config::default_toml())
+    } else if reference {
+        out::stdout(&config::reference_markdown()?)
+    } else {
+        Err("nothing to do: use --print-default, --reference or --check FILE".into())
+    }
+}
+
+/// `leakwatch bench ...`: each benchmark's command ([`bench::commands`]).
+fn bench(which: BenchCommand, force: bool) -> Result<(), String> {
+    match which {
+        BenchCommand::Sim { seconds, repeat, out } => benches::sim(seconds, repeat, out, force),
+        BenchCommand::Ekf { steps, out } => benches::ekf(steps, out, force),
+        BenchCommand::Calibration {
+            matrix,
+            data,
+            config,
+            json,
+            out,
+        } => benches::calibration::bench(matrix, data, config, json, out, force),
+        BenchCommand::Replay {
+            data,
+            threads,
+            files,
+            seconds,
+            estimates,
+            out,
+        } => benches::replay::bench(
+            data.as_deref(),
+            &threads,
+            files,
+            seconds,
+            estimates.into(),
+            &out,
+            force,
+        ),
+        BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
+        BenchCommand::Instances {
+            rig,
+            instances,
+            seed,
+            out,
+            hours_healthy,
+            run_seconds,
+            commission_seconds,
+            temp_c,
+            threads,
+        } => instances::command(
+            &instances::InstancesRequest {
                 rig,
                 instances,
                 seed,
@@ -211,40 +235,27 @@ fn run(cli: Cli) -> Result<(), String> {
                 run_seconds,
                 commission_seconds,
                 temp_c,
-                threads,
-            } => instances::command(
-                &instances::InstancesRequest {
-                    rig,
-                    instances,
-                    seed,
-                    out,
-                    hours_healthy,
-                    run_seconds,
-                    commission_seconds,
-                    temp_c,
-                    threads: threads.unwrap_or_else(|| {
-                        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
-                    }),
-                },
-                force,
-            ),
-            BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
-            BenchCommand::Detection {
-                threads,
-                data: Some(data),
-                config,
-                out,
-                ..
-            } => benches::detection_data(&data, config.as_deref(), threads, &out, force),
-            BenchCommand::Detection {
-                runs,
-                hours,
-                seed,
-                threads,
-                data: None,
-                config: _,
-                out,
-            } => benches::detection(runs, hours, seed, threads, &out, force),
-        },
+                threads: threads
+                    .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)),
+            },
+            force,
+        ),
+        BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
+        BenchCommand::Detection {
+            threads,
+            data: Some(data),
+            config,
+            out,
+            ..
+        } => benches::detection_data(&data, config.as_deref(), threads, &out, force),
+        BenchCommand::Detection {
+            runs,
+            hours,
+            seed,
+            threads,
+            data: None,
+            config: _,
+            out,
+        } => benches::detection(runs, hours, seed, threads, &out, force),
     }
 }

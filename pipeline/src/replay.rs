@@ -384,39 +384,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(8);
             let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<Issue>)>(8);
             std::thread::scope(|scope| {
-                let read = scope.spawn(move || {
-                    let mut batch = Vec::with_capacity(BATCH);
-                    while let Some(row) = reader.next_row() {
-                        match row {
-                            Row::Sample(s) => batch.push(s),
-                            Row::AfterGap(s, issue) => {
-                                batch.push(s);
-                                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                                if tx_in.send(Batch::Samples(full)).is_err()
-                                    || tx_in.send(Batch::Issue(issue)).is_err()
-                                {
-                                    return reader.absent;
-                                }
-                            }
-                            Row::Skipped(issue) => {
-                                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                                if tx_in.send(Batch::Samples(full)).is_err()
-                                    || tx_in.send(Batch::Issue(issue)).is_err()
-                                {
-                                    return reader.absent;
-                                }
-                            }
-                        }
-                        if batch.len() == BATCH {
-                            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                            if tx_in.send(Batch::Samples(full)).is_err() {
-                                return reader.absent;
-                            }
-                        }
-                    }
-                    let _ = tx_in.send(Batch::Samples(batch));
-                    reader.absent
-                });
+                let read = scope.spawn(move || read_batches(reader, &tx_in));
                 let stage = &mut *stage;
                 scope.spawn(move || {
                     for b in rx_in {
@@ -456,22 +424,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     summary.leak_filter = acc.0.finish(stage.leak().counters().resets);
     summary.thesis_filter = thesis_runs.then(|| acc.1.finish(stage.thesis().counters().resets));
     summary.events = events.len();
-    let armed_at_s = cls.leak_size.armed_at_s();
-    let blind_s = cls.leak_size.blind_s();
-    summary.watch = Watch {
-        run_s: if first_t.is_finite() {
-            (last_t - first_t).max(0.0)
-        } else {
-            0.0
-        },
-        armed_at_s,
-        watched_s: armed_at_s.map_or(0.0, |a| (last_t - a - blind_s).max(0.0)),
-        blind_s: if armed_at_s.is_some() { blind_s } else { 0.0 },
-        not_armed: events
-            .iter()
-            .find(|e| e.kind == detect::EventKind::NotArmed)
-            .map(|e| e.detail.to_string()),
-    };
+    summary.watch = Watch::of(cls, &events, first_t, last_t);
     summary.rows = summary.samples + summary.rows_skipped;
     summary.max_bad_fraction = req.max_bad_fraction;
     for (k, name) in dataset::COLUMNS[dataset::REQUIRED.len()..].iter().enumerate() {
@@ -479,13 +432,86 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             summary.optional_absent.insert(name.to_string(), absent[k]);
         }
     }
+    summary.refused = refusal(&summary, req);
+    write_events(&events_path, &events, req.overwrite, &inputs)?;
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    crate::out::write(&summary_path, (text + "\n").as_bytes(), req.overwrite, &inputs)?;
+    if let Some(why) = &summary.refused {
+        return Err(why.clone());
+    }
+    summary.event_log = events;
+    Ok(summary)
+}
+
+impl Watch {
+    /// What the detectors of `cls` watched of a replay from `first_t` to
+    /// `last_t` (s), with its `events` (a warm-up that never ended is one).
+    fn of(cls: &detect::Classifier, events: &[LeakEvent], first_t: f64, last_t: f64) -> Watch {
+        let armed_at_s = cls.leak_size.armed_at_s();
+        let blind_s = cls.leak_size.blind_s();
+        Watch {
+            run_s: if first_t.is_finite() {
+                (last_t - first_t).max(0.0)
+            } else {
+                0.0
+            },
+            armed_at_s,
+            watched_s: armed_at_s.map_or(0.0, |a| (last_t - a - blind_s).max(0.0)),
+            blind_s: if armed_at_s.is_some() { blind_s } else { 0.0 },
+            not_armed: events
+                .iter()
+                .find(|e| e.kind == detect::EventKind::NotArmed)
+                .map(|e| e.detail.to_string()),
+        }
+    }
+}
+
+/// Reads `reader` to its end in batches of [`BATCH`] samples onto `tx_in`, an
+/// issue (a gap, a skipped row) ending a batch and following it; returns the
+/// counts of absent optional values. Stops early when the receiver is gone.
+fn read_batches<R: std::io::BufRead>(
+    mut reader: CsvReader<R>,
+    tx_in: &crossbeam_channel::Sender<Batch>,
+) -> [u64; dataset::N_OPTIONAL] {
+    let mut batch = Vec::with_capacity(BATCH);
+    while let Some(row) = reader.next_row() {
+        match row {
+            Row::Sample(s) => batch.push(s),
+            Row::AfterGap(s, issue) => {
+                batch.push(s);
+                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
+                    return reader.absent;
+                }
+            }
+            Row::Skipped(issue) => {
+                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
+                    return reader.absent;
+                }
+            }
+        }
+        if batch.len() == BATCH {
+            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+            if tx_in.send(Batch::Samples(full)).is_err() {
+                return reader.absent;
+            }
+        }
+    }
+    let _ = tx_in.send(Batch::Samples(batch));
+    reader.absent
+}
+
+/// Why the recording is refused, if it is: no usable sample, or more bad rows
+/// than `req.max_bad_fraction` (the first issue that is not a gap named).
+fn refusal(summary: &Summary, req: &ReplayRequest) -> Option<String> {
     let first = summary
         .issues
         .iter()
         .find(|i| !i.contains("gap of"))
         .map(|i| format!("; first: {i}"))
         .unwrap_or_default();
-    summary.refused = if summary.samples == 0 {
+    if summary.samples == 0 {
         Some(format!(
             "{}: no usable samples ({} rows skipped{first})",
             req.input.display(),
@@ -501,15 +527,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
                     req.max_bad_fraction
                 )
             })
-    };
-    write_events(&events_path, &events, req.overwrite, &inputs)?;
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    crate::out::write(&summary_path, (text + "\n").as_bytes(), req.overwrite, &inputs)?;
-    if let Some(why) = &summary.refused {
-        return Err(why.clone());
     }
-    summary.event_log = events;
-    Ok(summary)
 }
 
 fn progress_bar(enabled: bool) -> indicatif::ProgressBar {
