@@ -1,6 +1,8 @@
 //! `leakwatch`: watch a hydraulic actuator for leaks. One command line for
 //! simulation, offline replay, the live pipeline, calibration and benchmarks.
 
+#![forbid(unsafe_code)]
+
 mod calibrate_cmd;
 mod cli;
 mod init;

@@ -16,9 +16,11 @@ mod events;
 mod figures;
 mod launch;
 mod placement;
+mod plan;
 mod restart;
 mod stages;
 mod summary;
+mod supervision;
 mod supervisor;
 mod watchdog;
 

@@ -6,22 +6,20 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Child;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
 use detect::LeakEvent;
 use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
-use crate::args::{check_udp_args, parse_source, RunArgs, RunSource, DEFAULT_SCENARIO};
+use crate::args::{check_udp_args, parse_source, RunArgs, RunSource};
 use crate::events::{own_event, print_event};
 use crate::figures::{LatencyReport, StageAcc, STAGE_NAMES};
-use crate::launch::{is_log_part, Resume, Samples, StageArgs, FRAME_SUBSCRIBERS};
 use crate::placement::Placement;
-use crate::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
-use crate::stages::{spawn, stage_program, terminate, FUSED};
-use crate::watchdog::{stall_cause, Alarm, Watchdog};
+use crate::plan::{announce, check_outputs, plan, run_prefix, stage_args, Plan};
+use crate::stages::stage_program;
+use crate::supervision::Supervision;
 use bus::say as errln;
 use config::Config;
 use pipeline::out::outln;
@@ -47,10 +45,6 @@ pub struct RunOutcome {
     pub latency_path: Option<PathBuf>,
 }
 
-/// Stages whose failure does not end the run: monitoring (acquisition,
-/// estimator, classifier) goes on without them.
-const OPTIONAL_STAGES: [&str; 3] = ["recorder", "liveview", "gateway"];
-
 /// Runs the pipeline; prints events as they come; writes the outputs.
 pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let program = stage_program()?;
@@ -72,70 +66,17 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         None => default_out_dir(),
     };
     pipeline::out::dir(&out_dir)?;
-    // An earlier run's outputs are replaced only with --force; refused before anything starts.
-    let mut outputs: Vec<String> = [
-        "config.toml",
-        "events.json",
-        "latency.json",
-        "run.mcap",
-        "metadata.yaml",
-    ]
-    .map(String::from)
-    .into();
-    outputs.extend(processes.iter().map(|n| format!("{n}.log")));
-    // an earlier run's further log parts (its recorder was restarted): a restarted
-    // recorder of this run must not find them in its way
-    if let Ok(entries) = std::fs::read_dir(&out_dir) {
-        let names = entries.flatten().filter_map(|e| e.file_name().into_string().ok());
-        outputs.extend(names.filter(|n| is_log_part(n)));
-    }
     let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
-    for name in outputs {
-        pipeline::out::check(&out_dir.join(name), args.force, &inputs)?;
-    }
-    // The demonstration (a leak on an off-nominal rig) is what `run` does without
-    // faults or a config; naming the default scenario explicitly changes nothing.
-    // `--fault none` asks for a healthy run.
-    let scenario = args.scenario.clone().unwrap_or_else(|| DEFAULT_SCENARIO.into());
-    let demo =
-        udp.is_none() && scenario == DEFAULT_SCENARIO && args.faults.is_empty() && args.config.is_none();
-    let seconds = args.seconds.unwrap_or(40.0);
-    let faults: Vec<String> = if demo {
-        vec!["ext1:0.5lpm@20s".to_string()]
-    } else {
-        args.faults
-            .iter()
-            .filter(|f| f.as_str() != "none")
-            .cloned()
-            .collect()
-    };
-    // One config for every stage: the user's, and for the demonstration an off-nominal rig.
-    let mut cfg = Config::load_or_default(args.config.as_deref())?;
-    // Every argument is checked here, before any stage starts.
-    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 3.6e6) {
-        return Err(format!(
-            "--seconds {seconds}: must be a number of seconds in (0, 3.6e6]"
-        ));
-    }
-    model::Scenario::by_name(&scenario, 0, seconds).map_err(|e| format!("--scenario {scenario}: {e}"))?;
-    for spec in &faults {
-        model::Fault::parse(spec, &cfg.model).map_err(|e| format!("--fault {spec}: {e}"))?;
-    }
-    WaitMode::parse(&args.mode).map_err(|e| format!("--mode {}: {e}", args.mode))?;
-    cfg.classifier.thesis_baseline |= args.thesis_baseline;
-    if demo {
-        cfg.rig = Some(pipeline::demo::off_nominal_rig(&cfg.model));
-    }
+    check_outputs(&out_dir, processes, args.force, &inputs)?;
+    let Plan {
+        scenario,
+        demo,
+        seconds,
+        faults,
+        mut cfg,
+    } = plan(args, udp.is_some())?;
     let stages = live_stages(args, &mut cfg, &out_dir, &inputs, quiet, processes)?;
-    // A private iceoryx2 prefix per run, unless the user names one (to attach
-    // other tools; checked as it is read, its length against bus::MAX_PREFIX_LEN).
-    let prefix = match std::env::var(bus::PREFIX_ENV) {
-        Ok(p) if !p.is_empty() => {
-            bus::validate_prefix(&p).map_err(|e| e.to_string())?;
-            p
-        }
-        _ => format!("run{}", std::process::id()),
-    };
+    let prefix = run_prefix()?;
     // The run's one time base, fixed now: every stage gets it (stages.rs), so
     // the log and the live view put the same Unix time on the same message.
     bus::init_epoch_offset().map_err(|e| e.to_string())?;
@@ -159,359 +100,242 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     pipeline::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
     let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
-    let mut events_rx = bus
-        .subscriber::<LeakEventFrame>(WaitMode::Event)
-        .map_err(|e| e.to_string())?;
-    let mut stats_rx = bus
-        .subscriber::<StatsFrame>(WaitMode::Event)
-        .map_err(|e| e.to_string())?;
-    // the frames: the acquisition's progress, and where a restarted one takes over
-    let mut frames_rx = bus
-        .subscriber::<SensorFrame>(WaitMode::Event)
-        .map_err(|e| e.to_string())?;
-    // the estimates: where a restarted estimator or classifier takes over
-    let mut estimates_rx = bus
-        .subscriber::<EstimateFrame>(WaitMode::Event)
-        .map_err(|e| e.to_string())?;
-    // Only acquisition publishes frames and only the classifier events: another
-    // publisher is another process of this user feeding the pipeline (docs/security.md).
-    let frames_watch = bus.topic_watch::<SensorFrame>().map_err(|e| e.to_string())?;
-    let events_watch = bus.topic_watch::<LeakEventFrame>().map_err(|e| e.to_string())?;
-    let mut frames_pubs = bus::PublisherWatch::new(Topic::Frames, 1);
-    let mut events_pubs = bus::PublisherWatch::new(Topic::Events, 1);
-    let mut last_watch = Instant::now();
+    let mut topics = Topics::open(&bus)?;
+    let last_watch = Instant::now();
     let stop = bus::stop_on_signals();
 
-    let mut launch = StageArgs {
-        rig: args.rig.clone(),
-        config: cfg_path.display().to_string(),
-        mode: args.mode.clone(),
-        out_dir: out_dir.clone(),
-        force: args.force,
-        frame_subscribers: FRAME_SUBSCRIBERS,
-        spin_us: if args.mode.starts_with("low-latency") || args.mode == "busy-poll" {
-            cfg.run.low_latency_spin_us
-        } else {
-            0
-        },
-        samples: match udp {
-            Some((addr, idle_s)) => Samples::Udp { addr, idle_s },
-            None => Samples::Sim {
-                scenario: scenario.clone(),
-                seconds,
-                faults: faults.clone(),
-            },
-        },
-    };
+    let launch = stage_args(
+        args,
+        &cfg_path,
+        &out_dir,
+        &cfg,
+        udp,
+        (&scenario, seconds, &faults),
+    );
     if !quiet {
-        match udp {
-            Some((addr, idle)) => outln!(
-                "leakwatch run: rig {}, UDP sensor stream on {addr} (until the sender's end of stream or {idle} s \
-                 without datagrams), {} mode; output {}",
-                args.rig,
-                args.mode,
-                out_dir.display()
-            ),
-            None => outln!(
-                "leakwatch run: rig {}, scenario {scenario}, {seconds} s at 1 kHz, faults [{}], {} mode{}{}; output {}",
-                args.rig,
-                faults.join(", "),
-                args.mode,
-                match placement {
-                    Placement::Split => String::new(),
-                    p => format!(", {} in one process", p.name()),
-                },
-                if demo { ", off-nominal rig (demonstration)" } else { "" },
-                out_dir.display()
-            ),
-        }
-        if let Ok(c) = detect::Classifier::new(cfg.classifier.clone()) {
-            outln!("note: {}", c.start_note());
-        }
+        announce(
+            args,
+            udp,
+            placement,
+            &out_dir,
+            &cfg,
+            (&scenario, seconds, &faults, demo),
+        )?;
     }
-    let mut children: BTreeMap<&str, Child> = BTreeMap::new();
-    let mut watchdog = Watchdog::default();
-    for &name in &stages {
-        let child = spawn(
-            &program,
-            name,
-            &launch.of(name, 0, &Resume::default()),
-            &prefix,
-            &out_dir.join(format!("{name}.log")),
-            cfg.run.cpu_of(name),
-        );
-        let child = match child {
-            Ok(child) => child,
-            Err(e) => {
-                // the stages already started go first, so that their files can go too
-                for (_, mut c) in std::mem::take(&mut children) {
-                    let _ = c.kill();
-                    let _ = c.wait();
-                }
-                return Err(format!("cannot start the {name}: {e}"));
-            }
-        };
-        children.insert(name, child);
-        watchdog.started(name, Instant::now());
-        if name != "acquisition" {
-            std::thread::sleep(Duration::from_millis(150));
-        }
-    }
+    let mut sup = Supervision::new(&program, &prefix, &out_dir, &bus_cfg, &cfg, launch, udp.is_some());
+    sup.start(&stages)?;
     start_cleanup.started();
-    // a UDP stream is paced by its sender: no datagram is no stall
-    // (the live view and the gateway publish no stats: restarted when they exit, not watched)
-    let watched =
-        |name: &str| !["liveview", "gateway"].contains(&name) && (udp.is_none() || name != "acquisition");
-    let mut restarts: BTreeMap<String, u32> = BTreeMap::new();
-    let mut backoffs: BTreeMap<&str, Backoff> = BTreeMap::new();
-    let mut started_at: BTreeMap<&str, Instant> = stages.iter().map(|n| (*n, Instant::now())).collect();
-    let mut restart_at: BTreeMap<&str, Instant> = BTreeMap::new();
-    // the last frame published, where a restarted acquisition takes over
-    let mut last_frame: Option<SensorFrame> = None;
-    // the last estimate published, and where a stage that exited had read the estimates to
-    let mut last_estimate: Option<u64> = None;
-    let mut read_to_at_exit: BTreeMap<&str, Option<u64>> = BTreeMap::new();
+    // a UDP stream lasts as long as its sender streams
+    let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
+    let Gathered {
+        mut events,
+        mut accs,
+        mut foreign_events,
+        failure,
+    } = watch(
+        &mut sup,
+        &mut topics,
+        &stages,
+        (placement, quiet),
+        (stop, deadline),
+        last_watch,
+    )?;
+    // the classifier's pid, for the events still queued once it has stopped
+    let classifier_pids = sup.stop();
+    while let Ok(Some(st)) = topics.stats_rx.try_receive() {
+        accs.entry(st.stage).or_default().push(&st.frame);
+    }
+    while let Ok(Some(f)) = topics.events_rx.try_receive() {
+        if let Some(ev) = own_event(&f, &classifier_pids, &mut foreign_events) {
+            events.push(ev);
+        }
+    }
+    let latency = latency_report(
+        &args.mode,
+        accs,
+        sup.restarts,
+        sup.watchdog.finish(Instant::now()),
+    );
+    let (events_path, latency_path) = write_outputs(
+        args,
+        &out_dir,
+        &inputs,
+        &events,
+        &latency,
+        &mut sup.output_failures,
+    )?;
+    write_bag_metadata(&out_dir, args.force, &inputs);
+    drop(topics);
+    drop(bus);
+    let _ = bus_cfg.remove_isolated_files();
+    if let Some(f) = failure {
+        let paths = [events_path.as_deref(), latency_path.as_deref()];
+        return Err(failure_message(&f, paths, &sup.log_failure, &sup.output_failures));
+    }
+    Ok(RunOutcome {
+        events,
+        latency,
+        out_dir: out_dir.clone(),
+        log_failure: sup.log_failure,
+        output_failures: sup.output_failures,
+        events_path,
+        latency_path,
+    })
+}
+
+/// The run's latency report: each stage's figures from its stats (`accs`, by
+/// stage code), the restarts and the stalls.
+fn latency_report(
+    mode: &str,
+    accs: BTreeMap<u32, StageAcc>,
+    restarts: BTreeMap<String, u32>,
+    stalls: BTreeMap<String, crate::watchdog::StallFigures>,
+) -> LatencyReport {
+    let mut stages = BTreeMap::new();
+    for (code, acc) in accs {
+        let name = STAGE_NAMES.get(code as usize).copied().unwrap_or("unknown");
+        stages.insert(name.to_string(), acc.finish());
+    }
+    LatencyReport {
+        mode: mode.to_string(),
+        stages,
+        restarts,
+        stalls,
+    }
+}
+
+/// Writes events.json and latency.json, whatever ended the run; one that
+/// cannot be written into `out_dir` (a full disk) goes to the temporary
+/// directory, said on stderr and in `output_failures`, and masks no earlier
+/// failure. Returns where each was written, if anywhere.
+fn write_outputs(
+    args: &RunArgs,
+    out_dir: &Path,
+    inputs: &[&Path],
+    events: &[LeakEvent],
+    latency: &LatencyReport,
+    output_failures: &mut Vec<String>,
+) -> Result<(Option<PathBuf>, Option<PathBuf>), String> {
+    let events_path = crate::clean::write_somewhere(
+        out_dir,
+        "events.json",
+        &args.rig,
+        output_failures,
+        |path, force| pipeline::replay::write_events(path, events, force, inputs),
+        args.force,
+    );
+    let text = serde_json::to_string_pretty(latency).map_err(|e| e.to_string())? + "\n";
+    let latency_path = crate::clean::write_somewhere(
+        out_dir,
+        "latency.json",
+        &args.rig,
+        output_failures,
+        |path, force| pipeline::out::write(path, text.as_bytes(), force, inputs),
+        args.force,
+    );
+    Ok((events_path, latency_path))
+}
+
+/// The error of a run that failure `f` ended: what holds what it gathered
+/// (`paths`: events.json and latency.json where they were written) and the
+/// outputs that failed on the way.
+fn failure_message(
+    f: &str,
+    paths: [Option<&Path>; 2],
+    log_failure: &Option<String>,
+    output_failures: &[String],
+) -> String {
+    let held: Vec<String> = paths.iter().flatten().map(|p| p.display().to_string()).collect();
+    let also: Vec<&String> = log_failure.iter().chain(output_failures).collect();
+    format!(
+        "{f} ({} hold what the run gathered){}",
+        if held.is_empty() {
+            "no output file could be written: the events printed above".to_string()
+        } else {
+            held.join(" and ")
+        },
+        if also.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; also: {}",
+                also.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
+            )
+        }
+    )
+}
+
+/// What the supervision gathered until the run ended.
+struct Gathered {
+    /// Every event of this run's classifier.
+    events: Vec<LeakEvent>,
+    /// Each stage's stats, by stage code.
+    accs: BTreeMap<u32, StageAcc>,
+    /// Events left out: published by anything but this run's classifier.
+    foreign_events: u64,
+    /// What ended the run, if a failure did (what was gathered is still written).
+    failure: Option<String>,
+}
+
+/// Watches the run until it ends: the acquisition's end of stream (then 2.5 s
+/// for the last frames and the recorder's file), a signal (`end.0`), the
+/// deadline (`end.1`) or a failure. Each round reads the topics (events printed
+/// unless `quiet`), watches who publishes, and supervises each of `stages`.
+fn watch(
+    sup: &mut Supervision,
+    topics: &mut Topics,
+    stages: &[&'static str],
+    (placement, quiet): (Placement, bool),
+    end: (&AtomicBool, Option<Duration>),
+    mut last_watch: Instant,
+) -> Result<Gathered, String> {
+    let (stop, deadline) = end;
     let mut events = Vec::new();
     let mut accs: BTreeMap<u32, StageAcc> = BTreeMap::new();
     let started = Instant::now();
-    let mut ended_at: Option<Instant> = None;
-    // a UDP stream lasts as long as its sender streams
-    let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
     // A failure ends the run, but what was gathered is still written.
     let mut failure: Option<String> = None;
-    // A failed output (the log, the live view, the gateway) does not: monitoring goes on.
-    let mut log_failure: Option<String> = None;
-    let mut output_failures: Vec<String> = Vec::new();
     // Events published by anything but this run's classifier are left out.
     let mut foreign_events = 0u64;
-    let stall_ended = |name: &str, d: Duration| {
-        errln!(
-            "leakwatch run: the {name} runs again after {:.1} s without progress",
-            d.as_secs_f64()
-        );
-    };
     loop {
         let now = Instant::now();
-        while let Ok(Some(f)) = events_rx.try_receive() {
-            if let Some(ev) = own_event(&f, &children, &mut foreign_events) {
+        while let Ok(Some(f)) = topics.events_rx.try_receive() {
+            if let Some(ev) = own_event(&f, &sup.children, &mut foreign_events) {
                 if !quiet {
                     print_event(&ev)?;
                 }
                 events.push(ev);
             }
         }
-        while let Ok(Some(f)) = frames_rx.try_receive() {
-            last_frame = Some(f.frame);
-            if let Some(d) = watchdog
-                .progress("acquisition", now)
-                .filter(|_| watched("acquisition"))
-            {
-                stall_ended("acquisition", d);
-            }
+        while let Ok(Some(f)) = topics.frames_rx.try_receive() {
+            sup.on_frame(f.frame, now);
         }
-        while let Ok(Some(e)) = estimates_rx.try_receive() {
-            last_estimate = Some(e.seq);
+        while let Ok(Some(e)) = topics.estimates_rx.try_receive() {
+            sup.last_estimate = Some(e.seq);
         }
-        while let Ok(Some(st)) = stats_rx.try_receive() {
+        while let Ok(Some(st)) = topics.stats_rx.try_receive() {
             accs.entry(st.stage).or_default().push(&st.frame);
-            let Some(&stage) = STAGE_NAMES.get(st.stage as usize) else {
-                continue;
-            };
-            // the stats of this stage's running process, against its upstream's output
-            // (the fused process: its estimator's, the first of the two)
-            let name = placement.process_of(stage);
-            if stage == "acquisition"
-                || (name == FUSED && stage == "classifier")
-                || children.get(name).map(Child::id) != Some(st.pid)
-            {
-                continue;
-            }
-            let upstream = if stage == "classifier" { 1 } else { 0 };
-            let up_out = accs.get(&upstream).map_or(0, StageAcc::frames_out_total);
-            if let Some(d) = watchdog.stats(name, st.pid, st.frames_in, up_out, now) {
-                stall_ended(name, d);
-            }
+            sup.on_stats(&st, &accs, placement, now);
         }
         if last_watch.elapsed() >= Duration::from_secs(1) {
             last_watch = Instant::now();
-            let counts = [frames_watch.publisher_count(), events_watch.publisher_count()];
-            for (watch, count) in [&mut frames_pubs, &mut events_pubs].into_iter().zip(counts) {
-                if let Some(w) = watch.observe(count) {
-                    errln!("leakwatch run: warning: {w}");
-                }
-            }
+            topics.watch_publishers();
         }
         if stop.load(Ordering::Relaxed) {
             errln!("leakwatch run: stopping (signal)");
             break;
         }
         // Supervision: exits, restarts with backoff, stalls.
-        for &name in &stages {
-            if let Some(child) = children.get_mut(name) {
-                match child.try_wait() {
-                    Ok(Some(status)) => {
-                        children.remove(name);
-                        watchdog.exited(name, now);
-                        // the classifier had read the estimates up to about here (the estimator's
-                        // last is known once it is down: the last published)
-                        read_to_at_exit.insert(name, last_estimate);
-                        if name == "acquisition" && status.success() {
-                            // the end of the stream: let the last frames drain
-                            ended_at.get_or_insert(now);
-                            continue;
-                        }
-                        if name == "recorder" && ended_at.is_some() {
-                            // it finished its file
-                            continue;
-                        }
-                        let ran = now.saturating_duration_since(started_at[name]);
-                        let backoff = backoffs.entry(name).or_default();
-                        let log = out_dir.join(match restarts.get(name) {
-                            Some(n) => format!("{name}-{n}.log"),
-                            None => format!("{name}.log"),
-                        });
-                        if name == "recorder"
-                            && status.code() == Some(i32::from(recorder::shell::EXIT_LOG_UNWRITABLE))
-                        {
-                            // a full disk or an I/O error: a restart would fail the same way
-                            let part = launch.log_part(restarts.get(name).copied().unwrap_or(0));
-                            let why = crate::clean::log_write_error(&log, &part);
-                            errln!(
-                                "leakwatch run: error: {why}; the recorder is not restarted: monitoring goes on \
-                                 without a log (events are printed here and written to events.json at the end)"
-                            );
-                            log_failure = Some(why);
-                            launch.frame_subscribers = launch.frame_subscribers.saturating_sub(1);
-                            continue;
-                        }
-                        // a prefix on which no node can start: a restart would fail the same way
-                        if let Some(why) = crate::blocked::why_blocked(&bus_cfg, Some(&log)) {
-                            if let Some(f) = crate::blocked::give_up(
-                                name,
-                                &why,
-                                OPTIONAL_STAGES.contains(&name),
-                                &mut log_failure,
-                                &mut output_failures,
-                                &mut launch.frame_subscribers,
-                            ) {
-                                failure = Some(f);
-                                break;
-                            }
-                            continue;
-                        }
-                        match backoff.on_exit(ran) {
-                            Decision::RestartIn(delay) => {
-                                errln!(
-                                    "leakwatch run: stage {name} exited ({status}) after {:.1} s; restarting it in {:.1} s \
-                                     (restart {} since it last ran {} s; see {})",
-                                    ran.as_secs_f64(),
-                                    delay.as_secs_f64(),
-                                    backoff.failures(),
-                                    HEALTHY_RUN.as_secs(),
-                                    log.display()
-                                );
-                                restart_at.insert(name, now + delay);
-                            }
-                            Decision::GiveUp if OPTIONAL_STAGES.contains(&name) => {
-                                let why = format!(
-                                    "stage {name} keeps failing: it exited {} times without running {} s in between \
-                                     (last: {status}); see {}",
-                                    MAX_RESTARTS + 1,
-                                    HEALTHY_RUN.as_secs(),
-                                    log.display()
-                                );
-                                errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
-                                if name == "recorder" {
-                                    log_failure = Some(why);
-                                    launch.frame_subscribers = launch.frame_subscribers.saturating_sub(1);
-                                } else {
-                                    output_failures.push(why);
-                                }
-                            }
-                            Decision::GiveUp => {
-                                failure = Some(format!(
-                                    "stage {name} keeps failing: it exited {} times without running {} s in between \
-                                     (last: {status}); see {}",
-                                    MAX_RESTARTS + 1,
-                                    HEALTHY_RUN.as_secs(),
-                                    log.display()
-                                ));
-                                break;
-                            }
-                        }
-                    }
-                    Ok(None) if watched(name) => match watchdog.check(name, now, name != "recorder") {
-                        Some(Alarm::Stalled(idle)) => errln!(
-                            "leakwatch run: warning: the {name} has made no progress for {:.1} s (process {} {})",
-                            idle.as_secs_f64(),
-                            child.id(),
-                            stall_cause(child.id())
-                        ),
-                        Some(Alarm::Kill(idle)) => {
-                            errln!(
-                                "leakwatch run: the {name} has made no progress for {:.1} s; killing it to restart it",
-                                idle.as_secs_f64()
-                            );
-                            let _ = child.kill();
-                        }
-                        None => {}
-                    },
-                    _ => {}
-                }
-            }
-            if restart_at.get(name).is_some_and(|t| now >= *t) {
-                restart_at.remove(name);
-                // checked again: the prefix may have been damaged while the stage waited
-                if let Some(why) = crate::blocked::why_blocked(&bus_cfg, None) {
-                    if let Some(f) = crate::blocked::give_up(
-                        name,
-                        &why,
-                        OPTIONAL_STAGES.contains(&name),
-                        &mut log_failure,
-                        &mut output_failures,
-                        &mut launch.frame_subscribers,
-                    ) {
-                        failure = Some(f);
-                        break;
-                    }
-                    continue;
-                }
-                let n = restarts.entry(name.to_string()).or_default();
-                *n += 1;
-                match spawn(
-                    &program,
-                    name,
-                    &launch.of(
-                        name,
-                        *n,
-                        &Resume {
-                            last_frame,
-                            after_estimate: match name {
-                                "classifier" => read_to_at_exit.get(name).copied().flatten(),
-                                _ => last_estimate,
-                            },
-                        },
-                    ),
-                    &prefix,
-                    &out_dir.join(format!("{name}-{n}.log")),
-                    cfg.run.cpu_of(name),
-                ) {
-                    Ok(c) => {
-                        children.insert(name, c);
-                        started_at.insert(name, now);
-                        watchdog.started(name, now);
-                    }
-                    Err(e) => {
-                        failure = Some(e);
-                        break;
-                    }
-                }
+        for &name in stages {
+            if let Err(f) = sup.supervise_stage(name, now) {
+                failure = Some(f);
+                break;
             }
         }
         if failure.is_some() {
             break;
         }
-        if let Some(t) = ended_at {
+        if let Some(t) = sup.ended_at {
             // let the last frames drain and the recorder finish its file
             if t.elapsed() > Duration::from_millis(2500) {
                 break;
@@ -523,106 +347,66 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         }
         std::thread::sleep(Duration::from_millis(10));
     }
-    // the classifier's pid, for the events still queued once it has stopped
-    let classifier_pids: BTreeMap<&str, u32> = children
-        .iter()
-        .filter(|(n, _)| **n == "classifier" || **n == FUSED)
-        .map(|(n, c)| (*n, c.id()))
-        .collect();
-    for (_, c) in children.iter_mut() {
-        terminate(c);
-    }
-    for (_, mut c) in children {
-        let t0 = Instant::now();
-        while t0.elapsed() < Duration::from_secs(5) {
-            if let Ok(Some(_)) = c.try_wait() {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = c.kill();
-        let _ = c.wait();
-    }
-    while let Ok(Some(st)) = stats_rx.try_receive() {
-        accs.entry(st.stage).or_default().push(&st.frame);
-    }
-    while let Ok(Some(f)) = events_rx.try_receive() {
-        if let Some(ev) = own_event(&f, &classifier_pids, &mut foreign_events) {
-            events.push(ev);
-        }
-    }
-    let mut stages = BTreeMap::new();
-    for (code, acc) in accs {
-        let name = STAGE_NAMES.get(code as usize).copied().unwrap_or("unknown");
-        stages.insert(name.to_string(), acc.finish());
-    }
-    let latency = LatencyReport {
-        mode: args.mode.clone(),
-        stages,
-        restarts,
-        stalls: watchdog.finish(Instant::now()),
-    };
-    // Written whatever ended the run; one that cannot be written into the output
-    // directory (a full disk) goes to the temporary directory, said on stderr, and
-    // masks no earlier failure.
-    let events_path = crate::clean::write_somewhere(
-        &out_dir,
-        "events.json",
-        &args.rig,
-        &mut output_failures,
-        |path, force| pipeline::replay::write_events(path, &events, force, &inputs),
-        args.force,
-    );
-    let text = serde_json::to_string_pretty(&latency).map_err(|e| e.to_string())? + "\n";
-    let latency_path = crate::clean::write_somewhere(
-        &out_dir,
-        "latency.json",
-        &args.rig,
-        &mut output_failures,
-        |path, force| pipeline::out::write(path, text.as_bytes(), force, &inputs),
-        args.force,
-    );
-    write_bag_metadata(&out_dir, args.force, &inputs);
-    drop(events_rx);
-    drop(stats_rx);
-    drop(frames_rx);
-    drop(estimates_rx);
-    drop((frames_watch, events_watch));
-    drop(bus);
-    let _ = bus_cfg.remove_isolated_files();
-    if let Some(f) = failure {
-        let held: Vec<String> = [events_path, latency_path]
-            .iter()
-            .flatten()
-            .map(|p| p.display().to_string())
-            .collect();
-        let also: Vec<&String> = log_failure.iter().chain(&output_failures).collect();
-        return Err(format!(
-            "{f} ({} hold what the run gathered){}",
-            if held.is_empty() {
-                "no output file could be written: the events printed above".to_string()
-            } else {
-                held.join(" and ")
-            },
-            if also.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; also: {}",
-                    also.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("; ")
-                )
-            }
-        ));
-    }
-    Ok(RunOutcome {
+    Ok(Gathered {
         events,
-        latency,
-        out_dir,
-        log_failure,
-        output_failures,
-        events_path,
-        latency_path,
+        accs,
+        foreign_events,
+        failure,
     })
+}
+
+/// The topics the supervisor reads itself, and who publishes on two of them.
+struct Topics {
+    /// The events.
+    events_rx: bus::Subscriber<LeakEventFrame>,
+    /// Each process's stats.
+    stats_rx: bus::Subscriber<StatsFrame>,
+    /// The frames: the acquisition's progress, and where a restarted one takes over.
+    frames_rx: bus::Subscriber<SensorFrame>,
+    /// The estimates: where a restarted estimator or classifier takes over.
+    estimates_rx: bus::Subscriber<EstimateFrame>,
+    /// Publishers of frames: only the acquisition.
+    frames_watch: bus::TopicWatch<SensorFrame>,
+    /// Publishers of events: only the classifier.
+    events_watch: bus::TopicWatch<LeakEventFrame>,
+    /// What was said of the frames' publishers.
+    frames_pubs: bus::PublisherWatch,
+    /// What was said of the events' publishers.
+    events_pubs: bus::PublisherWatch,
+}
+
+impl Topics {
+    /// Subscribes on `bus`.
+    fn open(bus: &Bus) -> Result<Topics, String> {
+        let e = |e: bus::BusError| e.to_string();
+        Ok(Topics {
+            events_rx: bus.subscriber::<LeakEventFrame>(WaitMode::Event).map_err(e)?,
+            stats_rx: bus.subscriber::<StatsFrame>(WaitMode::Event).map_err(e)?,
+            frames_rx: bus.subscriber::<SensorFrame>(WaitMode::Event).map_err(e)?,
+            estimates_rx: bus.subscriber::<EstimateFrame>(WaitMode::Event).map_err(e)?,
+            frames_watch: bus.topic_watch::<SensorFrame>().map_err(e)?,
+            events_watch: bus.topic_watch::<LeakEventFrame>().map_err(e)?,
+            frames_pubs: bus::PublisherWatch::new(Topic::Frames, 1),
+            events_pubs: bus::PublisherWatch::new(Topic::Events, 1),
+        })
+    }
+
+    /// Warns of another publisher of frames or events: another process of this
+    /// user feeding the pipeline (docs/security.md).
+    fn watch_publishers(&mut self) {
+        let counts = [
+            self.frames_watch.publisher_count(),
+            self.events_watch.publisher_count(),
+        ];
+        for (watch, count) in [&mut self.frames_pubs, &mut self.events_pubs]
+            .into_iter()
+            .zip(counts)
+        {
+            if let Some(w) = watch.observe(count) {
+                errln!("leakwatch run: warning: {w}");
+            }
+        }
+    }
 }
 
 /// The stages of the run ([`crate::stages::run_stages`]): the live view
