@@ -190,7 +190,9 @@ impl Effect {
                 0.1 * base.friction.viscous_n_s_per_m.max(100.0),
             ],
             Effect::SpoolBias => vec![0.01 * 3.0 * base.spool_gain_m_per_v],
-            Effect::SpringLoad => vec![2.0e3, 0.01],
+            // a tenth of the model's own spring, as for the other effects' scales
+            // (a workpiece of 2e6 N/m is not resolved to 2e3 N/m); without one 2e3 N/m
+            Effect::SpringLoad => vec![(0.1 * base.load.stiffness_n_per_m).max(2.0e3), 0.01],
             Effect::BulkModulus => vec![0.1 * base.bulk_modulus_pa],
             Effect::EntrainedAir => {
                 // the air fraction that lowers β by 10 % at the nominal chamber pressure

@@ -167,6 +167,51 @@ impl Calibration {
     pub fn names(&self) -> Vec<String> {
         self.effects.iter().map(|e| e.name.clone()).collect()
     }
+
+    /// This calibration followed by `next`, a search from this one's model
+    /// after a refit: every effect of both in order (each effect's cumulative
+    /// reduction against this one's gap before), this one's model and gap
+    /// before, `next`'s model and gap after, both rounds' candidates.
+    pub fn followed_by(self, next: Calibration) -> Calibration {
+        let before = self.gap_before.normalised.max(1e-300);
+        let mut effects = self.effects;
+        effects.extend(next.effects.into_iter().map(|mut e| {
+            e.cumulative_gap_reduction = 1.0 - e.gap_after.normalised / before;
+            e
+        }));
+        let mut rounds = self.rounds;
+        rounds.extend(next.rounds);
+        let mut warnings = self.warnings;
+        for w in next.warnings {
+            if !warnings.contains(&w) {
+                warnings.push(w);
+            }
+        }
+        let traces = Traces {
+            after: next.traces.after,
+            ..self.traces
+        };
+        Calibration {
+            effects,
+            gap_before: self.gap_before,
+            gap_reduction: 1.0 - next.gap_after.normalised / before,
+            gap_after: next.gap_after,
+            rounds,
+            breakdown_before: self.breakdown_before,
+            breakdown_after: next.breakdown_after,
+            spool_rms_m: match (self.spool_rms_m, next.spool_rms_m) {
+                (Some([b, _]), Some([_, a])) => Some([b, a]),
+                _ => next.spool_rms_m,
+            },
+            data: next.data,
+            options: next.options,
+            model_before: self.model_before,
+            model_after: next.model_after,
+            traces,
+            warnings,
+            elapsed_s: self.elapsed_s + next.elapsed_s,
+        }
+    }
 }
 
 /// One effect fitted on its own ([`fit_effect`](crate::fit_effect)).

@@ -166,6 +166,16 @@ pub fn template(sheet: &Datasheet) -> String {
                     num(sheet.oil.bulk_modulus_per_k),
                     "relative change per kelvin, 1/K (mineral oil about -0.0045)",
                 ),
+                (
+                    "operating_min_c",
+                    num(sheet.oil.operating_min_c),
+                    "the lowest oil temperature the rig runs at, °C",
+                ),
+                (
+                    "operating_max_c",
+                    num(sheet.oil.operating_max_c),
+                    "the highest, °C (commissioning states the smallest detectable leaks over the range)",
+                ),
             ],
         ),
         (

@@ -33,14 +33,17 @@ pub fn run(
     let datasheet = config.is_some_and(crate::model_file::has_datasheet);
     // a datasheet's sensors and noise go on into model.toml with the calibrated model
     let mut whole = None;
+    // the config the rig was identified with: the search refits with it
+    let mut identified = None;
     if identify || datasheet {
         // A datasheet's model is a prior within its tolerances: its values are
         // identified first, so that the search names what the rig has beyond them.
         let cfg = config::Config::load_or_default(config)?;
         match crate::commission::identify_rig(&input, &cfg) {
-            Ok(identified) => {
+            Ok(rig) => {
                 eprintln!("the search for missing effects starts from the identified model");
-                model = identified.model;
+                model = rig.model.clone();
+                identified = Some(rig);
             }
             Err(e) => eprintln!("note: {e}; the search starts from the config's model"),
         }
@@ -73,8 +76,13 @@ pub fn run(
             String::new()
         }
     );
-    let cal = calibrate::run_with_progress(&measured, &model, &opts, &|m: &str| eprintln!("  {m}"))
-        .map_err(|e| e.to_string())?;
+    let progress = |m: &str| eprintln!("  {m}");
+    let cal = match &identified {
+        Some(rig) => pipeline::calibration::search_with_refit(&input, rig, &measured, &opts, &progress)?,
+        None => {
+            calibrate::run_with_progress(&measured, &model, &opts, &progress).map_err(|e| e.to_string())?
+        }
+    };
     for w in &cal.warnings {
         eprintln!("note: {w}");
     }

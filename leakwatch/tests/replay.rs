@@ -791,4 +791,32 @@ fn a_temp_c_column_is_followed_and_said() {
     );
     let theta = s["leak_filter"]["bulk_scale"].as_f64().unwrap();
     assert!((theta - 1.0).abs() < 0.03, "θ {theta}");
+    // inside the default operating range (20-60 °C) all along
+    assert_eq!(
+        s["leak_filter"]["oil_outside_range_s"].as_f64(),
+        Some(0.0),
+        "{s:#}"
+    );
+    assert!(!err.contains("outside the operating range"), "{err}");
+    // with the range's top at 40 °C, the oil passes it at 5 ln 3 = 5.49 s
+    let narrow = d.join("narrow.toml");
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    std::fs::write(
+        &narrow,
+        text.replace("reference_c = 20.0", "reference_c = 20.0\noperating_max_c = 40.0"),
+    )
+    .unwrap();
+    let out = d.join("out_narrow");
+    let o = replay(&csv, &out, &["--config", narrow.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("the oil was outside the operating range 20-40 °C"),
+        "{err}"
+    );
+    let s = json(&out.join("summary.json"));
+    let outside = s["leak_filter"]["oil_outside_range_s"].as_f64().unwrap();
+    let first = s["leak_filter"]["first_oil_outside_range_s"].as_f64().unwrap();
+    assert!((first - 5.49).abs() < 0.1, "first outside at {first} s");
+    assert!((outside - (20.0 - 5.49)).abs() < 0.15, "{outside} s outside");
 }

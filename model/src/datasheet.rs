@@ -78,6 +78,12 @@ pub struct OilSheet {
     /// Relative change of the bulk modulus per kelvin, 1/K. Default −0.0045 (mineral oil).
     #[serde(default = "default_bulk_modulus_per_k")]
     pub bulk_modulus_per_k: f64,
+    /// The lowest oil temperature the rig runs at, °C. Default 20.
+    #[serde(default = "default_operating_min_c")]
+    pub operating_min_c: f64,
+    /// The highest oil temperature the rig runs at, °C. Default 60.
+    #[serde(default = "default_operating_max_c")]
+    pub operating_max_c: f64,
 }
 
 impl OilSheet {
@@ -90,6 +96,8 @@ impl OilSheet {
             viscosity_40c_mm2_s: default_viscosity_40c(),
             viscosity_100c_mm2_s: default_viscosity_100c(),
             bulk_modulus_per_k: default_bulk_modulus_per_k(),
+            operating_min_c: default_operating_min_c(),
+            operating_max_c: default_operating_max_c(),
         }
     }
 }
@@ -104,6 +112,14 @@ fn default_viscosity_100c() -> f64 {
 
 fn default_bulk_modulus_per_k() -> f64 {
     OilTemperature::default().bulk_modulus_per_k
+}
+
+fn default_operating_min_c() -> f64 {
+    OilTemperature::default().operating_min_c
+}
+
+fn default_operating_max_c() -> f64 {
+    OilTemperature::default().operating_max_c
 }
 
 /// The servovalve, from its catalogue sheet.
@@ -209,7 +225,7 @@ pub struct Datasheet {
 
 /// The config fields a datasheet derives: (section, field, the datasheet fact
 /// it comes from). Written once: a config with a `[datasheet]` may not set them.
-pub const DERIVED_FIELDS: [(&str, &str, &str); 26] = [
+pub const DERIVED_FIELDS: [(&str, &str, &str); 28] = [
     ("model", "piston_area_m2", "cylinder.bore_m and rod_m"),
     ("model", "rod_side_area_m2", "cylinder.kind, bore_m and rod_m"),
     ("model", "mounting_angle_rad", "cylinder.mounting_angle_deg"),
@@ -235,6 +251,8 @@ pub const DERIVED_FIELDS: [(&str, &str, &str); 26] = [
         "oil_temperature.bulk_modulus_per_k",
         "oil.bulk_modulus_per_k",
     ),
+    ("model", "oil_temperature.operating_min_c", "oil.operating_min_c"),
+    ("model", "oil_temperature.operating_max_c", "oil.operating_max_c"),
     ("model", "area_gradient_m2_per_m", "valve.rated_flow_l_min"),
     ("model", "area_gradient_b_m2_per_m", "valve.rated_flow_b_l_min"),
     (
@@ -387,6 +405,25 @@ impl Datasheet {
             0.0,
             "a relative change per kelvin from -0.02 to 0 (1/K)",
         )?;
+        for (field, value) in [
+            ("oil.operating_min_c", self.oil.operating_min_c),
+            ("oil.operating_max_c", self.oil.operating_max_c),
+        ] {
+            check(
+                field,
+                value,
+                -40.0,
+                150.0,
+                "an oil temperature from -40 to 150 °C",
+            )?;
+        }
+        if self.oil.operating_max_c <= self.oil.operating_min_c {
+            return Err(InvalidParam {
+                field: "datasheet.oil.operating_max_c".into(),
+                value: self.oil.operating_max_c,
+                expected: "a temperature above operating_min_c (the operating range's top)",
+            });
+        }
         let v = &self.valve;
         check(
             "valve.rated_flow_l_min",
@@ -559,6 +596,8 @@ impl Datasheet {
                 viscosity_40c_mm2_s: self.oil.viscosity_40c_mm2_s,
                 viscosity_100c_mm2_s: self.oil.viscosity_100c_mm2_s,
                 bulk_modulus_per_k: self.oil.bulk_modulus_per_k,
+                operating_min_c: self.oil.operating_min_c,
+                operating_max_c: self.oil.operating_max_c,
                 ..base.oil_temperature
             },
             ..base.clone()

@@ -448,21 +448,25 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
     Ok(cfg)
 }
 
-/// Oil temperatures at which commissioning states the smallest detectable leaks, °C.
-const STATED_TEMPERATURES_C: [f64; 3] = [20.0, 40.0, 60.0];
+/// The oil temperatures at which commissioning states the smallest detectable
+/// leaks, °C: the ends and the middle of the model's operating range.
+fn stated_temperatures_c(oil: &model::params::OilTemperature) -> [f64; 3] {
+    let (lo, hi) = (oil.operating_min_c, oil.operating_max_c);
+    [lo, 0.5 * (lo + hi), hi]
+}
 
-/// The line that states the smallest detectable leak of each kind at
-/// [`STATED_TEMPERATURES_C`]: the thresholds `thr` (L/min at p_s/2) widened by
-/// what the oil's temperature leaves uncertain for the model `model` with
-/// healthy offsets `offsets_lpm` (L/min), the temperature read from θ once it
-/// settled (no thermometer: the widest band; docs/plant.md).
+/// The line that states the smallest detectable leak of each kind over the
+/// operating range ([`stated_temperatures_c`]): the thresholds `thr` (L/min at
+/// p_s/2) widened by what the oil's temperature leaves uncertain for the model
+/// `model` with healthy offsets `offsets_lpm` (L/min), the temperature read
+/// from θ once it settled (no thermometer: the widest band; docs/plant.md).
 fn detectable_over_temperature(
     model: &model::ActuatorParams,
     thr: [f64; 3],
     offsets_lpm: [f64; 3],
 ) -> String {
     let oil = &model.oil_temperature;
-    let at = STATED_TEMPERATURES_C.map(|t| {
+    let at = stated_temperatures_c(oil).map(|t| {
         let (sigma, band) = filter::oil::null_leakage_band(model, t, filter::oil::settled_sigma_k(oil, t));
         let widen = detect::oil_band_lpm(sigma, band, offsets_lpm);
         format!(
@@ -472,8 +476,18 @@ fn detectable_over_temperature(
             thr[2] + widen[2]
         )
     });
+    let outside = if (oil.operating_min_c..=oil.operating_max_c).contains(&oil.reference_c) {
+        String::new()
+    } else {
+        format!(
+            " (the commissioning's temperature is outside the operating range {:.0}-{:.0} °C: \
+             commission on a recording inside it)",
+            oil.operating_min_c, oil.operating_max_c
+        )
+    };
     format!(
-        "smallest detectable leak (ext1/ext2/int, L/min at p_s/2) as the oil moves from the commissioning's {:.1} °C: {}",
+        "smallest detectable leak (ext1/ext2/int, L/min at p_s/2) over the operating range, as the oil \
+         moves from the commissioning's {:.1} °C: {}{outside}",
         oil.reference_c,
         at.join(", ")
     )
@@ -510,6 +524,37 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The smallest detectable leaks are stated at the ends and the middle of
+    /// the model's operating range: the thresholds themselves at the
+    /// commissioning's temperature, wider away from it; a commissioning
+    /// outside the range says so.
+    #[test]
+    fn the_detectable_leaks_are_stated_over_the_operating_range() {
+        let mut m = model::ActuatorParams {
+            valve_null_leakage_m3_s_pa: 1e-13,
+            ..model::ActuatorParams::default()
+        };
+        m.oil_temperature.operating_min_c = 10.0;
+        m.oil_temperature.operating_max_c = 50.0;
+        m.oil_temperature.reference_c = 30.0;
+        let thr = [0.03, 0.03, 0.04];
+        let line = detectable_over_temperature(&m, thr, [0.01, -0.01, 0.02]);
+        let at = |t: &str| -> Vec<f64> {
+            let rest = line.split(&format!("{t} °C ")).nth(1).expect(t);
+            let v = rest.split([',', ' ']).next().expect("values");
+            v.split('/').map(|x| x.parse().expect("a number")).collect()
+        };
+        let (cold, mid, warm) = (at("10"), at("30"), at("50"));
+        for k in 0..3 {
+            assert!((mid[k] - thr[k]).abs() < 1e-3, "{line}");
+            assert!(cold[k] > mid[k] + 1e-3 && warm[k] > mid[k] + 1e-3, "{line}");
+        }
+        assert!(!line.contains("outside"), "{line}");
+        m.oil_temperature.reference_c = 55.0;
+        let line = detectable_over_temperature(&m, thr, [0.01, -0.01, 0.02]);
+        assert!(line.contains("outside the operating range 10-50 °C"), "{line}");
+    }
 
     #[test]
     fn a_lag_is_held_against_the_datasheets_response_time() {

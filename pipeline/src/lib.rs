@@ -21,6 +21,7 @@
 #![forbid(unsafe_code)]
 
 pub mod batch;
+pub mod calibration;
 pub mod chain;
 pub mod commission;
 pub mod demo;

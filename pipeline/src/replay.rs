@@ -100,6 +100,13 @@ pub struct ResidualRms {
     pub oil_temp_range_c: (f64, f64),
     /// Whether those temperatures were read from the oil's stiffness θ (no `temp_c`).
     pub oil_temp_from_stiffness: bool,
+    /// The model's operating range of oil temperatures, °C (lowest, highest):
+    /// the range commissioning stated the smallest detectable leaks over.
+    pub oil_operating_range_c: (f64, f64),
+    /// Time the oil was outside that range by more than its temperature's σ, s.
+    pub oil_outside_range_s: f64,
+    /// Sample time it first was, s (NaN: never).
+    pub first_oil_outside_range_s: f64,
 }
 
 /// How much of a run the leak-size detector watched: from arming to the end,
@@ -185,10 +192,17 @@ struct Acc {
     oil_temp_c: (f64, f64),
     /// Some of them were read from θ.
     oil_temp_from_stiffness: bool,
+    /// The operating range, °C.
+    operating_c: (f64, f64),
+    /// Time outside it, s, and when it began (NaN: never).
+    outside_s: f64,
+    first_outside_s: f64,
+    /// The previous estimate's time, s (NaN: none yet).
+    last_t_s: f64,
 }
 
 impl Acc {
-    fn new(nis_gate: f64) -> Acc {
+    fn new(nis_gate: f64, operating_c: (f64, f64)) -> Acc {
         Acc {
             n: 0.0,
             sq: [0.0; 5],
@@ -199,6 +213,10 @@ impl Acc {
             bulk_scale: (f64::NAN, f64::NAN),
             oil_temp_c: (f64::NAN, f64::NAN),
             oil_temp_from_stiffness: false,
+            operating_c,
+            outside_s: 0.0,
+            first_outside_s: f64::NAN,
+            last_t_s: f64::NAN,
         }
     }
 
@@ -219,7 +237,9 @@ impl Acc {
                 self.oil_temp_c.1.max(e.oil_temp_c),
             );
             self.oil_temp_from_stiffness |= e.oil_temp_sigma_k > 0.0;
+            self.count_outside(e);
         }
+        self.last_t_s = e.t_s;
         if !(e.residual.iter().all(|r| r.is_finite()) && e.flags & filter::FLAG_CONVERGING == 0) {
             return;
         }
@@ -231,6 +251,28 @@ impl Acc {
         self.sq[4] += e.innovation[2].powi(2);
         self.nis += e.nis;
     }
+    /// Counts the time from the previous estimate to `e` (at most 0.1 s across
+    /// a gap) when `e`'s oil temperature is outside the operating range by
+    /// more than its σ.
+    fn count_outside(&mut self, e: &filter::Estimate) {
+        let sigma = if e.oil_temp_sigma_k.is_finite() {
+            e.oil_temp_sigma_k
+        } else {
+            0.0
+        };
+        let (lo, hi) = self.operating_c;
+        if e.oil_temp_c + sigma >= lo && e.oil_temp_c - sigma <= hi {
+            return;
+        }
+        if self.first_outside_s.is_nan() {
+            self.first_outside_s = e.t_s;
+        }
+        let dt = e.t_s - self.last_t_s;
+        if dt > 0.0 {
+            self.outside_s += dt.min(0.1);
+        }
+    }
+
     fn finish(&self, resets: u64) -> ResidualRms {
         let n = self.n.max(1.0);
         let r = |k: usize| (self.sq[k] / n).sqrt();
@@ -248,6 +290,9 @@ impl Acc {
             bulk_scale_sigma: self.bulk_scale.1,
             oil_temp_range_c: self.oil_temp_c,
             oil_temp_from_stiffness: self.oil_temp_from_stiffness,
+            oil_operating_range_c: self.operating_c,
+            oil_outside_range_s: self.outside_s,
+            first_oil_outside_range_s: self.first_outside_s,
         }
     }
 }
@@ -310,7 +355,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     };
     let thesis_runs = stage.thesis_runs();
     let gate = req.config.classifier.nis_gate;
-    let mut acc = (Acc::new(gate), Acc::new(gate));
+    let oil = &req.config.model.oil_temperature;
+    let operating_c = (oil.operating_min_c, oil.operating_max_c);
+    let mut acc = (Acc::new(gate, operating_c), Acc::new(gate, operating_c));
     let mut last_t = 0.0;
     let mut first_t = f64::NAN;
     let bar = progress_bar(req.progress);

@@ -197,6 +197,15 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
             eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
         }
     }
+    if s.leak_filter.oil_outside_range_s > 0.0 {
+        let (lo, hi) = s.leak_filter.oil_operating_range_c;
+        eprintln!(
+            "warning: the oil was outside the operating range {lo:.0}-{hi:.0} °C ([model.oil_temperature]) \
+             for {:.1} s from t = {:.3} s: the smallest detectable leaks commissioning stated hold inside \
+             it; beyond it the thresholds keep widening, so a leak is raised later or not at all",
+            s.leak_filter.oil_outside_range_s, s.leak_filter.first_oil_outside_range_s
+        );
+    }
     if let Some(line) = filter::oil_stiffness_line(
         s.leak_filter.bulk_scale,
         s.leak_filter.bulk_scale_sigma,

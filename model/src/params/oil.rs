@@ -30,6 +30,12 @@ pub struct OilTemperature {
     pub viscosity_100c_mm2_s: f64,
     /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
     pub bulk_modulus_per_k: f64,
+    /// The lowest oil temperature the rig runs at, °C (its operating range):
+    /// `commission` states the smallest detectable leaks over the range, and a
+    /// replay says how long the oil was outside it.
+    pub operating_min_c: f64,
+    /// The highest oil temperature the rig runs at, °C.
+    pub operating_max_c: f64,
     /// The leak filter's oil stiffness θ on the commissioning recording, at
     /// `reference_c` (1; `commission` sets it). Without `temp_c` the 12-state
     /// filter then reads the oil's temperature from θ relative to it and sets
@@ -45,6 +51,8 @@ impl Default for OilTemperature {
             viscosity_40c_mm2_s: 46.0,
             viscosity_100c_mm2_s: 6.8,
             bulk_modulus_per_k: -0.0045,
+            operating_min_c: 20.0,
+            operating_max_c: 60.0,
             reference_stiffness: None,
         }
     }

@@ -102,6 +102,24 @@ impl ActuatorParams {
             150.0,
             "an oil temperature from -40 to 150 °C",
         )?;
+        for (field, value) in [
+            ("oil_temperature.operating_min_c", oil.operating_min_c),
+            ("oil_temperature.operating_max_c", oil.operating_max_c),
+        ] {
+            r(
+                field,
+                value,
+                -40.0,
+                150.0,
+                "an oil temperature from -40 to 150 °C",
+            )?;
+        }
+        check(
+            "oil_temperature.operating_max_c",
+            oil.operating_max_c,
+            oil.operating_max_c > oil.operating_min_c,
+            "a temperature above operating_min_c (the operating range's top)",
+        )?;
         r(
             "oil_temperature.viscosity_40c_mm2_s",
             oil.viscosity_40c_mm2_s,
