@@ -40,7 +40,7 @@ pub(super) fn why_blocked(cfg: &BusConfig, stage_log: Option<&Path>) -> Option<S
 /// longer awaited) or `output_failures`, and monitoring goes on; for a stage
 /// monitoring needs, returns the run's failure.
 pub(super) fn give_up(
-    name: &str,
+    name: crate::stages::Stage,
     why: &str,
     optional: bool,
     log_failure: &mut Option<String>,
@@ -52,7 +52,7 @@ pub(super) fn give_up(
         return Some(why);
     }
     errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
-    if name == "recorder" {
+    if name == crate::stages::Stage::Recorder {
         *log_failure = Some(why);
         *frame_subscribers = frame_subscribers.saturating_sub(1);
     } else {

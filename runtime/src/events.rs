@@ -8,7 +8,7 @@ use classifier::wire::EventWire;
 use detect::LeakEvent;
 use frames::LeakEventFrame;
 
-use crate::stages::FUSED;
+use crate::stages::Stage;
 use bus::say as errln;
 use pipeline::out::outln;
 
@@ -17,15 +17,15 @@ pub(super) trait ClassifierPid {
     fn classifier_pid(&self) -> Option<u32>;
 }
 
-impl ClassifierPid for BTreeMap<&str, Child> {
+impl ClassifierPid for BTreeMap<Stage, Child> {
     fn classifier_pid(&self) -> Option<u32> {
-        self.get("classifier").or_else(|| self.get(FUSED)).map(Child::id)
+        self.iter().find(|(s, _)| s.classifies()).map(|(_, c)| c.id())
     }
 }
 
-impl ClassifierPid for BTreeMap<&str, u32> {
+impl ClassifierPid for BTreeMap<Stage, u32> {
     fn classifier_pid(&self) -> Option<u32> {
-        self.get("classifier").or_else(|| self.get(FUSED)).copied()
+        self.iter().find(|(s, _)| s.classifies()).map(|(_, pid)| *pid)
     }
 }
 

@@ -1,6 +1,7 @@
 //! The figures of a run: per-stage counts and latency gathered from the stats
 //! frames, and latency.json.
 
+use crate::stages::Stage;
 use std::collections::BTreeMap;
 
 use frames::StatsFrame;
@@ -131,7 +132,13 @@ pub struct LatencyReport {
     pub stalls: BTreeMap<String, crate::watchdog::StallFigures>,
 }
 
-pub(super) const STAGE_NAMES: [&str; 4] = ["acquisition", "estimator", "classifier", "recorder"];
+/// The stage of each stats frame's code (`StatsFrame::stage`).
+pub(super) const STAGE_CODES: [Stage; 4] = [
+    Stage::Acquisition,
+    Stage::Estimator,
+    Stage::Classifier,
+    Stage::Recorder,
+];
 
 #[cfg(test)]
 mod tests {

@@ -4,6 +4,8 @@ use std::net::SocketAddr;
 
 use frames::SensorFrame;
 
+use crate::stages::Stage;
+
 /// Where the acquisition's samples come from.
 #[derive(Debug, Clone)]
 pub(super) enum Samples {
@@ -72,11 +74,11 @@ impl StageArgs {
     /// last frame the supervisor received); a restarted estimator or classifier
     /// takes over after the estimate `resume.after_estimate` (its predecessor's
     /// last, as the supervisor saw it), so what it missed is a gap.
-    pub(super) fn of(&self, stage: &str, restart: u32, resume: &Resume) -> Vec<String> {
+    pub(super) fn of(&self, stage: Stage, restart: u32, resume: &Resume) -> Vec<String> {
         let s = |v: &str| v.to_string();
         let mut a = vec![s("--rig"), self.rig.clone()];
         match stage {
-            "recorder" => {
+            Stage::Recorder => {
                 let log = self.log_part(restart).display().to_string();
                 a.extend([s("--out"), log, s("--grace-ms"), s("1500")]);
                 for part in 0..restart {
@@ -87,14 +89,14 @@ impl StageArgs {
                     a.push(s("--force"));
                 }
             }
-            "classifier" | "estimator" | crate::stages::FUSED => {
+            Stage::Classifier | Stage::Estimator | Stage::EstimatorClassifier => {
                 a.extend([s("--config"), self.config.clone(), s("--mode"), self.mode.clone()]);
                 if let Some(seq) = resume.after_estimate.filter(|_| restart > 0) {
                     a.extend([s("--resume-after-seq"), seq.to_string()]);
                 }
             }
-            "liveview" | "gateway" => a.extend([s("--config"), self.config.clone()]),
-            _ => {
+            Stage::LiveView | Stage::Gateway => a.extend([s("--config"), self.config.clone()]),
+            Stage::Acquisition => {
                 match &self.samples {
                     Samples::Udp { addr, idle_s } => a.extend([
                         s("--udp"),
@@ -166,11 +168,11 @@ mod tests {
         };
         // the acquisition's pacer spins (low-latency mode); no other stage has a pacer
         assert!(args
-            .of("acquisition", 0, &Resume::default())
+            .of(Stage::Acquisition, 0, &Resume::default())
             .join(" ")
             .contains("--spin-us 60"));
         assert!(!args
-            .of("estimator", 0, &Resume::default())
+            .of(Stage::Estimator, 0, &Resume::default())
             .join(" ")
             .contains("--spin-us"));
         let f = SensorFrame {
@@ -183,9 +185,9 @@ mod tests {
             last_frame: Some(f),
             after_estimate: Some(6100),
         };
-        let first = args.of("acquisition", 0, &resume);
+        let first = args.of(Stage::Acquisition, 0, &resume);
         assert!(!first.iter().any(|a| a.starts_with("--resume")), "{first:?}");
-        let again = args.of("acquisition", 1, &resume).join(" ");
+        let again = args.of(Stage::Acquisition, 1, &resume).join(" ");
         assert!(
             again.ends_with(
                 "--wait-subscribers 3 --spin-us 60 --resume-seq 6123 --resume-t-s 6.123 --resume-mono-ns 987654321"
@@ -193,7 +195,7 @@ mod tests {
             "{again}"
         );
         assert!(again.contains("--fault ext1:0.5lpm@12s"), "{again}");
-        let rec = args.of("recorder", 2, &resume).join(" ");
+        let rec = args.of(Stage::Recorder, 2, &resume).join(" ");
         assert!(
             rec.contains("--out out/run-2.mcap")
                 && rec.ends_with("--continues out/run.mcap --continues out/run-1.mcap"),
@@ -201,7 +203,7 @@ mod tests {
         );
         assert!(is_log_part("run-1.mcap") && is_log_part("run-12.mcap"));
         assert!(!is_log_part("run.mcap") && !is_log_part("run-.mcap") && !is_log_part("run-1a.mcap"));
-        for stage in ["estimator", "classifier"] {
+        for stage in [Stage::Estimator, Stage::Classifier] {
             assert!(!args.of(stage, 0, &resume).join(" ").contains("--resume"));
             let again = args.of(stage, 1, &resume).join(" ");
             assert!(again.ends_with("--resume-after-seq 6100"), "{again}");

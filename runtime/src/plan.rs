@@ -104,7 +104,7 @@ pub(crate) fn run_prefix() -> Result<String, String> {
 /// the log and its further parts, each process's log.
 pub(crate) fn check_outputs(
     out_dir: &Path,
-    processes: &[&str],
+    processes: &[crate::stages::Stage],
     force: bool,
     inputs: &[&Path],
 ) -> Result<(), String> {

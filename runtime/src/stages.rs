@@ -7,25 +7,92 @@ use std::process::{Child, Command, Stdio};
 
 use bus::say as errln;
 
+/// A stage process of a run: what `leakwatch stage NAME` runs. The variants
+/// are in the alphabetical order of their names, so a map keyed by them lists
+/// the stages as one keyed by the names would.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Stage {
+    /// Reads the rig (UDP) or simulates it and publishes sensor frames.
+    Acquisition,
+    /// Turns estimates into leak and sensor events.
+    Classifier,
+    /// Runs the filters on the sensor frames and publishes estimates.
+    Estimator,
+    /// The estimator and the classifier in one process (`--placement estimator+classifier`).
+    EstimatorClassifier,
+    /// Publishes the run to Zenoh (`[zenoh]`).
+    Gateway,
+    /// Serves the run to Foxglove (`[live_view]`).
+    LiveView,
+    /// Writes the log.
+    Recorder,
+}
+
+impl Stage {
+    /// Every stage process.
+    pub const ALL: [Stage; 7] = [
+        Stage::Acquisition,
+        Stage::Classifier,
+        Stage::Estimator,
+        Stage::EstimatorClassifier,
+        Stage::Gateway,
+        Stage::LiveView,
+        Stage::Recorder,
+    ];
+
+    /// Its name: the argument of `leakwatch stage`, and its log's file name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Acquisition => "acquisition",
+            Stage::Classifier => "classifier",
+            Stage::Estimator => "estimator",
+            Stage::EstimatorClassifier => "estimator+classifier",
+            Stage::Gateway => "gateway",
+            Stage::LiveView => "liveview",
+            Stage::Recorder => "recorder",
+        }
+    }
+
+    /// The stage named `name`, if there is one.
+    pub fn parse(name: &str) -> Option<Stage> {
+        Stage::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// Whether its process publishes the run's events (the classifier, alone
+    /// or with the estimator).
+    pub fn classifies(self) -> bool {
+        matches!(self, Stage::Classifier | Stage::EstimatorClassifier)
+    }
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The four stage processes of the split placement, in the order they start.
-pub const STAGES: [&str; 4] = ["recorder", "classifier", "estimator", "acquisition"];
-/// The estimator and the classifier in one process (`--placement estimator+classifier`).
-pub const FUSED: &str = "estimator+classifier";
+pub const STAGES: [Stage; 4] = [
+    Stage::Recorder,
+    Stage::Classifier,
+    Stage::Estimator,
+    Stage::Acquisition,
+];
 
 /// The stages of a run in the order they start: the placement's processes, with the
 /// live view and the Zenoh gateway (unsupervised by the watchdog: they publish no
 /// stats) before the acquisition when asked for.
-pub(super) fn run_stages(processes: &[&'static str], live_view: bool, zenoh: bool) -> Vec<&'static str> {
+pub(super) fn run_stages(processes: &[Stage], live_view: bool, zenoh: bool) -> Vec<Stage> {
     // the placement's processes end with the acquisition, which starts last
     let (last, first) = processes
         .split_last()
         .map_or((None, processes), |(l, f)| (Some(*l), f));
     let mut v = first.to_vec();
     if live_view {
-        v.push("liveview");
+        v.push(Stage::LiveView);
     }
     if zenoh {
-        v.push("gateway");
+        v.push(Stage::Gateway);
     }
     v.extend(last);
     v
@@ -35,19 +102,19 @@ pub(super) fn run_stages(processes: &[&'static str], live_view: bool, zenoh: boo
 /// its own arguments (`leakwatch stage NAME ARGS...`).
 pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
     let argv = args.iter().cloned();
-    match args.first().and_then(|n| n.to_str()) {
-        Some("acquisition") => acquisition::shell::main(argv),
-        Some("estimator") => estimator::shell::main(argv),
-        Some("classifier") => classifier::shell::main(argv),
-        Some(FUSED) => classifier::fused::main(argv),
-        Some("recorder") => recorder::shell::main(argv),
-        Some("liveview") => live::shell::liveview_main(argv),
-        Some("gateway") => live::shell::gateway_main(argv),
-        other => {
+    let name = args.first().and_then(|n| n.to_str()).unwrap_or("");
+    match Stage::parse(name) {
+        Some(Stage::Acquisition) => acquisition::shell::main(argv),
+        Some(Stage::Estimator) => estimator::shell::main(argv),
+        Some(Stage::Classifier) => classifier::shell::main(argv),
+        Some(Stage::EstimatorClassifier) => classifier::fused::main(argv),
+        Some(Stage::Recorder) => recorder::shell::main(argv),
+        Some(Stage::LiveView) => live::shell::liveview_main(argv),
+        Some(Stage::Gateway) => live::shell::gateway_main(argv),
+        None => {
             errln!(
-                "leakwatch stage: unknown stage {:?}; the stages are acquisition, estimator, classifier, recorder, \
-                 liveview, gateway (and estimator+classifier, the two in one process)",
-                other.unwrap_or("")
+                "leakwatch stage: unknown stage {name:?}; the stages are acquisition, estimator, classifier, recorder, \
+                 liveview, gateway (and estimator+classifier, the two in one process)"
             );
             std::process::ExitCode::FAILURE
         }
@@ -64,9 +131,9 @@ pub fn stage_program() -> Result<PathBuf, String> {
 /// The recorder's arguments with `--config DIR/config.toml` added when the run
 /// wrote its configuration beside the log (`--out DIR/run.mcap`) and the
 /// arguments name none: the log then holds the configuration it was made with.
-fn with_run_config(name: &str, args: &[String]) -> Vec<String> {
+fn with_run_config(stage: Stage, args: &[String]) -> Vec<String> {
     let mut out = args.to_vec();
-    if name != "recorder" || args.iter().any(|a| a == "--config") {
+    if stage != Stage::Recorder || args.iter().any(|a| a == "--config") {
         return out;
     }
     let log = args
@@ -87,13 +154,13 @@ fn with_run_config(name: &str, args: &[String]) -> Vec<String> {
 
 pub(super) fn spawn(
     program: &Path,
-    name: &str,
+    stage: Stage,
     args: &[String],
     prefix: &str,
     log: &Path,
     cpu: Option<usize>,
 ) -> Result<Child, String> {
-    let args = &with_run_config(name, args);
+    let args = &with_run_config(stage, args);
     // the outputs were checked at start (an earlier run's only with --force)
     let err = pipeline::out::create(log, true, &[])?;
     let mut cmd = Command::new(program);
@@ -119,7 +186,7 @@ pub(super) fn spawn(
         });
     }
     cmd.arg("stage")
-        .arg(name)
+        .arg(stage.name())
         .args(args)
         .env(bus::PREFIX_ENV, prefix)
         // the run's time base (bus::init_epoch_offset at its start)
@@ -128,7 +195,7 @@ pub(super) fn spawn(
         .stdout(Stdio::null())
         .stderr(err)
         .spawn()
-        .map_err(|e| format!("cannot start stage {name} ({}): {e}", program.display()))
+        .map_err(|e| format!("cannot start stage {stage} ({}): {e}", program.display()))
 }
 
 pub(super) fn terminate(child: &mut Child) {

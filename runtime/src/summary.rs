@@ -4,6 +4,7 @@
 use detect::{LeakEvent, Phase};
 
 use crate::args::{parse_source, RunArgs, RunSource};
+use crate::stages::Stage;
 use crate::supervisor::RunOutcome;
 use pipeline::out::outln;
 
@@ -99,7 +100,13 @@ pub(super) fn print(args: &RunArgs, o: &RunOutcome) -> Result<(), String> {
     }
     // a restarted recorder continues the log in run-1.mcap, run-2.mcap, ...; a
     // recorder continues its file after an hour in run.1.mcap, ...
-    let restarted = o.latency.restarts.get("recorder").copied().unwrap_or(0) > 0;
+    let restarted = o
+        .latency
+        .restarts
+        .get(Stage::Recorder.name())
+        .copied()
+        .unwrap_or(0)
+        > 0;
     let log: Vec<String> = pipeline::logs::log_parts(&o.out_dir.join("run.mcap"))
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))

@@ -14,26 +14,26 @@ use bus::Received;
 use config::Config;
 use frames::{SensorFrame, StatsFrame};
 
-use crate::figures::{StageAcc, STAGE_NAMES};
+use crate::figures::{StageAcc, STAGE_CODES};
 use crate::launch::{Resume, StageArgs};
 use crate::placement::Placement;
 use crate::restart::{Backoff, Decision, HEALTHY_RUN, MAX_RESTARTS};
-use crate::stages::{spawn, terminate, FUSED};
+use crate::stages::{spawn, terminate, Stage};
 use crate::watchdog::{stall_cause, Alarm, Watchdog};
 
 /// Stages whose failure does not end the run: monitoring (acquisition,
 /// estimator, classifier) goes on without them.
-pub(crate) const OPTIONAL_STAGES: [&str; 3] = ["recorder", "liveview", "gateway"];
+pub(crate) const OPTIONAL_STAGES: [Stage; 3] = [Stage::Recorder, Stage::LiveView, Stage::Gateway];
 
 /// Whether the watchdog watches stage `name`: the live view and the gateway
 /// publish no stats (restarted when they exit, not watched), and a UDP stream
 /// (`udp`) is paced by its sender, so no datagram is no stall.
-pub(crate) fn watched(name: &str, udp: bool) -> bool {
-    !["liveview", "gateway"].contains(&name) && (!udp || name != "acquisition")
+pub(crate) fn watched(name: Stage, udp: bool) -> bool {
+    !matches!(name, Stage::LiveView | Stage::Gateway) && (!udp || name != Stage::Acquisition)
 }
 
 /// Says that stage `name` made progress again after `d` without.
-fn stall_ended(name: &str, d: Duration) {
+fn stall_ended(name: Stage, d: Duration) {
     errln!(
         "leakwatch run: the {name} runs again after {:.1} s without progress",
         d.as_secs_f64()
@@ -57,23 +57,23 @@ pub(crate) struct Supervision<'a> {
     /// How each stage is started.
     pub launch: StageArgs,
     /// The running stage processes.
-    pub children: BTreeMap<&'static str, Child>,
+    pub children: BTreeMap<Stage, Child>,
     /// Progress of each stage.
     pub watchdog: Watchdog,
     /// Restarts per stage.
     pub restarts: BTreeMap<String, u32>,
     /// Each stage's backoff.
-    pub backoffs: BTreeMap<&'static str, Backoff>,
+    pub backoffs: BTreeMap<Stage, Backoff>,
     /// When each stage's process started.
-    pub started_at: BTreeMap<&'static str, Instant>,
+    pub started_at: BTreeMap<Stage, Instant>,
     /// When each stage that exited is due to start again.
-    pub restart_at: BTreeMap<&'static str, Instant>,
+    pub restart_at: BTreeMap<Stage, Instant>,
     /// The last frame published, where a restarted acquisition takes over.
     pub last_frame: Option<SensorFrame>,
     /// The last estimate published.
     pub last_estimate: Option<u64>,
     /// Where a stage that exited had read the estimates to.
-    pub read_to_at_exit: BTreeMap<&'static str, Option<u64>>,
+    pub read_to_at_exit: BTreeMap<Stage, Option<u64>>,
     /// When the acquisition ended its stream.
     pub ended_at: Option<Instant>,
     /// Why the log could not be written, if it could not.
@@ -121,7 +121,7 @@ impl<'a> Supervision<'a> {
     /// Starts each of `stages` in turn (the acquisition first; 150 ms between
     /// the others). A stage that cannot start ends the start: the ones already
     /// started are killed first, so that their files can go too.
-    pub(crate) fn start(&mut self, stages: &[&'static str]) -> Result<(), String> {
+    pub(crate) fn start(&mut self, stages: &[Stage]) -> Result<(), String> {
         for &name in stages {
             let child = spawn(
                 self.program,
@@ -129,7 +129,7 @@ impl<'a> Supervision<'a> {
                 &self.launch.of(name, 0, &Resume::default()),
                 self.prefix,
                 &self.out_dir.join(format!("{name}.log")),
-                self.cfg.run.cpu_of(name),
+                self.cfg.run.cpu_of(name.name()),
             );
             let child = match child {
                 Ok(child) => child,
@@ -143,7 +143,7 @@ impl<'a> Supervision<'a> {
             };
             self.children.insert(name, child);
             self.watchdog.started(name, Instant::now());
-            if name != "acquisition" {
+            if name != Stage::Acquisition {
                 std::thread::sleep(Duration::from_millis(150));
             }
         }
@@ -158,35 +158,35 @@ impl<'a> Supervision<'a> {
     /// that ends the run.
     fn on_exit(
         &mut self,
-        name: &'static str,
+        name: Stage,
         status: std::process::ExitStatus,
         now: Instant,
     ) -> Result<bool, String> {
-        self.children.remove(name);
+        self.children.remove(&name);
         self.watchdog.exited(name, now);
         // the classifier had read the estimates up to about here (the estimator's
         // last is known once it is down: the last published)
         self.read_to_at_exit.insert(name, self.last_estimate);
-        if name == "acquisition" && status.success() {
+        if name == Stage::Acquisition && status.success() {
             // the end of the stream: let the last frames drain
             self.ended_at.get_or_insert(now);
             return Ok(true);
         }
-        if name == "recorder" && self.ended_at.is_some() {
+        if name == Stage::Recorder && self.ended_at.is_some() {
             // it finished its file
             return Ok(true);
         }
-        let ran = now.saturating_duration_since(self.started_at[name]);
+        let ran = now.saturating_duration_since(self.started_at[&name]);
         let backoff = self.backoffs.entry(name).or_default();
-        let log = self.out_dir.join(match self.restarts.get(name) {
+        let log = self.out_dir.join(match self.restarts.get(name.name()) {
             Some(n) => format!("{name}-{n}.log"),
             None => format!("{name}.log"),
         });
-        if name == "recorder" && status.code() == Some(i32::from(recorder::shell::EXIT_LOG_UNWRITABLE)) {
+        if name == Stage::Recorder && status.code() == Some(i32::from(recorder::shell::EXIT_LOG_UNWRITABLE)) {
             // a full disk or an I/O error: a restart would fail the same way
             let part = self
                 .launch
-                .log_part(self.restarts.get(name).copied().unwrap_or(0));
+                .log_part(self.restarts.get(name.name()).copied().unwrap_or(0));
             let why = crate::clean::log_write_error(&log, &part);
             errln!(
                 "leakwatch run: error: {why}; the recorder is not restarted: monitoring goes on \
@@ -232,7 +232,7 @@ impl<'a> Supervision<'a> {
                     log.display()
                 );
                 errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
-                if name == "recorder" {
+                if name == Stage::Recorder {
                     self.log_failure = Some(why);
                     self.launch.frame_subscribers = self.launch.frame_subscribers.saturating_sub(1);
                 } else {
@@ -258,10 +258,10 @@ impl<'a> Supervision<'a> {
         self.last_frame = Some(frame);
         if let Some(d) = self
             .watchdog
-            .progress("acquisition", now)
-            .filter(|_| watched("acquisition", self.udp))
+            .progress(Stage::Acquisition, now)
+            .filter(|_| watched(Stage::Acquisition, self.udp))
         {
-            stall_ended("acquisition", d);
+            stall_ended(Stage::Acquisition, d);
         }
     }
 
@@ -275,17 +275,17 @@ impl<'a> Supervision<'a> {
         placement: Placement,
         now: Instant,
     ) {
-        let Some(&stage) = STAGE_NAMES.get(st.stage as usize) else {
+        let Some(&stage) = STAGE_CODES.get(st.stage as usize) else {
             return;
         };
         let name = placement.process_of(stage);
-        if stage == "acquisition"
-            || (name == FUSED && stage == "classifier")
-            || self.children.get(name).map(Child::id) != Some(st.pid)
+        if stage == Stage::Acquisition
+            || (name == Stage::EstimatorClassifier && stage == Stage::Classifier)
+            || self.children.get(&name).map(Child::id) != Some(st.pid)
         {
             return;
         }
-        let upstream = if stage == "classifier" { 1 } else { 0 };
+        let upstream = if stage == Stage::Classifier { 1 } else { 0 };
         let up_out = accs.get(&upstream).map_or(0, StageAcc::frames_out_total);
         if let Some(d) = self.watchdog.stats(name, st.pid, st.frames_in, up_out, now) {
             stall_ended(name, d);
@@ -294,11 +294,11 @@ impl<'a> Supervision<'a> {
 
     /// Ends every stage process (SIGTERM, then SIGKILL after 5 s) and returns
     /// the pid of the classifier's process, for the events still queued.
-    pub(crate) fn stop(&mut self) -> BTreeMap<&'static str, u32> {
+    pub(crate) fn stop(&mut self) -> BTreeMap<Stage, u32> {
         let classifier_pids = self
             .children
             .iter()
-            .filter(|(n, _)| **n == "classifier" || **n == FUSED)
+            .filter(|(n, _)| n.classifies())
             .map(|(n, c)| (*n, c.id()))
             .collect();
         for (_, c) in self.children.iter_mut() {
@@ -321,8 +321,8 @@ impl<'a> Supervision<'a> {
     /// Stage `name` at `now`: its exit noticed (a restart scheduled, or the
     /// stage given up), a stall reported or the stalled process killed, a
     /// restart that is due made. An error is a failure that ends the run.
-    pub(crate) fn supervise_stage(&mut self, name: &'static str, now: Instant) -> Result<(), String> {
-        if let Some(child) = self.children.get_mut(name) {
+    pub(crate) fn supervise_stage(&mut self, name: Stage, now: Instant) -> Result<(), String> {
+        if let Some(child) = self.children.get_mut(&name) {
             match child.try_wait() {
                 Ok(Some(status)) => {
                     let done = self.on_exit(name, status, now)?;
@@ -331,7 +331,7 @@ impl<'a> Supervision<'a> {
                     }
                 }
                 Ok(None) if watched(name, self.udp) => {
-                    match self.watchdog.check(name, now, name != "recorder") {
+                    match self.watchdog.check(name, now, name != Stage::Recorder) {
                         Some(Alarm::Stalled(idle)) => errln!(
                         "leakwatch run: warning: the {name} has made no progress for {:.1} s (process {} {})",
                         idle.as_secs_f64(),
@@ -351,8 +351,8 @@ impl<'a> Supervision<'a> {
                 _ => {}
             }
         }
-        if self.restart_at.get(name).is_some_and(|t| now >= *t) {
-            self.restart_at.remove(name);
+        if self.restart_at.get(&name).is_some_and(|t| now >= *t) {
+            self.restart_at.remove(&name);
             // checked again: the prefix may have been damaged while the stage waited
             if let Some(why) = crate::blocked::why_blocked(self.bus_cfg, None) {
                 if let Some(f) = crate::blocked::give_up(
@@ -378,14 +378,14 @@ impl<'a> Supervision<'a> {
                     &Resume {
                         last_frame: self.last_frame,
                         after_estimate: match name {
-                            "classifier" => self.read_to_at_exit.get(name).copied().flatten(),
+                            Stage::Classifier => self.read_to_at_exit.get(&name).copied().flatten(),
                             _ => self.last_estimate,
                         },
                     },
                 ),
                 self.prefix,
                 &self.out_dir.join(format!("{name}-{n}.log")),
-                self.cfg.run.cpu_of(name),
+                self.cfg.run.cpu_of(name.name()),
             ) {
                 Ok(c) => {
                     self.children.insert(name, c);

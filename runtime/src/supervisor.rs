@@ -15,10 +15,10 @@ use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
 use crate::args::{check_udp_args, parse_source, RunArgs, RunSource};
 use crate::events::{own_event, print_event};
-use crate::figures::{LatencyReport, StageAcc, STAGE_NAMES};
+use crate::figures::{LatencyReport, StageAcc, STAGE_CODES};
 use crate::placement::Placement;
 use crate::plan::{announce, check_outputs, plan, run_prefix, stage_args, Plan};
-use crate::stages::stage_program;
+use crate::stages::{stage_program, Stage};
 use crate::supervision::Supervision;
 use bus::say as errln;
 use config::Config;
@@ -193,7 +193,7 @@ fn latency_report(
 ) -> LatencyReport {
     let mut stages = BTreeMap::new();
     for (code, acc) in accs {
-        let name = STAGE_NAMES.get(code as usize).copied().unwrap_or("unknown");
+        let name = STAGE_CODES.get(code as usize).map_or("unknown", |s| s.name());
         stages.insert(name.to_string(), acc.finish());
     }
     LatencyReport {
@@ -284,7 +284,7 @@ struct Gathered {
 fn watch(
     sup: &mut Supervision,
     topics: &mut Topics,
-    stages: &[&'static str],
+    stages: &[Stage],
     (placement, quiet): (Placement, bool),
     end: (&AtomicBool, Option<Duration>),
     mut last_watch: Instant,
@@ -419,8 +419,8 @@ fn live_stages(
     out_dir: &Path,
     inputs: &[&Path],
     quiet: bool,
-    processes: &[&'static str],
-) -> Result<Vec<&'static str>, String> {
+    processes: &[Stage],
+) -> Result<Vec<Stage>, String> {
     if let Some(port) = args.live_view {
         cfg.live_view.enabled = true;
         if port != 0 {
@@ -486,7 +486,10 @@ fn live_stages(
         );
     }
     let stages = crate::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
-    for name in stages.iter().filter(|n| ["liveview", "gateway"].contains(n)) {
+    for name in stages
+        .iter()
+        .filter(|n| matches!(n, Stage::LiveView | Stage::Gateway))
+    {
         pipeline::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
     }
     Ok(stages)

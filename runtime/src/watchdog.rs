@@ -13,6 +13,7 @@
 //! stats period; one of a starved stage is noticed 1.5 s after its second
 //! stats frame without input.
 
+use crate::stages::Stage;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -79,12 +80,12 @@ impl Watch {
 /// The watches of every stage.
 #[derive(Debug, Default)]
 pub(super) struct Watchdog {
-    watches: BTreeMap<&'static str, Watch>,
+    watches: BTreeMap<Stage, Watch>,
 }
 
 impl Watchdog {
     /// A process of `stage` started at `now`.
-    pub(super) fn started(&mut self, stage: &'static str, now: Instant) {
+    pub(super) fn started(&mut self, stage: Stage, now: Instant) {
         let w = self.watches.entry(stage).or_default();
         w.end_stall(now);
         w.last_progress = Some(now + START_ALLOWANCE);
@@ -93,16 +94,16 @@ impl Watchdog {
     }
 
     /// The process of `stage` exited at `now` (a stall in progress ends there).
-    pub(super) fn exited(&mut self, stage: &'static str, now: Instant) {
-        if let Some(w) = self.watches.get_mut(stage) {
+    pub(super) fn exited(&mut self, stage: Stage, now: Instant) {
+        if let Some(w) = self.watches.get_mut(&stage) {
             w.end_stall(now);
             w.last_progress = None;
         }
     }
 
     /// `stage` showed progress at `now`; returns the length of the stall this ends.
-    pub(super) fn progress(&mut self, stage: &'static str, now: Instant) -> Option<Duration> {
-        let w = self.watches.get_mut(stage)?;
+    pub(super) fn progress(&mut self, stage: Stage, now: Instant) -> Option<Duration> {
+        let w = self.watches.get_mut(&stage)?;
         w.last_progress?;
         let ended = w.end_stall(now);
         w.last_progress = Some(now);
@@ -115,13 +116,13 @@ impl Watchdog {
     /// interval and the one before. Returns the length of the stall this ends.
     pub(super) fn stats(
         &mut self,
-        stage: &'static str,
+        stage: Stage,
         pid: u32,
         frames_in: u64,
         upstream_out: u64,
         now: Instant,
     ) -> Option<Duration> {
-        let w = self.watches.get_mut(stage)?;
+        let w = self.watches.get_mut(&stage)?;
         let starved = match w.prev {
             Some((p, fin, up)) if p == pid => frames_in == fin && upstream_out > up,
             _ => false,
@@ -137,8 +138,8 @@ impl Watchdog {
 
     /// Whether `stage` has stalled at `now` (reported once per stall) or, if
     /// `may_kill`, stalled long enough to be killed (asked once per process).
-    pub(super) fn check(&mut self, stage: &'static str, now: Instant, may_kill: bool) -> Option<Alarm> {
-        let w = self.watches.get_mut(stage)?;
+    pub(super) fn check(&mut self, stage: Stage, now: Instant, may_kill: bool) -> Option<Alarm> {
+        let w = self.watches.get_mut(&stage)?;
         let idle = now.checked_duration_since(w.last_progress?)?;
         if may_kill && idle > KILL_AFTER && !w.kill_asked {
             w.kill_asked = true;
@@ -194,16 +195,23 @@ mod tests {
     fn a_stage_without_stats_for_two_seconds_is_one_stall() {
         let t0 = Instant::now();
         let mut w = Watchdog::default();
-        w.started("estimator", t0);
-        assert_eq!(w.stats("estimator", 7, 1000, 1000, t0 + s(1.0)), None);
-        assert_eq!(w.check("estimator", t0 + s(2.4), true), None);
+        w.started(Stage::Estimator, t0);
+        assert_eq!(w.stats(Stage::Estimator, 7, 1000, 1000, t0 + s(1.0)), None);
+        assert_eq!(w.check(Stage::Estimator, t0 + s(2.4), true), None);
         assert_eq!(
-            w.check("estimator", t0 + s(2.6), true),
+            w.check(Stage::Estimator, t0 + s(2.6), true),
             Some(Alarm::Stalled(s(1.6)))
         );
-        assert_eq!(w.check("estimator", t0 + s(2.9), true), None, "reported once");
-        assert_eq!(w.stats("estimator", 7, 1300, 4000, t0 + s(3.5)), Some(s(2.5)));
-        assert_eq!(w.check("estimator", t0 + s(4.0), true), None);
+        assert_eq!(
+            w.check(Stage::Estimator, t0 + s(2.9), true),
+            None,
+            "reported once"
+        );
+        assert_eq!(
+            w.stats(Stage::Estimator, 7, 1300, 4000, t0 + s(3.5)),
+            Some(s(2.5))
+        );
+        assert_eq!(w.check(Stage::Estimator, t0 + s(4.0), true), None);
         let f = w.finish(t0 + s(5.0));
         assert_eq!(
             f["estimator"],
@@ -221,27 +229,27 @@ mod tests {
     fn a_stage_starved_while_its_upstream_publishes_is_stalled() {
         let t0 = Instant::now();
         let mut w = Watchdog::default();
-        w.started("classifier", t0);
-        w.stats("classifier", 9, 500, 500, t0 + s(1.0));
+        w.started(Stage::Classifier, t0);
+        w.stats(Stage::Classifier, 9, 500, 500, t0 + s(1.0));
         // upstream idle: not a stall
-        w.stats("classifier", 9, 500, 500, t0 + s(2.0));
-        w.stats("classifier", 9, 500, 500, t0 + s(3.0));
-        assert_eq!(w.check("classifier", t0 + s(3.9), true), None);
+        w.stats(Stage::Classifier, 9, 500, 500, t0 + s(2.0));
+        w.stats(Stage::Classifier, 9, 500, 500, t0 + s(3.0));
+        assert_eq!(w.check(Stage::Classifier, t0 + s(3.9), true), None);
         // the upstream's last stats frame counts frames the stage already had
         // (the end of the stream): once is not a stall
-        w.stats("classifier", 9, 500, 700, t0 + s(4.0));
-        w.stats("classifier", 9, 500, 700, t0 + s(5.0));
-        assert_eq!(w.check("classifier", t0 + s(6.4), true), None);
+        w.stats(Stage::Classifier, 9, 500, 700, t0 + s(4.0));
+        w.stats(Stage::Classifier, 9, 500, 700, t0 + s(5.0));
+        assert_eq!(w.check(Stage::Classifier, t0 + s(6.4), true), None);
         // upstream publishes, the stage receives nothing, twice running
-        w.stats("classifier", 9, 500, 1700, t0 + s(6.0));
-        w.stats("classifier", 9, 500, 2700, t0 + s(7.0));
-        assert_eq!(w.check("classifier", t0 + s(7.4), true), None);
+        w.stats(Stage::Classifier, 9, 500, 1700, t0 + s(6.0));
+        w.stats(Stage::Classifier, 9, 500, 2700, t0 + s(7.0));
+        assert_eq!(w.check(Stage::Classifier, t0 + s(7.4), true), None);
         assert_eq!(
-            w.check("classifier", t0 + s(7.6), true),
+            w.check(Stage::Classifier, t0 + s(7.6), true),
             Some(Alarm::Stalled(s(1.6)))
         );
         // a new process (restart) is progress
-        assert_eq!(w.stats("classifier", 10, 0, 2800, t0 + s(8.0)), Some(s(2.0)));
+        assert_eq!(w.stats(Stage::Classifier, 10, 0, 2800, t0 + s(8.0)), Some(s(2.0)));
     }
 
     /// A stage stalled past 5 s is to be killed once (unless it may not be),
@@ -250,26 +258,30 @@ mod tests {
     fn a_long_stall_asks_for_one_kill() {
         let t0 = Instant::now();
         let mut w = Watchdog::default();
-        w.started("acquisition", t0);
-        w.started("recorder", t0);
-        w.progress("acquisition", t0 + s(0.5));
-        w.progress("recorder", t0 + s(0.5));
+        w.started(Stage::Acquisition, t0);
+        w.started(Stage::Recorder, t0);
+        w.progress(Stage::Acquisition, t0 + s(0.5));
+        w.progress(Stage::Recorder, t0 + s(0.5));
         assert!(matches!(
-            w.check("acquisition", t0 + s(2.1), true),
+            w.check(Stage::Acquisition, t0 + s(2.1), true),
             Some(Alarm::Stalled(_))
         ));
         assert!(matches!(
-            w.check("recorder", t0 + s(2.1), false),
+            w.check(Stage::Recorder, t0 + s(2.1), false),
             Some(Alarm::Stalled(_))
         ));
         assert_eq!(
-            w.check("acquisition", t0 + s(5.6), true),
+            w.check(Stage::Acquisition, t0 + s(5.6), true),
             Some(Alarm::Kill(s(5.1)))
         );
-        assert_eq!(w.check("acquisition", t0 + s(5.7), true), None);
-        assert_eq!(w.check("recorder", t0 + s(5.7), false), None, "never killed");
-        w.exited("acquisition", t0 + s(5.8));
-        assert_eq!(w.check("acquisition", t0 + s(9.0), true), None, "not running");
+        assert_eq!(w.check(Stage::Acquisition, t0 + s(5.7), true), None);
+        assert_eq!(w.check(Stage::Recorder, t0 + s(5.7), false), None, "never killed");
+        w.exited(Stage::Acquisition, t0 + s(5.8));
+        assert_eq!(
+            w.check(Stage::Acquisition, t0 + s(9.0), true),
+            None,
+            "not running"
+        );
         let f = w.finish(t0 + s(6.5));
         assert_eq!((f["acquisition"].count, f["acquisition"].killed), (1, 1));
         assert!((f["acquisition"].longest_s - 5.3).abs() < 1e-9);
