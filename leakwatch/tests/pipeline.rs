@@ -801,8 +801,10 @@ fn a_stage_that_keeps_failing_ends_the_run_and_leaves_the_events_and_latency() {
     let child = start_run("e2e-give-up", "60", Some("ext1:0.5lpm@10s"), &out, &cfg);
     let pid = wait_for_stage("classifier", "e2e-give-up");
     wait_for_stage("acquisition", "e2e-give-up");
+    // the acquisition reads the config as it starts: spoil it once it has
+    std::thread::sleep(Duration::from_secs(2));
     std::fs::write(out.join("config.toml"), "[classifier\nnot toml").unwrap();
-    std::thread::sleep(Duration::from_secs(13));
+    std::thread::sleep(Duration::from_secs(11));
     signal(pid, libc::SIGKILL);
     let o = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
