@@ -99,6 +99,14 @@ pub fn run(
     .map_err(|e| e.to_string())?;
     let files =
         calibrate::write_outputs(&cal, out, force, &inputs, &model_file).map_err(|e| e.to_string())?;
+    say_result(&cal, &files)?;
+    Ok(())
+}
+
+/// Prints what calibration `cal` found: the gap before, each effect added
+/// with its parameters, the gap after, and the files written (`files`); an
+/// error only when stdout cannot be written.
+fn say_result(cal: &calibrate::Calibration, files: &calibrate::OutputFiles) -> Result<(), String> {
     let g = |gap: &calibrate::Gap| {
         format!(
             "chamber 1 {:.1} kPa, chamber 2 {:.1} kPa, force {:.0} N, spool {:.2} µm per {:.0} ms window; normalised {:.3}",

@@ -109,6 +109,26 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
         rig: id,
         mechanics: found_mechanics,
     } = identify_on(input, cfg)?;
+    say_flow_balance(&id, cfg);
+    let mut mechanics = None;
+    match found_mechanics {
+        Ok(mech) => {
+            say_force_balance(&mech, cfg);
+            mechanics = Some(mech);
+        }
+        Err(e) => eprintln!("  mass and friction: not identified: {e}"),
+    }
+    let mut out = cfg.clone();
+    out.model = id.apply(&cfg.model);
+    if let Some(mech) = mechanics {
+        out.model = mech.apply(&out.model);
+    }
+    Ok(out)
+}
+
+/// Says what the flow balance identified (`id`) against the model of `cfg`,
+/// and what the recording cannot tell apart.
+fn say_flow_balance(id: &identify::Identification, cfg: &Config) {
     let dt = cfg.leak_filter.sample_period_s;
     let m = &cfg.model;
     let (wa, wb) = m.area_gradients_m2_per_m();
@@ -217,65 +237,58 @@ pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
          changes (an offset cancels); in the force balance an offset difference reads as a static \
          load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them"
     );
-    let mut mechanics = None;
-    match found_mechanics {
-        Ok(mech) => {
-            let f = m.friction.extend();
-            eprintln!(
-                "force balance on {} sliding samples: gap {:.0} -> {:.0} N RMS",
-                mech.equations, mech.gap_before_n, mech.gap_after_n
-            );
-            for (name, found, unit, scale, model) in [
-                ("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
-                ("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
-                ("static friction", &mech.static_n, "N", 1.0, f.static_n),
-                (
-                    "Stribeck velocity",
-                    &mech.stribeck_velocity_m_s,
-                    "mm/s",
-                    1e3,
-                    f.stribeck_velocity_m_s,
-                ),
-                (
-                    match transducers.map(|t| t.location) {
-                        Some(model::datasheet::TransducerLocation::Manifold) => {
-                            "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
-                        }
-                        _ => "viscous friction (apparent)",
-                    },
-                    &mech.viscous_n_s_per_m,
-                    "N·s/m",
-                    1.0,
-                    f.viscous_n_s_per_m,
-                ),
-                (
-                    "static force (weight and load)",
-                    &mech.static_force_n,
-                    "N",
-                    1.0,
-                    m.gravity_force_n(),
-                ),
-            ] {
-                eprintln!("{}", found_line(name, found, unit, scale, model));
-            }
-            if let Some((k, contact_m)) = mech.contact_spring {
-                eprintln!(
-                    "  a workpiece: a contact spring of {:.4e} ± {:.1e} N/m from {:.1} mm on (in the force balance, and now in the model's load)",
-                    k.value,
-                    k.sigma,
-                    contact_m * 1e3
-                );
-            }
-            mechanics = Some(mech);
-        }
-        Err(e) => eprintln!("  mass and friction: not identified: {e}"),
+}
+
+/// Says what the force balance identified (`mech`) against the model of `cfg`.
+fn say_force_balance(mech: &identify::Mechanics, cfg: &Config) {
+    let m = &cfg.model;
+    let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
+    let f = m.friction.extend();
+    eprintln!(
+        "force balance on {} sliding samples: gap {:.0} -> {:.0} N RMS",
+        mech.equations, mech.gap_before_n, mech.gap_after_n
+    );
+    for (name, found, unit, scale, model) in [
+        ("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
+        ("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
+        ("static friction", &mech.static_n, "N", 1.0, f.static_n),
+        (
+            "Stribeck velocity",
+            &mech.stribeck_velocity_m_s,
+            "mm/s",
+            1e3,
+            f.stribeck_velocity_m_s,
+        ),
+        (
+            match transducers.map(|t| t.location) {
+                Some(model::datasheet::TransducerLocation::Manifold) => {
+                    "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
+                }
+                _ => "viscous friction (apparent)",
+            },
+            &mech.viscous_n_s_per_m,
+            "N·s/m",
+            1.0,
+            f.viscous_n_s_per_m,
+        ),
+        (
+            "static force (weight and load)",
+            &mech.static_force_n,
+            "N",
+            1.0,
+            m.gravity_force_n(),
+        ),
+    ] {
+        eprintln!("{}", found_line(name, found, unit, scale, model));
     }
-    let mut out = cfg.clone();
-    out.model = id.apply(&cfg.model);
-    if let Some(mech) = mechanics {
-        out.model = mech.apply(&out.model);
+    if let Some((k, contact_m)) = mech.contact_spring {
+        eprintln!(
+            "  a workpiece: a contact spring of {:.4e} ± {:.1e} N/m from {:.1} mm on (in the force balance, and now in the model's load)",
+            k.value,
+            k.sigma,
+            contact_m * 1e3
+        );
     }
-    Ok(out)
 }
 
 /// Least healthy, converged data a commissioning needs, s.
