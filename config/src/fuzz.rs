@@ -76,17 +76,7 @@ fn mutate(seed: &str, mutations: &[Mutation]) -> String {
             }
             3 | 4 if len > 0 => {
                 // the value after the `=` of the line around `at`
-                let at = at % len;
-                let start = b[..at]
-                    .iter()
-                    .rposition(|&c| c == b'\n')
-                    .map(|i| i + 1)
-                    .unwrap_or(0);
-                let end = b[at..]
-                    .iter()
-                    .position(|&c| c == b'\n')
-                    .map(|i| at + i)
-                    .unwrap_or(len);
+                let (start, end) = line_around(&b, at % len);
                 match b[start..end].iter().position(|&c| c == b'=') {
                     Some(eq) => {
                         b.splice(start + eq + 1..end, tok.iter().copied());
@@ -98,17 +88,9 @@ fn mutate(seed: &str, mutations: &[Mutation]) -> String {
             }
             5 if len > 0 => {
                 // a line duplicated (a key or a section given twice) or removed
-                let at = at % len;
-                let start = b[..at]
-                    .iter()
-                    .rposition(|&c| c == b'\n')
-                    .map(|i| i + 1)
-                    .unwrap_or(0);
-                let end = b[at..]
-                    .iter()
-                    .position(|&c| c == b'\n')
-                    .map(|i| at + i + 1)
-                    .unwrap_or(len);
+                let (start, end) = line_around(&b, at % len);
+                // with its newline
+                let end = (end + 1).min(len);
                 if byte & 1 == 0 {
                     let line = b[start..end].to_vec();
                     b.splice(end..end, line);
@@ -184,4 +166,15 @@ fn the_seeds_are_valid_and_the_mutator_changes_them() {
     assert!(m.contains("mass_kg =nan"), "{m}");
     let e = Config::parse(&m).unwrap_err();
     assert!(e.contains("mass_kg"), "{e}");
+}
+
+/// The line of `b` around byte `at`: from its first byte to its newline
+/// (exclusive; `b.len()` for the last line without one).
+fn line_around(b: &[u8], at: usize) -> (usize, usize) {
+    let start = b[..at].iter().rposition(|&c| c == b'\n').map_or(0, |i| i + 1);
+    let end = b[at..]
+        .iter()
+        .position(|&c| c == b'\n')
+        .map_or(b.len(), |i| at + i);
+    (start, end)
 }

@@ -1,3 +1,6 @@
+// Over 600 lines: the `Estimator` (its step, resets, re-anchoring after gaps and the oil's
+// temperature) is one state machine with the `Estimate` it fills; its gap handling could move
+// to a module of its own.
 //! The EKF core of the estimator stage: a square-root EKF tracking the
 //! actuator at 1 kHz against the healthy model of `model::process`
 //! (docs/model.md#process-model), with the residuals and moving averages the

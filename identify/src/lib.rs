@@ -1,4 +1,4 @@
-// Over 600 lines: the identification's shared types and the valve/oil fit sit together; they move into modules of their own with the detector's split.
+// Over 600 lines: the identification's shared types and the valve/oil fit sit together; the fit could move to a module of its own, as the mechanics did (mechanics.rs).
 //! Identifies what a datasheet does not pin down, from a healthy recording of
 //! a rig's normal operation (docs/plant.md, "Identification"): the valve's
 //! flow gain per port, its null leakage, the spool's null bias and the oil's

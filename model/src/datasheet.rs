@@ -1,4 +1,4 @@
-// Over 600 lines: the datasheet's fields and their one validation; the validation moves to a module of its own with the config schema's move.
+// Over 600 lines: the datasheet's fields, their one validation and their derivation into the model; the validation could move to a module of its own.
 //! A rig described in its datasheets' own terms (`[datasheet]` of the config):
 //! bore and rod, hoses, oil, the valve's rated flow, the transducers. The
 //! model's, the sensors' and the leak filter's rig facts are derived from it

@@ -7,8 +7,6 @@ use std::path::Path;
 
 use bus::BusConfig;
 
-use bus::say as errln;
-
 /// The start of the line a stage writes when its iceoryx2 node cannot be created.
 const NODE_FAILURE: &str = "cannot create the iceoryx2 node";
 
@@ -32,33 +30,6 @@ pub(super) fn why_blocked(cfg: &BusConfig, stage_log: Option<&Path>) -> Option<S
         "its iceoryx2 node could not be created ({rest}); see {}",
         log.display()
     ))
-}
-
-/// A stage that cannot start again because of `why`: an optional stage
-/// (`optional`: the recorder, the live view, the gateway) is given up, said on
-/// stderr and kept in `log_failure` (the recorder; its frame subscription no
-/// longer awaited) or `output_failures`, and monitoring goes on; for a stage
-/// monitoring needs, returns the run's failure.
-pub(super) fn give_up(
-    name: crate::stages::Stage,
-    why: &str,
-    optional: bool,
-    log_failure: &mut Option<String>,
-    output_failures: &mut Vec<String>,
-    frame_subscribers: &mut usize,
-) -> Option<String> {
-    let why = format!("the {name} cannot be restarted: {why}");
-    if !optional {
-        return Some(why);
-    }
-    errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
-    if name == crate::stages::Stage::Recorder {
-        *log_failure = Some(why);
-        *frame_subscribers = frame_subscribers.saturating_sub(1);
-    } else {
-        output_failures.push(why);
-    }
-    None
 }
 
 #[cfg(test)]

@@ -198,16 +198,7 @@ impl<'a> Supervision<'a> {
         }
         // a prefix on which no node can start: a restart would fail the same way
         if let Some(why) = crate::blocked::why_blocked(self.bus_cfg, Some(&log)) {
-            if let Some(f) = crate::blocked::give_up(
-                name,
-                &why,
-                OPTIONAL_STAGES.contains(&name),
-                &mut self.log_failure,
-                &mut self.output_failures,
-                &mut self.launch.frame_subscribers,
-            ) {
-                return Err(f);
-            }
+            self.give_up(name, format!("the {name} cannot be restarted: {why}"))?;
             return Ok(true);
         }
         match backoff.on_exit(ran) {
@@ -223,33 +214,38 @@ impl<'a> Supervision<'a> {
                 );
                 self.restart_at.insert(name, now + delay);
             }
-            Decision::GiveUp if OPTIONAL_STAGES.contains(&name) => {
-                let why = format!(
-                    "stage {name} keeps failing: it exited {} times without running {} s in between \
-                     (last: {status}); see {}",
-                    MAX_RESTARTS + 1,
-                    HEALTHY_RUN.as_secs(),
-                    log.display()
-                );
-                errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
-                if name == Stage::Recorder {
-                    self.log_failure = Some(why);
-                    self.launch.frame_subscribers = self.launch.frame_subscribers.saturating_sub(1);
-                } else {
-                    self.output_failures.push(why);
-                }
-            }
             Decision::GiveUp => {
-                return Err(format!(
-                    "stage {name} keeps failing: it exited {} times without running {} s in between \
-                     (last: {status}); see {}",
-                    MAX_RESTARTS + 1,
-                    HEALTHY_RUN.as_secs(),
-                    log.display()
-                ));
+                self.give_up(
+                    name,
+                    format!(
+                        "stage {name} keeps failing: it exited {} times without running {} s in between \
+                         (last: {status}); see {}",
+                        MAX_RESTARTS + 1,
+                        HEALTHY_RUN.as_secs(),
+                        log.display()
+                    ),
+                )?;
             }
         }
         Ok(false)
+    }
+
+    /// Gives stage `name` up for `why`: a stage monitoring needs ends the run
+    /// (the error); an optional one (the recorder, the live view, the gateway)
+    /// is said on stderr and kept in `log_failure` (the recorder: its frame
+    /// subscription no longer awaited) or `output_failures`, and monitoring goes on.
+    fn give_up(&mut self, name: Stage, why: String) -> Result<(), String> {
+        if !OPTIONAL_STAGES.contains(&name) {
+            return Err(why);
+        }
+        errln!("leakwatch run: error: {why}; given up: monitoring goes on without it");
+        if name == Stage::Recorder {
+            self.log_failure = Some(why);
+            self.launch.frame_subscribers = self.launch.frame_subscribers.saturating_sub(1);
+        } else {
+            self.output_failures.push(why);
+        }
+        Ok(())
     }
 
     /// A frame the acquisition published: where a restarted one takes over, and
@@ -355,17 +351,7 @@ impl<'a> Supervision<'a> {
             self.restart_at.remove(&name);
             // checked again: the prefix may have been damaged while the stage waited
             if let Some(why) = crate::blocked::why_blocked(self.bus_cfg, None) {
-                if let Some(f) = crate::blocked::give_up(
-                    name,
-                    &why,
-                    OPTIONAL_STAGES.contains(&name),
-                    &mut self.log_failure,
-                    &mut self.output_failures,
-                    &mut self.launch.frame_subscribers,
-                ) {
-                    return Err(f);
-                }
-                return Ok(());
+                return self.give_up(name, format!("the {name} cannot be restarted: {why}"));
             }
             let n = self.restarts.entry(name.to_string()).or_default();
             *n += 1;
