@@ -21,28 +21,6 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
 }
 
-/// The format of an estimates file, as `--estimates` names it.
-#[derive(Clone, Copy, Debug, Default, ValueEnum)]
-pub(crate) enum EstimatesArg {
-    /// estimates.csv: one text row per sample.
-    #[default]
-    Csv,
-    /// estimates.parquet: one typed column per field (f64; the two flag columns i32).
-    Parquet,
-    /// No estimates file (events.json and summary.json only): the fastest replay.
-    None,
-}
-
-impl From<EstimatesArg> for pipeline::estimates_out::EstimatesFormat {
-    fn from(v: EstimatesArg) -> Self {
-        match v {
-            EstimatesArg::Csv => Self::Csv,
-            EstimatesArg::Parquet => Self::Parquet,
-            EstimatesArg::None => Self::None,
-        }
-    }
-}
-
 /// Friction variant of the simulated rig.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub(crate) enum RigVariant {
@@ -235,41 +213,7 @@ pub(crate) enum Command {
     },
     /// Replay a recorded or simulated CSV through the estimator and classifier, faster than real time;
     /// a directory or several files are replayed as a batch over all cores.
-    Replay {
-        /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak,temp_c]) or a recorded log (.mcap); or a
-        /// directory (its *.csv, *.csv.gz, *.mcap and those of its subfolders, one level down) or
-        /// several files: a batch, each file's outputs in OUT/<its relative name without extension>/,
-        /// a table on stdout, a non-zero exit if any file failed.
-        #[arg(required = true)]
-        inputs: Vec<PathBuf>,
-        /// Configuration file (TOML; defaults for everything missing).
-        #[arg(long)]
-        config: Option<PathBuf>,
-        /// Also run the thesis filter, with 6 states (friction from the model) or 7
-        /// (estimated load F_e), and write its estimates (the th_* columns)
-        #[arg(long)]
-        model: Option<u32>,
-        /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
-        #[arg(long)]
-        out: PathBuf,
-        /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
-        #[arg(long, value_enum, default_value_t)]
-        estimates: EstimatesArg,
-        /// Run all stages in one thread instead of over channels (same results).
-        #[arg(long)]
-        single_thread: bool,
-        /// Also run the thesis filter, write its estimates (the th_* columns) and report its
-        /// MAE detector's decisions (a comparison, labelled as such)
-        #[arg(long)]
-        thesis_baseline: bool,
-        /// Largest fraction of unusable input rows (0 to 1) before the file is refused
-        /// with a non-zero exit (outputs are still written).
-        #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
-        max_bad_rows: f64,
-        /// Worker threads of a batch, each replaying whole files (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
-    },
+    Replay(pipeline::replay_cmd::ReplayArgs),
     /// Learn the healthy state of a rig from a healthy recording and write a config
     /// that `replay`, `run` and every stage load with --config: a leak present when
     /// monitoring starts then shows against it.
@@ -440,7 +384,7 @@ pub(crate) enum BenchCommand {
         seconds: f64,
         /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
         #[arg(long, value_enum, default_value_t)]
-        estimates: EstimatesArg,
+        estimates: pipeline::estimates_out::EstimatesFormat,
         /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
         #[arg(long)]
         out: PathBuf,
@@ -451,36 +395,7 @@ pub(crate) enum BenchCommand {
     /// at 20, 30 or 50 °C), and run_NNN/measured.csv + truth.json: healthy runs on each duty cycle
     /// and a leak run of 0.1, 0.25 and 0.5 L/min of each kind, under oil warming or cooling across
     /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one.
-    Instances {
-        /// The rig: `press` (double-rod; press and handling cycles) or `lift` (vertical single-rod;
-        /// lift and handling cycles).
-        #[arg(long, value_parser = ["press", "lift"])]
-        rig: String,
-        /// Number of instances.
-        #[arg(long, default_value_t = 1)]
-        instances: usize,
-        /// Seed of the set (instance i is drawn from it and i).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-        /// Healthy time per instance, hours (in runs of --run-seconds, on the duty cycles in turn).
-        #[arg(long, default_value_t = 0.05)]
-        hours_healthy: f64,
-        /// Length of every run, s.
-        #[arg(long, default_value_t = 90.0)]
-        run_seconds: f64,
-        /// Length of the commissioning recording, s.
-        #[arg(long, default_value_t = 120.0)]
-        commission_seconds: f64,
-        /// The samples carry the oil's temperature (a `temp_c` column).
-        #[arg(long)]
-        temp_c: bool,
-        /// Worker threads, each simulating whole recordings (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
-    },
+    Instances(bench::commands::instances::InstancesRequest),
     /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
     Detection {
         /// Runs per leak kind and size.

@@ -28,7 +28,7 @@ fn main() -> ExitCode {
     }
     let cli = Cli::parse();
     // (benchmarks run pipelines and replays of their own: their status is theirs)
-    let watches = matches!(cli.command, Command::Run { .. } | Command::Replay { .. });
+    let watches = matches!(cli.command, Command::Run { .. } | Command::Replay(..));
     match run(cli) {
         Ok(()) if watches && status::not_watched() => ExitCode::from(status::NOT_WATCHED),
         Ok(()) if watches && status::output_failed() => ExitCode::from(status::OUTPUT_FAILED),
@@ -118,28 +118,7 @@ fn run(cli: Cli) -> Result<(), String> {
             effects,
             force,
         ),
-        Command::Replay {
-            inputs,
-            config,
-            model,
-            out,
-            estimates,
-            single_thread,
-            thesis_baseline,
-            max_bad_rows,
-            threads,
-        } => replay_cmd::run(replay_cmd::ReplayArgs {
-            inputs,
-            config,
-            model,
-            out,
-            estimates: estimates.into(),
-            single_thread,
-            thesis_baseline,
-            max_bad_rows,
-            force,
-            threads,
-        }),
+        Command::Replay(args) => replay_cmd::run(args, force),
         Command::Simulate {
             scenario,
             seconds,
@@ -207,41 +186,9 @@ fn bench(which: BenchCommand, force: bool) -> Result<(), String> {
             seconds,
             estimates,
             out,
-        } => benches::replay::bench(
-            data.as_deref(),
-            &threads,
-            files,
-            seconds,
-            estimates.into(),
-            &out,
-            force,
-        ),
+        } => benches::replay::bench(data.as_deref(), &threads, files, seconds, estimates, &out, force),
         BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
-        BenchCommand::Instances {
-            rig,
-            instances,
-            seed,
-            out,
-            hours_healthy,
-            run_seconds,
-            commission_seconds,
-            temp_c,
-            threads,
-        } => instances::command(
-            &instances::InstancesRequest {
-                rig,
-                instances,
-                seed,
-                out,
-                hours_healthy,
-                run_seconds,
-                commission_seconds,
-                temp_c,
-                threads: threads
-                    .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)),
-            },
-            force,
-        ),
+        BenchCommand::Instances(req) => instances::command(&req, force),
         BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
         BenchCommand::Detection {
             threads,

@@ -8,8 +8,8 @@ use std::io::{BufWriter, Write};
 use dataset::parquet::{Column, ParquetWriter};
 use filter::StageEstimate;
 
-/// The format of the estimates file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// The format of the estimates file (`--estimates`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EstimatesFormat {
     /// estimates.csv: one text row per sample.
     #[default]

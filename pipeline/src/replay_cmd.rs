@@ -10,27 +10,41 @@ use crate::logs::export_log;
 use crate::{out, replay};
 use config::Config;
 
-/// What `leakwatch replay` was asked to do: its arguments (`cli::Command::Replay`) and `--force`.
+/// What `leakwatch replay` was asked to do: its command line (`--force` is global: passed beside it).
+#[derive(Debug, Clone, clap::Args)]
 pub struct ReplayArgs {
-    /// Inputs: one CSV or recorded log (.mcap), or a directory or several files (a batch).
+    /// Input: a CSV (t,u,x,p1,p2[,x_sp,f_load,ref,q_leak,temp_c]) or a recorded log (.mcap); or a
+    /// directory (its *.csv, *.csv.gz, *.mcap and those of its subfolders, one level down) or
+    /// several files: a batch, each file's outputs in OUT/<its relative name without extension>/,
+    /// a table on stdout, a non-zero exit if any file failed.
+    #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// Configuration file.
+    /// Configuration file (TOML; defaults for everything missing).
+    #[arg(long)]
     pub config: Option<PathBuf>,
-    /// States of the thesis filter (6 or 7).
+    /// Also run the thesis filter, with 6 states (friction from the model) or 7
+    /// (estimated load F_e), and write its estimates (the th_* columns)
+    #[arg(long)]
     pub model: Option<u32>,
-    /// Output directory.
+    /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
+    #[arg(long)]
     pub out: PathBuf,
-    /// Format of the estimates file.
+    /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
+    #[arg(long, value_enum, default_value_t)]
     pub estimates: crate::estimates_out::EstimatesFormat,
-    /// Run all stages in one thread instead of over channels.
+    /// Run all stages in one thread instead of over channels (same results).
+    #[arg(long)]
     pub single_thread: bool,
-    /// Also report the thesis' MAE detector's decisions.
+    /// Also run the thesis filter, write its estimates (the th_* columns) and report its
+    /// MAE detector's decisions (a comparison, labelled as such)
+    #[arg(long)]
     pub thesis_baseline: bool,
-    /// Largest fraction of unusable input rows (0 to 1).
+    /// Largest fraction of unusable input rows (0 to 1) before the file is refused
+    /// with a non-zero exit (outputs are still written).
+    #[arg(long, default_value_t = dataset::DEFAULT_MAX_BAD_FRACTION)]
     pub max_bad_rows: f64,
-    /// Replace existing outputs.
-    pub force: bool,
-    /// Worker threads of a batch (default: all cores).
+    /// Worker threads of a batch, each replaying whole files (default: all cores).
+    #[arg(long)]
     pub threads: Option<usize>,
 }
 
@@ -126,8 +140,9 @@ pub fn replay_file(
     replay::run(&req)
 }
 
-/// `leakwatch replay`: one file as before; a directory or several files as a batch.
-pub fn run(args: ReplayArgs) -> Result<(), String> {
+/// `leakwatch replay`: one file as before; a directory or several files as a
+/// batch; `force`: replace existing outputs.
+pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
     let ReplayArgs {
         inputs,
         config,
@@ -137,7 +152,6 @@ pub fn run(args: ReplayArgs) -> Result<(), String> {
         single_thread,
         thesis_baseline,
         max_bad_rows,
-        force,
         threads,
     } = args;
     let settings = Settings::new(config, model, thesis_baseline, estimates, max_bad_rows, force)?;

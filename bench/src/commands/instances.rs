@@ -35,27 +35,46 @@ pub const LEAK_SIZES_LPM: [f64; 3] = [0.1, 0.25, 0.5];
 /// The leak kinds of the leak runs.
 pub const LEAK_KINDS: [&str; 3] = ["ext1", "ext2", "int"];
 
-/// What to generate.
-#[derive(Debug, Clone)]
+/// What to generate: the command line of `leakwatch bench instances`.
+#[derive(Debug, Clone, clap::Args)]
 pub struct InstancesRequest {
-    /// `press` or `lift`.
+    /// The rig: `press` (double-rod; press and handling cycles) or `lift` (vertical single-rod;
+    /// lift and handling cycles).
+    #[arg(long, value_parser = ["press", "lift"])]
     pub rig: String,
     /// Number of instances.
+    #[arg(long, default_value_t = 1)]
     pub instances: usize,
-    /// Seed of the whole set: instance i is drawn from it and i.
+    /// Seed of the set (instance i is drawn from it and i).
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Output directory.
+    #[arg(long)]
     pub out: PathBuf,
-    /// Healthy time per instance, h (split into runs of `run_seconds`).
+    /// Healthy time per instance, hours (in runs of --run-seconds, on the duty cycles in turn).
+    #[arg(long, default_value_t = 0.05)]
     pub hours_healthy: f64,
-    /// Length of each run, s.
+    /// Length of every run, s.
+    #[arg(long, default_value_t = 90.0)]
     pub run_seconds: f64,
     /// Length of the commissioning recording, s.
+    #[arg(long, default_value_t = 120.0)]
     pub commission_seconds: f64,
-    /// Whether the samples carry the oil's temperature (`temp_c`).
+    /// The samples carry the oil's temperature (a `temp_c` column).
+    #[arg(long)]
     pub temp_c: bool,
-    /// Worker threads (each simulates whole runs).
-    pub threads: usize,
+    /// Worker threads, each simulating whole recordings (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+impl InstancesRequest {
+    /// The worker threads: as asked, else one per core.
+    fn worker_threads(&self) -> usize {
+        self.threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1)
+    }
 }
 
 /// The rig named `rig` and its duty cycles (scenario names).
@@ -399,13 +418,13 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
         req.rig,
         plans.len(),
         simulated / 3600.0,
-        req.threads
+        req.worker_threads()
     );
     let next = AtomicUsize::new(0);
     let failed: Mutex<Option<String>> = Mutex::new(None);
     let bar = indicatif::ProgressBar::new(plans.len() as u64);
     std::thread::scope(|scope| {
-        for _ in 0..req.threads.max(1) {
+        for _ in 0..req.worker_threads() {
             scope.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(plan) = plans.get(i) else { break };
@@ -450,7 +469,7 @@ mod tests {
             run_seconds: 90.0,
             commission_seconds: 120.0,
             temp_c: false,
-            threads: 1,
+            threads: Some(1),
         }
     }
 

@@ -11,7 +11,9 @@ pub const STOP_SUBSTEPS: u32 = 8;
 
 impl ProcessModel {
     /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
-    /// (forward Euler in `substeps` sub-steps), with the state kept physical.
+    /// (Euler in `substeps` sub-steps: forward for the 6- and 7-state layouts,
+    /// the thesis'; symplectic for the layouts with leaks, whose rod velocity
+    /// steps with the pressures at the end of the step), with the state kept physical.
     pub fn step<const N: usize>(
         &self,
         s: &SVector<f64, N>,
@@ -53,6 +55,9 @@ impl ProcessModel {
             for v in jac.as_mut_slice() {
                 *v *= h;
             }
+            if N >= 10 {
+                self.semi_implicit_velocity(s, x, jac);
+            }
             for d in 0..N {
                 jac[(d, d)] += 1.0;
             }
@@ -60,10 +65,14 @@ impl ProcessModel {
             *x = *s;
             let mut step_jac = SMatrix::<f64, N, N>::zeros();
             for i in 0..n {
-                self.linearise_into(&x.clone_owned(), u_v, &mut f, &mut step_jac);
+                let start = *x;
+                self.linearise_into(&start, u_v, &mut f, &mut step_jac);
                 *x += f * h;
                 // I + A·h
                 step_jac *= h;
+                if N >= 10 {
+                    self.semi_implicit_velocity(&start, x, &mut step_jac);
+                }
                 for d in 0..N {
                     step_jac[(d, d)] += 1.0;
                 }
@@ -71,6 +80,27 @@ impl ProcessModel {
             }
         }
         self.keep_physical(x)
+    }
+
+    /// Symplectic Euler for the hydraulic mode: the rod's velocity steps with
+    /// the chamber pressures at the end of the (sub-)step. `s` the state at its
+    /// start, `x` the forward-Euler state at its end (its velocity corrected
+    /// here), `a_h` = h·A (its velocity row corrected to the step's
+    /// derivative; the identity not yet added).
+    #[inline(always)]
+    fn semi_implicit_velocity<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        x: &mut SVector<f64, N>,
+        a_h: &mut SMatrix<f64, N, N>,
+    ) {
+        // (both gains read before the row changes)
+        let (k1, k2) = (a_h[(4, 1)], a_h[(4, 2)]);
+        x[4] += k1 * (x[1] - s[1]) + k2 * (x[2] - s[2]);
+        for c in 0..N {
+            let add = k1 * a_h[(1, c)] + k2 * a_h[(2, c)];
+            a_h[(4, c)] += add;
+        }
     }
 
     /// Clamps pressures into [p_min, p_max], the rod into its stroke plus
