@@ -29,7 +29,8 @@ pub struct Tuning {
     pub states: u32,
     /// Sample period T, s.
     pub sample_period_s: f64,
-    /// Forward-Euler sub-steps per sample (1 = the thesis).
+    /// Euler sub-steps per sample (1 = the thesis): forward Euler for 6 and 7 states,
+    /// symplectic for the layouts with leaks (docs/model.md#discretisation).
     pub substeps: u32,
     /// Initial state.
     pub init: Init,
@@ -233,7 +234,7 @@ impl Tuning {
         }
         if self.substeps == 0 || self.substeps > 100 {
             return Err(format!(
-                "[estimator] substeps = {}: must be 1 to 100 forward-Euler steps per sample",
+                "[estimator] substeps = {}: must be 1 to 100 Euler steps per sample",
                 self.substeps
             ));
         }
