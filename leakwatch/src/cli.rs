@@ -368,27 +368,7 @@ pub(crate) enum BenchCommand {
     },
     /// Batch replay throughput: samples per second per core and in total, for each number of
     /// worker threads, on a directory of recordings (default: 16 simulated ten-minute CSVs).
-    Replay {
-        /// Directory to replay as `leakwatch replay DIR` would (default: generate the files
-        /// into OUT/replay-inputs/, removed at the end).
-        #[arg(long)]
-        data: Option<PathBuf>,
-        /// Numbers of worker threads to measure, one pass each (default: 1 and all cores).
-        #[arg(long, value_delimiter = ',')]
-        threads: Vec<usize>,
-        /// Generated files (without --data).
-        #[arg(long, default_value_t = 16)]
-        files: usize,
-        /// Length of each generated file, s (without --data).
-        #[arg(long, default_value_t = 600.0)]
-        seconds: f64,
-        /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
-        #[arg(long, value_enum, default_value_t)]
-        estimates: pipeline::estimates_out::EstimatesFormat,
-        /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Replay(bench::commands::replay::ReplayBenchArgs),
     /// Plant-style folders of simulated rig instances, each drawn over its datasheet's tolerances
     /// (docs/plant.md): OUT/inst_NNN/ with datasheet.toml (the catalogue's, as a user writes it),
     /// instance.toml (the drawn rig, for the simulator), commission_cold.csv (each duty cycle in turn
