@@ -183,6 +183,42 @@ pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> 
     }
 }
 
+/// What `leakwatch bench detection` runs: its command line.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DetectionBenchArgs {
+    /// Runs per leak kind and size.
+    #[arg(long, default_value_t = 20)]
+    pub runs: usize,
+    /// Simulated healthy hours for the false-alarm rate.
+    #[arg(long, default_value_t = 10.0)]
+    pub hours: f64,
+    /// Suite seed.
+    #[arg(long, default_value_t = 2026)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Score recorded runs instead of simulating: a directory of run folders, each
+    /// with measured.csv[.gz] and truth.json (e.g. DIR/run_000/).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Configuration file (model, filters, classifier) for the chain, with --data.
+    #[arg(long, requires = "data")]
+    pub config: Option<PathBuf>,
+    /// Output directory: detection.json, detection.md (and detection.png for the suite).
+    #[arg(long, default_value = "bench-detection")]
+    pub out: PathBuf,
+}
+
+/// `leakwatch bench detection`: the seeded suite ([`detection`]), or recorded
+/// runs with `--data` ([`detection_data`]).
+pub fn detection_command(args: &DetectionBenchArgs, force: bool) -> Result<(), String> {
+    match &args.data {
+        Some(data) => detection_data(data, args.config.as_deref(), args.threads, &args.out, force),
+        None => detection(args.runs, args.hours, args.seed, args.threads, &args.out, force),
+    }
+}
+
 /// The detection suite.
 pub fn detection(
     runs: usize,

@@ -377,28 +377,5 @@ pub(crate) enum BenchCommand {
     /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one.
     Instances(bench::commands::instances::InstancesRequest),
     /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
-    Detection {
-        /// Runs per leak kind and size.
-        #[arg(long, default_value_t = 20)]
-        runs: usize,
-        /// Simulated healthy hours for the false-alarm rate.
-        #[arg(long, default_value_t = 10.0)]
-        hours: f64,
-        /// Suite seed.
-        #[arg(long, default_value_t = 2026)]
-        seed: u64,
-        /// Worker threads (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Score recorded runs instead of simulating: a directory of run folders, each
-        /// with measured.csv[.gz] and truth.json (e.g. DIR/run_000/).
-        #[arg(long)]
-        data: Option<PathBuf>,
-        /// Configuration file (model, filters, classifier) for the chain, with --data.
-        #[arg(long)]
-        config: Option<PathBuf>,
-        /// Output directory: detection.json, detection.md (and detection.png for the suite).
-        #[arg(long, default_value = "bench-detection")]
-        out: PathBuf,
-    },
+    Detection(bench::commands::DetectionBenchArgs),
 }

@@ -183,21 +183,6 @@ fn bench(which: BenchCommand, force: bool) -> Result<(), String> {
         BenchCommand::Latency { seconds, out } => latency::bench(seconds, &out, force),
         BenchCommand::Instances(req) => instances::command(&req, force),
         BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
-        BenchCommand::Detection {
-            threads,
-            data: Some(data),
-            config,
-            out,
-            ..
-        } => benches::detection_data(&data, config.as_deref(), threads, &out, force),
-        BenchCommand::Detection {
-            runs,
-            hours,
-            seed,
-            threads,
-            data: None,
-            config: _,
-            out,
-        } => benches::detection(runs, hours, seed, threads, &out, force),
+        BenchCommand::Detection(args) => benches::detection_command(&args, force),
     }
 }
