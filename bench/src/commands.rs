@@ -235,8 +235,7 @@ pub fn detection(
     for name in ["detection.md", "detection.png", "detection.json"] {
         out::check(&out.join(name), force, &[])?;
     }
-    let threads =
-        threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let threads = threads.unwrap_or_else(pipeline::batch::cores);
     let cases = detection::cases(runs, hours, seed);
     let simulated: f64 = cases.iter().map(|c| c.seconds).sum();
     eprintln!(
@@ -322,8 +321,7 @@ pub fn detection_data(
         thesis_filter: cfg.estimator.clone(),
         classifier: cfg.classifier.clone(),
     };
-    let threads =
-        threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let threads = threads.unwrap_or_else(pipeline::batch::cores);
     eprintln!("scoring the runs of {} on {threads} threads", dir.display());
     let bar = indicatif::ProgressBar::new(0);
     let r = crate::detection_data::score_dir(dir, &set, threads, |done, total| {

@@ -156,9 +156,15 @@ pub fn threads_for(threads: Option<usize>, files: usize) -> Result<usize, String
     let n = match threads {
         Some(0) => return Err("--threads 0: at least one worker thread".into()),
         Some(n) => n,
-        None => std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        None => cores(),
     };
     Ok(n.min(files.max(1)))
+}
+
+/// The cores this process may run on (1 when the system cannot say): the
+/// default number of worker threads of every batch and benchmark.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
 /// Replays `jobs` into `out` on `threads` worker threads, each taking the next

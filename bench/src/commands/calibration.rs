@@ -25,10 +25,7 @@ pub fn bench(
         keep_traces: false,
         ..calibrate::CalibrateOptions::default()
     };
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1)
-        .min(2);
+    let threads = pipeline::batch::cores().min(2);
     let reports: Vec<(&str, calibrate::BenchReport)> = if let Some(dir) = data {
         let model = match config {
             Some(p) => pipeline::model_file::load_model(&p).map_err(|e| e.to_string())?,

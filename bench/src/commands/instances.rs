@@ -71,9 +71,7 @@ pub struct InstancesRequest {
 impl InstancesRequest {
     /// The worker threads: as asked, else one per core.
     fn worker_threads(&self) -> usize {
-        self.threads
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-            .max(1)
+        self.threads.unwrap_or_else(pipeline::batch::cores).max(1)
     }
 }
 

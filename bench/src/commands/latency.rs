@@ -168,7 +168,7 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     // (wait mode, placement, pinned): the estimator and classifier as two processes,
     // and as one; the low-latency configuration pins the acquisition alone to
     // one CPU and the fused estimator+classifier with the recorder to the other ([run] cpus).
-    let cpus = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cpus = pipeline::batch::cores();
     let mut runs = vec![
         ("event", None, false),
         ("low-latency", None, false),

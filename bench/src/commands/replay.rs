@@ -43,17 +43,9 @@ pub fn bench(args: &ReplayBenchArgs, force: bool) -> Result<(), String> {
     use pipeline::batch;
     use pipeline::replay_cmd::Settings;
 
-    let ReplayBenchArgs {
-        data,
-        threads,
-        files,
-        seconds,
-        estimates,
-        out,
-    } = args;
-    let (files, seconds, estimates, out) = (*files, *seconds, *estimates, out.as_path());
+    let (threads, estimates, out) = (&args.threads, args.estimates, args.out.as_path());
 
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = pipeline::batch::cores();
     let mut counts: Vec<usize> = if threads.is_empty() {
         vec![1, cores]
     } else {
@@ -76,10 +68,10 @@ pub fn bench(args: &ReplayBenchArgs, force: bool) -> Result<(), String> {
         }
     }
     let cfg = Config::default();
-    let generated = data.is_none();
-    let dir = match data {
+    let generated = args.data.is_none();
+    let dir = match &args.data {
         Some(d) => d.clone(),
-        None => generate_inputs(&cfg, files, seconds, &out.join("replay-inputs"), cores)?,
+        None => generate_inputs(&cfg, args.files, args.seconds, &out.join("replay-inputs"), cores)?,
     };
     let settings = Settings {
         cfg,

@@ -75,7 +75,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Runs `rigs` pipelines at once for `seconds` and gathers their latency.json.
 fn run_rigs(exe: &Path, rigs: usize, seconds: f64, out: &Path, force: bool) -> Result<ScaleRow, String> {
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) as f64;
+    let cores = pipeline::batch::cores() as f64;
     let before = cpu_jiffies();
     let tree_before = bus::stats::children_cpu_s();
     let started = Instant::now();
@@ -187,7 +187,7 @@ pub fn bench(rigs: &[usize], seconds: f64, out: &Path, force: bool) -> Result<()
         eprintln!("{n} rig(s) side by side, {seconds} s ...");
         rows.push(run_rigs(&exe, n, seconds, out, force)?);
     }
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) as f64;
+    let cores = pipeline::batch::cores() as f64;
     outln!("| rigs | stage CPU per rig % | host CPU % (all cores) | process-tree CPU per rig % | hop p50 µs | hop worst 1-s p99 µs | end-to-end p50 µs | frames lost / sent | deadline misses |");
     outln!("|---|---|---|---|---|---|---|---|---|");
     for r in &rows {
