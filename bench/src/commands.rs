@@ -6,6 +6,7 @@ pub mod instances;
 pub mod latency;
 pub mod replay;
 pub mod scale;
+pub mod sensor_faults;
 
 use std::path::{Path, PathBuf};
 

@@ -480,6 +480,11 @@ impl LeakSizeDetector {
         (self.is_armed() && self.armed_at_s.is_finite()).then_some(self.armed_at_s)
     }
 
+    /// The mean NIS of the healthy state the detector armed with (NaN before arming).
+    pub fn nis_healthy(&self) -> f64 {
+        self.nis_healthy
+    }
+
     /// Seconds in which no evidence was gathered after arming (gaps, resets, excursions, NIS), s.
     pub fn blind_s(&self) -> f64 {
         self.blind_s

@@ -11,6 +11,15 @@ use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET};
 /// sizes at once, long before `stuck_samples` names it.
 pub const STUCK_SUSPECT_SAMPLES: u32 = 200;
 
+/// A position reading repeated exactly may be a resting rod with a fine
+/// encoder, or one against its stop: the filter then fits the pressures. A
+/// frozen encoder on a moving rod does not: the pressures move as the rod
+/// does, and the mean NIS over the repeat rises far above the healthy one.
+/// This factor on the healthy mean NIS (3 before one is known) tells them
+/// apart (a frozen encoder on a moving rod leaves 100 and more; a leak of
+/// 0.5 L/min opening while the rod rests, 10 for a moment).
+pub const X_STUCK_NIS_RATIO: f64 = 30.0;
+
 /// Per-channel sensor watch: stuck, saturated, dead.
 #[derive(Debug, Clone, Copy, Default)]
 struct ChannelWatch {
@@ -18,6 +27,8 @@ struct ChannelWatch {
     last_t_s: f64,
     last: f64,
     same: u32,
+    /// The sum of the leak filter's NIS over the `same` repeated readings.
+    same_nis_sum: f64,
     saturated: u32,
     dead: u32,
     raised: Option<(EventKind, u64)>,
@@ -243,6 +254,19 @@ impl Classifier {
         }
     }
 
+    /// Whether the position's repeated readings of watch `w` leave the leak
+    /// filter's NIS above [`X_STUCK_NIS_RATIO`] times the healthy mean: the
+    /// pressures say the rod moves while the encoder does not.
+    fn x_repeat_misfits(&self, w: &ChannelWatch) -> bool {
+        let healthy = self.leak_size.nis_healthy();
+        let healthy = if healthy.is_finite() {
+            healthy.max(3.0)
+        } else {
+            3.0
+        };
+        w.same > 0 && w.same_nis_sum / f64::from(w.same) > X_STUCK_NIS_RATIO * healthy
+    }
+
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
         for c in 0..3 {
             let v = e.measured[c];
@@ -250,6 +274,11 @@ impl Classifier {
             if v.is_finite() {
                 w.dead = 0;
                 w.same = if v == w.last { w.same + 1 } else { 0 };
+                w.same_nis_sum = if w.same == 0 {
+                    0.0
+                } else {
+                    w.same_nis_sum + e.nis.max(0.0)
+                };
                 w.last = v;
                 let sat = c > 0 && (v <= 0.0 || v >= self.cfg.pressure_full_scale_pa);
                 w.saturated = if sat { w.saturated + 1 } else { 0 };
@@ -258,17 +287,21 @@ impl Classifier {
                 w.same = 0;
                 w.saturated = 0;
             }
-            // The rod may legitimately rest (stiction): only pressures can be stuck.
+            // The rod may legitimately rest (stiction, a stop): a repeated position is
+            // stuck only while the pressures say the rod moves ([`X_STUCK_NIS_RATIO`]).
+            let repeat_fits = c > 0 || self.x_repeat_misfits(&w);
             let now = if w.dead >= self.cfg.dead_samples {
                 Some(EventKind::SensorDead)
             } else if w.saturated >= self.cfg.saturated_samples {
                 Some(EventKind::SensorSaturated)
-            } else if c > 0 && w.same >= self.cfg.stuck_samples {
+            } else if repeat_fits && w.same >= self.cfg.stuck_samples {
                 Some(EventKind::SensorStuck)
             } else {
                 None
             };
-            if c > 0 && w.same >= STUCK_SUSPECT_SAMPLES {
+            // (a position is not held on suspicion: a leak opening while the rod rests
+            // raises the NIS over a repeat for a moment, and the leak must be seen)
+            if (c > 0 && w.same >= STUCK_SUSPECT_SAMPLES) || now == Some(EventKind::SensorStuck) {
                 self.leak_size.hold_evidence_until(e.t_s + self.cfg.recovery_s);
             }
             let dt_s = if w.last_t_s > 0.0 {
@@ -285,6 +318,12 @@ impl Classifier {
                             format!("no usable {} value for {} samples", CHANNELS[c], w.dead)
                         }
                         EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
+                        _ if c == 0 => format!(
+                            "x has not changed for {} samples while the pressures say the rod moves \
+                             (mean NIS {:.0} over them)",
+                            w.same,
+                            w.same_nis_sum / f64::from(w.same.max(1))
+                        ),
                         _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
                     };
                     let ev = self.plain(k, e.t_s, CHANNELS[c], &detail);

@@ -270,6 +270,70 @@ fn dead_and_stuck_sensors_are_reported() {
     assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
 }
 
+/// The classifier's events on scenario `scenario` (the default rig, seed 62)
+/// with the position reading frozen over samples `frozen` (at 1 kHz).
+fn with_frozen_position(
+    scenario: Scenario,
+    frozen: std::ops::Range<usize>,
+    samples: usize,
+) -> Vec<LeakEvent> {
+    let mut sim =
+        Simulator::with_default_sensors(ActuatorParams::default(), scenario, FaultSchedule::default(), 62)
+            .unwrap();
+    let mut stage = filter::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
+    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let (mut events, mut held) = (Vec::new(), 0.0);
+    for k in 0..samples {
+        let mut s = sim.step();
+        if k == frozen.start {
+            held = s.x_m;
+        }
+        if frozen.contains(&k) {
+            s.x_m = held;
+        }
+        let e = stage.on_sample(&s);
+        cls.on_stage(&e, |ev| events.push(ev));
+    }
+    events
+}
+
+/// A position reading frozen while the rod moves is `sensor-stuck` on x, and
+/// no leak; frozen while the rod rests (a fine encoder at rest reads the same)
+/// it is not: the pressures fit a resting rod.
+#[test]
+fn a_frozen_position_is_stuck_only_while_the_pressures_say_the_rod_moves() {
+    let moving = Scenario::by_name("closed-loop-sine", 62, 30.0).unwrap();
+    let events = with_frozen_position(moving, 20_000..26_000, 30_000);
+    let stuck = events
+        .iter()
+        .find(|e| e.kind == EventKind::SensorStuck && e.phase == Phase::Raised)
+        .expect("a frozen x on a moving rod is stuck");
+    assert_eq!(stuck.channel, "x");
+    assert!((22.0..22.1).contains(&stuck.t_detect_s), "{stuck:?}");
+    assert!(
+        events
+            .iter()
+            .any(|e| e.kind == EventKind::SensorStuck && e.phase == Phase::Cleared),
+        "{events:#?}"
+    );
+    assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
+
+    let mut resting = Scenario::by_name("closed-loop-random", 62, 30.0).unwrap();
+    resting.drive = model::scenario::Drive::ClosedLoopSteps {
+        levels: vec![(0.0, 0.3), (3.0, 0.25)],
+    };
+    let events = with_frozen_position(resting, 15_000..25_000, 30_000);
+    assert!(
+        events.iter().all(|e| e.kind != EventKind::SensorStuck),
+        "{events:#?}"
+    );
+}
+
 /// The rig of detection-suite seed 3176593409338201021: friction −6 % extending and
 /// −17 % retracting, bulk modulus −28 %, a spool null bias of 25 % of the spool
 /// amplitude at 3 V. Under the open-loop sine it drifts into the extended end stop

@@ -184,5 +184,6 @@ fn bench(which: BenchCommand, force: bool) -> Result<(), String> {
         BenchCommand::Instances(req) => instances::command(&req, force),
         BenchCommand::Scale { rigs, seconds, out } => scale::bench(&rigs, seconds, &out, force),
         BenchCommand::Detection(args) => benches::detection_command(&args, force),
+        BenchCommand::SensorFaults(args) => bench::commands::sensor_faults::command(&args, force),
     }
 }

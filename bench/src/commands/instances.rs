@@ -76,7 +76,7 @@ impl InstancesRequest {
 }
 
 /// The rig named `rig` and its duty cycles (scenario names).
-fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str]), String> {
+pub(crate) fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str]), String> {
     match rig {
         "press" => Ok((NominalRig::press(), &["press", "handling"])),
         "lift" => Ok((NominalRig::lift(), &["lift", "handling"])),
@@ -86,13 +86,13 @@ fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str]), String> {
 
 /// How far the tank thermometer a user reads during the commissioning
 /// recording may be off the oil in the chambers, K (either way).
-const TANK_READING_ERROR_K: f64 = 2.0;
+pub(crate) const TANK_READING_ERROR_K: f64 = 2.0;
 
 /// `datasheet.toml`: the catalogue datasheet and the nominal `[model]` fields
 /// no datasheet gives (as a user writes them), nothing of the drawn instance;
 /// and, as the README asks, the tank thermometer's reading during the
 /// commissioning recording, `tank_c` (°C), as the oil law's reference.
-fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
+pub(crate) fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
     let mut rest = toml::Table::try_from(&n.model).map_err(|e| e.to_string())?;
     if let Some(oil) = rest.get_mut("oil_temperature").and_then(|v| v.as_table_mut()) {
         oil.insert(
@@ -131,7 +131,7 @@ fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
 
 /// The simulated instance's config: `[model]` the drawn rig, `[sensors]` its
 /// sensors and installation, `[sim]` its pump (and `oil`, when given).
-fn instance_config(inst: &Instance, oil: Option<OilWarmUp>) -> Config {
+pub(crate) fn instance_config(inst: &Instance, oil: Option<OilWarmUp>) -> Config {
     let mut cfg = Config {
         model: inst.rig.clone(),
         sensors: inst.sensors,
@@ -165,31 +165,36 @@ fn instance_toml(inst: &Instance, rig: &str, index: usize) -> Result<String, Str
 
 /// One recording to simulate.
 #[derive(Debug, Clone)]
-struct Plan {
+pub(crate) struct Plan {
     /// Instance index.
-    instance: usize,
+    pub(crate) instance: usize,
     /// Folder under the instance's (empty: the commissioning recording).
-    run: String,
-    scenario: &'static str,
+    pub(crate) run: String,
+    pub(crate) scenario: &'static str,
     /// The commissioning recording's duty cycles, recorded in turn for an
     /// equal share of its length (empty for a run).
-    segments: Vec<&'static str>,
-    seed: u64,
-    seconds: f64,
-    oil: OilWarmUp,
+    pub(crate) segments: Vec<&'static str>,
+    pub(crate) seed: u64,
+    pub(crate) seconds: f64,
+    pub(crate) oil: OilWarmUp,
     /// (kind, size L/min, onset s).
-    leak: Option<(&'static str, f64, f64)>,
+    pub(crate) leak: Option<(&'static str, f64, f64)>,
 }
 
 /// Milliseconds: a drawn time on the sample grid, s.
-fn on_grid(t_s: f64) -> f64 {
+pub(crate) fn on_grid(t_s: f64) -> f64 {
     (t_s * 1000.0).round() / 1000.0
 }
 
 /// The recordings of instance `index` (seed `inst_seed`): the commissioning
 /// recording, the healthy runs on each duty cycle in turn, then a leak run of
 /// each size and kind, each with a drawn oil course and onset.
-fn plan_instance(req: &InstancesRequest, cycles: &[&'static str], index: usize, inst_seed: u64) -> Vec<Plan> {
+pub(crate) fn plan_instance(
+    req: &InstancesRequest,
+    cycles: &[&'static str],
+    index: usize,
+    inst_seed: u64,
+) -> Vec<Plan> {
     let mut rng = Rng::new(inst_seed ^ 0x7E3A_55C1_0B9D_2F48);
     let commission_temp = COMMISSION_TEMPS_C[(rng.next_u64() % COMMISSION_TEMPS_C.len() as u64) as usize];
     let mut out = vec![Plan {
@@ -244,7 +249,7 @@ fn plan_instance(req: &InstancesRequest, cycles: &[&'static str], index: usize, 
 }
 
 /// Instance `index`'s seed in a set seeded `seed`.
-fn instance_seed(seed: u64, index: usize) -> u64 {
+pub(crate) fn instance_seed(seed: u64, index: usize) -> u64 {
     Rng::new(seed.wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(index as u64 + 1))).next_u64() >> 12
 }
 
@@ -260,7 +265,11 @@ const SEGMENT_GAP_S: f64 = 1.0;
 /// The samples of `plan` under config `cfg` with `faults`, and their span, s:
 /// one simulation, or for the commissioning recording one per duty cycle in
 /// turn, joined with a gap of [`SEGMENT_GAP_S`].
-fn simulate_plan(cfg: &Config, plan: &Plan, faults: &[String]) -> Result<(Vec<model::Sample>, f64), String> {
+pub(crate) fn simulate_plan(
+    cfg: &Config,
+    plan: &Plan,
+    faults: &[String],
+) -> Result<(Vec<model::Sample>, f64), String> {
     let cycles: Vec<&str> = if plan.segments.is_empty() {
         vec![plan.scenario]
     } else {

@@ -1,0 +1,145 @@
+//! Scoring a sensor-fault run and the totals per run kind.
+
+use detect::{LeakEvent, Phase};
+use serde::Serialize;
+
+use super::{FaultRunOutcome, RunKind, SensorFaultsArgs, RUN_KINDS};
+
+/// Whether `e` is a sensor event's first report.
+fn is_sensor_raise(e: &LeakEvent) -> bool {
+    e.phase == Phase::Raised && !e.kind.is_leak_alarm() && !e.channel.is_empty()
+}
+
+/// Scores the events of one run against its fault (see [`FaultRunOutcome`]).
+pub(super) fn score(
+    instance: usize,
+    kind: RunKind,
+    spec: String,
+    channel: String,
+    onset_s: f64,
+    scenario: &str,
+    events: &[LeakEvent],
+) -> FaultRunOutcome {
+    let after = |e: &&LeakEvent| onset_s.is_finite() && e.t_detect_s >= onset_s;
+    let raised = || events.iter().filter(|e| e.phase == Phase::Raised);
+    let sensors_after: Vec<&LeakEvent> = events
+        .iter()
+        .filter(|e| is_sensor_raise(e))
+        .filter(after)
+        .collect();
+    let sensor_events_before_onset = events
+        .iter()
+        .filter(|e| is_sensor_raise(e))
+        .filter(|e| !after(e))
+        .count();
+    let first_sensor = sensors_after
+        .first()
+        .map(|e| (e.kind.name().to_string(), e.channel.clone(), e.t_detect_s));
+    let (leak_events, named_right, delay_s) = if kind == RunKind::Leak {
+        // the run's own leak: its first named kind must be the truth, before any sensor event
+        let first_named = raised().find(|e| e.kind.is_leak() && e.t_detect_s >= onset_s);
+        let first_sensor_t = sensors_after.first().map_or(f64::INFINITY, |e| e.t_detect_s);
+        let before = raised()
+            .filter(|e| e.kind.is_leak_alarm() && e.t_detect_s < onset_s)
+            .count();
+        match first_named {
+            Some(e) if e.kind.name() == channel && e.t_detect_s <= first_sensor_t => {
+                (before, true, e.t_detect_s - onset_s)
+            }
+            _ => (before, false, f64::NAN),
+        }
+    } else {
+        let right = sensors_after.iter().find(|e| e.channel == channel);
+        (
+            raised().filter(|e| e.kind.is_leak_alarm()).count(),
+            right.is_some(),
+            right.map_or(f64::NAN, |e| e.t_detect_s - onset_s),
+        )
+    };
+    FaultRunOutcome {
+        instance,
+        kind,
+        spec,
+        channel,
+        onset_s,
+        scenario: scenario.to_string(),
+        leak_events,
+        first_sensor,
+        sensor_events_before_onset,
+        named_right,
+        delay_s,
+    }
+}
+
+/// The totals of one run kind.
+#[derive(Debug, Clone, Serialize)]
+pub struct KindSummary {
+    /// The run kind.
+    pub kind: RunKind,
+    /// Runs.
+    pub runs: usize,
+    /// Runs with a leak event that is not their own leak.
+    pub runs_with_leak_events: usize,
+    /// Runs with a sensor event before the onset (or, healthy, at all).
+    pub runs_with_early_sensor_events: usize,
+    /// Runs named right: the sensor event on the faulty channel, or the leak's own kind first.
+    pub named_right: usize,
+    /// Median time from the onset to that, s (NaN: none).
+    pub median_delay_s: f64,
+    /// Longest such time, s (NaN: none).
+    pub max_delay_s: f64,
+}
+
+/// The totals per run kind, in [`RUN_KINDS`] order.
+pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
+    RUN_KINDS
+        .iter()
+        .map(|&kind| {
+            let mine: Vec<&FaultRunOutcome> = runs.iter().filter(|r| r.kind == kind).collect();
+            let mut delays: Vec<f64> = mine.iter().map(|r| r.delay_s).filter(|d| d.is_finite()).collect();
+            let median = crate::stats::quantile(&mut delays, 0.5);
+            KindSummary {
+                kind,
+                runs: mine.len(),
+                runs_with_leak_events: mine.iter().filter(|r| r.leak_events > 0).count(),
+                runs_with_early_sensor_events: mine
+                    .iter()
+                    .filter(|r| r.sensor_events_before_onset > 0)
+                    .count(),
+                named_right: mine.iter().filter(|r| r.named_right).count(),
+                median_delay_s: median,
+                max_delay_s: delays.iter().cloned().fold(f64::NAN, f64::max),
+            }
+        })
+        .collect()
+}
+
+/// The report's table in Markdown.
+pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
+    let mut s = format!(
+        "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s\n\n\
+         | run | runs | with a leak event | sensor event before the onset | named right | median / longest time from onset |\n\
+         |---|---|---|---|---|---|\n",
+        args.rig, args.instances, args.seed, args.seconds
+    );
+    for k in sums {
+        let pct = 100.0 * k.named_right as f64 / k.runs.max(1) as f64;
+        let named = if k.kind == RunKind::Healthy {
+            "-".to_string()
+        } else {
+            format!("{} ({pct:.0} %)", k.named_right)
+        };
+        s += &format!(
+            "| {} | {} | {} | {} | {named} | {:.1} / {:.1} s |\n",
+            k.kind.name(),
+            k.runs,
+            k.runs_with_leak_events,
+            k.runs_with_early_sensor_events,
+            k.median_delay_s,
+            k.max_delay_s
+        );
+    }
+    s += "\nNamed right: a sensor event on the faulty channel after the onset; for the leak run, \
+          its own kind named before any sensor event.\n";
+    s
+}

@@ -1,0 +1,203 @@
+use super::*;
+use detect::{EventKind, LeakEvent, Phase};
+
+/// An event of `kind` raised at `t_s` (s) on `channel`.
+fn raised(kind: EventKind, t_s: f64, channel: &str) -> LeakEvent {
+    let detector = if channel.is_empty() {
+        "leak-size"
+    } else {
+        "sensors"
+    };
+    let mut e = LeakEvent::plain(kind, Phase::Raised, detector, 1, t_s, f64::NAN);
+    e.channel = channel.into();
+    e
+}
+
+#[test]
+fn a_sensor_event_on_the_faulty_channel_after_the_onset_is_named_right() {
+    let events = [
+        raised(EventKind::SensorOffset, 10.0, "p2"),
+        raised(EventKind::SensorOffset, 31.5, "p2"),
+        raised(EventKind::SensorOffset, 33.0, "p1"),
+    ];
+    let o = score(
+        0,
+        RunKind::PressureDrift,
+        String::new(),
+        "p1".into(),
+        30.0,
+        "lift",
+        &events,
+    );
+    assert!(o.named_right);
+    assert_eq!(o.delay_s, 3.0);
+    assert_eq!(o.sensor_events_before_onset, 1);
+    assert_eq!(o.leak_events, 0);
+    assert_eq!(o.first_sensor, Some(("sensor-offset".into(), "p2".into(), 31.5)));
+    // on the wrong channel only: not named right
+    let o = score(
+        0,
+        RunKind::PressureDrift,
+        String::new(),
+        "p1".into(),
+        30.0,
+        "lift",
+        &events[..2],
+    );
+    assert!(!o.named_right && o.delay_s.is_nan());
+}
+
+#[test]
+fn a_pending_leak_counts_as_a_leak_event_in_a_sensor_fault_run() {
+    let events = [
+        raised(EventKind::Leak, 50.0, ""),
+        raised(EventKind::SensorStuck, 32.0, "x"),
+    ];
+    let o = score(
+        0,
+        RunKind::Stuck,
+        String::new(),
+        "x".into(),
+        30.0,
+        "lift",
+        &events,
+    );
+    assert_eq!(o.leak_events, 1);
+    assert!(o.named_right);
+    assert_eq!(o.delay_s, 2.0);
+}
+
+#[test]
+fn the_leak_run_is_named_right_only_by_its_own_kind_before_any_sensor_event() {
+    let right = [
+        raised(EventKind::Leak, 31.0, ""),
+        raised(EventKind::Int, 32.0, ""),
+    ];
+    let o = score(
+        0,
+        RunKind::Leak,
+        String::new(),
+        "int".into(),
+        30.0,
+        "press",
+        &right,
+    );
+    assert!(o.named_right);
+    assert_eq!((o.delay_s, o.leak_events), (2.0, 0));
+    let wrong_kind = [raised(EventKind::Ext1, 32.0, "")];
+    let o = score(
+        0,
+        RunKind::Leak,
+        String::new(),
+        "int".into(),
+        30.0,
+        "press",
+        &wrong_kind,
+    );
+    assert!(!o.named_right);
+    let sensor_first = [
+        raised(EventKind::SensorOffset, 31.0, "p1"),
+        raised(EventKind::Int, 32.0, ""),
+    ];
+    let o = score(
+        0,
+        RunKind::Leak,
+        String::new(),
+        "int".into(),
+        30.0,
+        "press",
+        &sensor_first,
+    );
+    assert!(!o.named_right);
+    // an alarm before the leak opened is a false one
+    let early = [
+        raised(EventKind::Leak, 12.0, ""),
+        raised(EventKind::Int, 32.0, ""),
+    ];
+    let o = score(
+        0,
+        RunKind::Leak,
+        String::new(),
+        "int".into(),
+        30.0,
+        "press",
+        &early,
+    );
+    assert_eq!(o.leak_events, 1);
+}
+
+#[test]
+fn the_drawn_faults_are_in_the_stated_ranges_and_their_specs_parse_back() {
+    let mut rng = Rng::new(7);
+    for _ in 0..200 {
+        let (f, _) = draw_fault(RunKind::PressureDrift, 25.0, &mut rng);
+        let f = f.expect("a drift");
+        assert!(f.channel.is_pressure());
+        let SensorFaultKind::Drift {
+            rate_si_per_s,
+            max_abs_si,
+        } = f.kind
+        else {
+            panic!("{f:?}")
+        };
+        let kpa_per_min = rate_si_per_s.abs() * 60.0 / 1e3;
+        assert!((DRIFT_RATE_KPA_PER_MIN.0..=DRIFT_RATE_KPA_PER_MIN.1).contains(&kpa_per_min));
+        assert_eq!(max_abs_si, DRIFT_MAX_KPA * 1e3);
+        assert_eq!(SensorFault::parse(&f.to_string()).expect("parses"), f);
+
+        let (f, _) = draw_fault(RunKind::Span, 25.0, &mut rng);
+        let f = f.expect("a span error");
+        let SensorFaultKind::Span { gain_error, ramp_s } = f.kind else {
+            panic!("{f:?}")
+        };
+        assert!((SPAN_PERCENT.0..=SPAN_PERCENT.1).contains(&(gain_error.abs() * 100.0)));
+        assert!((SPAN_RAMP_S.0..=SPAN_RAMP_S.1).contains(&ramp_s));
+        assert!(f.channel.is_pressure());
+
+        let (f, _) = draw_fault(RunKind::PositionDrift, 25.0, &mut rng);
+        let f = f.expect("a position drift");
+        assert_eq!(f.channel, Channel::X);
+        let SensorFaultKind::Drift { rate_si_per_s, .. } = f.kind else {
+            panic!("{f:?}")
+        };
+        let mm_per_min = rate_si_per_s.abs() * 60.0 * 1e3;
+        assert!(
+            (POSITION_DRIFT_MM_PER_MIN.0 - 1e-9..=POSITION_DRIFT_MM_PER_MIN.1 + 1e-9).contains(&mm_per_min)
+        );
+
+        let (f, leak) = draw_fault(RunKind::Leak, 25.0, &mut rng);
+        assert!(f.is_none() && ["ext1", "ext2", "int"].contains(&leak.expect("a kind")));
+        assert_eq!(draw_fault(RunKind::Healthy, 25.0, &mut rng), (None, None));
+    }
+}
+
+/// The whole command on one instance of the built-in rig with short runs: the
+/// report is written, every run kind is there, a stuck transducer is named on
+/// its channel, the leak is named as itself and the healthy twin stays quiet.
+#[test]
+fn one_thesis_instance_is_commissioned_watched_and_scored() {
+    let dir = scratch::ScratchDir::new("sensor-faults");
+    let args = SensorFaultsArgs {
+        rig: "thesis".into(),
+        instances: 1,
+        seed: 3,
+        seconds: 75.0,
+        out: dir.to_path_buf(),
+        threads: Some(2),
+    };
+    command(&args, false).expect("the bench runs");
+    let text = std::fs::read_to_string(dir.join("sensor_faults.json")).expect("the report");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let runs = json["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), RUN_KINDS.len());
+    let run = |kind: &str| runs.iter().find(|r| r["kind"] == kind).expect(kind);
+    assert_eq!(run("healthy")["leak_events"], 0, "{text}");
+    assert_eq!(run("healthy")["sensor_events_before_onset"], 0, "{text}");
+    assert_eq!(run("stuck")["named_right"], true, "{text}");
+    assert_eq!(run("leak")["named_right"], true, "{text}");
+    assert!(std::fs::read_to_string(dir.join("sensor_faults.md"))
+        .expect("md")
+        .contains("| stuck | 1 |"));
+    // the second run refuses to overwrite without --force
+    assert!(command(&args, false).is_err());
+}
