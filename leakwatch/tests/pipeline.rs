@@ -381,6 +381,34 @@ fn the_binary_alone_runs_the_pipeline_without_cargo() {
     }
 }
 
+/// The lines of `text` that report events (`  t = ...`) or the detection (`detected: ...`).
+fn event_lines(text: &str) -> Vec<String> {
+    text.lines()
+        .filter(|l| l.starts_with("  t = ") || l.starts_with("detected: "))
+        .map(str::to_string)
+        .collect()
+}
+
+/// The README's first command (`run` on its built-in defaults) prints the
+/// events the README shows, to the digit: the README's example cannot drift.
+#[test]
+fn the_readmes_first_command_prints_the_events_the_readme_shows() {
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md")).unwrap();
+    let shown = event_lines(&readme);
+    assert_eq!(shown.len(), 3, "the README's demo block: {shown:?}");
+    let d = tmpdir("readme");
+    let o = Command::new(env!("CARGO_BIN_EXE_leakwatch"))
+        .args(["run", "--rig", &rig_id("readme"), "--out"])
+        .arg(d.join("out"))
+        .current_dir(&*d)
+        .output()
+        .expect("leakwatch runs");
+    let printed = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{printed}");
+    assert_eq!(event_lines(&printed), shown, "{printed}");
+}
+
 /// The stages die with their supervisor: after a SIGKILL of `leakwatch run`,
 /// no stage of the run is alive 2 s later.
 #[test]
