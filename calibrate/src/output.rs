@@ -246,6 +246,16 @@ fn fmt_gap(g: &crate::Gap) -> String {
 pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration report\n");
+    report_data(&mut s, cal);
+    report_result(&mut s, cal);
+    report_rounds(&mut s, cal);
+    report_disagreement(&mut s, cal);
+    report_plots(&mut s, plots);
+    s
+}
+
+/// The report's opening: the data used, how it was compared and the input's warnings.
+fn report_data(s: &mut String, cal: &Calibration) {
     let d = &cal.data;
     let how = match cal.options.method {
         crate::Method::EquationError => format!(
@@ -286,6 +296,10 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
     if !cal.warnings.is_empty() {
         s.push('\n');
     }
+}
+
+/// The `## Result` section: the effects named (or none) and the gap before and after.
+fn report_result(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "## Result\n");
     if cal.effects.is_empty() {
         let _ = writeln!(
@@ -294,45 +308,7 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
              the model is as good as this data can tell.\n"
         );
     } else {
-        let _ = writeln!(
-            s,
-            "| # | effect | form | parameters (SI) | gap reduction | cumulative |"
-        );
-        let _ = writeln!(s, "|---|---|---|---|---|---|");
-        for (i, e) in cal.effects.iter().enumerate() {
-            let params: Vec<String> = e
-                .parameters
-                .iter()
-                .map(|(k, v)| {
-                    let sd = e.parameter_std.get(k).copied().unwrap_or(f64::NAN);
-                    format!("{k} = {v:.4e} (± {sd:.1e})")
-                })
-                .collect();
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.0} % | {:.0} % |",
-                i + 1,
-                e.name,
-                e.form,
-                params.join("<br>"),
-                100.0 * e.gap_reduction,
-                100.0 * e.cumulative_gap_reduction
-            );
-        }
-        s.push('\n');
-        for e in &cal.effects {
-            let _ = writeln!(s, "**`{}`** in engineering units:\n", e.name);
-            for l in &e.engineering {
-                let _ = writeln!(s, "- {l}");
-            }
-            for l in &e.not_identifiable {
-                let _ = writeln!(s, "- {l}");
-            }
-            s.push('\n');
-            if let Some(c) = &e.caveat {
-                let _ = writeln!(s, "**`{}`**: {c}.\n", e.name);
-            }
-        }
+        report_effects(s, cal);
     }
     let _ = writeln!(s, "- Gap before: {}", fmt_gap(&cal.gap_before));
     let _ = writeln!(s, "- Gap after: {}", fmt_gap(&cal.gap_after));
@@ -345,6 +321,53 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
         );
     }
     s.push('\n');
+}
+
+/// The table of the effects named (SI parameters with their σ, gap reductions in %) and each one in engineering units.
+fn report_effects(s: &mut String, cal: &Calibration) {
+    let _ = writeln!(
+        s,
+        "| # | effect | form | parameters (SI) | gap reduction | cumulative |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for (i, e) in cal.effects.iter().enumerate() {
+        let params: Vec<String> = e
+            .parameters
+            .iter()
+            .map(|(k, v)| {
+                let sd = e.parameter_std.get(k).copied().unwrap_or(f64::NAN);
+                format!("{k} = {v:.4e} (± {sd:.1e})")
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.0} % | {:.0} % |",
+            i + 1,
+            e.name,
+            e.form,
+            params.join("<br>"),
+            100.0 * e.gap_reduction,
+            100.0 * e.cumulative_gap_reduction
+        );
+    }
+    s.push('\n');
+    for e in &cal.effects {
+        let _ = writeln!(s, "**`{}`** in engineering units:\n", e.name);
+        for l in &e.engineering {
+            let _ = writeln!(s, "- {l}");
+        }
+        for l in &e.not_identifiable {
+            let _ = writeln!(s, "- {l}");
+        }
+        s.push('\n');
+        if let Some(c) = &e.caveat {
+            let _ = writeln!(s, "**`{}`**: {c}.\n", e.name);
+        }
+    }
+}
+
+/// The `## Selection, round by round` section: every candidate's score and verdict.
+fn report_rounds(s: &mut String, cal: &Calibration) {
     let _ = writeln!(s, "## Selection, round by round\n");
     for (k, r) in cal.rounds.iter().enumerate() {
         let _ = writeln!(s, "Round {} (validation gap {:.3}):\n", k + 1, r.gap_before);
@@ -372,6 +395,10 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
         }
         s.push('\n');
     }
+}
+
+/// The `## Where the model disagreed` section: the nominal model's error by regime (mm, MPa), then the signatures of the effects named.
+fn report_disagreement(s: &mut String, cal: &Calibration) {
     let _ = writeln!(
         s,
         "## Where the model disagreed (validation part, nominal model)\n"
@@ -407,6 +434,10 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
         }
         s.push('\n');
     }
+}
+
+/// The `## Plots` section: the figures written, and where the calibrated model is.
+fn report_plots(s: &mut String, plots: &[PathBuf]) {
     let _ = writeln!(s, "## Plots\n");
     for p in plots {
         if let Some(name) = p.file_name().and_then(|n| n.to_str()) {
@@ -418,5 +449,4 @@ pub fn report_md(cal: &Calibration, plots: &[PathBuf]) -> String {
         "The calibrated model is in `model.toml` (`leakwatch replay MEASURED.csv --config model.toml --out DIR`, \
          or `leakwatch run --config model.toml`); every number is in `calibration.json`."
     );
-    s
 }

@@ -77,195 +77,28 @@ fn num(v: f64) -> String {
 /// One line of the template: key, value (empty: commented out), comment.
 type Line = (&'static str, String, &'static str);
 
+/// The comment at the top of the template: what the file is and what to do with it.
+const HEADER: &str = "# leakwatch configuration: your rig in its datasheets' terms (docs/rig.md).\n\
+     # The values below are an example rig: replace each with yours.\n\
+     # leakwatch derives the model, the sensors and the leak filter's noise from\n\
+     # them; do not write those facts again in [model], [sensors] or [leak_filter].\n\
+     # Check it:  leakwatch config --check leakwatch.toml\n\
+     # Then:      leakwatch commission HEALTHY.csv --config leakwatch.toml --out rig.toml\n";
+
 /// The template: `sheet` as a `[datasheet]` with one comment per fact.
 pub fn template(sheet: &Datasheet) -> String {
-    let c = &sheet.cylinder;
-    let h = &sheet.hoses;
-    let v = &sheet.valve;
-    let t = &sheet.pressure_transducers;
-    let p = &sheet.position_sensor;
-    let kind = match c.kind {
-        CylinderKind::DoubleRod => "\"double-rod\"".to_string(),
-        CylinderKind::SingleRod => "\"single-rod\"".to_string(),
-    };
-    let rated_b = match v.rated_flow_b_l_min {
-        Some(q) => num(q),
-        None => String::new(),
-    };
-    let mut out = String::from(
-        "# leakwatch configuration: your rig in its datasheets' terms (docs/rig.md).\n\
-         # The values below are an example rig: replace each with yours.\n\
-         # leakwatch derives the model, the sensors and the leak filter's noise from\n\
-         # them; do not write those facts again in [model], [sensors] or [leak_filter].\n\
-         # Check it:  leakwatch config --check leakwatch.toml\n\
-         # Then:      leakwatch commission HEALTHY.csv --config leakwatch.toml --out rig.toml\n",
-    );
+    let mut out = String::from(HEADER);
     let sections: [(&str, Vec<Line>); 7] = [
-        (
-            "cylinder",
-            vec![
-                (
-                    "kind",
-                    kind,
-                    "\"double-rod\" (a rod through both ends) or \"single-rod\" (port A feeds the cap side)",
-                ),
-                ("bore_m", num(c.bore_m), "piston diameter, m"),
-                ("rod_m", num(c.rod_m), "rod diameter, m"),
-                ("stroke_m", num(c.stroke_m), "m"),
-                (
-                    "mounting_angle_deg",
-                    num(c.mounting_angle_deg),
-                    "extension above the horizontal, degrees: 0 horizontal, 90 lifts, -90 lowers",
-                ),
-                (
-                    "moving_mass_kg",
-                    num(c.moving_mass_kg),
-                    "piston, rod, tool and payload, kg",
-                ),
-            ],
-        ),
-        (
-            "hoses",
-            vec![
-                ("inner_diameter_m", num(h.inner_diameter_m), "m"),
-                ("length_a_m", num(h.length_a_m), "valve port A to the cylinder, m"),
-                ("length_b_m", num(h.length_b_m), "valve port B to the cylinder, m"),
-                (
-                    "extra_volume_a_m3",
-                    num(h.extra_volume_a_m3),
-                    "manifold bores and the cylinder's end volume on the port A side, m³",
-                ),
-                (
-                    "extra_volume_b_m3",
-                    num(h.extra_volume_b_m3),
-                    "the same on the port B side, m³",
-                ),
-            ],
-        ),
-        (
-            "oil",
-            vec![
-                ("density_kg_m3", num(sheet.oil.density_kg_m3), "kg/m³"),
-                (
-                    "bulk_modulus_pa",
-                    num(sheet.oil.bulk_modulus_pa),
-                    "without air, Pa (commissioning finds the effective one)",
-                ),
-                (
-                    "viscosity_40c_mm2_s",
-                    num(sheet.oil.viscosity_40c_mm2_s),
-                    "at 40 °C, mm²/s (the ISO VG grade)",
-                ),
-                (
-                    "viscosity_100c_mm2_s",
-                    num(sheet.oil.viscosity_100c_mm2_s),
-                    "at 100 °C, mm²/s (the oil's data sheet)",
-                ),
-                (
-                    "bulk_modulus_per_k",
-                    num(sheet.oil.bulk_modulus_per_k),
-                    "relative change per kelvin, 1/K (mineral oil about -0.0045)",
-                ),
-                (
-                    "operating_min_c",
-                    num(sheet.oil.operating_min_c),
-                    "the lowest oil temperature the rig runs at, °C",
-                ),
-                (
-                    "operating_max_c",
-                    num(sheet.oil.operating_max_c),
-                    "the highest, °C (commissioning states the smallest detectable leaks over the range)",
-                ),
-            ],
-        ),
-        (
-            "valve",
-            vec![
-                (
-                    "rated_flow_l_min",
-                    num(v.rated_flow_l_min),
-                    "port A at the rated signal and drop, L/min",
-                ),
-                (
-                    "rated_flow_b_l_min",
-                    rated_b,
-                    "port B's, for a valve matched to a single-rod area ratio (omit: port A's), L/min",
-                ),
-                (
-                    "rated_pressure_drop_pa",
-                    num(v.rated_pressure_drop_pa),
-                    "valve drop of the rated flow, both lands (7 MPa = 3.5 MPa per land), Pa",
-                ),
-                ("rated_signal_v", num(v.rated_signal_v), "V"),
-                (
-                    "spool_stroke_m",
-                    num(v.spool_stroke_m),
-                    "spool travel at the rated signal, m",
-                ),
-                (
-                    "phase_90_hz",
-                    num(v.phase_90_hz),
-                    "frequency of 90° phase lag, Hz",
-                ),
-                (
-                    "null_leakage_l_min",
-                    num(v.null_leakage_l_min),
-                    "internal leakage at supply with the ports blocked, L/min (0: critical centre)",
-                ),
-            ],
-        ),
-        (
-            "supply",
-            vec![(
-                "pressure_pa",
-                num(sheet.supply.pressure_pa),
-                "the pump's setting, Pa",
-            )],
-        ),
+        ("cylinder", cylinder_lines(&sheet.cylinder)),
+        ("hoses", hose_lines(&sheet.hoses)),
+        ("oil", oil_lines(&sheet.oil)),
+        ("valve", valve_lines(&sheet.valve)),
+        ("supply", supply_lines(&sheet.supply)),
         (
             "pressure_transducers",
-            vec![
-                (
-                    "full_scale_pa",
-                    num(t.full_scale_pa),
-                    "the range is 0 to this, Pa",
-                ),
-                (
-                    "adc_bits",
-                    t.adc_bits.to_string(),
-                    "the DAQ's resolution over the full scale, bits",
-                ),
-                (
-                    "noise_pa",
-                    num(t.noise_pa),
-                    "noise of a reading (standard deviation), Pa",
-                ),
-                (
-                    "location",
-                    match t.location {
-                        TransducerLocation::CylinderPorts => "\"cylinder-ports\"".to_string(),
-                        TransducerLocation::Manifold => "\"manifold\"".to_string(),
-                    },
-                    "\"cylinder-ports\" or \"manifold\" (at the valve: they read the hose's drop too)",
-                ),
-                (
-                    "response_time_s",
-                    num(t.response_time_s),
-                    "10-90 % response time, the datasheet's maximum, s (0: not given)",
-                ),
-            ],
+            transducer_lines(&sheet.pressure_transducers),
         ),
-        (
-            "position_sensor",
-            vec![
-                ("resolution_m", num(p.resolution_m), "one count, m"),
-                (
-                    "noise_m",
-                    num(p.noise_m),
-                    "noise of a reading (standard deviation), m",
-                ),
-            ],
-        ),
+        ("position_sensor", position_sensor_lines(&sheet.position_sensor)),
     ];
     for (section, fields) in sections {
         out.push_str(&format!("\n[datasheet.{section}]\n"));
@@ -279,6 +112,182 @@ pub fn template(sheet: &Datasheet) -> String {
         }
     }
     out
+}
+
+/// The `[datasheet.cylinder]` lines: kind, bore, rod and stroke (m), mounting angle (degrees), moving mass (kg).
+fn cylinder_lines(c: &CylinderSheet) -> Vec<Line> {
+    let kind = match c.kind {
+        CylinderKind::DoubleRod => "\"double-rod\"".to_string(),
+        CylinderKind::SingleRod => "\"single-rod\"".to_string(),
+    };
+    vec![
+        (
+            "kind",
+            kind,
+            "\"double-rod\" (a rod through both ends) or \"single-rod\" (port A feeds the cap side)",
+        ),
+        ("bore_m", num(c.bore_m), "piston diameter, m"),
+        ("rod_m", num(c.rod_m), "rod diameter, m"),
+        ("stroke_m", num(c.stroke_m), "m"),
+        (
+            "mounting_angle_deg",
+            num(c.mounting_angle_deg),
+            "extension above the horizontal, degrees: 0 horizontal, 90 lifts, -90 lowers",
+        ),
+        (
+            "moving_mass_kg",
+            num(c.moving_mass_kg),
+            "piston, rod, tool and payload, kg",
+        ),
+    ]
+}
+
+/// The `[datasheet.hoses]` lines: diameter and lengths (m), extra volumes (m³).
+fn hose_lines(h: &HoseSheet) -> Vec<Line> {
+    vec![
+        ("inner_diameter_m", num(h.inner_diameter_m), "m"),
+        ("length_a_m", num(h.length_a_m), "valve port A to the cylinder, m"),
+        ("length_b_m", num(h.length_b_m), "valve port B to the cylinder, m"),
+        (
+            "extra_volume_a_m3",
+            num(h.extra_volume_a_m3),
+            "manifold bores and the cylinder's end volume on the port A side, m³",
+        ),
+        (
+            "extra_volume_b_m3",
+            num(h.extra_volume_b_m3),
+            "the same on the port B side, m³",
+        ),
+    ]
+}
+
+/// The `[datasheet.oil]` lines: density (kg/m³), bulk modulus (Pa), viscosities (mm²/s), temperature coefficient (1/K) and range (°C).
+fn oil_lines(oil: &OilSheet) -> Vec<Line> {
+    vec![
+        ("density_kg_m3", num(oil.density_kg_m3), "kg/m³"),
+        (
+            "bulk_modulus_pa",
+            num(oil.bulk_modulus_pa),
+            "without air, Pa (commissioning finds the effective one)",
+        ),
+        (
+            "viscosity_40c_mm2_s",
+            num(oil.viscosity_40c_mm2_s),
+            "at 40 °C, mm²/s (the ISO VG grade)",
+        ),
+        (
+            "viscosity_100c_mm2_s",
+            num(oil.viscosity_100c_mm2_s),
+            "at 100 °C, mm²/s (the oil's data sheet)",
+        ),
+        (
+            "bulk_modulus_per_k",
+            num(oil.bulk_modulus_per_k),
+            "relative change per kelvin, 1/K (mineral oil about -0.0045)",
+        ),
+        (
+            "operating_min_c",
+            num(oil.operating_min_c),
+            "the lowest oil temperature the rig runs at, °C",
+        ),
+        (
+            "operating_max_c",
+            num(oil.operating_max_c),
+            "the highest, °C (commissioning states the smallest detectable leaks over the range)",
+        ),
+    ]
+}
+
+/// The `[datasheet.valve]` lines: rated flows (L/min), drop (Pa) and signal (V), spool stroke (m), bandwidth (Hz), null leakage (L/min).
+fn valve_lines(v: &ValveSheet) -> Vec<Line> {
+    let rated_b = match v.rated_flow_b_l_min {
+        Some(q) => num(q),
+        None => String::new(),
+    };
+    vec![
+        (
+            "rated_flow_l_min",
+            num(v.rated_flow_l_min),
+            "port A at the rated signal and drop, L/min",
+        ),
+        (
+            "rated_flow_b_l_min",
+            rated_b,
+            "port B's, for a valve matched to a single-rod area ratio (omit: port A's), L/min",
+        ),
+        (
+            "rated_pressure_drop_pa",
+            num(v.rated_pressure_drop_pa),
+            "valve drop of the rated flow, both lands (7 MPa = 3.5 MPa per land), Pa",
+        ),
+        ("rated_signal_v", num(v.rated_signal_v), "V"),
+        (
+            "spool_stroke_m",
+            num(v.spool_stroke_m),
+            "spool travel at the rated signal, m",
+        ),
+        (
+            "phase_90_hz",
+            num(v.phase_90_hz),
+            "frequency of 90° phase lag, Hz",
+        ),
+        (
+            "null_leakage_l_min",
+            num(v.null_leakage_l_min),
+            "internal leakage at supply with the ports blocked, L/min (0: critical centre)",
+        ),
+    ]
+}
+
+/// The `[datasheet.supply]` line: the supply pressure (Pa).
+fn supply_lines(supply: &SupplySheet) -> Vec<Line> {
+    vec![("pressure_pa", num(supply.pressure_pa), "the pump's setting, Pa")]
+}
+
+/// The `[datasheet.pressure_transducers]` lines: full scale (Pa), ADC bits, noise (Pa), location, response time (s).
+fn transducer_lines(t: &TransducerSheet) -> Vec<Line> {
+    vec![
+        (
+            "full_scale_pa",
+            num(t.full_scale_pa),
+            "the range is 0 to this, Pa",
+        ),
+        (
+            "adc_bits",
+            t.adc_bits.to_string(),
+            "the DAQ's resolution over the full scale, bits",
+        ),
+        (
+            "noise_pa",
+            num(t.noise_pa),
+            "noise of a reading (standard deviation), Pa",
+        ),
+        (
+            "location",
+            match t.location {
+                TransducerLocation::CylinderPorts => "\"cylinder-ports\"".to_string(),
+                TransducerLocation::Manifold => "\"manifold\"".to_string(),
+            },
+            "\"cylinder-ports\" or \"manifold\" (at the valve: they read the hose's drop too)",
+        ),
+        (
+            "response_time_s",
+            num(t.response_time_s),
+            "10-90 % response time, the datasheet's maximum, s (0: not given)",
+        ),
+    ]
+}
+
+/// The `[datasheet.position_sensor]` lines: resolution and noise (m).
+fn position_sensor_lines(p: &PositionSensorSheet) -> Vec<Line> {
+    vec![
+        ("resolution_m", num(p.resolution_m), "one count, m"),
+        (
+            "noise_m",
+            num(p.noise_m),
+            "noise of a reading (standard deviation), m",
+        ),
+    ]
 }
 
 #[cfg(test)]

@@ -308,160 +308,160 @@ use Ty::{Bool, Int, Num, Str};
 pub fn schema_of(topic: crate::LiveTopic) -> Value {
     use crate::LiveTopic as T;
     match topic {
-        T::Frames => schema(
-            "leakwatch.SensorFrame",
-            &[
-                ("seq", Int, "sequence number of the sample"),
-                ("t_s", Num, "sample time, s"),
-                ("u_v", Num, "valve command, V"),
-                ("x_m", Num, "rod position, m"),
-                ("p1_pa", Num, "chamber-1 pressure, Pa"),
-                ("p2_pa", Num, "chamber-2 pressure, Pa"),
-                ("x_sp_m", Num, "spool position, m (null: absent)"),
-                ("f_load_n", Num, "load force, N (null: absent)"),
-                ("ref_m", Num, "position reference, m (null: absent)"),
-                ("q_leak_lpm", Num, "leak flow, L/min (null: absent)"),
-                ("temp_c", Num, "oil temperature, °C (null: absent)"),
-                ("after_gap", Bool, "samples were missing before this one"),
-                ("end_of_stream", Bool, "the last sample of the stream"),
-            ],
-        ),
-        T::Estimates => schema(
-            "leakwatch.Estimate",
-            &[
-                ("seq", Int, "sequence number of the sample"),
-                ("t_s", Num, "sample time, s"),
-                ("x_m", Num, "estimated rod position, m"),
-                ("v_m_s", Num, "estimated rod velocity, m/s"),
-                ("p1_pa", Num, "estimated chamber-1 pressure, Pa"),
-                ("p2_pa", Num, "estimated chamber-2 pressure, Pa"),
-                ("x_sp_m", Num, "estimated spool position, m"),
-                ("f_e_n", Num, "estimated effective load F_e, N"),
-                ("leak_ext1_lpm", Num, "chamber-1 external leak at p_s/2, L/min"),
-                ("leak_ext2_lpm", Num, "chamber-2 external leak at p_s/2, L/min"),
-                ("leak_int_lpm", Num, "internal leak at p_s/2, L/min"),
-                (
-                    "leak_ext1_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_ext1_lpm, L/min",
-                ),
-                (
-                    "leak_ext2_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_ext2_lpm, L/min",
-                ),
-                (
-                    "leak_int_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_int_lpm, L/min",
-                ),
-                ("measured_x_m", Num, "measured rod position, m"),
-                ("measured_p1_pa", Num, "measured chamber-1 pressure, Pa"),
-                ("measured_p2_pa", Num, "measured chamber-2 pressure, Pa"),
-                ("residual_x_m", Num, "position residual, m"),
-                ("residual_p1_pa", Num, "p1 residual, Pa"),
-                ("residual_p2_pa", Num, "p2 residual, Pa"),
-                ("nis", Num, "normalised innovation squared"),
-                ("thesis_f_e_n", Num, "thesis filter: effective load, N"),
-                (
-                    "thesis_mae_p1_pa",
-                    Num,
-                    "thesis filter: MAE of the p1 residual, Pa",
-                ),
-                (
-                    "thesis_mae_p2_pa",
-                    Num,
-                    "thesis filter: MAE of the p2 residual, Pa",
-                ),
-                ("reset", Bool, "the filter was reset at this sample"),
-                ("converging", Bool, "the filter is still converging"),
-                (
-                    "flags",
-                    Int,
-                    "estimate flags: 1 reset, 2 skipped, 4 clamped, 16 converging, 32 after a gap",
-                ),
-            ],
-        ),
-        T::Events => schema(
-            "leakwatch.LeakEvent",
-            &[
-                (
-                    "event_id",
-                    Int,
-                    "the event's id (same for raised, updated, cleared)",
-                ),
-                (
-                    "kind",
-                    Str,
-                    "ext1, ext2, int, leak (kind pending), sensor-stuck, ...",
-                ),
-                ("phase", Str, "raised, updated or cleared"),
-                ("detector", Str, "the detector that decided"),
-                ("t_detect_s", Num, "sample time of the decision, s"),
-                ("t_onset_s", Num, "estimated onset, s"),
-                ("size_lpm", Num, "leak flow at the measured pressures, L/min"),
-                ("size_lpm_sigma", Num, "one standard deviation of size_lpm, L/min"),
-                ("size_nominal_lpm", Num, "the leak at p_s/2, L/min"),
-                ("coefficient_m3_s_sqrt_pa", Num, "leak coefficient, m³/(s·√Pa)"),
-                ("statistic", Num, "decision statistic, healthy spreads"),
-                ("threshold", Num, "its threshold, healthy spreads"),
-                ("confidence", Num, "confidence, 0..1"),
-                ("channel", Str, "sensor events: x, p1 or p2"),
-                ("detail", Str, "human-readable detail"),
-            ],
-        ),
-        T::Health => schema(
-            "leakwatch.Health",
-            &[
-                ("seq", Int, "sequence number of the health stream"),
-                ("t_s", Num, "sample time, s"),
-                ("status", Str, "warming-up, healthy, leak or sensor-fault"),
-                ("active_events", Int, "number of active events"),
-                (
-                    "leak_ext1_lpm",
-                    Num,
-                    "chamber-1 external leak: its size's rise above the healthy state, L/min at p_s/2",
-                ),
-                (
-                    "leak_ext2_lpm",
-                    Num,
-                    "chamber-2 external leak, as leak_ext1_lpm, L/min",
-                ),
-                ("leak_int_lpm", Num, "internal leak, as leak_ext1_lpm, L/min"),
-                (
-                    "leak_ext1_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_ext1_lpm, L/min",
-                ),
-                (
-                    "leak_ext2_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_ext2_lpm, L/min",
-                ),
-                (
-                    "leak_int_sigma_lpm",
-                    Num,
-                    "one standard deviation of leak_int_lpm, L/min",
-                ),
-                (
-                    "leak_ext1_threshold_lpm",
-                    Num,
-                    "the detector's threshold on leak_ext1_lpm, L/min (null before it armed)",
-                ),
-                (
-                    "leak_ext2_threshold_lpm",
-                    Num,
-                    "the detector's threshold on leak_ext2_lpm, L/min (null before it armed)",
-                ),
-                (
-                    "leak_int_threshold_lpm",
-                    Num,
-                    "the detector's threshold on leak_int_lpm, L/min (null before it armed)",
-                ),
-            ],
-        ),
+        T::Frames => schema("leakwatch.SensorFrame", SENSOR_FRAME_FIELDS),
+        T::Estimates => schema("leakwatch.Estimate", ESTIMATE_FIELDS),
+        T::Events => schema("leakwatch.LeakEvent", LEAK_EVENT_FIELDS),
+        T::Health => schema("leakwatch.Health", HEALTH_FIELDS),
     }
 }
+
+/// The fields of a `frames` message ([`FrameMsg`]): one sample, SI units.
+const SENSOR_FRAME_FIELDS: &[(&str, Ty, &str)] = &[
+    ("seq", Int, "sequence number of the sample"),
+    ("t_s", Num, "sample time, s"),
+    ("u_v", Num, "valve command, V"),
+    ("x_m", Num, "rod position, m"),
+    ("p1_pa", Num, "chamber-1 pressure, Pa"),
+    ("p2_pa", Num, "chamber-2 pressure, Pa"),
+    ("x_sp_m", Num, "spool position, m (null: absent)"),
+    ("f_load_n", Num, "load force, N (null: absent)"),
+    ("ref_m", Num, "position reference, m (null: absent)"),
+    ("q_leak_lpm", Num, "leak flow, L/min (null: absent)"),
+    ("temp_c", Num, "oil temperature, °C (null: absent)"),
+    ("after_gap", Bool, "samples were missing before this one"),
+    ("end_of_stream", Bool, "the last sample of the stream"),
+];
+
+/// The fields of an `estimates` message ([`EstimateMsg`]): the filters' estimates, residuals and leak sizes (SI, L/min).
+const ESTIMATE_FIELDS: &[(&str, Ty, &str)] = &[
+    ("seq", Int, "sequence number of the sample"),
+    ("t_s", Num, "sample time, s"),
+    ("x_m", Num, "estimated rod position, m"),
+    ("v_m_s", Num, "estimated rod velocity, m/s"),
+    ("p1_pa", Num, "estimated chamber-1 pressure, Pa"),
+    ("p2_pa", Num, "estimated chamber-2 pressure, Pa"),
+    ("x_sp_m", Num, "estimated spool position, m"),
+    ("f_e_n", Num, "estimated effective load F_e, N"),
+    ("leak_ext1_lpm", Num, "chamber-1 external leak at p_s/2, L/min"),
+    ("leak_ext2_lpm", Num, "chamber-2 external leak at p_s/2, L/min"),
+    ("leak_int_lpm", Num, "internal leak at p_s/2, L/min"),
+    (
+        "leak_ext1_sigma_lpm",
+        Num,
+        "one standard deviation of leak_ext1_lpm, L/min",
+    ),
+    (
+        "leak_ext2_sigma_lpm",
+        Num,
+        "one standard deviation of leak_ext2_lpm, L/min",
+    ),
+    (
+        "leak_int_sigma_lpm",
+        Num,
+        "one standard deviation of leak_int_lpm, L/min",
+    ),
+    ("measured_x_m", Num, "measured rod position, m"),
+    ("measured_p1_pa", Num, "measured chamber-1 pressure, Pa"),
+    ("measured_p2_pa", Num, "measured chamber-2 pressure, Pa"),
+    ("residual_x_m", Num, "position residual, m"),
+    ("residual_p1_pa", Num, "p1 residual, Pa"),
+    ("residual_p2_pa", Num, "p2 residual, Pa"),
+    ("nis", Num, "normalised innovation squared"),
+    ("thesis_f_e_n", Num, "thesis filter: effective load, N"),
+    (
+        "thesis_mae_p1_pa",
+        Num,
+        "thesis filter: MAE of the p1 residual, Pa",
+    ),
+    (
+        "thesis_mae_p2_pa",
+        Num,
+        "thesis filter: MAE of the p2 residual, Pa",
+    ),
+    ("reset", Bool, "the filter was reset at this sample"),
+    ("converging", Bool, "the filter is still converging"),
+    (
+        "flags",
+        Int,
+        "estimate flags: 1 reset, 2 skipped, 4 clamped, 16 converging, 32 after a gap",
+    ),
+];
+
+/// The fields of an `events` message ([`EventMsg`]): a leak or sensor event as raised, updated or cleared.
+const LEAK_EVENT_FIELDS: &[(&str, Ty, &str)] = &[
+    (
+        "event_id",
+        Int,
+        "the event's id (same for raised, updated, cleared)",
+    ),
+    (
+        "kind",
+        Str,
+        "ext1, ext2, int, leak (kind pending), sensor-stuck, ...",
+    ),
+    ("phase", Str, "raised, updated or cleared"),
+    ("detector", Str, "the detector that decided"),
+    ("t_detect_s", Num, "sample time of the decision, s"),
+    ("t_onset_s", Num, "estimated onset, s"),
+    ("size_lpm", Num, "leak flow at the measured pressures, L/min"),
+    ("size_lpm_sigma", Num, "one standard deviation of size_lpm, L/min"),
+    ("size_nominal_lpm", Num, "the leak at p_s/2, L/min"),
+    ("coefficient_m3_s_sqrt_pa", Num, "leak coefficient, m³/(s·√Pa)"),
+    ("statistic", Num, "decision statistic, healthy spreads"),
+    ("threshold", Num, "its threshold, healthy spreads"),
+    ("confidence", Num, "confidence, 0..1"),
+    ("channel", Str, "sensor events: x, p1 or p2"),
+    ("detail", Str, "human-readable detail"),
+];
+
+/// The fields of a `health` message ([`HealthMsg`]): the status, active events and leak sizes with thresholds (L/min).
+const HEALTH_FIELDS: &[(&str, Ty, &str)] = &[
+    ("seq", Int, "sequence number of the health stream"),
+    ("t_s", Num, "sample time, s"),
+    ("status", Str, "warming-up, healthy, leak or sensor-fault"),
+    ("active_events", Int, "number of active events"),
+    (
+        "leak_ext1_lpm",
+        Num,
+        "chamber-1 external leak: its size's rise above the healthy state, L/min at p_s/2",
+    ),
+    (
+        "leak_ext2_lpm",
+        Num,
+        "chamber-2 external leak, as leak_ext1_lpm, L/min",
+    ),
+    ("leak_int_lpm", Num, "internal leak, as leak_ext1_lpm, L/min"),
+    (
+        "leak_ext1_sigma_lpm",
+        Num,
+        "one standard deviation of leak_ext1_lpm, L/min",
+    ),
+    (
+        "leak_ext2_sigma_lpm",
+        Num,
+        "one standard deviation of leak_ext2_lpm, L/min",
+    ),
+    (
+        "leak_int_sigma_lpm",
+        Num,
+        "one standard deviation of leak_int_lpm, L/min",
+    ),
+    (
+        "leak_ext1_threshold_lpm",
+        Num,
+        "the detector's threshold on leak_ext1_lpm, L/min (null before it armed)",
+    ),
+    (
+        "leak_ext2_threshold_lpm",
+        Num,
+        "the detector's threshold on leak_ext2_lpm, L/min (null before it armed)",
+    ),
+    (
+        "leak_int_threshold_lpm",
+        Num,
+        "the detector's threshold on leak_int_lpm, L/min (null before it armed)",
+    ),
+];
 
 #[cfg(test)]
 mod tests {

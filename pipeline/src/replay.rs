@@ -6,14 +6,16 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use dataset::{CsvReader, Issue, Limits, Row};
+use dataset::{CsvReader, Limits};
 use detect::LeakEvent;
 use filter::StageEstimate;
-use model::Sample;
 use serde::Serialize;
 
 use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 use config::Config;
+use wiring::{replay_channels, replay_single_thread, Progress};
+
+mod wiring;
 
 /// How the stages are connected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -304,39 +306,18 @@ pub fn write_events(path: &Path, events: &[LeakEvent], force: bool, inputs: &[&P
     crate::out::write(path, (text + "\n").as_bytes(), force, inputs)
 }
 
-enum Batch {
-    Samples(Vec<Sample>),
-    Issue(Issue),
-}
-
-const BATCH: usize = 2048;
-
 /// Runs a replay and writes estimates.csv (or .parquet), events.json and summary.json into the output directory.
 pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
-    crate::out::dir(&req.out_dir)?;
-    let mut inputs: Vec<&Path> = vec![req.input.as_path()];
-    inputs.extend(req.protect.iter().map(|p| p.as_path()));
-    let est_path = req.estimates.file_name().map(|name| req.out_dir.join(name));
-    let events_path = req.out_dir.join("events.json");
-    let summary_path = req.out_dir.join("summary.json");
-    // Refuse before reading or writing anything.
-    for p in est_path.iter().chain([&events_path, &summary_path]) {
-        crate::out::check(p, req.overwrite, &inputs)?;
-    }
-    let est_name = est_path.as_deref().unwrap_or(&req.out_dir).display().to_string();
+    let paths = OutputPaths::prepare(req)?;
+    let est_name = &paths.est_name;
     let cfg = &req.config;
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
-    let mut reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
-    let file = match &est_path {
-        Some(p) => Some(crate::out::create(p, req.overwrite, &inputs)?),
-        None => None,
-    };
+    let reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
     // The thesis filter runs when its output is asked for: its estimates
     // (`--model`, the `th_*` columns) or the thesis' baseline; otherwise it
     // does not (a third of the work).
     let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
-    let mut out =
-        EstimatesWriter::new(file, req.estimates, thesis_wanted).map_err(|e| format!("{est_name}: {e}"))?;
+    let mut out = open_estimates(req, &paths, thesis_wanted)?;
     let mut chain = crate::Chain::new(&crate::ChainSettings::from(cfg))?.with_thesis(thesis_wanted);
     // (the channel wiring runs the stage and the detectors on two threads)
     let (stage, cls) = chain.parts_mut();
@@ -344,15 +325,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         eprintln!("note: {}", cls.start_note());
     }
     let mut events: Vec<LeakEvent> = Vec::new();
-    let mut summary = Summary {
-        input: req.input.display().to_string(),
-        log: req.log.clone(),
-        wiring: match req.wiring {
-            Wiring::Channels => "channels".into(),
-            Wiring::SingleThread => "single-thread".into(),
-        },
-        ..Summary::default()
-    };
+    let mut summary = new_summary(req);
     let thesis_runs = stage.thesis_runs();
     let gate = req.config.classifier.nis_gate;
     let oil = &req.config.model.oil_temperature;
@@ -360,7 +333,7 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let mut acc = (Acc::new(gate, operating_c), Acc::new(gate, operating_c));
     let mut last_t = 0.0;
     let mut first_t = f64::NAN;
-    let bar = progress_bar(req.progress);
+    let progress = Progress::new(req);
     let started = Instant::now();
 
     // The sink: classifier, accumulation and file writing.
@@ -382,85 +355,14 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             }
         }
     };
-    let on_issue = |issue: &Issue, summary: &mut Summary| {
-        if issue.skipped {
-            summary.rows_skipped += 1;
-            *summary
-                .rows_rejected
-                .entry(issue.kind.name().to_string())
-                .or_insert(0) += 1;
-        }
-        if summary.issues.len() < 100 {
-            summary.issues.push(issue.to_string());
-        }
-    };
     let has_optional = reader.has_optional();
-    // Adds the samples processed since the last call to `req.samples_done`.
-    let counted = std::cell::Cell::new(0u64);
-    let count = |samples: u64| {
-        if let Some(c) = &req.samples_done {
-            c.fetch_add(samples - counted.get(), std::sync::atomic::Ordering::Relaxed);
-            counted.set(samples);
-        }
-    };
-
     let absent = match req.wiring {
-        Wiring::SingleThread => {
-            while let Some(row) = reader.next_row() {
-                let sample = match row {
-                    Row::Sample(s) => s,
-                    Row::AfterGap(s, issue) => {
-                        on_issue(&issue, &mut summary);
-                        s
-                    }
-                    Row::Skipped(issue) => {
-                        on_issue(&issue, &mut summary);
-                        continue;
-                    }
-                };
-                let e = stage.on_sample(&sample);
-                sink(&e, &mut summary);
-                if summary.samples.is_multiple_of(65536) {
-                    bar.set_position(summary.samples);
-                    count(summary.samples);
-                }
-            }
-            reader.absent
-        }
-        Wiring::Channels => {
-            let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(8);
-            let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<Issue>)>(8);
-            std::thread::scope(|scope| {
-                let read = scope.spawn(move || read_batches(reader, &tx_in));
-                let stage = &mut *stage;
-                scope.spawn(move || {
-                    for b in rx_in {
-                        let msg = match b {
-                            Batch::Samples(v) => (v.iter().map(|s| stage.on_sample(s)).collect(), Vec::new()),
-                            Batch::Issue(issue) => (Vec::new(), vec![issue]),
-                        };
-                        if tx_out.send(msg).is_err() {
-                            return;
-                        }
-                    }
-                });
-                for (ests, issues) in rx_out {
-                    for e in &ests {
-                        sink(e, &mut summary);
-                    }
-                    for issue in &issues {
-                        on_issue(issue, &mut summary);
-                    }
-                    bar.set_position(summary.samples);
-                    count(summary.samples);
-                }
-                read.join().unwrap_or_default()
-            })
-        }
+        Wiring::SingleThread => replay_single_thread(reader, stage, &mut summary, &mut sink, &progress),
+        Wiring::Channels => replay_channels(reader, stage, &mut summary, &mut sink, &progress),
     };
-    count(summary.samples);
+    progress.count(summary.samples);
     cls.finish(last_t, |ev| events.push(ev));
-    bar.finish_and_clear();
+    progress.bar.finish_and_clear();
     if let Some(e) = write_err {
         return Err(e);
     }
@@ -480,14 +382,84 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         }
     }
     summary.refused = refusal(&summary, req);
-    write_events(&events_path, &events, req.overwrite, &inputs)?;
+    write_events(&paths.events, &events, req.overwrite, &paths.inputs)?;
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    crate::out::write(&summary_path, (text + "\n").as_bytes(), req.overwrite, &inputs)?;
+    crate::out::write(
+        &paths.summary,
+        (text + "\n").as_bytes(),
+        req.overwrite,
+        &paths.inputs,
+    )?;
     if let Some(why) = &summary.refused {
         return Err(why.clone());
     }
     summary.event_log = events;
     Ok(summary)
+}
+
+/// Where a replay writes, and what it must not overwrite.
+struct OutputPaths<'a> {
+    /// The inputs (the recording, then `req.protect`), which no output may replace.
+    inputs: Vec<&'a Path>,
+    /// The estimates file, unless none is written.
+    estimates: Option<PathBuf>,
+    /// events.json and summary.json.
+    events: PathBuf,
+    summary: PathBuf,
+    /// The estimates file's name in messages (the output directory when none is written).
+    est_name: String,
+}
+
+impl<'a> OutputPaths<'a> {
+    /// Creates the output directory and refuses an output that exists (without
+    /// `--force`) or is an input, before anything is read or written.
+    fn prepare(req: &'a ReplayRequest) -> Result<OutputPaths<'a>, String> {
+        crate::out::dir(&req.out_dir)?;
+        let mut inputs: Vec<&Path> = vec![req.input.as_path()];
+        inputs.extend(req.protect.iter().map(|p| p.as_path()));
+        let est_path = req.estimates.file_name().map(|name| req.out_dir.join(name));
+        let events_path = req.out_dir.join("events.json");
+        let summary_path = req.out_dir.join("summary.json");
+        // Refuse before reading or writing anything.
+        for p in est_path.iter().chain([&events_path, &summary_path]) {
+            crate::out::check(p, req.overwrite, &inputs)?;
+        }
+        let est_name = est_path.as_deref().unwrap_or(&req.out_dir).display().to_string();
+        Ok(OutputPaths {
+            inputs,
+            estimates: est_path,
+            events: events_path,
+            summary: summary_path,
+            est_name,
+        })
+    }
+}
+
+/// Creates the estimates file (if one is asked for) and its writer, with the
+/// thesis filter's columns when `thesis_wanted`.
+fn open_estimates(
+    req: &ReplayRequest,
+    paths: &OutputPaths<'_>,
+    thesis_wanted: bool,
+) -> Result<EstimatesWriter, String> {
+    let file = match &paths.estimates {
+        Some(p) => Some(crate::out::create(p, req.overwrite, &paths.inputs)?),
+        None => None,
+    };
+    EstimatesWriter::new(file, req.estimates, thesis_wanted).map_err(|e| format!("{}: {e}", paths.est_name))
+}
+
+/// The summary before the replay: its input, the log's damage and the wiring.
+fn new_summary(req: &ReplayRequest) -> Summary {
+    Summary {
+        input: req.input.display().to_string(),
+        log: req.log.clone(),
+        wiring: match req.wiring {
+            Wiring::Channels => "channels".into(),
+            Wiring::SingleThread => "single-thread".into(),
+        },
+        ..Summary::default()
+    }
 }
 
 impl Watch {
@@ -511,42 +483,6 @@ impl Watch {
                 .map(|e| e.detail.to_string()),
         }
     }
-}
-
-/// Reads `reader` to its end in batches of [`BATCH`] samples onto `tx_in`, an
-/// issue (a gap, a skipped row) ending a batch and following it; returns the
-/// counts of absent optional values. Stops early when the receiver is gone.
-fn read_batches<R: std::io::BufRead>(
-    mut reader: CsvReader<R>,
-    tx_in: &crossbeam_channel::Sender<Batch>,
-) -> [u64; dataset::N_OPTIONAL] {
-    let mut batch = Vec::with_capacity(BATCH);
-    while let Some(row) = reader.next_row() {
-        match row {
-            Row::Sample(s) => batch.push(s),
-            Row::AfterGap(s, issue) => {
-                batch.push(s);
-                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
-                    return reader.absent;
-                }
-            }
-            Row::Skipped(issue) => {
-                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-                if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
-                    return reader.absent;
-                }
-            }
-        }
-        if batch.len() == BATCH {
-            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
-            if tx_in.send(Batch::Samples(full)).is_err() {
-                return reader.absent;
-            }
-        }
-    }
-    let _ = tx_in.send(Batch::Samples(batch));
-    reader.absent
 }
 
 /// Why the recording is refused, if it is: no usable sample, or more bad rows
@@ -575,17 +511,4 @@ fn refusal(summary: &Summary, req: &ReplayRequest) -> Option<String> {
                 )
             })
     }
-}
-
-fn progress_bar(enabled: bool) -> indicatif::ProgressBar {
-    use std::io::IsTerminal;
-    if !enabled || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} {pos} samples  {per_sec}  {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-    );
-    bar
 }

@@ -165,87 +165,8 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
     // the machine's floors first, on an otherwise idle machine
     let floors = crate::commands::floors::measure(seconds.min(10.0))?;
     let mut rows = Vec::new();
-    // (wait mode, placement, pinned): the estimator and classifier as two processes,
-    // and as one; the low-latency configuration pins the acquisition alone to
-    // one CPU and the fused estimator+classifier with the recorder to the other ([run] cpus).
-    let cpus = pipeline::batch::cores();
-    let mut runs = vec![
-        ("event", None, false),
-        ("low-latency", None, false),
-        ("event", Some("estimator+classifier"), false),
-        ("low-latency", Some("estimator+classifier"), false),
-    ];
-    if cpus >= 2 {
-        runs.push(("low-latency", Some("estimator+classifier"), true));
-    }
-    for (mode, placement, pinned) in runs {
-        let label = match placement {
-            None => mode.to_string(),
-            Some(p) => format!("{mode}, {p} in one process"),
-        } + if pinned {
-            ", pinned (acquisition CPU 0, the fused stage and the recorder CPU 1)"
-        } else {
-            ""
-        };
-        let dir = match placement {
-            None => format!("run-{mode}"),
-            Some(_) => format!("run-{mode}-fused"),
-        } + if pinned { "-pinned" } else { "" };
-        let config = if pinned {
-            pipeline::out::dir(out)?;
-            let p = out.join("pinned.toml");
-            // (the recorder's bursts beside the spinning pacer cost it 60-140 µs at p99:
-            // the pacer gets CPU 0 alone)
-            let text = "[run]\ncpus = { acquisition = 0, recorder = 1, \"estimator+classifier\" = 1 }\n";
-            pipeline::out::write(&p, text.as_bytes(), true, &[])?;
-            Some(p)
-        } else {
-            None
-        };
-        let args = runtime::RunArgs {
-            seconds: Some(seconds),
-            scenario: Some("loaded-sine".into()),
-            faults: Vec::new(),
-            rig: format!(
-                "bench-{}{}{}",
-                mode.replace('-', ""),
-                if placement.is_some() { "-fused" } else { "" },
-                if pinned { "-pin" } else { "" }
-            ),
-            config,
-            mode: mode.into(),
-            out: Some(out.join(&dir)),
-            thesis_baseline: false,
-            force,
-            source: None,
-            udp_idle_timeout_s: None,
-            placement: placement.map(String::from),
-            live_view: None,
-            zenoh: false,
-            zenoh_connect: Vec::new(),
-        };
-        eprintln!("iceoryx2, {label}: {seconds} s ...");
-        let o = runtime::run_pipeline(&args, true)?;
-        let log = std::fs::read_to_string(out.join(&dir).join("acquisition.log")).unwrap_or_default();
-        let pacer_whole_run_us = pacer_lateness_us(&log).unwrap_or([f64::NAN; 4]);
-        let st = &o.latency.stages;
-        let get = |s: &str| st.get(s).cloned().unwrap_or_default();
-        let (e, c, a) = (get("estimator"), get("classifier"), get("acquisition"));
-        rows.push(Row {
-            transport: format!("iceoryx2 processes, {label}"),
-            hop_us: [e.latency_p50_us, e.latency_worst_1s_p99_us, e.latency_max_us],
-            // classifier input latency + its processing: the decision time
-            end_to_end_us: [
-                c.latency_p50_us + c.proc_p50_us,
-                c.latency_worst_1s_p99_us,
-                f64::NAN,
-                c.latency_max_us,
-            ],
-            frames: [a.frames_out, c.frames_in],
-            // (in one process with the classifier: the CPU of both)
-            estimator_cpu: e.cpu_fraction,
-            pacer_whole_run_us,
-        });
+    for (mode, placement, pinned) in process_runs() {
+        rows.push(process_row(seconds, out, force, mode, placement, pinned)?);
     }
     let samples = crate::commands::samples(seconds);
     eprintln!("threads over Unix datagram sockets: {seconds} s ...");
@@ -270,30 +191,144 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
         |s, stamp, x| s.send((stamp, *x)).is_ok(),
         |r| r.recv().ok(),
     ));
+    print_rows(&rows)?;
+    crate::commands::floors::print(&floors)?;
+    let p = out.join("latency.json");
+    let json = serde_json::json!({ "pipeline": rows, "floors": floors });
+    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())? + "\n";
+    pipeline::out::write(&p, text.as_bytes(), force, &[])?;
+    eprintln!("wrote {}", p.display());
+    Ok(())
+}
+
+/// The iceoryx2 runs as (wait mode, placement, pinned): the estimator and
+/// classifier as two processes, and as one; with two CPUs or more, the
+/// low-latency configuration also pinned.
+fn process_runs() -> Vec<(&'static str, Option<&'static str>, bool)> {
+    // (wait mode, placement, pinned): the estimator and classifier as two processes,
+    // and as one; the low-latency configuration pins the acquisition alone to
+    // one CPU and the fused estimator+classifier with the recorder to the other ([run] cpus).
+    let cpus = pipeline::batch::cores();
+    let mut runs = vec![
+        ("event", None, false),
+        ("low-latency", None, false),
+        ("event", Some("estimator+classifier"), false),
+        ("low-latency", Some("estimator+classifier"), false),
+    ];
+    if cpus >= 2 {
+        runs.push(("low-latency", Some("estimator+classifier"), true));
+    }
+    runs
+}
+
+/// Runs the pipeline as iceoryx2 processes for `seconds` s in wait `mode`
+/// with the stages' `placement` (and `pinned` to CPUs) under `out`; its row.
+fn process_row(
+    seconds: f64,
+    out: &Path,
+    force: bool,
+    mode: &str,
+    placement: Option<&str>,
+    pinned: bool,
+) -> Result<Row, String> {
+    let label = match placement {
+        None => mode.to_string(),
+        Some(p) => format!("{mode}, {p} in one process"),
+    } + if pinned {
+        ", pinned (acquisition CPU 0, the fused stage and the recorder CPU 1)"
+    } else {
+        ""
+    };
+    let dir = match placement {
+        None => format!("run-{mode}"),
+        Some(_) => format!("run-{mode}-fused"),
+    } + if pinned { "-pinned" } else { "" };
+    let config = if pinned {
+        pipeline::out::dir(out)?;
+        let p = out.join("pinned.toml");
+        // (the recorder's bursts beside the spinning pacer cost it 60-140 µs at p99:
+        // the pacer gets CPU 0 alone)
+        let text = "[run]\ncpus = { acquisition = 0, recorder = 1, \"estimator+classifier\" = 1 }\n";
+        pipeline::out::write(&p, text.as_bytes(), true, &[])?;
+        Some(p)
+    } else {
+        None
+    };
+    let args = runtime::RunArgs {
+        seconds: Some(seconds),
+        scenario: Some("loaded-sine".into()),
+        faults: Vec::new(),
+        rig: format!(
+            "bench-{}{}{}",
+            mode.replace('-', ""),
+            if placement.is_some() { "-fused" } else { "" },
+            if pinned { "-pin" } else { "" }
+        ),
+        config,
+        mode: mode.into(),
+        out: Some(out.join(&dir)),
+        thesis_baseline: false,
+        force,
+        source: None,
+        udp_idle_timeout_s: None,
+        placement: placement.map(String::from),
+        live_view: None,
+        zenoh: false,
+        zenoh_connect: Vec::new(),
+    };
+    eprintln!("iceoryx2, {label}: {seconds} s ...");
+    let o = runtime::run_pipeline(&args, true)?;
+    let log = std::fs::read_to_string(out.join(&dir).join("acquisition.log")).unwrap_or_default();
+    let pacer_whole_run_us = pacer_lateness_us(&log).unwrap_or([f64::NAN; 4]);
+    let st = &o.latency.stages;
+    let get = |s: &str| st.get(s).cloned().unwrap_or_default();
+    let (e, c, a) = (get("estimator"), get("classifier"), get("acquisition"));
+    Ok(Row {
+        transport: format!("iceoryx2 processes, {label}"),
+        hop_us: [e.latency_p50_us, e.latency_worst_1s_p99_us, e.latency_max_us],
+        // classifier input latency + its processing: the decision time
+        end_to_end_us: [
+            c.latency_p50_us + c.proc_p50_us,
+            c.latency_worst_1s_p99_us,
+            f64::NAN,
+            c.latency_max_us,
+        ],
+        frames: [a.frames_out, c.frames_in],
+        // (in one process with the classifier: the CPU of both)
+        estimator_cpu: e.cpu_fraction,
+        pacer_whole_run_us,
+    })
+}
+
+/// A table cell of µs or %: one decimal, or a dash when not measured.
+fn cell(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.1}")
+    } else {
+        "–".into()
+    }
+}
+
+/// Prints the transports' table (latencies µs, CPU %) and the acquisition
+/// pacer's lateness (µs) of the process rows.
+fn print_rows(rows: &[Row]) -> Result<(), String> {
     outln!("(thread rows: whole-run percentiles; process rows: p50 = median of the 1-s p50s, p99 = the worst 1-s p99, from the stages' stats frames)");
     outln!("| transport | hop p50 µs | hop p99 µs | hop max µs | end-to-end p50 µs | p99 µs | p99.9 µs | max µs | frames sent / classified | estimator CPU % |");
     outln!("|---|---|---|---|---|---|---|---|---|---|");
-    let f = |v: f64| {
-        if v.is_finite() {
-            format!("{v:.1}")
-        } else {
-            "–".into()
-        }
-    };
-    for r in &rows {
+    for r in rows {
         outln!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {} |",
             r.transport,
-            f(r.hop_us[0]),
-            f(r.hop_us[1]),
-            f(r.hop_us[2]),
-            f(r.end_to_end_us[0]),
-            f(r.end_to_end_us[1]),
-            f(r.end_to_end_us[2]),
-            f(r.end_to_end_us[3]),
+            cell(r.hop_us[0]),
+            cell(r.hop_us[1]),
+            cell(r.hop_us[2]),
+            cell(r.end_to_end_us[0]),
+            cell(r.end_to_end_us[1]),
+            cell(r.end_to_end_us[2]),
+            cell(r.end_to_end_us[3]),
             r.frames[0],
             r.frames[1],
-            f(r.estimator_cpu * 100.0)
+            cell(r.estimator_cpu * 100.0)
         );
     }
     outln!("");
@@ -305,19 +340,13 @@ pub fn bench(seconds: f64, out: &Path, force: bool) -> Result<(), String> {
         outln!(
             "| {} | {} | {} | {} | {} |",
             r.transport,
-            f(p[0]),
-            f(p[1]),
-            f(p[2]),
-            f(p[3])
+            cell(p[0]),
+            cell(p[1]),
+            cell(p[2]),
+            cell(p[3])
         );
     }
     outln!("");
-    crate::commands::floors::print(&floors)?;
-    let p = out.join("latency.json");
-    let json = serde_json::json!({ "pipeline": rows, "floors": floors });
-    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())? + "\n";
-    pipeline::out::write(&p, text.as_bytes(), force, &[])?;
-    eprintln!("wrote {}", p.display());
     Ok(())
 }
 

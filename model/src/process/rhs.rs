@@ -76,6 +76,56 @@ impl Derived {
     }
 }
 
+impl Derived {
+    /// The flow law's slope d√|Δp|/dΔp = 1/(2√max(|Δp|, [`MIN_SLOPE_DROP_PA`])), 1/√Pa, from `r` = √|Δp|.
+    #[inline(always)]
+    fn slope(&self, r: f64) -> f64 {
+        0.5 / r.max(self.root_min_slope)
+    }
+}
+
+/// √|Δp|, √Pa, of a pressure drop `dp` in Pa.
+#[inline(always)]
+fn root(dp: f64) -> f64 {
+    dp.abs().sqrt()
+}
+
+/// The pressure drops of the flow laws and their square roots.
+#[derive(Clone, Copy)]
+struct DropRoots {
+    /// p1 − p_r, p2 − p_r and p1 − p2, Pa.
+    dp1r: f64,
+    dp2r: f64,
+    dp12: f64,
+    /// √|Δp| of each, √Pa (0 where no law of the layout needs it).
+    r1r: f64,
+    r2r: f64,
+    r12: f64,
+}
+
+/// The valve's flows (Q1, Q2), m³/s, and the partials of Q1 and Q2 w.r.t. (x_sp, p1, p2).
+struct ValveSlopes {
+    q: (f64, f64),
+    dq1: [f64; 3],
+    dq2: [f64; 3],
+}
+
+/// The estimated leaks' flows per unit of their states (10+ states), q = q_n·ssqrt(Δp)/√Δp_n:
+/// ssqrt(Δp)/√Δp_n for ext1, ext2 and int (dimensionless); zeros for fewer states.
+#[inline(always)]
+fn estimated_leak_gains<const N: usize>(d: &Derived, r: &DropRoots) -> (f64, f64, f64) {
+    let inv_sqrt_n = d.inv_sqrt_n;
+    if N >= 10 {
+        (
+            signed(r.dp1r, r.r1r) * inv_sqrt_n,
+            signed(r.dp2r, r.r2r) * inv_sqrt_n,
+            signed(r.dp12, r.r12) * inv_sqrt_n,
+        )
+    } else {
+        (0.0, 0.0, 0.0)
+    }
+}
+
 /// sgn(Δp)·√|Δp| from √|Δp|.
 #[inline]
 fn signed(dp_pa: f64, root: f64) -> f64 {
@@ -128,13 +178,30 @@ impl ProcessModel {
             N == 6 || N == 7 || N == 10 || N == 11 || N == 12,
             "process layouts have 6, 7, 10, 11 or 12 states"
         );
-        let p = &self.params;
         let d = self.derived();
-        let (x_sp, p1, p2, x, v, v_sp) = (s[0], s[1], s[2], s[3], s[4], s[5]);
+        let (x_sp, p1, p2) = (s[0], s[1], s[2]);
         f.as_mut_slice().fill(0.0);
         a.as_mut_slice().fill(0.0);
 
-        // Spool: second order.
+        self.spool_rows(s, u_v, f, a);
+        let roots = self.drop_roots::<N>(x_sp, p1, p2);
+        let valve = self.valve_flows_and_slopes(&d, &roots, x_sp, p1, p2);
+        self.chamber_rows(s, &d, &roots, &valve, f, a);
+        self.rod_rows(s, &d, f, a);
+    }
+
+    /// Rows 0 and 5 of f and ∂f/∂x: the spool's second-order dynamics (m, m/s)
+    /// driven by the command `u_v` (V), with the estimated null bias in layouts of 11+ states.
+    #[inline(always)]
+    fn spool_rows<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+        f: &mut SVector<f64, N>,
+        a: &mut SMatrix<f64, N, N>,
+    ) {
+        let p = &self.params;
+        let (x_sp, v_sp) = (s[0], s[5]);
         let wn = p.spool_natural_freq_rad_s;
         f[0] = v_sp;
         a[(0, 5)] = 1.0;
@@ -146,11 +213,13 @@ impl ProcessModel {
         }
         a[(5, 0)] = -wn * wn;
         a[(5, 5)] = -2.0 * p.spool_damping_ratio * wn;
+    }
 
-        // The square roots of the pressure drops the laws below use.
-        let (ps, pr) = (p.supply_pressure_pa, p.return_pressure_pa);
-        let root = |dp: f64| dp.abs().sqrt();
-        let slope = |r: f64| 0.5 / r.max(d.root_min_slope);
+    /// The pressure drops to return and across the piston (Pa) and the square
+    /// roots (√Pa) the valve and leak laws of the layout `N` use (0 where none does).
+    #[inline(always)]
+    fn drop_roots<const N: usize>(&self, x_sp: f64, p1: f64, p2: f64) -> DropRoots {
+        let pr = self.params.return_pressure_pa;
         let (dp1r, dp2r, dp12) = (p1 - pr, p2 - pr, p1 - p2);
         let needs_leak_roots = N >= 10;
         let r1r = if needs_leak_roots || x_sp < 0.0 || self.leaks.sqrt_m3_s_sqrt_pa[0] != 0.0 {
@@ -164,69 +233,108 @@ impl ProcessModel {
         } else {
             0.0
         };
+        DropRoots {
+            dp1r,
+            dp2r,
+            dp12,
+            r1r,
+            r2r,
+            r12,
+        }
+    }
 
-        // Valve flows and their slopes.
-        let (flows, dq1, dq2) = if p.supply_sag_pa_per_m3_s != 0.0 {
+    /// The valve's flows into chambers 1 and 2 (m³/s) and their partials with
+    /// respect to (x_sp, p1, p2): by differences with supply sag, else in closed
+    /// form (orifice law on the open lands plus the null leakage).
+    #[inline(always)]
+    fn valve_flows_and_slopes(&self, d: &Derived, r: &DropRoots, x_sp: f64, p1: f64, p2: f64) -> ValveSlopes {
+        let p = &self.params;
+        if p.supply_sag_pa_per_m3_s != 0.0 {
             let flows = valve_flows(p, x_sp, p1, p2);
             let (dq1, dq2) = self.valve_partials(x_sp, p1, p2);
-            ((flows.q1_m3_s, flows.q2_m3_s), dq1, dq2)
-        } else {
-            let (cd, (wa, wb)) = (p.discharge_coefficient, p.area_gradients_m2_per_m());
-            let (ga, gb) = (d.ga, d.gb);
-            let (mut q, mut dq1, mut dq2) = if x_sp >= 0.0 {
-                // Q1 = g_A x_sp ssqrt(ps − p1), Q2 = g_B x_sp ssqrt(p2 − pr)
-                let dps1 = ps - p1;
-                let rs1 = root(dps1);
-                let (ss1, ss2) = (signed(dps1, rs1), signed(dp2r, r2r));
-                (
-                    (cd * wa * x_sp * d.root * ss1, cd * wb * x_sp * d.root * ss2),
-                    [ga * ss1, -ga * x_sp * slope(rs1), 0.0],
-                    [gb * ss2, 0.0, gb * x_sp * slope(r2r)],
-                )
-            } else {
-                // Q1 = g_A x_sp ssqrt(p1 − pr), Q2 = g_B x_sp ssqrt(ps − p2)
-                let dps2 = ps - p2;
-                let rs2 = root(dps2);
-                let (ss1, ss2) = (signed(dp1r, r1r), signed(dps2, rs2));
-                (
-                    (
-                        -(cd * wa * -x_sp * d.root * ss1),
-                        -(cd * wb * -x_sp * d.root * ss2),
-                    ),
-                    [ga * ss1, ga * x_sp * slope(r1r), 0.0],
-                    [gb * ss2, 0.0, -gb * x_sp * slope(rs2)],
-                )
+            return ValveSlopes {
+                q: (flows.q1_m3_s, flows.q2_m3_s),
+                dq1,
+                dq2,
             };
-            if p.valve_null_leakage_m3_s_pa > 0.0 {
-                let n = null_leakage_flows(p, x_sp, p1, p2);
-                q.0 += n.q1_m3_s;
-                q.1 += n.q2_m3_s;
-                for i in 0..3 {
-                    dq1[i] += n.dq1[i];
-                    dq2[i] += n.dq2[i];
-                }
-            }
-            (q, dq1, dq2)
+        }
+        let ps = p.supply_pressure_pa;
+        let slope = |rt: f64| d.slope(rt);
+        let (cd, (wa, wb)) = (p.discharge_coefficient, p.area_gradients_m2_per_m());
+        let (ga, gb) = (d.ga, d.gb);
+        let (mut q, mut dq1, mut dq2) = if x_sp >= 0.0 {
+            // Q1 = g_A x_sp ssqrt(ps − p1), Q2 = g_B x_sp ssqrt(p2 − pr)
+            let dps1 = ps - p1;
+            let rs1 = root(dps1);
+            let (ss1, ss2) = (signed(dps1, rs1), signed(r.dp2r, r.r2r));
+            (
+                (cd * wa * x_sp * d.root * ss1, cd * wb * x_sp * d.root * ss2),
+                [ga * ss1, -ga * x_sp * slope(rs1), 0.0],
+                [gb * ss2, 0.0, gb * x_sp * slope(r.r2r)],
+            )
+        } else {
+            // Q1 = g_A x_sp ssqrt(p1 − pr), Q2 = g_B x_sp ssqrt(ps − p2)
+            let dps2 = ps - p2;
+            let rs2 = root(dps2);
+            let (ss1, ss2) = (signed(r.dp1r, r.r1r), signed(dps2, rs2));
+            (
+                (
+                    -(cd * wa * -x_sp * d.root * ss1),
+                    -(cd * wb * -x_sp * d.root * ss2),
+                ),
+                [ga * ss1, ga * x_sp * slope(r.r1r), 0.0],
+                [gb * ss2, 0.0, -gb * x_sp * slope(rs2)],
+            )
         };
-        // Leaks built into the model, and their slopes: internal w.r.t. (p1, p2),
-        // ext1 w.r.t. p1, ext2 w.r.t. p2 (index order of LeakSet: ext1, ext2, int).
-        let lq = self.leaks.flows(p1, p2, pr);
+        if p.valve_null_leakage_m3_s_pa > 0.0 {
+            let n = null_leakage_flows(p, x_sp, p1, p2);
+            q.0 += n.q1_m3_s;
+            q.1 += n.q2_m3_s;
+            for i in 0..3 {
+                dq1[i] += n.dq1[i];
+                dq2[i] += n.dq2[i];
+            }
+        }
+        ValveSlopes { q, dq1, dq2 }
+    }
+
+    /// The slopes (m³/(s·Pa)) of the leaks built into the model: internal
+    /// w.r.t. (p1, p2), ext1 w.r.t. p1, ext2 w.r.t. p2 (index order of LeakSet: ext1, ext2, int).
+    #[inline(always)]
+    fn leak_partials(&self, d: &Derived, r: &DropRoots) -> LeakPartials {
         let l = &self.leaks;
-        let leak_slope = |i: usize, r: f64| {
+        let leak_slope = |i: usize, rt: f64| {
             if l.sqrt_m3_s_sqrt_pa[i] == 0.0 {
                 l.linear_m3_s_pa[i]
             } else {
-                l.linear_m3_s_pa[i] + l.sqrt_m3_s_sqrt_pa[i] * slope(r)
+                l.linear_m3_s_pa[i] + l.sqrt_m3_s_sqrt_pa[i] * d.slope(rt)
             }
         };
-        let d_int = leak_slope(2, r12);
-        let dl = LeakPartials {
-            ext1: leak_slope(0, r1r),
-            ext2: leak_slope(1, r2r),
+        let d_int = leak_slope(2, r.r12);
+        LeakPartials {
+            ext1: leak_slope(0, r.r1r),
+            ext2: leak_slope(1, r.r2r),
             int: [d_int, -d_int],
-        };
+        }
+    }
 
-        // Chambers.
+    /// Rows 1 and 2 of f and ∂f/∂x: the chamber pressures (Pa/s), from the net
+    /// inflow (valve, built-in and estimated leaks, piston displacement) times β/V.
+    #[inline(always)]
+    fn chamber_rows<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        d: &Derived,
+        r: &DropRoots,
+        valve: &ValveSlopes,
+        f: &mut SVector<f64, N>,
+        a: &mut SMatrix<f64, N, N>,
+    ) {
+        let p = &self.params;
+        let (p1, p2, x, v) = (s[1], s[2], s[3], s[4]);
+        let (flows, dq1, dq2) = (valve.q, valve.dq1, valve.dq2);
+        let lq = self.leaks.flows(p1, p2, p.return_pressure_pa);
+        let dl = self.leak_partials(d, r);
         let (a1, a2) = p.areas_m2();
         let (v1, v2) = p.chamber_volumes_m3(x);
         // The 12-state layout scales the oil's stiffness by its estimate θ.
@@ -235,17 +343,7 @@ impl ProcessModel {
         let (b1, b2) = (theta * b1_model, theta * b2_model);
         let db1 = theta * bulk_slope(p, p1, b1_model);
         let db2 = theta * bulk_slope(p, p2, b2_model);
-        // Estimated leaks (10 states): q = q_n·ssqrt(Δp)/√Δp_n.
-        let inv_sqrt_n = d.inv_sqrt_n;
-        let (g1, g2, gi) = if N >= 10 {
-            (
-                signed(dp1r, r1r) * inv_sqrt_n,
-                signed(dp2r, r2r) * inv_sqrt_n,
-                signed(dp12, r12) * inv_sqrt_n,
-            )
-        } else {
-            (0.0, 0.0, 0.0)
-        };
+        let (g1, g2, gi) = estimated_leak_gains::<N>(d, r);
         let (qe1, qe2, qi) = if N >= 10 {
             (s[I_QE1], s[I_QE2], s[I_QI])
         } else {
@@ -277,18 +375,32 @@ impl ProcessModel {
             a[(1, I_QI)] = -b1 / v1 * gi;
             a[(2, I_QE2)] = -b2 / v2 * g2;
             a[(2, I_QI)] = b2 / v2 * gi;
+            let inv_sqrt_n = d.inv_sqrt_n;
             let (s1, s2, si) = (
-                slope(r1r) * inv_sqrt_n,
-                slope(r2r) * inv_sqrt_n,
-                slope(r12) * inv_sqrt_n,
+                d.slope(r.r1r) * inv_sqrt_n,
+                d.slope(r.r2r) * inv_sqrt_n,
+                d.slope(r.r12) * inv_sqrt_n,
             );
             a[(1, 1)] -= b1 / v1 * (qe1 * s1 + qi * si);
             a[(1, 2)] += b1 / v1 * qi * si;
             a[(2, 1)] += b2 / v2 * qi * si;
             a[(2, 2)] -= b2 / v2 * (qe2 * s2 + qi * si);
         }
+    }
 
-        // Rod.
+    /// Rows 3 and 4 of f and ∂f/∂x: the rod's position (m) and its acceleration
+    /// (m/s²) from the pressure force, gravity, the end stops and the estimated
+    /// external force (7+ states), or the load and friction (the thesis' 6).
+    #[inline(always)]
+    fn rod_rows<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        d: &Derived,
+        f: &mut SVector<f64, N>,
+        a: &mut SMatrix<f64, N, N>,
+    ) {
+        let p = &self.params;
+        let (p1, p2, x, v) = (s[1], s[2], s[3], s[4]);
         f[3] = v;
         a[(3, 4)] = 1.0;
         let m = p.mass_kg;
@@ -313,34 +425,51 @@ impl ProcessModel {
             }
             a[(4, I_FE)] = d.neg_inv_m;
         } else {
-            let load = p.load.force_n(x, v);
-            let (dload_dx, dload_dv) = if p.load.stiffness_n_per_m != 0.0 || p.load.preload_n != 0.0 {
-                if x > p.load.contact_m {
-                    (p.load.stiffness_n_per_m, p.load.damping_n_s_per_m)
-                } else {
-                    (0.0, 0.0)
-                }
+            self.thesis_acceleration_row(s, d, f, a);
+        }
+    }
+
+    /// Row 4 of the thesis' 6-state layout: the rod's acceleration (m/s²) from
+    /// the pressure force, gravity, the load and friction (sliding, breaking away or stuck).
+    #[inline(always)]
+    fn thesis_acceleration_row<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        d: &Derived,
+        f: &mut SVector<f64, N>,
+        a: &mut SMatrix<f64, N, N>,
+    ) {
+        let p = &self.params;
+        let (p1, p2, x, v) = (s[1], s[2], s[3], s[4]);
+        let m = p.mass_kg;
+        let gravity = d.gravity;
+        let load = p.load.force_n(x, v);
+        let (dload_dx, dload_dv) = if p.load.stiffness_n_per_m != 0.0 || p.load.preload_n != 0.0 {
+            if x > p.load.contact_m {
+                (p.load.stiffness_n_per_m, p.load.damping_n_s_per_m)
             } else {
                 (0.0, 0.0)
-            };
-            let drive = p.pressure_force_n(p1, p2) - gravity - load;
-            let friction = friction_force_n(&p.friction, v, drive);
-            f[4] = (drive - friction) / m;
-            if v.abs() > p.friction.zero_velocity_m_s {
-                // sliding: Stribeck + viscous
-                a[(4, 1)] = d.a1_m;
-                a[(4, 2)] = -d.a2_m;
-                a[(4, 3)] = -dload_dx / m;
-                a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
-            } else if friction != drive {
-                // breaking away: friction saturated at ±f_st
-                a[(4, 1)] = d.a1_m;
-                a[(4, 2)] = -d.a2_m;
-                a[(4, 3)] = -dload_dx / m;
-                a[(4, 4)] = -dload_dv / m;
             }
-            // stuck: friction balances the drive, dv/dt = 0 and its row is zero
+        } else {
+            (0.0, 0.0)
+        };
+        let drive = p.pressure_force_n(p1, p2) - gravity - load;
+        let friction = friction_force_n(&p.friction, v, drive);
+        f[4] = (drive - friction) / m;
+        if v.abs() > p.friction.zero_velocity_m_s {
+            // sliding: Stribeck + viscous
+            a[(4, 1)] = d.a1_m;
+            a[(4, 2)] = -d.a2_m;
+            a[(4, 3)] = -dload_dx / m;
+            a[(4, 4)] = (-dload_dv - friction_dv(&p.friction, v)) / m;
+        } else if friction != drive {
+            // breaking away: friction saturated at ±f_st
+            a[(4, 1)] = d.a1_m;
+            a[(4, 2)] = -d.a2_m;
+            a[(4, 3)] = -dload_dx / m;
+            a[(4, 4)] = -dload_dv / m;
         }
+        // stuck: friction balances the drive, dv/dt = 0 and its row is zero
     }
 
     /// Partials of the valve's (Q1, Q2) with respect to (x_sp, p1, p2) with
