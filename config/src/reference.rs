@@ -7,7 +7,10 @@
 //! - Range and unit: the field's own validation ([`probe_range`]).
 //! - Default: `Config::default()` serialized.
 
+mod structs;
+
 use super::{probe_range, Config};
+use structs::{find_struct, struct_head};
 
 /// The sources of the structs that make up the configuration (path from the
 /// workspace root, text). A section whose type is in none of them is an error
@@ -40,26 +43,6 @@ const SOURCES: [(&str, &str); 13] = [
 /// The command that writes the committed reference (named in the page and by its test).
 pub const REGENERATE: &str = "cargo run -p leakwatch -- config --reference > docs/config.md";
 
-/// One field of a config struct, as its source declares it.
-#[derive(Debug, Clone, PartialEq)]
-struct Field {
-    /// The TOML key.
-    name: String,
-    /// The Rust type, as written (`f64`, `Option<Friction>`, `live::ZenohConfig`).
-    ty: String,
-    /// The doc comment, its lines joined with spaces.
-    doc: String,
-}
-
-/// A struct of the configuration: its doc comment and its fields.
-#[derive(Debug, Clone, PartialEq)]
-struct StructDoc {
-    /// Where it is declared (path from the workspace root).
-    file: &'static str,
-    /// Its fields that are config keys (`#[serde(skip)]` ones left out).
-    fields: Vec<Field>,
-}
-
 /// The settings a user sets first, with why; each is in its section's table below.
 pub const FIRST: [(&str, &str); 5] = [
     (
@@ -84,61 +67,6 @@ pub const FIRST: [(&str, &str); 5] = [
     ),
 ];
 
-/// The struct `name` from [`SOURCES`], or why not.
-fn find_struct(name: &str) -> Result<StructDoc, String> {
-    for (file, text) in SOURCES {
-        let lines: Vec<&str> = text.lines().map(str::trim).collect();
-        let head = format!("pub struct {name} {{");
-        let Some(start) = lines.iter().position(|l| *l == head) else {
-            continue;
-        };
-        let mut fields = Vec::new();
-        let mut doc: Vec<&str> = Vec::new();
-        let mut skip = false;
-        let mut i = start + 1;
-        while i < lines.len() && lines[i] != "}" {
-            let line = lines[i];
-            if let Some(d) = line.strip_prefix("///") {
-                doc.push(d.trim());
-            } else if line.starts_with("#[") {
-                // an attribute, possibly over several lines
-                let mut attr = line.to_string();
-                while !attr.ends_with(']') && i + 1 < lines.len() {
-                    i += 1;
-                    attr.push_str(lines[i]);
-                }
-                let compact: String = attr.chars().filter(|c| !c.is_whitespace()).collect();
-                skip |= compact.contains("serde(skip)") || compact.contains("skip_deserializing");
-            } else if let Some(decl) = line.strip_prefix("pub ") {
-                let (key, ty) = decl
-                    .split_once(':')
-                    .ok_or_else(|| format!("{file}: cannot read the field `{line}` of {name}"))?;
-                if !skip {
-                    if doc.is_empty() {
-                        return Err(format!("{file}: {name}::{key} has no doc comment"));
-                    }
-                    fields.push(Field {
-                        name: key.trim().to_string(),
-                        ty: ty.trim().trim_end_matches(',').trim().to_string(),
-                        doc: doc.join(" "),
-                    });
-                }
-                doc.clear();
-                skip = false;
-            } else if !line.is_empty() && !line.starts_with("//") {
-                return Err(format!(
-                    "{file}: cannot read `{line}` in {name} (a private field?)"
-                ));
-            }
-            i += 1;
-        }
-        return Ok(StructDoc { file, fields });
-    }
-    Err(format!(
-        "the config type {name} is in none of the reference's sources (add its file to SOURCES in config/src/reference.rs)"
-    ))
-}
-
 /// `Option<T>` → (true, `T`); `T` → (false, `T`).
 fn unwrap_option(ty: &str) -> (bool, &str) {
     match ty.strip_prefix("Option<").and_then(|t| t.strip_suffix('>')) {
@@ -154,7 +82,7 @@ fn bare(ty: &str) -> &str {
 
 /// Whether `ty` names a struct of the sources (a TOML table).
 fn is_struct(ty: &str) -> bool {
-    let head = format!("pub struct {} {{", bare(ty));
+    let head = struct_head(bare(ty));
     SOURCES
         .iter()
         .any(|(_, text)| text.lines().any(|l| l.trim() == head))
