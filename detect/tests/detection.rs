@@ -56,6 +56,18 @@ fn mean_flow(trace: &[f64], from_s: f64, to_s: f64) -> f64 {
     part.iter().sum::<f64>() / part.len() as f64
 }
 
+/// The built-in rig's estimator stage (sensor-derived leak filter, thesis
+/// filter) and the default classifier.
+fn default_stage() -> (filter::EstimatorStage, Classifier) {
+    let stage = filter::EstimatorStage::new(
+        ActuatorParams::default(),
+        Tuning::sensor_derived(),
+        Tuning::thesis(),
+    )
+    .unwrap();
+    (stage, Classifier::new(ClassifierConfig::default()).unwrap())
+}
+
 fn raised(events: &[LeakEvent], detector: &str) -> Vec<LeakEvent> {
     events
         .iter()
@@ -196,13 +208,7 @@ fn gaps_nan_and_a_restart_raise_no_false_leak() {
     let scenario = Scenario::by_name("closed-loop-sine", 51, 40.0).unwrap();
     let mut sim =
         Simulator::with_default_sensors(off_nominal_rig(), scenario, FaultSchedule::default(), 51).unwrap();
-    let mut stage = filter::EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .unwrap();
-    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let (mut stage, mut cls) = default_stage();
     let mut events = Vec::new();
     for k in 0..40_000 {
         let mut s = sim.step();
@@ -236,13 +242,7 @@ fn dead_and_stuck_sensors_are_reported() {
     let mut sim =
         Simulator::with_default_sensors(ActuatorParams::default(), scenario, FaultSchedule::default(), 61)
             .unwrap();
-    let mut stage = filter::EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .unwrap();
-    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let (mut stage, mut cls) = default_stage();
     let mut events = Vec::new();
     let mut frozen = 0.0;
     for k in 0..30_000 {
@@ -280,13 +280,7 @@ fn with_frozen_position(
     let mut sim =
         Simulator::with_default_sensors(ActuatorParams::default(), scenario, FaultSchedule::default(), 62)
             .unwrap();
-    let mut stage = filter::EstimatorStage::new(
-        ActuatorParams::default(),
-        Tuning::sensor_derived(),
-        Tuning::thesis(),
-    )
-    .unwrap();
-    let mut cls = Classifier::new(ClassifierConfig::default()).unwrap();
+    let (mut stage, mut cls) = default_stage();
     let (mut events, mut held) = (Vec::new(), 0.0);
     for k in 0..samples {
         let mut s = sim.step();
