@@ -11,8 +11,6 @@
 //! The `q_leak`, `f_load` and `ref` columns are never shown to the detector.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use crate::stats::quantile;
 use detect::LeakEvent;
@@ -305,37 +303,13 @@ pub fn score_dir(
             dir.display()
         ));
     }
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<DataOutcome, String>>>> = Mutex::new(vec![None; dirs.len()]);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(d) = dirs.get(i) else { break };
-                let r = (|| {
-                    let truth = read_truth(d)?;
-                    let run = detect_file(&measured_file(d)?, set)?;
-                    Ok(score_run(truth, &run))
-                })();
-                if let Ok(mut v) = results.lock() {
-                    v[i] = Some(r);
-                }
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, dirs.len());
-            });
-        }
-    });
-    let mut runs = Vec::new();
-    for r in results
-        .into_inner()
-        .map_err(|_| "a worker panicked".to_string())?
-    {
-        match r {
-            Some(Ok(o)) => runs.push(o),
-            Some(Err(e)) => return Err(e),
-            None => return Err("a run was not scored".into()),
-        }
-    }
+    let score = |i: usize| {
+        let d = &dirs[i];
+        let truth = read_truth(d)?;
+        let run = detect_file(&measured_file(d)?, set)?;
+        Ok(score_run(truth, &run))
+    };
+    let runs = crate::work::try_map(dirs.len(), threads, score, progress)?;
     Ok(summarise_data(runs, t0.elapsed().as_secs_f64()))
 }
 

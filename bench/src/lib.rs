@@ -12,3 +12,4 @@ pub mod replay;
 pub mod speed;
 pub mod stats;
 pub mod thesis;
+pub mod work;

@@ -14,8 +14,6 @@
 //! Every CSV comes from [`pipeline::simulate::build`], the `simulate` command's path.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use model::instance::{Instance, NominalRig};
 use model::rng::Rng;
@@ -86,13 +84,13 @@ pub(crate) fn nominal(rig: &str) -> Result<(NominalRig, &'static [&'static str])
 
 /// How far the tank thermometer a user reads during the commissioning
 /// recording may be off the oil in the chambers, K (either way).
-pub(crate) const TANK_READING_ERROR_K: f64 = 2.0;
+const TANK_READING_ERROR_K: f64 = 2.0;
 
 /// `datasheet.toml`: the catalogue datasheet and the nominal `[model]` fields
 /// no datasheet gives (as a user writes them), nothing of the drawn instance;
 /// and, as the README asks, the tank thermometer's reading during the
 /// commissioning recording, `tank_c` (°C), as the oil law's reference.
-pub(crate) fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
+fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, String> {
     let mut rest = toml::Table::try_from(&n.model).map_err(|e| e.to_string())?;
     if let Some(oil) = rest.get_mut("oil_temperature").and_then(|v| v.as_table_mut()) {
         oil.insert(
@@ -127,6 +125,14 @@ pub(crate) fn catalogue_toml(n: &NominalRig, tank_c: f64) -> Result<String, Stri
          # The simulated instance differs from it within the datasheet's tolerances: instance.toml.\n\n{body}",
         n.name
     ))
+}
+
+/// The `datasheet.toml` a user writes for instance `inst` of rig `n`
+/// ([`catalogue_toml`]), with the tank's reading of the commissioning's oil at
+/// `commission_c` (°C), off by up to [`TANK_READING_ERROR_K`] (drawn from the instance's seed).
+pub(crate) fn user_datasheet(n: &NominalRig, inst: &Instance, commission_c: f64) -> Result<String, String> {
+    let misread = Rng::new(inst.seed ^ 0x5EED_7A4C).uniform_in(-TANK_READING_ERROR_K, TANK_READING_ERROR_K);
+    catalogue_toml(n, commission_c + misread)
 }
 
 /// The simulated instance's config: `[model]` the drawn rig, `[sensors]` its
@@ -409,9 +415,7 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
         pipeline::out::dir(&dir)?;
         let plan = plan_instance(req, cycles, i, inst.seed);
         let commission_c = plan.first().map_or(40.0, |p| p.oil.start_c);
-        let misread =
-            Rng::new(inst.seed ^ 0x5EED_7A4C).uniform_in(-TANK_READING_ERROR_K, TANK_READING_ERROR_K);
-        let catalogue = catalogue_toml(&nominal, commission_c + misread)?;
+        let catalogue = user_datasheet(&nominal, &inst, commission_c)?;
         pipeline::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
         let text = instance_toml(&inst, &req.rig, i)?;
         pipeline::out::write(&dir.join("instance.toml"), text.as_bytes(), force, &[])?;
@@ -427,29 +431,15 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
         simulated / 3600.0,
         req.worker_threads()
     );
-    let next = AtomicUsize::new(0);
-    let failed: Mutex<Option<String>> = Mutex::new(None);
     let bar = indicatif::ProgressBar::new(plans.len() as u64);
-    std::thread::scope(|scope| {
-        for _ in 0..req.worker_threads() {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(plan) = plans.get(i) else { break };
-                if let Err(e) = write_recording(req, plan, &instances[plan.instance], force) {
-                    if let Ok(mut f) = failed.lock() {
-                        f.get_or_insert(e);
-                    }
-                    next.store(plans.len(), Ordering::Relaxed);
-                    break;
-                }
-                bar.inc(1);
-            });
-        }
-    });
+    let written = crate::work::try_map(
+        plans.len(),
+        req.worker_threads(),
+        |i| write_recording(req, &plans[i], &instances[plans[i].instance], force),
+        |done, _| bar.set_position(done as u64),
+    );
     bar.finish_and_clear();
-    if let Some(e) = failed.into_inner().map_err(|_| "a worker panicked".to_string())? {
-        return Err(e);
-    }
+    written?;
     let wall = t0.elapsed().as_secs_f64();
     eprintln!(
         "wrote {} instances to {} in {wall:.1} s ({:.0}x real time); score one with \

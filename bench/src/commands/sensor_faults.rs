@@ -15,8 +15,6 @@
 //! Nothing is written but the reports: `sensor_faults.md` and `sensor_faults.json`.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use model::instance::Instance;
 use model::rng::Rng;
@@ -187,9 +185,7 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
         let inst = Instance::draw(&nominal, seed);
         let plans = instances::plan_instance(&instances_request(args), cycles, index, inst.seed);
         let plan = plans.first().ok_or("no commissioning recording planned")?;
-        let misread = Rng::new(inst.seed ^ 0x5EED_7A4C)
-            .uniform_in(-instances::TANK_READING_ERROR_K, instances::TANK_READING_ERROR_K);
-        let sheet = instances::catalogue_toml(&nominal, plan.oil.start_c + misread)?;
+        let sheet = instances::user_datasheet(&nominal, &inst, plan.oil.start_c)?;
         let cfg = Config::parse(&sheet).map_err(|e| format!("instance {index}'s datasheet: {e}"))?;
         let sim_cfg = instances::instance_config(&inst, Some(plan.oil));
         let (samples, _) = instances::simulate_plan(&sim_cfg, plan, &[])?;
@@ -393,37 +389,17 @@ fn check(args: &SensorFaultsArgs) -> Result<(), String> {
     simulate::check_seconds(args.seconds, 1e-3)
 }
 
-/// Runs `job(i)` for i in 0..n on `threads` threads; the results in order, or the first error.
+/// Runs `job(i)` for i in 0..n on `threads` threads under a progress bar
+/// ([`crate::work::try_map`]).
 fn parallel<T: Send>(
     n: usize,
     threads: usize,
     job: impl Fn(usize) -> Result<T, String> + Sync,
 ) -> Result<Vec<T>, String> {
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<T, String>>>> = Mutex::new((0..n).map(|_| None).collect());
     let bar = indicatif::ProgressBar::new(n as u64);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                if i >= n {
-                    break;
-                }
-                let r = job(i);
-                if let Ok(mut v) = results.lock() {
-                    v[i] = Some(r);
-                }
-                bar.inc(1);
-            });
-        }
-    });
+    let out = crate::work::try_map(n, threads, job, |done, _| bar.set_position(done as u64));
     bar.finish_and_clear();
-    let all = results
-        .into_inner()
-        .map_err(|_| "a worker panicked".to_string())?;
-    all.into_iter()
-        .map(|r| r.unwrap_or_else(|| Err("a job did not run".into())))
-        .collect()
+    out
 }
 
 /// `leakwatch bench sensor-faults`: commissions each instance, watches its runs,

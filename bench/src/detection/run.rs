@@ -1,9 +1,6 @@
 //! Running the cases: one case through the rig, the estimator stage and the
 //! classifier, scored per detector; the whole suite on several threads.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
-
 use detect::{ClassifierConfig, LeakEvent};
 use model::rng::Rng;
 use model::{FaultSchedule, Scenario, Simulator};
@@ -128,29 +125,8 @@ pub(super) fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcom
 /// Runs the suite on `threads` threads; `progress` is called after each run with (done, total).
 pub fn run_suite(cases: &[Case], threads: usize, progress: impl Fn(usize, usize) + Sync) -> SuiteResult {
     let t0 = std::time::Instant::now();
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<RunResult>>> = Mutex::new(vec![None; cases.len()]);
-    let done = AtomicUsize::new(0);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                if i >= cases.len() {
-                    break;
-                }
-                let r = run_case(&cases[i]).ok();
-                if let Ok(mut all) = results.lock() {
-                    all[i] = r;
-                }
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cases.len());
-            });
-        }
-    });
-    let runs: Vec<RunResult> = results
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-        .collect();
+    // a case that cannot run is left out of the totals
+    let all = crate::work::try_map(cases.len(), threads, |i| Ok(run_case(&cases[i]).ok()), progress);
+    let runs: Vec<RunResult> = all.unwrap_or_default().into_iter().flatten().collect();
     summarise(runs, t0.elapsed().as_secs_f64())
 }
