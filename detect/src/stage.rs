@@ -258,12 +258,8 @@ impl Classifier {
     /// filter's NIS above [`X_STUCK_NIS_RATIO`] times the healthy mean: the
     /// pressures say the rod moves while the encoder does not.
     fn x_repeat_misfits(&self, w: &ChannelWatch) -> bool {
-        let healthy = self.leak_size.nis_healthy();
-        let healthy = if healthy.is_finite() {
-            healthy.max(3.0)
-        } else {
-            3.0
-        };
+        // (NaN before arming: `max` then gives 3)
+        let healthy = self.leak_size.nis_healthy().max(3.0);
         w.same > 0 && w.same_nis_sum / f64::from(w.same) > X_STUCK_NIS_RATIO * healthy
     }
 
@@ -289,12 +285,12 @@ impl Classifier {
             }
             // The rod may legitimately rest (stiction, a stop): a repeated position is
             // stuck only while the pressures say the rod moves ([`X_STUCK_NIS_RATIO`]).
-            let repeat_fits = c > 0 || self.x_repeat_misfits(&w);
+            let may_be_stuck = c > 0 || self.x_repeat_misfits(&w);
             let now = if w.dead >= self.cfg.dead_samples {
                 Some(EventKind::SensorDead)
             } else if w.saturated >= self.cfg.saturated_samples {
                 Some(EventKind::SensorSaturated)
-            } else if repeat_fits && w.same >= self.cfg.stuck_samples {
+            } else if may_be_stuck && w.same >= self.cfg.stuck_samples {
                 Some(EventKind::SensorStuck)
             } else {
                 None
