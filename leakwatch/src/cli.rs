@@ -129,6 +129,16 @@ pub(crate) enum Command {
         /// implies --zenoh), e.g. tcp/10.0.0.5:7447.
         #[arg(long, value_name = "ENDPOINT")]
         zenoh_connect: Vec<String>,
+        /// A new folder per run in this directory (leakwatch-run-YYYYMMDD-HHMMSS; not with --out),
+        /// as a service runs: docs/service.md.
+        #[arg(long, value_name = "DIR")]
+        runs_dir: Option<PathBuf>,
+        /// With --runs-dir: remove earlier runs whose newest file is older than this, days.
+        #[arg(long, value_name = "DAYS")]
+        keep_days: Option<f64>,
+        /// With --runs-dir: remove the oldest earlier runs while all runs together exceed this, GiB.
+        #[arg(long, value_name = "GIB")]
+        keep_gib: Option<f64>,
     },
     /// Print the events of every rig reachable over Zenoh as they happen (the rigs' `run --zenoh`
     /// gateways publish them under leakwatch/<rig>/...), and each rig's health status when it

@@ -68,6 +68,9 @@ fn run(cli: Cli) -> Result<(), String> {
             live_view,
             zenoh,
             zenoh_connect,
+            runs_dir,
+            keep_days,
+            keep_gib,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -84,6 +87,9 @@ fn run(cli: Cli) -> Result<(), String> {
             live_view,
             zenoh,
             zenoh_connect,
+            runs_dir,
+            keep_days,
+            keep_gib,
         }),
         Command::Watch {
             listen,

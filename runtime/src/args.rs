@@ -37,6 +37,12 @@ pub struct RunArgs {
     pub zenoh: bool,
     /// `--zenoh-connect`: the gateway's endpoints instead of the config's.
     pub zenoh_connect: Vec<String>,
+    /// `--runs-dir`: a new folder in it per run (not with `out`), the earlier ones pruned.
+    pub runs_dir: Option<PathBuf>,
+    /// `--keep-days`: with `runs_dir`, earlier runs older than this are removed, days.
+    pub keep_days: Option<f64>,
+    /// `--keep-gib`: with `runs_dir`, the runs' total size kept within this, GiB.
+    pub keep_gib: Option<f64>,
 }
 
 /// Where a run's samples come from.

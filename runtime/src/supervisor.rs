@@ -16,8 +16,11 @@ use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 use crate::args::{check_udp_args, parse_source, RunArgs, RunSource};
 use crate::events::{own_event, print_event};
 use crate::figures::{LatencyReport, StageAcc, STAGE_CODES};
+use crate::notify::ServiceNotify;
 use crate::placement::Placement;
 use crate::plan::{announce, check_outputs, plan, run_prefix, stage_args, Plan};
+use crate::retention::{Retention, RUN_FOLDER_PREFIX};
+use crate::service::Service;
 use crate::stages::{stage_program, Stage};
 use crate::supervision::Supervision;
 use bus::say as errln;
@@ -61,10 +64,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
             None
         }
     };
-    let out_dir = match &args.out {
-        Some(dir) => dir.clone(),
-        None => default_out_dir(),
-    };
+    let (out_dir, retention) = out_dir_of(args)?;
     pipeline::out::dir(&out_dir)?;
     let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
     check_outputs(&out_dir, processes, args.force, &inputs)?;
@@ -127,6 +127,8 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     start_cleanup.started();
     // a UDP stream lasts as long as its sender streams
     let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
+    let mut service = Service::new(ServiceNotify::from_env(), retention, out_dir.clone(), &args.rig);
+    service.prune(Instant::now());
     let Gathered {
         mut events,
         mut accs,
@@ -138,8 +140,11 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         &stages,
         (placement, quiet),
         (stop, deadline),
-        last_watch,
+        (last_watch, &mut service),
     )?;
+    service
+        .notify
+        .stopping(failure.as_deref().unwrap_or("the run ended"));
     // the classifier's pid, for the events still queued once it has stopped
     let classifier_pids = sup.stop();
     while let Ok(Some(st)) = topics.stats_rx.try_receive() {
@@ -287,7 +292,7 @@ fn watch(
     stages: &[Stage],
     (placement, quiet): (Placement, bool),
     end: (&AtomicBool, Option<Duration>),
-    mut last_watch: Instant,
+    (mut last_watch, service): (Instant, &mut Service),
 ) -> Result<Gathered, String> {
     let (stop, deadline) = end;
     let mut events = Vec::new();
@@ -307,9 +312,13 @@ fn watch(
                 events.push(ev);
             }
         }
+        let mut frames = 0;
         while let Ok(Some(f)) = topics.frames_rx.try_receive() {
             sup.on_frame(f.frame, now);
+            frames += 1;
         }
+        service.on_frames(frames, now);
+        service.tick(now, events.len());
         while let Ok(Some(e)) = topics.estimates_rx.try_receive() {
             sup.last_estimate = Some(e.seq);
         }
@@ -495,10 +504,35 @@ fn live_stages(
     Ok(stages)
 }
 
+/// The run's folder: `--out`, or a new one in `--runs-dir` (with what to keep
+/// of the earlier runs there), or a new one here.
+fn out_dir_of(args: &RunArgs) -> Result<(PathBuf, Option<Retention>), String> {
+    let (max_age, max_bytes) = crate::retention::limits(args.keep_days, args.keep_gib)?;
+    match (&args.out, &args.runs_dir) {
+        (Some(_), Some(_)) => {
+            Err("--out and --runs-dir: give one (--runs-dir makes a new folder in it per run)".into())
+        }
+        (_, None) if max_age.is_some() || max_bytes.is_some() => {
+            Err("--keep-days and --keep-gib are for --runs-dir".into())
+        }
+        (Some(dir), None) => Ok((dir.clone(), None)),
+        (None, None) => Ok((default_out_dir(Path::new("")), None)),
+        (None, Some(runs)) => {
+            pipeline::out::dir(runs)?;
+            let keep = Retention {
+                dir: runs.clone(),
+                max_age,
+                max_bytes,
+            };
+            Ok((default_out_dir(runs), Some(keep)))
+        }
+    }
+}
+
 /// Where a run without `--out` writes: `leakwatch-run-YYYYMMDD-HHMMSS` (its
 /// UTC start time, as rosbag2 names a recording by its start), so a second run
 /// never collides with the first; `-2`, `-3`, ... within one second.
-fn default_out_dir() -> PathBuf {
+fn default_out_dir(parent: &Path) -> PathBuf {
     let ns = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_nanos() as i128);
@@ -508,11 +542,11 @@ fn default_out_dir() -> PathBuf {
         .take(19)
         .filter(char::is_ascii_digit)
         .collect();
-    let stamp = format!("leakwatch-run-{}-{}", &digits[..8], &digits[8..]);
-    let mut dir = PathBuf::from(&stamp);
+    let stamp = format!("{RUN_FOLDER_PREFIX}{}-{}", &digits[..8], &digits[8..]);
+    let mut dir = parent.join(&stamp);
     let mut n = 2;
     while dir.exists() {
-        dir = PathBuf::from(format!("{stamp}-{n}"));
+        dir = parent.join(format!("{stamp}-{n}"));
         n += 1;
     }
     dir

@@ -275,6 +275,9 @@ fn process_row(
         live_view: None,
         zenoh: false,
         zenoh_connect: Vec::new(),
+        runs_dir: None,
+        keep_days: None,
+        keep_gib: None,
     };
     eprintln!("iceoryx2, {label}: {seconds} s ...");
     let o = runtime::run_pipeline(&args, true)?;
