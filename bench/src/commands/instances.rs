@@ -64,6 +64,10 @@ pub struct InstancesRequest {
     /// Worker threads, each simulating whole recordings (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Only the datasheet and the commissioning recording (no runs): what a
+    /// user has before the watch (docs/examples.sh).
+    #[arg(long)]
+    pub commissioning_only: bool,
 }
 
 impl InstancesRequest {
@@ -413,7 +417,10 @@ pub fn command(req: &InstancesRequest, force: bool) -> Result<(), String> {
         let inst = Instance::draw(&nominal, instance_seed(req.seed, i));
         let dir = instance_dir(&req.out, i);
         pipeline::out::dir(&dir)?;
-        let plan = plan_instance(req, cycles, i, inst.seed);
+        let mut plan = plan_instance(req, cycles, i, inst.seed);
+        if req.commissioning_only {
+            plan.truncate(1);
+        }
         let commission_c = plan.first().map_or(40.0, |p| p.oil.start_c);
         let catalogue = user_datasheet(&nominal, &inst, commission_c)?;
         pipeline::out::write(&dir.join("datasheet.toml"), catalogue.as_bytes(), force, &[])?;
@@ -467,6 +474,7 @@ mod tests {
             commission_seconds: 120.0,
             temp_c: false,
             threads: Some(1),
+            commissioning_only: false,
         }
     }
 

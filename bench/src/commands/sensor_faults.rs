@@ -228,6 +228,7 @@ fn instances_request(args: &SensorFaultsArgs) -> InstancesRequest {
         commission_seconds: 120.0,
         temp_c: false,
         threads: None,
+        commissioning_only: false,
     }
 }
 
