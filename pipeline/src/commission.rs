@@ -468,6 +468,11 @@ fn stated_temperatures_c(oil: &model::params::OilTemperature) -> [f64; 3] {
     [lo, 0.5 * (lo + hi), hi]
 }
 
+/// How far a tank thermometer's reading may be from the oil in the
+/// cylinder, K: a commissioning this close outside the operating range is
+/// not said to be outside it.
+const TANK_THERMOMETER_K: f64 = 2.0;
+
 /// The line that states the smallest detectable leak of each kind over the
 /// operating range ([`stated_temperatures_c`]): the thresholds `thr` (L/min at
 /// p_s/2) widened by what the oil's temperature leaves uncertain for the model
@@ -489,7 +494,8 @@ fn detectable_over_temperature(
             thr[2] + widen[2]
         )
     });
-    let outside = if (oil.operating_min_c..=oil.operating_max_c).contains(&oil.reference_c) {
+    let range = oil.operating_min_c - TANK_THERMOMETER_K..=oil.operating_max_c + TANK_THERMOMETER_K;
+    let outside = if range.contains(&oil.reference_c) {
         String::new()
     } else {
         format!(
@@ -564,6 +570,9 @@ mod tests {
             assert!(cold[k] > mid[k] + 1e-3 && warm[k] > mid[k] + 1e-3, "{line}");
         }
         assert!(!line.contains("outside"), "{line}");
+        // a tank thermometer's reading just below the range is not outside it
+        m.oil_temperature.reference_c = 9.0;
+        assert!(!detectable_over_temperature(&m, thr, [0.0; 3]).contains("outside"));
         m.oil_temperature.reference_c = 55.0;
         let line = detectable_over_temperature(&m, thr, [0.01, -0.01, 0.02]);
         assert!(line.contains("outside the operating range 10-50 °C"), "{line}");
