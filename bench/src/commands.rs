@@ -335,7 +335,12 @@ pub fn detection_data(
     outln!("wall time {:.1} s", r.wall_s);
     out::write(
         &out.join("detection.md"),
-        format!("# Detection on {}\n\n{md}", dir.display()).as_bytes(),
+        // the data set's name, not this machine's path to it
+        format!(
+            "# Detection on {}\n\n{md}",
+            dir.file_name().map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned())
+        )
+        .as_bytes(),
         force,
         &inputs,
     )?;
