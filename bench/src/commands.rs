@@ -338,7 +338,8 @@ pub fn detection_data(
         // the data set's name, not this machine's path to it
         format!(
             "# Detection on {}\n\n{md}",
-            dir.file_name().map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned())
+            dir.file_name()
+                .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned())
         )
         .as_bytes(),
         force,

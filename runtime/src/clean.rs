@@ -65,7 +65,7 @@ impl StartCleanup {
     }
 
     /// Every stage started: what the start made stays for the run.
-    pub(super) fn started(mut self) {
+    pub(super) fn started(&mut self) {
         self.started = true;
     }
 }

@@ -12,6 +12,7 @@
 mod args;
 mod blocked;
 mod clean;
+mod error;
 mod events;
 mod figures;
 mod launch;
@@ -29,6 +30,7 @@ mod watchdog;
 
 pub use args::RunArgs;
 pub use clean::{clean, clean_all};
+pub use error::RunError;
 pub use stages::stage_main;
 pub use supervisor::run_pipeline;
 

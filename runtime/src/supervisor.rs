@@ -14,6 +14,7 @@ use detect::LeakEvent;
 use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
 use crate::args::{check_udp_args, parse_source, RunArgs, RunSource};
+use crate::error::RunError;
 use crate::events::{own_event, print_event};
 use crate::figures::{LatencyReport, StageAcc, STAGE_CODES};
 use crate::notify::ServiceNotify;
@@ -48,8 +49,88 @@ pub struct RunOutcome {
     pub latency_path: Option<PathBuf>,
 }
 
-/// Runs the pipeline; prints events as they come; writes the outputs.
-pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
+/// Runs the pipeline; prints events as they come; writes the outputs. The
+/// steps: [`check`] (nothing started), [`prepare`] and the stages' start,
+/// the watch, [`finish`] (the outputs, whatever ended the run).
+pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, RunError> {
+    let c = check(args, quiet).map_err(RunError::Invalid)?;
+    let (mut p, prefix, bus_cfg) = prepare(args, &c).map_err(RunError::Start)?;
+    let launch = stage_args(
+        args,
+        &p.cfg_path,
+        &c.out_dir,
+        &c.plan.cfg,
+        c.udp,
+        (&c.plan.scenario, c.plan.seconds, &c.plan.faults),
+    );
+    if !quiet {
+        let plan = &c.plan;
+        let sim = (
+            plan.scenario.as_str(),
+            plan.seconds,
+            plan.faults.as_slice(),
+            plan.demo,
+        );
+        announce(args, c.udp, c.placement, &c.out_dir, &plan.cfg, sim).map_err(RunError::Watch)?;
+    }
+    let mut sup = Supervision::new(
+        &c.program,
+        &prefix,
+        &c.out_dir,
+        &bus_cfg,
+        &c.plan.cfg,
+        launch,
+        c.udp.is_some(),
+    );
+    sup.start(&c.stages).map_err(RunError::Start)?;
+    p.start_cleanup.started();
+    // a UDP stream lasts as long as its sender streams
+    let deadline = c
+        .udp
+        .is_none()
+        .then(|| Duration::from_secs_f64(c.plan.seconds + 30.0));
+    let mut service = Service::new(
+        ServiceNotify::from_env(),
+        c.retention.clone(),
+        c.out_dir.clone(),
+        &args.rig,
+    );
+    service.prune(Instant::now());
+    let gathered = watch(
+        &mut sup,
+        &mut p.topics,
+        &c.stages,
+        (c.placement, quiet),
+        (p.stop, deadline),
+        (p.started, &mut service),
+    )
+    .map_err(RunError::Watch)?;
+    service
+        .notify
+        .stopping(gathered.failure.as_deref().unwrap_or("the run ended"));
+    finish(args, &c, &bus_cfg, (p, sup), gathered)
+}
+
+/// What [`check`] found: the run, checked, before anything starts.
+struct Checked {
+    /// The leakwatch binary the stages run from.
+    program: PathBuf,
+    /// Where the estimator and the classifier run.
+    placement: Placement,
+    /// A UDP source's address and idle timeout (s); `None` for the simulated rig.
+    udp: Option<(std::net::SocketAddr, f64)>,
+    /// The run's folder.
+    out_dir: PathBuf,
+    /// What to keep of the earlier runs, with `--runs-dir`.
+    retention: Option<Retention>,
+    /// The scenario, faults and the config every stage reads.
+    plan: Plan,
+    /// The stages to start (the live outputs among them when asked for).
+    stages: Vec<Stage>,
+}
+
+/// Checks every argument, the config and the outputs; starts nothing.
+fn check(args: &RunArgs, quiet: bool) -> Result<Checked, String> {
     let program = stage_program()?;
     frames::RigId::new(&args.rig).map_err(|e| format!("--rig {}: {e}", args.rig))?;
     let source = parse_source(args.source.as_deref())?;
@@ -66,16 +147,50 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     };
     let (out_dir, retention) = out_dir_of(args)?;
     pipeline::out::dir(&out_dir)?;
-    let inputs: Vec<&Path> = args.config.iter().map(|p| p.as_path()).collect();
+    let inputs = inputs_of(args);
     check_outputs(&out_dir, processes, args.force, &inputs)?;
-    let Plan {
-        scenario,
-        demo,
-        seconds,
-        faults,
-        mut cfg,
-    } = plan(args, udp.is_some())?;
-    let stages = live_stages(args, &mut cfg, &out_dir, &inputs, quiet, processes)?;
+    let mut plan = plan(args, udp.is_some())?;
+    let stages = live_stages(args, &mut plan.cfg, &out_dir, &inputs, quiet, processes)?;
+    Ok(Checked {
+        program,
+        placement,
+        udp,
+        out_dir,
+        retention,
+        plan,
+        stages,
+    })
+}
+
+/// The run's inputs (its config file), which no output may be.
+fn inputs_of(args: &RunArgs) -> Vec<&Path> {
+    args.config.iter().map(|p| p.as_path()).collect()
+}
+
+/// The run's own iceoryx2 prefix, its bus and topics, and the config the
+/// stages read: what the stages start on. Fields drop in their order: the
+/// topics and the bus, then the start's clean-up, then the prefix's lock.
+struct Prepared {
+    /// The topics the supervisor reads itself.
+    topics: Topics,
+    /// The run's bus.
+    bus: Bus,
+    /// Removes what a failed start made on the prefix (while the lock is held).
+    start_cleanup: crate::clean::StartCleanup,
+    /// The run owns its prefix until it ends.
+    _prefix_lock: bus::PrefixLock,
+    /// The config file the stages read (in the run's folder).
+    cfg_path: PathBuf,
+    /// Set by SIGINT and SIGTERM.
+    stop: &'static AtomicBool,
+    /// When the watch of publishers started.
+    started: Instant,
+}
+
+/// Takes the run's prefix (removing what a dead run left on it), writes the
+/// stages' config and opens the bus and the topics the supervisor reads;
+/// with the prefix and the bus settings on it.
+fn prepare(args: &RunArgs, c: &Checked) -> Result<(Prepared, String, BusConfig), String> {
     let prefix = run_prefix()?;
     // The run's one time base, fixed now: every stage gets it (stages.rs), so
     // the log and the live view put the same Unix time on the same message.
@@ -86,7 +201,7 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     };
     // The run owns its prefix until it ends: a second run on it is refused here,
     // before it could touch the first one's shared memory.
-    let _prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
+    let prefix_lock = bus_cfg.lock_prefix().map_err(|e| e.to_string())?;
     // what a killed run on this prefix left in shared memory: removed, and said
     crate::clean::remove_at_start(&bus_cfg);
     // a management segment of another user, or a damaged one that could not be
@@ -96,61 +211,45 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
     }
     // a start that fails from here on removes what it made on the prefix
     let start_cleanup = crate::clean::StartCleanup::new(&bus_cfg);
-    let cfg_path = out_dir.join("config.toml");
-    let cfg_text = toml::to_string(&cfg).map_err(|e| e.to_string())?;
-    pipeline::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs)?;
+    let cfg_path = c.out_dir.join("config.toml");
+    let cfg_text = toml::to_string(&c.plan.cfg).map_err(|e| e.to_string())?;
+    pipeline::out::write(&cfg_path, cfg_text.as_bytes(), args.force, &inputs_of(args))?;
     let bus = Bus::open(&args.rig, bus_cfg.clone()).map_err(|e| e.to_string())?;
-    let mut topics = Topics::open(&bus)?;
-    let last_watch = Instant::now();
-    let stop = bus::stop_on_signals();
+    let topics = Topics::open(&bus)?;
+    let prepared = Prepared {
+        topics,
+        bus,
+        start_cleanup,
+        _prefix_lock: prefix_lock,
+        cfg_path,
+        stop: bus::stop_on_signals(),
+        started: Instant::now(),
+    };
+    Ok((prepared, prefix, bus_cfg))
+}
 
-    let launch = stage_args(
-        args,
-        &cfg_path,
-        &out_dir,
-        &cfg,
-        udp,
-        (&scenario, seconds, &faults),
-    );
-    if !quiet {
-        announce(
-            args,
-            udp,
-            placement,
-            &out_dir,
-            &cfg,
-            (&scenario, seconds, &faults, demo),
-        )?;
-    }
-    let mut sup = Supervision::new(&program, &prefix, &out_dir, &bus_cfg, &cfg, launch, udp.is_some());
-    sup.start(&stages)?;
-    start_cleanup.started();
-    // a UDP stream lasts as long as its sender streams
-    let deadline = udp.is_none().then(|| Duration::from_secs_f64(seconds + 30.0));
-    let mut service = Service::new(ServiceNotify::from_env(), retention, out_dir.clone(), &args.rig);
-    service.prune(Instant::now());
+/// After the watch: stops the stages, drains the last stats and events,
+/// writes events.json, latency.json and the bag metadata, and releases the
+/// prefix. A failure that ended the run is the error, its outputs written.
+fn finish(
+    args: &RunArgs,
+    c: &Checked,
+    bus_cfg: &BusConfig,
+    (mut p, mut sup): (Prepared, Supervision),
+    g: Gathered,
+) -> Result<RunOutcome, RunError> {
     let Gathered {
         mut events,
         mut accs,
         mut foreign_events,
         failure,
-    } = watch(
-        &mut sup,
-        &mut topics,
-        &stages,
-        (placement, quiet),
-        (stop, deadline),
-        (last_watch, &mut service),
-    )?;
-    service
-        .notify
-        .stopping(failure.as_deref().unwrap_or("the run ended"));
+    } = g;
     // the classifier's pid, for the events still queued once it has stopped
     let classifier_pids = sup.stop();
-    while let Ok(Some(st)) = topics.stats_rx.try_receive() {
+    while let Ok(Some(st)) = p.topics.stats_rx.try_receive() {
         accs.entry(st.stage).or_default().push(&st.frame);
     }
-    while let Ok(Some(f)) = topics.events_rx.try_receive() {
+    while let Ok(Some(f)) = p.topics.events_rx.try_receive() {
         if let Some(ev) = own_event(&f, &classifier_pids, &mut foreign_events) {
             events.push(ev);
         }
@@ -161,26 +260,36 @@ pub fn run_pipeline(args: &RunArgs, quiet: bool) -> Result<RunOutcome, String> {
         sup.restarts,
         sup.watchdog.finish(Instant::now()),
     );
+    let inputs = inputs_of(args);
     let (events_path, latency_path) = write_outputs(
         args,
-        &out_dir,
+        &c.out_dir,
         &inputs,
         &events,
         &latency,
         &mut sup.output_failures,
-    )?;
-    write_bag_metadata(&out_dir, args.force, &inputs);
+    )
+    .map_err(RunError::Output)?;
+    write_bag_metadata(&c.out_dir, args.force, &inputs);
+    let Prepared {
+        topics,
+        bus,
+        _prefix_lock,
+        ..
+    } = p;
     drop(topics);
     drop(bus);
     let _ = bus_cfg.remove_isolated_files();
+    drop(_prefix_lock);
     if let Some(f) = failure {
         let paths = [events_path.as_deref(), latency_path.as_deref()];
-        return Err(failure_message(&f, paths, &sup.log_failure, &sup.output_failures));
+        let message = failure_message(&f, paths, &sup.log_failure, &sup.output_failures);
+        return Err(RunError::Failed(message));
     }
     Ok(RunOutcome {
         events,
         latency,
-        out_dir: out_dir.clone(),
+        out_dir: c.out_dir.clone(),
         log_failure: sup.log_failure,
         output_failures: sup.output_failures,
         events_path,
