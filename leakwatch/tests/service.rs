@@ -34,6 +34,16 @@ fn have(program: &str) -> bool {
     ok
 }
 
+/// What `systemd-analyze verify` says of the unit file `path`.
+fn verify(path: &Path) -> String {
+    let o = Command::new("systemd-analyze")
+        .args(["verify", "--man=no"])
+        .arg(path)
+        .output()
+        .unwrap();
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o))
+}
+
 #[test]
 fn the_unit_passes_systemd_analyze_verify() {
     if !have("systemd-analyze") {
@@ -47,12 +57,7 @@ fn the_unit_passes_systemd_analyze_verify() {
     assert_ne!(here, unit, "the unit starts /usr/bin/leakwatch");
     let path = dir.path().join("leakwatch@rig1.service");
     std::fs::write(&path, here).unwrap();
-    let o = Command::new("systemd-analyze")
-        .args(["verify", "--man=no"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    let said = verify(&path);
     // only what it says about this unit counts (a container's own units may be incomplete)
     let ours: Vec<&str> = said.lines().filter(|l| l.contains("leakwatch")).collect();
     assert!(ours.is_empty(), "systemd-analyze verify: {said}");
@@ -61,12 +66,7 @@ fn the_unit_passes_systemd_analyze_verify() {
         .unwrap()
         .replace("Type=notify", "Type=notifyy");
     std::fs::write(&path, bad).unwrap();
-    let o = Command::new("systemd-analyze")
-        .args(["verify", "--man=no"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    let said = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    let said = verify(&path);
     assert!(said.contains("notifyy"), "a bad Type= is reported: {said}");
 }
 
