@@ -25,7 +25,8 @@
 ///            "load.stiffness_n_per_m = -1.0: must be a stiffness from 0 to 1e10 N/m");
 /// ```
 ///
-/// A field is `doc comment, attributes, name: Type [= default] [=> [unit, range]]`:
+/// A field is `doc comment, attributes, name: Type [= default] [=> [unit, range]]`
+/// (or `=> [unit]`: a unit, no range):
 /// the struct gets every attribute and doc comment as written; `Default` is
 /// implemented from the defaults when every field has one (a section with
 /// required fields has none); `SCHEMA` holds the table and `check_ranges`
@@ -37,7 +38,7 @@ macro_rules! config_struct {
         $svis:vis struct $name:ident {
             $(
                 $(#[$($fattr:tt)*])*
-                $fvis:vis $field:ident : $ty:ty $(= $default:expr)? $(=> [$unit:literal, $range:expr])?
+                $fvis:vis $field:ident : $ty:ty $(= $default:expr)? $(=> [$unit:literal $(, $range:expr)?])?
             ),* $(,)?
         }
     ) => {
@@ -62,7 +63,7 @@ macro_rules! config_struct {
                         key: stringify!($field),
                         doc: &[$($crate::__doc!($($fattr)*)),*],
                         unit: $crate::__unit!($($unit)?),
-                        range: $crate::__range!($($range)?),
+                        range: $crate::__range!($($($range)?)?),
                         kind: <$ty as $crate::FieldType>::KIND,
                         optional: <$ty as $crate::FieldType>::OPTIONAL,
                         skipped: false $(|| $crate::__skips!($($fattr)*))*,
