@@ -331,11 +331,18 @@ pub fn range_hint(e: &toml::de::Error) -> String {
         return String::new();
     };
     // an element of a list (`leaks[0]`) has its list's field
-    let path: Vec<&str> = keys.split('.').map(|k| k.split('[').next().unwrap_or(k)).collect();
+    let path: Vec<&str> = keys
+        .split('.')
+        .map(|k| k.split('[').next().unwrap_or(k))
+        .collect();
     let Some(field) = Config::SCHEMA.find(&path) else {
         return String::new();
     };
-    let range = field.expected();
+    // a channel of `[udp]` states its range in the channel's own unit
+    let range = match path.as_slice() {
+        ["udp", channel, key] => UdpScaling::range_text(channel, key).unwrap_or_default(),
+        _ => field.expected(),
+    };
     match field.kind {
         _ if range.is_empty() => String::new(),
         schema::Kind::Integer => format!(" (`{keys}` must be an integer: {range})"),

@@ -192,7 +192,10 @@ impl LiveViewConfig {
             format!(
                 "[live_view] bind = {:?}: must be {}",
                 self.bind,
-                Self::SCHEMA.find(&["bind"]).map(schema::Field::expected).unwrap_or_default()
+                Self::SCHEMA
+                    .find(&["bind"])
+                    .map(schema::Field::expected)
+                    .unwrap_or_default()
             )
         })?;
         Ok(())

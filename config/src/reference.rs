@@ -267,7 +267,12 @@ pub fn reference_markdown() -> Result<String, String> {
         let Kind::Table(section) = f.kind else {
             return Err(format!("Config::{} is not a section", f.key));
         };
-        w.section(std::slice::from_ref(&f.key.to_string()), section, &f.doc_text(), f.optional);
+        w.section(
+            std::slice::from_ref(&f.key.to_string()),
+            section,
+            &f.doc_text(),
+            f.optional,
+        );
     }
     Ok(w.out.trim_end().to_string() + "\n")
 }

@@ -84,31 +84,40 @@ impl UdpScaling {
     /// Checks every gain (finite, |gain| within its declared range) and offset
     /// (finite, within its declared range, in the channel's unit), and the
     /// sender (a fixed port, not the unspecified address); the error names the
-    /// field, its range and the channel's unit.
+    /// field, its range and the channel's unit ([`UdpScaling::range_text`]).
     pub fn validate(&self) -> Result<(), String> {
         if let Some(sender) = self.sender {
             parse_sender_address(&sender.to_string())?;
         }
-        let [gain, offset] = ChannelScale::SCHEMA.fields else {
-            return Err("[udp]: the channel's schema is not gain and offset".into());
-        };
-        for (name, unit, c) in self.channels() {
-            if !gain.range.holds_number(c.gain.abs()) {
-                return Err(format!(
-                    "[udp] {name}.gain = {:?}: must be {}",
-                    c.gain,
-                    gain.range.text(&format!("{unit} per raw unit"))
-                ));
-            }
-            if !offset.range.holds_number(c.offset) {
-                return Err(format!(
-                    "[udp] {name}.offset = {:?}: must be {}",
-                    c.offset,
-                    offset.range.text(unit)
-                ));
+        for (name, _, c) in self.channels() {
+            for (field, value, checked) in [("gain", c.gain, c.gain.abs()), ("offset", c.offset, c.offset)] {
+                let Some(f) = ChannelScale::SCHEMA.find(&[field]) else {
+                    continue;
+                };
+                if !f.range.holds_number(checked) {
+                    return Err(format!(
+                        "[udp] {name}.{field} = {value:?}: must be {}",
+                        Self::range_text(name, field).unwrap_or_default()
+                    ));
+                }
             }
         }
         Ok(())
+    }
+
+    /// The range of `[udp.<channel>] <field>` (`gain` or `offset`) as its check
+    /// states it, in the channel's SI unit (`a number from -1e9 to 1e9 Pa`);
+    /// `None` for another channel or field.
+    pub fn range_text(channel: &str, field: &str) -> Option<String> {
+        let (_, unit, _) = UdpScaling::default()
+            .channels()
+            .into_iter()
+            .find(|(name, _, _)| *name == channel)?;
+        let range = ChannelScale::SCHEMA.find(&[field])?.range;
+        Some(match field {
+            "gain" => range.text(&format!("{unit} per raw unit")),
+            _ => range.text(unit),
+        })
     }
 
     /// True if every channel passes through unchanged (gain 1, offset 0).

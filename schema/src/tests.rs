@@ -57,7 +57,10 @@ fn the_table_holds_each_fact_once() {
     assert_eq!(keys.len(), 8);
     let f = s.find(&["adc_bits"]).expect("adc_bits");
     assert_eq!((f.unit, f.expected()), ("bits", "1 to 24 bits".to_string()));
-    assert_eq!(s.find(&["states"]).map(|f| f.expected()), Some("6, 7, 10, 11 or 12".into()));
+    assert_eq!(
+        s.find(&["states"]).map(|f| f.expected()),
+        Some("6, 7, 10, 11 or 12".into())
+    );
     assert_eq!(
         s.find(&["angle_rad"]).map(|f| f.expected()),
         Some("an angle from -10 to 10 rad (0: horizontal)".into())
@@ -68,8 +71,14 @@ fn the_table_holds_each_fact_once() {
     );
     assert_eq!(s.find(&["leaks", "slip_n"]).map(|f| f.key), Some("slip_n"));
     assert!(s.find(&["retract"]).is_some_and(|f| f.optional));
-    assert!(matches!(s.find(&["leaks"]).map(|f| f.kind), Some(Kind::Tables(_))));
-    assert!(matches!(s.find(&["offsets"]).map(|f| f.kind), Some(Kind::List(Kind::Number))));
+    assert!(matches!(
+        s.find(&["leaks"]).map(|f| f.kind),
+        Some(Kind::Tables(_))
+    ));
+    assert!(matches!(
+        s.find(&["offsets"]).map(|f| f.kind),
+        Some(Kind::List(Kind::Number))
+    ));
     assert_eq!(<Outer as FieldType>::OPTIONAL, false);
     let _ = Required { bore_m: 0.1 };
     assert_eq!(Required::SCHEMA.fields[0].expected(), "a bore from 1e-3 to 2 m");
@@ -77,21 +86,35 @@ fn the_table_holds_each_fact_once() {
 
 #[test]
 fn check_ranges_names_the_dotted_key() {
-    Outer::default().check_ranges("").expect("the defaults are in range");
+    Outer::default()
+        .check_ranges("")
+        .expect("the defaults are in range");
     let mut o = Outer::default();
     o.retract = Some(Inner {
         slip_n: f64::NAN,
         ..Inner::default()
     });
     let e = o.check_ranges("").unwrap_err();
-    assert_eq!(e.to_string(), "retract.slip_n = NaN: must be a force from 0 to 1e6 N");
+    assert_eq!(
+        e.to_string(),
+        "retract.slip_n = NaN: must be a force from 0 to 1e6 N"
+    );
     let mut o = Outer::default();
-    o.leaks = vec![Inner::default(), Inner { air: 0.5, ..Inner::default() }];
+    o.leaks = vec![
+        Inner::default(),
+        Inner {
+            air: 0.5,
+            ..Inner::default()
+        },
+    ];
     let e = o.check_ranges("model").unwrap_err();
     assert_eq!(e.key, "model.leaks[1].air");
     let mut o = Outer::default();
     o.adc_bits = 64;
-    assert_eq!(o.check_ranges("").unwrap_err().to_string(), "adc_bits = 64: must be 1 to 24 bits");
+    assert_eq!(
+        o.check_ranges("").unwrap_err().to_string(),
+        "adc_bits = 64: must be 1 to 24 bits"
+    );
     o.adc_bits = 12;
     o.states = 8;
     assert_eq!(o.check_ranges("").unwrap_err().shown, "8");
