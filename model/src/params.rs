@@ -412,6 +412,17 @@ mod tests {
     }
 
     #[test]
+    fn the_declared_stiffness_range_is_the_filters_clamp() {
+        let f = ActuatorParams::SCHEMA
+            .find(&["oil_temperature", "reference_stiffness"])
+            .expect("declared");
+        let Range::Number { lo, hi, .. } = f.range else {
+            panic!("{:?}", f.range);
+        };
+        assert_eq!((lo, hi), crate::process::BULK_SCALE_RANGE);
+    }
+
+    #[test]
     fn validate_names_the_field() {
         let mut p = ActuatorParams::default();
         p.friction.static_n = 500.0;

@@ -79,7 +79,7 @@ fn the_table_holds_each_fact_once() {
         s.find(&["offsets"]).map(|f| f.kind),
         Some(Kind::List(Kind::Number))
     ));
-    assert_eq!(<Outer as FieldType>::OPTIONAL, false);
+    const { assert!(!<Outer as FieldType>::OPTIONAL) };
     let _ = Required { bore_m: 0.1 };
     assert_eq!(Required::SCHEMA.fields[0].expected(), "a bore from 1e-3 to 2 m");
 }
@@ -89,28 +89,34 @@ fn check_ranges_names_the_dotted_key() {
     Outer::default()
         .check_ranges("")
         .expect("the defaults are in range");
-    let mut o = Outer::default();
-    o.retract = Some(Inner {
-        slip_n: f64::NAN,
-        ..Inner::default()
-    });
+    let o = Outer {
+        retract: Some(Inner {
+            slip_n: f64::NAN,
+            ..Inner::default()
+        }),
+        ..Outer::default()
+    };
     let e = o.check_ranges("").unwrap_err();
     assert_eq!(
         e.to_string(),
         "retract.slip_n = NaN: must be a force from 0 to 1e6 N"
     );
-    let mut o = Outer::default();
-    o.leaks = vec![
-        Inner::default(),
-        Inner {
-            air: 0.5,
-            ..Inner::default()
-        },
-    ];
+    let o = Outer {
+        leaks: vec![
+            Inner::default(),
+            Inner {
+                air: 0.5,
+                ..Inner::default()
+            },
+        ],
+        ..Outer::default()
+    };
     let e = o.check_ranges("model").unwrap_err();
     assert_eq!(e.key, "model.leaks[1].air");
-    let mut o = Outer::default();
-    o.adc_bits = 64;
+    let mut o = Outer {
+        adc_bits: 64,
+        ..Outer::default()
+    };
     assert_eq!(
         o.check_ranges("").unwrap_err().to_string(),
         "adc_bits = 64: must be 1 to 24 bits"
