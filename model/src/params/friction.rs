@@ -15,21 +15,45 @@ pub enum FrictionPreset {
     Smooth,
 }
 
-schema::config_struct! {
-    /// Friction parameters of one direction of motion (Karnopp with the LaVal
-    /// Stribeck form, docs/model.md#friction).
-    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-    #[serde(default, deny_unknown_fields)]
-    pub struct FrictionParams {
-        /// Static (stiction) friction f_st, N.
-        pub static_n: f64 = 2.4e3 => ["N", Range::Stated("a force from slip_n to 1e6 N")],
-        /// Slip (Coulomb) friction f_sl, N.
-        pub slip_n: f64 = 1.1e3 => ["N", num!("a force", 0, 1e6)],
-        /// Stribeck decay velocity α, m/s.
-        pub stribeck_velocity_m_s: f64 = 0.04 => ["m/s", num!("a velocity", 1e-6, 10)],
-        /// Viscous friction coefficient d, N·s/m.
-        pub viscous_n_s_per_m: f64 = 350.0 => ["N·s/m", num!("a viscous coefficient", 0, 1e7)],
-    }
+/// Declares [`FrictionParams`] and [`Friction`] with the same curve fields,
+/// written once (`$curve`).
+macro_rules! friction_structs {
+    ($($curve:tt)*) => {
+        schema::config_struct! {
+            /// Friction parameters of one direction of motion (Karnopp with the LaVal
+            /// Stribeck form, docs/model.md#friction).
+            #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+            #[serde(default, deny_unknown_fields)]
+            pub struct FrictionParams {
+                $($curve)*
+            }
+        }
+
+        schema::config_struct! {
+            /// Friction of the rod seal in both directions. The top-level values apply
+            /// while extending and, unless `retract` is given, in both directions.
+            #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+            #[serde(default, deny_unknown_fields)]
+            pub struct Friction {
+                $($curve)*
+                /// Velocity treated as zero (the stick band half-width) u_z, m/s.
+                pub zero_velocity_m_s: f64 = 1.0e-3 => ["m/s", num!("a velocity", 1e-9, 1)],
+                /// Friction while retracting (v < 0), when it differs from extending (asymmetric seals).
+                pub retract: Option<FrictionParams> = None,
+            }
+        }
+    };
+}
+
+friction_structs! {
+    /// Static (stiction) friction f_st, N.
+    pub static_n: f64 = 2.4e3 => ["N", Range::Stated("a force from slip_n to 1e6 N")],
+    /// Slip (Coulomb) friction f_sl, N.
+    pub slip_n: f64 = 1.1e3 => ["N", num!("a force", 0, 1e6)],
+    /// Stribeck decay velocity α, m/s.
+    pub stribeck_velocity_m_s: f64 = 0.04 => ["m/s", num!("a velocity", 1e-6, 10)],
+    /// Viscous friction coefficient d, N·s/m.
+    pub viscous_n_s_per_m: f64 = 350.0 => ["N·s/m", num!("a viscous coefficient", 0, 1e7)],
 }
 
 impl FrictionParams {
@@ -42,27 +66,6 @@ impl FrictionParams {
                 ..FrictionParams::default()
             },
         }
-    }
-}
-
-schema::config_struct! {
-    /// Friction of the rod seal in both directions. The top-level values apply
-    /// while extending and, unless `retract` is given, in both directions.
-    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-    #[serde(default, deny_unknown_fields)]
-    pub struct Friction {
-        /// Static (stiction) friction f_st, N.
-        pub static_n: f64 = 2.4e3 => ["N", Range::Stated("a force from slip_n to 1e6 N")],
-        /// Slip (Coulomb) friction f_sl, N.
-        pub slip_n: f64 = 1.1e3 => ["N", num!("a force", 0, 1e6)],
-        /// Stribeck decay velocity α, m/s.
-        pub stribeck_velocity_m_s: f64 = 0.04 => ["m/s", num!("a velocity", 1e-6, 10)],
-        /// Viscous friction coefficient d, N·s/m.
-        pub viscous_n_s_per_m: f64 = 350.0 => ["N·s/m", num!("a viscous coefficient", 0, 1e7)],
-        /// Velocity treated as zero (the stick band half-width) u_z, m/s.
-        pub zero_velocity_m_s: f64 = 1.0e-3 => ["m/s", num!("a velocity", 1e-9, 1)],
-        /// Friction while retracting (v < 0), when it differs from extending (asymmetric seals).
-        pub retract: Option<FrictionParams> = None,
     }
 }
 
