@@ -23,59 +23,42 @@ use udp::UdpScaling;
 /// up from the working directory when no `--config` is given.
 pub const WORKING_DIR_CONFIG: &str = "leakwatch.toml";
 
-/// The whole configuration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Config {
-    /// The rig in its datasheets' terms (docs/rig.md); when given, the rig facts
-    /// of `[model]`, `[sensors]` and `[leak_filter]` are derived from it
-    /// ([`model::datasheet::DERIVED_FIELDS`]) and are not written there.
-    pub datasheet: Option<model::Datasheet>,
-    /// The actuator model the estimator and calibration believe in.
-    pub model: ActuatorParams,
-    /// The simulated rig's own parameters; when absent the rig equals `[model]`.
-    pub rig: Option<ActuatorParams>,
-    /// Sensors of the simulated rig.
-    pub sensors: SensorParams,
-    /// Integration settings of the simulated rig.
-    pub sim: SimSettings,
-    /// The thesis filter (baseline detector): by default the thesis' 7-state tuning
-    /// (docs/model.md#tuning).
-    pub estimator: Tuning,
-    /// The leak filter (leakwatch's detector): by default 12 states, tuning from the sensors.
-    pub leak_filter: Tuning,
-    /// The detectors.
-    pub classifier: ClassifierConfig,
-    /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
-    /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent),
-    /// and the expected sender, `sender = "IP:PORT"` (default: the first one).
-    pub udp: UdpScaling,
-    /// How `run` places its stage processes: CPU pinning, the low-latency spin.
-    pub run: RunSettings,
-    /// The Foxglove WebSocket live view (`run --live-view`), off by default.
-    pub live_view: live::LiveViewConfig,
-    /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
-    pub zenoh: live::ZenohConfig,
-}
-
-impl Default for Config {
-    fn default() -> Self {
-        let mut cfg = Config {
-            datasheet: None,
-            model: ActuatorParams::default(),
-            rig: None,
-            sensors: SensorParams::default(),
-            sim: SimSettings::default(),
-            estimator: Tuning::thesis(),
-            leak_filter: Tuning::sensor_derived(),
-            classifier: ClassifierConfig::default(),
-            udp: UdpScaling::default(),
-            run: RunSettings::default(),
-            live_view: live::LiveViewConfig::default(),
-            zenoh: live::ZenohConfig::default(),
-        };
-        cfg.derive_rig_facts();
-        cfg
+schema::config_struct! {
+    /// The whole configuration: each section with its defaults (the rig facts
+    /// of `[classifier]` equal `[model]`'s and `[sensors]`' defaults, so the
+    /// default needs no [`Config::derive_rig_facts`]).
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct Config {
+        /// The rig in its datasheets' terms (docs/rig.md); when given, the rig facts
+        /// of `[model]`, `[sensors]` and `[leak_filter]` are derived from it
+        /// ([`model::datasheet::DERIVED_FIELDS`]) and are not written there.
+        pub datasheet: Option<model::Datasheet> = None,
+        /// The actuator model the estimator and calibration believe in.
+        pub model: ActuatorParams = ActuatorParams::default(),
+        /// The simulated rig's own parameters; when absent the rig equals `[model]`.
+        pub rig: Option<ActuatorParams> = None,
+        /// Sensors of the simulated rig.
+        pub sensors: SensorParams = SensorParams::default(),
+        /// Integration settings of the simulated rig.
+        pub sim: SimSettings = SimSettings::default(),
+        /// The thesis filter (baseline detector): by default the thesis' 7-state tuning
+        /// (docs/model.md#tuning).
+        pub estimator: Tuning = Tuning::thesis(),
+        /// The leak filter (leakwatch's detector): by default 12 states, tuning from the sensors.
+        pub leak_filter: Tuning = Tuning::sensor_derived(),
+        /// The detectors.
+        pub classifier: ClassifierConfig = ClassifierConfig::default(),
+        /// The UDP sensor stream of a real rig (`run --source udp://...`): per-channel
+        /// scaling of raw values to SI, `SI = gain·raw + offset` (default: SI as sent),
+        /// and the expected sender, `sender = "IP:PORT"` (default: the first one).
+        pub udp: UdpScaling = UdpScaling::default(),
+        /// How `run` places its stage processes: CPU pinning, the low-latency spin.
+        pub run: RunSettings = RunSettings::default(),
+        /// The Foxglove WebSocket live view (`run --live-view`), off by default.
+        pub live_view: live::LiveViewConfig = live::LiveViewConfig::default(),
+        /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
+        pub zenoh: live::ZenohConfig = live::ZenohConfig::default(),
     }
 }
 
@@ -332,13 +315,8 @@ pub fn toml_error_line(text: &str, e: &toml::de::Error) -> String {
 
 /// For a TOML error at a numeric field of the config (a value of the wrong
 /// type, negative for an unsigned field, or too large for it): ` (`section.field`
-/// must be an integer: 1 to 24 bits)`, the range and unit from the field's own
-/// validation; empty for any other error.
-///
-/// The range is the validation's own message (no second table to keep in
-/// step): the field is set, in the default config, to values outside every
-/// range (NaN for a number; 0, then the largest u8, u16, u32 for an integer)
-/// until the validation refuses it by name.
+/// must be an integer: 1 to 24 bits)`, the range and unit as the field
+/// declares them ([`Config::SCHEMA`]); empty for any other error.
 pub fn range_hint(e: &toml::de::Error) -> String {
     // the dotted key path of the value the error is about (toml shows it when
     // the error has no input text to point into)
@@ -352,141 +330,29 @@ pub fn range_hint(e: &toml::de::Error) -> String {
     else {
         return String::new();
     };
-    let mut path: Vec<&str> = keys.split('.').collect();
-    if path.first() == Some(&"rig") {
-        path[0] = "model"; // [rig] has [model]'s fields and ranges (not in the default config)
-    }
-    // only a field the default config has (an optional one has no type to name)
-    match toml::Table::try_from(Config::default()) {
-        Ok(base) if leaf(&base, &path).is_some() => {}
-        _ => return String::new(),
-    }
-    match probe_range(&path) {
-        Some((Probe::Integer, r)) => format!(" (`{keys}` must be an integer: {r})"),
-        Some((Probe::Number, r)) if r.starts_with("a number ") => format!(" (`{keys}` must be {r})"),
-        Some((Probe::Number, r)) => format!(" (`{keys}` must be a number: {r})"),
+    // an element of a list (`leaks[0]`) has its list's field
+    let path: Vec<&str> = keys
+        .split('.')
+        .map(|k| k.split('[').next().unwrap_or(k))
+        .collect();
+    let Some(field) = Config::SCHEMA.find(&path) else {
+        return String::new();
+    };
+    // a channel of `[udp]` states its range in the channel's own unit
+    let range = match path.as_slice() {
+        ["udp", channel, key] => UdpScaling::range_text(channel, key).unwrap_or_default(),
+        _ => field.expected(),
+    };
+    match field.kind {
+        _ if range.is_empty() => String::new(),
+        schema::Kind::Integer => format!(" (`{keys}` must be an integer: {range})"),
+        schema::Kind::Number | schema::Kind::List(schema::Kind::Number) if range.starts_with("a number ") => {
+            format!(" (`{keys}` must be {range})")
+        }
+        schema::Kind::Number | schema::Kind::List(schema::Kind::Number) => {
+            format!(" (`{keys}` must be a number: {range})")
+        }
         _ => String::new(),
-    }
-}
-
-/// What kind of value [`probe_range`] tried in a field.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Probe {
-    /// A floating-point number (tried: NaN).
-    Number,
-    /// An integer (tried: 0, then the largest u8, u16, u32).
-    Integer,
-    /// Text or a choice of names (tried: `"?"`, and `["?"]` for a list).
-    Text,
-}
-
-/// The range of the config field at `path` (`["model", "mass_kg"]`) as its
-/// own validation states it (`a mass from 1e-3 to 1e5 kg`), with the kind of
-/// value tried; `None` when no value outside every range is refused by name.
-///
-/// The field is set, in the default config, to values outside every range
-/// (NaN for a number; 0, then the largest u8, u16, u32 for an integer; `"?"`
-/// for text or a name) until the validation, or the parser for a choice of
-/// names, refuses it by name. So a range is written once, where it is checked.
-/// A field of an optional section that is absent by default (`[rig]`,
-/// `[model.friction.retract]`) is tried with that section given empty;
-/// `[rig]` has `[model]`'s fields and ranges.
-pub fn probe_range(path: &[&str]) -> Option<(Probe, String)> {
-    let mut path: Vec<&str> = path.to_vec();
-    if path.first() == Some(&"rig") {
-        path[0] = "model"; // [rig] has [model]'s fields and ranges (not in the default config)
-    }
-    let (last, parents) = path.split_last()?;
-    // [datasheet] has required fields: probed in the example `leakwatch init` writes
-    let datasheet = (path.first() == Some(&"datasheet")).then(|| crate::init::example(false));
-    let mut base = toml::Table::try_from(Config {
-        datasheet,
-        ..Config::default()
-    })
-    .ok()?;
-    // an optional section absent by default is given empty (its fields then take their defaults)
-    let mut t = &mut base;
-    for key in parents {
-        t = t
-            .entry(key.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
-            .as_table_mut()?;
-    }
-    let given = match t.get(*last) {
-        Some(v) => v.clone(),
-        // an optional field absent by default: its kind from a config that has it
-        None => toml::Value::Float(0.0),
-    };
-    let (kind, candidates) = match given {
-        toml::Value::Integer(_) => (
-            Probe::Integer,
-            [0, 255, 65_535, 4_294_967_295].map(toml::Value::Integer).to_vec(),
-        ),
-        toml::Value::Float(_) => (Probe::Number, vec![toml::Value::Float(f64::NAN)]),
-        toml::Value::String(_) => (Probe::Text, vec![toml::Value::String("?".into())]),
-        // numbers per channel: each NaN
-        toml::Value::Array(items) if items.iter().all(|v| v.is_float()) && !items.is_empty() => (
-            Probe::Number,
-            vec![toml::Value::Array(vec![
-                toml::Value::Float(f64::NAN);
-                items.len()
-            ])],
-        ),
-        toml::Value::Array(_) => (
-            Probe::Text,
-            vec![toml::Value::Array(vec![toml::Value::String("?".into())])],
-        ),
-        _ => return None,
-    };
-    for v in candidates {
-        let mut t = base.clone();
-        if let Some(section) = leaf_mut(&mut t, parents).and_then(|s| s.as_table_mut()) {
-            section.insert(last.to_string(), v);
-        } else if parents.is_empty() {
-            t.insert(last.to_string(), v);
-        }
-        let Ok(text) = toml::to_string(&t) else { continue };
-        let range = match Config::parse_or_toml_error(&text) {
-            Err(ParseError::Invalid(msg))
-                if msg.contains(&format!("{last}` =")) || msg.contains(&format!("{last} =")) =>
-            {
-                msg.split_once("is invalid: expected ")
-                    .or_else(|| msg.split_once(": must be "))
-                    .map(|(_, r)| r.to_string())
-            }
-            // a choice of names: the parser lists them (`unknown variant `?`, expected ...`)
-            Err(ParseError::Toml(e)) if kind == Probe::Text => e
-                .message()
-                .split_once("expected ")
-                .map(|(_, r)| r.trim().to_string()),
-            _ => None,
-        };
-        if let Some(r) = range {
-            return Some((kind, r));
-        }
-    }
-    None
-}
-
-fn leaf<'a>(t: &'a toml::Table, path: &[&str]) -> Option<&'a toml::Value> {
-    let (first, rest) = path.split_first()?;
-    let v = t.get(*first)?;
-    match v {
-        toml::Value::Table(sub) if !rest.is_empty() => leaf(sub, rest),
-        _ if rest.is_empty() => Some(v),
-        _ => None,
-    }
-}
-
-fn leaf_mut<'a>(t: &'a mut toml::Table, path: &[&str]) -> Option<&'a mut toml::Value> {
-    let (first, rest) = path.split_first()?;
-    let v = t.get_mut(*first)?;
-    if rest.is_empty() {
-        return Some(v);
-    }
-    match v {
-        toml::Value::Table(sub) => leaf_mut(sub, rest),
-        _ => None,
     }
 }
 

@@ -5,6 +5,7 @@
 use std::net::IpAddr;
 use std::path::{Path, PathBuf};
 
+use schema::{int, num, Range};
 use serde::{Deserialize, Serialize};
 
 /// Foxglove's default WebSocket port, the live view's default.
@@ -14,104 +15,67 @@ pub const DEFAULT_PORT: u16 = 8765;
 /// default: Zenoh's usual port on this machine.
 pub const DEFAULT_WATCH_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 
-/// Highest rate of a decimated stream, Hz (the rig's own sample rate).
-pub const MAX_RATE_HZ: f64 = 1000.0;
-/// Lowest rate of a decimated stream, Hz.
-pub const MIN_RATE_HZ: f64 = 0.1;
-
-/// `[live_view]`: the Foxglove WebSocket live view.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct LiveViewConfig {
-    /// Serve the live view in `leakwatch run` (also `run --live-view [PORT]`).
-    pub enabled: bool,
-    /// Address to listen on: `127.0.0.1` (this machine only, the default) or
-    /// `0.0.0.0` (every interface: anyone who reaches the port sees the rig).
-    pub bind: String,
-    /// TCP port, 1 to 65535 (8765 is Foxglove's default).
-    pub port: u16,
-    /// Sensor frames sent at most this often, Hz (of the rig's sample time).
-    pub frames_hz: f64,
-    /// Estimates sent at most this often, Hz (events and health: every one).
-    pub estimates_hz: f64,
-    /// Messages queued per client before the oldest are dropped (a slow
-    /// client loses messages; the pipeline never waits for it), 1 to 65536.
-    pub backlog: usize,
-    /// A token every client must send (`ws://HOST:PORT/?token=TOKEN`, or an
-    /// `Authorization: Bearer TOKEN` header); a client without it is refused
-    /// with HTTP 401. None by default. 16 to 256 characters of
-    /// `A-Z a-z 0-9 - _ . ~` (nothing to escape in a URL). It is copied into
-    /// the run's config.toml and its log's metadata: prefer `token_file`.
-    pub token: Option<String>,
-    /// A file holding the token (its first line), instead of `token`: a
-    /// regular file of this user that nobody else can read (mode 0600 or 0400).
-    pub token_file: Option<PathBuf>,
-}
-
-impl Default for LiveViewConfig {
-    fn default() -> Self {
-        LiveViewConfig {
-            enabled: false,
-            bind: "127.0.0.1".into(),
-            port: DEFAULT_PORT,
-            frames_hz: 50.0,
-            estimates_hz: 50.0,
-            backlog: 256,
-            token: None,
-            token_file: None,
-        }
+schema::config_struct! {
+    /// `[live_view]`: the Foxglove WebSocket live view.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct LiveViewConfig {
+        /// Serve the live view in `leakwatch run` (also `run --live-view [PORT]`).
+        pub enabled: bool = false,
+        /// Address to listen on: `127.0.0.1` (this machine only, the default) or
+        /// `0.0.0.0` (every interface: anyone who reaches the port sees the rig).
+        pub bind: String = "127.0.0.1".into() => [
+            "",
+            Range::Stated("an IP address (127.0.0.1: this machine; 0.0.0.0: every interface)")
+        ],
+        /// TCP port, 1 to 65535 (8765 is Foxglove's default).
+        pub port: u16 = DEFAULT_PORT => ["", int!(1, 65535, "(a TCP port)")],
+        /// Sensor frames sent at most this often, Hz (of the rig's sample time).
+        pub frames_hz: f64 = 50.0 => ["Hz", num!("a number", 0.1, 1000.0)],
+        /// Estimates sent at most this often, Hz (events and health: every one).
+        pub estimates_hz: f64 = 50.0 => ["Hz", num!("a number", 0.1, 1000.0)],
+        /// Messages queued per client before the oldest are dropped (a slow
+        /// client loses messages; the pipeline never waits for it), 1 to 65536.
+        pub backlog: usize = 256 => ["messages", int!(1, 65536)],
+        /// A token every client must send (`ws://HOST:PORT/?token=TOKEN`, or an
+        /// `Authorization: Bearer TOKEN` header); a client without it is refused
+        /// with HTTP 401. None by default. 16 to 256 characters of
+        /// `A-Z a-z 0-9 - _ . ~` (nothing to escape in a URL). It is copied into
+        /// the run's config.toml and its log's metadata: prefer `token_file`.
+        pub token: Option<String> = None,
+        /// A file holding the token (its first line), instead of `token`: a
+        /// regular file of this user that nobody else can read (mode 0600 or 0400).
+        pub token_file: Option<PathBuf> = None,
     }
 }
 
-/// `[zenoh]`: the fleet gateway and `leakwatch watch`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ZenohConfig {
-    /// Run the gateway in `leakwatch run` (also `run --zenoh`).
-    pub enabled: bool,
-    /// Zenoh endpoints the gateway listens on, e.g. `["tcp/0.0.0.0:7447"]` (none by default).
-    pub listen: Vec<String>,
-    /// Zenoh endpoints the gateway connects to: a `leakwatch watch --listen`,
-    /// a Zenoh router or another peer, e.g. `["tcp/10.0.0.5:7447"]` (default
-    /// `tcp/127.0.0.1:7447`, a `leakwatch watch` on this machine).
-    pub connect: Vec<String>,
-    /// Zenoh's multicast scouting (finds peers on the local network by itself);
-    /// off by default: only the endpoints given are used.
-    pub multicast_scouting: bool,
-    /// Estimates published at most this often, Hz (events and health: every one).
-    pub estimates_hz: f64,
-    /// A file holding the key shared by the gateways and `watch` (its first
-    /// line, at least 32 bytes; a file of this user with mode 0600): the
-    /// gateway signs every message with it (HMAC-SHA256) and `watch` marks
-    /// what it cannot verify `UNVERIFIED` and leaves out replays. None by
-    /// default: unsigned, unverified.
-    pub key_file: Option<PathBuf>,
-    /// The oldest signed message `watch` accepts, s (and as far ahead: the
-    /// clocks of the gateway's and the watch's machines must agree this well).
-    pub max_age_s: f64,
-}
-
-impl Default for ZenohConfig {
-    fn default() -> Self {
-        ZenohConfig {
-            enabled: false,
-            listen: Vec::new(),
-            connect: vec![DEFAULT_WATCH_ENDPOINT.to_string()],
-            multicast_scouting: false,
-            estimates_hz: 10.0,
-            key_file: None,
-            max_age_s: 30.0,
-        }
-    }
-}
-
-fn check_rate(section: &str, name: &str, v: f64) -> Result<(), String> {
-    if v.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&v) {
-        Ok(())
-    } else {
-        Err(format!(
-            "[{section}] {name} = {v:?}: must be a number from {MIN_RATE_HZ:?} to {MAX_RATE_HZ:?} Hz"
-        ))
+schema::config_struct! {
+    /// `[zenoh]`: the fleet gateway and `leakwatch watch`.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct ZenohConfig {
+        /// Run the gateway in `leakwatch run` (also `run --zenoh`).
+        pub enabled: bool = false,
+        /// Zenoh endpoints the gateway listens on, e.g. `["tcp/0.0.0.0:7447"]` (none by default).
+        pub listen: Vec<String> = Vec::new(),
+        /// Zenoh endpoints the gateway connects to: a `leakwatch watch --listen`,
+        /// a Zenoh router or another peer, e.g. `["tcp/10.0.0.5:7447"]` (default
+        /// `tcp/127.0.0.1:7447`, a `leakwatch watch` on this machine).
+        pub connect: Vec<String> = vec![DEFAULT_WATCH_ENDPOINT.to_string()],
+        /// Zenoh's multicast scouting (finds peers on the local network by itself);
+        /// off by default: only the endpoints given are used.
+        pub multicast_scouting: bool = false,
+        /// Estimates published at most this often, Hz (events and health: every one).
+        pub estimates_hz: f64 = 10.0 => ["Hz", num!("a number", 0.1, 1000.0)],
+        /// A file holding the key shared by the gateways and `watch` (its first
+        /// line, at least 32 bytes; a file of this user with mode 0600): the
+        /// gateway signs every message with it (HMAC-SHA256) and `watch` marks
+        /// what it cannot verify `UNVERIFIED` and leaves out replays. None by
+        /// default: unsigned, unverified.
+        pub key_file: Option<PathBuf> = None,
+        /// The oldest signed message `watch` accepts, s (and as far ahead: the
+        /// clocks of the gateway's and the watch's machines must agree this well).
+        pub max_age_s: f64 = 30.0 => ["s", num!("a number", 1, 3600)],
     }
 }
 
@@ -222,24 +186,18 @@ impl LiveViewConfig {
 
     /// Checks every field; the error names the field, its range and unit.
     pub fn validate(&self) -> Result<(), String> {
+        self.check_ranges("").map_err(|e| format!("[live_view] {e}"))?;
         self.resolve_token()?;
         self.bind.parse::<IpAddr>().map_err(|_| {
             format!(
-                "[live_view] bind = {:?}: must be an IP address (127.0.0.1: this machine; 0.0.0.0: every interface)",
-                self.bind
+                "[live_view] bind = {:?}: must be {}",
+                self.bind,
+                Self::SCHEMA
+                    .find(&["bind"])
+                    .map(schema::Field::expected)
+                    .unwrap_or_default()
             )
         })?;
-        if self.port == 0 {
-            return Err("[live_view] port = 0: must be 1 to 65535 (a TCP port)".into());
-        }
-        check_rate("live_view", "frames_hz", self.frames_hz)?;
-        check_rate("live_view", "estimates_hz", self.estimates_hz)?;
-        if !(1..=65_536).contains(&self.backlog) {
-            return Err(format!(
-                "[live_view] backlog = {}: must be 1 to 65536 messages",
-                self.backlog
-            ));
-        }
         Ok(())
     }
 }
@@ -247,15 +205,9 @@ impl LiveViewConfig {
 impl ZenohConfig {
     /// Checks every field; the error names the field, its range and unit.
     pub fn validate(&self) -> Result<(), String> {
+        self.check_ranges("").map_err(|e| format!("[zenoh] {e}"))?;
         for e in self.listen.iter().chain(&self.connect) {
             check_endpoint(e).map_err(|m| format!("[zenoh] {m}"))?;
-        }
-        check_rate("zenoh", "estimates_hz", self.estimates_hz)?;
-        if !(self.max_age_s.is_finite() && (1.0..=3600.0).contains(&self.max_age_s)) {
-            return Err(format!(
-                "[zenoh] max_age_s = {:?}: must be a number from 1 to 3600 s",
-                self.max_age_s
-            ));
         }
         self.key().map(|_| ())
     }

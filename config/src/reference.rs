@@ -1,44 +1,16 @@
 //! `leakwatch config --reference`: the configuration reference in Markdown,
-//! made from the config types themselves, so it cannot disagree with them.
+//! made from the config types' declarations ([`schema`]), so it cannot
+//! disagree with them.
 //!
-//! - Sections and fields: the structs [`Config`] holds, read from their source
-//!   (compiled in with `include_str!`), in the order they are declared.
+//! - Sections and fields: [`Config::SCHEMA`] and the sections it holds, in
+//!   the order they are declared.
 //! - Meaning: the first sentence of each field's doc comment.
-//! - Range and unit: the field's own validation ([`probe_range`]).
+//! - Unit and range: as each field declares them (and as its check states them).
 //! - Default: `Config::default()` serialized.
 
-mod structs;
+use schema::{Field, Kind, Section};
 
-use super::{probe_range, Config};
-use structs::{find_struct, struct_head};
-
-/// The sources of the structs that make up the configuration (path from the
-/// workspace root, text). A section whose type is in none of them is an error
-/// that names the type.
-const SOURCES: [(&str, &str); 13] = [
-    ("config/src/lib.rs", include_str!("lib.rs")),
-    ("config/src/run_settings.rs", include_str!("run_settings.rs")),
-    ("model/src/params.rs", include_str!("../../model/src/params.rs")),
-    (
-        "model/src/params/friction.rs",
-        include_str!("../../model/src/params/friction.rs"),
-    ),
-    (
-        "model/src/params/oil.rs",
-        include_str!("../../model/src/params/oil.rs"),
-    ),
-    (
-        "model/src/datasheet.rs",
-        include_str!("../../model/src/datasheet.rs"),
-    ),
-    ("model/src/sensors.rs", include_str!("../../model/src/sensors.rs")),
-    ("model/src/sim.rs", include_str!("../../model/src/sim.rs")),
-    ("model/src/leakage.rs", include_str!("../../model/src/leakage.rs")),
-    ("filter/src/tuning.rs", include_str!("../../filter/src/tuning.rs")),
-    ("detect/src/config.rs", include_str!("../../detect/src/config.rs")),
-    ("config/src/udp.rs", include_str!("udp.rs")),
-    ("config/src/live.rs", include_str!("live.rs")),
-];
+use super::Config;
 
 /// The command that writes the committed reference (named in the page and by its test).
 pub const REGENERATE: &str = "cargo run -p leakwatch -- config --reference > docs/config.md";
@@ -66,27 +38,6 @@ pub const FIRST: [(&str, &str); 5] = [
         "watching from Foxglove on this PC, or from another PC with `leakwatch watch`.",
     ),
 ];
-
-/// `Option<T>` → (true, `T`); `T` → (false, `T`).
-fn unwrap_option(ty: &str) -> (bool, &str) {
-    match ty.strip_prefix("Option<").and_then(|t| t.strip_suffix('>')) {
-        Some(inner) => (true, inner),
-        None => (false, ty),
-    }
-}
-
-/// The type's name without its module path (`live::ZenohConfig` → `ZenohConfig`).
-fn bare(ty: &str) -> &str {
-    ty.rsplit("::").next().unwrap_or(ty)
-}
-
-/// Whether `ty` names a struct of the sources (a TOML table).
-fn is_struct(ty: &str) -> bool {
-    let head = struct_head(bare(ty));
-    SOURCES
-        .iter()
-        .any(|(_, text)| text.lines().any(|l| l.trim() == head))
-}
 
 /// The first sentence of a doc comment: up to the first `. ` before a capital
 /// letter outside parentheses, or the whole of it. Rustdoc links (`` [`x`] ``)
@@ -117,58 +68,6 @@ fn first_sentence(doc: &str) -> String {
         text.replace_range(open..open + 1, "");
     }
     text.replace('|', "\\|")
-}
-
-/// Whether a word of a range is a number (`1e-3`, `0.5)`, `-π/2`).
-fn is_number(word: &str) -> bool {
-    let w = word.trim_matches(|c: char| "[](),;:".contains(c));
-    w.parse::<f64>().is_ok() || (w.contains('π') && w.chars().all(|c| "0123456789.π/-+".contains(c)))
-}
-
-/// `text` without its remarks in parentheses: a ` (` group closed by a `)`
-/// that ends a word (`(0 = off)`, not `m³/(s·Pa)` nor `(dimensionless)²`).
-fn without_remarks(text: &str) -> String {
-    let mut out = text.to_string();
-    while let Some(open) = out.find(" (") {
-        let Some(close) = out[open..].find(')').map(|c| open + c) else {
-            break;
-        };
-        let after = out[close + 1..].chars().next();
-        if after.is_some_and(|c| !(c.is_whitespace() || ",;.".contains(c))) {
-            break;
-        }
-        out.replace_range(open..close + 1, "");
-    }
-    out
-}
-
-/// The unit of a field, from its range (`a mass from 1e-3 to 1e5 kg` → `kg`):
-/// the words after its last number, remarks in parentheses left out; else a
-/// remark right after the last number (`from 0.01 to 1 (dimensionless)`);
-/// else the short last part of the meaning (`Window of ..., samples.` →
-/// `samples`); else empty.
-fn unit_of(range: &str, meaning: &str) -> String {
-    let plain = without_remarks(range);
-    let words: Vec<&str> = plain.split_whitespace().collect();
-    if let Some(last) = words.iter().rposition(|w| is_number(w)) {
-        let rest = words[last + 1..].join(" ");
-        if !rest.is_empty() {
-            return rest;
-        }
-        let words: Vec<&str> = range.split_whitespace().collect();
-        if let Some(last) = words.iter().rposition(|w| is_number(w)) {
-            let rest = words[last + 1..].join(" ");
-            if let Some(inner) = rest.strip_prefix('(').and_then(|r| r.strip_suffix(')')) {
-                if !inner.chars().any(|c| c.is_ascii_digit()) {
-                    return inner.to_string();
-                }
-            }
-        }
-    }
-    match meaning.trim_end_matches('.').rsplit_once(", ") {
-        Some((_, tail)) if tail.chars().count() <= 12 && !tail.contains(['(', ')', ' ']) => tail.to_string(),
-        _ => String::new(),
-    }
 }
 
 /// A default value as it is written in the file (numbers in their shortest
@@ -217,18 +116,45 @@ fn section_defaults(defaults: &toml::Table, path: &[String]) -> Option<toml::Tab
     }
 }
 
+/// The range column of a field: its declared range, `true or false`, or its names.
+fn range_cell(f: &Field) -> String {
+    match f.kind {
+        Kind::Flag => "true or false".into(),
+        Kind::Choice(names) => {
+            let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+            match names.split_last() {
+                Some((last, rest)) if rest.len() == 1 => format!("{} or {last}", rest[0]),
+                Some((last, rest)) if !rest.is_empty() => format!("one of {}, {last}", rest.join(", ")),
+                _ => names.concat(),
+            }
+        }
+        Kind::Tables(_) => String::new(),
+        _ => f.expected(),
+    }
+}
+
+/// A table cell: `—` when empty, `|` escaped.
+fn cell(s: &str) -> String {
+    if s.is_empty() {
+        "—".to_string()
+    } else {
+        s.replace('|', "\\|")
+    }
+}
+
 /// Writes the reference of one section and, after it, of its sub-sections.
 struct Writer {
     /// `Config::default()` serialized.
     defaults: toml::Table,
     /// Sections written so far: (type, defaults, heading), to refer to instead of repeating.
-    written: Vec<(String, Option<toml::Table>, String)>,
+    written: Vec<(&'static str, Option<toml::Table>, String)>,
     /// The page so far.
     out: String,
 }
 
 impl Writer {
-    fn section(&mut self, path: &[String], ty: &str, about: &str, optional: bool) -> Result<(), String> {
+    /// The section at `path`, of type `section`, that the field documented `about` holds.
+    fn section(&mut self, path: &[String], section: &'static Section, about: &str, optional: bool) {
         let heading = format!("[{}]", path.join("."));
         let defaults = section_defaults(&self.defaults, path);
         let mut intro = first_sentence(about);
@@ -238,20 +164,18 @@ impl Writer {
         if let Some((_, _, same)) = self
             .written
             .iter()
-            .find(|(t, d, _)| t == bare(ty) && *d == defaults)
+            .find(|(t, d, _)| *t == section.name && *d == defaults)
         {
             self.out.push_str(&format!(
                 "## {heading}\n\n{intro} The fields, ranges and defaults of {same}.\n\n"
             ));
-            return Ok(());
+            return;
         }
         self.written
-            .push((bare(ty).to_string(), defaults.clone(), heading.clone()));
-        let doc = find_struct(bare(ty))?;
+            .push((section.name, defaults.clone(), heading.clone()));
         self.out.push_str(&format!(
             "## {heading}\n\n{intro} (`{}` in {})\n\n",
-            bare(ty),
-            doc.file
+            section.name, section.file
         ));
         match (optional, defaults.is_some()) {
             (true, true) => self
@@ -265,81 +189,53 @@ impl Writer {
         self.out
             .push_str("| field | unit | range | default | meaning |\n|---|---|---|---|---|\n");
         let mut subsections = Vec::new();
-        for f in &doc.fields {
-            let (opt, inner) = unwrap_option(&f.ty);
-            if is_struct(inner) {
-                subsections.push((f, opt, inner));
+        for f in section.settings() {
+            if let Kind::Table(sub) = f.kind {
+                subsections.push((f, sub));
                 continue;
             }
-            let mut field_path = path.to_vec();
-            field_path.push(f.name.clone());
-            let keys: Vec<&str> = field_path.iter().map(String::as_str).collect();
-            let list_of_tables = inner
-                .strip_prefix("Vec<")
-                .and_then(|t| t.strip_suffix('>'))
-                .is_some_and(is_struct);
-            let range = if inner == "bool" {
-                "true or false".to_string()
-            } else if list_of_tables {
-                String::new()
-            } else {
-                probe_range(&keys).map(|(_, r)| r).unwrap_or_default()
-            };
-            let default = match defaults.as_ref().and_then(|d| d.get(&f.name)) {
+            let default = match defaults.as_ref().and_then(|d| d.get(f.key)) {
                 Some(v) => format!("`{}`", shown(v)),
-                None if opt => "absent".into(),
+                None if f.optional => "absent".into(),
                 None => "—".into(),
             };
-            let cell = |s: &str| {
-                if s.is_empty() {
-                    "—".to_string()
-                } else {
-                    s.replace('|', "\\|")
-                }
-            };
+            let meaning = first_sentence(&f.doc_text());
             self.out.push_str(&format!(
-                "| `{}` | {} | {} | {} | {} |\n",
-                f.name,
-                cell(&unit_of(&range, &first_sentence(&f.doc))),
-                cell(&range),
-                default,
-                first_sentence(&f.doc)
+                "| `{}` | {} | {} | {default} | {meaning} |\n",
+                f.key,
+                cell(f.unit_shown()),
+                cell(&range_cell(f)),
             ));
-            if let Some(element) = inner.strip_prefix("Vec<").and_then(|t| t.strip_suffix('>')) {
-                if is_struct(element) {
-                    subsections.push((f, false, element));
-                }
+            if let Kind::Tables(element) = f.kind {
+                subsections.push((f, element));
             }
         }
         self.out.push('\n');
-        for (f, opt, inner) in subsections {
-            let mut sub = path.to_vec();
-            sub.push(f.name.clone());
-            if f.ty.starts_with("Vec<") {
-                self.list(&sub, inner, &f.doc)?;
+        for (f, sub) in subsections {
+            let mut path = path.to_vec();
+            path.push(f.key.to_string());
+            if matches!(f.kind, Kind::Tables(_)) {
+                self.list(&path, sub, &f.doc_text());
             } else {
-                self.section(&sub, inner, &f.doc, opt)?;
+                self.section(&path, sub, &f.doc_text(), f.optional);
             }
         }
-        Ok(())
     }
 
     /// A list of tables (`[[model.leaks]]`): its element's fields, no defaults.
-    fn list(&mut self, path: &[String], ty: &str, about: &str) -> Result<(), String> {
-        let doc = find_struct(bare(ty))?;
+    fn list(&mut self, path: &[String], section: &'static Section, about: &str) {
         self.out.push_str(&format!(
             "## [[{}]]\n\n{} Each entry has every field below. (`{}` in {})\n\n| field | meaning |\n|---|---|\n",
             path.join("."),
             first_sentence(about),
-            bare(ty),
-            doc.file
+            section.name,
+            section.file
         ));
-        for f in &doc.fields {
+        for f in section.settings() {
             self.out
-                .push_str(&format!("| `{}` | {} |\n", f.name, first_sentence(&f.doc)));
+                .push_str(&format!("| `{}` | {} |\n", f.key, first_sentence(&f.doc_text())));
         }
         self.out.push('\n');
-        Ok(())
     }
 }
 
@@ -358,7 +254,7 @@ pub fn reference_markdown() -> Result<String, String> {
          Every field is optional: a field left out takes its default.\n\
          `leakwatch config --print-default` prints them all as TOML; `leakwatch config --check FILE` checks a file.\n\
          A value outside its range is refused at load, naming the field, the range and the unit.\n\n\
-         This page is generated from the config types: meanings from their doc comments, ranges from their validation, defaults from `Config::default()`.\n\
+         This page is generated from the config types' declarations (each field declared once, with its unit, range, default and doc comment: the `schema` crate): meanings from the doc comments, units and ranges as declared (and checked), defaults from `Config::default()`.\n\
          Do not edit it; regenerate it with `{REGENERATE}`.\n\
          A test (`leakwatch/tests/reference.rs`) fails when it differs from what the command prints.\n\n"
     ));
@@ -367,13 +263,16 @@ pub fn reference_markdown() -> Result<String, String> {
         w.out.push_str(&format!("- {fields}: {why}\n"));
     }
     w.out.push('\n');
-    let config = find_struct("Config")?;
-    for f in &config.fields {
-        let (opt, inner) = unwrap_option(&f.ty);
-        if !is_struct(inner) {
-            return Err(format!("Config::{} is not a section (type {})", f.name, f.ty));
-        }
-        w.section(std::slice::from_ref(&f.name), inner, &f.doc, opt)?;
+    for f in Config::SCHEMA.settings() {
+        let Kind::Table(section) = f.kind else {
+            return Err(format!("Config::{} is not a section", f.key));
+        };
+        w.section(
+            std::slice::from_ref(&f.key.to_string()),
+            section,
+            &f.doc_text(),
+            f.optional,
+        );
     }
     Ok(w.out.trim_end().to_string() + "\n")
 }
@@ -477,28 +376,6 @@ mod tests {
         assert_eq!(
             first_sentence("Pressure factors ([`crate::f`]), 1."),
             "Pressure factors (`crate::f`), 1."
-        );
-        assert_eq!(unit_of("a mass from 1e-3 to 1e5 kg", ""), "kg");
-        assert_eq!(unit_of("a fraction in [0, 0.5)", "A fraction."), "");
-        assert_eq!(
-            unit_of("a number from 0.0 to 10.0 (fraction of the size)", ""),
-            "fraction of the size"
-        );
-        assert_eq!(
-            unit_of("an angle from -π/2 to π/2 rad (0: horizontal)", ""),
-            "rad"
-        );
-        assert_eq!(
-            unit_of("a conductance from 0 to 1e-9 m³/(s·Pa) (0 = none)", ""),
-            "m³/(s·Pa)"
-        );
-        assert_eq!(
-            unit_of("a number from 0.0 to 1.0 (dimensionless)²", ""),
-            "(dimensionless)²"
-        );
-        assert_eq!(
-            unit_of("1 to 3600000 (an hour at 1 kHz)", "Window, samples."),
-            "samples"
         );
     }
 }

@@ -2,6 +2,7 @@
 
 use std::collections::BTreeMap;
 
+use schema::int;
 use serde::{Deserialize, Serialize};
 
 /// The stage processes a CPU can be given to.
@@ -13,31 +14,25 @@ pub const PINNABLE: [&str; 5] = [
     "estimator+classifier",
 ];
 
-/// `[run]` settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RunSettings {
-    /// CPU (core index, as the kernel numbers them) each named stage process is
-    /// pinned to (`sched_setaffinity` before it starts); a stage not named runs
-    /// wherever the scheduler puts it. E.g. `cpus = { acquisition = 0, "estimator+classifier" = 1 }`.
-    pub cpus: BTreeMap<String, usize>,
-    /// In low-latency mode, how long the acquisition's pacer spins before each
-    /// deadline instead of sleeping, µs (0 = sleep only; event mode always sleeps).
-    pub low_latency_spin_us: u64,
-}
-
-impl Default for RunSettings {
-    fn default() -> Self {
-        RunSettings {
-            cpus: BTreeMap::new(),
-            low_latency_spin_us: 60,
-        }
+schema::config_struct! {
+    /// `[run]` settings.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct RunSettings {
+        /// CPU (core index, as the kernel numbers them) each named stage process is
+        /// pinned to (`sched_setaffinity` before it starts); a stage not named runs
+        /// wherever the scheduler puts it. E.g. `cpus = { acquisition = 0, "estimator+classifier" = 1 }`.
+        pub cpus: BTreeMap<String, usize> = BTreeMap::new(),
+        /// In low-latency mode, how long the acquisition's pacer spins before each
+        /// deadline instead of sleeping, µs (0 = sleep only; event mode always sleeps).
+        pub low_latency_spin_us: u64 = 60 => ["µs", int!(0, 900, "(less than the 1 ms period)")],
     }
 }
 
 impl RunSettings {
-    /// Checks the stage names and that each CPU exists on this machine.
+    /// Checks the declared ranges, the stage names and that each CPU exists on this machine.
     pub fn validate(&self) -> Result<(), String> {
+        self.check_ranges("").map_err(|e| format!("[run] {e}"))?;
         let online = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
         for (stage, cpu) in &self.cpus {
             if !PINNABLE.contains(&stage.as_str()) {
@@ -52,12 +47,6 @@ impl RunSettings {
                     online.max(cpu_count()) - 1
                 ));
             }
-        }
-        if self.low_latency_spin_us > 900 {
-            return Err(format!(
-                "[run] low_latency_spin_us = {}: must be 0 to 900 µs (less than the 1 ms period)",
-                self.low_latency_spin_us
-            ));
         }
         Ok(())
     }

@@ -377,3 +377,105 @@ fn the_detectors_rig_facts_come_from_model_and_sensors() {
     let e = Config::parse("[classifier]\npressure_full_scale_pa = \"25 MPa\"\n").unwrap_err();
     assert!(e.contains("[sensors] pressure_full_scale_pa"), "{e}");
 }
+
+/// Every name a choice field declares parses, and the parser's own list of
+/// names (in its error for an unknown one) is the declared list.
+fn choices_are_the_parsers<T: serde::de::DeserializeOwned + schema::FieldType>() {
+    #[derive(Deserialize)]
+    struct One<T> {
+        #[allow(dead_code)]
+        v: T,
+    }
+    let schema::Kind::Choice(names) = T::KIND else {
+        panic!("not a choice: {:?}", T::KIND);
+    };
+    for name in names {
+        toml::from_str::<One<T>>(&format!("v = {name:?}")).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    let Err(e) = toml::from_str::<One<T>>("v = \"?\"") else {
+        panic!("`?` was taken");
+    };
+    let listed = e
+        .message()
+        .split_once("expected ")
+        .map(|(_, l)| l.to_string())
+        .unwrap_or_default();
+    assert_eq!(listed.matches('`').count(), 2 * names.len(), "{listed}");
+    for name in names {
+        assert!(listed.contains(&format!("`{name}`")), "{name} not in {listed}");
+    }
+}
+
+#[test]
+fn the_declared_choices_are_the_names_the_parser_takes() {
+    choices_are_the_parsers::<filter::tuning::Init>();
+    choices_are_the_parsers::<model::datasheet::CylinderKind>();
+    choices_are_the_parsers::<model::datasheet::TransducerLocation>();
+    choices_are_the_parsers::<model::leakage::LeakPath>();
+    choices_are_the_parsers::<model::leakage::LeakLaw>();
+}
+
+#[test]
+fn the_schema_declares_every_setting_of_the_default_config_and_nothing_else() {
+    let defaults = toml::Table::try_from(Config::default()).expect("the defaults");
+    fn walk(t: &toml::Table, section: &'static schema::Section, at: &str) {
+        for (k, v) in t {
+            let field = section
+                .settings()
+                .find(|f| f.key == k)
+                .unwrap_or_else(|| panic!("{at}.{k} is not declared in {}", section.name));
+            if let (toml::Value::Table(sub), schema::Kind::Table(s)) = (v, field.kind) {
+                walk(sub, s, &format!("{at}.{k}"));
+            }
+        }
+        for f in section
+            .settings()
+            .filter(|f| !f.optional && !matches!(f.kind, schema::Kind::Tables(_)))
+        {
+            assert!(
+                t.contains_key(f.key),
+                "{at}.{} is declared but not in the default config",
+                f.key
+            );
+        }
+    }
+    walk(&defaults, &Config::SCHEMA, "");
+    // the rig facts of [classifier] are declared (and checked) but are no settings
+    let skipped: Vec<&str> = ClassifierConfig::SCHEMA
+        .fields
+        .iter()
+        .filter(|f| f.skipped)
+        .map(|f| f.key)
+        .collect();
+    assert_eq!(skipped, ["supply_pressure_pa", "pressure_full_scale_pa"]);
+}
+
+#[test]
+fn the_default_config_needs_no_derived_rig_facts() {
+    let mut derived = Config::default();
+    derived.derive_rig_facts();
+    assert_eq!(derived, Config::default());
+    Config::default().validate().expect("the defaults are valid");
+}
+
+#[test]
+fn a_range_hint_comes_from_the_schema_for_every_section() {
+    for (text, hint) in [
+        (
+            "[datasheet.cylinder]\nbore_m = \"50 mm\"\n",
+            "(`datasheet.cylinder.bore_m` must be a number: a bore from 1e-3 to 2 m)",
+        ),
+        (
+            "[[model.leaks]]\npath = \"ext1\"\nlaw = \"sqrt\"\ncoefficient = \"x\"\n",
+            "(`model.leaks.coefficient` must be a number: a coefficient from 0 to 1e-4 \
+             (m³/s per √Pa, or per Pa for the linear law))",
+        ),
+        (
+            "[live_view]\nport = 70000\n",
+            "(`live_view.port` must be an integer: 1 to 65535 (a TCP port))",
+        ),
+    ] {
+        let e = Config::parse(text).unwrap_err();
+        assert!(e.ends_with(hint), "{text}: {e}");
+    }
+}

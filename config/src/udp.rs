@@ -3,26 +3,22 @@
 
 use std::net::SocketAddr;
 
+use schema::num;
 use serde::{Deserialize, Serialize};
 
-/// Linear scaling of one channel from what the sender sends to SI:
-/// `SI = gain · raw + offset`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ChannelScale {
-    /// SI units per raw unit (e.g. Pa per count); negative for an inverted sensor.
-    pub gain: f64,
-    /// SI value at raw 0, in the channel's SI unit (V, m, Pa, N or °C).
-    pub offset: f64,
-}
-
-impl Default for ChannelScale {
-    /// Gain 1, offset 0: the sender sends SI.
-    fn default() -> Self {
-        ChannelScale {
-            gain: 1.0,
-            offset: 0.0,
-        }
+schema::config_struct! {
+    /// Linear scaling of one channel from what the sender sends to SI:
+    /// `SI = gain · raw + offset`. Gain 1, offset 0 (the default): the sender sends SI.
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct ChannelScale {
+        /// SI units per raw unit (e.g. Pa per count); negative for an inverted sensor.
+        pub gain: f64 = 1.0 => [
+            "SI units per raw unit",
+            num!("a number of magnitude", 1e-12, 1e12, "(negative for an inverted sensor)")
+        ],
+        /// SI value at raw 0, in the channel's SI unit (V, m, Pa, N or °C).
+        pub offset: f64 = 0.0 => ["(the channel's SI unit)", num!("a number", -1e9, 1e9)],
     }
 }
 
@@ -34,45 +30,42 @@ impl ChannelScale {
     }
 }
 
-/// The `[udp]` section of the configuration: the scaling of each channel of
-/// the UDP stream from raw values to SI (`[udp.p1] gain = 250.0, offset =
-/// -1.0e6` for a pressure sent in counts of 250 Pa from −1 MPa), and the
-/// expected sender (`sender = "192.168.10.20:5005"`). The default, gain 1 and
-/// offset 0 everywhere, means the sender already sends SI. The sample time is
-/// never scaled (seconds).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct UdpScaling {
-    /// The only address datagrams are taken from, `IP:PORT` of the rig's DAQ
-    /// or PLC (its source port must then be fixed); datagrams from any other
-    /// address are dropped and counted foreign. `None` (the default): the
-    /// first sender of a valid datagram. The acquisition passes it on as
-    /// `acquisition::UdpOptions::sender`.
-    #[serde(
-        deserialize_with = "deserialize_sender",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub sender: Option<SocketAddr>,
-    /// Valve command, to V.
-    pub u: ChannelScale,
-    /// Rod position, to m.
-    pub x: ChannelScale,
-    /// Chamber-1 pressure, to Pa.
-    pub p1: ChannelScale,
-    /// Chamber-2 pressure, to Pa.
-    pub p2: ChannelScale,
-    /// Spool position, to m.
-    pub x_sp: ChannelScale,
-    /// Load force, to N.
-    pub f_load: ChannelScale,
-    /// Oil temperature, to °C.
-    pub temp_c: ChannelScale,
+schema::config_struct! {
+    /// The `[udp]` section of the configuration: the scaling of each channel of
+    /// the UDP stream from raw values to SI (`[udp.p1] gain = 250.0, offset =
+    /// -1.0e6` for a pressure sent in counts of 250 Pa from −1 MPa), and the
+    /// expected sender (`sender = "192.168.10.20:5005"`). The default, gain 1 and
+    /// offset 0 everywhere, means the sender already sends SI. The sample time is
+    /// never scaled (seconds).
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct UdpScaling {
+        /// The only address datagrams are taken from, `IP:PORT` of the rig's DAQ
+        /// or PLC (its source port must then be fixed); datagrams from any other
+        /// address are dropped and counted foreign. `None` (the default): the
+        /// first sender of a valid datagram. The acquisition passes it on as
+        /// `acquisition::UdpOptions::sender`.
+        #[serde(
+            deserialize_with = "deserialize_sender",
+            skip_serializing_if = "Option::is_none"
+        )]
+        pub sender: Option<SocketAddr> = None,
+        /// Valve command, to V.
+        pub u: ChannelScale = ChannelScale::default(),
+        /// Rod position, to m.
+        pub x: ChannelScale = ChannelScale::default(),
+        /// Chamber-1 pressure, to Pa.
+        pub p1: ChannelScale = ChannelScale::default(),
+        /// Chamber-2 pressure, to Pa.
+        pub p2: ChannelScale = ChannelScale::default(),
+        /// Spool position, to m.
+        pub x_sp: ChannelScale = ChannelScale::default(),
+        /// Load force, to N.
+        pub f_load: ChannelScale = ChannelScale::default(),
+        /// Oil temperature, to °C.
+        pub temp_c: ChannelScale = ChannelScale::default(),
+    }
 }
-
-/// Smallest and largest accepted |gain|, SI units per raw unit.
-pub const GAIN_RANGE: (f64, f64) = (1e-12, 1e12);
-/// Largest accepted |offset|, in the channel's SI unit.
-pub const OFFSET_MAX: f64 = 1e9;
 
 impl UdpScaling {
     /// Every channel with its name and SI unit.
@@ -88,30 +81,43 @@ impl UdpScaling {
         ]
     }
 
-    /// Checks every gain (finite, |gain| from 1e-12 to 1e12) and offset
-    /// (finite, |offset| ≤ 1e9 in the channel's unit), and the sender (a
-    /// fixed port, not the unspecified address); the error names the field.
+    /// Checks every gain (finite, |gain| within its declared range) and offset
+    /// (finite, within its declared range, in the channel's unit), and the
+    /// sender (a fixed port, not the unspecified address); the error names the
+    /// field, its range and the channel's unit ([`UdpScaling::range_text`]).
     pub fn validate(&self) -> Result<(), String> {
         if let Some(sender) = self.sender {
             parse_sender_address(&sender.to_string())?;
         }
-        for (name, unit, c) in self.channels() {
-            let g = c.gain.abs();
-            if !(GAIN_RANGE.0..=GAIN_RANGE.1).contains(&g) {
-                return Err(format!(
-                    "[udp] {name}.gain = {:?}: must be a number of magnitude from {:e} to {:e} {unit} per raw unit \
-                     (negative for an inverted sensor)",
-                    c.gain, GAIN_RANGE.0, GAIN_RANGE.1
-                ));
-            }
-            if !c.offset.is_finite() || c.offset.abs() > OFFSET_MAX {
-                return Err(format!(
-                    "[udp] {name}.offset = {:?}: must be a number from {:e} to {:e} {unit}",
-                    c.offset, -OFFSET_MAX, OFFSET_MAX
-                ));
+        for (name, _, c) in self.channels() {
+            for (field, value, checked) in [("gain", c.gain, c.gain.abs()), ("offset", c.offset, c.offset)] {
+                let Some(f) = ChannelScale::SCHEMA.find(&[field]) else {
+                    continue;
+                };
+                if !f.range.holds_number(checked) {
+                    return Err(format!(
+                        "[udp] {name}.{field} = {value:?}: must be {}",
+                        Self::range_text(name, field).unwrap_or_default()
+                    ));
+                }
             }
         }
         Ok(())
+    }
+
+    /// The range of `[udp.<channel>] <field>` (`gain` or `offset`) as its check
+    /// states it, in the channel's SI unit (`a number from -1e9 to 1e9 Pa`);
+    /// `None` for another channel or field.
+    pub fn range_text(channel: &str, field: &str) -> Option<String> {
+        let (_, unit, _) = UdpScaling::default()
+            .channels()
+            .into_iter()
+            .find(|(name, _, _)| *name == channel)?;
+        let range = ChannelScale::SCHEMA.find(&[field])?.range;
+        Some(match field {
+            "gain" => range.text(&format!("{unit} per raw unit")),
+            _ => range.text(unit),
+        })
     }
 
     /// True if every channel passes through unchanged (gain 1, offset 0).

@@ -1,34 +1,37 @@
 //! The classifier's settings and a rig's commissioning (its learned healthy state).
 
 use crate::events::nan;
+use schema::{int, num};
 use serde::{Deserialize, Serialize};
 
-/// What a healthy commissioning run taught about the leak filter's estimates:
-/// loaded at start, it arms the detector at once, so that a leak already
-/// present when monitoring starts shows against it (`[classifier.commissioning]`,
-/// written by `leakwatch commission`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Commissioning {
-    /// Healthy offset of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
-    pub offsets_lpm: [f64; 3],
-    /// Healthy spread (standard deviation) of each, L/min at the nominal drop.
-    pub spreads_lpm: [f64; 3],
-    /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
-    pub crossings_per_s: [f64; 3],
-    /// Seconds of healthy, converged data learned from, s.
-    pub healthy_s: f64,
-    /// Mean normalised innovation squared of the healthy data (NaN: unknown).
-    #[serde(default = "nan")]
-    pub nis_mean: f64,
-    /// Where it was learned (the recording's path).
-    #[serde(default)]
-    pub source: String,
-    /// The internal leak's pressure factors (r1, r2) of the chamber-flow
-    /// signatures ([`crate::signatures_with`]), 1: ssqrt(p1 − p2)/√p_i at the
-    /// recording's mean pressures where p1 − p2 kept its sign, else (1, 1).
-    #[serde(default = "nominal_factors")]
-    pub internal_factors: [f64; 2],
+schema::config_struct! {
+    /// What a healthy commissioning run taught about the leak filter's estimates:
+    /// loaded at start, it arms the detector at once, so that a leak already
+    /// present when monitoring starts shows against it (`[classifier.commissioning]`,
+    /// written by `leakwatch commission`).
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Commissioning {
+        /// Healthy offset of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
+        pub offsets_lpm: [f64; 3],
+        /// Healthy spread (standard deviation) of each, L/min at the nominal drop.
+        pub spreads_lpm: [f64; 3],
+        /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
+        pub crossings_per_s: [f64; 3],
+        /// Seconds of healthy, converged data learned from, s.
+        pub healthy_s: f64 => ["s"],
+        /// Mean normalised innovation squared of the healthy data (NaN: unknown).
+        #[serde(default = "nan")]
+        pub nis_mean: f64,
+        /// Where it was learned (the recording's path).
+        #[serde(default)]
+        pub source: String,
+        /// The internal leak's pressure factors (r1, r2) of the chamber-flow
+        /// signatures ([`crate::signatures_with`]), 1: ssqrt(p1 − p2)/√p_i at the
+        /// recording's mean pressures where p1 − p2 kept its sign, else (1, 1).
+        #[serde(default = "nominal_factors")]
+        pub internal_factors: [f64; 2],
+    }
 }
 
 fn nominal_factors() -> [f64; 2] {
@@ -88,326 +91,152 @@ impl Commissioning {
     }
 }
 
-/// Settings of the detectors, `[classifier]` in the TOML config.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ClassifierConfig {
-    /// Time after the filter has converged before learning starts (the leak and
-    /// bias estimates settle), s.
-    pub settle_s: f64,
-    /// Healthy warm-up after settling, used to learn thresholds, s.
-    pub warmup_s: f64,
-    /// Shortest warm-up that can give thresholds, s.
-    pub min_warmup_s: f64,
-    /// Leak-size detector: the false-alarm rate asked for, per hour. The threshold
-    /// on the rise, in healthy spreads, is c = √(2 ln(N₀/rate)) (Rice's formula for
-    /// a Gaussian process with N₀ upcrossings of its mean per hour, learned in the
-    /// warm-up), never below `threshold_sigma`.
-    pub false_alarms_per_hour: f64,
-    /// Leak-size detector: least threshold in spreads of the healthy estimate.
-    pub threshold_sigma: f64,
-    /// Leak-size detector: at the first alarm, the part of the flow mismatch the
-    /// named kind leaves unexplained must be below this fraction of its size (the
-    /// kind is decided before the alarm is raised).
-    pub isolation_max_misfit: f64,
-    /// Leak-size detector: window of the measured pressures over which the real
-    /// leak flow is averaged, s.
-    pub size_window_s: f64,
-    /// Leak-size detector: after a gap, a skipped sample or a filter reset, no
-    /// evidence for this long (the filter re-converges), s.
-    pub recovery_s: f64,
-    /// Leak-size detector: a normalised innovation squared above this (an innovation
-    /// of about √nis_gate standard deviations) means the filter has lost track for
-    /// a moment: no evidence for `recovery_s` after it.
-    pub nis_gate: f64,
-    /// Leak-size detector: while the NIS averaged over the last 5 s exceeds this
-    /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
-    /// chirp), evidence does not count (0 = off).
-    pub nis_ratio_gate: f64,
-    /// Leak-size detector: while the valve command reverses faster than this (its
-    /// frequency, from swings through ±1 V over the last 2 s), evidence does not
-    /// count (0 = off, the default), Hz. For a rig whose model is known not to
-    /// follow fast inputs; leakwatch's own model follows the 10.5 Hz chirp since
-    /// the filters hold each command over the interval after its sample
-    /// (2026-11-25; the gate was 3 Hz before).
-    pub max_command_hz: f64,
-    /// Emit the thesis' MAE baseline detector's events too (a comparison, off by
-    /// default; the live estimator runs the thesis filter only then).
-    pub thesis_baseline: bool,
-    /// The healthy state learned by commissioning (absent: learned in a warm-up,
-    /// and a leak present at start cannot be seen).
-    pub commissioning: Option<Commissioning>,
-    /// Leak-size detector: once this much healthy evidence has been seen after arming
-    /// (no leak, every rise below `baseline_hold` of its threshold), the thresholds
-    /// are taken from the spread of the rises since arming, refined every second,
-    /// where lower than the warm-up's (0 = keep the warm-up's); not with a
-    /// commissioning, s.
-    pub refine_after_s: f64,
-    /// Leak-size detector: smallest external leak (ext1, ext2) ever declared, L/min
-    /// of real flow at the measured pressures (its threshold at p_s/2 is at least
-    /// this divided by √(Δp/(p_s/2)) averaged over `size_window_s`).
-    pub min_size_lpm: f64,
-    /// Leak-size detector: smallest internal leak ever declared, L/min of real flow
-    /// at the measured pressures (as `min_size_lpm`). Higher than the external
-    /// floor: one chamber losing what the other gains is also what a spool null
-    /// error or a rod held by stiction makes the healthy model show.
-    pub min_internal_size_lpm: f64,
-    /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
-    pub confirm_s: f64,
-    /// Leak-size detector: evidence before an external leak is declared while it
-    /// alone explains the mismatch clearly (one chamber loses flow, the other does
-    /// not), s; at most `confirm_s`. A transient of the rod or the spool (a
-    /// breakaway from stiction, a reference step) moves both chambers' flows at
-    /// once, in opposite directions: the pattern of an internal leak or of both
-    /// kinds together, which keeps `confirm_s`.
-    pub confirm_external_s: f64,
-    /// Leak-size detector: a rise r thresholds high counts min(r, this) seconds of
-    /// evidence per second towards `confirm_s` (1 = plain time above threshold; a
-    /// leak far above its threshold is confirmed sooner).
-    pub confirm_gain_cap: f64,
-    /// Leak-size detector: time constant of the healthy baseline that the rise is
-    /// measured from, s (0 = the warm-up offset, never adapted).
-    pub baseline_tau_s: f64,
-    /// Leak-size detector: while any rise exceeds this fraction of its threshold the
-    /// baseline holds, for at most `baseline_hold_s` (a leak opening over seconds is
-    /// not absorbed on its way to the threshold, a drift of the operating point is
-    /// still followed); only once the baseline has followed the estimates for
-    /// `baseline_tau_s` after arming (before that it is still settling).
-    pub baseline_hold: f64,
-    /// Leak-size detector: longest hold of the baseline by one rise, s.
-    pub baseline_hold_s: f64,
-    /// Leak-size detector: drift of the baseline since the warm-up that is reported
-    /// as a slowly growing leak, L/min (at nominal drop).
-    pub slow_leak_lpm: f64,
-    /// Supply pressure of the rig, Pa: a rig fact, not a setting. It is not read
-    /// from or written to a config file; the config loader sets it from
-    /// `[model] supply_pressure_pa` (leakwatch's `Config`), so it is written once.
-    #[serde(skip)]
-    pub supply_pressure_pa: f64,
-    /// Leak-size detector: a chamber pressure within this fraction of the supply
-    /// pressure from tank or supply is an excursion (the rod against a stop, a land
-    /// closed): no evidence is gathered and the baseline holds.
-    pub excursion_margin: f64,
-    /// Leak-size detector: time after an excursion before evidence is gathered again, s.
-    pub excursion_recovery_s: f64,
-    /// Leak-size detector: during an excursion, a rise above this many thresholds is
-    /// still evidence (a large leak itself drains the chambers towards tank).
-    pub excursion_override: f64,
-    /// Time below half the threshold before a leak is cleared, s.
-    pub clear_s: f64,
-    /// Relative change of the size that gives an `updated` event.
-    pub update_relative: f64,
-    /// Time another kind must explain the data clearly better before an event is re-isolated, s.
-    pub reisolate_s: f64,
-    /// How long one kind must lead, clearly and above its threshold, before a leak is
-    /// named (until then it is raised as `leak`, kind pending), s. At most
-    /// `confirm_s`: the kind is named at the first alarm.
-    pub kind_confirm_s: f64,
-    /// A rise past this many times its threshold for `confirm_s` raises a leak with
-    /// its kind pending even while no kind explains the mismatch clearly yet
-    /// (a leak that first shows on both chambers); 0 turns it off.
-    pub pending_factor: f64,
-    /// Shortest time between two `updated` events of one leak, s.
-    pub update_interval_s: f64,
-    /// Thesis detector: threshold as a multiple of the largest healthy MAE.
-    pub mae_margin: f64,
-    /// Thesis detector: time above threshold before a decision, s.
-    pub mae_confirm_s: f64,
-    /// Samples with the same exact value before a sensor is called stuck.
-    pub stuck_samples: u32,
-    /// Samples at the end of the range before a sensor is called saturated.
-    pub saturated_samples: u32,
-    /// Samples without a usable value before a sensor is called dead.
-    pub dead_samples: u32,
-    /// Full-scale range of the pressure transducers, Pa: a rig fact, not a
-    /// setting, set by the config loader from `[sensors] pressure_full_scale_pa`
-    /// (not read from or written to a config file).
-    #[serde(skip)]
-    pub pressure_full_scale_pa: f64,
-}
-
-impl Default for ClassifierConfig {
-    fn default() -> Self {
-        ClassifierConfig {
-            settle_s: 3.0,
-            warmup_s: 5.0,
-            min_warmup_s: 3.0,
-            false_alarms_per_hour: 0.05,
-            threshold_sigma: 4.0,
-            isolation_max_misfit: 0.35,
-            size_window_s: 2.0,
-            recovery_s: 2.0,
-            nis_gate: 10000.0,
-            nis_ratio_gate: 3.0,
-            max_command_hz: 0.0,
-            thesis_baseline: false,
-            commissioning: None,
-            min_size_lpm: 0.03,
-            min_internal_size_lpm: 0.04,
-            refine_after_s: 5.0,
-            confirm_s: 0.2,
-            confirm_external_s: 0.1,
-            confirm_gain_cap: 2.0,
-            baseline_tau_s: 15.0,
-            baseline_hold: 0.5,
-            baseline_hold_s: 5.0,
-            slow_leak_lpm: 0.5,
-            supply_pressure_pa: 13.8e6,
-            excursion_margin: 0.05,
-            excursion_recovery_s: 0.2,
-            excursion_override: 4.0,
-            clear_s: 2.0,
-            update_relative: 0.1,
-            reisolate_s: 0.5,
-            kind_confirm_s: 1.5,
-            pending_factor: 2.0,
-            update_interval_s: 1.0,
-            mae_margin: 1.3,
-            mae_confirm_s: 0.5,
-            stuck_samples: 2000,
-            saturated_samples: 200,
-            dead_samples: 200,
-            pressure_full_scale_pa: 20.7e6,
-        }
+schema::config_struct! {
+    /// Settings of the detectors, `[classifier]` in the TOML config.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct ClassifierConfig {
+        /// Time after the filter has converged before learning starts (the leak and
+        /// bias estimates settle), s.
+        pub settle_s: f64 = 3.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Healthy warm-up after settling, used to learn thresholds, s.
+        pub warmup_s: f64 = 5.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Shortest warm-up that can give thresholds, s.
+        pub min_warmup_s: f64 = 3.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: the false-alarm rate asked for, per hour. The threshold
+        /// on the rise, in healthy spreads, is c = √(2 ln(N₀/rate)) (Rice's formula for
+        /// a Gaussian process with N₀ upcrossings of its mean per hour, learned in the
+        /// warm-up), never below `threshold_sigma`.
+        pub false_alarms_per_hour: f64 = 0.05 => ["per hour", num!("a number", 1e-9, 1000000.0)],
+        /// Leak-size detector: least threshold in spreads of the healthy estimate.
+        pub threshold_sigma: f64 = 4.0 => ["healthy spreads", num!("a number", 0.0, 1000.0)],
+        /// Leak-size detector: at the first alarm, the part of the flow mismatch the
+        /// named kind leaves unexplained must be below this fraction of its size (the
+        /// kind is decided before the alarm is raised).
+        pub isolation_max_misfit: f64 = 0.35 => ["(fraction of the size)", num!("a number", 0.0, 10.0)],
+        /// Leak-size detector: window of the measured pressures over which the real
+        /// leak flow is averaged, s.
+        pub size_window_s: f64 = 2.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: after a gap, a skipped sample or a filter reset, no
+        /// evidence for this long (the filter re-converges), s.
+        pub recovery_s: f64 = 2.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: a normalised innovation squared above this (an innovation
+        /// of about √nis_gate standard deviations) means the filter has lost track for
+        /// a moment: no evidence for `recovery_s` after it.
+        pub nis_gate: f64 = 10000.0 => ["(normalised innovation squared)", num!("a number", 0.0, 1000000000000000.0)],
+        /// Leak-size detector: while the NIS averaged over the last 5 s exceeds this
+        /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
+        /// chirp), evidence does not count (0 = off).
+        pub nis_ratio_gate: f64 = 3.0 => ["(times the healthy mean NIS)", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: while the valve command reverses faster than this (its
+        /// frequency, from swings through ±1 V over the last 2 s), evidence does not
+        /// count (0 = off, the default), Hz. For a rig whose model is known not to
+        /// follow fast inputs; leakwatch's own model follows the 10.5 Hz chirp since
+        /// the filters hold each command over the interval after its sample
+        /// (2026-11-25; the gate was 3 Hz before).
+        pub max_command_hz: f64 = 0.0 => ["Hz", num!("a number", 0.0, 100000.0)],
+        /// Emit the thesis' MAE baseline detector's events too (a comparison, off by
+        /// default; the live estimator runs the thesis filter only then).
+        pub thesis_baseline: bool = false,
+        /// The healthy state learned by commissioning (absent: learned in a warm-up,
+        /// and a leak present at start cannot be seen).
+        pub commissioning: Option<Commissioning> = None,
+        /// Leak-size detector: once this much healthy evidence has been seen after arming
+        /// (no leak, every rise below `baseline_hold` of its threshold), the thresholds
+        /// are taken from the spread of the rises since arming, refined every second,
+        /// where lower than the warm-up's (0 = keep the warm-up's); not with a
+        /// commissioning, s.
+        pub refine_after_s: f64 = 5.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: smallest external leak (ext1, ext2) ever declared, L/min
+        /// of real flow at the measured pressures (its threshold at p_s/2 is at least
+        /// this divided by √(Δp/(p_s/2)) averaged over `size_window_s`).
+        pub min_size_lpm: f64 = 0.03 => ["L/min", num!("a number", 0.0, 10000.0)],
+        /// Leak-size detector: smallest internal leak ever declared, L/min of real flow
+        /// at the measured pressures (as `min_size_lpm`). Higher than the external
+        /// floor: one chamber losing what the other gains is also what a spool null
+        /// error or a rod held by stiction makes the healthy model show.
+        pub min_internal_size_lpm: f64 = 0.04 => ["L/min", num!("a number", 0.0, 10000.0)],
+        /// Leak-size detector: evidence (time above threshold, weighted by `confirm_gain_cap`) before a leak is declared, s.
+        pub confirm_s: f64 = 0.2 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: evidence before an external leak is declared while it
+        /// alone explains the mismatch clearly (one chamber loses flow, the other does
+        /// not), s; at most `confirm_s`. A transient of the rod or the spool (a
+        /// breakaway from stiction, a reference step) moves both chambers' flows at
+        /// once, in opposite directions: the pattern of an internal leak or of both
+        /// kinds together, which keeps `confirm_s`.
+        pub confirm_external_s: f64 = 0.1 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: a rise r thresholds high counts min(r, this) seconds of
+        /// evidence per second towards `confirm_s` (1 = plain time above threshold; a
+        /// leak far above its threshold is confirmed sooner).
+        pub confirm_gain_cap: f64 = 2.0 => ["(thresholds)", num!("a number", 1.0, 100.0)],
+        /// Leak-size detector: time constant of the healthy baseline that the rise is
+        /// measured from, s (0 = the warm-up offset, never adapted).
+        pub baseline_tau_s: f64 = 15.0 => ["s", num!("a number", 0.0, 100000000.0)],
+        /// Leak-size detector: while any rise exceeds this fraction of its threshold the
+        /// baseline holds, for at most `baseline_hold_s` (a leak opening over seconds is
+        /// not absorbed on its way to the threshold, a drift of the operating point is
+        /// still followed); only once the baseline has followed the estimates for
+        /// `baseline_tau_s` after arming (before that it is still settling).
+        pub baseline_hold: f64 = 0.5 => ["(fraction of the threshold)", num!("a number", 0.0, 1000.0)],
+        /// Leak-size detector: longest hold of the baseline by one rise, s.
+        pub baseline_hold_s: f64 = 5.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: drift of the baseline since the warm-up that is reported
+        /// as a slowly growing leak, L/min (at nominal drop).
+        pub slow_leak_lpm: f64 = 0.5 => ["L/min", num!("a number", 0.0, 10000.0)],
+        /// Supply pressure of the rig, Pa: a rig fact, not a setting. It is not read
+        /// from or written to a config file; the config loader sets it from
+        /// `[model] supply_pressure_pa` (leakwatch's `Config`), so it is written once.
+        #[serde(skip)]
+        pub supply_pressure_pa: f64 = 13.8e6 => ["Pa", num!("a number", 10000.0, 1000000000.0)],
+        /// Leak-size detector: a chamber pressure within this fraction of the supply
+        /// pressure from tank or supply is an excursion (the rod against a stop, a land
+        /// closed): no evidence is gathered and the baseline holds.
+        pub excursion_margin: f64 = 0.05 => ["(fraction of the supply pressure)", num!("a number", 0.0, 1.0)],
+        /// Leak-size detector: time after an excursion before evidence is gathered again, s.
+        pub excursion_recovery_s: f64 = 0.2 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Leak-size detector: during an excursion, a rise above this many thresholds is
+        /// still evidence (a large leak itself drains the chambers towards tank).
+        pub excursion_override: f64 = 4.0 => ["thresholds", num!("a number", 0.0, 1000000.0)],
+        /// Time below half the threshold before a leak is cleared, s.
+        pub clear_s: f64 = 2.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Relative change of the size that gives an `updated` event.
+        pub update_relative: f64 = 0.1 => ["(relative change)", num!("a number", 0.0, 1000000.0)],
+        /// Time another kind must explain the data clearly better before an event is re-isolated, s.
+        pub reisolate_s: f64 = 0.5 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// How long one kind must lead, clearly and above its threshold, before a leak is
+        /// named (until then it is raised as `leak`, kind pending), s. At most
+        /// `confirm_s`: the kind is named at the first alarm.
+        pub kind_confirm_s: f64 = 1.5 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// A rise past this many times its threshold for `confirm_s` raises a leak with
+        /// its kind pending even while no kind explains the mismatch clearly yet
+        /// (a leak that first shows on both chambers); 0 turns it off.
+        pub pending_factor: f64 = 2.0 => ["(times the threshold)", num!("a number", 0.0, 1000000.0)],
+        /// Shortest time between two `updated` events of one leak, s.
+        pub update_interval_s: f64 = 1.0 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Thesis detector: threshold as a multiple of the largest healthy MAE.
+        pub mae_margin: f64 = 1.3 => ["(times the healthy MAE)", num!("a number", 0.0, 1000000.0)],
+        /// Thesis detector: time above threshold before a decision, s.
+        pub mae_confirm_s: f64 = 0.5 => ["s", num!("a number", 0.0, 1000000.0)],
+        /// Samples with the same exact value before a sensor is called stuck.
+        pub stuck_samples: u32 = 2000 => ["samples", int!(1, 1000000000)],
+        /// Samples at the end of the range before a sensor is called saturated.
+        pub saturated_samples: u32 = 200 => ["samples", int!(1, 1000000000)],
+        /// Samples without a usable value before a sensor is called dead.
+        pub dead_samples: u32 = 200 => ["samples", int!(1, 1000000000)],
+        /// Full-scale range of the pressure transducers, Pa: a rig fact, not a
+        /// setting, set by the config loader from `[sensors] pressure_full_scale_pa`
+        /// (not read from or written to a config file).
+        #[serde(skip)]
+        pub pressure_full_scale_pa: f64 = 20.7e6 => ["Pa", num!("a number", 100000.0, 1000000000.0)],
     }
 }
 
 impl ClassifierConfig {
-    /// Checks every field, naming the first bad one.
+    /// Checks every field against its declared range, naming the first bad
+    /// one (`[classifier] warmup_s = ...: must be ...`) with its range and
+    /// unit, then the commissioning and the warm-ups against each other.
     pub fn validate(&self) -> Result<(), String> {
-        // (name, value, least, largest, unit)
-        let fields: [(&str, f64, f64, f64, &str); 34] = [
-            ("settle_s", self.settle_s, 0.0, 1e6, "s"),
-            ("warmup_s", self.warmup_s, 0.0, 1e6, "s"),
-            ("min_warmup_s", self.min_warmup_s, 0.0, 1e6, "s"),
-            (
-                "false_alarms_per_hour",
-                self.false_alarms_per_hour,
-                1e-9,
-                1e6,
-                "per hour",
-            ),
-            (
-                "threshold_sigma",
-                self.threshold_sigma,
-                0.0,
-                1e3,
-                "healthy spreads",
-            ),
-            (
-                "isolation_max_misfit",
-                self.isolation_max_misfit,
-                0.0,
-                10.0,
-                "(fraction of the size)",
-            ),
-            ("size_window_s", self.size_window_s, 0.0, 1e6, "s"),
-            ("recovery_s", self.recovery_s, 0.0, 1e6, "s"),
-            (
-                "nis_gate",
-                self.nis_gate,
-                0.0,
-                1e15,
-                "(normalised innovation squared)",
-            ),
-            (
-                "nis_ratio_gate",
-                self.nis_ratio_gate,
-                0.0,
-                1e6,
-                "(times the healthy mean NIS)",
-            ),
-            ("max_command_hz", self.max_command_hz, 0.0, 1e5, "Hz"),
-            ("min_size_lpm", self.min_size_lpm, 0.0, 1e4, "L/min"),
-            (
-                "min_internal_size_lpm",
-                self.min_internal_size_lpm,
-                0.0,
-                1e4,
-                "L/min",
-            ),
-            ("refine_after_s", self.refine_after_s, 0.0, 1e6, "s"),
-            (
-                "confirm_gain_cap",
-                self.confirm_gain_cap,
-                1.0,
-                100.0,
-                "(thresholds)",
-            ),
-            ("confirm_s", self.confirm_s, 0.0, 1e6, "s"),
-            ("confirm_external_s", self.confirm_external_s, 0.0, 1e6, "s"),
-            ("baseline_tau_s", self.baseline_tau_s, 0.0, 1e8, "s"),
-            (
-                "baseline_hold",
-                self.baseline_hold,
-                0.0,
-                1e3,
-                "(fraction of the threshold)",
-            ),
-            ("baseline_hold_s", self.baseline_hold_s, 0.0, 1e6, "s"),
-            ("slow_leak_lpm", self.slow_leak_lpm, 0.0, 1e4, "L/min"),
-            ("supply_pressure_pa", self.supply_pressure_pa, 1e4, 1e9, "Pa"),
-            (
-                "excursion_margin",
-                self.excursion_margin,
-                0.0,
-                1.0,
-                "(fraction of the supply pressure)",
-            ),
-            ("excursion_recovery_s", self.excursion_recovery_s, 0.0, 1e6, "s"),
-            (
-                "excursion_override",
-                self.excursion_override,
-                0.0,
-                1e6,
-                "thresholds",
-            ),
-            ("clear_s", self.clear_s, 0.0, 1e6, "s"),
-            (
-                "update_relative",
-                self.update_relative,
-                0.0,
-                1e6,
-                "(relative change)",
-            ),
-            ("reisolate_s", self.reisolate_s, 0.0, 1e6, "s"),
-            ("kind_confirm_s", self.kind_confirm_s, 0.0, 1e6, "s"),
-            (
-                "pending_factor",
-                self.pending_factor,
-                0.0,
-                1e6,
-                "(times the threshold)",
-            ),
-            ("update_interval_s", self.update_interval_s, 0.0, 1e6, "s"),
-            ("mae_margin", self.mae_margin, 0.0, 1e6, "(times the healthy MAE)"),
-            ("mae_confirm_s", self.mae_confirm_s, 0.0, 1e6, "s"),
-            (
-                "pressure_full_scale_pa",
-                self.pressure_full_scale_pa,
-                1e5,
-                1e9,
-                "Pa",
-            ),
-        ];
-        for (name, v, lo, hi, unit) in fields {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(format!(
-                    "[classifier] {name} = {v:?}: must be a number from {lo:?} to {hi:?} {unit}"
-                ));
-            }
-        }
-        for (name, v) in [
-            ("stuck_samples", self.stuck_samples),
-            ("saturated_samples", self.saturated_samples),
-            ("dead_samples", self.dead_samples),
-        ] {
-            if !(1..=1_000_000_000).contains(&v) {
-                return Err(format!(
-                    "[classifier] {name} = {v}: must be 1 to 1000000000 samples"
-                ));
-            }
-        }
+        self.check_ranges("").map_err(|e| format!("[classifier] {e}"))?;
         if let Some(c) = &self.commissioning {
             c.validate()?;
         }

@@ -2,6 +2,7 @@
 //! sensors, in the TOML config under `[estimator]`.
 
 use nalgebra::SVector;
+use schema::{int, num, Range};
 use serde::{Deserialize, Serialize};
 
 /// How the filter's initial state is chosen.
@@ -14,123 +15,97 @@ pub enum Init {
     Measured,
 }
 
-/// Everything the estimator needs besides the physical parameters.
-///
-/// Q is the process noise added per sample (variance per step), R the
-/// measurement noise variance and P0 the initial covariance, each in the
-/// square of its state's SI unit.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Tuning {
-    /// Number of states: 6 (friction and load from the parameters), 7 (plus the
-    /// effective load F_e), 10 (plus the three leak sizes q_e1, q_e2, q_i), 11
-    /// (plus the spool null bias b) or 12 (plus the oil's stiffness θ, a multiple
-    /// of the model's bulk modulus).
-    pub states: u32,
-    /// Sample period T, s.
-    pub sample_period_s: f64,
-    /// Euler sub-steps per sample (1 = the thesis): forward Euler for 6 and 7 states,
-    /// symplectic for the layouts with leaks (docs/model.md#discretisation).
-    pub substeps: u32,
-    /// Initial state.
-    pub init: Init,
-    /// Initial chamber pressures for `init = "thesis"`, Pa.
-    pub init_pressure_pa: f64,
-    /// Q of the spool position, m².
-    pub q_x_sp_m2: f64,
-    /// Q of each chamber pressure, Pa².
-    pub q_p_pa2: f64,
-    /// Q of the rod position, m².
-    pub q_x_m2: f64,
-    /// Q of the rod velocity, m²/s².
-    pub q_v_m2_s2: f64,
-    /// Q of the spool velocity, m²/s².
-    pub q_v_sp_m2_s2: f64,
-    /// Q of the effective load F_e (its random walk), N².
-    pub q_f_e_n2: f64,
-    /// Q of each leak size q_e1, q_e2, q_i (their random walk), m⁶/s².
-    pub q_leak_m6_s2: f64,
-    /// Q of the spool null bias (its random walk), m².
-    pub q_bias_m2: f64,
-    /// Q of the oil-stiffness scale θ (its random walk), 1 (dimensionless, squared).
-    pub q_bulk_scale: f64,
-    /// R of the rod position, m².
-    pub r_x_m2: f64,
-    /// R of each chamber pressure, Pa².
-    pub r_p_pa2: f64,
-    /// P0 of the spool position, m².
-    pub p0_x_sp_m2: f64,
-    /// P0 of each chamber pressure, Pa².
-    pub p0_p_pa2: f64,
-    /// P0 of the rod position, m².
-    pub p0_x_m2: f64,
-    /// P0 of the rod velocity, m²/s².
-    pub p0_v_m2_s2: f64,
-    /// P0 of the spool velocity, m²/s².
-    pub p0_v_sp_m2_s2: f64,
-    /// P0 of F_e, N².
-    pub p0_f_e_n2: f64,
-    /// P0 of each leak size, m⁶/s².
-    pub p0_leak_m6_s2: f64,
-    /// P0 of the spool null bias, m².
-    pub p0_bias_m2: f64,
-    /// P0 of the oil-stiffness scale θ (which starts at 1), 1 (dimensionless, squared).
-    pub p0_bulk_scale: f64,
-    /// Window of the moving average of |residual| (the thesis' MAE), samples.
-    pub mae_window_samples: usize,
-    /// Longest run of missing samples bridged by prediction; after a longer gap the
-    /// fast states restart from the next sample and the leak sizes and spool bias are kept.
-    pub max_bridged_gap_samples: u32,
-    /// A position innovation beyond this, m (or beyond 20 of its standard deviations,
-    /// if larger), held for 200 samples, resets the filter; 0 = never (the thesis'
-    /// filter, whose R_x trusts the encoder to 1 cm only, drifts by centimetres).
-    pub divergence_reset_m: f64,
-    /// Time after a (re)start during which estimates are flagged as converging, s.
-    pub convergence_time_s: f64,
-}
-
-impl Default for Tuning {
-    fn default() -> Self {
-        Tuning::thesis()
+schema::config_struct! {
+    /// Everything the estimator needs besides the physical parameters.
+    ///
+    /// Q is the process noise added per sample (variance per step), R the
+    /// measurement noise variance and P0 the initial covariance, each in the
+    /// square of its state's SI unit. The ranges: variances in SI squared units,
+    /// capped at the square of a physically absurd value of their state (1 cm of
+    /// spool, 1 GPa, 10 m, 100 m/s, 10 MN, 0.01 m³/s); P0 up to the thesis' 1e4
+    /// in every state; P0 > 0 (a zero initial variance makes the square-root
+    /// factor singular). The defaults are the thesis' tuning ([`Tuning::thesis`]).
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct Tuning {
+        /// Number of states: 6 (friction and load from the parameters), 7 (plus the
+        /// effective load F_e), 10 (plus the three leak sizes q_e1, q_e2, q_i), 11
+        /// (plus the spool null bias b) or 12 (plus the oil's stiffness θ, a multiple
+        /// of the model's bulk modulus).
+        pub states: u32 = 7 => ["", Range::OneOf(&[6, 7, 10, 11, 12])],
+        /// Sample period T, s.
+        pub sample_period_s: f64 = 1e-3 => ["s", num!("a number", 1e-5, 1.0)],
+        /// Euler sub-steps per sample (1 = the thesis): forward Euler for 6 and 7 states,
+        /// symplectic for the layouts with leaks (docs/model.md#discretisation).
+        pub substeps: u32 = 1 => ["Euler steps per sample", int!(1, 100)],
+        /// Initial state.
+        pub init: Init = Init::Thesis,
+        /// Initial chamber pressures for `init = "thesis"`, Pa.
+        pub init_pressure_pa: f64 = 6.8e6 => ["Pa", num!("a number", 0.0, 1000000000.0)],
+        /// Q of the spool position, m².
+        pub q_x_sp_m2: f64 = 1e-10 => ["m²", num!("a number", 0.0, 0.0001)],
+        /// Q of each chamber pressure, Pa².
+        pub q_p_pa2: f64 = 1e4 => ["Pa²", num!("a number", 0.0, 1e18)],
+        /// Q of the rod position, m².
+        pub q_x_m2: f64 = 1e-6 => ["m²", num!("a number", 0.0, 100.0)],
+        /// Q of the rod velocity, m²/s².
+        pub q_v_m2_s2: f64 = 1e-4 => ["m²/s²", num!("a number", 0.0, 10000.0)],
+        /// Q of the spool velocity, m²/s².
+        pub q_v_sp_m2_s2: f64 = 1e-20 => ["m²/s²", num!("a number", 0.0, 10000.0)],
+        /// Q of the effective load F_e (its random walk), N².
+        pub q_f_e_n2: f64 = 1e2 => ["N²", num!("a number", 0.0, 100000000000000.0)],
+        /// Q of each leak size q_e1, q_e2, q_i (their random walk), m⁶/s².
+        pub q_leak_m6_s2: f64 = 1e-16 => ["m⁶/s²", num!("a number", 0.0, 0.0001)],
+        /// Q of the spool null bias (its random walk), m².
+        pub q_bias_m2: f64 = 1e-20 => ["m²", num!("a number", 0.0, 0.0001)],
+        /// Q of the oil-stiffness scale θ (its random walk), 1 (dimensionless, squared).
+        pub q_bulk_scale: f64 = 0.0 => ["(dimensionless)²", num!("a number", 0.0, 1.0)],
+        /// R of the rod position, m².
+        pub r_x_m2: f64 = 1e-4 => ["m²", num!("a number", 1e-30, 100.0)],
+        /// R of each chamber pressure, Pa².
+        pub r_p_pa2: f64 = 1e6 => ["Pa²", num!("a number", 1e-30, 1e18)],
+        /// P0 of the spool position, m².
+        pub p0_x_sp_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of each chamber pressure, Pa².
+        pub p0_p_pa2: f64 = 1e4 => ["Pa²", num!("a number", 1e-30, 1e18)],
+        /// P0 of the rod position, m².
+        pub p0_x_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of the rod velocity, m²/s².
+        pub p0_v_m2_s2: f64 = 1e4 => ["m²/s²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of the spool velocity, m²/s².
+        pub p0_v_sp_m2_s2: f64 = 1e4 => ["m²/s²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of F_e, N².
+        pub p0_f_e_n2: f64 = 1e4 => ["N²", num!("a number", 1e-30, 100000000000000.0)],
+        /// P0 of each leak size, m⁶/s².
+        pub p0_leak_m6_s2: f64 = 1e4 => ["m⁶/s²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of the spool null bias, m².
+        pub p0_bias_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
+        /// P0 of the oil-stiffness scale θ (which starts at 1), 1 (dimensionless, squared).
+        pub p0_bulk_scale: f64 = 1e-2 => ["(dimensionless)²", num!("a number", 1e-30, 1.0)],
+        /// Window of the moving average of |residual| (the thesis' MAE), samples.
+        pub mae_window_samples: usize = 4000 => ["samples", int!(1, 3600000, "(an hour at 1 kHz)")],
+        /// Longest run of missing samples bridged by prediction; after a longer gap the
+        /// fast states restart from the next sample and the leak sizes and spool bias are kept.
+        pub max_bridged_gap_samples: u32 = 5 => ["samples", int!(0, 3600000, "(an hour at 1 kHz)")],
+        /// A position innovation beyond this, m (or beyond 20 of its standard deviations,
+        /// if larger), held for 200 samples, resets the filter; 0 = never (the thesis'
+        /// filter, whose R_x trusts the encoder to 1 cm only, drifts by centimetres).
+        pub divergence_reset_m: f64 = 0.0 => ["m", num!("a number", 0.0, 100.0)],
+        /// Time after a (re)start during which estimates are flagged as converging, s.
+        pub convergence_time_s: f64 = 2.0 => ["s", num!("a number", 0.0, 1000000.0)],
     }
 }
 
+impl schema::FieldType for Init {
+    const KIND: schema::Kind = schema::Kind::Choice(&["thesis", "measured"]);
+}
+
 impl Tuning {
-    /// The thesis' tuning (docs/model.md#tuning):
+    /// The thesis' tuning (docs/model.md#tuning), the declared defaults:
     /// Q = diag(1e-10, 1e4, 1e4, 1e-6, 1e-4, 1e-20, 1e2),
     /// R = diag(1e-4, 1e6, 1e6), x0 with pressures at 6.8 MPa, P0 = 1e4·I, 7 states.
     pub fn thesis() -> Self {
-        Tuning {
-            states: 7,
-            sample_period_s: 1e-3,
-            substeps: 1,
-            init: Init::Thesis,
-            init_pressure_pa: 6.8e6,
-            q_x_sp_m2: 1e-10,
-            q_p_pa2: 1e4,
-            q_x_m2: 1e-6,
-            q_v_m2_s2: 1e-4,
-            q_v_sp_m2_s2: 1e-20,
-            q_f_e_n2: 1e2,
-            q_leak_m6_s2: 1e-16,
-            q_bias_m2: 1e-20,
-            q_bulk_scale: 0.0,
-            r_x_m2: 1e-4,
-            r_p_pa2: 1e6,
-            p0_x_sp_m2: 1e4,
-            p0_p_pa2: 1e4,
-            p0_x_m2: 1e4,
-            p0_v_m2_s2: 1e4,
-            p0_v_sp_m2_s2: 1e4,
-            p0_f_e_n2: 1e4,
-            p0_leak_m6_s2: 1e4,
-            p0_bias_m2: 1e4,
-            p0_bulk_scale: 1e-2,
-            mae_window_samples: 4000,
-            max_bridged_gap_samples: 5,
-            convergence_time_s: 2.0,
-            divergence_reset_m: 0.0,
-        }
+        Tuning::default()
     }
 
     /// A tuning derived from the sensors and the model's known errors:
@@ -180,77 +155,10 @@ impl Tuning {
         }
     }
 
-    /// Checks every field, naming the first bad one.
+    /// Checks every field against its declared range, naming the first bad
+    /// one (`[estimator] q_p_pa2 = ...: must be ...`) with its range and unit.
     pub fn validate(&self) -> Result<(), String> {
-        if ![6, 7, 10, 11, 12].contains(&self.states) {
-            return Err(format!(
-                "[estimator] states = {}: must be 6, 7, 10, 11 or 12",
-                self.states
-            ));
-        }
-        // (name, value, least, largest, unit): variances in SI squared units, capped at
-        // the square of a physically absurd value of their state (1 cm of spool,
-        // 1 GPa, 10 m, 100 m/s, 10 MN, 0.01 m³/s); P0 up to the thesis' 1e4 in
-        // every state; P0 > 0 (a zero initial variance makes the square-root
-        // factor singular).
-        let ranges: [(&str, f64, f64, f64, &str); 24] = [
-            ("r_x_m2", self.r_x_m2, 1e-30, 100.0, "m²"),
-            ("r_p_pa2", self.r_p_pa2, 1e-30, 1e18, "Pa²"),
-            ("init_pressure_pa", self.init_pressure_pa, 0.0, 1e9, "Pa"),
-            ("q_x_sp_m2", self.q_x_sp_m2, 0.0, 1e-4, "m²"),
-            ("q_p_pa2", self.q_p_pa2, 0.0, 1e18, "Pa²"),
-            ("q_x_m2", self.q_x_m2, 0.0, 100.0, "m²"),
-            ("q_v_m2_s2", self.q_v_m2_s2, 0.0, 1e4, "m²/s²"),
-            ("q_v_sp_m2_s2", self.q_v_sp_m2_s2, 0.0, 1e4, "m²/s²"),
-            ("q_f_e_n2", self.q_f_e_n2, 0.0, 1e14, "N²"),
-            ("q_leak_m6_s2", self.q_leak_m6_s2, 0.0, 1e-4, "m⁶/s²"),
-            ("q_bias_m2", self.q_bias_m2, 0.0, 1e-4, "m²"),
-            ("q_bulk_scale", self.q_bulk_scale, 0.0, 1.0, "(dimensionless)²"),
-            ("p0_x_sp_m2", self.p0_x_sp_m2, 1e-30, 1e4, "m²"),
-            ("p0_p_pa2", self.p0_p_pa2, 1e-30, 1e18, "Pa²"),
-            ("p0_x_m2", self.p0_x_m2, 1e-30, 1e4, "m²"),
-            ("p0_v_m2_s2", self.p0_v_m2_s2, 1e-30, 1e4, "m²/s²"),
-            ("p0_v_sp_m2_s2", self.p0_v_sp_m2_s2, 1e-30, 1e4, "m²/s²"),
-            ("p0_f_e_n2", self.p0_f_e_n2, 1e-30, 1e14, "N²"),
-            ("p0_leak_m6_s2", self.p0_leak_m6_s2, 1e-30, 1e4, "m⁶/s²"),
-            ("p0_bias_m2", self.p0_bias_m2, 1e-30, 1e4, "m²"),
-            (
-                "p0_bulk_scale",
-                self.p0_bulk_scale,
-                1e-30,
-                1.0,
-                "(dimensionless)²",
-            ),
-            ("convergence_time_s", self.convergence_time_s, 0.0, 1e6, "s"),
-            ("divergence_reset_m", self.divergence_reset_m, 0.0, 100.0, "m"),
-            ("sample_period_s", self.sample_period_s, 1e-5, 1.0, "s"),
-        ];
-        for (name, v, lo, hi, unit) in ranges {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(format!(
-                    "[estimator] {name} = {v:?}: must be a number from {lo:?} to {hi:?} {unit}"
-                ));
-            }
-        }
-        if self.substeps == 0 || self.substeps > 100 {
-            return Err(format!(
-                "[estimator] substeps = {}: must be 1 to 100 Euler steps per sample",
-                self.substeps
-            ));
-        }
-        if self.mae_window_samples == 0 || self.mae_window_samples > 3_600_000 {
-            return Err(format!(
-                "[estimator] mae_window_samples = {}: must be 1 to 3600000 (an hour at 1 kHz)",
-                self.mae_window_samples
-            ));
-        }
-        if self.max_bridged_gap_samples > 3_600_000 {
-            return Err(format!(
-                "[estimator] max_bridged_gap_samples = {}: must be 0 to 3600000 samples (an hour at 1 kHz)",
-                self.max_bridged_gap_samples
-            ));
-        }
-        Ok(())
+        self.check_ranges("").map_err(|e| format!("[estimator] {e}"))
     }
 
     fn per_state(v: [f64; 9]) -> [f64; 12] {

@@ -58,6 +58,14 @@ impl std::fmt::Display for LeakPath {
     }
 }
 
+impl schema::FieldType for LeakPath {
+    const KIND: schema::Kind = schema::Kind::Choice(&["ext1", "ext2", "int"]);
+}
+
+impl schema::FieldType for LeakLaw {
+    const KIND: schema::Kind = schema::Kind::Choice(&["linear", "sqrt"]);
+}
+
 /// The flow law of a leak.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]

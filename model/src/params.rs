@@ -6,41 +6,33 @@
 //! the oil, a spool null bias, supply sag, a spring load, built-in leaks), and
 //! each such effect has a neutral default so the nominal model has none.
 
+use schema::{below, num, Range};
 use serde::{Deserialize, Serialize};
 
 use crate::leakage::{LeakLaw, LeakPath};
 
 mod friction;
 mod oil;
-mod validate;
+pub(crate) mod validate;
 
 pub use friction::{Friction, FrictionParams, FrictionPreset};
 pub use oil::{OilFactors, OilTemperature};
 pub use validate::InvalidParam;
 
-/// A spring in front of the rod: F_l = k·max(0, x − x_c) + preload + damping
-/// while in contact (docs/model.md#load; the thesis' Chapters 6 and 7).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SpringLoad {
-    /// Spring stiffness K_env, N/m (0 = no load).
-    pub stiffness_n_per_m: f64,
-    /// Rod position at which the rod touches the spring, m.
-    pub contact_m: f64,
-    /// Force added as soon as the spring is touched, N.
-    pub preload_n: f64,
-    /// Damping while in contact, N·s/m.
-    pub damping_n_s_per_m: f64,
-}
-
-impl Default for SpringLoad {
-    fn default() -> Self {
-        SpringLoad {
-            stiffness_n_per_m: 0.0,
-            contact_m: 0.22,
-            preload_n: 0.0,
-            damping_n_s_per_m: 0.0,
-        }
+schema::config_struct! {
+    /// A spring in front of the rod: F_l = k·max(0, x − x_c) + preload + damping
+    /// while in contact (docs/model.md#load; the thesis' Chapters 6 and 7).
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct SpringLoad {
+        /// Spring stiffness K_env, N/m (0 = no load).
+        pub stiffness_n_per_m: f64 = 0.0 => ["N/m", num!("a stiffness", 0, 1e10)],
+        /// Rod position at which the rod touches the spring, m.
+        pub contact_m: f64 = 0.22 => ["m", num!("a position", -10, 10)],
+        /// Force added as soon as the spring is touched, N.
+        pub preload_n: f64 = 0.0 => ["N", num!("a force", 0, 1e7)],
+        /// Damping while in contact, N·s/m.
+        pub damping_n_s_per_m: f64 = 0.0 => ["N·s/m", num!("a damping", 0, 1e8)],
     }
 }
 
@@ -69,126 +61,128 @@ impl SpringLoad {
     }
 }
 
-/// A leak that is part of the plant itself (as opposed to a scheduled fault).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BuiltInLeak {
-    /// Where the oil leaks.
-    pub path: LeakPath,
-    /// Which law the flow follows.
-    pub law: LeakLaw,
-    /// The coefficient: m³/(s·Pa) for the linear law, m³/(s·√Pa) for the square-root law.
-    pub coefficient: f64,
+schema::config_struct! {
+    /// A leak that is part of the plant itself (as opposed to a scheduled fault).
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct BuiltInLeak {
+        /// Where the oil leaks.
+        pub path: LeakPath,
+        /// Which law the flow follows.
+        pub law: LeakLaw,
+        /// The coefficient: m³/(s·Pa) for the linear law, m³/(s·√Pa) for the square-root law.
+        pub coefficient: f64 => [
+            "(m³/s per √Pa, or per Pa for the linear law)",
+            num!("a coefficient", 0, 1e-4)
+        ],
+    }
 }
 
-/// All physical parameters of the servovalve-driven cylinder: double-rod
-/// (one piston area) or single-rod (`rod_side_area_m2`), at any mounting angle.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ActuatorParams {
-    /// Piston area chamber 1 (the cap side of a single-rod cylinder) pushes on, A1, m².
-    pub piston_area_m2: f64,
-    /// Piston area chamber 2 pushes on, A2, m²: the annulus of a single-rod
-    /// cylinder (π/4·(D² − d²)). Absent: A1 (a double-rod cylinder).
-    pub rod_side_area_m2: Option<f64>,
-    /// Angle of the direction of extension above the horizontal, rad: π/2 is a
-    /// vertical cylinder whose extension lifts the moving mass, −π/2 one whose
-    /// extension lowers it; gravity then pulls on the rod with m·g·sin(angle).
-    pub mounting_angle_rad: f64,
-    /// Moving mass m (rod + piston), kg.
-    pub mass_kg: f64,
-    /// Fully retracted rod position X_min, m.
-    pub x_min_m: f64,
-    /// Fully extended rod position X_max, m.
-    pub x_max_m: f64,
-    /// Line (dead) volume on the chamber-1 side V10, m³.
-    pub dead_volume_1_m3: f64,
-    /// Line (dead) volume on the chamber-2 side V20, m³.
-    pub dead_volume_2_m3: f64,
-    /// Effective bulk modulus of the (air-free) oil β, Pa.
-    pub bulk_modulus_pa: f64,
-    /// How the oil's bulk modulus and viscosity follow its temperature (used
-    /// only when the samples carry it, `temp_c`).
-    pub oil_temperature: OilTemperature,
-    /// Volume fraction of entrained air at atmospheric pressure (0 = none);
-    /// makes the effective bulk modulus fall at low pressure.
-    pub entrained_air_fraction: f64,
-    /// Oil density ρ, kg/m³.
-    pub oil_density_kg_m3: f64,
-    /// Orifice discharge coefficient C_d, dimensionless.
-    pub discharge_coefficient: f64,
-    /// Orifice area gradient w of the port-A lands (P→A, A→T), m²/m.
-    pub area_gradient_m2_per_m: f64,
-    /// Orifice area gradient of the port-B lands (P→B, B→T), m²/m: a valve matched
-    /// to a single-rod cylinder has w_B = w·A2/A1. Absent: the port-A gradient.
-    pub area_gradient_b_m2_per_m: Option<f64>,
-    /// Spool displacement per volt of command (DC gain) k_sp, m/V.
-    pub spool_gain_m_per_v: f64,
-    /// Spool natural frequency ω_n, rad/s.
-    pub spool_natural_freq_rad_s: f64,
-    /// Spool damping ratio ζ_n, dimensionless.
-    pub spool_damping_ratio: f64,
-    /// Spool null bias: spool position at zero command, m.
-    pub spool_null_bias_m: f64,
-    /// Supply pressure p_s at zero flow, Pa.
-    pub supply_pressure_pa: f64,
-    /// Supply pressure drop per unit of flow drawn from the supply, Pa/(m³/s) (0 = stiff supply).
-    pub supply_sag_pa_per_m3_s: f64,
-    /// Return (tank) pressure p_r, Pa (gauge).
-    pub return_pressure_pa: f64,
-    /// Laminar leakage conductance of each of the valve's four metering lands at
-    /// null (spool underlap), m³/(s·Pa) (0 = a critical-centre valve without
-    /// leakage). A catalogue's "internal leakage" Q_L at supply p_s (ports
-    /// blocked, two paths P→A→T and P→B→T in parallel) is C_L = Q_L / p_s.
-    pub valve_null_leakage_m3_s_pa: f64,
-    /// Spool travel over which a closing land's null leakage fades to zero, m (the
-    /// underlap x_u; used only with `valve_null_leakage_m3_s_pa` > 0).
-    pub valve_underlap_m: f64,
-    /// Friction of the rod and piston seals.
-    pub friction: Friction,
-    /// External load: a spring in front of the rod.
-    pub load: SpringLoad,
-    /// Stiffness of the end stops, N/m.
-    pub end_stop_stiffness_n_per_m: f64,
-    /// Damping of the end stops while pressed, N·s/m.
-    pub end_stop_damping_n_s_per_m: f64,
-    /// Leaks that are part of the plant (none in the healthy model).
-    pub leaks: Vec<BuiltInLeak>,
-}
-
-impl Default for ActuatorParams {
-    fn default() -> Self {
-        ActuatorParams {
-            piston_area_m2: 6.33e-4,
-            rod_side_area_m2: None,
-            mounting_angle_rad: 0.0,
-            mass_kg: 10.0,
-            x_min_m: 0.0,
-            x_max_m: 0.6069,
-            dead_volume_1_m3: 2.14e-5,
-            dead_volume_2_m3: 2.14e-5,
-            bulk_modulus_pa: 6.89e8,
-            oil_temperature: OilTemperature::default(),
-            entrained_air_fraction: 0.0,
-            oil_density_kg_m3: 847.15,
-            discharge_coefficient: 0.6,
-            area_gradient_m2_per_m: 2.075e-2,
-            area_gradient_b_m2_per_m: None,
-            spool_gain_m_per_v: 2.794e-5,
-            spool_natural_freq_rad_s: 200.0 * std::f64::consts::PI,
-            spool_damping_ratio: 0.7,
-            spool_null_bias_m: 0.0,
-            supply_pressure_pa: 13.8e6,
-            supply_sag_pa_per_m3_s: 0.0,
-            return_pressure_pa: 0.0,
-            valve_null_leakage_m3_s_pa: 0.0,
-            valve_underlap_m: 5.0e-6,
-            friction: Friction::default(),
-            load: SpringLoad::default(),
-            end_stop_stiffness_n_per_m: 1.0e8,
-            end_stop_damping_n_s_per_m: 6.0e4,
-            leaks: Vec::new(),
-        }
+schema::config_struct! {
+    /// All physical parameters of the servovalve-driven cylinder: double-rod
+    /// (one piston area) or single-rod (`rod_side_area_m2`), at any mounting angle.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct ActuatorParams {
+        /// Piston area chamber 1 (the cap side of a single-rod cylinder) pushes on, A1, m².
+        pub piston_area_m2: f64 = 6.33e-4 => ["m²", num!("an area", 1e-6, 1)],
+        /// Piston area chamber 2 pushes on, A2, m²: the annulus of a single-rod
+        /// cylinder (π/4·(D² − d²)). Absent: A1 (a double-rod cylinder).
+        pub rod_side_area_m2: Option<f64> = None => [
+            "m²",
+            num!("an area", 1e-6, 1, "(or absent: a double-rod cylinder)")
+        ],
+        /// Angle of the direction of extension above the horizontal, rad: π/2 is a
+        /// vertical cylinder whose extension lifts the moving mass, −π/2 one whose
+        /// extension lowers it; gravity then pulls on the rod with m·g·sin(angle).
+        pub mounting_angle_rad: f64 = 0.0 => [
+            "rad",
+            Range::Number {
+                what: "an angle",
+                lo: -std::f64::consts::FRAC_PI_2,
+                hi: std::f64::consts::FRAC_PI_2,
+                lo_text: "-π/2",
+                hi_text: "π/2",
+                note: "(0: horizontal, π/2: vertical, extension lifts)",
+            }
+        ],
+        /// Moving mass m (rod + piston), kg.
+        pub mass_kg: f64 = 10.0 => ["kg", num!("a mass", 1e-3, 1e5)],
+        /// Fully retracted rod position X_min, m.
+        pub x_min_m: f64 = 0.0 => ["m", num!("a position", -10, 10)],
+        /// Fully extended rod position X_max, m.
+        pub x_max_m: f64 = 0.6069 => [
+            "m",
+            Range::Stated("a position at least 1 mm above x_min_m and at most 10 m")
+        ],
+        /// Line (dead) volume on the chamber-1 side V10, m³.
+        pub dead_volume_1_m3: f64 = 2.14e-5 => ["m³", num!("a volume", 1e-9, 1)],
+        /// Line (dead) volume on the chamber-2 side V20, m³.
+        pub dead_volume_2_m3: f64 = 2.14e-5 => ["m³", num!("a volume", 1e-9, 1)],
+        /// Effective bulk modulus of the (air-free) oil β, Pa.
+        pub bulk_modulus_pa: f64 = 6.89e8 => ["Pa", num!("a bulk modulus", 1e6, 1e11)],
+        /// How the oil's bulk modulus and viscosity follow its temperature (used
+        /// only when the samples carry it, `temp_c`).
+        pub oil_temperature: OilTemperature = OilTemperature::default(),
+        /// Volume fraction of entrained air at atmospheric pressure (0 = none);
+        /// makes the effective bulk modulus fall at low pressure.
+        pub entrained_air_fraction: f64 = 0.0 => ["", below!("a fraction", 0, 0.5)],
+        /// Oil density ρ, kg/m³.
+        pub oil_density_kg_m3: f64 = 847.15 => ["kg/m³", num!("a density", 100, 5000)],
+        /// Orifice discharge coefficient C_d, dimensionless.
+        pub discharge_coefficient: f64 = 0.6 => ["(dimensionless)", num!("a value", 0.01, 1)],
+        /// Orifice area gradient w of the port-A lands (P→A, A→T), m²/m.
+        pub area_gradient_m2_per_m: f64 = 2.075e-2 => ["m²/m", num!("an area gradient", 1e-6, 10)],
+        /// Orifice area gradient of the port-B lands (P→B, B→T), m²/m: a valve matched
+        /// to a single-rod cylinder has w_B = w·A2/A1. Absent: the port-A gradient.
+        pub area_gradient_b_m2_per_m: Option<f64> = None => [
+            "m²/m",
+            num!("an area gradient", 1e-6, 10, "(or absent: the port-A gradient)")
+        ],
+        /// Spool displacement per volt of command (DC gain) k_sp, m/V.
+        pub spool_gain_m_per_v: f64 = 2.794e-5 => ["m/V", num!("a spool gain", 1e-9, 0.1)],
+        /// Spool natural frequency ω_n, rad/s.
+        pub spool_natural_freq_rad_s: f64 = 200.0 * std::f64::consts::PI => [
+            "rad/s",
+            num!("a natural frequency", 1, 2e4)
+        ],
+        /// Spool damping ratio ζ_n, dimensionless.
+        pub spool_damping_ratio: f64 = 0.7 => ["(dimensionless)", num!("a damping ratio", 0.01, 10)],
+        /// Spool null bias: spool position at zero command, m.
+        pub spool_null_bias_m: f64 = 0.0 => ["m", num!("a spool offset", -0.01, 0.01)],
+        /// Supply pressure p_s at zero flow, Pa.
+        pub supply_pressure_pa: f64 = 13.8e6 => [
+            "Pa",
+            Range::Stated("a pressure at least 1e4 Pa above return_pressure_pa and at most 1e9 Pa (1000 MPa)")
+        ],
+        /// Supply pressure drop per unit of flow drawn from the supply, Pa/(m³/s) (0 = stiff supply).
+        pub supply_sag_pa_per_m3_s: f64 = 0.0 => [
+            "Pa per m³/s",
+            Range::Stated("0 (no sag) or a pressure drop from 1 to 1e14 Pa per m³/s")
+        ],
+        /// Return (tank) pressure p_r, Pa (gauge).
+        pub return_pressure_pa: f64 = 0.0 => ["Pa", num!("a pressure", 0, 1e8)],
+        /// Laminar leakage conductance of each of the valve's four metering lands at
+        /// null (spool underlap), m³/(s·Pa) (0 = a critical-centre valve without
+        /// leakage). A catalogue's "internal leakage" Q_L at supply p_s (ports
+        /// blocked, two paths P→A→T and P→B→T in parallel) is C_L = Q_L / p_s.
+        pub valve_null_leakage_m3_s_pa: f64 = 0.0 => [
+            "m³/(s·Pa)",
+            num!("a conductance", 0, 1e-9, "(0 = no null leakage; 1e-9 passes 1260 L/min at 21 MPa)")
+        ],
+        /// Spool travel over which a closing land's null leakage fades to zero, m (the
+        /// underlap x_u; used only with `valve_null_leakage_m3_s_pa` > 0).
+        pub valve_underlap_m: f64 = 5.0e-6 => ["m", num!("a spool travel", 1e-8, 1e-3)],
+        /// Friction of the rod and piston seals.
+        pub friction: Friction = Friction::default(),
+        /// External load: a spring in front of the rod.
+        pub load: SpringLoad = SpringLoad::default(),
+        /// Stiffness of the end stops, N/m.
+        pub end_stop_stiffness_n_per_m: f64 = 1.0e8 => ["N/m", num!("a stiffness", 1, 1e10)],
+        /// Damping of the end stops while pressed, N·s/m.
+        pub end_stop_damping_n_s_per_m: f64 = 6.0e4 => ["N·s/m", num!("a damping", 0, 1e8)],
+        /// Leaks that are part of the plant (none in the healthy model).
+        pub leaks: Vec<BuiltInLeak> = Vec::new(),
     }
 }
 
@@ -415,6 +409,17 @@ mod tests {
             ..ActuatorParams::default()
         };
         assert_eq!(p.measured_pressure_range_pa(), (-420.0e3, 31.5e6));
+    }
+
+    #[test]
+    fn the_declared_stiffness_range_is_the_filters_clamp() {
+        let f = ActuatorParams::SCHEMA
+            .find(&["oil_temperature", "reference_stiffness"])
+            .expect("declared");
+        let Range::Number { lo, hi, .. } = f.range else {
+            panic!("{:?}", f.range);
+        };
+        assert_eq!((lo, hi), crate::process::BULK_SCALE_RANGE);
     }
 
     #[test]

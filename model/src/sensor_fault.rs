@@ -164,10 +164,10 @@ impl SensorFault {
     /// Checks the values, naming the first bad one (`sensor_fault.<channel>.<field>`).
     pub fn validate(&self) -> Result<(), InvalidParam> {
         let ch = self.channel.name();
-        let bad = |field: &str, value: f64, expected: &'static str| InvalidParam {
+        let bad = |field: &str, value: f64, expected: &str| InvalidParam {
             field: format!("sensor_fault.{ch}.{field}"),
             value,
-            expected,
+            expected: expected.to_string(),
         };
         if !(self.onset_s.is_finite() && self.onset_s >= 0.0) {
             return Err(bad("onset_s", self.onset_s, "an onset of 0 s or later"));

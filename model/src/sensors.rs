@@ -1,194 +1,57 @@
 //! Sensor models of the rig (docs/model.md#sensors): optical encoder, pressure
 //! transducers through a 12-bit ADC, spool position and load cell.
 
+use schema::{int, num};
 use serde::{Deserialize, Serialize};
 
 use crate::rng::Rng;
 use crate::sensor_fault::Distortion;
 
-/// Sensor characteristics of the simulated rig.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SensorParams {
-    /// Encoder resolution (one count), m.
-    pub encoder_resolution_m: f64,
-    /// Standard deviation of the position sensor's noise beyond its
-    /// quantisation, m (0: an encoder that only counts, as on the thesis rig).
-    pub position_noise_m: f64,
-    /// Full scale of the pressure channels (0 to this), Pa.
-    pub pressure_full_scale_pa: f64,
-    /// ADC resolution of every analogue channel, bits.
-    pub adc_bits: u32,
-    /// Standard deviation of the pressure transducer noise, Pa.
-    pub pressure_noise_pa: f64,
-    /// Full scale of the spool position channel (±), m.
-    pub spool_full_scale_m: f64,
-    /// Standard deviation of the spool position noise, m.
-    pub spool_noise_m: f64,
-    /// Full scale of the load cell (±), N.
-    pub load_cell_full_scale_n: f64,
-    /// Standard deviation of the load cell noise, N.
-    pub load_cell_noise_n: f64,
-    /// Whether to add noise and quantisation at all (false gives the true states).
-    pub enabled: bool,
-    /// Zero offsets of the p1 and p2 transducers, Pa (an installation's; 0 by default).
-    pub pressure_offset_pa: [f64; 2],
-    /// Span errors of the p1 and p2 transducers, relative (0.005: reads 0.5 % high).
-    pub pressure_gain_error: [f64; 2],
-    /// Time constant of both transducers' first-order lag, s (0: none), applied
-    /// to the pressures at the sample rate.
-    pub pressure_lag_s: f64,
-    /// Laminar resistance of the line between the valve manifold, where the
-    /// transducers sit, and each chamber, Pa/(m³/s) (0: transducers at the
-    /// cylinder ports): the manifold reads p1 + R·Q1 and p2 − R·Q2, Q the valve's flows.
-    pub line_resistance_pa_s_per_m3: f64,
-}
-
-impl Default for SensorParams {
-    fn default() -> Self {
-        SensorParams {
-            encoder_resolution_m: 3.0e-5,
-            position_noise_m: 0.0,
-            pressure_full_scale_pa: 20.7e6,
-            adc_bits: 12,
-            pressure_noise_pa: 5.0e3,
-            spool_full_scale_m: 3.5e-4,
-            spool_noise_m: 2.0e-7,
-            load_cell_full_scale_n: 22.0e3,
-            load_cell_noise_n: 5.0,
-            enabled: true,
-            pressure_offset_pa: [0.0; 2],
-            pressure_gain_error: [0.0; 2],
-            pressure_lag_s: 0.0,
-            line_resistance_pa_s_per_m3: 0.0,
-        }
+schema::config_struct! {
+    /// Sensor characteristics of the simulated rig.
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct SensorParams {
+        /// Encoder resolution (one count), m.
+        pub encoder_resolution_m: f64 = 3.0e-5 => ["m", num!("a resolution", 1e-9, 1e-2)],
+        /// Standard deviation of the position sensor's noise beyond its
+        /// quantisation, m (0: an encoder that only counts, as on the thesis rig).
+        pub position_noise_m: f64 = 0.0 => ["m", num!("a noise", 0, 1e-2)],
+        /// Full scale of the pressure channels (0 to this), Pa.
+        pub pressure_full_scale_pa: f64 = 20.7e6 => ["Pa", num!("a full scale", 1e5, 1e9)],
+        /// ADC resolution of every analogue channel, bits.
+        pub adc_bits: u32 = 12 => ["bits", int!(1, 24)],
+        /// Standard deviation of the pressure transducer noise, Pa.
+        pub pressure_noise_pa: f64 = 5.0e3 => ["Pa", num!("a noise", 0, 1e8)],
+        /// Full scale of the spool position channel (±), m.
+        pub spool_full_scale_m: f64 = 3.5e-4 => ["m", num!("a full scale", 1e-6, 0.1)],
+        /// Standard deviation of the spool position noise, m.
+        pub spool_noise_m: f64 = 2.0e-7 => ["m", num!("a noise", 0, 1e-2)],
+        /// Full scale of the load cell (±), N.
+        pub load_cell_full_scale_n: f64 = 22.0e3 => ["N", num!("a full scale", 1, 1e8)],
+        /// Standard deviation of the load cell noise, N.
+        pub load_cell_noise_n: f64 = 5.0 => ["N", num!("a noise", 0, 1e7)],
+        /// Whether to add noise and quantisation at all (false gives the true states).
+        pub enabled: bool = true,
+        /// Zero offsets of the p1 and p2 transducers, Pa (an installation's; 0 by default).
+        pub pressure_offset_pa: [f64; 2] = [0.0; 2] => ["Pa", num!("offsets", -1e7, 1e7)],
+        /// Span errors of the p1 and p2 transducers, relative (0.005: reads 0.5 % high).
+        pub pressure_gain_error: [f64; 2] = [0.0; 2] => ["", num!("span errors", -0.5, 0.5)],
+        /// Time constant of both transducers' first-order lag, s (0: none), applied
+        /// to the pressures at the sample rate.
+        pub pressure_lag_s: f64 = 0.0 => ["s", num!("a time constant", 0, 1)],
+        /// Laminar resistance of the line between the valve manifold, where the
+        /// transducers sit, and each chamber, Pa/(m³/s) (0: transducers at the
+        /// cylinder ports): the manifold reads p1 + R·Q1 and p2 − R·Q2, Q the valve's flows.
+        pub line_resistance_pa_s_per_m3: f64 = 0.0 => ["Pa/(m³/s)", num!("a resistance", 0, 1e13)],
     }
 }
 
 impl SensorParams {
-    /// Checks every field, naming the first bad one (`sensors.<field>`).
+    /// Checks every field against its declared range, naming the first bad one
+    /// (`sensors.<field>`) with its range and unit.
     pub fn validate(&self) -> Result<(), crate::params::InvalidParam> {
-        let bad = |field: &str, value: f64, expected: &'static str| crate::params::InvalidParam {
-            field: format!("sensors.{field}"),
-            value,
-            expected,
-        };
-        if !(1..=24).contains(&self.adc_bits) {
-            return Err(bad("adc_bits", self.adc_bits as f64, "1 to 24 bits"));
-        }
-        let ranges: [(&str, f64, f64, f64, &'static str); 8] = [
-            (
-                "encoder_resolution_m",
-                self.encoder_resolution_m,
-                1e-9,
-                1e-2,
-                "a resolution from 1e-9 to 1e-2 m",
-            ),
-            (
-                "pressure_full_scale_pa",
-                self.pressure_full_scale_pa,
-                1e5,
-                1e9,
-                "a full scale from 1e5 to 1e9 Pa",
-            ),
-            (
-                "spool_full_scale_m",
-                self.spool_full_scale_m,
-                1e-6,
-                0.1,
-                "a full scale from 1e-6 to 0.1 m",
-            ),
-            (
-                "load_cell_full_scale_n",
-                self.load_cell_full_scale_n,
-                1.0,
-                1e8,
-                "a full scale from 1 to 1e8 N",
-            ),
-            (
-                "position_noise_m",
-                self.position_noise_m,
-                0.0,
-                1e-2,
-                "a noise from 0 to 1e-2 m",
-            ),
-            (
-                "pressure_noise_pa",
-                self.pressure_noise_pa,
-                0.0,
-                1e8,
-                "a noise from 0 to 1e8 Pa",
-            ),
-            (
-                "spool_noise_m",
-                self.spool_noise_m,
-                0.0,
-                1e-2,
-                "a noise from 0 to 1e-2 m",
-            ),
-            (
-                "load_cell_noise_n",
-                self.load_cell_noise_n,
-                0.0,
-                1e7,
-                "a noise from 0 to 1e7 N",
-            ),
-        ];
-        for (name, v, lo, hi, expected) in ranges {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(bad(name, v, expected));
-            }
-        }
-        let installation: [(&str, f64, f64, f64, &'static str); 6] = [
-            (
-                "pressure_offset_pa",
-                self.pressure_offset_pa[0],
-                -1e7,
-                1e7,
-                "offsets from -1e7 to 1e7 Pa",
-            ),
-            (
-                "pressure_offset_pa",
-                self.pressure_offset_pa[1],
-                -1e7,
-                1e7,
-                "offsets from -1e7 to 1e7 Pa",
-            ),
-            (
-                "pressure_gain_error",
-                self.pressure_gain_error[0],
-                -0.5,
-                0.5,
-                "span errors from -0.5 to 0.5",
-            ),
-            (
-                "pressure_gain_error",
-                self.pressure_gain_error[1],
-                -0.5,
-                0.5,
-                "span errors from -0.5 to 0.5",
-            ),
-            (
-                "pressure_lag_s",
-                self.pressure_lag_s,
-                0.0,
-                1.0,
-                "a time constant from 0 to 1 s",
-            ),
-            (
-                "line_resistance_pa_s_per_m3",
-                self.line_resistance_pa_s_per_m3,
-                0.0,
-                1e13,
-                "a resistance from 0 to 1e13 Pa/(m³/s)",
-            ),
-        ];
-        for (name, v, lo, hi, expected) in installation {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(bad(name, v, expected));
-            }
-        }
-        Ok(())
+        Ok(self.check_ranges("sensors")?)
     }
 
     /// Ideal sensors: measurements equal the true states.

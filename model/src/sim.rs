@@ -3,6 +3,7 @@
 //! scenario, with a leak fault schedule and sensor faults. It is deliberately not the estimator's
 //! forward-Euler model.
 
+use schema::{int, num};
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::{derivative, rk4_step, state_at_rest, Forces, LeakSet, State, I_X};
@@ -16,40 +17,44 @@ use crate::sensor_fault::{Channel, SensorFaultRun, SensorFaultSchedule};
 use crate::sensors::SensorParams;
 use crate::units::m3_s_to_lpm;
 
-/// Integration settings of the simulator, and its pump.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SimSettings {
-    /// Sample period of the DAQ, s.
-    pub sample_period_s: f64,
-    /// RK4 sub-steps per sample period (40 gives 25 µs steps).
-    pub substeps_per_sample: u32,
-    /// The simulated pump's ripple: amplitude as a fraction of the supply
-    /// pressure (0.004: ±0.4 %; 0: none). The filters' model has no ripple.
-    pub supply_ripple_fraction: f64,
-    /// The ripple's frequency, Hz.
-    pub supply_ripple_hz: f64,
-    /// The oil's temperature over the run (None: constant, at the rig's
-    /// `oil_temperature.reference_c`).
-    pub oil: Option<OilWarmUp>,
+schema::config_struct! {
+    /// Integration settings of the simulator, and its pump.
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct SimSettings {
+        /// Sample period of the DAQ, s.
+        pub sample_period_s: f64 = 1.0e-3 => ["s", num!("a sample period", 1e-5, 1)],
+        /// RK4 sub-steps per sample period (40 gives 25 µs steps).
+        pub substeps_per_sample: u32 = 40 => ["sub-steps per sample", int!(1, 10000)],
+        /// The simulated pump's ripple: amplitude as a fraction of the supply
+        /// pressure (0.004: ±0.4 %; 0: none). The filters' model has no ripple.
+        pub supply_ripple_fraction: f64 = 0.0 => ["", num!("a fraction of the supply pressure", 0, 0.5)],
+        /// The ripple's frequency, Hz.
+        pub supply_ripple_hz: f64 = 250.0 => ["Hz", num!("a frequency", 0, 1e5)],
+        /// The oil's temperature over the run (None: constant, at the rig's
+        /// `oil_temperature.reference_c`).
+        pub oil: Option<OilWarmUp> = None,
+    }
 }
 
-/// The simulated oil's temperature over a run, T(t) = T_end + (T_start −
-/// T_end)·e^(−t/τ): a warm-up (or a cool-down); the rig's bulk modulus,
-/// viscous friction and laminar flows follow it
-/// ([`ActuatorParams::set_oil_temperature`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct OilWarmUp {
-    /// Temperature at t = 0, °C.
-    pub start_c: f64,
-    /// Temperature the oil tends to, °C.
-    pub end_c: f64,
-    /// Time constant τ, s.
-    pub time_constant_s: f64,
-    /// Whether the samples carry it (`temp_c`, to [`TEMP_RESOLUTION_C`]); false: the rig has no thermometer.
-    #[serde(default)]
-    pub measured: bool,
+schema::config_struct! {
+    /// The simulated oil's temperature over a run, T(t) = T_end + (T_start −
+    /// T_end)·e^(−t/τ): a warm-up (or a cool-down); the rig's bulk modulus,
+    /// viscous friction and laminar flows follow it
+    /// ([`ActuatorParams::set_oil_temperature`]).
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct OilWarmUp {
+        /// Temperature at t = 0, °C.
+        pub start_c: f64 => ["°C", num!("an oil temperature", -40, 150)],
+        /// Temperature the oil tends to, °C.
+        pub end_c: f64 => ["°C", num!("an oil temperature", -40, 150)],
+        /// Time constant τ, s.
+        pub time_constant_s: f64 => ["s", num!("a time constant", 1e-3, 1e7)],
+        /// Whether the samples carry it (`temp_c`, to [`TEMP_RESOLUTION_C`]); false: the rig has no thermometer.
+        #[serde(default)]
+        pub measured: bool,
+    }
 }
 
 /// Resolution of the simulated oil thermometer, °C.
@@ -63,67 +68,10 @@ impl OilWarmUp {
 }
 
 impl SimSettings {
-    /// Checks the settings, naming the first bad one (`sim.<field>`).
+    /// Checks the settings against their declared ranges, naming the first bad
+    /// one (`sim.<field>`) with its range and unit.
     pub fn validate(&self) -> Result<(), InvalidParam> {
-        if !(1.0e-5..=1.0).contains(&self.sample_period_s) {
-            return Err(InvalidParam {
-                field: "sim.sample_period_s".into(),
-                value: self.sample_period_s,
-                expected: "a sample period from 1e-5 s to 1 s",
-            });
-        }
-        if !(1..=10_000).contains(&self.substeps_per_sample) {
-            return Err(InvalidParam {
-                field: "sim.substeps_per_sample".into(),
-                value: self.substeps_per_sample as f64,
-                expected: "1 to 10000 sub-steps per sample",
-            });
-        }
-        if !(0.0..=0.5).contains(&self.supply_ripple_fraction) {
-            return Err(InvalidParam {
-                field: "sim.supply_ripple_fraction".into(),
-                value: self.supply_ripple_fraction,
-                expected: "a fraction of the supply pressure from 0 to 0.5",
-            });
-        }
-        if !(0.0..=1e5).contains(&self.supply_ripple_hz) {
-            return Err(InvalidParam {
-                field: "sim.supply_ripple_hz".into(),
-                value: self.supply_ripple_hz,
-                expected: "a frequency from 0 to 1e5 Hz",
-            });
-        }
-        if let Some(oil) = self.oil {
-            for (field, value) in [("sim.oil.start_c", oil.start_c), ("sim.oil.end_c", oil.end_c)] {
-                if !(-40.0..=150.0).contains(&value) {
-                    return Err(InvalidParam {
-                        field: field.into(),
-                        value,
-                        expected: "an oil temperature from -40 to 150 °C",
-                    });
-                }
-            }
-            if !(1e-3..=1e7).contains(&oil.time_constant_s) {
-                return Err(InvalidParam {
-                    field: "sim.oil.time_constant_s".into(),
-                    value: oil.time_constant_s,
-                    expected: "a time constant from 1e-3 to 1e7 s",
-                });
-            }
-        }
-        Ok(())
-    }
-}
-
-impl Default for SimSettings {
-    fn default() -> Self {
-        SimSettings {
-            sample_period_s: 1.0e-3,
-            substeps_per_sample: 40,
-            supply_ripple_fraction: 0.0,
-            supply_ripple_hz: 250.0,
-            oil: None,
-        }
+        Ok(self.check_ranges("sim")?)
     }
 }
 

@@ -13,7 +13,15 @@
 use std::path::{Path, PathBuf};
 
 /// The crates that must stay pure.
-const PURE: [&str; 6] = ["model", "dataset", "plot", "filter", "detect", "calibrate"];
+const PURE: [&str; 7] = [
+    "schema",
+    "model",
+    "dataset",
+    "plot",
+    "filter",
+    "detect",
+    "calibrate",
+];
 
 /// Dependencies no pure crate may have.
 const FORBIDDEN: [&str; 5] = ["iceoryx2", "bus", "frames", "clap", "toml"];

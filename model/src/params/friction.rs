@@ -1,6 +1,7 @@
 //! Friction parameters: the presets, one direction's Stribeck curve, and the
 //! rod's friction with an optional own retracting curve.
 
+use schema::{num, Range};
 use serde::{Deserialize, Serialize};
 
 /// Which friction preset a rig uses.
@@ -14,30 +15,45 @@ pub enum FrictionPreset {
     Smooth,
 }
 
-/// Friction parameters of one direction of motion (Karnopp with the LaVal
-/// Stribeck form, docs/model.md#friction).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FrictionParams {
-    /// Static (stiction) friction f_st, N.
-    pub static_n: f64,
-    /// Slip (Coulomb) friction f_sl, N.
-    pub slip_n: f64,
-    /// Stribeck decay velocity α, m/s.
-    pub stribeck_velocity_m_s: f64,
-    /// Viscous friction coefficient d, N·s/m.
-    pub viscous_n_s_per_m: f64,
+/// Declares [`FrictionParams`] and [`Friction`] with the same curve fields,
+/// written once (`$curve`).
+macro_rules! friction_structs {
+    ($($curve:tt)*) => {
+        schema::config_struct! {
+            /// Friction parameters of one direction of motion (Karnopp with the LaVal
+            /// Stribeck form, docs/model.md#friction).
+            #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+            #[serde(default, deny_unknown_fields)]
+            pub struct FrictionParams {
+                $($curve)*
+            }
+        }
+
+        schema::config_struct! {
+            /// Friction of the rod seal in both directions. The top-level values apply
+            /// while extending and, unless `retract` is given, in both directions.
+            #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+            #[serde(default, deny_unknown_fields)]
+            pub struct Friction {
+                $($curve)*
+                /// Velocity treated as zero (the stick band half-width) u_z, m/s.
+                pub zero_velocity_m_s: f64 = 1.0e-3 => ["m/s", num!("a velocity", 1e-9, 1)],
+                /// Friction while retracting (v < 0), when it differs from extending (asymmetric seals).
+                pub retract: Option<FrictionParams> = None,
+            }
+        }
+    };
 }
 
-impl Default for FrictionParams {
-    fn default() -> Self {
-        FrictionParams {
-            static_n: 2.4e3,
-            slip_n: 1.1e3,
-            stribeck_velocity_m_s: 0.04,
-            viscous_n_s_per_m: 350.0,
-        }
-    }
+friction_structs! {
+    /// Static (stiction) friction f_st, N.
+    pub static_n: f64 = 2.4e3 => ["N", Range::Stated("a force from slip_n to 1e6 N")],
+    /// Slip (Coulomb) friction f_sl, N.
+    pub slip_n: f64 = 1.1e3 => ["N", num!("a force", 0, 1e6)],
+    /// Stribeck decay velocity α, m/s.
+    pub stribeck_velocity_m_s: f64 = 0.04 => ["m/s", num!("a velocity", 1e-6, 10)],
+    /// Viscous friction coefficient d, N·s/m.
+    pub viscous_n_s_per_m: f64 = 350.0 => ["N·s/m", num!("a viscous coefficient", 0, 1e7)],
 }
 
 impl FrictionParams {
@@ -53,33 +69,9 @@ impl FrictionParams {
     }
 }
 
-/// Friction of the rod seal in both directions. The top-level values apply
-/// while extending and, unless `retract` is given, in both directions.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Friction {
-    /// Static (stiction) friction f_st, N.
-    pub static_n: f64,
-    /// Slip (Coulomb) friction f_sl, N.
-    pub slip_n: f64,
-    /// Stribeck decay velocity α, m/s.
-    pub stribeck_velocity_m_s: f64,
-    /// Viscous friction coefficient d, N·s/m.
-    pub viscous_n_s_per_m: f64,
-    /// Velocity treated as zero (the stick band half-width) u_z, m/s.
-    pub zero_velocity_m_s: f64,
-    /// Friction while retracting (v < 0), when it differs from extending (asymmetric seals).
-    pub retract: Option<FrictionParams>,
-}
-
-impl Default for Friction {
-    fn default() -> Self {
-        Friction::symmetric(FrictionParams::default())
-    }
-}
-
 impl Friction {
-    /// The same friction in both directions, with the thesis' stick band (1 mm/s).
+    /// The same friction in both directions, with the thesis' stick band (1 mm/s)
+    /// (the default: [`FrictionParams::default`] both ways).
     pub fn symmetric(p: FrictionParams) -> Self {
         Friction {
             static_n: p.static_n,

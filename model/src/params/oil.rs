@@ -4,6 +4,7 @@
 //! with the viscosity the seals' viscous friction (∝ √ν, a lubricating film)
 //! and every laminar flow (∝ 1/ν: the valve's null leakage, a linear leak).
 
+use schema::num;
 use serde::{Deserialize, Serialize};
 
 /// Kelvin at 0 °C.
@@ -14,47 +15,38 @@ const WALTHER_OFFSET_MM2_S: f64 = 0.7;
 /// reference a mineral oil still has half its stiffness.
 const MIN_BULK_FACTOR: f64 = 0.5;
 
-/// The oil's temperature law, relative to the temperature the model's
-/// parameters hold at. It is used only when the samples carry the oil's
-/// temperature (`temp_c`); without it nothing changes.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct OilTemperature {
-    /// Oil temperature at which the model's bulk modulus, viscous friction and
-    /// laminar flows hold, °C: the commissioning recording's mean when it has
-    /// a `temp_c` column.
-    pub reference_c: f64,
-    /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade: 46 for HLP 46).
-    pub viscosity_40c_mm2_s: f64,
-    /// Kinematic viscosity at 100 °C, mm²/s (the oil's data sheet; 6.8 for an HLP 46 of viscosity index 100).
-    pub viscosity_100c_mm2_s: f64,
-    /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
-    pub bulk_modulus_per_k: f64,
-    /// The lowest oil temperature the rig runs at, °C (its operating range):
-    /// `commission` states the smallest detectable leaks over the range, and a
-    /// replay says how long the oil was outside it.
-    pub operating_min_c: f64,
-    /// The highest oil temperature the rig runs at, °C.
-    pub operating_max_c: f64,
-    /// The leak filter's oil stiffness θ on the commissioning recording, at
-    /// `reference_c` (1; `commission` sets it). Without `temp_c` the 12-state
-    /// filter then reads the oil's temperature from θ relative to it and sets
-    /// the viscous terms from it; absent: those terms stay as given.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub reference_stiffness: Option<f64>,
-}
-
-impl Default for OilTemperature {
-    fn default() -> Self {
-        OilTemperature {
-            reference_c: 40.0,
-            viscosity_40c_mm2_s: 46.0,
-            viscosity_100c_mm2_s: 6.8,
-            bulk_modulus_per_k: -0.0045,
-            operating_min_c: 20.0,
-            operating_max_c: 60.0,
-            reference_stiffness: None,
-        }
+schema::config_struct! {
+    /// The oil's temperature law, relative to the temperature the model's
+    /// parameters hold at. It is used only when the samples carry the oil's
+    /// temperature (`temp_c`); without it nothing changes.
+    #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+    #[serde(default, deny_unknown_fields)]
+    pub struct OilTemperature {
+        /// Oil temperature at which the model's bulk modulus, viscous friction and
+        /// laminar flows hold, °C: the commissioning recording's mean when it has
+        /// a `temp_c` column.
+        pub reference_c: f64 = 40.0 => ["°C", num!("an oil temperature", -40, 150)],
+        /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade: 46 for HLP 46).
+        pub viscosity_40c_mm2_s: f64 = 46.0 => ["mm²/s", num!("a kinematic viscosity", 1, 10000)],
+        /// Kinematic viscosity at 100 °C, mm²/s (the oil's data sheet; 6.8 for an HLP 46 of viscosity index 100).
+        pub viscosity_100c_mm2_s: f64 = 6.8 => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
+        /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
+        pub bulk_modulus_per_k: f64 = -0.0045 => ["(1/K)", num!("a relative change per kelvin", -0.02, 0)],
+        /// The lowest oil temperature the rig runs at, °C (its operating range):
+        /// `commission` states the smallest detectable leaks over the range, and a
+        /// replay says how long the oil was outside it.
+        pub operating_min_c: f64 = 20.0 => ["°C", num!("an oil temperature", -40, 150)],
+        /// The highest oil temperature the rig runs at, °C.
+        pub operating_max_c: f64 = 60.0 => ["°C", num!("an oil temperature", -40, 150)],
+        /// The leak filter's oil stiffness θ on the commissioning recording, at
+        /// `reference_c` (1; `commission` sets it). Without `temp_c` the 12-state
+        /// filter then reads the oil's temperature from θ relative to it and sets
+        /// the viscous terms from it; absent: those terms stay as given.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub reference_stiffness: Option<f64> = None => [
+            "times the model's bulk modulus",
+            num!("a stiffness", 0.2, 2)
+        ],
     }
 }
 
