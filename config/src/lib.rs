@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 pub mod init;
 pub mod live;
+pub mod opcua;
 mod reference;
 mod run_settings;
 pub mod udp;
@@ -56,6 +57,8 @@ pub struct Config {
     pub live_view: live::LiveViewConfig,
     /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
     pub zenoh: live::ZenohConfig,
+    /// The OPC UA server for a plant's SCADA (`run --opcua`), off by default.
+    pub opcua: opcua::OpcuaConfig,
 }
 
 impl Default for Config {
@@ -73,6 +76,7 @@ impl Default for Config {
             run: RunSettings::default(),
             live_view: live::LiveViewConfig::default(),
             zenoh: live::ZenohConfig::default(),
+            opcua: opcua::OpcuaConfig::default(),
         };
         cfg.derive_rig_facts();
         cfg
@@ -242,7 +246,8 @@ impl Config {
         self.udp.validate()?;
         self.run.validate()?;
         self.live_view.validate()?;
-        self.zenoh.validate()
+        self.zenoh.validate()?;
+        self.opcua.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else
@@ -300,7 +305,8 @@ impl Config {
              #        (gain 1, offset 0: the sender sends SI); [udp] sender = \"IP:PORT\": optional, the only\n\
              #        address datagrams are taken from (default: the first sender).\n\
              # [live_view]: the Foxglove WebSocket live view (run --live-view), rates in Hz.\n\
-             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\n{body}"
+             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\
+             # [opcua]: the OPC UA server for a plant's SCADA (run --opcua), read-only.\n\n{body}"
         )
     }
 }

@@ -15,7 +15,7 @@ use structs::{find_struct, struct_head};
 /// The sources of the structs that make up the configuration (path from the
 /// workspace root, text). A section whose type is in none of them is an error
 /// that names the type.
-const SOURCES: [(&str, &str); 13] = [
+const SOURCES: [(&str, &str); 14] = [
     ("config/src/lib.rs", include_str!("lib.rs")),
     ("config/src/run_settings.rs", include_str!("run_settings.rs")),
     ("model/src/params.rs", include_str!("../../model/src/params.rs")),
@@ -38,6 +38,7 @@ const SOURCES: [(&str, &str); 13] = [
     ("detect/src/config.rs", include_str!("../../detect/src/config.rs")),
     ("config/src/udp.rs", include_str!("udp.rs")),
     ("config/src/live.rs", include_str!("live.rs")),
+    ("config/src/opcua.rs", include_str!("opcua.rs")),
 ];
 
 /// The command that writes the committed reference (named in the page and by its test).

@@ -129,6 +129,11 @@ pub(crate) enum Command {
         /// implies --zenoh), e.g. tcp/10.0.0.5:7447.
         #[arg(long, value_name = "ENDPOINT")]
         zenoh_connect: Vec<String>,
+        /// Serve the rig's state and its leak and sensor events to a SCADA over OPC UA
+        /// (opc.tcp://127.0.0.1:PORT/, read-only; default port 4840, or [opcua] port; also on
+        /// with [opcua] enabled = true; docs/opcua.md). Off by default.
+        #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "0")]
+        opcua: Option<u16>,
     },
     /// Print the events of every rig reachable over Zenoh as they happen (the rigs' `run --zenoh`
     /// gateways publish them under leakwatch/<rig>/...), and each rig's health status when it

@@ -68,6 +68,7 @@ fn run(cli: Cli) -> Result<(), String> {
             live_view,
             zenoh,
             zenoh_connect,
+            opcua,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -84,6 +85,7 @@ fn run(cli: Cli) -> Result<(), String> {
             live_view,
             zenoh,
             zenoh_connect,
+            opcua,
         }),
         Command::Watch {
             listen,

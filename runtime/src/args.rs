@@ -37,6 +37,8 @@ pub struct RunArgs {
     pub zenoh: bool,
     /// `--zenoh-connect`: the gateway's endpoints instead of the config's.
     pub zenoh_connect: Vec<String>,
+    /// `--opcua [PORT]`: serve the OPC UA server (0: the configured port, default 4840).
+    pub opcua: Option<u16>,
 }
 
 /// Where a run's samples come from.

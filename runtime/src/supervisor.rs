@@ -433,8 +433,16 @@ fn live_stages(
     if !args.zenoh_connect.is_empty() {
         cfg.zenoh.connect = args.zenoh_connect.clone();
     }
+    if let Some(port) = args.opcua {
+        cfg.opcua.enabled = true;
+        if port != 0 {
+            cfg.opcua.port = port;
+        }
+    }
     cfg.live_view.validate()?;
     cfg.zenoh.validate()?;
+    cfg.opcua.validate()?;
+    opcua_stage(cfg, quiet)?;
     let v = &cfg.live_view;
     if v.enabled {
         // the live view binds it again at once
@@ -485,14 +493,43 @@ fn live_stages(
             cfg.zenoh.connect.join(", ")
         );
     }
-    let stages = crate::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
-    for name in stages
-        .iter()
-        .filter(|n| matches!(n, Stage::LiveView | Stage::Gateway))
-    {
+    let outputs = crate::stages::Outputs {
+        live_view: v.enabled,
+        zenoh: cfg.zenoh.enabled,
+        opcua: cfg.opcua.enabled,
+    };
+    let stages = crate::stages::run_stages(processes, outputs);
+    for name in stages.iter().filter(|n| crate::stages::is_output(**n)) {
         pipeline::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
     }
     Ok(stages)
+}
+
+/// The OPC UA server of `[opcua]`, when enabled: its port checked free (the stage
+/// binds it again at once) and its endpoint said on the console.
+fn opcua_stage(cfg: &Config, quiet: bool) -> Result<(), String> {
+    let o = &cfg.opcua;
+    if !o.enabled {
+        return Ok(());
+    }
+    std::net::TcpListener::bind((o.bind.as_str(), o.port))
+        .map_err(|e| format!("--opcua {}: cannot listen on {}:{}: {e}", o.port, o.bind, o.port))?;
+    if let Some(w) = o.exposure_warning() {
+        errln!("leakwatch run: warning: {w}");
+    }
+    if !quiet {
+        outln!(
+            "opcua: opc.tcp://{}:{}/ (Objects/Leakwatch/<rig>, read-only; {}; security {}; docs/opcua.md)",
+            o.bind,
+            o.port,
+            match &o.user {
+                Some(u) => format!("user {u}"),
+                None => "anonymous".to_string(),
+            },
+            o.security_policies.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// Where a run without `--out` writes: `leakwatch-run-YYYYMMDD-HHMMSS` (its

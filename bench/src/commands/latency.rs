@@ -275,6 +275,7 @@ fn process_row(
         live_view: None,
         zenoh: false,
         zenoh_connect: Vec::new(),
+        opcua: None,
     };
     eprintln!("iceoryx2, {label}: {seconds} s ...");
     let o = runtime::run_pipeline(&args, true)?;
