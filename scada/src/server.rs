@@ -11,7 +11,7 @@ use opcua::server::node_manager::memory::{simple_node_manager, SimpleNodeManager
 use opcua::server::{
     Server, ServerBuilder, ServerEndpoint, ServerHandle, ServerUserToken, ANONYMOUS_USER_TOKEN_ID,
 };
-use opcua::types::{DataValue, DateTime, MessageSecurityMode, NodeId, ObjectId, Variant};
+use opcua::types::{DataValue, DateTime, MessageSecurityMode, NodeId, Variant};
 
 use config::opcua::OpcuaConfig;
 use frames::LeakEventFrame;
@@ -31,7 +31,6 @@ pub struct Output {
     handle: ServerHandle,
     manager: Arc<SimpleNodeManager>,
     nodes: RigNodes,
-    server_node: NodeId,
     /// The certificate store made for this process (no `pki_dir`), removed at the end.
     scratch_pki: Option<PathBuf>,
 }
@@ -125,7 +124,6 @@ pub fn build(cfg: &OpcuaConfig, port: u16, rig: &str) -> Result<(Server, Output)
         handle,
         manager,
         nodes,
-        server_node: ObjectId::Server.into(),
         scratch_pki,
     };
     Ok((server, output))
@@ -172,18 +170,15 @@ impl Output {
             .map_err(|e| format!("cannot set the state variables: {e}"))
     }
 
-    /// Emits `e` as an OPC UA event, from the rig's object and the Server object;
-    /// `time_ns`: the acquisition time of its sample, Unix ns.
+    /// Emits `e` as an OPC UA event from the rig's object (the server passes it to
+    /// the Server object's subscribers too); `time_ns`: the acquisition time of its
+    /// sample, Unix ns.
     pub fn emit(&self, e: &LeakEventFrame, time_ns: u64) {
         let n = &self.nodes;
         let ev = LeakwatchEvent::of_frame(n.ns, &n.object, &n.rig, e, time_ns);
-        self.handle.subscriptions().notify_events(
-            [
-                (&ev as &dyn opcua::nodes::Event, &n.object),
-                (&ev as &dyn opcua::nodes::Event, &self.server_node),
-            ]
-            .into_iter(),
-        );
+        self.handle
+            .subscriptions()
+            .notify_events(std::iter::once((&ev as &dyn opcua::nodes::Event, &n.object)));
     }
 
     /// Stops the server (its task then ends).
