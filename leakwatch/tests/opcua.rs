@@ -153,7 +153,10 @@ fn a_scada_client_reads_the_state_and_receives_the_leak_alarm() {
     assert!((0.5..1.5).contains(&size), "{after}");
     // the oil's temperature: none measured, and none estimated on this rig (no datasheet oil)
     let oil = &after["OilTemperatureC"]["value"];
-    assert!(oil.is_null() || oil.as_f64().is_some_and(|t| (0.0..120.0).contains(&t)), "{after}");
+    assert!(
+        oil.is_null() || oil.as_f64().is_some_and(|t| (0.0..120.0).contains(&t)),
+        "{after}"
+    );
     // read-only
     let write = got["write"].as_str().unwrap();
     assert!(

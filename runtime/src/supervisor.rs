@@ -411,8 +411,9 @@ impl Topics {
 
 /// The stages of the run ([`crate::stages::run_stages`]): the live view
 /// (`--live-view [PORT]` or `[live_view] enabled`) and the Zenoh gateway
-/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) set in `cfg` for the
-/// stages to read, checked (the live view's port free), and said on the console.
+/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) and the OPC UA server
+/// (`--opcua [PORT]` or `[opcua] enabled`) set in `cfg` for the stages to read,
+/// checked (the live view's and the OPC UA server's ports free), and said on the console.
 fn live_stages(
     args: &RunArgs,
     cfg: &mut Config,
