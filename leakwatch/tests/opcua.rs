@@ -199,12 +199,21 @@ fn a_scada_client_reads_the_state_and_receives_the_leak_alarm() {
     assert!(log.contains("opcua: stopped by signal"), "{log}");
 }
 
+fn python_client(port: u16, args: &[&str]) -> Output {
+    Command::new("python3")
+        .arg(client_script())
+        .arg(format!("opc.tcp://127.0.0.1:{port}/"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 /// With `[opcua] user` and `password_file` (and `--opcua PORT`), the user reads
 /// the state over the None policy (the password encrypted with the server's
 /// certificate, made in `pki_dir`); an anonymous session and a wrong password
-/// are refused.
+/// are refused. The OPC UA stage, killed, is restarted and serves again.
 #[test]
-fn with_a_user_anonymous_clients_are_refused() {
+fn with_a_user_anonymous_clients_are_refused_and_a_killed_server_comes_back() {
     if !python_with("asyncua") {
         return;
     }
@@ -225,46 +234,66 @@ fn with_a_user_anonymous_clients_are_refused() {
         ),
     );
     let port = free_port();
-    let (port_s, cfg_s) = (port.to_string(), cfg.display().to_string());
-    let out_s = dir.join("run").display().to_string();
-    let pw_s = pw.display().to_string();
-    let (run, client) = run_with_client(
-        &[
+    let rig = rig_id("user");
+    let run = Command::new(BIN)
+        .args([
+            "run",
             "--rig",
-            "ua2",
+            &rig,
             "--seconds",
-            "12",
+            "20",
             "--fault",
             "none",
             "--opcua",
-            &port_s,
-            "--config",
-            &cfg_s,
-            "--out",
-            &out_s,
-        ],
+        ])
+        .arg(port.to_string())
+        .arg("--config")
+        .arg(&cfg)
+        .arg("--out")
+        .arg(dir.join("run"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pw_s = pw.display().to_string();
+    let user = ["--rig", &rig, "--user", "scada", "--password-file", &pw_s];
+    let first = python_client(
         port,
-        &[
-            "--rig",
-            "ua2",
-            "--seconds",
-            "1",
-            "--user",
-            "scada",
-            "--password-file",
-            &pw_s,
-            "--check-anonymous-refused",
-        ],
+        &[&user[..], &["--seconds", "1", "--check-anonymous-refused"]].concat(),
     );
-    let got = client_json(&client);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let got = client_json(&first);
     eprintln!("client: {got}");
     check_variables(&got["variables"]);
-    assert_ne!(got["anonymous"], "Good", "{got}");
-    assert_ne!(got["wrong_password"], "Good", "{got}");
+    assert_eq!(got["variables"]["Running"]["value"], true, "{got}");
+    assert!(
+        got["anonymous"].as_str().unwrap().starts_with("BadIdentityToken"),
+        "{got}"
+    );
+    assert!(
+        got["wrong_password"]
+            .as_str()
+            .unwrap()
+            .starts_with("BadIdentityToken"),
+        "{got}"
+    );
     assert!(
         pki.join("own/cert.der").is_file(),
         "no server certificate in {}",
         pki.display()
+    );
+    // killed, restarted like the live view, and serving again
+    let pid = wait_for_stage("opcua", "user");
+    signal(pid, libc::SIGKILL);
+    wait_until("the OPC UA stage restarted", || {
+        stage_pids(Some("opcua"), "user").iter().any(|p| *p != pid)
+    });
+    let again = client_json(&python_client(port, &[&user[..], &["--seconds", "0.5"]].concat()));
+    assert_eq!(again["variables"]["Running"]["value"], true, "{again}");
+    let run = run.wait_with_output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("stage opcua exited"),
+        "the restart is not reported: {err}"
     );
 }
