@@ -37,7 +37,7 @@ pub struct RunOutcome {
     /// the run monitored on without it.
     pub log_failure: Option<String>,
     /// Other outputs that failed while monitoring went on: events.json or latency.json
-    /// written elsewhere (or nowhere), a live view or gateway given up.
+    /// written elsewhere (or nowhere), a live view, gateway or OPC UA server given up.
     pub output_failures: Vec<String>,
     /// Where events.json was written (the output directory's, or the fallback), if anywhere.
     pub events_path: Option<PathBuf>,
