@@ -9,7 +9,9 @@ prints one JSON object with what it saw.
     python3 examples/opcua/scada_client.py opc.tcp://127.0.0.1:4840/ --rig rig1 --seconds 25
 
 With a user configured ([opcua] user, password_file), give --user and
---password-file; --check-anonymous-refused also checks that an anonymous
+--password-file; --security Basic256Sha256 (or Aes128Sha256RsaOaep) signs and
+encrypts the session with a client certificate made for it in --cert-dir (the
+server must trust it: [opcua] trust_client_certs, or its pki_dir/trusted/); --check-anonymous-refused also checks that an anonymous
 session and a wrong password are refused. --until-leak stops once a leak's
 raise with its kind named (ext1, ext2 or int; a raise of kind `leak`, the kind
 pending, comes first and is kept too) has arrived.
@@ -26,10 +28,14 @@ import argparse
 import asyncio
 import datetime as dt
 import json
+import socket
 import sys
 import time
+from pathlib import Path
 
 from asyncua import Client, ua
+from asyncua.crypto.cert_gen import setup_self_signed_certificate
+from cryptography.x509.oid import ExtendedKeyUsageOID
 
 NAMESPACE = "urn:leakwatch"
 NAMED_LEAKS = {"ext1", "ext2", "int"}
@@ -122,12 +128,30 @@ async def connect_and_read(url, user=None, password=None):
         await c.nodes.objects.get_child([f"{ns}:Leakwatch"])
 
 
+CLIENT_URI = "urn:leakwatch:scada-client"
+
+
+async def secure(client, policy, cert_dir):
+    """Sign and encrypt the session with `policy`, with a client certificate
+    made (once) in `cert_dir`."""
+    d = Path(cert_dir)
+    d.mkdir(parents=True, exist_ok=True)
+    key, cert = d / "client-key.pem", d / "client-cert.der"
+    await setup_self_signed_certificate(
+        key, cert, CLIENT_URI, socket.gethostname(), [ExtendedKeyUsageOID.CLIENT_AUTH], {"commonName": "leakwatch scada client"}
+    )
+    client.application_uri = CLIENT_URI
+    await client.set_security_string(f"{policy},SignAndEncrypt,{cert},{key}")
+
+
 async def watch(args, password):
     client = Client(url=args.url, timeout=5)
+    if args.security:
+        await secure(client, args.security, args.cert_dir)
+    result = {"security": args.security or "None"}
     if args.user is not None:
         client.set_user(args.user)
         client.set_password(password)
-    result = {}
     async with client:
         ns = await client.get_namespace_index(NAMESPACE)
         result["namespace"] = ns
@@ -174,6 +198,8 @@ async def main():
     ap.add_argument("--user")
     ap.add_argument("--password-file")
     ap.add_argument("--check-anonymous-refused", action="store_true")
+    ap.add_argument("--security", choices=["Basic256Sha256", "Aes128Sha256RsaOaep"])
+    ap.add_argument("--cert-dir", default="scada-client-pki")
     ap.add_argument("--wait-s", type=float, default=20.0, help="how long to wait for the server to listen")
     args = ap.parse_args()
     password = None

@@ -199,6 +199,36 @@ fn a_scada_client_reads_the_state_and_receives_the_leak_alarm() {
     assert!(log.contains("opcua: stopped by signal"), "{log}");
 }
 
+/// A session signed and encrypted with a client certificate the server does not
+/// trust is refused; once trusted, both signing policies serve the state.
+fn secure_sessions(port: u16, user: &[&str], cert_dir: &Path, pki: &Path) {
+    let certs = cert_dir.display().to_string();
+    let secure = |policy: &str| {
+        python_client(
+            port,
+            &[
+                user,
+                &["--seconds", "0.2", "--security", policy, "--cert-dir", &certs],
+            ]
+            .concat(),
+        )
+    };
+    let untrusted = secure("Basic256Sha256");
+    let err = String::from_utf8_lossy(&untrusted.stderr);
+    assert!(
+        !untrusted.status.success() && err.contains("BadCertificateUntrusted"),
+        "{err}"
+    );
+    for f in std::fs::read_dir(pki.join("rejected")).unwrap().flatten() {
+        std::fs::rename(f.path(), pki.join("trusted").join(f.file_name())).unwrap();
+    }
+    for policy in ["Basic256Sha256", "Aes128Sha256RsaOaep"] {
+        let got = client_json(&secure(policy));
+        assert_eq!(got["security"], policy, "{got}");
+        assert_eq!(got["variables"]["Running"]["value"], true, "{got}");
+    }
+}
+
 fn python_client(port: u16, args: &[&str]) -> Output {
     Command::new("python3")
         .arg(client_script())
@@ -211,7 +241,11 @@ fn python_client(port: u16, args: &[&str]) -> Output {
 /// With `[opcua] user` and `password_file` (and `--opcua PORT`), the user reads
 /// the state over the None policy (the password encrypted with the server's
 /// certificate, made in `pki_dir`); an anonymous session and a wrong password
-/// are refused. The OPC UA stage, killed, is restarted and serves again.
+/// are refused. A signed and encrypted session (Basic256Sha256) with a client
+/// certificate the server does not trust is refused; once the certificate is
+/// moved from `pki_dir/rejected/` to `trusted/`, Basic256Sha256 and
+/// Aes128Sha256RsaOaep sessions read the state. The OPC UA stage, killed, is
+/// restarted and serves again.
 #[test]
 fn with_a_user_anonymous_clients_are_refused_and_a_killed_server_comes_back() {
     if !python_with("asyncua") {
@@ -241,7 +275,7 @@ fn with_a_user_anonymous_clients_are_refused_and_a_killed_server_comes_back() {
             "--rig",
             &rig,
             "--seconds",
-            "20",
+            "40",
             "--fault",
             "none",
             "--opcua",
@@ -281,6 +315,7 @@ fn with_a_user_anonymous_clients_are_refused_and_a_killed_server_comes_back() {
         "no server certificate in {}",
         pki.display()
     );
+    secure_sessions(port, &user, &dir.join("client-pki"), &pki);
     // killed, restarted like the live view, and serving again
     let pid = wait_for_stage("opcua", "user");
     signal(pid, libc::SIGKILL);
