@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 pub mod init;
 pub mod live;
+pub mod opcua;
 mod reference;
 mod run_settings;
 pub mod udp;
@@ -59,6 +60,8 @@ schema::config_struct! {
         pub live_view: live::LiveViewConfig = live::LiveViewConfig::default(),
         /// The Zenoh fleet gateway (`run --zenoh`) and `leakwatch watch`, off by default.
         pub zenoh: live::ZenohConfig = live::ZenohConfig::default(),
+        /// The OPC UA server for a plant's SCADA (`run --opcua`), off by default.
+        pub opcua: opcua::OpcuaConfig = opcua::OpcuaConfig::default(),
     }
 }
 
@@ -225,7 +228,8 @@ impl Config {
         self.udp.validate()?;
         self.run.validate()?;
         self.live_view.validate()?;
-        self.zenoh.validate()
+        self.zenoh.validate()?;
+        self.opcua.validate()
     }
 
     /// The config file a command uses: `explicit` (`--config`) if given, else
@@ -283,7 +287,8 @@ impl Config {
              #        (gain 1, offset 0: the sender sends SI); [udp] sender = \"IP:PORT\": optional, the only\n\
              #        address datagrams are taken from (default: the first sender).\n\
              # [live_view]: the Foxglove WebSocket live view (run --live-view), rates in Hz.\n\
-             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\n{body}"
+             # [zenoh]: the fleet gateway (run --zenoh) and `watch`: Zenoh endpoints, estimates rate in Hz.\n\
+             # [opcua]: the OPC UA server for a plant's SCADA (run --opcua), read-only.\n\n{body}"
         )
     }
 }

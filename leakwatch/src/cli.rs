@@ -139,6 +139,11 @@ pub(crate) enum Command {
         /// With --runs-dir: remove the oldest earlier runs while all runs together exceed this, GiB.
         #[arg(long, value_name = "GIB")]
         keep_gib: Option<f64>,
+        /// Serve the rig's state and its leak and sensor events to a SCADA over OPC UA
+        /// (opc.tcp://127.0.0.1:PORT/, read-only; default port 4840, or [opcua] port; also on
+        /// with [opcua] enabled = true; docs/opcua.md). Off by default.
+        #[arg(long, value_name = "PORT", num_args = 0..=1, default_missing_value = "0")]
+        opcua: Option<u16>,
     },
     /// Print the events of every rig reachable over Zenoh as they happen (the rigs' `run --zenoh`
     /// gateways publish them under leakwatch/<rig>/...), and each rig's health status when it

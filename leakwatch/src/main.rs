@@ -71,6 +71,7 @@ fn run(cli: Cli) -> Result<(), String> {
             runs_dir,
             keep_days,
             keep_gib,
+            opcua,
         } => run::run(run::RunArgs {
             seconds,
             scenario,
@@ -90,6 +91,7 @@ fn run(cli: Cli) -> Result<(), String> {
             runs_dir,
             keep_days,
             keep_gib,
+            opcua,
         }),
         Command::Watch {
             listen,

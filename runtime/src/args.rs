@@ -43,6 +43,8 @@ pub struct RunArgs {
     pub keep_days: Option<f64>,
     /// `--keep-gib`: with `runs_dir`, the runs' total size kept within this, GiB.
     pub keep_gib: Option<f64>,
+    /// `--opcua [PORT]`: serve the OPC UA server (0: the configured port, default 4840).
+    pub opcua: Option<u16>,
 }
 
 /// Where a run's samples come from.

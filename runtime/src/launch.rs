@@ -95,7 +95,7 @@ impl StageArgs {
                     a.extend([s("--resume-after-seq"), seq.to_string()]);
                 }
             }
-            Stage::LiveView | Stage::Gateway => a.extend([s("--config"), self.config.clone()]),
+            Stage::LiveView | Stage::Gateway | Stage::Opcua => a.extend([s("--config"), self.config.clone()]),
             Stage::Acquisition => {
                 match &self.samples {
                     Samples::Udp { addr, idle_s } => a.extend([

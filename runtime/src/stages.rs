@@ -24,19 +24,22 @@ pub enum Stage {
     Gateway,
     /// Serves the run to Foxglove (`[live_view]`).
     LiveView,
+    /// Serves the rig's state and events over OPC UA (`[opcua]`).
+    Opcua,
     /// Writes the log.
     Recorder,
 }
 
 impl Stage {
     /// Every stage process.
-    pub const ALL: [Stage; 7] = [
+    pub const ALL: [Stage; 8] = [
         Stage::Acquisition,
         Stage::Classifier,
         Stage::Estimator,
         Stage::EstimatorClassifier,
         Stage::Gateway,
         Stage::LiveView,
+        Stage::Opcua,
         Stage::Recorder,
     ];
 
@@ -49,6 +52,7 @@ impl Stage {
             Stage::EstimatorClassifier => "estimator+classifier",
             Stage::Gateway => "gateway",
             Stage::LiveView => "liveview",
+            Stage::Opcua => "opcua",
             Stage::Recorder => "recorder",
         }
     }
@@ -79,20 +83,40 @@ pub const STAGES: [Stage; 4] = [
     Stage::Acquisition,
 ];
 
+/// The live outputs a run starts (each when asked for).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) struct Outputs {
+    /// The Foxglove live view.
+    pub live_view: bool,
+    /// The Zenoh gateway.
+    pub zenoh: bool,
+    /// The OPC UA server.
+    pub opcua: bool,
+}
+
+/// Whether `stage` is a live output (the live view, the Zenoh gateway, the OPC UA
+/// server): optional, and not watched by the watchdog (they publish no stats).
+pub(super) fn is_output(stage: Stage) -> bool {
+    matches!(stage, Stage::LiveView | Stage::Gateway | Stage::Opcua)
+}
+
 /// The stages of a run in the order they start: the placement's processes, with the
-/// live view and the Zenoh gateway (unsupervised by the watchdog: they publish no
-/// stats) before the acquisition when asked for.
-pub(super) fn run_stages(processes: &[Stage], live_view: bool, zenoh: bool) -> Vec<Stage> {
+/// live view, the Zenoh gateway and the OPC UA server (unsupervised by the watchdog:
+/// they publish no stats) before the acquisition when asked for.
+pub(super) fn run_stages(processes: &[Stage], outputs: Outputs) -> Vec<Stage> {
     // the placement's processes end with the acquisition, which starts last
     let (last, first) = processes
         .split_last()
         .map_or((None, processes), |(l, f)| (Some(*l), f));
     let mut v = first.to_vec();
-    if live_view {
+    if outputs.live_view {
         v.push(Stage::LiveView);
     }
-    if zenoh {
+    if outputs.zenoh {
         v.push(Stage::Gateway);
+    }
+    if outputs.opcua {
+        v.push(Stage::Opcua);
     }
     v.extend(last);
     v
@@ -111,10 +135,11 @@ pub fn stage_main(args: &[std::ffi::OsString]) -> std::process::ExitCode {
         Some(Stage::Recorder) => recorder::shell::main(argv),
         Some(Stage::LiveView) => live::shell::liveview_main(argv),
         Some(Stage::Gateway) => live::shell::gateway_main(argv),
+        Some(Stage::Opcua) => scada::shell::opcua_main(argv),
         None => {
             errln!(
                 "leakwatch stage: unknown stage {name:?}; the stages are acquisition, estimator, classifier, recorder, \
-                 liveview, gateway (and estimator+classifier, the two in one process)"
+                 liveview, gateway, opcua (and estimator+classifier, the two in one process)"
             );
             std::process::ExitCode::FAILURE
         }

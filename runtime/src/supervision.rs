@@ -23,13 +23,14 @@ use crate::watchdog::{stall_cause, Alarm, Watchdog};
 
 /// Stages whose failure does not end the run: monitoring (acquisition,
 /// estimator, classifier) goes on without them.
-pub(crate) const OPTIONAL_STAGES: [Stage; 3] = [Stage::Recorder, Stage::LiveView, Stage::Gateway];
+pub(crate) const OPTIONAL_STAGES: [Stage; 4] =
+    [Stage::Recorder, Stage::LiveView, Stage::Gateway, Stage::Opcua];
 
-/// Whether the watchdog watches stage `name`: the live view and the gateway
-/// publish no stats (restarted when they exit, not watched), and a UDP stream
+/// Whether the watchdog watches stage `name`: the live view, the gateway and the
+/// OPC UA server publish no stats (restarted when they exit, not watched), and a UDP stream
 /// (`udp`) is paced by its sender, so no datagram is no stall.
 pub(crate) fn watched(name: Stage, udp: bool) -> bool {
-    !matches!(name, Stage::LiveView | Stage::Gateway) && (!udp || name != Stage::Acquisition)
+    !crate::stages::is_output(name) && (!udp || name != Stage::Acquisition)
 }
 
 /// Says that stage `name` made progress again after `d` without.

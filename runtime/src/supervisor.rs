@@ -41,7 +41,7 @@ pub struct RunOutcome {
     /// the run monitored on without it.
     pub log_failure: Option<String>,
     /// Other outputs that failed while monitoring went on: events.json or latency.json
-    /// written elsewhere (or nowhere), a live view or gateway given up.
+    /// written elsewhere (or nowhere), a live view, gateway or OPC UA server given up.
     pub output_failures: Vec<String>,
     /// Where events.json was written (the output directory's, or the fallback), if anywhere.
     pub events_path: Option<PathBuf>,
@@ -529,8 +529,9 @@ impl Topics {
 
 /// The stages of the run ([`crate::stages::run_stages`]): the live view
 /// (`--live-view [PORT]` or `[live_view] enabled`) and the Zenoh gateway
-/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) set in `cfg` for the
-/// stages to read, checked (the live view's port free), and said on the console.
+/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) and the OPC UA server
+/// (`--opcua [PORT]` or `[opcua] enabled`) set in `cfg` for the stages to read,
+/// checked (the live view's and the OPC UA server's ports free), and said on the console.
 fn live_stages(
     args: &RunArgs,
     cfg: &mut Config,
@@ -551,8 +552,16 @@ fn live_stages(
     if !args.zenoh_connect.is_empty() {
         cfg.zenoh.connect = args.zenoh_connect.clone();
     }
+    if let Some(port) = args.opcua {
+        cfg.opcua.enabled = true;
+        if port != 0 {
+            cfg.opcua.port = port;
+        }
+    }
     cfg.live_view.validate()?;
     cfg.zenoh.validate()?;
+    cfg.opcua.validate()?;
+    opcua_stage(cfg, quiet)?;
     let v = &cfg.live_view;
     if v.enabled {
         // the live view binds it again at once
@@ -603,11 +612,13 @@ fn live_stages(
             cfg.zenoh.connect.join(", ")
         );
     }
-    let stages = crate::stages::run_stages(processes, v.enabled, cfg.zenoh.enabled);
-    for name in stages
-        .iter()
-        .filter(|n| matches!(n, Stage::LiveView | Stage::Gateway))
-    {
+    let outputs = crate::stages::Outputs {
+        live_view: v.enabled,
+        zenoh: cfg.zenoh.enabled,
+        opcua: cfg.opcua.enabled,
+    };
+    let stages = crate::stages::run_stages(processes, outputs);
+    for name in stages.iter().filter(|n| crate::stages::is_output(**n)) {
         pipeline::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
     }
     Ok(stages)
@@ -636,6 +647,33 @@ fn out_dir_of(args: &RunArgs) -> Result<(PathBuf, Option<Retention>), String> {
             Ok((default_out_dir(runs), Some(keep)))
         }
     }
+}
+
+/// The OPC UA server of `[opcua]`, when enabled: its port checked free (the stage
+/// binds it again at once) and its endpoint said on the console.
+fn opcua_stage(cfg: &Config, quiet: bool) -> Result<(), String> {
+    let o = &cfg.opcua;
+    if !o.enabled {
+        return Ok(());
+    }
+    std::net::TcpListener::bind((o.bind.as_str(), o.port))
+        .map_err(|e| format!("--opcua {}: cannot listen on {}:{}: {e}", o.port, o.bind, o.port))?;
+    if let Some(w) = o.exposure_warning() {
+        errln!("leakwatch run: warning: {w}");
+    }
+    if !quiet {
+        outln!(
+            "opcua: opc.tcp://{}:{}/ (Objects/Leakwatch/<rig>, read-only; {}; security {}; docs/opcua.md)",
+            o.bind,
+            o.port,
+            match &o.user {
+                Some(u) => format!("user {u}"),
+                None => "anonymous".to_string(),
+            },
+            o.security_policies.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// Where a run without `--out` writes: `leakwatch-run-YYYYMMDD-HHMMSS` (its

@@ -278,6 +278,7 @@ fn process_row(
         runs_dir: None,
         keep_days: None,
         keep_gib: None,
+        opcua: None,
     };
     eprintln!("iceoryx2, {label}: {seconds} s ...");
     let o = runtime::run_pipeline(&args, true)?;
