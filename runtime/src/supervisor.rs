@@ -18,15 +18,15 @@ use crate::error::RunError;
 use crate::events::{own_event, print_event};
 use crate::figures::{LatencyReport, StageAcc, STAGE_CODES};
 use crate::notify::ServiceNotify;
+use crate::outputs::live_stages;
 use crate::placement::Placement;
 use crate::plan::{announce, check_outputs, plan, run_prefix, stage_args, Plan};
-use crate::retention::{Retention, RUN_FOLDER_PREFIX};
+use crate::retention::Retention;
+use crate::run_dir::{out_dir_of, write_bag_metadata};
 use crate::service::Service;
 use crate::stages::{stage_program, Stage};
 use crate::supervision::Supervision;
 use bus::say as errln;
-use config::Config;
-use pipeline::out::outln;
 
 /// The result of a run.
 #[derive(Debug)]
@@ -524,197 +524,5 @@ impl Topics {
                 errln!("leakwatch run: warning: {w}");
             }
         }
-    }
-}
-
-/// The stages of the run ([`crate::stages::run_stages`]): the live view
-/// (`--live-view [PORT]` or `[live_view] enabled`) and the Zenoh gateway
-/// (`--zenoh`, `--zenoh-connect` or `[zenoh] enabled`) and the OPC UA server
-/// (`--opcua [PORT]` or `[opcua] enabled`) set in `cfg` for the stages to read,
-/// checked (the live view's and the OPC UA server's ports free), and said on the console.
-fn live_stages(
-    args: &RunArgs,
-    cfg: &mut Config,
-    out_dir: &Path,
-    inputs: &[&Path],
-    quiet: bool,
-    processes: &[Stage],
-) -> Result<Vec<Stage>, String> {
-    if let Some(port) = args.live_view {
-        cfg.live_view.enabled = true;
-        if port != 0 {
-            cfg.live_view.port = port;
-        }
-    }
-    if args.zenoh || !args.zenoh_connect.is_empty() {
-        cfg.zenoh.enabled = true;
-    }
-    if !args.zenoh_connect.is_empty() {
-        cfg.zenoh.connect = args.zenoh_connect.clone();
-    }
-    if let Some(port) = args.opcua {
-        cfg.opcua.enabled = true;
-        if port != 0 {
-            cfg.opcua.port = port;
-        }
-    }
-    cfg.live_view.validate()?;
-    cfg.zenoh.validate()?;
-    cfg.opcua.validate()?;
-    opcua_stage(cfg, quiet)?;
-    let v = &cfg.live_view;
-    if v.enabled {
-        // the live view binds it again at once
-        std::net::TcpListener::bind((v.bind.as_str(), v.port)).map_err(|e| {
-            format!(
-                "--live-view {}: cannot listen on {}:{}: {e}",
-                v.port, v.bind, v.port
-            )
-        })?;
-    }
-    if v.enabled {
-        // the shipped Foxglove layout with this rig's topics, beside the run's outputs
-        let layout = out_dir.join(live::layout::LAYOUT_FILE_NAME);
-        pipeline::out::write(
-            &layout,
-            live::layout::for_rig(&args.rig).as_bytes(),
-            args.force,
-            inputs,
-        )?;
-        if let Some(w) = v.exposure_warning() {
-            errln!("leakwatch run: warning: {w}");
-        }
-        if !quiet {
-            outln!(
-                "live view: ws://{}:{}{} (Foxglove: Open connection, Foxglove WebSocket; frames {} Hz, estimates {} Hz)",
-                v.bind,
-                v.port,
-                if v.token.is_some() || v.token_file.is_some() {
-                    "/?token=TOKEN (the [live_view] token)"
-                } else {
-                    ""
-                },
-                v.frames_hz,
-                v.estimates_hz
-            );
-            outln!(
-                "live view layout: {} (Foxglove: Layouts, Import from file; {} for rig {})",
-                layout.display(),
-                live::layout::LAYOUT_REPO_PATH,
-                args.rig
-            );
-        }
-    }
-    if cfg.zenoh.enabled && !quiet {
-        outln!(
-            "zenoh: publishing leakwatch/{}/{{events,health,estimates}}, connecting to [{}]",
-            args.rig,
-            cfg.zenoh.connect.join(", ")
-        );
-    }
-    let outputs = crate::stages::Outputs {
-        live_view: v.enabled,
-        zenoh: cfg.zenoh.enabled,
-        opcua: cfg.opcua.enabled,
-    };
-    let stages = crate::stages::run_stages(processes, outputs);
-    for name in stages.iter().filter(|n| crate::stages::is_output(**n)) {
-        pipeline::out::check(&out_dir.join(format!("{name}.log")), args.force, inputs)?;
-    }
-    Ok(stages)
-}
-
-/// The run's folder: `--out`, or a new one in `--runs-dir` (with what to keep
-/// of the earlier runs there), or a new one here.
-fn out_dir_of(args: &RunArgs) -> Result<(PathBuf, Option<Retention>), String> {
-    let (max_age, max_bytes) = crate::retention::limits(args.keep_days, args.keep_gib)?;
-    match (&args.out, &args.runs_dir) {
-        (Some(_), Some(_)) => {
-            Err("--out and --runs-dir: give one (--runs-dir makes a new folder in it per run)".into())
-        }
-        (_, None) if max_age.is_some() || max_bytes.is_some() => {
-            Err("--keep-days and --keep-gib are for --runs-dir".into())
-        }
-        (Some(dir), None) => Ok((dir.clone(), None)),
-        (None, None) => Ok((default_out_dir(Path::new("")), None)),
-        (None, Some(runs)) => {
-            pipeline::out::dir(runs)?;
-            let keep = Retention {
-                dir: runs.clone(),
-                max_age,
-                max_bytes,
-            };
-            Ok((default_out_dir(runs), Some(keep)))
-        }
-    }
-}
-
-/// The OPC UA server of `[opcua]`, when enabled: its port checked free (the stage
-/// binds it again at once) and its endpoint said on the console.
-fn opcua_stage(cfg: &Config, quiet: bool) -> Result<(), String> {
-    let o = &cfg.opcua;
-    if !o.enabled {
-        return Ok(());
-    }
-    std::net::TcpListener::bind((o.bind.as_str(), o.port))
-        .map_err(|e| format!("--opcua {}: cannot listen on {}:{}: {e}", o.port, o.bind, o.port))?;
-    if let Some(w) = o.exposure_warning() {
-        errln!("leakwatch run: warning: {w}");
-    }
-    if !quiet {
-        outln!(
-            "opcua: opc.tcp://{}:{}/ (Objects/Leakwatch/<rig>, read-only; {}; security {}; docs/opcua.md)",
-            o.bind,
-            o.port,
-            match &o.user {
-                Some(u) => format!("user {u}"),
-                None => "anonymous".to_string(),
-            },
-            o.security_policies.join(", ")
-        );
-    }
-    Ok(())
-}
-
-/// Where a run without `--out` writes: `leakwatch-run-YYYYMMDD-HHMMSS` (its
-/// UTC start time, as rosbag2 names a recording by its start), so a second run
-/// never collides with the first; `-2`, `-3`, ... within one second.
-fn default_out_dir(parent: &Path) -> PathBuf {
-    let ns = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as i128);
-    // "YYYY-MM-DD hh:mm:ss.mmm UTC" -> "YYYYMMDD-hhmmss"
-    let digits: String = recorder::info::utc(ns)
-        .chars()
-        .take(19)
-        .filter(char::is_ascii_digit)
-        .collect();
-    let stamp = format!("{RUN_FOLDER_PREFIX}{}-{}", &digits[..8], &digits[8..]);
-    let mut dir = parent.join(&stamp);
-    let mut n = 2;
-    while dir.exists() {
-        dir = parent.join(format!("{stamp}-{n}"));
-        n += 1;
-    }
-    dir
-}
-
-/// Writes the rosbag2 `metadata.yaml` beside the run's log, so that rosbag2
-/// readers open the run's folder as a bag (`ros2 bag info DIR`, `rosbags`).
-/// A log that cannot be read or a file that cannot be written is said on
-/// stderr; the run's other outputs stand.
-fn write_bag_metadata(out_dir: &Path, force: bool, inputs: &[&Path]) {
-    let log = out_dir.join("run.mcap");
-    if !log.is_file() {
-        return;
-    }
-    let written = pipeline::logs::read_log(&log).and_then(|(l, parts, bytes)| {
-        let mut info = recorder::Info::from_log(&log, bytes, &l);
-        info.later_parts = parts.into_iter().skip(1).collect();
-        let text = recorder::rosbag2::metadata_yaml(&info);
-        pipeline::out::write(&out_dir.join("metadata.yaml"), text.as_bytes(), force, inputs)
-    });
-    if let Err(e) = written {
-        eprintln!("leakwatch run: no rosbag2 metadata.yaml beside the log: {e}");
     }
 }
