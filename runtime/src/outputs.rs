@@ -133,4 +133,3 @@ fn opcua_stage(cfg: &Config, quiet: bool) -> Result<(), String> {
     }
     Ok(())
 }
-

@@ -73,4 +73,3 @@ pub(crate) fn write_bag_metadata(out_dir: &Path, force: bool, inputs: &[&Path]) 
         eprintln!("leakwatch run: no rosbag2 metadata.yaml beside the log: {e}");
     }
 }
-
