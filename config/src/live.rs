@@ -89,6 +89,20 @@ pub fn check_endpoint(e: &str) -> Result<(), String> {
     }
 }
 
+/// Checks that `bind`, the `bind` field of the section `section` declared by
+/// `schema`, is an IP address; the error says what it must be.
+pub(crate) fn check_bind(section: &str, bind: &str, schema: &schema::Section) -> Result<(), String> {
+    bind.parse::<IpAddr>().map(|_| ()).map_err(|_| {
+        format!(
+            "{section} bind = {bind:?}: must be {}",
+            schema
+                .find(&["bind"])
+                .map(schema::Field::expected)
+                .unwrap_or_default()
+        )
+    })
+}
+
 /// The shortest token of the live view, characters.
 pub const MIN_TOKEN_LEN: usize = 16;
 
@@ -188,16 +202,7 @@ impl LiveViewConfig {
     pub fn validate(&self) -> Result<(), String> {
         self.check_ranges("").map_err(|e| format!("[live_view] {e}"))?;
         self.resolve_token()?;
-        self.bind.parse::<IpAddr>().map_err(|_| {
-            format!(
-                "[live_view] bind = {:?}: must be {}",
-                self.bind,
-                Self::SCHEMA
-                    .find(&["bind"])
-                    .map(schema::Field::expected)
-                    .unwrap_or_default()
-            )
-        })?;
+        check_bind("[live_view]", &self.bind, &Self::SCHEMA)?;
         Ok(())
     }
 }

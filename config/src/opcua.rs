@@ -95,16 +95,7 @@ impl OpcuaConfig {
     /// Checks every field; the error names the field, its range and unit.
     pub fn validate(&self) -> Result<(), String> {
         self.check_ranges("").map_err(|e| format!("[opcua] {e}"))?;
-        self.bind.parse::<IpAddr>().map_err(|_| {
-            format!(
-                "[opcua] bind = {:?}: must be {}",
-                self.bind,
-                Self::SCHEMA
-                    .find(&["bind"])
-                    .map(schema::Field::expected)
-                    .unwrap_or_default()
-            )
-        })?;
+        crate::live::check_bind("[opcua]", &self.bind, &Self::SCHEMA)?;
         if self.security_policies.is_empty() {
             return Err(format!(
                 "[opcua] security_policies = []: give at least one of {}",
