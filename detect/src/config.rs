@@ -12,9 +12,9 @@ schema::config_struct! {
     #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
     #[serde(deny_unknown_fields)]
     pub struct Commissioning {
-        /// Healthy offset of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
+        /// Healthy offset (median) of each single-leak size (ext1, ext2, int), L/min at the nominal drop.
         pub offsets_lpm: [f64; 3],
-        /// Healthy spread (standard deviation) of each, L/min at the nominal drop.
+        /// Healthy spread of each (upper semi-deviation: RMS above the median), L/min at the nominal drop.
         pub spreads_lpm: [f64; 3],
         /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
         pub crossings_per_s: [f64; 3],
@@ -122,8 +122,9 @@ schema::config_struct! {
         pub recovery_s: f64 = 2.0 => ["s", num!("a number", 0.0, 1000000.0)],
         /// Leak-size detector: a normalised innovation squared above this (an innovation
         /// of about √nis_gate standard deviations) means the filter has lost track for
-        /// a moment: no evidence for `recovery_s` after it.
-        pub nis_gate: f64 = 10000.0 => ["(normalised innovation squared)", num!("a number", 0.0, 1000000000000000.0)],
+        /// a moment: no evidence for `recovery_s` after it (the model's errors in such a
+        /// moment, a reversal with the valve saturated, move the leak estimates).
+        pub nis_gate: f64 = 2000.0 => ["(normalised innovation squared)", num!("a number", 0.0, 1000000000000000.0)],
         /// Leak-size detector: while the NIS averaged over the last 5 s exceeds this
         /// many times its healthy mean (the model no longer tracks the input, e.g. a fast
         /// chirp), evidence does not count (0 = off).

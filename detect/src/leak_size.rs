@@ -124,9 +124,11 @@ pub fn thresholds(
 }
 
 /// Healthy values of the three single-leak sizes kept every 10 ms, and their
-/// statistics: the mean as the offset, the standard deviation as the spread
-/// (the healthy estimate wanders with the operating point, which a robust
-/// spread would hide), and the rate of upcrossings of the mean.
+/// statistics: the median as the offset, the upper semi-deviation as the
+/// spread (the RMS of the values above the median: a leak only adds flow, so
+/// the detector tests rises; the healthy estimate's upward wander with the
+/// operating point stays in it, its dips do not, a filter kicked down by a
+/// transient it cannot follow), and the rate of upcrossings of the median.
 #[derive(Debug, Clone, Default)]
 struct HealthyRecord {
     values: [Vec<f64>; 3],
@@ -193,15 +195,28 @@ impl HealthyRecord {
             if v.is_empty() {
                 continue;
             }
-            let n = v.len() as f64;
-            let m = v.iter().sum::<f64>() / n;
-            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+            let m = median(v);
+            let (sum_sq, above) = v
+                .iter()
+                .filter(|x| **x > m)
+                .fold((0.0_f64, 0.0_f64), |(s, n), x| (s + (x - m).powi(2), n + 1.0));
             med[k] = m;
-            spread[k] = var.sqrt();
+            spread[k] = (sum_sq / above.max(1.0)).sqrt();
             let ups = v.windows(2).filter(|w| w[0] <= m && w[1] > m).count();
             cross[k] = ups as f64 / self.learned_s.max(Self::EVERY_S);
         }
         (med, spread, cross)
+    }
+}
+
+/// The median of `v` (the mean of the middle two of an even count; NaN if empty).
+fn median(v: &[f64]) -> f64 {
+    let mut sorted = v.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    match sorted.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => sorted[n / 2],
+        n => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
     }
 }
 

@@ -358,3 +358,23 @@ fn the_oils_null_leakage_band_widens_the_thresholds() {
     let large = delay_of_step_with_band(&cfg, [0.5, 0.0, 0.0], 0.15);
     assert!(large < 1.0, "{large} s");
 }
+
+/// Commissioning on a healthy stream of spread 0.01 L/min around 0.02 L/min,
+/// kicked down by 0.5 L/min for 1 s in every 10 (a transient the filter cannot
+/// follow): the offset is the median and the spread the noise's, not the dips'
+/// (the standard deviation would be about 0.15 L/min, 15 times wider).
+#[test]
+fn commissioning_learns_the_rises_spread_not_the_dips() {
+    let mut noise = Noise(0x5eed_0f_d1b5);
+    let mut learner = CommissioningLearner::new(1.0);
+    for i in 0..120_000 {
+        let t = i as f64 * 1e-3;
+        let dip = if t % 10.0 >= 9.0 { -0.5 } else { 0.0 };
+        let q = [0.02 + 0.01 * noise.gauss() + dip, 0.0, 0.0];
+        learner.on_estimate(&estimate(t, q));
+    }
+    let c = learner.finish(10.0, "test").expect("commissioned");
+    // ext1's signature is q_e1 alone when the others are zero.
+    assert!((c.offsets_lpm[0] - 0.02).abs() < 0.002, "{:?}", c.offsets_lpm);
+    assert!((c.spreads_lpm[0] / 0.01 - 1.0).abs() < 0.1, "{:?}", c.spreads_lpm);
+}
