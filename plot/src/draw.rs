@@ -13,7 +13,7 @@ use crate::font::text_style;
 use crate::layout::{self, Anchor, LabelBox, Piece};
 use crate::{
     Figure, Marker, Panel, PlotError, Rgb, Series, Style, FIGURE_WIDTH_PX, LEFT_MARGIN_PX, LEGEND_WIDTH_PX,
-    PALETTE, PANEL_HEIGHT_PX, TITLE_BAND_PX,
+    PALETTE, PANEL_HEIGHT_PX, TITLE_BAND_PX, Y_DESC_PAD_PX,
 };
 
 type Area<DB> = DrawingArea<DB, Shift>;
@@ -75,6 +75,7 @@ fn draw_panel<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(&plot)
         .caption(&panel.title, text_style(15.0, s, BLACK))
         .margin_top(px(s, 2.0))
+        .margin_left(px(s, Y_DESC_PAD_PX as f64))
         .margin_right(px(s, 8.0))
         .x_label_area_size(px(s, 24.0))
         .y_label_area_size(px(s, LEFT_MARGIN_PX as f64))

@@ -45,6 +45,8 @@ const TITLE_BAND_PX: usize = 40;
 const XLABEL_BAND_PX: usize = 34;
 /// Width of the y axis' tick labels and label, left of each plot area, in pixels.
 const LEFT_MARGIN_PX: usize = 90;
+/// Room left of the y-axis label (its text is centred on the plot area's left edge), in pixels.
+const Y_DESC_PAD_PX: usize = 16;
 /// Width of the legend column right of each plot area, in pixels.
 const LEGEND_WIDTH_PX: usize = 190;
 /// A PNG is drawn this many times larger and reduced (antialiasing).

@@ -73,7 +73,10 @@ fn the_svg_has_the_curve_and_threshold_where_they_belong() {
     // x: 0..10 s spans the plot's width; the flat line's ends are its edges and
     // the onset marker at 5 s halfway between them
     let (x0, x1) = (thr[0][0].0, thr[0][1].0);
-    assert!((x0 - LEFT_MARGIN_PX as f64).abs() <= 1.5, "{x0}");
+    assert!(
+        (x0 - (Y_DESC_PAD_PX + LEFT_MARGIN_PX) as f64).abs() <= 1.5,
+        "{x0}"
+    );
     assert!(
         (x1 - (FIGURE_WIDTH_PX - LEGEND_WIDTH_PX - 8) as f64).abs() <= 1.5,
         "{x1}"
@@ -102,7 +105,7 @@ fn the_png_has_the_curve_where_the_svg_has_it() {
     let svg = render_svg(&fig).unwrap();
     let flat = &polylines(&svg, "#00C800")[0];
     let row = flat[0].1.round() as usize;
-    let col = LEFT_MARGIN_PX + 200;
+    let col = Y_DESC_PAD_PX + LEFT_MARGIN_PX + 200;
     let green = |y: usize| {
         img.pixel(col, y)
             .is_some_and(|[r, g, b]| g > 150 && r < 120 && b < 120)
