@@ -273,12 +273,12 @@ pub(crate) enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Draw a run (a simulate or measured CSV, or a recorded log) as a PNG.
+    /// Draw a run (a simulate or measured CSV, a recorded log, or a replay) as a PNG or an SVG.
     Plot {
         /// Input: a CSV in the dataset format, a recorded log (.mcap), or a replay output
-        /// directory (estimates.csv, events.json).
+        /// directory (estimates.csv, events.json, detector.csv).
         input: PathBuf,
-        /// Output PNG.
+        /// Output: an SVG file if it ends in .svg, else a PNG.
         #[arg(long)]
         out: PathBuf,
     },

@@ -53,7 +53,7 @@ pub fn plot_run_csv(input: &Path, out: &Path, force: bool) -> Result<(), String>
         .unwrap_or_default();
     let mut fig = Figure::new(&title, "t [s]");
     fig.panels = panels;
-    crate::out::png(&fig, out, force, &[input])
+    crate::out::figure(&fig, out, force, &[input])
 }
 
 /// Draws a recorded log: the sensor frames as [`plot_run_csv`] does (rod
@@ -122,7 +122,7 @@ pub fn plot_log(input: &Path, out: &Path, force: bool) -> Result<(), String> {
         .unwrap_or_default();
     let mut fig = Figure::new(&title, "t [s]");
     fig.panels = vec![with_markers(pos), pres, cmd, with_markers(leak)];
-    crate::out::png(&fig, out, force, &[input])
+    crate::out::figure(&fig, out, force, &[input])
 }
 
 /// Reads a CSV with a header into named columns (non-numbers become NaN).
@@ -144,10 +144,165 @@ fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
     Ok((header, cols))
 }
 
-/// Draws a replay directory (estimates.csv, events.json): measured against
-/// estimated position and pressures, the residuals (and MAE) of the thesis
-/// filter when it ran, else of the leak filter, and the leak filter's leak
-/// sizes, with detections and onsets marked.
+/// The markers of a replay's leak events (events.json): each leak-size
+/// alarm's estimated onset (once per onset), the pending alarm (a leak of kind
+/// not yet named) and the named alarm; the thesis' MAE detections.
+fn event_markers(dir: &Path) -> Vec<plot::Marker> {
+    let mut markers = Vec::new();
+    let Ok(text) = std::fs::read_to_string(dir.join("events.json")) else {
+        return markers;
+    };
+    let Ok(events) = serde_json::from_str::<Vec<serde_json::Value>>(&text) else {
+        return markers;
+    };
+    let mut onsets: Vec<f64> = Vec::new();
+    for e in events.iter().filter(|e| e["phase"] == "raised") {
+        let kind = e["kind"].as_str().unwrap_or("?");
+        let det = e["detector"].as_str().unwrap_or("");
+        let Some(td) = e["t_detect_s"].as_f64() else {
+            continue;
+        };
+        let label = match (det, kind) {
+            ("leak-size", "leak") => format!("pending alarm {td:.2} s"),
+            ("leak-size", "ext1" | "ext2" | "int") => format!("{kind} named {td:.2} s"),
+            (_, "ext1" | "ext2" | "int") => format!("{kind} detected ({det}) {td:.2} s"),
+            _ => continue,
+        };
+        markers.push(plot::Marker::Vertical { x: td, label });
+        if det == "leak-size" {
+            if let Some(to) = e["t_onset_s"]
+                .as_f64()
+                .filter(|to| !onsets.iter().any(|o| (o - to).abs() < 1e-6))
+            {
+                onsets.push(to);
+                markers.push(plot::Marker::Vertical {
+                    x: to,
+                    label: format!("onset {to:.2} s"),
+                });
+            }
+        }
+    }
+    markers
+}
+
+/// The leak panel as the detector saw it (detector.csv): each kind's rise
+/// above its healthy baseline with its threshold, the stretches it was blind
+/// and the warm-up shaded, the true leak flow where the recording has it;
+/// `None` when the replay wrote no detector.csv.
+fn detector_panel(
+    dir: &Path,
+    t_first_s: f64,
+    truth: Option<(Vec<f64>, Vec<f64>)>,
+) -> Result<Option<Panel>, String> {
+    let path = pipeline::replay::trace::path_in(dir);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let (header, cols) = read_columns(&path)?;
+    let col = |name: &str| -> Result<&Vec<f64>, String> {
+        header
+            .iter()
+            .position(|h| h == name)
+            .map(|i| &cols[i])
+            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+    };
+    let t = col("t")?;
+    let mut panel = Panel::new(
+        "Leak-size detector: each kind's rise above its healthy baseline and its threshold; the true leak flow at the measured pressures",
+        "rise [L/min at p_s/2]",
+    );
+    if let Some(&t_armed) = t.first() {
+        panel = panel.with_marker(plot::Marker::Span {
+            x_from: t_first_s,
+            x_to: t_armed,
+            label: "warm-up: not armed".into(),
+        });
+    }
+    for (k, kind) in ["e1", "e2", "i"].iter().enumerate() {
+        let color = plot::PALETTE[k];
+        let name = ["ext1", "ext2", "int"][k];
+        panel = panel
+            .with_series(series(name, t, col(&format!("rise_{kind}_lpm"))?.clone()).colored(color))
+            .with_series(
+                series(
+                    &format!("{name} threshold"),
+                    t,
+                    col(&format!("threshold_{kind}_lpm"))?.clone(),
+                )
+                .styled(plot::Style::Dashed)
+                .colored(color),
+            );
+    }
+    let blind = col("blind")?;
+    let mut first = true;
+    let mut k = 0;
+    while k < t.len() {
+        if blind[k] != 1.0 {
+            k += 1;
+            continue;
+        }
+        let from = k;
+        while k < t.len() && blind[k] == 1.0 {
+            k += 1;
+        }
+        let to = t.get(k).copied().unwrap_or(t[k - 1]);
+        let label = if first { "blind: no evidence" } else { "" };
+        panel = panel.with_marker(plot::Marker::Span {
+            x_from: t[from.saturating_sub(1)],
+            x_to: to,
+            label: label.into(),
+        });
+        first = false;
+    }
+    if let Some((tt, q)) = truth {
+        panel = panel.with_series(series("true leak flow", &tt, q).colored([0, 0, 0]));
+    }
+    Ok(Some(panel))
+}
+
+/// The true leak flow of the replay's input (its `q_leak` column), when the
+/// input named in summary.json is there and has one that is not all zero.
+fn truth_of(dir: &Path) -> Option<(Vec<f64>, Vec<f64>)> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let summary: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let input = Path::new(summary["input"].as_str()?);
+    let ds = dataset::read_csv(input, dataset::Limits::default()).ok()?;
+    if !ds.has_optional[3]
+        || ds
+            .samples
+            .iter()
+            .all(|s| s.q_leak_lpm == 0.0 || s.q_leak_lpm.is_nan())
+    {
+        return None;
+    }
+    Some((
+        ds.samples.iter().map(|s| s.t_s).collect(),
+        ds.samples.iter().map(|s| s.q_leak_lpm).collect(),
+    ))
+}
+
+/// The figure's title: the replay's input and its folder.
+fn replay_title(dir: &Path) -> String {
+    let input = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["input"].as_str().map(str::to_string));
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default()
+    };
+    match input {
+        Some(i) => format!("replay of {} (folder {})", name(Path::new(&i)), name(dir)),
+        None => format!("replay folder {}", name(dir)),
+    }
+}
+
+/// Draws a replay directory (estimates.csv, events.json, detector.csv):
+/// measured against estimated position and pressures, the residuals (and MAE)
+/// of the thesis filter when it ran, else of the leak filter, and the leak
+/// panel as the detector saw it (or, for a replay without detector.csv, the
+/// leak filter's sizes), with the onsets and alarms marked.
 pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
     let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
     crate::out::check(
@@ -165,44 +320,23 @@ pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
     let scaled =
         |name: &str, k: f64| -> Result<Vec<f64>, String> { Ok(col(name)?.iter().map(|v| v * k).collect()) };
     let t = col("t")?.clone();
-    let mut markers = Vec::new();
-    if let Ok(text) = std::fs::read_to_string(dir.join("events.json")) {
-        if let Ok(events) = serde_json::from_str::<Vec<serde_json::Value>>(&text) {
-            for e in events.iter().filter(|e| e["phase"] == "raised") {
-                let kind = e["kind"].as_str().unwrap_or("?");
-                if !matches!(kind, "ext1" | "ext2" | "int") {
-                    continue;
-                }
-                let det = e["detector"].as_str().unwrap_or("");
-                if let Some(td) = e["t_detect_s"].as_f64() {
-                    markers.push(plot::Marker::Vertical {
-                        x: td,
-                        label: format!("{kind} detected ({det})"),
-                    });
-                }
-                if det == "leak-size" {
-                    if let Some(to) = e["t_onset_s"].as_f64() {
-                        markers.push(plot::Marker::Vertical {
-                            x: to,
-                            label: "estimated onset".into(),
-                        });
-                    }
-                }
-            }
-        }
-    }
+    let markers = event_markers(dir);
     let with_markers = |mut p: Panel| {
         for m in &markers {
             p = p.with_marker(m.clone());
         }
         p
     };
-    let leaks = with_markers(
-        Panel::new("Leak filter: estimated leak sizes at nominal drop", "q [L/min]")
-            .with_series(series("q_e1", &t, scaled("q_e1_lpm", 1.0)?))
-            .with_series(series("q_e2", &t, scaled("q_e2_lpm", 1.0)?))
-            .with_series(series("q_i", &t, scaled("q_i_lpm", 1.0)?)),
-    );
+    let t0 = t.first().copied().unwrap_or(0.0);
+    let leaks = match detector_panel(dir, t0, truth_of(dir))? {
+        Some(p) => with_markers(p),
+        None => with_markers(
+            Panel::new("Leak filter: estimated leak sizes at nominal drop", "q [L/min]")
+                .with_series(series("q_e1", &t, scaled("q_e1_lpm", 1.0)?))
+                .with_series(series("q_e2", &t, scaled("q_e2_lpm", 1.0)?))
+                .with_series(series("q_i", &t, scaled("q_i_lpm", 1.0)?)),
+        ),
+    };
     // the thesis filter's columns are there when it ran (--model, --thesis-baseline):
     // then its pressures and residuals are drawn, else the leak filter's
     let thesis = col("th_x").is_ok();
@@ -218,19 +352,16 @@ pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
     let pos = pos
         .with_series(series("leak filter", &t, scaled("x", 1e3)?))
         .with_series(series("measured", &t, scaled("x_meas", 1e3)?));
+    // the estimates first, the measured pressures drawn over them
     let pres = Panel::new("Chamber pressures: measured and estimated", "p [MPa]")
-        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?))
-        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?))
-        .with_series(series(
-            &format!("p1 {who}"),
-            &t,
-            scaled(&format!("{pre}p1"), 1e-6)?,
-        ))
-        .with_series(series(
-            &format!("p2 {who}"),
-            &t,
-            scaled(&format!("{pre}p2"), 1e-6)?,
-        ));
+        .with_series(
+            series(&format!("p1 {who}"), &t, scaled(&format!("{pre}p1"), 1e-6)?).colored(plot::PALETTE[3]),
+        )
+        .with_series(
+            series(&format!("p2 {who}"), &t, scaled(&format!("{pre}p2"), 1e-6)?).colored(plot::PALETTE[4]),
+        )
+        .with_series(series("p1 measured", &t, scaled("p1_meas", 1e-6)?).colored(plot::PALETTE[0]))
+        .with_series(series("p2 measured", &t, scaled("p2_meas", 1e-6)?).colored(plot::PALETTE[1]));
     let resid = Panel::new(&format!("{name}: a-posteriori pressure residuals"), "e [kPa]")
         .with_series(series("e p1", &t, scaled(&format!("{pre}r_p1"), 1e-3)?))
         .with_series(series("e p2", &t, scaled(&format!("{pre}r_p2"), 1e-3)?));
@@ -246,10 +377,9 @@ pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
         ));
     }
     panels.push(leaks);
-    let title = format!("replay {}", dir.display());
-    let mut fig = Figure::new(&title, "t [s]");
+    let mut fig = Figure::new(&replay_title(dir), "t [s]");
     fig.panels = panels;
-    crate::out::png(
+    crate::out::figure(
         &fig,
         out,
         force,

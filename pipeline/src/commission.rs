@@ -23,6 +23,8 @@ use model::process::I_BIAS;
 
 use config::Config;
 
+pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
+
 /// Reads `input` into the rows [`identify::identify`] takes.
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
@@ -46,21 +48,6 @@ fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
         }
     }
     Ok(rows)
-}
-
-/// One identified parameter as a line: `name: value ± σ unit (model's m)` or why not.
-fn found_line(name: &str, found: &identify::Found, unit: &str, scale: f64, model_value: f64) -> String {
-    match found {
-        identify::Found::Identified(e) => format!(
-            "  {name}: {:.4} ± {:.4} {unit} (the datasheet's {:.4})",
-            e.value * scale,
-            e.sigma * scale,
-            model_value * scale
-        ),
-        identify::Found::NotIdentifiable(why) => {
-            format!("  {name}: not identifiable from this recording: {why}")
-        }
-    }
 }
 
 /// What an identified transducer lag `e` (s) says against the longest lag the
@@ -105,189 +92,174 @@ pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
 /// Identifies the valve's flow gains, null leakage and the oil's stiffness on
 /// `input` and puts them into the model (printing what was found).
 pub fn identify_rig(input: &Path, cfg: &Config) -> Result<Config, String> {
+    identify_rig_said(input, cfg).map(|(cfg, _)| cfg)
+}
+
+/// [`identify_rig`], and what it found and printed.
+pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identified), String> {
     let Found {
         rig: id,
         mechanics: found_mechanics,
     } = identify_on(input, cfg)?;
-    say_flow_balance(&id, cfg);
-    let mut mechanics = None;
-    match found_mechanics {
-        Ok(mech) => {
-            say_force_balance(&mech, cfg);
-            mechanics = Some(mech);
-        }
-        Err(e) => eprintln!("  mass and friction: not identified: {e}"),
-    }
+    let mut said = Identified::default();
+    flow_balance(&id, cfg, &mut said);
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
-    if let Some(mech) = mechanics {
-        out.model = mech.apply(&out.model);
+    match found_mechanics {
+        Ok(mech) => {
+            force_balance(&mech, cfg, &mut said);
+            out.model = mech.apply(&out.model);
+        }
+        Err(e) => said.mechanics_error = Some(e),
     }
-    Ok(out)
+    for line in said.lines() {
+        eprintln!("{line}");
+    }
+    Ok((out, said))
 }
 
-/// Says what the flow balance identified (`id`) against the model of `cfg`,
-/// and what the recording cannot tell apart.
-fn say_flow_balance(id: &identify::Identification, cfg: &Config) {
+/// What the flow balance identified (`id`) against the model of `cfg`, and
+/// what the recording cannot tell apart.
+fn flow_balance(id: &identify::Identification, cfg: &Config, out: &mut Identified) {
     let dt = cfg.leak_filter.sample_period_s;
     let m = &cfg.model;
     let (wa, wb) = m.area_gradients_m2_per_m();
-    eprintln!(
-        "identified on {} windows of {} ms ({} moving); flow-balance gap {:.3} -> {:.3} L/min RMS (sensor floor {:.3}):",
+    out.windows = (
         id.windows,
         identify::WINDOW_SAMPLES as f64 * dt * 1e3,
         id.moving_windows,
-        id.gap_before_lpm,
-        id.gap_after_lpm,
-        id.sensor_floor_lpm
     );
+    out.gap_lpm = (id.gap_before_lpm, id.gap_after_lpm, id.sensor_floor_lpm);
     let ga = &id.valve_gain_a;
-    if m.rod_side_area_m2.is_none() && m.area_gradient_b_m2_per_m.is_none() {
-        eprintln!(
-            "{}",
-            found_line("valve area gradient", &ga.scaled(wa), "mm²/mm", 1e3, wa)
-        );
+    let two_ports = !(m.rod_side_area_m2.is_none() && m.area_gradient_b_m2_per_m.is_none());
+    let port_a = if two_ports {
+        "port A area gradient"
     } else {
-        eprintln!(
-            "{}",
-            found_line("port A area gradient", &ga.scaled(wa), "mm²/mm", 1e3, wa)
-        );
-        eprintln!(
-            "{}",
-            found_line(
-                "port B area gradient",
-                &id.valve_gain_b.scaled(wb),
-                "mm²/mm",
-                1e3,
-                wb
-            )
-        );
+        "valve area gradient"
+    };
+    out.flow
+        .push(Param::new(port_a, &ga.scaled(wa), "mm²/mm", 1e3, wa));
+    if two_ports {
+        out.flow.push(Param::new(
+            "port B area gradient",
+            &id.valve_gain_b.scaled(wb),
+            "mm²/mm",
+            1e3,
+            wb,
+        ));
     }
-    eprintln!(
-        "{}",
-        found_line(
+    let two_pi = 2.0 * std::f64::consts::PI;
+    out.flow.extend([
+        Param::new(
             "effective bulk modulus",
             &id.bulk_modulus_pa,
             "MPa",
             1e-6,
-            m.bulk_modulus_pa
-        )
-    );
-    eprintln!(
-        "{}",
-        found_line(
+            m.bulk_modulus_pa,
+        ),
+        Param::new(
             "valve null leakage C_L",
             &id.null_leakage_m3_s_pa,
             "1e-13 m³/(s·Pa)",
             1e13,
-            m.valve_null_leakage_m3_s_pa
-        )
-    );
-    eprintln!(
-        "{}",
-        found_line(
+            m.valve_null_leakage_m3_s_pa,
+        ),
+        Param::new(
             "supply sag",
             &id.supply_sag_pa_per_m3_s,
             "MPa per m³/s",
             1e-6,
-            m.supply_sag_pa_per_m3_s
-        )
-    );
-    eprintln!(
-        "{}",
-        found_line(
+            m.supply_sag_pa_per_m3_s,
+        ),
+        Param::new(
             "spool -90° frequency",
-            &id.spool_natural_freq_rad_s
-                .scaled(1.0 / (2.0 * std::f64::consts::PI)),
+            &id.spool_natural_freq_rad_s.scaled(1.0 / two_pi),
             "Hz",
             1.0,
-            m.spool_natural_freq_rad_s / (2.0 * std::f64::consts::PI)
-        )
-    );
+            m.spool_natural_freq_rad_s / two_pi,
+        ),
+    ]);
     let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
     for (channel, found) in ["p1", "p2"].iter().zip(&id.pressure_lag_s) {
-        match found {
-            identify::Found::Identified(e) => eprintln!(
+        out.notes.push(match found {
+            identify::Found::Identified(e) => format!(
                 "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters){}",
                 e.value * 1e3,
                 e.sigma * 1e3,
                 lag_against_datasheet(e, transducers.and_then(|t| t.lag_bound_s()))
             ),
             identify::Found::NotIdentifiable(why) => {
-                eprintln!("  {channel} transducer lag: not identifiable from this recording: {why}")
+                format!("  {channel} transducer lag: not identifiable from this recording: {why}")
             }
-        }
+        });
     }
-    match id.oil_temp_c {
-        Some(t) => eprintln!(
+    out.notes.push(match id.oil_temp_c {
+        Some(t) => format!(
             "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \
              and a live temp_c moves the model from it"
         ),
-        None => eprintln!(
+        None => format!(
             "  oil temperature: not recorded (no temp_c column): the identified values hold at the \
              recording's temperature, taken as [model.oil_temperature] reference_c = {:.1} °C; set it \
              to the oil's temperature during the recording (the tank's thermometer): the live model \
              moves from it, with temp_c or with the temperature the leak filter reads from the oil's stiffness",
             m.oil_temperature.reference_c
         ),
-    }
+    });
     // what this recording cannot tell apart, said rather than guessed
-    eprintln!(
+    out.notes.push(
         "  transducer offsets: not separable from this recording: the flow balance uses pressure \
          changes (an offset cancels); in the force balance an offset difference reads as a static \
          load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them"
+            .to_string(),
     );
 }
 
-/// Says what the force balance identified (`mech`) against the model of `cfg`.
-fn say_force_balance(mech: &identify::Mechanics, cfg: &Config) {
+/// What the force balance identified (`mech`) against the model of `cfg`.
+fn force_balance(mech: &identify::Mechanics, cfg: &Config, out: &mut Identified) {
     let m = &cfg.model;
     let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
     let f = m.friction.extend();
-    eprintln!(
-        "force balance on {} sliding samples: gap {:.0} -> {:.0} N RMS",
-        mech.equations, mech.gap_before_n, mech.gap_after_n
-    );
-    for (name, found, unit, scale, model) in [
-        ("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
-        ("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
-        ("static friction", &mech.static_n, "N", 1.0, f.static_n),
-        (
+    out.force_gap_n = Some((mech.equations, mech.gap_before_n, mech.gap_after_n));
+    let viscous = match transducers.map(|t| t.location) {
+        Some(model::datasheet::TransducerLocation::Manifold) => {
+            "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
+        }
+        _ => "viscous friction (apparent)",
+    };
+    out.mechanics = vec![
+        Param::new("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
+        Param::new("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
+        Param::new("static friction", &mech.static_n, "N", 1.0, f.static_n),
+        Param::new(
             "Stribeck velocity",
             &mech.stribeck_velocity_m_s,
             "mm/s",
             1e3,
             f.stribeck_velocity_m_s,
         ),
-        (
-            match transducers.map(|t| t.location) {
-                Some(model::datasheet::TransducerLocation::Manifold) => {
-                    "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
-                }
-                _ => "viscous friction (apparent)",
-            },
+        Param::new(
+            viscous,
             &mech.viscous_n_s_per_m,
             "N·s/m",
             1.0,
             f.viscous_n_s_per_m,
         ),
-        (
+        Param::new(
             "static force (weight and load)",
             &mech.static_force_n,
             "N",
             1.0,
             m.gravity_force_n(),
         ),
-    ] {
-        eprintln!("{}", found_line(name, found, unit, scale, model));
-    }
+    ];
     if let Some((k, contact_m)) = mech.contact_spring {
-        eprintln!(
+        out.notes.push(format!(
             "  a workpiece: a contact spring of {:.4e} ± {:.1e} N/m from {:.1} mm on (in the force balance, and now in the model's load)",
             k.value,
             k.sigma,
             contact_m * 1e3
-        );
+        ));
     }
 }
 
@@ -386,6 +358,14 @@ pub fn with_null_bias(cfg: &Config, bias: &NullBias) -> Config {
 /// the θ at the recording's oil temperature, which the filter reads the
 /// temperature against when no `temp_c` comes ([`filter::oil`]).
 pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Option<f64>), String> {
+    learn_traced(input, cfg).map(|(c, theta, _)| (c, theta))
+}
+
+/// [`learn`], and the leak filter's fit to the recording ([`FitTrace`]).
+pub fn learn_traced(
+    input: &Path,
+    cfg: &Config,
+) -> Result<(detect::Commissioning, Option<f64>, FitTrace), String> {
     if cfg.leak_filter.states < 10 {
         return Err(format!(
             "[leak_filter] states = {}: commissioning needs the leak filter (10, 11 or 12 states)",
@@ -398,8 +378,10 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Optio
     at_reference.model.oil_temperature.reference_stiffness = None;
     let (mut theta_sum, mut theta_n) = (0.0, 0u64);
     let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
+    let mut fit = FitTrace::default();
     replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
         learner.on_estimate(e);
+        fit.push(e);
         if e.bulk_scale.is_finite() && e.flags & unsettled == 0 {
             theta_sum += e.bulk_scale;
             theta_n += 1;
@@ -408,15 +390,22 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Optio
     let c = learner
         .finish(MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
-    Ok((c, (theta_n > 0).then(|| theta_sum / theta_n as f64)))
+    Ok((c, (theta_n > 0).then(|| theta_sum / theta_n as f64), fit))
 }
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
 /// learns the commissioning with the bias held: the config to write.
 pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
-    let mut cfg = identify_rig(input, cfg)?;
+    commission_recorded(input, cfg).map(|(cfg, _)| cfg)
+}
+
+/// [`commission`], and the commissioning record: what it printed, for the report.
+pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, CommissionRecord), String> {
+    let datasheet_model = cfg.model.clone();
+    let (mut cfg, identified) = identify_rig_said(input, cfg)?;
     // the identified model is now the rig's; the datasheet it started from is not written again
     cfg.datasheet = None;
+    let mut null_bias = None;
     if cfg.leak_filter.states >= 11 {
         let bias = identify_null_bias(input, &cfg)?;
         eprintln!(
@@ -427,38 +416,37 @@ pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
             (cfg.model.spool_null_bias_m + bias.bias_m) * 1e6
         );
         cfg = with_null_bias(&cfg, &bias);
+        null_bias = Some((bias, datasheet_model.spool_null_bias_m));
     }
-    let (c, theta) = learn(input, &cfg)?;
+    let (c, theta, fit) = learn_traced(input, &cfg)?;
     cfg.model.oil_temperature.reference_stiffness = theta;
-    if let Some(theta) = theta {
-        eprintln!(
-            "oil stiffness on this recording: {theta:.3} of the model's bulk modulus, at {:.1} °C: \
-             without temp_c the leak filter reads the oil's temperature against it",
-            cfg.model.oil_temperature.reference_c
-        );
-    }
-    eprintln!(
-        "learned {:.0} s of healthy data: offsets ext1/ext2/int {:.3}/{:.3}/{:.3} L/min, spreads {:.3}/{:.3}/{:.3} L/min (at p_s/2)",
-        c.healthy_s, c.offsets_lpm[0], c.offsets_lpm[1], c.offsets_lpm[2], c.spreads_lpm[0], c.spreads_lpm[1], c.spreads_lpm[2]
-    );
-    if c.internal_factors != detect::NOMINAL_INTERNAL_FACTORS {
-        eprintln!(
-            "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",
-            c.internal_factors[0], c.internal_factors[1]
-        );
-    }
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
-    eprintln!(
-        "the detector will raise leaks from {:.3}/{:.3}/{:.3} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
-        thr[0], thr[1], thr[2], cfg.classifier.false_alarms_per_hour
-    );
-    eprintln!("{}", detectable_over_temperature(&cfg.model, thr, c.offsets_lpm));
-    eprintln!(
-        "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
-        c.nis_mean
-    );
+    let learned = Learned {
+        theta,
+        reference_c: cfg.model.oil_temperature.reference_c,
+        healthy_s: c.healthy_s,
+        offsets_lpm: c.offsets_lpm,
+        spreads_lpm: c.spreads_lpm,
+        internal_factors: (c.internal_factors != detect::NOMINAL_INTERNAL_FACTORS)
+            .then_some(c.internal_factors),
+        thresholds_lpm: thr,
+        false_alarms_per_hour: cfg.classifier.false_alarms_per_hour,
+        detectable: detectable_at(&cfg.model, thr, c.offsets_lpm),
+        detectable_line: detectable_over_temperature(&cfg.model, thr, c.offsets_lpm),
+        nis_mean: c.nis_mean,
+    };
+    for line in learned.lines() {
+        eprintln!("{line}");
+    }
     cfg.classifier.commissioning = Some(c);
-    Ok(cfg)
+    let record = CommissionRecord {
+        input: input.display().to_string(),
+        identified,
+        null_bias,
+        learned,
+        fit,
+    };
+    Ok((cfg, record))
 }
 
 /// The oil temperatures at which commissioning states the smallest detectable
@@ -473,6 +461,22 @@ fn stated_temperatures_c(oil: &model::params::OilTemperature) -> [f64; 3] {
 /// not said to be outside it.
 const TANK_THERMOMETER_K: f64 = 2.0;
 
+/// The smallest detectable leak of each kind (L/min at p_s/2) at each of
+/// [`stated_temperatures_c`] (°C): the thresholds `thr` widened by what the oil's
+/// temperature leaves uncertain for `model` with healthy offsets `offsets_lpm`.
+pub fn detectable_at(
+    model: &model::ActuatorParams,
+    thr: [f64; 3],
+    offsets_lpm: [f64; 3],
+) -> [(f64, [f64; 3]); 3] {
+    let oil = &model.oil_temperature;
+    stated_temperatures_c(oil).map(|t| {
+        let (sigma, band) = filter::oil::null_leakage_band(model, t, filter::oil::settled_sigma_k(oil, t));
+        let widen = detect::oil_band_lpm(sigma, band, offsets_lpm);
+        (t, std::array::from_fn(|k| thr[k] + widen[k]))
+    })
+}
+
 /// The line that states the smallest detectable leak of each kind over the
 /// operating range ([`stated_temperatures_c`]): the thresholds `thr` (L/min at
 /// p_s/2) widened by what the oil's temperature leaves uncertain for the model
@@ -484,16 +488,8 @@ fn detectable_over_temperature(
     offsets_lpm: [f64; 3],
 ) -> String {
     let oil = &model.oil_temperature;
-    let at = stated_temperatures_c(oil).map(|t| {
-        let (sigma, band) = filter::oil::null_leakage_band(model, t, filter::oil::settled_sigma_k(oil, t));
-        let widen = detect::oil_band_lpm(sigma, band, offsets_lpm);
-        format!(
-            "{t:.0} °C {:.3}/{:.3}/{:.3}",
-            thr[0] + widen[0],
-            thr[1] + widen[1],
-            thr[2] + widen[2]
-        )
-    });
+    let at = detectable_at(model, thr, offsets_lpm)
+        .map(|(t, d)| format!("{t:.0} °C {:.3}/{:.3}/{:.3}", d[0], d[1], d[2]));
     let range = oil.operating_min_c - TANK_THERMOMETER_K..=oil.operating_max_c + TANK_THERMOMETER_K;
     let outside = if range.contains(&oil.reference_c) {
         String::new()
@@ -516,12 +512,14 @@ fn detectable_over_temperature(
 pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Result<(), String> {
     let mut inputs = vec![input];
     inputs.extend(config);
+    let report = report_path(out);
     // refused before the learning, not after
     crate::out::check(out, force, &inputs)?;
+    crate::out::check(&report, force, &inputs)?;
     if config.is_none() {
         Config::note_builtin_rig("./leakwatch.toml");
     }
-    let cfg = commission(input, &Config::load_or_default(config)?)?;
+    let (cfg, record) = commission_recorded(input, &Config::load_or_default(config)?)?;
     let body = toml::to_string(&cfg).map_err(|e| e.to_string())?;
     let text = format!(
         "# leakwatch configuration with the rig's commissioning (the healthy state of the leak\n\
@@ -537,7 +535,14 @@ pub fn run(input: &Path, config: Option<&Path>, out: &Path, force: bool) -> Resu
     );
     crate::out::write(out, text.as_bytes(), force, &inputs)?;
     eprintln!("wrote {}", out.display());
+    crate::out::write(&report, record.html()?.as_bytes(), force, &inputs)?;
+    eprintln!("wrote {} (the commissioning record)", report.display());
     Ok(())
+}
+
+/// The report beside the config `out`: its name with `.html` for `.toml`.
+pub fn report_path(out: &Path) -> std::path::PathBuf {
+    out.with_extension("html")
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ pub mod batch;
 pub mod calibration;
 pub mod chain;
 pub mod commission;
+pub mod commission_report;
 pub mod demo;
 pub mod estimates_out;
 pub mod logs;

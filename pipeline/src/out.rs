@@ -33,6 +33,17 @@ pub fn png(fig: &plot::Figure, path: &Path, force: bool, inputs: &[&Path]) -> Re
     write(path, &bytes, force, inputs)
 }
 
+/// Renders `fig` and writes it as an SVG file when `path` ends in `.svg`, else
+/// as a PNG file (see [`write()`]).
+pub fn figure(fig: &plot::Figure, path: &Path, force: bool, inputs: &[&Path]) -> Result<(), String> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
+        let svg = plot::render_svg(fig).map_err(|e| format!("{}: {e}", path.display()))?;
+        write(path, svg.as_bytes(), force, inputs)
+    } else {
+        png(fig, path, force, inputs)
+    }
+}
+
 /// Writes `text` to standard output and flushes it. (A standard output closed
 /// with `>&-` is reopened on /dev/null by the Rust runtime at start: writes to it
 /// succeed and are lost.)

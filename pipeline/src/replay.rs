@@ -15,6 +15,7 @@ use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 use config::Config;
 use wiring::{replay_channels, replay_single_thread, Progress};
 
+pub mod trace;
 mod wiring;
 
 /// How the stages are connected.
@@ -318,6 +319,13 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     // does not (a third of the work).
     let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
     let mut out = open_estimates(req, &paths, thesis_wanted)?;
+    let mut trace = match &paths.trace {
+        Some(p) => Some(
+            trace::DetectorTrace::new(crate::out::create(p, req.overwrite, &paths.inputs)?)
+                .map_err(|e| format!("{}: {e}", p.display()))?,
+        ),
+        None => None,
+    };
     let mut chain = crate::Chain::new(&crate::ChainSettings::from(cfg))?.with_thesis(thesis_wanted);
     // (the channel wiring runs the stage and the detectors on two threads)
     let (stage, cls) = chain.parts_mut();
@@ -353,6 +361,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             if let Err(e) = out.write(s) {
                 write_err = Some(format!("{est_name}: {e}"));
             }
+            if let Some(Err(e)) = trace.as_mut().map(|t| t.push(&s.leak, cls)) {
+                write_err = Some(format!("{}: {e}", trace::FILE_NAME));
+            }
         }
     };
     let has_optional = reader.has_optional();
@@ -367,6 +378,9 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         return Err(e);
     }
     out.finish().map_err(|e| format!("{est_name}: {e}"))?;
+    if let Some(t) = trace {
+        t.finish().map_err(|e| format!("{}: {e}", trace::FILE_NAME))?;
+    }
     summary.wall_s = started.elapsed().as_secs_f64();
     summary.samples_per_s = summary.samples as f64 / summary.wall_s.max(1e-9);
     summary.samples_missing = stage.missing_samples();
@@ -403,6 +417,8 @@ struct OutputPaths<'a> {
     inputs: Vec<&'a Path>,
     /// The estimates file, unless none is written.
     estimates: Option<PathBuf>,
+    /// detector.csv, written with the estimates file.
+    trace: Option<PathBuf>,
     /// events.json and summary.json.
     events: PathBuf,
     summary: PathBuf,
@@ -420,14 +436,20 @@ impl<'a> OutputPaths<'a> {
         let est_path = req.estimates.file_name().map(|name| req.out_dir.join(name));
         let events_path = req.out_dir.join("events.json");
         let summary_path = req.out_dir.join("summary.json");
+        let trace_path = est_path.as_ref().map(|_| trace::path_in(&req.out_dir));
         // Refuse before reading or writing anything.
-        for p in est_path.iter().chain([&events_path, &summary_path]) {
+        for p in est_path
+            .iter()
+            .chain(&trace_path)
+            .chain([&events_path, &summary_path])
+        {
             crate::out::check(p, req.overwrite, &inputs)?;
         }
         let est_name = est_path.as_deref().unwrap_or(&req.out_dir).display().to_string();
         Ok(OutputPaths {
             inputs,
             estimates: est_path,
+            trace: trace_path,
             events: events_path,
             summary: summary_path,
             est_name,

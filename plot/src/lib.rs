@@ -1,11 +1,16 @@
-//! Small PNG line charts for leakwatch's figures.
+//! leakwatch's figures, drawn with plotters: PNG and SVG.
 //!
 //! A [`Figure`] is a stack of [`Panel`]s sharing one x axis (time, usually).
-//! Each panel has its own y axis, a legend, and any number of [`Series`]
-//! (lines, dashed lines or points) and [`Marker`]s (vertical or horizontal
-//! reference lines such as a leak onset or a threshold). Text is drawn with
-//! an embedded 8x8 bitmap font, so nothing depends on the fonts installed on
-//! the machine. Non-finite values break a line instead of being drawn.
+//! Each panel has its own y axis, a legend in a column to its right, and any
+//! number of [`Series`] (lines, dashed lines or points) and [`Marker`]s
+//! (vertical or horizontal reference lines such as a leak onset or a
+//! threshold, and shaded spans such as a stretch the detector was blind).
+//! Text is drawn in an embedded font (DejaVu Sans), so nothing depends on the
+//! fonts installed on the machine; a PNG is drawn at twice its size and
+//! reduced, so lines and text are antialiased. A series with more points than
+//! its plot area has pixel columns is drawn as each column's min..max
+//! (shaded) and mean (its line): an envelope. Marker labels never overlap:
+//! they are stacked. Non-finite values break a line instead of being drawn.
 //!
 //! ```no_run
 //! use plot::{Figure, Panel, Series, Style};
@@ -14,6 +19,7 @@
 //! let mut fig = Figure::new("demo", "t [s]");
 //! fig.panels.push(Panel::new("sine", "y [-]").with_series(Series::line("sin", &t, &y)));
 //! plot::render_png(&fig, std::path::Path::new("demo.png")).unwrap();
+//! plot::write_svg(&fig, std::path::Path::new("demo.svg")).unwrap();
 //! ```
 
 #![forbid(unsafe_code)]
@@ -21,23 +27,30 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-mod raster;
-mod render;
+use plotters::prelude::{BitMapBackend, IntoDrawingArea, SVGBackend};
 
-pub use raster::Image;
-pub use render::{nice_ticks, render};
+mod draw;
+mod font;
+mod image;
+mod layout;
 
-/// Width of a rendered figure in pixels.
+pub use image::Image;
+
+/// Width of a rendered figure in pixels (PNG) or user units (SVG).
 pub const FIGURE_WIDTH_PX: usize = 1400;
 /// Height of one panel in pixels (plot area plus its title and tick labels).
 pub const PANEL_HEIGHT_PX: usize = 280;
 /// Height of the figure's title band and of the x-axis label band, in pixels.
 const TITLE_BAND_PX: usize = 40;
-const XLABEL_BAND_PX: usize = 40;
-const LEFT_MARGIN_PX: usize = 110;
-const RIGHT_MARGIN_PX: usize = 30;
-const PANEL_TOP_PAD_PX: usize = 26;
-const PANEL_BOTTOM_PAD_PX: usize = 24;
+const XLABEL_BAND_PX: usize = 34;
+/// Width of the y axis' tick labels and label, left of each plot area, in pixels.
+const LEFT_MARGIN_PX: usize = 90;
+/// Room left of the y-axis label (its text is centred on the plot area's left edge), in pixels.
+const Y_DESC_PAD_PX: usize = 16;
+/// Width of the legend column right of each plot area, in pixels.
+const LEGEND_WIDTH_PX: usize = 190;
+/// A PNG is drawn this many times larger and reduced (antialiasing).
+const SUPERSAMPLE: usize = 2;
 
 /// An RGB colour.
 pub type Rgb = [u8; 3];
@@ -53,11 +66,6 @@ pub const PALETTE: [Rgb; 8] = [
     [227, 119, 194],
     [23, 190, 207],
 ];
-
-const WHITE: Rgb = [255, 255, 255];
-const BLACK: Rgb = [0, 0, 0];
-const GRID: Rgb = [225, 225, 225];
-const MARKER: Rgb = [90, 90, 90];
 
 /// How a series is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,6 +133,15 @@ pub enum Marker {
         /// Position on the panel's y axis.
         y: f64,
         /// Text drawn beside the line.
+        label: String,
+    },
+    /// A shaded stretch of the x axis (e.g. where the detector was blind), with a label.
+    Span {
+        /// Where it starts on the x axis.
+        x_from: f64,
+        /// Where it ends on the x axis.
+        x_to: f64,
+        /// Text drawn at its start (empty: none).
         label: String,
     },
 }
@@ -211,6 +228,8 @@ pub enum PlotError {
     },
     /// The PNG encoder failed.
     Encode(String),
+    /// The plotting library could not draw the figure.
+    Draw(String),
 }
 
 impl fmt::Display for PlotError {
@@ -222,6 +241,7 @@ impl fmt::Display for PlotError {
             }
             PlotError::Io { path, source } => write!(f, "cannot write {}: {source}", path.display()),
             PlotError::Encode(e) => write!(f, "PNG encoding failed: {e}"),
+            PlotError::Draw(e) => write!(f, "cannot draw the figure: {e}"),
         }
     }
 }
@@ -242,100 +262,78 @@ pub fn encode_png(img: &Image) -> Result<Vec<u8>, PlotError> {
     Ok(out)
 }
 
-/// Renders a figure and writes it as a PNG file.
-pub fn render_png(fig: &Figure, path: &Path) -> Result<(), PlotError> {
-    let bytes = encode_png(&render(fig)?)?;
+/// The size of a figure in pixels: width and height.
+fn size(fig: &Figure) -> (usize, usize) {
+    (
+        FIGURE_WIDTH_PX,
+        TITLE_BAND_PX + fig.panels.len() * PANEL_HEIGHT_PX + XLABEL_BAND_PX,
+    )
+}
+
+/// The first series, in panel order, whose x and y differ in length, as an
+/// error; [`PlotError::NothingToPlot`] for a figure without panels.
+fn check(fig: &Figure) -> Result<(), PlotError> {
+    if fig.panels.is_empty() {
+        return Err(PlotError::NothingToPlot);
+    }
+    for s in fig.panels.iter().flat_map(|p| &p.series) {
+        if s.x.len() != s.y.len() {
+            return Err(PlotError::LengthMismatch {
+                label: s.label.clone(),
+                x_len: s.x.len(),
+                y_len: s.y.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Renders a figure to an RGB image, [`FIGURE_WIDTH_PX`] wide and
+/// [`PANEL_HEIGHT_PX`] per panel (plus the title and x-label bands) high.
+pub fn render(fig: &Figure) -> Result<Image, PlotError> {
+    check(fig)?;
+    let (w, h) = size(fig);
+    let (bw, bh) = (w * SUPERSAMPLE, h * SUPERSAMPLE);
+    let mut big = vec![255u8; 3 * bw * bh];
+    {
+        let root = BitMapBackend::with_buffer(&mut big, (bw as u32, bh as u32)).into_drawing_area();
+        draw::draw(fig, &root, SUPERSAMPLE as f64)?;
+        root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
+    }
+    Ok(Image::reduced(&big, bw, bh, SUPERSAMPLE))
+}
+
+/// Renders a figure as an SVG document (the same layout as [`render`], in user
+/// units equal to its pixels; text in the `sans-serif` family).
+pub fn render_svg(fig: &Figure) -> Result<String, PlotError> {
+    check(fig)?;
+    let (w, h) = size(fig);
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (w as u32, h as u32)).into_drawing_area();
+        draw::draw(fig, &root, 1.0)?;
+        root.present().map_err(|e| PlotError::Draw(e.to_string()))?;
+    }
+    Ok(out)
+}
+
+/// Writes `bytes` to `path`.
+fn write(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
     std::fs::write(path, bytes).map_err(|source| PlotError::Io {
         path: path.to_path_buf(),
         source,
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn demo() -> Figure {
-        let t: Vec<f64> = (0..=1000).map(|i| i as f64 * 0.01).collect();
-        let y: Vec<f64> = t.iter().map(|t| (t * 2.0).sin()).collect();
-        let mut fig = Figure::new("demo", "t [s]");
-        fig.panels
-            .push(Panel::new("a", "y [-]").with_series(Series::line("sin", &t, &y)));
-        fig.panels.push(
-            Panel::new("b", "z [-]")
-                .with_series(Series::line("flat", &t, &vec![2.0; t.len()]).colored([0, 200, 0]))
-                .with_marker(Marker::Vertical {
-                    x: 5.0,
-                    label: "onset".into(),
-                }),
-        );
-        fig
-    }
-
-    #[test]
-    fn ticks_are_round_and_cover_the_range() {
-        let t = nice_ticks(0.0, 1.0, 5);
-        let want = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0];
-        assert_eq!(t.len(), want.len());
-        assert!(t.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12), "{t:?}");
-        // 50.3 / 10 = 5.03 per tick rounds up to a step of 10.
-        assert_eq!(nice_ticks(-3.3, 47.0, 10), vec![0.0, 10.0, 20.0, 30.0, 40.0]);
-        assert_eq!(
-            nice_ticks(-3.3, 47.0, 20),
-            vec![0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0]
-        );
-        assert!(nice_ticks(1.0, 1.0, 5).is_empty());
-        assert!(nice_ticks(f64::NAN, 1.0, 5).is_empty());
-    }
-
-    #[test]
-    fn image_has_the_documented_size_and_draws_the_series() {
-        let img = render(&demo()).unwrap();
-        assert_eq!(img.width, FIGURE_WIDTH_PX);
-        assert_eq!(img.height, TITLE_BAND_PX + 2 * PANEL_HEIGHT_PX + XLABEL_BAND_PX);
-        // The flat green line of panel 2 sits mid-height of its plot area.
-        let top = TITLE_BAND_PX + PANEL_HEIGHT_PX + PANEL_TOP_PAD_PX;
-        let plot_h = PANEL_HEIGHT_PX - PANEL_TOP_PAD_PX - PANEL_BOTTOM_PAD_PX;
-        let mid = top + plot_h / 2;
-        let x = LEFT_MARGIN_PX + 50;
-        let hits = (mid - 2..=mid + 2)
-            .filter(|&y| img.pixel(x, y) == Some([0, 200, 0]))
-            .count();
-        assert!(hits >= 1, "flat line not found near row {mid}");
-    }
-
-    #[test]
-    fn png_round_trips_through_the_decoder() {
-        let img = render(&demo()).unwrap();
-        let bytes = encode_png(&img).unwrap();
-        let dec = png::Decoder::new(std::io::Cursor::new(bytes));
-        let mut reader = dec.read_info().unwrap();
-        let mut buf = vec![0; reader.output_buffer_size()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!(
-            (info.width as usize, info.height as usize),
-            (img.width, img.height)
-        );
-        assert_eq!(&buf[..info.buffer_size()], &img.pixels[..]);
-    }
-
-    #[test]
-    fn bad_figures_are_reported() {
-        assert!(matches!(
-            render(&Figure::new("x", "t")),
-            Err(PlotError::NothingToPlot)
-        ));
-        let mut fig = Figure::new("x", "t");
-        fig.panels
-            .push(Panel::new("p", "y").with_series(Series::line("s", &[1.0, 2.0], &[1.0])));
-        let e = render(&fig).unwrap_err();
-        assert!(e.to_string().contains("'s' has 2 x values but 1 y values"), "{e}");
-        let mut fig = Figure::new("x", "t");
-        fig.panels.push(Panel::new("p", "y").with_series(Series::line(
-            "s",
-            &[1.0, 2.0],
-            &[f64::NAN, f64::NAN],
-        )));
-        assert!(render(&fig).is_ok(), "all-NaN y still draws the axes");
-    }
+/// Renders a figure and writes it as a PNG file.
+pub fn render_png(fig: &Figure, path: &Path) -> Result<(), PlotError> {
+    write(path, &encode_png(&render(fig)?)?)
 }
+
+/// Renders a figure and writes it as an SVG file.
+pub fn write_svg(fig: &Figure, path: &Path) -> Result<(), PlotError> {
+    write(path, render_svg(fig)?.as_bytes())
+}
+
+#[cfg(test)]
+mod tests;

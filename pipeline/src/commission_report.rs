@@ -1,0 +1,385 @@
+//! The commissioning record: what `leakwatch commission` found and learned,
+//! the one source of its terminal lines and of the report it writes beside
+//! its TOML, a self-contained HTML page (inline CSS and SVG, no external
+//! resource) that prints on A4.
+
+use crate::commission::NullBias;
+
+/// One parameter the identification names: its value and σ in `unit`, or why
+/// it could not be identified, against the datasheet's (the model's) value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// What it is.
+    pub name: String,
+    /// The unit of the values.
+    pub unit: String,
+    /// Value and σ identified, in `unit`; or why it is not identifiable.
+    pub found: Result<(f64, f64), String>,
+    /// The datasheet's (the model's before the identification) value, in `unit`.
+    pub datasheet: f64,
+}
+
+impl Param {
+    /// `found` (SI) in `unit` (`scale` per SI unit) against `model_value` (SI).
+    pub fn new(name: &str, found: &identify::Found, unit: &str, scale: f64, model_value: f64) -> Param {
+        Param {
+            name: name.to_string(),
+            unit: unit.to_string(),
+            found: match found {
+                identify::Found::Identified(e) => Ok((e.value * scale, e.sigma * scale)),
+                identify::Found::NotIdentifiable(why) => Err(why.to_string()),
+            },
+            datasheet: model_value * scale,
+        }
+    }
+
+    /// The terminal's line: `name: value ± σ unit (the datasheet's d)` or why not.
+    pub fn line(&self) -> String {
+        match &self.found {
+            Ok((v, sigma)) => format!(
+                "  {}: {v:.4} ± {sigma:.4} {} (the datasheet's {:.4})",
+                self.name, self.unit, self.datasheet
+            ),
+            Err(why) => format!("  {}: not identifiable from this recording: {why}", self.name),
+        }
+    }
+}
+
+/// What the identification found, as the terminal says it and the report shows it.
+#[derive(Debug, Clone, Default)]
+pub struct Identified {
+    /// The flow balance's windows, their length (ms) and how many moved.
+    pub windows: (usize, f64, usize),
+    /// The flow-balance gap before and after, and the sensor floor, L/min RMS.
+    pub gap_lpm: (f64, f64, f64),
+    /// The flow balance's parameters.
+    pub flow: Vec<Param>,
+    /// The force balance's sliding samples and its gap before and after, N RMS.
+    pub force_gap_n: Option<(usize, f64, f64)>,
+    /// The force balance's parameters (empty when it was not identified).
+    pub mechanics: Vec<Param>,
+    /// Why the force balance was not identified, if it was not.
+    pub mechanics_error: Option<String>,
+    /// The other lines: transducer lags, oil temperature, the workpiece, what
+    /// the recording cannot tell apart.
+    pub notes: Vec<String>,
+}
+
+impl Identified {
+    /// The terminal's lines, in order.
+    pub fn lines(&self) -> Vec<String> {
+        let (w, ms, moving) = self.windows;
+        let (before, after, floor) = self.gap_lpm;
+        let mut out = vec![format!(
+            "identified on {w} windows of {ms} ms ({moving} moving); flow-balance gap {before:.3} -> {after:.3} L/min RMS (sensor floor {floor:.3}):"
+        )];
+        out.extend(self.flow.iter().map(Param::line));
+        out.extend(self.notes.iter().cloned());
+        if let Some((n, b, a)) = self.force_gap_n {
+            out.push(format!(
+                "force balance on {n} sliding samples: gap {b:.0} -> {a:.0} N RMS"
+            ));
+        }
+        out.extend(self.mechanics.iter().map(Param::line));
+        if let Some(e) = &self.mechanics_error {
+            out.push(format!("  mass and friction: not identified: {e}"));
+        }
+        out
+    }
+}
+
+/// The leak filter's fit to the healthy recording, every [`FitTrace::EVERY`]-th estimate.
+#[derive(Debug, Clone, Default)]
+pub struct FitTrace {
+    /// Sample times, s.
+    pub t_s: Vec<f64>,
+    /// Measured p1 and p2, MPa.
+    pub measured_mpa: [Vec<f64>; 2],
+    /// The leak filter's a-posteriori p1 and p2, MPa.
+    pub estimated_mpa: [Vec<f64>; 2],
+    /// The a-posteriori residuals of p1 and p2, kPa.
+    pub residual_kpa: [Vec<f64>; 2],
+    /// The normalised innovation squared (1).
+    pub nis: Vec<f64>,
+    /// Estimates seen.
+    seen: u64,
+}
+
+impl FitTrace {
+    /// One estimate in this many is kept (100 Hz at 1 kHz).
+    pub const EVERY: u64 = 10;
+
+    /// Takes estimate `e` (kept every [`Self::EVERY`]-th).
+    pub fn push(&mut self, e: &filter::Estimate) {
+        self.seen += 1;
+        if !(self.seen - 1).is_multiple_of(Self::EVERY) {
+            return;
+        }
+        self.t_s.push(e.t_s);
+        for k in 0..2 {
+            self.measured_mpa[k].push(e.measured[k + 1] * 1e-6);
+            self.estimated_mpa[k].push((e.measured[k + 1] - e.residual[k + 1]) * 1e-6);
+            self.residual_kpa[k].push(e.residual[k + 1] * 1e-3);
+        }
+        self.nis.push(e.nis);
+    }
+
+    /// The figure of the fit: pressures measured and estimated, residuals, NIS.
+    pub fn figure(&self, title: &str) -> plot::Figure {
+        use plot::{Marker, Panel, Series};
+        let t = &self.t_s;
+        let mut fig = plot::Figure::new(title, "t [s]");
+        fig.panels.push(
+            Panel::new("Chamber pressures: measured and the leak filter's", "p [MPa]")
+                .with_series(
+                    Series::line("p1 leak filter", t, &self.estimated_mpa[0]).colored(plot::PALETTE[3]),
+                )
+                .with_series(
+                    Series::line("p2 leak filter", t, &self.estimated_mpa[1]).colored(plot::PALETTE[4]),
+                )
+                .with_series(Series::line("p1 measured", t, &self.measured_mpa[0]).colored(plot::PALETTE[0]))
+                .with_series(Series::line("p2 measured", t, &self.measured_mpa[1]).colored(plot::PALETTE[1])),
+        );
+        fig.panels.push(
+            Panel::new("A-posteriori pressure residuals", "e [kPa]")
+                .with_series(Series::line("e p1", t, &self.residual_kpa[0]))
+                .with_series(Series::line("e p2", t, &self.residual_kpa[1])),
+        );
+        fig.panels.push(
+            Panel::new("Normalised innovation squared", "NIS [-]")
+                .with_series(Series::line("NIS", t, &self.nis))
+                .with_marker(Marker::Horizontal {
+                    y: 3.0,
+                    label: "3: the model fits".into(),
+                }),
+        );
+        fig
+    }
+}
+
+/// What commissioning learned of the healthy state, and the thresholds it gives.
+#[derive(Debug, Clone)]
+pub struct Learned {
+    /// The oil's stiffness on the recording, of the model's bulk modulus (1); `None` without that state.
+    pub theta: Option<f64>,
+    /// The oil temperature the model's values hold at, °C.
+    pub reference_c: f64,
+    /// Healthy data learned from, s.
+    pub healthy_s: f64,
+    /// Healthy offsets of the ext1, ext2 and int sizes, L/min at p_s/2.
+    pub offsets_lpm: [f64; 3],
+    /// Their healthy spreads, L/min at p_s/2.
+    pub spreads_lpm: [f64; 3],
+    /// The internal leak's pressure factors r1/r2 when not the nominal ones (1).
+    pub internal_factors: Option<[f64; 2]>,
+    /// The thresholds of ext1, ext2 and int, L/min at p_s/2.
+    pub thresholds_lpm: [f64; 3],
+    /// The false-alarm rate the thresholds are set for, 1/h.
+    pub false_alarms_per_hour: f64,
+    /// The smallest detectable leaks (L/min at p_s/2) at oil temperatures (°C).
+    pub detectable: [(f64, [f64; 3]); 3],
+    /// The terminal's line of [`Self::detectable`].
+    pub detectable_line: String,
+    /// The leak filter's mean NIS on the recording (1; 3 when the model fits).
+    pub nis_mean: f64,
+}
+
+/// Three values as `a/b/c` with three decimals.
+fn three(v: [f64; 3]) -> String {
+    format!("{:.3}/{:.3}/{:.3}", v[0], v[1], v[2])
+}
+
+impl Learned {
+    /// The terminal's lines, in order.
+    pub fn lines(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(theta) = self.theta {
+            out.push(format!(
+                "oil stiffness on this recording: {theta:.3} of the model's bulk modulus, at {:.1} °C: \
+                 without temp_c the leak filter reads the oil's temperature against it",
+                self.reference_c
+            ));
+        }
+        out.push(format!(
+            "learned {:.0} s of healthy data: offsets ext1/ext2/int {} L/min, spreads {} L/min (at p_s/2)",
+            self.healthy_s,
+            three(self.offsets_lpm),
+            three(self.spreads_lpm)
+        ));
+        if let Some(f) = self.internal_factors {
+            out.push(format!(
+                "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",
+                f[0], f[1]
+            ));
+        }
+        out.push(format!(
+            "the detector will raise leaks from {} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
+            three(self.thresholds_lpm),
+            self.false_alarms_per_hour
+        ));
+        out.push(self.detectable_line.clone());
+        out.push(format!(
+            "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
+            self.nis_mean
+        ));
+        out
+    }
+}
+
+/// Everything a commissioning found and learned on one healthy recording.
+#[derive(Debug, Clone)]
+pub struct CommissionRecord {
+    /// The healthy recording.
+    pub input: String,
+    /// What the identification found.
+    pub identified: Identified,
+    /// The spool's null bias found, and the datasheet's (model's) before it, m.
+    pub null_bias: Option<(NullBias, f64)>,
+    /// The healthy state and the thresholds.
+    pub learned: Learned,
+    /// The leak filter's fit to the recording.
+    pub fit: FitTrace,
+}
+
+/// `text` with HTML's special characters escaped.
+fn esc(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The page's style: A4, small type, tables with rules.
+const STYLE: &str = "@page { size: A4; margin: 12mm; }\n\
+body { font-family: 'DejaVu Sans', sans-serif; font-size: 9pt; margin: 0 auto; max-width: 186mm; color: #000; }\n\
+h1 { font-size: 14pt; margin: 0 0 4pt; } h2 { font-size: 11pt; margin: 10pt 0 3pt; }\n\
+table { border-collapse: collapse; width: 100%; } th, td { border-bottom: 1px solid #bbb; padding: 1.5pt 4pt; text-align: left; }\n\
+td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }\n\
+p.note { margin: 2pt 0; } svg { width: 100%; height: auto; } figure { margin: 4pt 0; break-inside: avoid; }\n";
+
+/// One row of the identification table: value, σ, datasheet, difference (and %).
+fn param_row(p: &Param) -> Option<String> {
+    let (v, sigma) = p.found.as_ref().ok()?;
+    let d = v - p.datasheet;
+    let pct = if p.datasheet != 0.0 {
+        format!(" ({:+.1} %)", 100.0 * d / p.datasheet.abs())
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "<tr><td>{}</td><td class=\"n\">{v:.4}</td><td class=\"n\">{sigma:.4}</td><td class=\"n\">{:.4}</td><td class=\"n\">{d:+.4}{pct}</td><td>{}</td></tr>\n",
+        esc(&p.name),
+        p.datasheet,
+        esc(&p.unit)
+    ))
+}
+
+impl CommissionRecord {
+    /// The report: one self-contained HTML page (inline CSS, the fit as inline
+    /// SVG, no external resource) that prints on A4.
+    pub fn html(&self) -> Result<String, String> {
+        let id = &self.identified;
+        let l = &self.learned;
+        let name = std::path::Path::new(&self.input)
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_else(|| self.input.clone());
+        let mut h = format!(
+            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>Commissioning record: {n}</title>\n<style>\n{STYLE}</style></head><body>\n\
+             <h1>Commissioning record: {n}</h1>\n<p class=\"note\">Healthy recording <code>{i}</code>. Identified against the datasheet, then the healthy state of the leak filter's estimates learned.</p>\n",
+            n = esc(&name),
+            i = esc(&self.input)
+        );
+        let (w, ms, moving) = id.windows;
+        let (before, after, floor) = id.gap_lpm;
+        h += &format!(
+            "<h2>Identification</h2>\n<p class=\"note\">Flow balance on {w} windows of {ms} ms ({moving} moving): gap {before:.3} → {after:.3} L/min RMS, sensor floor {floor:.3} L/min.</p>\n"
+        );
+        if let Some((n, b, a)) = id.force_gap_n {
+            h += &format!(
+                "<p class=\"note\">Force balance on {n} sliding samples: gap {b:.0} → {a:.0} N RMS.</p>\n"
+            );
+        }
+        h += "<table><tr><th>parameter</th><th>identified</th><th>σ</th><th>datasheet</th><th>difference</th><th>unit</th></tr>\n";
+        for row in id.flow.iter().chain(&id.mechanics).filter_map(param_row) {
+            h += &row;
+        }
+        if let Some((b, model_m)) = &self.null_bias {
+            h += &format!(
+                "<tr><td>spool null bias (spread {:.2} µm over {:.0} s)</td><td class=\"n\">{:+.2}</td><td class=\"n\">–</td><td class=\"n\">{:+.2}</td><td class=\"n\">{:+.2}</td><td>µm</td></tr>\n",
+                b.spread_m * 1e6,
+                b.over_s,
+                (model_m + b.bias_m) * 1e6,
+                model_m * 1e6,
+                b.bias_m * 1e6
+            );
+        }
+        h += "</table>\n<h2>Not identified, and why</h2>\n";
+        for p in id.flow.iter().chain(&id.mechanics) {
+            if let Err(why) = &p.found {
+                h += &format!("<p class=\"note\"><b>{}</b>: {}</p>\n", esc(&p.name), esc(why));
+            }
+        }
+        if let Some(e) = &id.mechanics_error {
+            h += &format!("<p class=\"note\"><b>mass and friction</b>: {}</p>\n", esc(e));
+        }
+        for n in &id.notes {
+            h += &format!("<p class=\"note\">{}</p>\n", esc(n.trim()));
+        }
+        h += &self.learned_html(l);
+        let svg = plot::render_svg(&self.fit.figure(&format!("The leak filter on {name}")))
+            .map_err(|e| format!("the report's figure: {e}"))?;
+        h += &format!(
+            "<h2>The fit to the recording</h2>\n<figure>{}</figure>\n</body></html>\n",
+            strip_xml_decl(&svg)
+        );
+        Ok(h)
+    }
+
+    /// The healthy state, the thresholds per kind and per oil temperature, and the mean NIS.
+    fn learned_html(&self, l: &Learned) -> String {
+        let mut h = format!(
+            "<h2>Healthy state and thresholds</h2>\n<p class=\"note\">Learned from {:.0} s of healthy data; thresholds for {} false alarms per hour. L/min at p_s/2.</p>\n\
+             <table><tr><th></th><th>ext1</th><th>ext2</th><th>int</th></tr>\n",
+            l.healthy_s, l.false_alarms_per_hour
+        );
+        let row = |name: &str, v: [f64; 3]| {
+            format!(
+                "<tr><td>{name}</td><td class=\"n\">{:.3}</td><td class=\"n\">{:.3}</td><td class=\"n\">{:.3}</td></tr>\n",
+                v[0], v[1], v[2]
+            )
+        };
+        h += &row("healthy offset", l.offsets_lpm);
+        h += &row("healthy spread", l.spreads_lpm);
+        h += &row("threshold", l.thresholds_lpm);
+        for (t, d) in &l.detectable {
+            h += &row(&format!("smallest detectable at {t:.0} °C"), *d);
+        }
+        h += "</table>\n";
+        if let Some(f) = l.internal_factors {
+            h += &format!(
+                "<p class=\"note\">Internal leak's pressure factors r1/r2: {:.3}/{:.3}.</p>\n",
+                f[0], f[1]
+            );
+        }
+        if let Some(theta) = l.theta {
+            h += &format!(
+                "<p class=\"note\">Oil stiffness on this recording: {theta:.3} of the model's bulk modulus, at {:.1} °C.</p>\n",
+                l.reference_c
+            );
+        }
+        h += &format!(
+            "<p class=\"note\">The leak filter's mean NIS on this recording: <b>{:.1}</b> (3 when the model fits the rig).</p>\n",
+            l.nis_mean
+        );
+        h
+    }
+}
+
+/// An SVG document without its XML declaration, to sit inline in HTML.
+fn strip_xml_decl(svg: &str) -> &str {
+    match svg.find("<svg") {
+        Some(i) => &svg[i..],
+        None => svg,
+    }
+}
