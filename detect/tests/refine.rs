@@ -365,7 +365,7 @@ fn the_oils_null_leakage_band_widens_the_thresholds() {
 /// (the standard deviation would be about 0.15 L/min, 15 times wider).
 #[test]
 fn commissioning_learns_the_rises_spread_not_the_dips() {
-    let mut noise = Noise(0x5eed_0f_d1b5);
+    let mut noise = Noise(0x005e_ed0f_d1b5);
     let mut learner = CommissioningLearner::new(1.0);
     for i in 0..120_000 {
         let t = i as f64 * 1e-3;
