@@ -334,8 +334,10 @@ const EXACT_POWERS_OF_TEN: [f64; 23] = [
 /// one digit before the exponent), as the f64 `str::parse` gives (the nearest,
 /// ties to even); `None` for any other text. Numbers of at most 2⁵³ in their
 /// digits and a power of ten within ±22 take Clinger's fast path (one exact
-/// product or quotient, correctly rounded); the others are parsed by
-/// `str::parse`.
+/// product or quotient, correctly rounded); the others (17 significant digits
+/// above 2⁵³, as shortest round-trip floats often have) are converted by
+/// `fast-float2` (Lemire's Eisel-Lemire algorithm, correctly rounded: the same
+/// f64 as `str::parse`, several times faster on such numbers).
 fn parse_plain_f64(cell: &str) -> Option<f64> {
     if cell == "NaN" {
         // what `simulate` and `export` write for a value that is absent
@@ -410,8 +412,12 @@ fn parse_plain_f64(cell: &str) -> Option<f64> {
             return Some(if negative { -v } else { v });
         }
     }
-    // More digits, or a power beyond the exact ones: the standard parser.
-    cell.parse().ok()
+    // More digits, or a power beyond the exact ones: the grammar is checked
+    // above, so the whole cell is a number `fast-float2` reads as `str::parse` does.
+    match fast_float2::parse_partial::<f64, _>(b) {
+        Ok((v, used)) if used == b.len() => Some(v),
+        _ => cell.parse().ok(),
+    }
 }
 
 /// `text` without one pair of surrounding double quotes (standard CSV quoting,
@@ -496,6 +502,28 @@ mod tests {
             "1,5",
             "0000000000000000000000001.5",
             "1.50000000000000000000",
+            // beyond Clinger's fast path: 17 digits above 2^53, halfway cases, subnormals
+            "0.30000000000000004",
+            "-0.30000000000000004",
+            "9007199254740993.5",
+            "1.00000000000000011102230246251565404236316680908203125",
+            "1.00000000000000011102230246251565404236316680908203124",
+            "1.00000000000000011102230246251565404236316680908203126",
+            "0.1000000000000000055511151231257827021181583404541015625",
+            "2.2250738585072011e-308",
+            "2.2250738585072014e-308",
+            "4.9406564584124654e-324",
+            "2.4703282292062327e-324",
+            "2.4703282292062328e-324",
+            "1.7976931348623158e308",
+            "1.7976931348623159e308",
+            "123456789012345678e-5",
+            "7.2057594037927933e16",
+            "1e23",
+            "8.98846567431158e307",
+            "-1e-23",
+            "1e0000",
+            "1e+9999",
         ] {
             check(text);
         }
