@@ -5,6 +5,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+use crate::samples::{count_absent, RowSource, SampleChecks};
 use crate::{DatasetError, Issue, IssueKind, Limits, Sample, COLUMNS, N_OPTIONAL, REQUIRED};
 
 /// A streaming reader of samples from a CSV file.
@@ -15,10 +16,8 @@ pub struct CsvReader<R: BufRead> {
     path: PathBuf,
     map: [Option<usize>; COLUMNS.len()],
     n_cols: usize,
-    limits: Limits,
+    checks: SampleChecks,
     line_no: u64,
-    last_t: Option<f64>,
-    period: Option<f64>,
     cells: Vec<f64>,
     /// Rows read (excluding the header).
     pub rows: u64,
@@ -92,10 +91,8 @@ impl<R: BufRead> CsvReader<R> {
             path: path.to_path_buf(),
             map,
             n_cols: names.len(),
-            limits,
+            checks: SampleChecks::new(limits),
             line_no: 1,
-            last_t: None,
-            period: limits.sample_period_s,
             cells: Vec::with_capacity(names.len()),
             rows: 0,
             skipped: 0,
@@ -184,14 +181,7 @@ impl<R: BufRead> CsvReader<R> {
     /// The row of a parsed line, its absent optional values counted.
     fn counted(&mut self, parsed: Result<(Sample, Option<Issue>), Issue>) -> Row {
         if let Ok((s, _)) = &parsed {
-            for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm, s.temp_c]
-                .into_iter()
-                .enumerate()
-            {
-                if v.is_nan() && self.map[REQUIRED.len() + k].is_some() {
-                    self.absent[k] += 1;
-                }
-            }
+            count_absent(s, |j| self.map[j].is_some(), &mut self.absent);
         }
         match parsed {
             Ok((sample, None)) => Row::Sample(sample),
@@ -288,39 +278,30 @@ impl<R: BufRead> CsvReader<R> {
             q_leak_lpm: get(8),
             temp_c: get(9),
         };
-        if let Some((j, kind, msg)) = self.limits.check(&s) {
-            return Err(self.issue(Some(j), kind, msg, true));
+        let checked = self.checks.check(s, self.line_no);
+        if checked.is_err() {
+            self.skipped += 1;
         }
-        if let Some(last) = self.last_t {
-            if s.t_s <= last {
-                let msg = format!("time {} s does not increase (previous {} s)", s.t_s, last);
-                return Err(self.issue(Some(0), IssueKind::TimeNotIncreasing, msg, true));
-            }
-            let dt = s.t_s - last;
-            let period = *self.period.get_or_insert(dt);
-            if dt < (1.0 - self.limits.step_tolerance) * period {
-                let msg = format!(
-                    "time step {dt:?} s (from {last:?} s) is shorter than {} of the sample period {period:?} s",
-                    1.0 - self.limits.step_tolerance
-                );
-                return Err(self.issue(Some(0), IssueKind::StepTooShort, msg, true));
-            }
-            self.last_t = Some(s.t_s);
-            if dt > 1.5 * period {
-                let missing = (dt / period).round() as u64 - 1;
-                let msg = format!("gap of {dt} s ({missing} missing samples) before this row");
-                let issue = self.issue(Some(0), IssueKind::Gap { missing }, msg, false);
-                return Ok((s, Some(issue)));
-            }
-        } else {
-            self.last_t = Some(s.t_s);
-        }
-        Ok((s, None))
+        checked
     }
 
     /// The file being read.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+impl<R: BufRead> RowSource for CsvReader<R> {
+    fn next_row(&mut self) -> Option<Row> {
+        CsvReader::next_row(self)
+    }
+
+    fn has_optional(&self) -> [bool; N_OPTIONAL] {
+        CsvReader::has_optional(self)
+    }
+
+    fn absent(&self) -> [u64; N_OPTIONAL] {
+        self.absent
     }
 }
 

@@ -11,22 +11,62 @@ use filter::StageEstimate;
 /// The format of the estimates file (`--estimates`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EstimatesFormat {
-    /// estimates.csv: one text row per sample.
+    /// Parquet for a batch and for an input of [`LONG_INPUT_BYTES`] or more,
+    /// CSV for a shorter single file (decided before the replay starts).
     #[default]
+    Auto,
+    /// estimates.csv: one text row per sample.
     Csv,
-    /// estimates.parquet: one typed column per field (f64; the two flag columns i32).
+    /// estimates.parquet: one typed column per field (f64; the two flag columns
+    /// i32), with each column chunk's minimum and maximum.
     Parquet,
     /// No estimates file (events.json and summary.json only): the fastest replay.
     None,
 }
 
+/// The input size from which [`EstimatesFormat::Auto`] writes Parquet, bytes
+/// (16 MiB: about 2 minutes of a 1 kHz CSV with every column, whose
+/// estimates.csv would be about 6 times larger; a compressed input (`.csv.gz`,
+/// `.mcap`) reaches it only with a longer recording).
+pub const LONG_INPUT_BYTES: u64 = 16 << 20;
+
 impl EstimatesFormat {
-    /// The file name in the output directory (none for [`EstimatesFormat::None`]).
+    /// The file name in the output directory (none for [`EstimatesFormat::None`];
+    /// [`EstimatesFormat::Auto`] is resolved first, by [`Self::for_input`] or
+    /// [`Self::for_batch`]: none either).
     pub fn file_name(self) -> Option<&'static str> {
         match self {
             EstimatesFormat::Csv => Some("estimates.csv"),
             EstimatesFormat::Parquet => Some("estimates.parquet"),
-            EstimatesFormat::None => None,
+            EstimatesFormat::None | EstimatesFormat::Auto => None,
+        }
+    }
+
+    /// The format for one file of a batch: [`EstimatesFormat::Auto`] is Parquet.
+    pub fn for_batch(self) -> EstimatesFormat {
+        match self {
+            EstimatesFormat::Auto => EstimatesFormat::Parquet,
+            other => other,
+        }
+    }
+
+    /// The format for a single input of `input_bytes` bytes:
+    /// [`EstimatesFormat::Auto`] is Parquet from [`LONG_INPUT_BYTES`] on, else CSV.
+    pub fn for_input(self, input_bytes: u64) -> EstimatesFormat {
+        match self {
+            EstimatesFormat::Auto if input_bytes >= LONG_INPUT_BYTES => EstimatesFormat::Parquet,
+            EstimatesFormat::Auto => EstimatesFormat::Csv,
+            other => other,
+        }
+    }
+
+    /// Its name as `--estimates` takes it (`auto`, `csv`, `parquet`, `none`).
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimatesFormat::Auto => "auto",
+            EstimatesFormat::Csv => "csv",
+            EstimatesFormat::Parquet => "parquet",
+            EstimatesFormat::None => "none",
         }
     }
 }
@@ -120,8 +160,13 @@ pub enum EstimatesWriter {
 impl EstimatesWriter {
     /// Starts the file (the CSV header, or the Parquet magic), with the thesis
     /// filter's columns when `thesis`; `file` is ignored (and may be none) for
-    /// [`EstimatesFormat::None`].
+    /// [`EstimatesFormat::None`]; [`EstimatesFormat::Auto`] is an error (resolve it first).
     pub fn new(file: Option<File>, format: EstimatesFormat, thesis: bool) -> std::io::Result<Self> {
+        if format == EstimatesFormat::Auto {
+            return Err(std::io::Error::other(
+                "the estimates' format `auto` was not resolved to csv or parquet",
+            ));
+        }
         let Some(file) = file.filter(|_| format != EstimatesFormat::None) else {
             if format == EstimatesFormat::None {
                 return Ok(EstimatesWriter::None);
@@ -129,7 +174,7 @@ impl EstimatesWriter {
             return Err(std::io::Error::other("no file to write the estimates to"));
         };
         Ok(match format {
-            EstimatesFormat::None => EstimatesWriter::None,
+            EstimatesFormat::None | EstimatesFormat::Auto => EstimatesWriter::None,
             EstimatesFormat::Csv => {
                 let mut out = Box::new(CsvOut::new(file, thesis));
                 out.buf.extend_from_slice(header(thesis).as_bytes());
@@ -234,5 +279,33 @@ impl CsvOut {
     fn finish(mut self) -> std::io::Result<()> {
         self.file.write_all(&self.buf)?;
         self.file.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_is_parquet_for_a_batch_and_a_long_input_and_csv_below() {
+        use EstimatesFormat::*;
+        assert_eq!(LONG_INPUT_BYTES, 16 * 1024 * 1024);
+        assert_eq!(Auto.for_batch(), Parquet);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES), Parquet);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES - 1), Csv);
+        // a format asked for is kept
+        for f in [Csv, Parquet, None] {
+            assert_eq!((f.for_batch(), f.for_input(u64::MAX), f.for_input(0)), (f, f, f));
+        }
+        assert_eq!(Auto.file_name(), Option::None);
+        assert_eq!(
+            [Auto, Csv, Parquet, None].map(EstimatesFormat::name),
+            ["auto", "csv", "parquet", "none"]
+        );
+        // an unresolved `auto` writes nothing and says so
+        let err = EstimatesWriter::new(Option::None, Auto, false)
+            .err()
+            .expect("refused");
+        assert!(err.to_string().contains("`auto` was not resolved"), "{err}");
     }
 }
