@@ -421,7 +421,8 @@ impl Totals {
     fn line(&self, files: usize) -> String {
         let mib = |b: u64| b as f64 / f64::from(1 << 20);
         format!(
-            "totals of {files} files: {:.1} MiB read, {} samples, {} rows skipped, {} events raised;              estimates ({}): {} rows, {:.1} MiB",
+            "totals of {files} files: {:.1} MiB read, {} samples, {} rows skipped, {} events raised; \
+             estimates ({}): {} rows, {:.1} MiB",
             mib(self.input_bytes),
             self.samples,
             self.rows_skipped,

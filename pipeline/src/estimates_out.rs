@@ -26,9 +26,12 @@ pub enum EstimatesFormat {
 
 /// The input size from which [`EstimatesFormat::Auto`] writes Parquet, bytes
 /// (16 MiB: about 2 minutes of a 1 kHz CSV with every column, whose
-/// estimates.csv would be about 6 times larger; a compressed input (`.csv.gz`,
-/// `.mcap`) reaches it only with a longer recording).
+/// estimates.csv would be about 3 times larger).
 pub const LONG_INPUT_BYTES: u64 = 16 << 20;
+
+/// [`LONG_INPUT_BYTES`] for a compressed input (`.csv.gz`, a log `.mcap`), bytes
+/// (2 MiB: a log holds a 1 kHz sample in about 20 bytes, 7.5 times fewer than its CSV).
+pub const LONG_COMPRESSED_INPUT_BYTES: u64 = 2 << 20;
 
 impl EstimatesFormat {
     /// The file name in the output directory (none for [`EstimatesFormat::None`];
@@ -50,11 +53,26 @@ impl EstimatesFormat {
         }
     }
 
-    /// The format for a single input of `input_bytes` bytes:
-    /// [`EstimatesFormat::Auto`] is Parquet from [`LONG_INPUT_BYTES`] on, else CSV.
-    pub fn for_input(self, input_bytes: u64) -> EstimatesFormat {
+    /// The input size from which [`EstimatesFormat::Auto`] writes Parquet for
+    /// the input `path`, bytes: [`LONG_COMPRESSED_INPUT_BYTES`] for a name
+    /// ending in `.gz` or `.mcap` (any case), else [`LONG_INPUT_BYTES`].
+    pub fn long_input_bytes(path: &std::path::Path) -> u64 {
+        let compressed = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gz") || e.eq_ignore_ascii_case("mcap"));
+        if compressed {
+            LONG_COMPRESSED_INPUT_BYTES
+        } else {
+            LONG_INPUT_BYTES
+        }
+    }
+
+    /// The format for a single input of `input_bytes` bytes, long from
+    /// `long_bytes` on ([`Self::long_input_bytes`]): [`EstimatesFormat::Auto`]
+    /// is Parquet for a long input, else CSV.
+    pub fn for_input(self, input_bytes: u64, long_bytes: u64) -> EstimatesFormat {
         match self {
-            EstimatesFormat::Auto if input_bytes >= LONG_INPUT_BYTES => EstimatesFormat::Parquet,
+            EstimatesFormat::Auto if input_bytes >= long_bytes => EstimatesFormat::Parquet,
             EstimatesFormat::Auto => EstimatesFormat::Csv,
             other => other,
         }
@@ -291,11 +309,19 @@ mod tests {
         use EstimatesFormat::*;
         assert_eq!(LONG_INPUT_BYTES, 16 * 1024 * 1024);
         assert_eq!(Auto.for_batch(), Parquet);
-        assert_eq!(Auto.for_input(LONG_INPUT_BYTES), Parquet);
-        assert_eq!(Auto.for_input(LONG_INPUT_BYTES - 1), Csv);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES, LONG_INPUT_BYTES), Parquet);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES - 1, LONG_INPUT_BYTES), Csv);
+        let long = |name: &str| EstimatesFormat::long_input_bytes(std::path::Path::new(name));
+        assert_eq!(
+            [long("a.csv"), long("a.csv.gz"), long("run.MCAP"), long("a")],
+            [16 << 20, 2 << 20, 2 << 20, 16 << 20]
+        );
         // a format asked for is kept
         for f in [Csv, Parquet, None] {
-            assert_eq!((f.for_batch(), f.for_input(u64::MAX), f.for_input(0)), (f, f, f));
+            assert_eq!(
+                (f.for_batch(), f.for_input(u64::MAX, 1), f.for_input(0, 1)),
+                (f, f, f)
+            );
         }
         assert_eq!(Auto.file_name(), Option::None);
         assert_eq!(

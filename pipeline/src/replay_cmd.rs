@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
 
 use crate::estimates_out::{EstimatesFormat, LONG_INPUT_BYTES};
-use crate::{out, replay};
+use crate::replay;
 use config::Config;
 
 /// What `leakwatch replay` was asked to do: its command line (`--force` is global: passed beside it).
@@ -133,14 +133,22 @@ pub fn replay_file(
             EstimatesFormat::Parquet,
             "the default for a batch (Parquet; --estimates csv for text)".to_string(),
         ),
-        (EstimatesFormat::Auto, false) => (
-            settings.estimates.for_input(bytes),
-            format!(
-                "the default for an input of {:.1} MiB: Parquet from {} MiB on, CSV below",
-                bytes as f64 / f64::from(1 << 20),
-                LONG_INPUT_BYTES >> 20
-            ),
-        ),
+        (EstimatesFormat::Auto, false) => {
+            let long = EstimatesFormat::long_input_bytes(input);
+            (
+                settings.estimates.for_input(bytes, long),
+                format!(
+                    "the default for an input of {:.1} MiB: Parquet from {} MiB on{}, CSV below",
+                    bytes as f64 / f64::from(1 << 20),
+                    long >> 20,
+                    if long < LONG_INPUT_BYTES {
+                        " for a compressed input"
+                    } else {
+                        ""
+                    }
+                ),
+            )
+        }
         (asked, _) => (asked, format!("asked for (--estimates {})", asked.name())),
     };
     let req = replay::ReplayRequest {
