@@ -30,9 +30,11 @@ mod limits;
 pub mod output;
 pub mod parquet;
 mod reader;
+mod samples;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};
 pub use reader::{CsvReader, FileSource, Row};
+pub use samples::{RowSource, SampleChecks, SampleRows};
 
 /// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).
 pub const SHOWN_MAX_CHARS: usize = 80;

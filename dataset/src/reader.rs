@@ -5,6 +5,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+use crate::samples::{count_absent, RowSource, SampleChecks};
 use crate::{DatasetError, Issue, IssueKind, Limits, Sample, COLUMNS, N_OPTIONAL, REQUIRED};
 
 /// A streaming reader of samples from a CSV file.
@@ -15,10 +16,8 @@ pub struct CsvReader<R: BufRead> {
     path: PathBuf,
     map: [Option<usize>; COLUMNS.len()],
     n_cols: usize,
-    limits: Limits,
+    checks: SampleChecks,
     line_no: u64,
-    last_t: Option<f64>,
-    period: Option<f64>,
     cells: Vec<f64>,
     /// Rows read (excluding the header).
     pub rows: u64,
@@ -92,10 +91,8 @@ impl<R: BufRead> CsvReader<R> {
             path: path.to_path_buf(),
             map,
             n_cols: names.len(),
-            limits,
+            checks: SampleChecks::new(limits),
             line_no: 1,
-            last_t: None,
-            period: limits.sample_period_s,
             cells: Vec::with_capacity(names.len()),
             rows: 0,
             skipped: 0,
@@ -184,14 +181,7 @@ impl<R: BufRead> CsvReader<R> {
     /// The row of a parsed line, its absent optional values counted.
     fn counted(&mut self, parsed: Result<(Sample, Option<Issue>), Issue>) -> Row {
         if let Ok((s, _)) = &parsed {
-            for (k, v) in [s.x_sp_m, s.f_load_n, s.ref_m, s.q_leak_lpm, s.temp_c]
-                .into_iter()
-                .enumerate()
-            {
-                if v.is_nan() && self.map[REQUIRED.len() + k].is_some() {
-                    self.absent[k] += 1;
-                }
-            }
+            count_absent(s, |j| self.map[j].is_some(), &mut self.absent);
         }
         match parsed {
             Ok((sample, None)) => Row::Sample(sample),
@@ -288,34 +278,11 @@ impl<R: BufRead> CsvReader<R> {
             q_leak_lpm: get(8),
             temp_c: get(9),
         };
-        if let Some((j, kind, msg)) = self.limits.check(&s) {
-            return Err(self.issue(Some(j), kind, msg, true));
+        let checked = self.checks.check(s, self.line_no);
+        if checked.is_err() {
+            self.skipped += 1;
         }
-        if let Some(last) = self.last_t {
-            if s.t_s <= last {
-                let msg = format!("time {} s does not increase (previous {} s)", s.t_s, last);
-                return Err(self.issue(Some(0), IssueKind::TimeNotIncreasing, msg, true));
-            }
-            let dt = s.t_s - last;
-            let period = *self.period.get_or_insert(dt);
-            if dt < (1.0 - self.limits.step_tolerance) * period {
-                let msg = format!(
-                    "time step {dt:?} s (from {last:?} s) is shorter than {} of the sample period {period:?} s",
-                    1.0 - self.limits.step_tolerance
-                );
-                return Err(self.issue(Some(0), IssueKind::StepTooShort, msg, true));
-            }
-            self.last_t = Some(s.t_s);
-            if dt > 1.5 * period {
-                let missing = (dt / period).round() as u64 - 1;
-                let msg = format!("gap of {dt} s ({missing} missing samples) before this row");
-                let issue = self.issue(Some(0), IssueKind::Gap { missing }, msg, false);
-                return Ok((s, Some(issue)));
-            }
-        } else {
-            self.last_t = Some(s.t_s);
-        }
-        Ok((s, None))
+        checked
     }
 
     /// The file being read.
@@ -324,99 +291,43 @@ impl<R: BufRead> CsvReader<R> {
     }
 }
 
-/// Powers of ten that are exact in an f64 (10²² is the last).
-const EXACT_POWERS_OF_TEN: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18,
-    1e19, 1e20, 1e21, 1e22,
-];
+impl<R: BufRead> RowSource for CsvReader<R> {
+    fn next_row(&mut self) -> Option<Row> {
+        CsvReader::next_row(self)
+    }
 
-/// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]` (at least
-/// one digit before the exponent), as the f64 `str::parse` gives (the nearest,
-/// ties to even); `None` for any other text. Numbers of at most 2⁵³ in their
-/// digits and a power of ten within ±22 take Clinger's fast path (one exact
-/// product or quotient, correctly rounded); the others (17 significant digits
-/// above 2⁵³, as shortest round-trip floats often have) are converted by
-/// `fast-float2` (Lemire's Eisel-Lemire algorithm, correctly rounded: the same
-/// f64 as `str::parse`, several times faster on such numbers).
+    fn has_optional(&self) -> [bool; N_OPTIONAL] {
+        CsvReader::has_optional(self)
+    }
+
+    fn absent(&self) -> [u64; N_OPTIONAL] {
+        self.absent
+    }
+}
+
+/// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]`, as the f64
+/// `str::parse` gives (the nearest, ties to even); `None` for any other text
+/// (`inf`, `nan` in any case but `NaN`, `1e`, ...: the general path reads it).
+/// `NaN` is what `simulate` and `export` write for an absent value. The
+/// conversion is `fast-float2`'s (Clinger's fast path, else Eisel-Lemire, eight
+/// digits at a time; correctly rounded: the same f64 as `str::parse`), over
+/// the cell's bytes with no copy.
 fn parse_plain_f64(cell: &str) -> Option<f64> {
     if cell == "NaN" {
-        // what `simulate` and `export` write for a value that is absent
         return Some(f64::NAN);
     }
     let b = cell.as_bytes();
-    let digit = |i: usize| b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|d| *d < 10);
-    let (negative, start) = match b.first()? {
-        b'-' => (true, 1),
-        b'+' => (false, 1),
-        _ => (false, 0),
+    let body = match b.first()? {
+        b'-' | b'+' => b.get(1..)?,
+        _ => b,
     };
-    // the digits after any leading zeros go into `mantissa` (exact up to 19 of them)
-    let mut i = start;
-    while b.get(i) == Some(&b'0') {
-        i += 1;
-    }
-    let mut mantissa: u64 = 0;
-    let from = i;
-    while let Some(d) = digit(i) {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    let mut significant = i - from;
-    let mut any_digit = i > start;
-    let mut exp10: i64 = 0;
-    if b.get(i) == Some(&b'.') {
-        i += 1;
-        let fraction = i;
-        if significant == 0 {
-            while b.get(i) == Some(&b'0') {
-                i += 1;
-            }
-        }
-        let from = i;
-        while let Some(d) = digit(i) {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-            i += 1;
-        }
-        significant += i - from;
-        exp10 = -((i - fraction) as i64);
-        any_digit |= i > fraction;
-    }
-    if !any_digit {
+    // a digit or a point first: no `inf`, `infinity` nor `nan` here
+    if !matches!(body.first()?, b'0'..=b'9' | b'.') {
         return None;
     }
-    if let Some(b'e' | b'E') = b.get(i) {
-        let (sign, from) = match b.get(i + 1) {
-            Some(b'-') => (-1, i + 2),
-            Some(b'+') => (1, i + 2),
-            _ => (1, i + 1),
-        };
-        let exp_digits = b.get(from..)?;
-        if exp_digits.is_empty() || exp_digits.len() > 4 || !exp_digits.iter().all(u8::is_ascii_digit) {
-            return None;
-        }
-        let e = exp_digits.iter().fold(0i64, |e, d| e * 10 + i64::from(d - b'0'));
-        exp10 += sign * e;
-        i = b.len();
-    }
-    if i != b.len() {
-        return None;
-    }
-    if significant <= 19 {
-        if mantissa == 0 {
-            return Some(if negative { -0.0 } else { 0.0 });
-        }
-        if mantissa <= 1 << 53 && (-22..=22).contains(&exp10) {
-            let m = mantissa as f64;
-            let p = EXACT_POWERS_OF_TEN[exp10.unsigned_abs() as usize];
-            let v = if exp10 >= 0 { m * p } else { m / p };
-            return Some(if negative { -v } else { v });
-        }
-    }
-    // More digits, or a power beyond the exact ones: the grammar is checked
-    // above, so the whole cell is a number `fast-float2` reads as `str::parse` does.
     match fast_float2::parse_partial::<f64, _>(b) {
         Ok((v, used)) if used == b.len() => Some(v),
-        _ => cell.parse().ok(),
+        _ => None,
     }
 }
 

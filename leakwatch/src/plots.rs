@@ -304,6 +304,13 @@ fn replay_title(dir: &Path) -> String {
 /// panel as the detector saw it (or, for a replay without detector.csv, the
 /// leak filter's sizes), with the onsets and alarms marked.
 pub fn plot_replay(dir: &Path, out: &Path, force: bool) -> Result<(), String> {
+    if !dir.join("estimates.csv").exists() && dir.join("estimates.parquet").exists() {
+        return Err(format!(
+            "{}: its estimates are Parquet; `plot` draws estimates.csv: replay with `--estimates csv` \
+             (`--estimates-every 10` for a long input)",
+            dir.display()
+        ));
+    }
     let (header, cols) = read_columns(&dir.join("estimates.csv"))?;
     crate::out::check(
         out,

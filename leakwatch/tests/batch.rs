@@ -47,14 +47,23 @@ fn three_runs(dir: &Path) -> Vec<(PathBuf, &'static str)> {
     runs
 }
 
-/// Replays `input` alone into `out` (the default wiring: threads over channels).
+/// Replays `input` alone into `out` (the default wiring: threads over
+/// channels), its estimates as Parquet (a batch's default; a 20 s file alone
+/// would write CSV).
 fn replay_alone(input: &Path, out: &Path) {
-    let o = leakwatch(&["replay", input.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = leakwatch(&[
+        "replay",
+        input.to_str().unwrap(),
+        "--estimates",
+        "parquet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
 fn assert_same_outputs(batch: &Path, alone: &Path) {
-    for name in ["estimates.csv", "events.json"] {
+    for name in ["estimates.parquet", "events.json"] {
         let (a, b) = (
             std::fs::read(batch.join(name)).unwrap(),
             std::fs::read(alone.join(name)).unwrap(),
@@ -90,6 +99,20 @@ fn a_directory_replayed_on_two_threads_matches_each_file_replayed_alone() {
     let err = stderr(&o);
     assert!(err.contains("replaying 3 files on 2 threads"), "{err}");
     assert!(err.contains("[3/3]") && err.contains("samples/s"), "{err}");
+    // the totals of the files, and the estimates' format said (Parquet, a batch's default)
+    assert!(
+        err.contains("totals of 3 files: ")
+            && err.contains("60000 samples, 0 rows skipped")
+            && err.contains("estimates (parquet): 60000 rows"),
+        "{err}"
+    );
+    let summary = json(&out.join("a").join("summary.json"));
+    assert_eq!(summary["estimates"]["format"], "parquet", "{summary:#}");
+    assert_eq!(summary["estimates"]["rows"], 20000, "{summary:#}");
+    assert!(
+        summary["estimates"]["why"].as_str().unwrap().contains("batch"),
+        "{summary:#}"
+    );
     let table = stdout(&o);
     assert!(table.starts_with("| file | samples | events raised |"), "{table}");
     for (input, name) in &runs {
@@ -208,7 +231,7 @@ fn several_files_are_a_batch_named_by_their_stems_and_clashes_are_refused() {
         assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
         assert!(stderr(&o).contains("replaying 1 files"), "{}", stderr(&o));
     }
-    assert!(x.join("a").join("estimates.csv").is_file());
+    assert!(x.join("a").join("estimates.parquet").is_file());
     // a directory with nothing to replay
     let empty = d.join("empty");
     std::fs::create_dir_all(&empty).unwrap();

@@ -227,6 +227,18 @@ fn plot_draws_a_replay_directory() {
     // with the thesis filter's columns (--model 7): its residuals and MAE, a fifth panel
     let five = figure("with", &["--model", "7"]).len();
     assert!(five > four + 5_000, "five panels {five} bytes, four {four} bytes");
+    // Parquet estimates are not drawn: the error says how to get a CSV
+    let pq = d.join("pq");
+    assert!(replay(&input, &pq, &["--estimates", "parquet"]).status.success());
+    let o = leakwatch(&[
+        "plot",
+        pq.to_str().unwrap(),
+        "--out",
+        d.join("pq.png").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--estimates csv"), "{err}");
+    assert!(!d.join("pq.png").exists());
 }
 
 /// `--model 6` runs the thesis filter with 6 states (friction from the model, no
@@ -468,6 +480,60 @@ fn a_recorded_log_with_a_damaged_chunk_replays_the_rest_and_counts_the_lost_samp
     assert_eq!(s["samples"].as_u64().unwrap() + lost, 4000, "{s:#}");
     assert_eq!(s["samples_missing"].as_u64().unwrap(), lost, "{s:#}");
     assert_eq!(s["log"]["chunks_skipped"].as_array().unwrap().len(), 1, "{s:#}");
+}
+
+/// `--estimates-every N` writes the estimates of one sample in N (the first, the
+/// (N+1)th, ...), the same rows as the full file's, and the summary says which
+/// file, how decimated and why; a short input's default is CSV.
+#[test]
+fn decimated_estimates_are_every_nth_row_of_the_full_file_and_the_summary_says_so() {
+    let d = tmpdir("every");
+    let input = simulate(&d, "loaded-sine", "3", "none");
+    let (full, tenth) = (d.join("full"), d.join("tenth"));
+    let o = replay(&input, &full, &[]);
+    assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("estimates: ")
+            && err.contains("estimates.csv (every sample, 3000 rows; the default for an input of"),
+        "{err}"
+    );
+    let o = replay(&input, &tenth, &["--estimates-every", "10"]);
+    assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
+    let all = std::fs::read_to_string(full.join("estimates.csv")).unwrap();
+    let some = std::fs::read_to_string(tenth.join("estimates.csv")).unwrap();
+    let every_tenth: Vec<&str> = all
+        .lines()
+        .take(1)
+        .chain(all.lines().skip(1).step_by(10))
+        .collect();
+    assert_eq!(some.lines().collect::<Vec<_>>(), every_tenth);
+    assert_eq!(some.lines().count(), 301);
+    let s = json(&tenth.join("summary.json"));
+    assert_eq!(s["estimates"]["format"], "csv", "{s:#}");
+    assert_eq!(s["estimates"]["file"], "estimates.csv", "{s:#}");
+    assert_eq!(
+        (s["estimates"]["every"].as_u64(), s["estimates"]["rows"].as_u64()),
+        (Some(10), Some(300))
+    );
+    assert!(
+        s["estimates"]["why"]
+            .as_str()
+            .unwrap()
+            .contains("Parquet from 16 MiB on"),
+        "{s:#}"
+    );
+    // asked for: said so
+    let pq = d.join("pq");
+    let o = replay(&input, &pq, &["--estimates", "parquet"]);
+    assert!(ran(&o), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&pq.join("summary.json"));
+    assert_eq!(s["estimates"]["why"], "asked for (--estimates parquet)", "{s:#}");
+    assert_eq!(s["estimates"]["rows"], 3000, "{s:#}");
+    // 0 is refused by name
+    let o = replay(&input, &d.join("zero"), &["--estimates-every", "0"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--estimates-every"));
 }
 
 /// A log with nothing readable (an 8-byte file of MCAP magic, an empty file) is an

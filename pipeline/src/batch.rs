@@ -168,8 +168,9 @@ pub fn cores() -> usize {
 }
 
 /// Replays `jobs` into `out` on `threads` worker threads, each taking the next
-/// file (the largest first) until none is left. With `progress`, a line on
-/// stderr for every file done and every 10 s: files done / total and samples/s.
+/// file (the largest first) until none is left. With `progress`, one bar on
+/// stderr (files done / total, samples, samples/s) on a terminal, else a line
+/// for every file done and every 10 s.
 pub fn replay_all(
     jobs: &[Job],
     out: &Path,
@@ -177,6 +178,10 @@ pub fn replay_all(
     threads: usize,
     progress: bool,
 ) -> BatchResult {
+    let settings = &Settings {
+        batch: true,
+        ..settings.clone()
+    };
     let mut order: Vec<usize> = (0..jobs.len()).collect();
     order.sort_by(|&a, &b| jobs[b].bytes.cmp(&jobs[a].bytes).then(a.cmp(&b)));
     let next = AtomicUsize::new(0);
@@ -222,33 +227,20 @@ pub fn replay_all(
             });
         }
         drop(tx);
+        let bar = BatchProgress::new(progress, jobs.len());
         let mut finished = 0usize;
         loop {
-            match rx.recv_timeout(Duration::from_secs(10)) {
+            match rx.recv_timeout(bar.tick()) {
                 Ok((i, d)) => {
                     finished += 1;
-                    if progress {
-                        let what = match &d.result {
-                            Ok(s) => format!("{} samples in {:.1} s", s.samples, d.wall_s),
-                            Err(e) => format!("FAILED: {e}"),
-                        };
-                        eprintln!(
-                            "[{finished}/{}] {}: {what} | {}",
-                            jobs.len(),
-                            jobs[i].name,
-                            rate(&samples, started)
-                        );
-                    }
+                    bar.file_done(finished, &jobs[i].name, &d, &samples, started);
                     done[i] = Some(d);
                 }
-                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
-                    if progress {
-                        eprintln!("[{finished}/{}] ... | {}", jobs.len(), rate(&samples, started));
-                    }
-                }
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => bar.waiting(finished, &samples, started),
                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break,
             }
         }
+        bar.finish();
     });
     let done = done
         .into_iter()
@@ -268,6 +260,82 @@ pub fn replay_all(
         wall_s: started.elapsed().as_secs_f64(),
         threads,
         samples: samples.load(Ordering::Relaxed),
+    }
+}
+
+/// A batch's progress on stderr: one bar (files done of all, samples, samples/s)
+/// on a terminal; elsewhere a line for every file done and every 10 s.
+struct BatchProgress {
+    /// The bar, on a terminal (none: lines, or nothing without `progress`).
+    bar: Option<indicatif::ProgressBar>,
+    /// Lines are printed (asked for, not on a terminal).
+    lines: bool,
+    files: usize,
+}
+
+impl BatchProgress {
+    /// The progress of `files` files, shown if `progress`.
+    fn new(progress: bool, files: usize) -> BatchProgress {
+        use std::io::IsTerminal;
+        let terminal = progress && std::io::stderr().is_terminal();
+        let bar = terminal.then(|| {
+            let bar = indicatif::ProgressBar::new(files as u64);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} files  {msg}  {elapsed}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar
+        });
+        BatchProgress {
+            bar,
+            lines: progress && !terminal,
+            files,
+        }
+    }
+
+    /// How long to wait for a file before showing the progress again.
+    fn tick(&self) -> Duration {
+        if self.bar.is_some() {
+            Duration::from_millis(250)
+        } else {
+            Duration::from_secs(10)
+        }
+    }
+
+    /// Shows file `name` done (`finished` so far).
+    fn file_done(&self, finished: usize, name: &str, d: &Done, samples: &AtomicU64, started: Instant) {
+        let what = match &d.result {
+            Ok(s) => format!("{} samples in {:.1} s", s.samples, d.wall_s),
+            Err(e) => format!("FAILED: {e}"),
+        };
+        if let Some(bar) = &self.bar {
+            if d.result.is_err() {
+                bar.suspend(|| eprintln!("{name}: {what}"));
+            }
+            bar.set_position(finished as u64);
+            bar.set_message(rate(samples, started));
+        } else if self.lines {
+            eprintln!(
+                "[{finished}/{}] {name}: {what} | {}",
+                self.files,
+                rate(samples, started)
+            );
+        }
+    }
+
+    /// Shows the progress while no file ended.
+    fn waiting(&self, finished: usize, samples: &AtomicU64, started: Instant) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(rate(samples, started));
+        } else if self.lines {
+            eprintln!("[{finished}/{}] ... | {}", self.files, rate(samples, started));
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
     }
 }
 
@@ -318,6 +386,58 @@ fn cell(text: &str) -> String {
     text.replace('|', "/").replace(['\n', '\r'], " ")
 }
 
+/// What the files replayed without error add up to: read, found and written.
+#[derive(Debug, Default)]
+struct Totals {
+    /// Input bytes.
+    input_bytes: u64,
+    /// Samples processed and rows skipped.
+    samples: u64,
+    rows_skipped: u64,
+    /// Events raised (distinct, any kind).
+    events_raised: usize,
+    /// Estimates rows and bytes written, and their formats.
+    estimates_rows: u64,
+    estimates_bytes: u64,
+    formats: Vec<String>,
+}
+
+impl Totals {
+    /// Adds the replay `s` of `job`, whose outputs are in `dir`.
+    fn add(&mut self, job: &Job, s: &Summary, dir: &Path) {
+        self.input_bytes += job.bytes;
+        self.samples += s.samples;
+        self.rows_skipped += s.rows_skipped;
+        self.estimates_rows += s.estimates.rows;
+        if let Some(file) = &s.estimates.file {
+            self.estimates_bytes += std::fs::metadata(dir.join(file)).map_or(0, |m| m.len());
+        }
+        if !self.formats.contains(&s.estimates.format) {
+            self.formats.push(s.estimates.format.clone());
+        }
+    }
+
+    /// The totals' line for `files` files.
+    fn line(&self, files: usize) -> String {
+        let mib = |b: u64| b as f64 / f64::from(1 << 20);
+        format!(
+            "totals of {files} files: {:.1} MiB read, {} samples, {} rows skipped, {} events raised; \
+             estimates ({}): {} rows, {:.1} MiB",
+            mib(self.input_bytes),
+            self.samples,
+            self.rows_skipped,
+            self.events_raised,
+            if self.formats.is_empty() {
+                "none".to_string()
+            } else {
+                self.formats.join(", ")
+            },
+            self.estimates_rows,
+            mib(self.estimates_bytes)
+        )
+    }
+}
+
 /// `leakwatch replay DIR|FILE...`: the batch, its progress on stderr, its table
 /// on stdout (per file: samples, events raised (distinct events of any kind),
 /// the leak kinds the leak-size detector raised, its first alarm's kind, size
@@ -341,9 +461,11 @@ pub fn run(
     outln!("| file | samples | events raised | leaks raised | first alarm | watched s | error |");
     outln!("|---|---|---|---|---|---|---|");
     let mut failed = 0usize;
+    let mut totals = Totals::default();
     for (job, d) in jobs.iter().zip(&b.done) {
         match &d.result {
             Ok(s) => {
+                totals.add(job, s, &out.join(&job.name));
                 // events, not reports: a leak raised first with its kind pending
                 // and again, same id, with its kind is one event
                 let mut raised: Vec<(&str, u64)> = s
@@ -355,6 +477,7 @@ pub fn run(
                 raised.sort_unstable();
                 raised.dedup();
                 let raised = raised.len();
+                totals.events_raised += raised;
                 let (kinds, first) = leaks_raised(s);
                 let watched = match s.watch.armed_at_s {
                     Some(_) => format!("{:.1} of {:.1}", s.watch.watched_s, s.watch.run_s),
@@ -390,6 +513,7 @@ pub fn run(
         b.samples as f64 / b.wall_s.max(1e-9),
         out.display()
     );
+    eprintln!("{}", totals.line(jobs.len() - failed));
     if failed > 0 {
         return Err(format!("{failed} of {} files failed (see the table)", jobs.len()));
     }

@@ -11,22 +11,80 @@ use filter::StageEstimate;
 /// The format of the estimates file (`--estimates`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EstimatesFormat {
-    /// estimates.csv: one text row per sample.
+    /// Parquet for a batch and for an input of [`LONG_INPUT_BYTES`] or more,
+    /// CSV for a shorter single file (decided before the replay starts).
     #[default]
+    Auto,
+    /// estimates.csv: one text row per sample.
     Csv,
-    /// estimates.parquet: one typed column per field (f64; the two flag columns i32).
+    /// estimates.parquet: one typed column per field (f64; the two flag columns
+    /// i32), with each column chunk's minimum and maximum.
     Parquet,
     /// No estimates file (events.json and summary.json only): the fastest replay.
     None,
 }
 
+/// The input size from which [`EstimatesFormat::Auto`] writes Parquet, bytes
+/// (16 MiB: about 2 minutes of a 1 kHz CSV with every column, whose
+/// estimates.csv would be about 3 times larger).
+pub const LONG_INPUT_BYTES: u64 = 16 << 20;
+
+/// [`LONG_INPUT_BYTES`] for a compressed input (`.csv.gz`, a log `.mcap`), bytes
+/// (2 MiB: a log holds a 1 kHz sample in about 20 bytes, 7.5 times fewer than its CSV).
+pub const LONG_COMPRESSED_INPUT_BYTES: u64 = 2 << 20;
+
 impl EstimatesFormat {
-    /// The file name in the output directory (none for [`EstimatesFormat::None`]).
+    /// The file name in the output directory (none for [`EstimatesFormat::None`];
+    /// [`EstimatesFormat::Auto`] is resolved first, by [`Self::for_input`] or
+    /// [`Self::for_batch`]: none either).
     pub fn file_name(self) -> Option<&'static str> {
         match self {
             EstimatesFormat::Csv => Some("estimates.csv"),
             EstimatesFormat::Parquet => Some("estimates.parquet"),
-            EstimatesFormat::None => None,
+            EstimatesFormat::None | EstimatesFormat::Auto => None,
+        }
+    }
+
+    /// The format for one file of a batch: [`EstimatesFormat::Auto`] is Parquet.
+    pub fn for_batch(self) -> EstimatesFormat {
+        match self {
+            EstimatesFormat::Auto => EstimatesFormat::Parquet,
+            other => other,
+        }
+    }
+
+    /// The input size from which [`EstimatesFormat::Auto`] writes Parquet for
+    /// the input `path`, bytes: [`LONG_COMPRESSED_INPUT_BYTES`] for a name
+    /// ending in `.gz` or `.mcap` (any case), else [`LONG_INPUT_BYTES`].
+    pub fn long_input_bytes(path: &std::path::Path) -> u64 {
+        let compressed = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gz") || e.eq_ignore_ascii_case("mcap"));
+        if compressed {
+            LONG_COMPRESSED_INPUT_BYTES
+        } else {
+            LONG_INPUT_BYTES
+        }
+    }
+
+    /// The format for a single input of `input_bytes` bytes, long from
+    /// `long_bytes` on ([`Self::long_input_bytes`]): [`EstimatesFormat::Auto`]
+    /// is Parquet for a long input, else CSV.
+    pub fn for_input(self, input_bytes: u64, long_bytes: u64) -> EstimatesFormat {
+        match self {
+            EstimatesFormat::Auto if input_bytes >= long_bytes => EstimatesFormat::Parquet,
+            EstimatesFormat::Auto => EstimatesFormat::Csv,
+            other => other,
+        }
+    }
+
+    /// Its name as `--estimates` takes it (`auto`, `csv`, `parquet`, `none`).
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimatesFormat::Auto => "auto",
+            EstimatesFormat::Csv => "csv",
+            EstimatesFormat::Parquet => "parquet",
+            EstimatesFormat::None => "none",
         }
     }
 }
@@ -120,8 +178,13 @@ pub enum EstimatesWriter {
 impl EstimatesWriter {
     /// Starts the file (the CSV header, or the Parquet magic), with the thesis
     /// filter's columns when `thesis`; `file` is ignored (and may be none) for
-    /// [`EstimatesFormat::None`].
+    /// [`EstimatesFormat::None`]; [`EstimatesFormat::Auto`] is an error (resolve it first).
     pub fn new(file: Option<File>, format: EstimatesFormat, thesis: bool) -> std::io::Result<Self> {
+        if format == EstimatesFormat::Auto {
+            return Err(std::io::Error::other(
+                "the estimates' format `auto` was not resolved to csv or parquet",
+            ));
+        }
         let Some(file) = file.filter(|_| format != EstimatesFormat::None) else {
             if format == EstimatesFormat::None {
                 return Ok(EstimatesWriter::None);
@@ -129,7 +192,7 @@ impl EstimatesWriter {
             return Err(std::io::Error::other("no file to write the estimates to"));
         };
         Ok(match format {
-            EstimatesFormat::None => EstimatesWriter::None,
+            EstimatesFormat::None | EstimatesFormat::Auto => EstimatesWriter::None,
             EstimatesFormat::Csv => {
                 let mut out = Box::new(CsvOut::new(file, thesis));
                 out.buf.extend_from_slice(header(thesis).as_bytes());
@@ -234,5 +297,41 @@ impl CsvOut {
     fn finish(mut self) -> std::io::Result<()> {
         self.file.write_all(&self.buf)?;
         self.file.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_is_parquet_for_a_batch_and_a_long_input_and_csv_below() {
+        use EstimatesFormat::*;
+        assert_eq!(LONG_INPUT_BYTES, 16 * 1024 * 1024);
+        assert_eq!(Auto.for_batch(), Parquet);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES, LONG_INPUT_BYTES), Parquet);
+        assert_eq!(Auto.for_input(LONG_INPUT_BYTES - 1, LONG_INPUT_BYTES), Csv);
+        let long = |name: &str| EstimatesFormat::long_input_bytes(std::path::Path::new(name));
+        assert_eq!(
+            [long("a.csv"), long("a.csv.gz"), long("run.MCAP"), long("a")],
+            [16 << 20, 2 << 20, 2 << 20, 16 << 20]
+        );
+        // a format asked for is kept
+        for f in [Csv, Parquet, None] {
+            assert_eq!(
+                (f.for_batch(), f.for_input(u64::MAX, 1), f.for_input(0, 1)),
+                (f, f, f)
+            );
+        }
+        assert_eq!(Auto.file_name(), Option::None);
+        assert_eq!(
+            [Auto, Csv, Parquet, None].map(EstimatesFormat::name),
+            ["auto", "csv", "parquet", "none"]
+        );
+        // an unresolved `auto` writes nothing and says so
+        let err = EstimatesWriter::new(Option::None, Auto, false)
+            .err()
+            .expect("refused");
+        assert!(err.to_string().contains("`auto` was not resolved"), "{err}");
     }
 }

@@ -86,6 +86,12 @@ pub fn log_parts(first: &Path) -> Vec<PathBuf> {
 /// order, as one; returns it, the parts and their total size in bytes. A part
 /// that cannot be read is an error naming it.
 pub fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64), String> {
+    read_log_with(log, false)
+}
+
+/// [`read_log`] with every part read for its sensor frames only
+/// ([`recorder::LogReader::read_frames`]).
+fn read_log_with(log: &Path, frames_only: bool) -> Result<(recorder::Log, Vec<PathBuf>, u64), String> {
     let parts = log_parts(log);
     let mut whole: Option<recorder::Log> = None;
     let mut bytes = 0;
@@ -94,7 +100,7 @@ pub fn read_log(log: &Path) -> Result<(recorder::Log, Vec<PathBuf>, u64), String
             .map_err(|e| format!("{}: {e}", p.display()))?
             .len();
         let l = recorder::LogReader::open(p)
-            .and_then(|r| r.read())
+            .and_then(|r| if frames_only { r.read_frames() } else { r.read() })
             .map_err(|e| format!("{}: {e}", p.display()))?;
         match whole.as_mut() {
             None => whole = Some(l),
@@ -146,6 +152,27 @@ pub fn export_log(
     need_frames: bool,
 ) -> Result<(Vec<PathBuf>, replay::LogDamage), String> {
     let (l, _, _) = read_log(log)?;
+    let damage = check_log(&l, log, need_frames)?;
+    let files = recorder::export_csv(&l, dir, force).map_err(|e| e.to_string())?;
+    Ok((files, damage))
+}
+
+/// The samples of the sensor frames of the log `log` (every part, [`log_parts`]), read for a
+/// replay (the other channels not decoded), and what reading skipped; a log
+/// without a readable frame is an error naming it; a truncated or damaged one
+/// is warned about on stderr.
+pub fn log_samples(
+    log: &Path,
+) -> Result<(impl Iterator<Item = model::Sample> + Send, replay::LogDamage), String> {
+    let (l, _, _) = read_log_with(log, true)?;
+    let damage = check_log(&l, log, true)?;
+    Ok((l.frames.into_iter().map(|f| model::Sample::from(&f)), damage))
+}
+
+/// What reading `l` (from `log`) skipped, with a warning on stderr for each
+/// damage; an error if it holds no message (or no sensor frame, with
+/// `need_frames`).
+fn check_log(l: &recorder::Log, log: &Path, need_frames: bool) -> Result<replay::LogDamage, String> {
     let messages = l.frames.len() + l.estimates.len() + l.events.len() + l.health.len() + l.stats.len();
     if messages == 0 || need_frames && l.frames.is_empty() {
         let why = match (&l.truncated, l.chunks_skipped.first()) {
@@ -173,12 +200,10 @@ pub fn export_log(
             l.frames_lost
         );
     }
-    let files = recorder::export_csv(&l, dir, force).map_err(|e| e.to_string())?;
-    let damage = replay::LogDamage {
-        chunks_skipped: l.chunks_skipped,
+    Ok(replay::LogDamage {
+        chunks_skipped: l.chunks_skipped.clone(),
         frames_lost: l.frames_lost,
-    };
-    Ok((files, damage))
+    })
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use dataset::{CsvReader, Limits};
+use dataset::{CsvReader, Limits, RowSource, SampleRows};
 use detect::LeakEvent;
 use filter::StageEstimate;
 use serde::Serialize;
@@ -30,7 +30,7 @@ pub enum Wiring {
 /// What to replay and where to write.
 #[derive(Debug, Clone)]
 pub struct ReplayRequest {
-    /// The input: a CSV in the dataset format.
+    /// The input: a CSV in the dataset format, or a recorded log (`.mcap`, its first part).
     pub input: PathBuf,
     /// Output directory (created if missing).
     pub out_dir: PathBuf,
@@ -47,10 +47,13 @@ pub struct ReplayRequest {
     pub overwrite: bool,
     /// Other inputs (the config, an original log) that no output may replace.
     pub protect: Vec<PathBuf>,
-    /// When the input was exported from a recorded log: what reading it skipped.
-    pub log: Option<LogDamage>,
-    /// Format of the estimates file (estimates.csv or estimates.parquet).
+    /// Format of the estimates file (estimates.csv, estimates.parquet or none;
+    /// [`EstimatesFormat::Auto`] resolved before).
     pub estimates: EstimatesFormat,
+    /// One estimates row every this many samples (1: every sample; `--estimates-every`).
+    pub estimates_every: u64,
+    /// Why the estimates take that format (said in the summary).
+    pub estimates_why: String,
     /// The thesis filter's estimates were asked for (`--model`): it runs and
     /// the estimates file has its `th_*` columns (as with the thesis baseline).
     pub thesis_estimates: bool,
@@ -130,6 +133,21 @@ pub struct Watch {
     pub not_armed: Option<String>,
 }
 
+/// The estimates file a replay wrote, in summary.json.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct EstimatesOut {
+    /// `csv`, `parquet` or `none`.
+    pub format: String,
+    /// Its file name in the output directory (null: none written).
+    pub file: Option<String>,
+    /// One row every this many samples (1: every sample).
+    pub every: u64,
+    /// Rows written.
+    pub rows: u64,
+    /// Why this format: asked for, or the default's rule.
+    pub why: String,
+}
+
 /// What `summary.json` holds.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Summary {
@@ -175,6 +193,8 @@ pub struct Summary {
     pub watch: Watch,
     /// How the stages were connected.
     pub wiring: String,
+    /// The estimates file: format, name, decimation and why.
+    pub estimates: EstimatesOut,
     /// The events written to events.json (not repeated in summary.json): the
     /// batch replay's table reads the leak kinds and first alarm from them.
     #[serde(skip)]
@@ -307,18 +327,44 @@ pub fn write_events(path: &Path, events: &[LeakEvent], force: bool, inputs: &[&P
     crate::out::write(path, (text + "\n").as_bytes(), force, inputs)
 }
 
+/// Whether `path` is a recorded log (`.mcap`, any case), read by its sensor frames.
+pub fn is_log(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+}
+
 /// Runs a replay and writes estimates.csv (or .parquet), events.json and summary.json into the output directory.
+/// The input is a CSV (read row by row) or a recorded log ([`is_log`]: its
+/// sensor frames, every part, decoded into memory and checked as the rows of
+/// their CSV export would be).
 pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
     let paths = OutputPaths::prepare(req)?;
-    let est_name = &paths.est_name;
     let cfg = &req.config;
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
-    let reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
+    if is_log(&req.input) {
+        let (samples, damage) = crate::logs::log_samples(&req.input)?;
+        let mut summary = new_summary(req);
+        summary.log = Some(damage);
+        run_rows(req, &paths, SampleRows::new(samples, limits), summary)
+    } else {
+        let reader = CsvReader::open(&req.input, limits).map_err(|e| e.to_string())?;
+        run_rows(req, &paths, reader, new_summary(req))
+    }
+}
+
+/// The replay of `rows` (the input of `req`) into `paths`, from `summary` as it starts.
+fn run_rows(
+    req: &ReplayRequest,
+    paths: &OutputPaths<'_>,
+    reader: impl RowSource + Send,
+    mut summary: Summary,
+) -> Result<Summary, String> {
+    let est_name = &paths.est_name;
+    let cfg = &req.config;
     // The thesis filter runs when its output is asked for: its estimates
     // (`--model`, the `th_*` columns) or the thesis' baseline; otherwise it
     // does not (a third of the work).
     let thesis_wanted = req.thesis_estimates || cfg.classifier.thesis_baseline;
-    let mut out = open_estimates(req, &paths, thesis_wanted)?;
+    let mut out = open_estimates(req, paths, thesis_wanted)?;
     let mut trace = match &paths.trace {
         Some(p) => Some(
             trace::DetectorTrace::new(crate::out::create(p, req.overwrite, &paths.inputs)?)
@@ -333,7 +379,6 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         eprintln!("note: {}", cls.start_note());
     }
     let mut events: Vec<LeakEvent> = Vec::new();
-    let mut summary = new_summary(req);
     let thesis_runs = stage.thesis_runs();
     let gate = req.config.classifier.nis_gate;
     let oil = &req.config.model.oil_temperature;
@@ -346,6 +391,8 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
 
     // The sink: classifier, accumulation and file writing.
     let mut write_err: Option<String> = None;
+    let every = req.estimates_every.max(1);
+    let mut rows_written = 0u64;
     let mut sink = |s: &StageEstimate, summary: &mut Summary| {
         summary.samples += 1;
         last_t = s.leak.t_s;
@@ -357,7 +404,8 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
             acc.1.push(&s.thesis);
         }
         cls.on_stage(s, |ev| events.push(ev));
-        if write_err.is_none() {
+        if write_err.is_none() && (summary.samples - 1).is_multiple_of(every) {
+            rows_written += 1;
             if let Err(e) = out.write(s) {
                 write_err = Some(format!("{est_name}: {e}"));
             }
@@ -396,6 +444,13 @@ pub fn run(req: &ReplayRequest) -> Result<Summary, String> {
         }
     }
     summary.refused = refusal(&summary, req);
+    summary.estimates = EstimatesOut {
+        format: req.estimates.name().into(),
+        file: req.estimates.file_name().map(str::to_string),
+        every,
+        rows: rows_written,
+        why: req.estimates_why.clone(),
+    };
     write_events(&paths.events, &events, req.overwrite, &paths.inputs)?;
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     crate::out::write(
@@ -475,7 +530,6 @@ fn open_estimates(
 fn new_summary(req: &ReplayRequest) -> Summary {
     Summary {
         input: req.input.display().to_string(),
-        log: req.log.clone(),
         wiring: match req.wiring {
             Wiring::Channels => "channels".into(),
             Wiring::SingleThread => "single-thread".into(),

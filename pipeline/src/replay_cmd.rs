@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
 
-use crate::logs::export_log;
-use crate::{out, replay};
+use crate::estimates_out::{EstimatesFormat, LONG_INPUT_BYTES};
+use crate::replay;
 use config::Config;
 
 /// What `leakwatch replay` was asked to do: its command line (`--force` is global: passed beside it).
@@ -29,9 +29,15 @@ pub struct ReplayArgs {
     /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
     #[arg(long)]
     pub out: PathBuf,
-    /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
+    /// Format of the estimates file: auto (parquet for a batch and for an input of 16 MiB or
+    /// more, csv below), csv (text), parquet (columns with statistics, for pandas, polars,
+    /// pyarrow, DuckDB; same values bit for bit) or none (no estimates file: the fastest replay).
     #[arg(long, value_enum, default_value_t)]
     pub estimates: crate::estimates_out::EstimatesFormat,
+    /// Write the estimates of every Nth sample only (the first, the (N+1)th, ...): a decimated
+    /// estimates file, 1 = every sample.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub estimates_every: u64,
     /// Run all stages in one thread instead of over channels (same results).
     #[arg(long)]
     pub single_thread: bool,
@@ -55,8 +61,12 @@ pub struct Settings {
     pub cfg: Config,
     /// The configuration file it came from (never overwritten).
     pub config: Option<PathBuf>,
-    /// Format of the estimates file.
+    /// Format of the estimates file (`auto`: resolved per file, [`EstimatesFormat::for_input`]).
     pub estimates: crate::estimates_out::EstimatesFormat,
+    /// One estimates row every this many samples (1: every sample).
+    pub estimates_every: u64,
+    /// The files are a batch's (`auto` estimates are then Parquet whatever their size).
+    pub batch: bool,
     /// The thesis filter's estimates were asked for (`--model`).
     pub thesis_estimates: bool,
     /// Largest fraction of unusable input rows (0 to 1).
@@ -71,10 +81,14 @@ impl Settings {
         config: Option<PathBuf>,
         model: Option<u32>,
         thesis_baseline: bool,
-        estimates: crate::estimates_out::EstimatesFormat,
+        estimates: (EstimatesFormat, u64),
         max_bad_rows: f64,
         force: bool,
     ) -> Result<Settings, String> {
+        let (estimates, estimates_every) = estimates;
+        if estimates_every == 0 {
+            return Err("--estimates-every 0: one row every 1 or more samples".into());
+        }
         if !(0.0..=1.0).contains(&max_bad_rows) {
             return Err(format!(
                 "--max-bad-rows {max_bad_rows}: must be a fraction from 0 to 1"
@@ -93,6 +107,8 @@ impl Settings {
             cfg,
             config,
             estimates,
+            estimates_every,
+            batch: false,
             thesis_estimates: model.is_some(),
             max_bad_rows,
             force,
@@ -100,8 +116,7 @@ impl Settings {
     }
 }
 
-/// Replays one file (a CSV, or a recorded log through its export in
-/// `out/log-export/`) into `out`: the one path of a single replay and of every
+/// Replays one file (a CSV, or a recorded log read by its sensor frames) into `out`: the one path of a single replay and of every
 /// file of a batch, so their outputs are the same bytes.
 pub fn replay_file(
     input: &Path,
@@ -111,20 +126,33 @@ pub fn replay_file(
     progress: bool,
     samples_done: Option<Arc<AtomicU64>>,
 ) -> Result<replay::Summary, String> {
-    // A recorded log is replayed through its frames, exported as dataset.csv.
-    let mut protect: Vec<PathBuf> = settings.config.iter().cloned().collect();
-    let mut log = None;
-    let input = if input.extension().is_some_and(|e| e == "mcap") {
-        out::dir(out)?;
-        let dir = out.join("log-export");
-        log = Some(export_log(input, &dir, settings.force, true)?.1);
-        protect.push(input.to_path_buf());
-        dir.join("dataset.csv")
-    } else {
-        input.to_path_buf()
+    let protect: Vec<PathBuf> = settings.config.iter().cloned().collect();
+    let bytes = std::fs::metadata(input).map(|m| m.len()).unwrap_or(0);
+    let (estimates, estimates_why) = match (settings.estimates, settings.batch) {
+        (EstimatesFormat::Auto, true) => (
+            EstimatesFormat::Parquet,
+            "the default for a batch (Parquet; --estimates csv for text)".to_string(),
+        ),
+        (EstimatesFormat::Auto, false) => {
+            let long = EstimatesFormat::long_input_bytes(input);
+            (
+                settings.estimates.for_input(bytes, long),
+                format!(
+                    "the default for an input of {:.1} MiB: Parquet from {} MiB on{}, CSV below",
+                    bytes as f64 / f64::from(1 << 20),
+                    long >> 20,
+                    if long < LONG_INPUT_BYTES {
+                        " for a compressed input"
+                    } else {
+                        ""
+                    }
+                ),
+            )
+        }
+        (asked, _) => (asked, format!("asked for (--estimates {})", asked.name())),
     };
     let req = replay::ReplayRequest {
-        input,
+        input: input.to_path_buf(),
         out_dir: out.to_path_buf(),
         config: settings.cfg.clone(),
         wiring,
@@ -132,8 +160,9 @@ pub fn replay_file(
         max_bad_fraction: settings.max_bad_rows,
         overwrite: settings.force,
         protect,
-        log,
-        estimates: settings.estimates,
+        estimates,
+        estimates_every: settings.estimates_every,
+        estimates_why,
         thesis_estimates: settings.thesis_estimates,
         samples_done,
     };
@@ -149,12 +178,20 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         model,
         out,
         estimates,
+        estimates_every,
         single_thread,
         thesis_baseline,
         max_bad_rows,
         threads,
     } = args;
-    let settings = Settings::new(config, model, thesis_baseline, estimates, max_bad_rows, force)?;
+    let settings = Settings::new(
+        config,
+        model,
+        thesis_baseline,
+        (estimates, estimates_every),
+        max_bad_rows,
+        force,
+    )?;
     let input = match inputs.as_slice() {
         [one] if !one.is_dir() => one,
         _ => return crate::batch::run(&inputs, &out, &settings, threads),
@@ -245,6 +282,21 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
             w.blind_s
         ),
     }
+    let e = &s.estimates;
+    eprintln!(
+        "estimates: {} ({}{}; {})",
+        e.file.as_deref().unwrap_or("none written"),
+        if e.every == 1 {
+            "every sample".to_string()
+        } else {
+            format!("one sample in {}", e.every)
+        },
+        match e.file {
+            Some(_) => format!(", {} rows", e.rows),
+            None => String::new(),
+        },
+        e.why
+    );
     eprintln!(
         "replayed {} samples in {:.2} s ({:.0} samples/s); {} rows skipped, {} samples missing; {} events; wrote {}",
         s.samples,

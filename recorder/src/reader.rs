@@ -237,6 +237,17 @@ impl LogReader {
     /// unbounded; a file that is not MCAP, or a message that does not decode, is
     /// an error naming the channel and message.
     pub fn read(&self) -> Result<Log, RecorderError> {
+        self.read_with(false)
+    }
+
+    /// What [`Self::read`] gives with the sensor frames only ([`Log::frames`],
+    /// their damage and their channels' counts): the other channels' messages
+    /// are not decoded (a replay's input, read at several times the speed).
+    pub fn read_frames(&self) -> Result<Log, RecorderError> {
+        self.read_with(true)
+    }
+
+    fn read_with(&self, frames_only: bool) -> Result<Log, RecorderError> {
         let mut log = Log::default();
         // The channels and schemas, from the summary at the end when there is one
         // (a damaged first chunk then loses its messages, not the channels of all others).
@@ -279,7 +290,13 @@ impl LogReader {
                     schemas.insert(h.id, (h.name, h.encoding));
                 }
                 Item::Message(header, data) => {
-                    self.decode(&mut log, &mut single, &channels, &header, data)?
+                    let wanted = !frames_only
+                        || channels
+                            .get(&header.channel_id)
+                            .is_some_and(|c| c.name == "frames" || c.name == FRAME_BATCHES_CHANNEL);
+                    if wanted {
+                        self.decode(&mut log, &mut single, &channels, &header, data)?
+                    }
                 }
                 Item::ChunkSkipped(why) => {
                     log.chunks_skipped.push(why);

@@ -23,7 +23,7 @@ pub struct ReplayBenchArgs {
     /// Length of each generated file, s (without --data).
     #[arg(long, default_value_t = 600.0)]
     pub seconds: f64,
-    /// Format of each replay's estimates file: csv (the default, as `replay` writes), parquet or none.
+    /// Format of each replay's estimates file: auto (the default, as a batch of `replay` writes: parquet), csv, parquet or none.
     #[arg(long, value_enum, default_value_t)]
     pub estimates: pipeline::estimates_out::EstimatesFormat,
     /// Output directory: replay.json (each pass's replay outputs are written under it and removed).
@@ -77,6 +77,8 @@ pub fn bench(args: &ReplayBenchArgs, force: bool) -> Result<(), String> {
         cfg,
         config: None,
         estimates,
+        estimates_every: 1,
+        batch: true,
         thesis_estimates: false,
         max_bad_rows: dataset::DEFAULT_MAX_BAD_FRACTION,
         force: true,
@@ -111,7 +113,7 @@ pub fn bench(args: &ReplayBenchArgs, force: bool) -> Result<(), String> {
         data: dir.display().to_string(),
         generated,
         cores,
-        estimates: format!("{estimates:?}").to_lowercase(),
+        estimates: estimates.for_batch().name().to_string(),
         passes,
     };
     outln!("{}", crate::replay::table(&report));

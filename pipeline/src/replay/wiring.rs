@@ -2,7 +2,7 @@
 //! estimator and the sink in the calling thread or on three threads over
 //! bounded channels, with the progress shown and counted as it goes.
 
-use dataset::{CsvReader, Issue, Row};
+use dataset::{Issue, Row, RowSource};
 use filter::{EstimatorStage, StageEstimate};
 use model::Sample;
 
@@ -69,8 +69,8 @@ impl<'a> Progress<'a> {
 
 /// Replays `reader` through `stage` into `sink` in the calling thread; returns
 /// the counts of absent optional values.
-pub(super) fn replay_single_thread<R: std::io::BufRead>(
-    mut reader: CsvReader<R>,
+pub(super) fn replay_single_thread(
+    mut reader: impl RowSource,
     stage: &mut EstimatorStage,
     summary: &mut Summary,
     sink: &mut impl FnMut(&StageEstimate, &mut Summary),
@@ -94,14 +94,14 @@ pub(super) fn replay_single_thread<R: std::io::BufRead>(
             progress.tick(summary.samples);
         }
     }
-    reader.absent
+    reader.absent()
 }
 
 /// Replays `reader` through `stage` into `sink` on three threads (reader,
 /// estimator, the caller's) over bounded channels; returns the counts of
 /// absent optional values.
-pub(super) fn replay_channels<R: std::io::BufRead + Send>(
-    reader: CsvReader<R>,
+pub(super) fn replay_channels(
+    reader: impl RowSource + Send,
     stage: &mut EstimatorStage,
     summary: &mut Summary,
     sink: &mut impl FnMut(&StageEstimate, &mut Summary),
@@ -139,8 +139,8 @@ pub(super) fn replay_channels<R: std::io::BufRead + Send>(
 /// Reads `reader` to its end in batches of [`BATCH`] samples onto `tx_in`, an
 /// issue (a gap, a skipped row) ending a batch and following it; returns the
 /// counts of absent optional values. Stops early when the receiver is gone.
-fn read_batches<R: std::io::BufRead>(
-    mut reader: CsvReader<R>,
+fn read_batches(
+    mut reader: impl RowSource,
     tx_in: &crossbeam_channel::Sender<Batch>,
 ) -> [u64; dataset::N_OPTIONAL] {
     let mut batch = Vec::with_capacity(BATCH);
@@ -151,25 +151,25 @@ fn read_batches<R: std::io::BufRead>(
                 batch.push(s);
                 let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                 if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
-                    return reader.absent;
+                    return reader.absent();
                 }
             }
             Row::Skipped(issue) => {
                 let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
                 if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
-                    return reader.absent;
+                    return reader.absent();
                 }
             }
         }
         if batch.len() == BATCH {
             let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
             if tx_in.send(Batch::Samples(full)).is_err() {
-                return reader.absent;
+                return reader.absent();
             }
         }
     }
     let _ = tx_in.send(Batch::Samples(batch));
-    reader.absent
+    reader.absent()
 }
 
 /// A spinner of samples and their rate on stderr, if `enabled` and a terminal; else a hidden one.
