@@ -26,11 +26,14 @@ const SAG: usize = 6;
 const SPOOL_W: usize = 7;
 const LAG1: usize = 8;
 const LAG2: usize = 9;
-const UNKNOWNS: usize = 10;
+const LINE: usize = 10;
+const UNKNOWNS: usize = 11;
 /// Relative step of the spool's natural frequency for its column.
 const SPOOL_W_STEP: f64 = 0.01;
 /// Step of the supply sag for its column (a finite difference), Pa/(m³/s).
 const SAG_STEP: f64 = 1.0e8;
+/// Step of the line resistance for its column (a finite difference), Pa/(m³/s).
+const LINE_STEP: f64 = 1.0e8;
 
 /// The least-squares rows: per window, chamber 1 and chamber 2.
 struct Rows {
@@ -80,6 +83,8 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
         (f(&rows[k + 2].sample) - f(&rows[k - 2].sample)) / (4.0 * dt_s)
     };
     let (mut pd1_first, mut pd2_first) = (0.0, 0.0);
+    // The valve's flows over the previous interval, m³/s (for the line drop's rate).
+    let mut q_prev: Option<[f64; 2]> = None;
     for (k, pair) in rows.windows(2).enumerate() {
         let (s0, s1) = (&pair[0].sample, &pair[1].sample);
         // The spool over this interval, under the command of its first sample.
@@ -103,6 +108,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
             // A window never spans a gap: its partial sums are dropped.
             (acc1, acc2, rhs1, rhs2, dx, n, v1_sum, v2_sum) =
                 ([0.0; UNKNOWNS], [0.0; UNKNOWNS], 0.0, 0.0, 0.0, 0, 0.0, 0.0);
+            q_prev = None;
             continue;
         }
         let (p1, p2) = (0.5 * (s0.p1_pa + s1.p1_pa), 0.5 * (s0.p2_pa + s1.p2_pa));
@@ -125,6 +131,14 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
         let nl = null_leakage_flows(&unit_cl, x_sp_mean, p1, p2);
         let qs = orifice_flows(&sagged, x_sp_mean, p1, p2);
         let lq = leaks.flows(p1, p2, p.return_pressure_pa);
+        let line = line_drop_columns(p, &unit_cl, x_sp_mean, [p1, p2], [q.q1_m3_s, q.q2_m3_s], nl);
+        let q_now = line.valve_flows_m3_s;
+        let q_before = q_prev.unwrap_or(q_now);
+        q_prev = Some(q_now);
+        // The chambers' pressures are p1 − R·Q1 and p2 + R·Q2: the flows read
+        // at them, and their change through the oil's compliance.
+        acc1[LINE] += line.flow_per_r[0] * dt_s + v1 * (q_now[0] - q_before[0]) / p.bulk_modulus_pa;
+        acc2[LINE] += line.flow_per_r[1] * dt_s + v2 * (q_now[1] - q_before[1]) / p.bulk_modulus_pa;
         acc1[K_A] += q.q1_m3_s * dt_s;
         acc1[KB_A] += g1 * dt_s;
         acc1[C_L] += nl.q1_m3_s * dt_s;
@@ -282,7 +296,15 @@ pub(crate) fn identify_once(
         chamber_rms(&built.x1, &built.y1, &model),
         chamber_rms(&built.x2, &built.y2, &model),
     ];
-    let (null_leakage, fit) = fit_flow_balance(p, &built, double_rod, &mut model)?;
+    let (null_leakage, with_line) = fit_flow_balance(p, &built, double_rod, &mut model)?;
+    // The filters read the manifold's pressures as the chambers': the other
+    // unknowns are refitted without the line's drop, at the null leakage found
+    // with it (which the oil's temperature scales).
+    if let Some(c) = null_leakage.estimate() {
+        model[C_L] = c.value;
+    }
+    let fit = two_pass(&built, &column_groups(double_rod, false).0, &model)?;
+    let line_resistance_pa_s_per_m3 = line_resistance(&with_line);
     let (valve_gain_a, valve_gain_b) = valve_gains(&fit, double_rod);
     // b from κ_A·b (the better-determined port when the two differ).
     let null_bias_m = Found::Identified(Estimate {
@@ -303,6 +325,7 @@ pub(crate) fn identify_once(
         supply_sag_pa_per_m3_s: supply_sag(p, &fit),
         spool_natural_freq_rad_s: spool_natural_freq(p, &fit),
         pressure_lag_s: [pressure_lag(&fit, LAG1, "p1"), pressure_lag(&fit, LAG2, "p2")],
+        line_resistance_pa_s_per_m3,
         windows,
         moving_windows: built.moving,
         gap_before_lpm: pooled(rms_before),
@@ -325,7 +348,7 @@ fn model_unknowns(p: &ActuatorParams) -> [f64; UNKNOWNS] {
 
 /// The fitted column groups: without and with the null leakage C_L (one
 /// flow gain and one κ·b for both ports of a double-rod cylinder).
-fn column_groups(double_rod: bool) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+fn column_groups(double_rod: bool, line: bool) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
     let mut cols: Vec<Vec<usize>> = if double_rod {
         vec![vec![K_A, K_B], vec![KB_A, KB_B]]
     } else {
@@ -336,6 +359,9 @@ fn column_groups(double_rod: bool) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
     cols.push(vec![SPOOL_W]);
     cols.push(vec![LAG1]);
     cols.push(vec![LAG2]);
+    if line {
+        cols.push(vec![LINE]);
+    }
     let with_cl = {
         let mut c = cols.clone();
         c.push(vec![C_L]);
@@ -344,9 +370,52 @@ fn column_groups(double_rod: bool) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
     (cols, with_cl)
 }
 
+/// The weighted least squares over the columns `cols` around `model`: equal
+/// weights, then each chamber weighted by its residual RMS.
+fn two_pass(built: &Rows, cols: &[Vec<usize>], model: &[f64; UNKNOWNS]) -> Result<Fitted, String> {
+    let first = solve(built, cols, model, [1.0, 1.0]).ok_or_else(unsolvable)?;
+    let w = [1.0 / first.rms[0].max(1e-30), 1.0 / first.rms[1].max(1e-30)];
+    solve(built, cols, model, w).ok_or_else(unsolvable)
+}
+
 /// The error of a flow balance that cannot be solved.
 fn unsolvable() -> String {
     "the flow balance could not be solved (the recording does not excite the valve)".to_string()
+}
+
+/// The line drop's columns at one interval: the valve's flows (into
+/// chamber 1, out of chamber 2, m³/s, with the model's null leakage) and the
+/// change of the flows per unit of line resistance R at R = 0 when the
+/// transducers read the chambers plus the drop (m³/s per Pa/(m³/s)).
+struct LineDrop {
+    valve_flows_m3_s: [f64; 2],
+    flow_per_r: [f64; 2],
+}
+
+/// [`LineDrop`] for the model `p` (`unit_cl`: `p` with a unit null
+/// leakage) at the spool position `x_sp_m` (m), the measured pressures
+/// `p_pa` (Pa), the orifice flows `q_m3_s` (m³/s) and the unit null leakage
+/// flows `nl` there.
+fn line_drop_columns(
+    p: &ActuatorParams,
+    unit_cl: &ActuatorParams,
+    x_sp_m: f64,
+    p_pa: [f64; 2],
+    q_m3_s: [f64; 2],
+    nl: model::dynamics::NullLeakage,
+) -> LineDrop {
+    let cl = p.valve_null_leakage_m3_s_pa;
+    let flows = [q_m3_s[0] + cl * nl.q1_m3_s, q_m3_s[1] + cl * nl.q2_m3_s];
+    let (c1, c2) = (p_pa[0] - LINE_STEP * flows[0], p_pa[1] + LINE_STEP * flows[1]);
+    let qc = orifice_flows(p, x_sp_m, c1, c2);
+    let nlc = null_leakage_flows(unit_cl, x_sp_m, c1, c2);
+    LineDrop {
+        valve_flows_m3_s: flows,
+        flow_per_r: [
+            (qc.q1_m3_s - q_m3_s[0] + cl * (nlc.q1_m3_s - nl.q1_m3_s)) / LINE_STEP,
+            (qc.q2_m3_s - q_m3_s[1] + cl * (nlc.q2_m3_s - nl.q2_m3_s)) / LINE_STEP,
+        ],
+    }
 }
 
 /// The unknown `u` of `fit` as an estimate.
@@ -366,7 +435,7 @@ fn fit_flow_balance(
     double_rod: bool,
     model: &mut [f64; UNKNOWNS],
 ) -> Result<(Found, Fitted), String> {
-    let (cols, with_cl) = column_groups(double_rod);
+    let (cols, with_cl) = column_groups(double_rod, true);
     // Two passes: equal weights, then each chamber weighted by its residual RMS.
     let first = solve(built, &with_cl, model, [1.0, 1.0]).ok_or_else(unsolvable)?;
     let w = [1.0 / first.rms[0].max(1e-30), 1.0 / first.rms[1].max(1e-30)];
@@ -477,6 +546,21 @@ fn supply_sag(p: &ActuatorParams, fit: &Fitted) -> Found {
         Found::NotIdentifiable(format!(
             "the supply sag came out {:.3e} ± {:.2e} Pa/(m³/s), not resolved from zero (5 σ)",
             sag.value, sag.sigma
+        ))
+    }
+}
+
+/// The line resistance between manifold transducers and the chambers,
+/// Pa/(m³/s): identified when resolved from zero (5 σ).
+fn line_resistance(fit: &Fitted) -> Found {
+    let r = estimate(fit, LINE);
+    if r.value > RESOLVED_SIGMAS * r.sigma {
+        Found::Identified(r)
+    } else {
+        Found::NotIdentifiable(format!(
+            "the line resistance came out {:.2e} ± {:.1e} Pa/(m³/s), not resolved from zero (5 σ): \
+             the transducers read the chambers",
+            r.value, r.sigma
         ))
     }
 }

@@ -150,6 +150,11 @@ pub struct Identification {
     /// Apparent: it takes up whatever else delays a reading (the line's own
     /// dynamics, DAQ timing). Reported, not put into the filters.
     pub pressure_lag_s: [Found; 2],
+    /// The line resistance between the transducers (at the valve's manifold)
+    /// and the chambers, Pa/(m³/s): the transducers read p1 + R·Q1 and
+    /// p2 − R·Q2, Q the valve's flows. Fitted so that the line's drop does
+    /// not bias the null leakage; reported, not put into the filters.
+    pub line_resistance_pa_s_per_m3: Found,
     /// Windows of [`WINDOW_SAMPLES`] used, and how many of them moved.
     pub windows: usize,
     /// Windows in which the rod moved more than 0.1 mm.

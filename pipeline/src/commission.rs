@@ -193,6 +193,17 @@ fn flow_balance(id: &identify::Identification, cfg: &Config, out: &mut Identifie
             }
         });
     }
+    out.notes.push(match &id.line_resistance_pa_s_per_m3 {
+        identify::Found::Identified(e) => format!(
+            "  line resistance, transducers to chambers: {:.0} ± {:.0} MPa per m³/s (the line's drop, \
+             fitted beside the null leakage; reported, not put into the filters)",
+            e.value * 1e-6,
+            e.sigma * 1e-6
+        ),
+        identify::Found::NotIdentifiable(why) => {
+            format!("  line resistance, transducers to chambers: not identifiable from this recording: {why}")
+        }
+    });
     out.notes.push(match id.oil_temp_c {
         Some(t) => format!(
             "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \
