@@ -296,15 +296,26 @@ pub(crate) fn identify_once(
         chamber_rms(&built.x1, &built.y1, &model),
         chamber_rms(&built.x2, &built.y2, &model),
     ];
-    let (null_leakage, with_line) = fit_flow_balance(p, &built, double_rod, &mut model)?;
-    // The filters read the manifold's pressures as the chambers': the other
-    // unknowns are refitted without the line's drop, at the null leakage found
-    // with it (which the oil's temperature scales).
-    if let Some(c) = null_leakage.estimate() {
-        model[C_L] = c.value;
-    }
-    let fit = two_pass(&built, &column_groups(double_rod, false).0, &model)?;
+    let mut at_line = model;
+    let (cl_with_line, with_line) = fit_flow_balance(p, &built, double_rod, &mut at_line, true)?;
     let line_resistance_pa_s_per_m3 = line_resistance(&with_line);
+    let (null_leakage, fit) = if line_resistance_pa_s_per_m3.estimate().is_some() {
+        // The filters read the manifold's pressures as the chambers': the
+        // other unknowns are refitted without the line's drop, at the null
+        // leakage found with it (which the oil's temperature scales).
+        let mut at = model;
+        at[C_L] = at_line[C_L];
+        if let Some(c) = cl_with_line.estimate() {
+            at[C_L] = c.value;
+        }
+        (
+            cl_with_line,
+            two_pass(&built, &column_groups(double_rod, false).0, &at)?,
+        )
+    } else {
+        // No line drop resolved: the fit without its column.
+        fit_flow_balance(p, &built, double_rod, &mut model, false)?
+    };
     let (valve_gain_a, valve_gain_b) = valve_gains(&fit, double_rod);
     // b from κ_A·b (the better-determined port when the two differ).
     let null_bias_m = Found::Identified(Estimate {
@@ -426,16 +437,18 @@ fn estimate(fit: &Fitted, u: usize) -> Estimate {
     }
 }
 
-/// The weighted least squares of the flow balance: the null leakage C_L
-/// (m³/(s·Pa)) as found, and the final fit (refitted with C_L fixed, in
-/// `model`, when it is not resolved from zero).
+/// The weighted least squares of the flow balance, with the line drop's
+/// column when `line`: the null leakage C_L (m³/(s·Pa)) as found, and the
+/// final fit (refitted with C_L fixed, in `model`, when it is not resolved
+/// from zero).
 fn fit_flow_balance(
     p: &ActuatorParams,
     built: &Rows,
     double_rod: bool,
     model: &mut [f64; UNKNOWNS],
+    line: bool,
 ) -> Result<(Found, Fitted), String> {
-    let (cols, with_cl) = column_groups(double_rod, true);
+    let (cols, with_cl) = column_groups(double_rod, line);
     // Two passes: equal weights, then each chamber weighted by its residual RMS.
     let first = solve(built, &with_cl, model, [1.0, 1.0]).ok_or_else(unsolvable)?;
     let w = [1.0 / first.rms[0].max(1e-30), 1.0 / first.rms[1].max(1e-30)];
