@@ -572,7 +572,7 @@ fn line_resistance(fit: &Fitted) -> Found {
     } else {
         Found::NotIdentifiable(format!(
             "the line resistance came out {:.2e} ± {:.1e} Pa/(m³/s), not resolved from zero (5 σ): \
-             the transducers read the chambers",
+             the flow balance is fitted without it",
             r.value, r.sigma
         ))
     }
