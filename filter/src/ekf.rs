@@ -621,6 +621,12 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 }
 
 impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
+    /// σ of each innovation from the prior, √(P_ii + r_i) for the measured
+    /// states `states` (measurement units), before an update.
+    pub(crate) fn prior_innovation_sigma(&self, states: [usize; M]) -> SVector<f64, M> {
+        self.innovation_sigma::<N>(states)
+    }
+
     /// σ of each innovation from the prior, C_ii = c_i²·|row s_i of S|² + r_i
     /// (measurement units), for an S whose measured rows have non-zeros in
     /// their first `K` columns only: |row|² over those (the zeros beyond

@@ -17,6 +17,7 @@ pub mod bias;
 pub mod ekf;
 pub mod mae;
 pub mod oil;
+pub mod outlier;
 pub mod stage;
 pub mod tuning;
 
@@ -183,6 +184,8 @@ pub struct EstimatorCounters {
     pub resets: u64,
     /// Predictions that had to be clamped to the physical range.
     pub clamped: u64,
+    /// Channel readings left out of the update as outliers ([`outlier`]).
+    pub outliers: u64,
 }
 
 /// One of the three layouts; sizes differ, but the stage holds exactly one, inline.
@@ -214,6 +217,8 @@ pub struct Estimator {
     still_samples: u32,
     /// How the estimate answers a pressure transducer's offset.
     offset_response: BiasResponse,
+    /// Readings far off the prediction, left out of the update.
+    outliers: outlier::OutlierGate,
     diverged_samples: u32,
     /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
     reanchor_pending: bool,
@@ -289,6 +294,7 @@ impl Estimator {
             leaks_converged: false,
             still_samples: 0,
             offset_response: BiasResponse::default(),
+            outliers: outlier::OutlierGate::default(),
             diverged_samples: 0,
             reanchor_pending: false,
             measured_p_range_pa,
@@ -325,6 +331,7 @@ impl Estimator {
             let memory = StepMemory {
                 still_samples: &mut 0,
                 offset_response: &mut BiasResponse::default(),
+                outliers: &mut outlier::OutlierGate::default(),
             };
             let _ = step_filter(w, model, &input, out, memory);
         }
@@ -519,6 +526,7 @@ impl Estimator {
             }
             self.started = true;
             self.offset_response.clear();
+            self.outliers.clear();
             self.t0_s = s.t_s;
             self.leaks_converged = false;
             self.diverged_samples = 0;
@@ -537,6 +545,7 @@ impl Estimator {
             }
             self.reanchor_pending = false;
             self.offset_response.clear();
+            self.outliers.clear();
             self.diverged_samples = 0;
             flags |= FLAG_REANCHORED;
         }
@@ -560,6 +569,7 @@ impl Estimator {
         let memory = StepMemory {
             still_samples: &mut self.still_samples,
             offset_response: &mut self.offset_response,
+            outliers: &mut self.outliers,
         };
         let step = match &mut self.filter {
             Filter::S6(e) => step_filter(e, &self.model, &input, &mut out, memory),
@@ -583,6 +593,7 @@ impl Estimator {
                 return out;
             }
         }
+        self.counters.outliers = self.outliers.left_out();
         if !usable {
             flags |= FLAG_SKIPPED;
             self.counters.skipped += 1;
@@ -686,6 +697,8 @@ struct StepMemory<'a> {
     still_samples: &'a mut u32,
     /// How the estimate answers a pressure offset.
     offset_response: &'a mut BiasResponse,
+    /// The outlier watch.
+    outliers: &'a mut outlier::OutlierGate,
 }
 
 /// What one sample gives a filter step.
@@ -754,6 +767,7 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     let StepMemory {
         still_samples,
         offset_response,
+        outliers,
     } = memory;
     let (mut x_pred, mut f) = (SVector::<f64, N>::zeros(), SMatrix::<f64, N, N>::zeros());
     let guard = model.step_into(e.state(), u, &mut x_pred, &mut f);
@@ -778,8 +792,15 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     offset_response.predict(&f);
     let y_pred = ProcessModel::measure(e.state());
     if usable {
-        let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, use_channel)?;
-        offset_response.update(e, ProcessModel::MEASURED_STATES, use_channel);
+        let sigma = e.prior_innovation_sigma(ProcessModel::MEASURED_STATES);
+        let nu = y - y_pred;
+        let updating = outliers.gate(
+            &[nu[0], nu[1], nu[2]],
+            &[sigma[0], sigma[1], sigma[2]],
+            use_channel,
+        );
+        let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, updating)?;
+        offset_response.update(e, ProcessModel::MEASURED_STATES, updating);
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
