@@ -15,6 +15,8 @@ use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 use config::Config;
 use wiring::{replay_channels, replay_single_thread, Progress};
 
+pub mod figure;
+pub mod report;
 pub mod trace;
 mod wiring;
 

@@ -26,7 +26,7 @@ pub struct ReplayArgs {
     /// (estimated load F_e), and write its estimates (the th_* columns)
     #[arg(long)]
     pub model: Option<u32>,
-    /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
+    /// Output directory: estimates.csv (or .parquet), detector.csv, events.json, summary.json, report.html.
     #[arg(long)]
     pub out: PathBuf,
     /// Format of the estimates file: csv (text), parquet (columns, for pandas, polars, pyarrow; same values bit for bit) or none (no estimates file: the fastest replay).
@@ -46,6 +46,10 @@ pub struct ReplayArgs {
     /// Worker threads of a batch, each replaying whole files (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Write no report.html (a single file's replay writes one by default: its
+    /// leak alarms, blind stretches, smallest detectable leaks and leak panel).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// What every file of a replay shares: the configuration and the output rules.
@@ -153,6 +157,7 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         thesis_baseline,
         max_bad_rows,
         threads,
+        no_report,
     } = args;
     let settings = Settings::new(config, model, thesis_baseline, estimates, max_bad_rows, force)?;
     let input = match inputs.as_slice() {
@@ -164,6 +169,13 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
     } else {
         replay::Wiring::Channels
     };
+    let report = (!no_report).then(|| out.join(replay::report::FILE_NAME));
+    if let Some(r) = &report {
+        // refused before the replay, as its other outputs are
+        let mut inputs = vec![input.as_path()];
+        inputs.extend(settings.config.as_deref());
+        out::check(r, force, &inputs)?;
+    }
     let s = replay_file(input, &out, &settings, wiring, true, None)?;
     let cfg = &settings.cfg;
     let (cfg_nis_gate, cfg_recovery_s) = (cfg.classifier.nis_gate, cfg.classifier.recovery_s);
@@ -245,6 +257,9 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
             w.blind_s
         ),
     }
+    if let Some(r) = &report {
+        write_report(r, &s, &settings, &out, input)?;
+    }
     eprintln!(
         "replayed {} samples in {:.2} s ({:.0} samples/s); {} rows skipped, {} samples missing; {} events; wrote {}",
         s.samples,
@@ -256,4 +271,25 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         out.display()
     );
     Ok(())
+}
+
+/// Writes the replay's report `path` from its summary `s` (its events those
+/// of events.json), the configuration of `settings` and the folder `out`;
+/// never over `input` or the config file.
+fn write_report(
+    path: &Path,
+    s: &replay::Summary,
+    settings: &Settings,
+    out: &Path,
+    input: &Path,
+) -> Result<(), String> {
+    let report = replay::report::ReplayReport {
+        summary: s,
+        config: &settings.cfg,
+        config_path: settings.config.as_deref(),
+        out_dir: out,
+    };
+    let mut inputs = vec![input, Path::new(&s.input)];
+    inputs.extend(settings.config.as_deref());
+    out::write(path, report.html()?.as_bytes(), settings.force, &inputs)
 }
