@@ -59,6 +59,10 @@ pub struct ReplayRequest {
     /// Samples processed so far, added to as the replay goes (a batch's progress
     /// across its worker threads); none: not counted.
     pub samples_done: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
+    /// Files the caller writes into the output directory after the replay (the
+    /// report): refused as the replay's own are, after them, before anything is
+    /// read or written.
+    pub also_writes: Vec<PathBuf>,
 }
 
 /// What reading a recorded log (MCAP) skipped, reported in summary.json.
@@ -444,6 +448,7 @@ impl<'a> OutputPaths<'a> {
             .iter()
             .chain(&trace_path)
             .chain([&events_path, &summary_path])
+            .chain(&req.also_writes)
         {
             crate::out::check(p, req.overwrite, &inputs)?;
         }

@@ -106,7 +106,8 @@ impl Settings {
 
 /// Replays one file (a CSV, or a recorded log through its export in
 /// `out/log-export/`) into `out`: the one path of a single replay and of every
-/// file of a batch, so their outputs are the same bytes.
+/// file of a batch, so their outputs are the same bytes. `also_writes`: the
+/// files the caller writes into `out` after it (refused with the replay's own).
 pub fn replay_file(
     input: &Path,
     out: &Path,
@@ -114,6 +115,7 @@ pub fn replay_file(
     wiring: replay::Wiring,
     progress: bool,
     samples_done: Option<Arc<AtomicU64>>,
+    also_writes: &[PathBuf],
 ) -> Result<replay::Summary, String> {
     // A recorded log is replayed through its frames, exported as dataset.csv.
     let mut protect: Vec<PathBuf> = settings.config.iter().cloned().collect();
@@ -140,6 +142,7 @@ pub fn replay_file(
         estimates: settings.estimates,
         thesis_estimates: settings.thesis_estimates,
         samples_done,
+        also_writes: also_writes.to_vec(),
     };
     replay::run(&req)
 }
@@ -170,13 +173,7 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         replay::Wiring::Channels
     };
     let report = (!no_report).then(|| out.join(replay::report::FILE_NAME));
-    if let Some(r) = &report {
-        // refused before the replay, as its other outputs are
-        let mut inputs = vec![input.as_path()];
-        inputs.extend(settings.config.as_deref());
-        out::check(r, force, &inputs)?;
-    }
-    let s = replay_file(input, &out, &settings, wiring, true, None)?;
+    let s = replay_file(input, &out, &settings, wiring, true, None, report.as_slice())?;
     let cfg = &settings.cfg;
     let (cfg_nis_gate, cfg_recovery_s) = (cfg.classifier.nis_gate, cfg.classifier.recovery_s);
     let model_bulk_modulus_pa = cfg.model.bulk_modulus_pa;

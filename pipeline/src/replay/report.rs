@@ -140,7 +140,10 @@ impl ReplayReport<'_> {
         h += &self.detectable_html(view.as_ref());
         h += "<h2>The leak panel as the detector saw it</h2>\n";
         match &view {
-            Some(v) => h += &crate::html::figure(&self.figure(v, &name(input))?)?,
+            Some(v) if !v.t_s.is_empty() => h += &crate::html::figure(&self.figure(v, &name(input))?)?,
+            Some(_) => {
+                h += "<p class=\"note\">The detector never armed: detector.csv has no rows, no figure.</p>\n"
+            }
             None => {
                 h += "<p class=\"note\">No detector.csv in this replay (--estimates none): no figure.</p>\n"
             }
