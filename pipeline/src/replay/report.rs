@@ -360,3 +360,60 @@ impl ReplayReport<'_> {
         Ok(fig)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An event of the leak-size detector: `kind`, `phase`, id 7, at `t` s,
+    /// sized `size` ± 0.01 L/min, confidence `conf`.
+    fn ev(kind: EventKind, phase: Phase, t: f64, size: f64, conf: f64) -> LeakEvent {
+        LeakEvent {
+            size_lpm: size,
+            size_lpm_sigma: 0.01,
+            confidence: conf,
+            ..LeakEvent::plain(kind, phase, "leak-size", 7, t, 10.0)
+        }
+    }
+
+    /// A pending leak named later, resized and cleared is one alarm: raised
+    /// when pending, named when its kind came, the latest size and
+    /// confidence, cleared; sensor events are no alarm.
+    #[test]
+    fn an_alarms_phases_make_one_row() {
+        let events = [
+            ev(EventKind::Leak, Phase::Raised, 10.5, 0.40, 0.6),
+            LeakEvent::plain(
+                EventKind::SensorSpikes,
+                Phase::Raised,
+                "sensors",
+                8,
+                11.0,
+                f64::NAN,
+            ),
+            ev(EventKind::Ext1, Phase::Raised, 12.0, 0.45, 0.9),
+            ev(EventKind::Ext1, Phase::Updated, 13.0, 0.50, 0.95),
+            ev(EventKind::Ext1, Phase::Cleared, 20.0, f64::NAN, 1.0),
+        ];
+        let got = alarms(&events);
+        assert_eq!(
+            got,
+            [Alarm {
+                kind: "ext1",
+                detector: "leak-size".into(),
+                raised_s: 10.5,
+                named_s: Some(12.0),
+                onset_s: 10.0,
+                size_lpm: (0.50, 0.01),
+                confidence: 0.95,
+                cleared_s: Some(20.0),
+            }]
+        );
+        // one never named stays pending, open at the end
+        let pending = alarms(&events[..1]);
+        assert_eq!(
+            (pending[0].kind, pending[0].named_s, pending[0].cleared_s),
+            ("leak", None, None)
+        );
+    }
+}
