@@ -98,7 +98,8 @@ fn screenshot(html_path: &Path, dir: &Path) {
 /// `commission` writes rig.html beside rig.toml: the thresholds, offsets,
 /// smallest detectable leaks and mean NIS are the terminal's and the TOML's
 /// (to their printed decimals); the page loads nothing from outside and opens
-/// in headless Chromium (a screenshot is taken).
+/// in headless Chromium (a screenshot is taken). A replay with the TOML
+/// states the record's thresholds and smallest detectable leaks.
 #[test]
 fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     let d = tmpdir("commission_report");
@@ -208,6 +209,29 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     assert!(html.contains("<svg"));
 
     screenshot(&html_path, &d);
+
+    // a replay with the commissioned config states the commissioning's thresholds
+    // and smallest detectable leaks in its report
+    let replayed = d.join("replayed");
+    let o = leakwatch(&[
+        "replay",
+        healthy.to_str().unwrap(),
+        "--config",
+        toml_path.to_str().unwrap(),
+        "--out",
+        replayed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = std::fs::read_to_string(replayed.join("report.html")).unwrap();
+    assert!(report.contains("Replay of healthy.csv on the rig of rig.toml"));
+    for name in [
+        "threshold",
+        "smallest detectable at 20 °C",
+        "smallest detectable at 60 °C",
+    ] {
+        assert_eq!(row(&report, name), row(&html, name), "{name}");
+    }
+    assert!(report.contains("Leak alarms (0)"), "a healthy recording");
 }
 
 /// `plot --out X.svg` of a replay of a simulated 0.5 L/min ext1 leak draws
