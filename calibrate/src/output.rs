@@ -111,6 +111,13 @@ pub fn write_outputs(
 }
 
 fn plot_traces(cal: &Calibration, path: &Path) -> Result<(), CalibrateError> {
+    save_png(&traces_figure(cal), path)
+}
+
+/// The figure of the fit (traces.png, and the HTML report's): the first 3 s
+/// of the validation part's re-anchored windows, rod position (mm) and the
+/// chamber pressures (MPa), measured against the model before and after.
+pub fn traces_figure(cal: &Calibration) -> Figure {
     let tr = &cal.traces;
     // the first ~3 s of validation windows
     let mut n = 0;
@@ -145,7 +152,7 @@ fn plot_traces(cal: &Calibration, path: &Path) -> Result<(), CalibrateError> {
                 .with_series(Series::line("after (calibrated)", t, &col(&tr.after))),
         );
     }
-    save_png(&fig, path)
+    fig
 }
 
 fn plot_breakdown(cal: &Calibration, regime: &str, unit: &str, path: &Path) -> Result<bool, CalibrateError> {

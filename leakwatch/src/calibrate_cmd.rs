@@ -3,6 +3,7 @@
 
 use crate::logs::export_log;
 use crate::out::{self, outln};
+use pipeline::calibrate_report::{self, CalibrationRecord, Identification};
 
 /// `leakwatch calibrate`: calibrates the model of `config` (or the built-in one)
 /// against `input` (a CSV or a recorded log) and writes the outputs into `out`.
@@ -35,17 +36,23 @@ pub fn run(
     let mut whole = None;
     // the config the rig was identified with: the search refits with it
     let mut identified = None;
+    // what the identification found, for the report
+    let mut identification = Identification::NotAsked;
     if identify || datasheet {
         // A datasheet's model is a prior within its tolerances: its values are
         // identified first, so that the search names what the rig has beyond them.
         let cfg = config::Config::load_or_default(config)?;
-        match crate::commission::identify_rig(&input, &cfg) {
-            Ok(rig) => {
+        match crate::commission::identify_rig_said(&input, &cfg) {
+            Ok((rig, said)) => {
                 eprintln!("the search for missing effects starts from the identified model");
                 model = rig.model.clone();
                 identified = Some(rig);
+                identification = Identification::Found(said);
             }
-            Err(e) => eprintln!("note: {e}; the search starts from the config's model"),
+            Err(e) => {
+                eprintln!("note: {e}; the search starts from the config's model");
+                identification = Identification::Failed(e);
+            }
         }
         if datasheet {
             whole = Some(cfg);
@@ -97,25 +104,35 @@ pub fn run(
         None => crate::model_file::model_toml(&cal.model_after),
     }
     .map_err(|e| e.to_string())?;
+    // the report is refused with the other outputs, before any is written
+    let report = out.join(calibrate_report::FILE_NAME);
+    out::check(&report, force, &inputs)?;
     let files =
         calibrate::write_outputs(&cal, out, force, &inputs, &model_file).map_err(|e| e.to_string())?;
-    say_result(&cal, &files)?;
+    let record = CalibrationRecord {
+        input: original.display().to_string(),
+        identification,
+        cal: &cal,
+    };
+    out::write(&report, record.html()?.as_bytes(), force, &inputs)?;
+    say_result(&cal, &files, &report)?;
     Ok(())
 }
 
 /// Prints what calibration `cal` found: the gap before, each effect added
-/// with its parameters, the gap after, and the files written (`files`); an
-/// error only when stdout cannot be written.
-fn say_result(cal: &calibrate::Calibration, files: &calibrate::OutputFiles) -> Result<(), String> {
+/// with its parameters, the gap after, and the files written (`files` and the
+/// HTML report `report`); an error only when stdout cannot be written.
+fn say_result(
+    cal: &calibrate::Calibration,
+    files: &calibrate::OutputFiles,
+    report: &std::path::Path,
+) -> Result<(), String> {
+    // the numbers the report's gap table holds
     let g = |gap: &calibrate::Gap| {
+        let [p1, p2, force, spool, normalised] = calibrate_report::gap_numbers(gap);
         format!(
-            "chamber 1 {:.1} kPa, chamber 2 {:.1} kPa, force {:.0} N, spool {:.2} µm per {:.0} ms window; normalised {:.3}",
-            gap.p1_pa / 1e3,
-            gap.p2_pa / 1e3,
-            gap.force_n,
-            gap.spool_m * 1e6,
+            "chamber 1 {p1} kPa, chamber 2 {p2} kPa, force {force} N, spool {spool} µm per {:.0} ms window; normalised {normalised}",
             cal.data.window_s * 1e3,
-            gap.normalised
         )
     };
     outln!("gap before (validation RMS): {}", g(&cal.gap_before));
@@ -132,9 +149,11 @@ fn say_result(cal: &calibrate::Calibration, files: &calibrate::OutputFiles) -> R
     }
     if cal.gap_after.normalised > 1.0 {
         outln!(
-            "the remaining gap ({:.2}) is well above the sensor floor (about 0.2-0.4): the rig differs in \
+            "the remaining gap ({:.2}) is well above the sensor floor (about {:.1}-{:.1}): the rig differs in \
              something the library does not have, or a channel is scaled or wired differently",
-            cal.gap_after.normalised
+            cal.gap_after.normalised,
+            calibrate_report::NORMALISED_SENSOR_FLOOR.0,
+            calibrate_report::NORMALISED_SENSOR_FLOOR.1
         );
     }
     for (i, e) in cal.effects.iter().enumerate() {
@@ -164,10 +183,11 @@ fn say_result(cal: &calibrate::Calibration, files: &calibrate::OutputFiles) -> R
         cal.gap_reduction * 100.0
     );
     outln!(
-        "wrote {}, {}, {}",
+        "wrote {}, {}, {}, {}",
         files.json.display(),
         files.model_toml.display(),
-        files.report.display()
+        files.report.display(),
+        report.display()
     );
     Ok(())
 }

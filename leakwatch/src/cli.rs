@@ -218,7 +218,7 @@ pub(crate) enum Command {
         /// without a [datasheet] (one whose [model] was entered from datasheets by hand).
         #[arg(long)]
         identify: bool,
-        /// Output directory: calibration.json, model.toml, report.md and plots.
+        /// Output directory: calibration.json, model.toml, report.md and plots, report.html (one A4 page).
         #[arg(long)]
         out: PathBuf,
         /// Effects to consider, comma-separated (default: the whole library; `friction` fits

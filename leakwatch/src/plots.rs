@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use pipeline::replay::figure::{self, read_columns};
 use plot::{Figure, Panel, Series};
 
 fn series(label: &str, x: &[f64], y: Vec<f64>) -> Series {
@@ -125,139 +126,26 @@ pub fn plot_log(input: &Path, out: &Path, force: bool) -> Result<(), String> {
     crate::out::figure(&fig, out, force, &[input])
 }
 
-/// Reads a CSV with a header into named columns (non-numbers become NaN).
-fn read_columns(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .ok_or_else(|| format!("{}: empty file", path.display()))?
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
-    let mut cols = vec![Vec::new(); header.len()];
-    for line in lines {
-        for (i, cell) in line.split(',').enumerate().take(header.len()) {
-            cols[i].push(cell.trim().parse::<f64>().unwrap_or(f64::NAN));
-        }
-    }
-    Ok((header, cols))
-}
-
-/// The markers of a replay's leak events (events.json): each leak-size
-/// alarm's estimated onset (once per onset), the pending alarm (a leak of kind
-/// not yet named) and the named alarm; the thesis' MAE detections.
+/// The markers of the replay's leak events (its events.json; none when it
+/// cannot be read), as [`figure::event_markers`] places them.
 fn event_markers(dir: &Path) -> Vec<plot::Marker> {
-    let mut markers = Vec::new();
     let Ok(text) = std::fs::read_to_string(dir.join("events.json")) else {
-        return markers;
+        return Vec::new();
     };
     let Ok(events) = serde_json::from_str::<Vec<serde_json::Value>>(&text) else {
-        return markers;
+        return Vec::new();
     };
-    let mut onsets: Vec<f64> = Vec::new();
-    for e in events.iter().filter(|e| e["phase"] == "raised") {
-        let kind = e["kind"].as_str().unwrap_or("?");
-        let det = e["detector"].as_str().unwrap_or("");
-        let Some(td) = e["t_detect_s"].as_f64() else {
-            continue;
-        };
-        let label = match (det, kind) {
-            ("leak-size", "leak") => format!("pending alarm {td:.2} s"),
-            ("leak-size", "ext1" | "ext2" | "int") => format!("{kind} named {td:.2} s"),
-            (_, "ext1" | "ext2" | "int") => format!("{kind} detected ({det}) {td:.2} s"),
-            _ => continue,
-        };
-        markers.push(plot::Marker::Vertical { x: td, label });
-        if det == "leak-size" {
-            if let Some(to) = e["t_onset_s"]
-                .as_f64()
-                .filter(|to| !onsets.iter().any(|o| (o - to).abs() < 1e-6))
-            {
-                onsets.push(to);
-                markers.push(plot::Marker::Vertical {
-                    x: to,
-                    label: format!("onset {to:.2} s"),
-                });
-            }
-        }
-    }
-    markers
+    figure::event_markers(&events)
 }
 
-/// The leak panel as the detector saw it (detector.csv): each kind's rise
-/// above its healthy baseline with its threshold, the stretches it was blind
-/// and the warm-up shaded, the true leak flow where the recording has it;
+/// The leak panel as the detector saw it (detector.csv, [`figure::DetectorView::panel`]);
 /// `None` when the replay wrote no detector.csv.
 fn detector_panel(
     dir: &Path,
     t_first_s: f64,
     truth: Option<(Vec<f64>, Vec<f64>)>,
 ) -> Result<Option<Panel>, String> {
-    let path = pipeline::replay::trace::path_in(dir);
-    if !path.exists() {
-        return Ok(None);
-    }
-    let (header, cols) = read_columns(&path)?;
-    let col = |name: &str| -> Result<&Vec<f64>, String> {
-        header
-            .iter()
-            .position(|h| h == name)
-            .map(|i| &cols[i])
-            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
-    };
-    let t = col("t")?;
-    let mut panel = Panel::new(
-        "Leak-size detector: each kind's rise above its healthy baseline and its threshold; the true leak flow at the measured pressures",
-        "rise [L/min at p_s/2]",
-    );
-    if let Some(&t_armed) = t.first() {
-        panel = panel.with_marker(plot::Marker::Span {
-            x_from: t_first_s,
-            x_to: t_armed,
-            label: "warm-up: not armed".into(),
-        });
-    }
-    for (k, kind) in ["e1", "e2", "i"].iter().enumerate() {
-        let color = plot::PALETTE[k];
-        let name = ["ext1", "ext2", "int"][k];
-        panel = panel
-            .with_series(series(name, t, col(&format!("rise_{kind}_lpm"))?.clone()).colored(color))
-            .with_series(
-                series(
-                    &format!("{name} threshold"),
-                    t,
-                    col(&format!("threshold_{kind}_lpm"))?.clone(),
-                )
-                .styled(plot::Style::Dashed)
-                .colored(color),
-            );
-    }
-    let blind = col("blind")?;
-    let mut first = true;
-    let mut k = 0;
-    while k < t.len() {
-        if blind[k] != 1.0 {
-            k += 1;
-            continue;
-        }
-        let from = k;
-        while k < t.len() && blind[k] == 1.0 {
-            k += 1;
-        }
-        let to = t.get(k).copied().unwrap_or(t[k - 1]);
-        let label = if first { "blind: no evidence" } else { "" };
-        panel = panel.with_marker(plot::Marker::Span {
-            x_from: t[from.saturating_sub(1)],
-            x_to: to,
-            label: label.into(),
-        });
-        first = false;
-    }
-    if let Some((tt, q)) = truth {
-        panel = panel.with_series(series("true leak flow", &tt, q).colored([0, 0, 0]));
-    }
-    Ok(Some(panel))
+    Ok(figure::DetectorView::read(dir)?.map(|v| v.panel(t_first_s, truth)))
 }
 
 /// The true leak flow of the replay's input (its `q_leak` column), when the
@@ -267,18 +155,7 @@ fn truth_of(dir: &Path) -> Option<(Vec<f64>, Vec<f64>)> {
     let summary: serde_json::Value = serde_json::from_str(&text).ok()?;
     let input = Path::new(summary["input"].as_str()?);
     let ds = dataset::read_csv(input, dataset::Limits::default()).ok()?;
-    if !ds.has_optional[3]
-        || ds
-            .samples
-            .iter()
-            .all(|s| s.q_leak_lpm == 0.0 || s.q_leak_lpm.is_nan())
-    {
-        return None;
-    }
-    Some((
-        ds.samples.iter().map(|s| s.t_s).collect(),
-        ds.samples.iter().map(|s| s.q_leak_lpm).collect(),
-    ))
+    figure::truth(&ds)
 }
 
 /// The figure's title: the replay's input and its folder.

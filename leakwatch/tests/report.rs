@@ -7,6 +7,7 @@ mod common;
 
 use std::path::Path;
 
+use common::html::{row, screenshot, self_contained};
 use common::{leakwatch, stderr, tmpdir};
 
 /// `simulate` of the built-in rig into `out`.
@@ -18,42 +19,11 @@ fn simulate(args: &[&str], out: &Path) {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// The numbers of the report's table row named `name` (the cells after it).
-fn row(html: &str, name: &str) -> Vec<String> {
-    let start = html
-        .find(&format!("<tr><td>{name}</td>"))
-        .unwrap_or_else(|| panic!("no row {name}"));
-    let end = start + html[start..].find("</tr>").unwrap();
-    html[start..end]
-        .split("<td class=\"n\">")
-        .skip(1)
-        .map(|c| c.split('<').next().unwrap().to_string())
-        .collect()
-}
-
-/// True where headless Chromium runs; false (the test skips) only where it is
-/// not required (LEAKWATCH_REQUIRE_CHROMIUM unset: CI sets it).
-fn chromium() -> Option<&'static str> {
-    let found = ["chromium", "chromium-browser"].into_iter().find(|c| {
-        std::process::Command::new(c)
-            .arg("--version")
-            .output()
-            .is_ok_and(|o| o.status.success())
-    });
-    if found.is_none() {
-        assert!(
-            std::env::var("LEAKWATCH_REQUIRE_CHROMIUM").is_err(),
-            "chromium is required (.ci/setup installs it)"
-        );
-        eprintln!("SKIPPED: chromium is not installed");
-    }
-    found
-}
-
 /// `commission` writes rig.html beside rig.toml: the thresholds, offsets,
 /// smallest detectable leaks and mean NIS are the terminal's and the TOML's
 /// (to their printed decimals); the page loads nothing from outside and opens
-/// in headless Chromium (a screenshot is taken).
+/// in headless Chromium (a screenshot is taken). A replay with the TOML
+/// states the record's thresholds and smallest detectable leaks.
 #[test]
 fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     let d = tmpdir("commission_report");
@@ -159,34 +129,33 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     );
 
     // self-contained: nothing fetched from outside
-    for bad in ["src=", "href=", "@import", "url(", "<link", "<script"] {
-        assert!(!html.contains(bad), "the report holds `{bad}`");
-    }
-    assert!(html.contains("<svg") && html.contains("@page { size: A4"));
+    self_contained(&html);
+    assert!(html.contains("<svg"));
 
-    if let Some(browser) = chromium() {
-        let shot = d.join("rig.png");
-        let o = std::process::Command::new(browser)
-            .args([
-                "--headless",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--no-first-run",
-                "--window-size=794,1123",
-                &format!("--user-data-dir={}", d.join("chromium").display()),
-                &format!("--screenshot={}", shot.display()),
-                &format!("file://{}", html_path.display()),
-            ])
-            .output()
-            .expect("chromium runs");
-        assert!(o.status.success(), "{}", stderr(&o));
-        let png = std::fs::read(&shot).expect("the screenshot is written");
-        assert!(
-            png.len() > 10_000 && png.starts_with(b"\x89PNG"),
-            "{} bytes",
-            png.len()
-        );
+    screenshot(&html_path, &d);
+
+    // a replay with the commissioned config states the commissioning's thresholds
+    // and smallest detectable leaks in its report
+    let replayed = d.join("replayed");
+    let o = leakwatch(&[
+        "replay",
+        healthy.to_str().unwrap(),
+        "--config",
+        toml_path.to_str().unwrap(),
+        "--out",
+        replayed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = std::fs::read_to_string(replayed.join("report.html")).unwrap();
+    assert!(report.contains("Replay of healthy.csv on the rig of rig.toml"));
+    for name in [
+        "threshold",
+        "smallest detectable at 20 °C",
+        "smallest detectable at 60 °C",
+    ] {
+        assert_eq!(row(&report, name), row(&html, name), "{name}");
     }
+    assert!(report.contains("Leak alarms (0)"), "a healthy recording");
 }
 
 /// `plot --out X.svg` of a replay of a simulated 0.5 L/min ext1 leak draws
@@ -296,4 +265,273 @@ fn the_replay_figure_draws_the_detectors_view() {
         dashes.iter().filter(|y| (**y - want).abs() <= 1.5).count() * 2 > dashes.len(),
         "threshold {thr} L/min should be at y {want:.1}; dashes at {dashes:?}"
     );
+}
+
+/// The numbers of a terminal gap line (`chamber 1 X kPa, chamber 2 Y kPa,
+/// force F N, spool S µm per ...; normalised N`), as printed.
+fn gap_of(line: &str) -> Vec<String> {
+    let after = |key: &str| {
+        line.split(key)
+            .nth(1)
+            .unwrap_or_else(|| panic!("no `{key}` in {line}"))
+            .split([' ', '('])
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    vec![
+        after("chamber 1 "),
+        after("chamber 2 "),
+        after("force "),
+        after("spool "),
+        after("normalised "),
+    ]
+}
+
+/// `calibrate --identify` writes report.html beside model.toml: the
+/// identified values with σ and the datasheet's as the terminal printed them,
+/// the gap before, after each effect and after as the terminal's lines, each
+/// effect named with calibration.json's parameters, model.toml's values of
+/// them; no external resource, and it opens in headless Chromium.
+#[test]
+fn the_calibration_report_holds_the_terminals_and_the_files_numbers() {
+    let d = tmpdir("calibrate_report");
+    // a rig off the nominal one: a spool null offset and softer oil
+    let rig = d.join("rig.toml");
+    std::fs::write(
+        &rig,
+        "[rig]\nspool_null_bias_m = -8.0e-6\nbulk_modulus_pa = 4.8e8\n",
+    )
+    .unwrap();
+    let healthy = d.join("healthy.csv");
+    let args = "--scenario open-loop-sine --seconds 12 --seed 3 --config";
+    let mut args: Vec<&str> = args.split(' ').collect();
+    args.push(rig.to_str().unwrap());
+    simulate(&args, &healthy);
+    let cal = d.join("cal");
+    let o = leakwatch(&[
+        "calibrate",
+        healthy.to_str().unwrap(),
+        "--identify",
+        "--out",
+        cal.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (out, err) = (String::from_utf8_lossy(&o.stdout).to_string(), stderr(&o));
+    let html_path = cal.join("report.html");
+    assert!(
+        out.contains(&format!(
+            "{}, {}",
+            cal.join("report.md").display(),
+            html_path.display()
+        )),
+        "{out}"
+    );
+    let html = std::fs::read_to_string(&html_path).unwrap();
+
+    // an identified parameter: value, σ and the datasheet's as the terminal prints them
+    let bulk = err
+        .lines()
+        .find_map(|l| l.trim_start().strip_prefix("effective bulk modulus: "))
+        .expect("the bulk modulus is identified");
+    let words: Vec<&str> = bulk.split([' ', ')']).collect();
+    let (value, sigma, sheet) = (words[0], words[2], words[6]);
+    assert_eq!(
+        row(&html, "effective bulk modulus")[..3],
+        [value, sigma, sheet],
+        "{bulk}"
+    );
+    // what was not identified, with the terminal's reason
+    let esc = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;");
+    let mut not_identified = 0;
+    for l in err
+        .lines()
+        .filter(|l| l.contains(": not identifiable from this recording: "))
+    {
+        let (name, why) = l
+            .trim()
+            .split_once(": not identifiable from this recording: ")
+            .unwrap();
+        assert!(html.contains(&esc(name)) && html.contains(&esc(why)), "{l}");
+        not_identified += 1;
+    }
+    assert!(not_identified > 0, "{err}");
+
+    // the gap before and after: the terminal's numbers
+    let line = |prefix: &str| {
+        out.lines()
+            .find_map(|l| l.strip_prefix(prefix))
+            .unwrap_or_else(|| panic!("no `{prefix}` in {out}"))
+            .to_string()
+    };
+    let before = line("gap before (validation RMS): ");
+    assert_eq!(row(&html, "before")[..5], gap_of(&before)[..]);
+    let after = line("gap after: ");
+    let smaller = after.split(" (").last().unwrap().split(' ').next().unwrap();
+    let cells = row(&html, "after");
+    assert_eq!(cells[..5], gap_of(&after)[..]);
+    assert_eq!(cells[5], format!("{smaller} %"));
+
+    // each effect: named as calibration.json names it, its share of the gap as
+    // the terminal's, its parameters as the JSON's and model.toml's
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cal.join("calibration.json")).unwrap()).unwrap();
+    let effects = json["effects"].as_array().unwrap();
+    assert!(!effects.is_empty(), "{json:#}");
+    let model: toml::Table =
+        toml::from_str(&std::fs::read_to_string(cal.join("model.toml")).unwrap()).unwrap();
+    for (i, e) in effects.iter().enumerate() {
+        let name = e["name"].as_str().unwrap();
+        let share = out
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("{}. {name} (", i + 1)))
+            .expect("the terminal names it");
+        let share = share
+            .split("explains ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap();
+        let cells = row(&html, &format!("+ {}. {name}", i + 1));
+        assert_eq!(cells[5], format!("{share} %"), "{name}");
+        for (key, v) in e["parameters"].as_object().unwrap() {
+            let v = v.as_f64().unwrap();
+            assert!(
+                html.contains(&format!("<td>{key}</td><td class=\"n\">{v:.4e}</td>")),
+                "{name}: {key}"
+            );
+            // model.toml holds the calibrated model: a top-level [model] field equals it
+            if let Some(m) = model["model"].get(key.as_str()).and_then(|x| x.as_float()) {
+                assert_eq!(format!("{m:.4e}"), format!("{v:.4e}"), "{key}");
+            }
+        }
+    }
+
+    self_contained(&html);
+    assert!(html.contains("<svg"), "the fit's figure");
+    screenshot(&html_path, &d);
+}
+
+/// `replay` writes report.html into its folder: each leak alarm's times,
+/// size and confidence are events.json's, the watched and blind seconds
+/// summary.json's and the terminal's; the leak panel inline; no external
+/// resource, and it opens in headless Chromium. `--no-report` writes none.
+#[test]
+fn the_replay_report_holds_the_events_and_the_summarys_numbers() {
+    let d = tmpdir("replay_report");
+    let csv = d.join("leak.csv");
+    let args = "--scenario loaded-sine --seconds 20 --fault ext1:0.5lpm@10s";
+    simulate(&args.split(' ').collect::<Vec<_>>(), &csv);
+    let cfg = common::short_warmup_config(&d);
+    let out = d.join("leak");
+    let o = leakwatch(&[
+        "replay",
+        csv.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let html_path = out.join("report.html");
+    let html = std::fs::read_to_string(&html_path).unwrap();
+    assert!(html.contains("<title>Replay of leak.csv on the rig of cfg.toml</title>"));
+
+    // the ext1 alarm: events.json's numbers
+    let events: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("events.json")).unwrap()).unwrap();
+    let leak_size: Vec<&serde_json::Value> = events
+        .iter()
+        .filter(|e| e["detector"] == "leak-size" && e["phase"] != "cleared")
+        .collect();
+    let first = leak_size.first().expect("the leak is raised");
+    let named = leak_size
+        .iter()
+        .find(|e| e["kind"] == "ext1")
+        .expect("the leak is named ext1");
+    let latest = leak_size
+        .iter()
+        .rev()
+        .find(|e| e["event_id"] == first["event_id"] && e["size_lpm"].is_f64())
+        .unwrap();
+    let f = |v: &serde_json::Value| format!("{:.3}", v.as_f64().unwrap());
+    let cells = row(&html, "ext1");
+    assert_eq!(cells[0], f(&first["t_detect_s"]), "raised at");
+    assert_eq!(cells[1], f(&latest["t_onset_s"]), "onset");
+    assert_eq!(cells[2], f(&latest["size_lpm"]), "size");
+    assert_eq!(cells[3], f(&latest["size_lpm_sigma"]), "σ");
+    assert_eq!(cells[4], format!("{:.2}", latest["confidence"].as_f64().unwrap()));
+    assert!(
+        html.contains(&format!("<td>named at {} s</td>", f(&named["t_detect_s"]))),
+        "named"
+    );
+    // the onset near the leak's start (10 s), the size near the 0.5 L/min simulated
+    let (onset, size): (f64, f64) = (cells[1].parse().unwrap(), cells[2].parse().unwrap());
+    assert!(
+        (onset - 10.0).abs() < 1.0 && (size - 0.5).abs() < 0.15,
+        "{cells:?}"
+    );
+
+    // watched and blind: summary.json's, to the terminal's decimal
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let w = &summary["watch"];
+    let one = |v: &serde_json::Value| format!("{:.1}", v.as_f64().unwrap());
+    let (watched, run, armed, blind) = (
+        one(&w["watched_s"]),
+        one(&w["run_s"]),
+        one(&w["armed_at_s"]),
+        one(&w["blind_s"]),
+    );
+    assert!(
+        err.contains(&format!("watched {watched} of {run} s"))
+            && err.contains(&format!("armed at {armed} s, {blind} s without")),
+        "{err}"
+    );
+    assert!(
+        html.contains(&format!("Watched <b>{watched}</b> of <b>{run}</b> s"))
+            && html.contains(&format!("armed at <b>{armed}</b> s, <b>{blind}</b> s blind")),
+        "watch"
+    );
+    // the thresholds at the end: detector.csv's last row
+    let trace = std::fs::read_to_string(out.join("detector.csv")).unwrap();
+    let last: Vec<f64> = trace
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(
+        row(&html, "threshold at the end"),
+        [
+            format!("{:.3}", last[4]),
+            format!("{:.3}", last[5]),
+            format!("{:.3}", last[6])
+        ]
+    );
+
+    self_contained(&html);
+    for text in ["ext1 threshold", "true leak flow", "ext1 named", "onset"] {
+        assert!(html.contains(text), "no `{text}` in the figure");
+    }
+    screenshot(&html_path, &d);
+
+    // --no-report: none
+    let quiet = d.join("quiet");
+    let o = leakwatch(&[
+        "replay",
+        csv.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--estimates",
+        "none",
+        "--no-report",
+        "--out",
+        quiet.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(quiet.join("events.json").exists() && !quiet.join("report.html").exists());
 }

@@ -209,6 +209,7 @@ pub fn replay_all(
                         Wiring::SingleThread,
                         false,
                         Some(samples.clone()),
+                        &[],
                     )
                 };
                 let result =

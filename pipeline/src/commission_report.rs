@@ -4,6 +4,7 @@
 //! resource) that prints on A4.
 
 use crate::commission::NullBias;
+use crate::html::esc;
 
 /// One parameter the identification names: its value and σ in `unit`, or why
 /// it could not be identified, against the datasheet's (the model's) value.
@@ -85,6 +86,42 @@ impl Identified {
             out.push(format!("  mass and friction: not identified: {e}"));
         }
         out
+    }
+
+    /// The identification's part of a report: the flow and force balances'
+    /// gaps against the sensor floor, the table of what was identified
+    /// (value, σ, the datasheet's value, the difference) with `extra_rows`
+    /// (HTML table rows) at its end, and what could not be identified and why.
+    pub fn html(&self, extra_rows: &str) -> String {
+        let id = self;
+        let (w, ms, moving) = id.windows;
+        let (before, after, floor) = id.gap_lpm;
+        let mut h = format!(
+            "<h2>Identification</h2>\n<p class=\"note\">Flow balance on {w} windows of {ms} ms ({moving} moving): gap {before:.3} → {after:.3} L/min RMS, sensor floor {floor:.3} L/min.</p>\n"
+        );
+        if let Some((n, b, a)) = id.force_gap_n {
+            h += &format!(
+                "<p class=\"note\">Force balance on {n} sliding samples: gap {b:.0} → {a:.0} N RMS.</p>\n"
+            );
+        }
+        h += "<table><tr><th>parameter</th><th>identified</th><th>σ</th><th>datasheet</th><th>difference</th><th>unit</th></tr>\n";
+        for row in id.flow.iter().chain(&id.mechanics).filter_map(param_row) {
+            h += &row;
+        }
+        h += extra_rows;
+        h += "</table>\n<h2>Not identified, and why</h2>\n";
+        for p in id.flow.iter().chain(&id.mechanics) {
+            if let Err(why) = &p.found {
+                h += &format!("<p class=\"note\"><b>{}</b>: {}</p>\n", esc(&p.name), esc(why));
+            }
+        }
+        if let Some(e) = &id.mechanics_error {
+            h += &format!("<p class=\"note\"><b>mass and friction</b>: {}</p>\n", esc(e));
+        }
+        for n in &id.notes {
+            h += &format!("<p class=\"note\">{}</p>\n", esc(n.trim()));
+        }
+        h
     }
 }
 
@@ -241,22 +278,6 @@ pub struct CommissionRecord {
     pub fit: FitTrace,
 }
 
-/// `text` with HTML's special characters escaped.
-fn esc(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// The page's style: A4, small type, tables with rules.
-const STYLE: &str = "@page { size: A4; margin: 12mm; }\n\
-body { font-family: 'DejaVu Sans', sans-serif; font-size: 9pt; margin: 0 auto; max-width: 186mm; color: #000; }\n\
-h1 { font-size: 14pt; margin: 0 0 4pt; } h2 { font-size: 11pt; margin: 10pt 0 3pt; }\n\
-table { border-collapse: collapse; width: 100%; } th, td { border-bottom: 1px solid #bbb; padding: 1.5pt 4pt; text-align: left; }\n\
-td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }\n\
-p.note { margin: 2pt 0; } svg { width: 100%; height: auto; } figure { margin: 4pt 0; break-inside: avoid; }\n";
-
 /// One row of the identification table: value, σ, datasheet, difference (and %).
 fn param_row(p: &Param) -> Option<String> {
     let (v, sigma) = p.found.as_ref().ok()?;
@@ -284,55 +305,26 @@ impl CommissionRecord {
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_else(|| self.input.clone());
-        let mut h = format!(
-            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>Commissioning record: {n}</title>\n<style>\n{STYLE}</style></head><body>\n\
-             <h1>Commissioning record: {n}</h1>\n<p class=\"note\">Healthy recording <code>{i}</code>. Identified against the datasheet, then the healthy state of the leak filter's estimates learned.</p>\n",
-            n = esc(&name),
-            i = esc(&self.input)
-        );
-        let (w, ms, moving) = id.windows;
-        let (before, after, floor) = id.gap_lpm;
+        let mut h = crate::html::page_start(&format!("Commissioning record: {name}"));
         h += &format!(
-            "<h2>Identification</h2>\n<p class=\"note\">Flow balance on {w} windows of {ms} ms ({moving} moving): gap {before:.3} → {after:.3} L/min RMS, sensor floor {floor:.3} L/min.</p>\n"
+            "<p class=\"note\">Healthy recording <code>{}</code>. Identified against the datasheet, then the healthy state of the leak filter's estimates learned.</p>\n",
+            esc(&self.input)
         );
-        if let Some((n, b, a)) = id.force_gap_n {
-            h += &format!(
-                "<p class=\"note\">Force balance on {n} sliding samples: gap {b:.0} → {a:.0} N RMS.</p>\n"
-            );
-        }
-        h += "<table><tr><th>parameter</th><th>identified</th><th>σ</th><th>datasheet</th><th>difference</th><th>unit</th></tr>\n";
-        for row in id.flow.iter().chain(&id.mechanics).filter_map(param_row) {
-            h += &row;
-        }
-        if let Some((b, model_m)) = &self.null_bias {
-            h += &format!(
+        let null_bias = self.null_bias.as_ref().map(|(b, model_m)| {
+            format!(
                 "<tr><td>spool null bias (spread {:.2} µm over {:.0} s)</td><td class=\"n\">{:+.2}</td><td class=\"n\">–</td><td class=\"n\">{:+.2}</td><td class=\"n\">{:+.2}</td><td>µm</td></tr>\n",
                 b.spread_m * 1e6,
                 b.over_s,
                 (model_m + b.bias_m) * 1e6,
                 model_m * 1e6,
                 b.bias_m * 1e6
-            );
-        }
-        h += "</table>\n<h2>Not identified, and why</h2>\n";
-        for p in id.flow.iter().chain(&id.mechanics) {
-            if let Err(why) = &p.found {
-                h += &format!("<p class=\"note\"><b>{}</b>: {}</p>\n", esc(&p.name), esc(why));
-            }
-        }
-        if let Some(e) = &id.mechanics_error {
-            h += &format!("<p class=\"note\"><b>mass and friction</b>: {}</p>\n", esc(e));
-        }
-        for n in &id.notes {
-            h += &format!("<p class=\"note\">{}</p>\n", esc(n.trim()));
-        }
+            )
+        });
+        h += &id.html(null_bias.as_deref().unwrap_or(""));
         h += &self.learned_html(l);
-        let svg = plot::render_svg(&self.fit.figure(&format!("The leak filter on {name}")))
-            .map_err(|e| format!("the report's figure: {e}"))?;
-        h += &format!(
-            "<h2>The fit to the recording</h2>\n<figure>{}</figure>\n</body></html>\n",
-            strip_xml_decl(&svg)
-        );
+        h += "<h2>The fit to the recording</h2>\n";
+        h += &crate::html::figure(&self.fit.figure(&format!("The leak filter on {name}")))?;
+        h += crate::html::PAGE_END;
         Ok(h)
     }
 
@@ -373,13 +365,5 @@ impl CommissionRecord {
             l.nis_mean
         );
         h
-    }
-}
-
-/// An SVG document without its XML declaration, to sit inline in HTML.
-fn strip_xml_decl(svg: &str) -> &str {
-    match svg.find("<svg") {
-        Some(i) => &svg[i..],
-        None => svg,
     }
 }

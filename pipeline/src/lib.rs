@@ -13,6 +13,8 @@
 //! - [`simulate`]: the rig simulator from a config, to CSV; [`demo`]: a
 //!   simulated leak through the chain, printed.
 //! - [`commission`]: a healthy recording into a commissioned config.
+//! - [`commission_report`], [`calibrate_report`], `replay::report`: the HTML
+//!   reports of commission, calibrate and replay, built of [`html`]'s pieces.
 //! - [`logs`]: MCAP logs exported, repaired, described, replayed.
 //! - [`model_file`]: the model.toml `calibrate` writes, read and written.
 //! - [`out`]: every file and standard-output write; [`status`]: the exit
@@ -21,12 +23,14 @@
 #![forbid(unsafe_code)]
 
 pub mod batch;
+pub mod calibrate_report;
 pub mod calibration;
 pub mod chain;
 pub mod commission;
 pub mod commission_report;
 pub mod demo;
 pub mod estimates_out;
+pub mod html;
 pub mod logs;
 pub mod model_file;
 pub mod out;

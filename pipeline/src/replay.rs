@@ -15,6 +15,8 @@ use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 use config::Config;
 use wiring::{replay_channels, replay_single_thread, Progress};
 
+pub mod figure;
+pub mod report;
 pub mod trace;
 mod wiring;
 
@@ -60,6 +62,10 @@ pub struct ReplayRequest {
     /// Samples processed so far, added to as the replay goes (a batch's progress
     /// across its worker threads); none: not counted.
     pub samples_done: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
+    /// Files the caller writes into the output directory after the replay (the
+    /// report): refused as the replay's own are, after them, before anything is
+    /// read or written.
+    pub also_writes: Vec<PathBuf>,
 }
 
 /// What reading a recorded log (MCAP) skipped, reported in summary.json.
@@ -497,6 +503,7 @@ impl<'a> OutputPaths<'a> {
             .iter()
             .chain(&trace_path)
             .chain([&events_path, &summary_path])
+            .chain(&req.also_writes)
         {
             crate::out::check(p, req.overwrite, &inputs)?;
         }

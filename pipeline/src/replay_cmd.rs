@@ -26,7 +26,7 @@ pub struct ReplayArgs {
     /// (estimated load F_e), and write its estimates (the th_* columns)
     #[arg(long)]
     pub model: Option<u32>,
-    /// Output directory: estimates.csv (or .parquet), events.json, summary.json.
+    /// Output directory: estimates.csv (or .parquet), detector.csv, events.json, summary.json, report.html.
     #[arg(long)]
     pub out: PathBuf,
     /// Format of the estimates file: auto (parquet for a batch and for an input of 16 MiB or
@@ -52,6 +52,10 @@ pub struct ReplayArgs {
     /// Worker threads of a batch, each replaying whole files (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Write no report.html (a single file's replay writes one by default: its
+    /// leak alarms, blind stretches, smallest detectable leaks and leak panel).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// What every file of a replay shares: the configuration and the output rules.
@@ -116,8 +120,10 @@ impl Settings {
     }
 }
 
-/// Replays one file (a CSV, or a recorded log read by its sensor frames) into `out`: the one path of a single replay and of every
-/// file of a batch, so their outputs are the same bytes.
+/// Replays one file (a CSV, or a recorded log read by its sensor frames) into
+/// `out`: the one path of a single replay and of every file of a batch, so
+/// their outputs are the same bytes. `also_writes`: the files the caller
+/// writes into `out` after it (refused with the replay's own).
 pub fn replay_file(
     input: &Path,
     out: &Path,
@@ -125,6 +131,7 @@ pub fn replay_file(
     wiring: replay::Wiring,
     progress: bool,
     samples_done: Option<Arc<AtomicU64>>,
+    also_writes: &[PathBuf],
 ) -> Result<replay::Summary, String> {
     let protect: Vec<PathBuf> = settings.config.iter().cloned().collect();
     let bytes = std::fs::metadata(input).map(|m| m.len()).unwrap_or(0);
@@ -165,6 +172,7 @@ pub fn replay_file(
         estimates_why,
         thesis_estimates: settings.thesis_estimates,
         samples_done,
+        also_writes: also_writes.to_vec(),
     };
     replay::run(&req)
 }
@@ -183,6 +191,7 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         thesis_baseline,
         max_bad_rows,
         threads,
+        no_report,
     } = args;
     let settings = Settings::new(
         config,
@@ -201,7 +210,8 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
     } else {
         replay::Wiring::Channels
     };
-    let s = replay_file(input, &out, &settings, wiring, true, None)?;
+    let report = (!no_report).then(|| out.join(replay::report::FILE_NAME));
+    let s = replay_file(input, &out, &settings, wiring, true, None, report.as_slice())?;
     let cfg = &settings.cfg;
     let (cfg_nis_gate, cfg_recovery_s) = (cfg.classifier.nis_gate, cfg.classifier.recovery_s);
     let model_bulk_modulus_pa = cfg.model.bulk_modulus_pa;
@@ -297,6 +307,9 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         },
         e.why
     );
+    if let Some(r) = &report {
+        write_report(r, &s, &settings, &out, input)?;
+    }
     eprintln!(
         "replayed {} samples in {:.2} s ({:.0} samples/s); {} rows skipped, {} samples missing; {} events; wrote {}",
         s.samples,
@@ -308,4 +321,25 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         out.display()
     );
     Ok(())
+}
+
+/// Writes the replay's report `path` from its summary `s` (its events those
+/// of events.json), the configuration of `settings` and the folder `out`;
+/// never over `input` or the config file.
+fn write_report(
+    path: &Path,
+    s: &replay::Summary,
+    settings: &Settings,
+    out: &Path,
+    input: &Path,
+) -> Result<(), String> {
+    let report = replay::report::ReplayReport {
+        summary: s,
+        config: &settings.cfg,
+        config_path: settings.config.as_deref(),
+        out_dir: out,
+    };
+    let mut inputs = vec![input, Path::new(&s.input)];
+    inputs.extend(settings.config.as_deref());
+    crate::out::write(path, report.html()?.as_bytes(), settings.force, &inputs)
 }
