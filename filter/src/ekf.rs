@@ -1,3 +1,7 @@
+// Over 600 lines: one square-root filter with its predict (lean column form, the dense
+// reference it is held to, the Householder fallback) and its updates (dense and selector,
+// Potter's scalar steps) over one factor layout; the column kernels (product, Cholesky,
+// triangularisation, from `product_column` on) could move to a module of their own.
 //! A generic square-root extended Kalman filter over static sizes.
 //!
 //! The covariance is carried as a factor S with P = S·Sᵀ, so it is symmetric

@@ -327,6 +327,7 @@ impl Estimator {
                 y,
                 use_channel: [true; 3],
                 usable: true,
+                gate_outliers: false,
             };
             let memory = StepMemory {
                 still_samples: &mut 0,
@@ -565,6 +566,7 @@ impl Estimator {
             y,
             use_channel,
             usable,
+            gate_outliers: s.t_s - self.t0_s >= self.tuning.convergence_time_s,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,
@@ -711,6 +713,9 @@ struct StepInput {
     use_channel: [bool; 3],
     /// Whether the sample updates the filter at all.
     usable: bool,
+    /// Whether a lone outlier is left out ([`outlier`]): not while the
+    /// filter converges from its start, when large innovations are its own.
+    gate_outliers: bool,
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
@@ -763,6 +768,7 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         ref y,
         use_channel,
         usable,
+        gate_outliers,
     } = *input;
     let StepMemory {
         still_samples,
@@ -792,13 +798,17 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     offset_response.predict(&f);
     let y_pred = ProcessModel::measure(e.state());
     if usable {
-        let sigma = e.prior_innovation_sigma(ProcessModel::MEASURED_STATES);
-        let nu = y - y_pred;
-        let updating = outliers.gate(
-            &[nu[0], nu[1], nu[2]],
-            &[sigma[0], sigma[1], sigma[2]],
-            use_channel,
-        );
+        let updating = if gate_outliers {
+            let sigma = e.prior_innovation_sigma(ProcessModel::MEASURED_STATES);
+            let nu = y - y_pred;
+            outliers.gate(
+                &[nu[0], nu[1], nu[2]],
+                &[sigma[0], sigma[1], sigma[2]],
+                use_channel,
+            )
+        } else {
+            use_channel
+        };
         let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, updating)?;
         offset_response.update(e, ProcessModel::MEASURED_STATES, updating);
         let mut x = *e.state();
