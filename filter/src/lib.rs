@@ -825,7 +825,13 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
                 f64::NAN
             };
         }
-        out.nis = inn.nis;
+        // A reading left out still counts in the NIS: the detector holds its
+        // evidence after such a burst as after any other.
+        let left_out: f64 = (0..3)
+            .filter(|&k| use_channel[k] && !updating[k])
+            .map(|k| (inn.nu[k] / inn.sigma[k]).powi(2))
+            .sum();
+        out.nis = inn.nis + left_out;
     }
     let x = e.state();
     let sig = e.sigma();
