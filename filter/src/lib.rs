@@ -38,6 +38,8 @@ pub use tuning::{Init, Tuning};
 pub const MAX_STATES: usize = 11;
 /// Largest number of states any layout has (the leak model with spool bias and oil stiffness).
 pub const MAX_LAYOUT_STATES: usize = 12;
+/// The fewest states of a leak filter's layout (the leak sizes from state 7 on).
+const LEAK_LAYOUT_STATES: u32 = 10;
 
 // The flag bits are the wire's (`frames::estimate_flags`), so flags are copied, not
 // recoded; `estimator::wire` checks at compile time that the two agree (this crate
@@ -566,7 +568,8 @@ impl Estimator {
             y,
             use_channel,
             usable,
-            gate_outliers: s.t_s - self.t0_s >= self.tuning.convergence_time_s,
+            gate_outliers: self.tuning.states >= LEAK_LAYOUT_STATES
+                && s.t_s - self.t0_s >= self.tuning.convergence_time_s,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,
@@ -713,8 +716,9 @@ struct StepInput {
     use_channel: [bool; 3],
     /// Whether the sample updates the filter at all.
     usable: bool,
-    /// Whether a lone outlier is left out ([`outlier`]): not while the
-    /// filter converges from its start, when large innovations are its own.
+    /// Whether a lone outlier is left out ([`outlier`]): in the leak filter
+    /// only (the thesis filter stays as published), and not while it
+    /// converges from its start, when large innovations are its own.
     gate_outliers: bool,
 }
 
