@@ -590,6 +590,20 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         states: [usize; M],
         use_channel: [bool; M],
     ) -> Result<Innovation<M>, EkfError> {
+        self.update_selected_choosing::<A>(y, h_pred, states, |_, _| use_channel)
+    }
+
+    /// [`Self::update_selected_lean`] with the channels that update chosen
+    /// by `choose` from the innovations and their prior σ (measurement
+    /// units), both computed once here.
+    #[inline(always)]
+    pub(crate) fn update_selected_choosing<A: MulAdd>(
+        &mut self,
+        y: &SVector<f64, M>,
+        h_pred: &SVector<f64, M>,
+        states: [usize; M],
+        choose: impl FnOnce(&SVector<f64, M>, &SVector<f64, M>) -> [bool; M],
+    ) -> Result<Innovation<M>, EkfError> {
         let nu = y - h_pred;
         // The columns the measured rows of S can have non-zeros in: those up
         // to the highest measured state, and any full ones (the rank-one
@@ -605,14 +619,16 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         // compile time; any other reach takes all N.
         // σ of each innovation from the prior, then the updates.
         let (sigma, nis) = match support {
-            4 if N >= 4 => (
-                self.innovation_sigma::<4>(states),
-                self.potter::<4, A>(&nu, states, use_channel)?,
-            ),
-            _ => (
-                self.innovation_sigma::<N>(states),
-                self.potter::<N, A>(&nu, states, use_channel)?,
-            ),
+            4 if N >= 4 => {
+                let sigma = self.innovation_sigma::<4>(states);
+                let use_channel = choose(&nu, &sigma);
+                (sigma, self.potter::<4, A>(&nu, states, use_channel)?)
+            }
+            _ => {
+                let sigma = self.innovation_sigma::<N>(states);
+                let use_channel = choose(&nu, &sigma);
+                (sigma, self.potter::<N, A>(&nu, states, use_channel)?)
+            }
         };
         // Each scalar update passed a positive finite variance, so the
         // factor's new columns are finite; a non-finite innovation shows in
@@ -625,12 +641,6 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
 }
 
 impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
-    /// σ of each innovation from the prior, √(P_ii + r_i) for the measured
-    /// states `states` (measurement units), before an update.
-    pub(crate) fn prior_innovation_sigma(&self, states: [usize; M]) -> SVector<f64, M> {
-        self.innovation_sigma::<N>(states)
-    }
-
     /// σ of each innovation from the prior, C_ii = c_i²·|row s_i of S|² + r_i
     /// (measurement units), for an S whose measured rows have non-zeros in
     /// their first `K` columns only: |row|² over those (the zeros beyond

@@ -802,18 +802,19 @@ fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     offset_response.predict(&f);
     let y_pred = ProcessModel::measure(e.state());
     if usable {
-        let updating = if gate_outliers {
-            let sigma = e.prior_innovation_sigma(ProcessModel::MEASURED_STATES);
-            let nu = y - y_pred;
-            outliers.gate(
-                &[nu[0], nu[1], nu[2]],
-                &[sigma[0], sigma[1], sigma[2]],
-                use_channel,
-            )
-        } else {
-            use_channel
-        };
-        let inn = e.update_selected_lean::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, updating)?;
+        // The channels that update: less a lone outlier once the filter has converged.
+        let mut updating = use_channel;
+        let inn =
+            e.update_selected_choosing::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, |nu, sigma| {
+                if gate_outliers {
+                    updating = outliers.gate(
+                        &[nu[0], nu[1], nu[2]],
+                        &[sigma[0], sigma[1], sigma[2]],
+                        use_channel,
+                    );
+                }
+                updating
+            })?;
         offset_response.update(e, ProcessModel::MEASURED_STATES, updating);
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
