@@ -304,7 +304,6 @@ pub(crate) fn identify_once(
         // other unknowns are refitted without the line's drop, at the null
         // leakage found with it (which the oil's temperature scales).
         let mut at = model;
-        at[C_L] = at_line[C_L];
         if let Some(c) = cl_with_line.estimate() {
             at[C_L] = c.value;
         }
