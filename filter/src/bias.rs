@@ -78,12 +78,18 @@ impl BiasResponse {
         if N <= I_QI {
             return;
         }
-        let gains: [Option<SVector<f64, N>>; 3] =
-            std::array::from_fn(|i| use_channel[i].then(|| e.gain_column(states[i], i)));
+        // (a plain loop, not a closure: the gains compile with the caller's
+        // vector unit, inlined into the filter's step)
+        let mut gains = [SVector::<f64, N>::zeros(); 3];
+        for (i, gain) in gains.iter_mut().enumerate() {
+            if use_channel[i] {
+                *gain = e.gain_column(states[i], i);
+            }
+        }
         for (c, d) in OFFSET_CHANNELS.iter().zip(&mut self.delta) {
             let before = *d;
-            for (i, gain) in gains.iter().enumerate() {
-                if let Some(k) = gain {
+            for (i, k) in gains.iter().enumerate() {
+                if use_channel[i] {
                     let unit = if i == *c { 1.0 } else { 0.0 };
                     let innovation = unit - before[states[i]];
                     for j in 0..N {
