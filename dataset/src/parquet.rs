@@ -93,22 +93,33 @@ struct ChunkMeta {
 fn min_max(kind: ColumnType, values: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
     match kind {
         ColumnType::F64 => {
-            let mut range: Option<(f64, f64)> = None;
-            for v in values.chunks_exact(8) {
-                let x = f64::from_le_bytes([v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]]);
-                if x.is_nan() {
-                    continue;
+            // f64::min and f64::max keep the other value over a NaN, so NaN
+            // is left out without a test per value; four lanes apart, so the
+            // loop runs in vector registers
+            let (mut lo, mut hi) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4]);
+            let quads = values.chunks_exact(32);
+            let rest = quads.remainder();
+            for quad in quads {
+                for (k, v) in quad.chunks_exact(8).enumerate() {
+                    let x = f64::from_le_bytes([v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]]);
+                    lo[k] = lo[k].min(x);
+                    hi[k] = hi[k].max(x);
                 }
-                range = Some(match range {
-                    Some((lo, hi)) => (lo.min(x), hi.max(x)),
-                    None => (x, x),
-                });
             }
-            range.map(|(lo, hi)| {
-                let lo = if lo == 0.0 { -0.0 } else { lo };
-                let hi = if hi == 0.0 { 0.0 } else { hi };
-                (lo.to_le_bytes().to_vec(), hi.to_le_bytes().to_vec())
-            })
+            for v in rest.chunks_exact(8) {
+                let x = f64::from_le_bytes([v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]]);
+                lo[0] = lo[0].min(x);
+                hi[0] = hi[0].max(x);
+            }
+            let lo = lo[0].min(lo[1]).min(lo[2].min(lo[3]));
+            let hi = hi[0].max(hi[1]).max(hi[2].max(hi[3]));
+            // a value that is not NaN lies in [lo, hi]; none: lo = ∞ > hi = −∞
+            if lo > hi {
+                return None;
+            }
+            let lo = if lo == 0.0 { -0.0 } else { lo };
+            let hi = if hi == 0.0 { 0.0 } else { hi };
+            Some((lo.to_le_bytes().to_vec(), hi.to_le_bytes().to_vec()))
         }
         ColumnType::I32 => {
             let mut it = values
@@ -473,6 +484,28 @@ mod tests {
             CREATED_BY,
             format!("leakwatch version {}", env!("CARGO_PKG_VERSION"))
         );
+    }
+
+    #[test]
+    fn chunk_statistics_are_the_least_and_greatest_value_in_any_position() {
+        let f = |v: &[f64]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let back = |b: &[u8]| f64::from_le_bytes(b.try_into().expect("8 bytes"));
+        // each length up to past two lanes' rounds, the extremes in every position
+        for n in 1..12 {
+            for at_lo in 0..n {
+                for at_hi in (0..n).filter(|k| *k != at_lo) {
+                    let mut v: Vec<f64> = (0..n).map(|k| if k % 3 == 0 { f64::NAN } else { 0.5 }).collect();
+                    v[at_lo] = -7.25;
+                    v[at_hi] = 3.0e9;
+                    let (lo, hi) = min_max(ColumnType::F64, &f(&v)).expect("a range");
+                    assert_eq!((back(&lo), back(&hi)), (-7.25, 3.0e9), "{v:?}");
+                }
+            }
+            let all_nan = vec![f64::NAN; n];
+            assert_eq!(min_max(ColumnType::F64, &f(&all_nan)), None);
+            let (lo, hi) = min_max(ColumnType::F64, &f(&vec![f64::INFINITY; n])).expect("a range");
+            assert_eq!((back(&lo), back(&hi)), (f64::INFINITY, f64::INFINITY));
+        }
     }
 
     #[test]

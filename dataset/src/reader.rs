@@ -28,6 +28,10 @@ pub struct CsvReader<R: BufRead> {
     pub absent: [u64; N_OPTIONAL],
 }
 
+/// The read buffer of a file, bytes (256 KiB: some 1,800 lines of a 1 kHz
+/// CSV per read; a line across its end is the only one copied).
+const READ_BUFFER_BYTES: usize = 256 << 10;
+
 /// A buffered byte source: a plain file, or a gzip-compressed one decoded on the fly.
 pub type FileSource = Box<dyn BufRead + Send>;
 
@@ -41,9 +45,12 @@ impl CsvReader<FileSource> {
         })?;
         let gz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
         let source: FileSource = if gz {
-            Box::new(BufReader::new(flate2::read::MultiGzDecoder::new(file)))
+            Box::new(BufReader::with_capacity(
+                READ_BUFFER_BYTES,
+                flate2::read::MultiGzDecoder::new(file),
+            ))
         } else {
-            Box::new(BufReader::new(file))
+            Box::new(BufReader::with_capacity(READ_BUFFER_BYTES, file))
         };
         CsvReader::new(source, path, limits)
     }
@@ -126,6 +133,19 @@ impl<R: BufRead> CsvReader<R> {
             if self.ended {
                 return None;
             }
+            // The hot path: a plain line whole in the reader's buffer, parsed
+            // where it lies (no copy, no search for its end before the parse).
+            // Anything else (a line across the buffer's end, an error, the
+            // end of the file) is read below, as it always was.
+            if let Ok(buffered) = self.reader.fill_buf() {
+                if let Some(used) = plain_line(buffered, &mut self.cells) {
+                    self.reader.consume(used);
+                    self.line_no += 1;
+                    self.rows += 1;
+                    let parsed = self.sample_of_cells();
+                    return Some(self.counted(parsed));
+                }
+            }
             let mut buf = std::mem::take(&mut self.line);
             buf.clear();
             let read = self.reader.read_until(b'\n', &mut buf);
@@ -190,40 +210,19 @@ impl<R: BufRead> CsvReader<R> {
         }
     }
 
-    /// The cells of a plain line (ASCII decimal numbers or empty cells between
-    /// commas, ended by `\n` or `\r\n`) into `self.cells`, each the f64
-    /// `str::parse` gives; `false` (cells undefined) for any other line, which
-    /// then takes [`Self::parse_row`]'s general path. The hot path of a replay:
-    /// no UTF-8 pass, no trimming, no per-cell search for quotes.
+    /// The cells of a plain line ([`plain_line`]) into `self.cells`; `false`
+    /// (cells undefined) for any other line, which then takes
+    /// [`Self::parse_row`]'s general path.
     fn plain_cells(&mut self, bytes: &[u8]) -> bool {
-        let line = bytes.strip_suffix(b"\n").unwrap_or(bytes);
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        // one UTF-8 pass for the line (ASCII: a quick one); the cells are then
-        // text, so a number the fast path leaves goes to `str::parse` as it is
-        let Ok(mut rest) = std::str::from_utf8(line) else {
-            return false;
-        };
-        if rest.is_empty() {
-            return false;
+        // a line without its end (the last of a file) is given one
+        let ended = bytes.ends_with(b"\n");
+        if ended {
+            return plain_line(bytes, &mut self.cells) == Some(bytes.len());
         }
-        self.cells.clear();
-        loop {
-            let comma = rest.bytes().position(|b| b == b',');
-            let cell = comma.map_or(rest, |k| &rest[..k]);
-            let v = if cell.is_empty() {
-                f64::NAN
-            } else {
-                match parse_plain_f64(cell) {
-                    Some(v) => v,
-                    None => return false,
-                }
-            };
-            self.cells.push(v);
-            match comma {
-                Some(k) => rest = &rest[k + 1..],
-                None => return true,
-            }
-        }
+        let mut line = Vec::with_capacity(bytes.len() + 1);
+        line.extend_from_slice(bytes);
+        line.push(b'\n');
+        plain_line(&line, &mut self.cells) == Some(line.len())
     }
 
     fn parse_row(&mut self, line: &str) -> Result<(Sample, Option<Issue>), Issue> {
@@ -305,30 +304,58 @@ impl<R: BufRead> RowSource for CsvReader<R> {
     }
 }
 
-/// A plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]`, as the f64
-/// `str::parse` gives (the nearest, ties to even); `None` for any other text
-/// (`inf`, `nan` in any case but `NaN`, `1e`, ...: the general path reads it).
-/// `NaN` is what `simulate` and `export` write for an absent value. The
-/// conversion is `fast-float2`'s (Clinger's fast path, else Eisel-Lemire, eight
-/// digits at a time; correctly rounded: the same f64 as `str::parse`), over
-/// the cell's bytes with no copy.
-fn parse_plain_f64(cell: &str) -> Option<f64> {
-    if cell == "NaN" {
-        return Some(f64::NAN);
+/// The cells of the plain line at the start of `bytes` into `cells`: ASCII
+/// decimal numbers ([`plain_number`]), `NaN` or empty cells (NaN) between
+/// commas, the line ended by `\n` or `\r\n`; returns the bytes the line
+/// takes with its end. `None` (cells undefined) for an empty line, a line
+/// with anything else in it (spaces, quotes, `inf`, text that is not UTF-8:
+/// the general path reads it and names what is wrong), or no line end in
+/// `bytes`. The hot path of a replay: each number parsed where it lies and
+/// its cell's end found by the parse itself, no UTF-8 pass, no search for
+/// commas or the line's end beforehand.
+fn plain_line(bytes: &[u8], cells: &mut Vec<f64>) -> Option<usize> {
+    if matches!(bytes.first(), None | Some(b'\n' | b'\r')) {
+        return None;
     }
-    let b = cell.as_bytes();
-    let body = match b.first()? {
-        b'-' | b'+' => b.get(1..)?,
-        _ => b,
+    cells.clear();
+    let mut at = 0;
+    loop {
+        let rest = &bytes[at..];
+        let (v, used) = match rest.first()? {
+            b',' | b'\n' | b'\r' => (f64::NAN, 0),
+            b'N' if rest.starts_with(b"NaN") => (f64::NAN, 3),
+            _ => plain_number(rest)?,
+        };
+        cells.push(v);
+        at += used;
+        match bytes.get(at)? {
+            b',' => at += 1,
+            b'\n' => return Some(at + 1),
+            b'\r' if bytes.get(at + 1) == Some(&b'\n') => return Some(at + 2),
+            _ => return None,
+        }
+    }
+}
+
+/// The plain decimal number, `[+-]digits[.digits][(e|E)[+-]digits]`, at the
+/// start of `bytes` and the bytes it takes: the f64 `str::parse` gives for
+/// those bytes (the nearest, ties to even); `None` unless a digit or a point
+/// follows the sign (no `inf`, `infinity` nor `nan`). The conversion is
+/// `fast-float2`'s (Clinger's fast path, else Eisel-Lemire, eight digits at
+/// a time; correctly rounded: the same f64 as `str::parse`), over the bytes
+/// with no copy. The caller checks what follows (a cell ends at a comma or
+/// the line's end: `1e` then `,` is not a number, `1` then `e` is not a cell).
+#[inline]
+fn plain_number(bytes: &[u8]) -> Option<(f64, usize)> {
+    let body = match bytes.first()? {
+        b'-' | b'+' => bytes.get(1..)?,
+        _ => bytes,
     };
     // a digit or a point first: no `inf`, `infinity` nor `nan` here
     if !matches!(body.first()?, b'0'..=b'9' | b'.') {
         return None;
     }
-    match fast_float2::parse_partial::<f64, _>(b) {
-        Ok((v, used)) if used == b.len() => Some(v),
-        _ => None,
-    }
+    fast_float2::parse_partial::<f64, _>(bytes).ok()
 }
 
 /// `text` without one pair of surrounding double quotes (standard CSV quoting,
@@ -354,7 +381,18 @@ pub enum Row {
 
 #[cfg(test)]
 mod tests {
-    use super::parse_plain_f64;
+    use super::{plain_line, plain_number};
+
+    /// A whole cell as a plain number (the test's view of [`plain_number`]).
+    fn parse_plain_f64(cell: &str) -> Option<f64> {
+        if cell == "NaN" {
+            return Some(f64::NAN);
+        }
+        match plain_number(cell.as_bytes()) {
+            Some((v, used)) if used == cell.len() => Some(v),
+            _ => None,
+        }
+    }
 
     /// The fast parse against `str::parse`, bit for bit, or refused where
     /// `str::parse` fails too (the general path then reports the cell).
@@ -365,6 +403,71 @@ mod tests {
             (Some(a), None) => panic!("{text}: parsed as {a:?}, str::parse refuses it"),
             // refused: the line takes the general path, which parses it as before
             (None, _) => {}
+        }
+    }
+
+    #[test]
+    fn a_line_reads_the_same_wherever_the_read_buffer_ends() {
+        let text = "t,u,x,p1,p2\n0.001,1.5,0.01,1e6,2e6\n0.002,-0.5,NaN,1000000.5,2e6\r\n\
+\n0.003,,0.01,1e6,2e6\n 0.004,0,0.01,1e6,2e6\n0.005,\"0\",0.01,1e6,2e6\n0.006,1e,0.01,1e6,2e6\n\
+0.007,0,0.01,1e6\n0.008,inf,0.01,1e6,2e6\n0.009,0,0.01,1e6,2e6,\n\r\n0.010,0,0.01,1e6,2e6\r\r\n\
+0.011,0.30000000000000004,0.01,1e6,2e6";
+        let rows = |capacity: usize| {
+            let source = std::io::BufReader::with_capacity(capacity, text.as_bytes());
+            let mut r =
+                super::CsvReader::new(source, std::path::Path::new("b.csv"), crate::Limits::default())
+                    .expect("header");
+            let mut rows = Vec::new();
+            while let Some(row) = r.next_row() {
+                rows.push(format!("{row:?}"));
+            }
+            (rows, r.rows, r.skipped, r.absent)
+        };
+        let whole = rows(1 << 16);
+        // (a read buffer of 1 byte reads every line by the general path)
+        assert_eq!((whole.0.len(), whole.1, whole.2), (11, 11, 6), "{:#?}", whole.0);
+        assert!(
+            whole.0[0].starts_with("Sample(Sample { t_s: 0.001, u_v: 1.5,"),
+            "{}",
+            whole.0[0]
+        );
+        assert!(whole.0[5].contains("`1e` is not a number"), "{}", whole.0[5]);
+        assert!(
+            whole.0[10].contains("u_v: 0.30000000000000004"),
+            "{}",
+            whole.0[10]
+        );
+        for capacity in 1..80 {
+            assert_eq!(rows(capacity), whole, "a read buffer of {capacity} bytes");
+        }
+    }
+
+    #[test]
+    fn a_plain_line_is_its_cells_and_its_length_with_its_end() {
+        let mut cells = Vec::new();
+        assert_eq!(plain_line(b"1,-2.5e3,,NaN\r\nx", &mut cells), Some(15));
+        assert_eq!(cells.len(), 4);
+        assert_eq!((cells[0], cells[1]), (1.0, -2500.0));
+        assert!(cells[2].is_nan() && cells[3].is_nan());
+        assert_eq!(plain_line(b"1,2\n", &mut cells), Some(4));
+        // no end in the bytes, an empty line, or anything not plain: the general path
+        for text in [
+            &b"1,2"[..],
+            b"\n",
+            b"\r\n",
+            b"1, 2\n",
+            b"1e,2\n",
+            b"inf\n",
+            b"-NaN\n",
+            b"1\r2\n",
+            b"1\r\r\n",
+        ] {
+            assert_eq!(
+                plain_line(text, &mut cells),
+                None,
+                "{}",
+                String::from_utf8_lossy(text)
+            );
         }
     }
 

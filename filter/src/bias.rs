@@ -52,11 +52,17 @@ impl BiasResponse {
         if N <= I_QI {
             return;
         }
+        // row i of F·δ summed over j in order from −0.0 (as `Iterator::sum`
+        // does), the rows side by side: F by columns, so each j adds one
+        // column's first rows, in vector registers
         for d in &mut self.delta {
-            let before = *d;
-            for (i, v) in d.iter_mut().enumerate().take(FIRST_RANDOM_WALK) {
-                *v = (0..N).map(|j| f[(i, j)] * before[j]).sum();
+            let mut acc = [-0.0; FIRST_RANDOM_WALK];
+            for (column, before) in f.as_slice().chunks_exact(N).zip(&d[..N]) {
+                for (a, f_ij) in acc.iter_mut().zip(column) {
+                    *a += f_ij * before;
+                }
             }
+            d[..FIRST_RANDOM_WALK].copy_from_slice(&acc);
         }
     }
 
@@ -72,12 +78,18 @@ impl BiasResponse {
         if N <= I_QI {
             return;
         }
-        let gains: [Option<SVector<f64, N>>; 3] =
-            std::array::from_fn(|i| use_channel[i].then(|| e.gain_column(states[i], i)));
+        // (a plain loop, not a closure: the gains compile with the caller's
+        // vector unit, inlined into the filter's step)
+        let mut gains = [SVector::<f64, N>::zeros(); 3];
+        for (i, gain) in gains.iter_mut().enumerate() {
+            if use_channel[i] {
+                *gain = e.gain_column(states[i], i);
+            }
+        }
         for (c, d) in OFFSET_CHANNELS.iter().zip(&mut self.delta) {
             let before = *d;
-            for (i, gain) in gains.iter().enumerate() {
-                if let Some(k) = gain {
+            for (i, k) in gains.iter().enumerate() {
+                if use_channel[i] {
                     let unit = if i == *c { 1.0 } else { 0.0 };
                     let innovation = unit - before[states[i]];
                     for j in 0..N {
@@ -93,5 +105,68 @@ impl BiasResponse {
     pub fn leak_sizes_lpm_per_mpa(&self) -> [[f64; 3]; 2] {
         self.delta
             .map(|d| std::array::from_fn(|k| d[I_QE1 + k] / M3_S_PA_PER_LPM_MPA))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_update_is_the_sum_over_each_row_bit_for_bit() {
+        // a fixed LCG's values, with zeros of both signs among them
+        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            match state >> 60 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => {
+                    ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+                        * 10f64.powi((state >> 56) as i32 % 7 - 3)
+                }
+            }
+        };
+        for _ in 0..200 {
+            let f = SMatrix::<f64, 12, 12>::from_fn(|i, j| {
+                if i >= FIRST_RANDOM_WALK {
+                    f64::from(u8::from(i == j))
+                } else {
+                    next()
+                }
+            });
+            let mut r = BiasResponse::default();
+            for d in &mut r.delta {
+                for v in d.iter_mut() {
+                    *v = next();
+                }
+            }
+            let before = r;
+            r.predict(&f);
+            for (d, b) in r.delta.iter().zip(&before.delta) {
+                for i in 0..12 {
+                    let expected: f64 = if i < FIRST_RANDOM_WALK {
+                        (0..12).map(|j| f[(i, j)] * b[j]).sum()
+                    } else {
+                        b[i]
+                    };
+                    assert_eq!(
+                        d[i].to_bits(),
+                        expected.to_bits(),
+                        "row {i}: {} against {expected}",
+                        d[i]
+                    );
+                }
+            }
+        }
+        // an all-zero row sums to −0.0 from −0.0 only when every product is −0.0
+        let mut r = BiasResponse::default();
+        r.delta[0] = [-1.0; MAX_LAYOUT_STATES];
+        let mut f = SMatrix::<f64, 12, 12>::identity();
+        f[(0, 0)] = 0.0;
+        r.predict(&f);
+        assert_eq!(r.delta[0][0].to_bits(), (-0.0f64).to_bits());
     }
 }

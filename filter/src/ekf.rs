@@ -295,6 +295,7 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     /// Column `i` of the gain of the update just made, SI (state units per
     /// unit of measurement `i`): K[:, i] = P⁺[:, s]/r_i for measured state `s`,
     /// the batch gain the scalar updates amount to (R is diagonal).
+    #[inline(always)]
     pub fn gain_column(&self, s: usize, i: usize) -> SVector<f64, N> {
         let mut g = SVector::<f64, N>::zeros();
         for col in &self.s[..N] {

@@ -200,7 +200,10 @@ impl EstimatesWriter {
                 EstimatesWriter::Csv(out)
             }
             EstimatesFormat::Parquet => {
-                let out = BufWriter::with_capacity(1 << 20, file);
+                // the writer holds a row group's columns itself: the buffer
+                // takes the small writes (page headers, the footer), and a
+                // column's values, larger than it, go straight to the file
+                let out = BufWriter::with_capacity(PARQUET_SMALL_WRITES_BYTES, file);
                 EstimatesWriter::Parquet(
                     Box::new(ParquetWriter::new(out, &parquet_columns(thesis))?),
                     thesis,
@@ -237,6 +240,10 @@ impl EstimatesWriter {
         }
     }
 }
+
+/// The buffer of estimates.parquet's small writes, bytes (64 KiB, below a
+/// column chunk's values: [`dataset::parquet::ROWS_PER_GROUP`] × 4 bytes).
+const PARQUET_SMALL_WRITES_BYTES: usize = 64 << 10;
 
 /// The leak filter's columns of an estimates file (every replay writes them).
 pub const LEAK_COLUMNS: &str =

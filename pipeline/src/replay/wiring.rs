@@ -99,7 +99,8 @@ pub(super) fn replay_single_thread(
 
 /// Replays `reader` through `stage` into `sink` on three threads (reader,
 /// estimator, the caller's) over bounded channels; returns the counts of
-/// absent optional values.
+/// absent optional values. The batches' buffers go back to the thread that
+/// fills them once read, so a replay allocates them once, not per batch.
 pub(super) fn replay_channels(
     reader: impl RowSource + Send,
     stage: &mut EstimatorStage,
@@ -107,15 +108,27 @@ pub(super) fn replay_channels(
     sink: &mut impl FnMut(&StageEstimate, &mut Summary),
     progress: &Progress<'_>,
 ) -> [u64; dataset::N_OPTIONAL] {
-    let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(8);
-    let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<Issue>)>(8);
+    let (tx_in, rx_in) = crossbeam_channel::bounded::<Batch>(IN_FLIGHT);
+    let (tx_out, rx_out) = crossbeam_channel::bounded::<(Vec<StageEstimate>, Vec<Issue>)>(IN_FLIGHT);
+    // the emptied buffers, back to the reader and to the estimator
+    let (tx_free_in, rx_free_in) = crossbeam_channel::bounded::<Vec<Sample>>(RECYCLED);
+    let (tx_free_out, rx_free_out) = crossbeam_channel::bounded::<Vec<StageEstimate>>(RECYCLED);
     std::thread::scope(|scope| {
-        let read = scope.spawn(move || read_batches(reader, &tx_in));
+        let read = scope.spawn(move || read_batches(reader, &tx_in, &rx_free_in));
         let stage = &mut *stage;
         scope.spawn(move || {
             for b in rx_in {
                 let msg = match b {
-                    Batch::Samples(v) => (v.iter().map(|s| stage.on_sample(s)).collect(), Vec::new()),
+                    Batch::Samples(samples) => {
+                        let mut ests = rx_free_out
+                            .try_recv()
+                            .unwrap_or_else(|_| Vec::with_capacity(BATCH));
+                        ests.clear();
+                        ests.extend(samples.iter().map(|s| stage.on_sample(s)));
+                        // (a full return channel: the buffer is dropped)
+                        let _ = tx_free_in.try_send(samples);
+                        (ests, Vec::new())
+                    }
                     Batch::Issue(issue) => (Vec::new(), vec![issue]),
                 };
                 if tx_out.send(msg).is_err() {
@@ -131,38 +144,55 @@ pub(super) fn replay_channels(
                 on_issue(issue, summary);
             }
             progress.tick(summary.samples);
+            if ests.capacity() > 0 {
+                let _ = tx_free_out.try_send(ests);
+            }
         }
         read.join().unwrap_or_default()
     })
 }
 
+/// Batches on each channel at most.
+const IN_FLIGHT: usize = 8;
+
+/// Emptied buffers kept for reuse on each return channel (more than can be
+/// in flight at once, so none is dropped).
+const RECYCLED: usize = 2 * IN_FLIGHT + 4;
+
 /// Reads `reader` to its end in batches of [`BATCH`] samples onto `tx_in`, an
-/// issue (a gap, a skipped row) ending a batch and following it; returns the
+/// issue (a gap, a skipped row) ending a batch and following it, each batch
+/// in a buffer from `free` when one is back (else a new one); returns the
 /// counts of absent optional values. Stops early when the receiver is gone.
 fn read_batches(
     mut reader: impl RowSource,
     tx_in: &crossbeam_channel::Sender<Batch>,
+    free: &crossbeam_channel::Receiver<Vec<Sample>>,
 ) -> [u64; dataset::N_OPTIONAL] {
-    let mut batch = Vec::with_capacity(BATCH);
+    let empty = || {
+        let mut v = free.try_recv().unwrap_or_else(|_| Vec::with_capacity(BATCH));
+        v.clear();
+        v
+    };
+    let mut batch = empty();
     while let Some(row) = reader.next_row() {
         match row {
             Row::Sample(s) => batch.push(s),
             Row::AfterGap(s, issue) => {
                 batch.push(s);
-                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                let full = std::mem::replace(&mut batch, empty());
                 if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
                     return reader.absent();
                 }
             }
             Row::Skipped(issue) => {
-                let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+                let full = std::mem::replace(&mut batch, empty());
                 if tx_in.send(Batch::Samples(full)).is_err() || tx_in.send(Batch::Issue(issue)).is_err() {
                     return reader.absent();
                 }
             }
         }
         if batch.len() == BATCH {
-            let full = std::mem::replace(&mut batch, Vec::with_capacity(BATCH));
+            let full = std::mem::replace(&mut batch, empty());
             if tx_in.send(Batch::Samples(full)).is_err() {
                 return reader.absent();
             }
