@@ -49,22 +49,6 @@ pub const OFFSET_CONFIRM_S: f64 = 2.0;
 /// A named offset clears once its part of the rises has stayed below half
 /// the naming level this long, s.
 pub const OFFSET_CLEAR_S: f64 = 10.0;
-/// Once the rises have fitted an offset better than any leak (by
-/// [`OFFSET_FIT_RATIO`]) for this long on one channel, they stay no leak
-/// evidence while a leak does not fit them better than that offset
-/// ([`OFFSET_HOLD_RATIO`]), s. A drifting transducer's part of the rises grows
-/// with the drift, and with it what the filter's other states take of it: the
-/// strict ratio would let the grown rises through as a leak.
-pub const OFFSET_HOLD_AFTER_S: f64 = 10.0;
-/// While an offset is held ([`OFFSET_HOLD_AFTER_S`]), its fit must leave less
-/// than this share of what the best leak's fit leaves (1): a leak must fit
-/// the rises better than the offset to be evidence.
-pub const OFFSET_HOLD_RATIO: f64 = 1.0;
-/// An episode whose rises have stayed high this long without a leak's onset
-/// holds its offset by [`OFFSET_HOLD_RATIO`] too, s: a leak takes its rises
-/// past their thresholds within a second or two of its onset; an offset's
-/// swing grows into them over tens of seconds.
-pub const OFFSET_EPISODE_HOLD_S: f64 = 5.0;
 /// Least weight an episode's fit needs before it can veto, s of samples.
 const EPISODE_MIN_S: f64 = 0.2;
 
@@ -190,8 +174,6 @@ pub struct OffsetWatch {
     episode: Option<Fit>,
     /// When the episode's rises were last high, s.
     episode_high_s: f64,
-    /// When the present episode started, s.
-    episode_start_s: f64,
     /// The channel meeting the naming conditions, and since when, s.
     candidate: Option<(usize, f64)>,
     /// Per channel: when its offset's part of the rises was last below a tenth of the threshold, s.
@@ -201,10 +183,6 @@ pub struct OffsetWatch {
     standing: Option<StandingOffset>,
     /// The leak kinds' directions in (w1, w2) ([`leak_directions`]).
     directions: [[f64; 2]; 3],
-    /// The channel whose offset has fitted the rises better than any leak, and since when, s.
-    suspect: Option<(usize, f64)>,
-    /// Whether the last rises were no leak evidence ([`OffsetWatch::vetoes`]).
-    vetoing: bool,
     /// Least offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
     least_offset_mpa: f64,
     /// Time the window has been filled over, s (nothing is named before [`OFFSET_WINDOW_S`]).
@@ -231,14 +209,11 @@ impl Default for OffsetWatch {
             window: Fit::default(),
             episode: None,
             episode_high_s: f64::NEG_INFINITY,
-            episode_start_s: f64::INFINITY,
             candidate: None,
             low_since_s: [f64::NEG_INFINITY; 2],
             fading_since_s: None,
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
-            suspect: None,
-            vetoing: false,
             least_offset_mpa: 0.0,
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
@@ -262,46 +237,18 @@ impl OffsetWatch {
         self.standing
     }
 
-    /// Whether the last rises are no leak evidence: those of the present
-    /// episode fit an offset better than any leak, or those of the window do
-    /// with the offset's part of them past [`OFFSET_MATERIAL_SHARE`] of the
-    /// smallest threshold (by [`OFFSET_FIT_RATIO`]); once that has held
-    /// [`OFFSET_HOLD_AFTER_S`] on one channel, or once the episode has lasted
-    /// [`OFFSET_EPISODE_HOLD_S`], while no leak fits them better than the
-    /// offset ([`OFFSET_HOLD_RATIO`]).
+    /// Whether the rises of the present episode fit an offset better than any
+    /// leak, or those of the window do with the offset's part of them past
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
     pub fn vetoes(&self) -> bool {
-        self.vetoing
-    }
-
-    /// Whether the rises fit an offset better than any leak, by `ratio` (1).
-    fn offset_fits(&self, ratio: f64) -> bool {
-        let episode = self
-            .episode
-            .as_ref()
-            .is_some_and(|f| f.w >= EPISODE_MIN_S && f.offset_fits_better(&self.directions, ratio));
+        let episode = self.episode.as_ref().is_some_and(|f| {
+            f.w >= EPISODE_MIN_S && f.offset_fits_better(&self.directions, OFFSET_FIT_RATIO)
+        });
         let (c, _) = self.window.best_offset();
         let window = self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self.window.offset_fits_better(&self.directions, ratio);
+            && self.window.offset_fits_better(&self.directions, OFFSET_FIT_RATIO);
         episode || window
-    }
-
-    /// Updates [`OffsetWatch::vetoes`] at time `t_s` (s).
-    fn update_veto(&mut self, t_s: f64) {
-        let (c, _) = self.window.best_offset();
-        let strict = self.offset_fits(OFFSET_FIT_RATIO);
-        let established = match self.suspect {
-            Some((j, since)) => j == c && t_s - since >= OFFSET_HOLD_AFTER_S,
-            None => false,
-        };
-        let long_episode = self.episode.is_some() && t_s - self.episode_start_s >= OFFSET_EPISODE_HOLD_S;
-        let held = (established || long_episode) && self.offset_fits(OFFSET_HOLD_RATIO);
-        self.suspect = match self.suspect {
-            Some((j, since)) if j == c && (strict || held) => Some((j, since)),
-            _ if strict => Some((c, t_s)),
-            _ => None,
-        };
-        self.vetoing = strict || held;
     }
 
     /// Reads one sample's rises `rise` (w1, w2, int; L/min at p_s/2, of
@@ -347,10 +294,7 @@ impl OffsetWatch {
         let high = (0..3).any(|k| rise3[k].abs() > EPISODE_LEVEL * thresholds_lpm[k]);
         if high {
             self.episode_high_s = t_s;
-            if self.episode.is_none() {
-                self.episode = Some(Fit::default());
-                self.episode_start_s = t_s;
-            }
+            self.episode.get_or_insert_with(Fit::default);
         } else if t_s - self.episode_high_s > EPISODE_QUIET_S {
             self.episode = None;
         }
@@ -359,7 +303,6 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
-        self.update_veto(t_s);
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..2 {
             if self.window.explained_rms_lpm(c) < 0.1 * smallest {
@@ -435,87 +378,4 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
         ),
     };
     ev
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const DT_S: f64 = 1e-3;
-    const THRESHOLD_LPM: f64 = 0.1;
-
-    /// The p1 offset's response on w1, L/min per MPa: it swings with the valve's flow and fades at rest.
-    fn response_lpm_per_mpa(t_s: f64) -> f64 {
-        0.6 * (std::f64::consts::PI * t_s).sin().abs()
-    }
-
-    /// Feeds a p1 drift of 5 kPa/s whose rises carry a steady part that grows
-    /// as `absorbed`·(t/100 s)² of the offset (what the filter's other states take of it),
-    /// plus a leak of `leak_lpm` from `leak_from_s`; returns whether the watch
-    /// vetoed at each whole second, and the watch.
-    fn drift(seconds: f64, absorbed: f64, leak_lpm: f64, leak_from_s: f64) -> (Vec<bool>, OffsetWatch) {
-        // (a range of 1000 MPa: no offset is named, the veto alone is seen)
-        let mut w = OffsetWatch::new(1e9);
-        let mut id = 0;
-        let mut vetoed = Vec::new();
-        let n = (seconds / DT_S).round() as usize;
-        for i in 1..=n {
-            let t = i as f64 * DT_S;
-            let b_mpa = 0.005 * t;
-            let d = response_lpm_per_mpa(t);
-            let steady =
-                absorbed * (t / 100.0).powi(2) * b_mpa + if t >= leak_from_s { leak_lpm } else { 0.0 };
-            let rise = [b_mpa * d + steady, 0.0, 0.0];
-            let response = [[d, 0.0, 0.0], [0.0, d, 0.0]];
-            w.on_rise(t, DT_S, rise, &response, [1.0, 1.0], [THRESHOLD_LPM; 3], &mut id);
-            if i % 1000 == 0 {
-                vetoed.push(w.vetoes());
-            }
-        }
-        (vetoed, w)
-    }
-
-    #[test]
-    fn a_drift_fitted_as_an_offset_stays_no_leak_evidence_as_its_fit_degrades() {
-        // (the offset's fit leaves 0.4-0.5 of the leak's from 20 s to 60 s, 0.83 at 85 s)
-        let (vetoed, w) = drift(85.0, 0.6, 0.0, f64::INFINITY);
-        let first = vetoed.iter().position(|v| *v).expect("vetoed");
-        assert!(first <= 25, "first veto at {first} s");
-        assert!(vetoed[first..].iter().all(|v| *v), "{vetoed:?}");
-        // at the end the strict ratio no longer holds: the hold is what vetoes
-        assert!(!w.offset_fits(OFFSET_FIT_RATIO));
-        assert!(w.offset_fits(OFFSET_HOLD_RATIO));
-        // without the hold's history (no standing suspect, a young episode), the same rises would be leak evidence
-        let mut fresh = w.clone();
-        fresh.suspect = None;
-        fresh.episode_start_s = 85.0;
-        fresh.update_veto(85.0);
-        assert!(!fresh.vetoes());
-    }
-
-    #[test]
-    fn a_long_episode_that_an_offset_fits_better_than_a_leak_is_no_leak_evidence() {
-        // (the window's offset fit leaves 0.53-0.9 of the leak's from 20 s on)
-        let (vetoed, w) = drift(55.0, 1.5, 0.0, f64::INFINITY);
-        assert!(vetoed[25..].iter().all(|v| *v), "{vetoed:?}");
-        assert!(!w.offset_fits(OFFSET_FIT_RATIO));
-        // without a standing suspect, the episode's age alone holds the offset
-        let mut old = w.clone();
-        old.suspect = None;
-        old.update_veto(55.0);
-        assert!(old.vetoes());
-        // the same rises in an episode younger than the hold are leak evidence
-        let mut young = old.clone();
-        young.suspect = None;
-        young.episode_start_s = 55.0;
-        young.update_veto(55.0);
-        assert!(!young.vetoes());
-    }
-
-    #[test]
-    fn a_leak_opening_under_a_held_offset_is_evidence_again() {
-        let (vetoed, _) = drift(90.0, 0.6, 0.3, 60.0);
-        assert!(vetoed[25..59].iter().all(|v| *v), "{vetoed:?}");
-        assert!(vetoed[70..].iter().all(|v| !*v), "{vetoed:?}");
-    }
 }
