@@ -60,7 +60,7 @@ pub use config::{
 };
 pub use frames;
 pub use private::{current_uid, ensure_private, private_dir, private_dir_path, RUNTIME_DIR_ENV};
-pub use publisher::{Publisher, PublisherWatch, TopicWatch};
+pub use publisher::{Publisher, PublisherWatch, TopicHold, TopicWatch};
 pub use schedule::ArrivalSchedule;
 pub use signals::stop_on_signals;
 pub use stage::{run_stage, run_stage_with, StageOptions, StageReport, StopReason};
@@ -241,6 +241,14 @@ impl Bus {
         Ok(TopicWatch {
             service: self.pubsub::<T>()?,
         })
+    }
+
+    /// Topic `T`'s services (frames and wake-ups), opened or created now and
+    /// kept while the [`TopicHold`] lives. A supervisor holds every topic
+    /// before it starts the stages, so that a stage killed at its start cannot
+    /// leave a service half created.
+    pub fn hold<T: Frame>(&self) -> Result<TopicHold<T>, BusError> {
+        Ok(TopicHold::new(self.pubsub::<T>()?, self.wake(T::TOPIC)?))
     }
 
     /// A subscriber of `T` on its topic, waiting in `mode`.

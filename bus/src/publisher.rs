@@ -1,5 +1,6 @@
 //! The sending side of a topic: [`Publisher`] (send + wake), and the
-//! counting of a topic's publishers ([`TopicWatch`], [`PublisherWatch`]).
+//! counting of a topic's publishers ([`TopicWatch`], [`PublisherWatch`]), and
+//! a topic's services kept created ([`TopicHold`]).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -9,6 +10,27 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::prelude::*;
 
 use crate::{monotonic_ns, BusError};
+
+/// Keeps one topic's services (its frames and its wake-ups) created for as long
+/// as it lives (see [`Bus::hold`](crate::Bus::hold)). A process killed while it
+/// creates a service leaves it half made, and every later open of it fails
+/// with "hangs in creation"; a service that already exists is only opened.
+pub struct TopicHold<T: Frame> {
+    _service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+    _wake: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+}
+
+impl<T: Frame> TopicHold<T> {
+    pub(crate) fn new(
+        service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+        wake: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+    ) -> TopicHold<T> {
+        TopicHold {
+            _service: service,
+            _wake: wake,
+        }
+    }
+}
 
 /// Counts the publishers of one topic without subscribing to it (see
 /// [`Bus::topic_watch`](crate::Bus::topic_watch)): a publisher more than the pipeline's own is another

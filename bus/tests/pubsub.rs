@@ -422,3 +422,44 @@ fn the_warm_up_runs_before_frames_in_low_latency_mode_only() {
         }
     }
 }
+
+/// Whether the topic's frame service and wake service exist on `bus`'s prefix.
+fn topic_services_exist(bus: &Bus, topic: frames::Topic) -> [bool; 2] {
+    use iceoryx2::prelude::*;
+    use iceoryx2::service::messaging_pattern::MessagingPattern;
+    let names = [
+        frames::service_name(bus.rig(), topic),
+        frames::wake_service_name(bus.rig(), topic),
+    ];
+    let patterns = [MessagingPattern::PublishSubscribe, MessagingPattern::Event];
+    let mut exist = [false; 2];
+    for ((e, name), pattern) in exist.iter_mut().zip(names).zip(patterns) {
+        let name = ServiceName::new(&name).expect("a valid name");
+        *e =
+            ipc::Service::does_exist(&name, bus.node().config(), pattern).expect("the service's state reads");
+    }
+    exist
+}
+
+/// A held topic exists before any stage touches it and outlives the stages
+/// that open it: a stage killed at its start then only ever opens it, and
+/// cannot leave it half created.
+#[test]
+fn a_held_topic_is_created_at_once_and_outlives_its_users() {
+    use frames::{HealthFrame, Topic};
+    let cfg = config("hold");
+    let supervisor = Bus::open("rig1", cfg.clone()).unwrap();
+    assert_eq!(topic_services_exist(&supervisor, Topic::Health), [false, false]);
+    let hold = supervisor.hold::<HealthFrame>().unwrap();
+    assert_eq!(topic_services_exist(&supervisor, Topic::Health), [true, true]);
+    {
+        let stage = Bus::open("rig1", cfg.clone()).unwrap();
+        let tx = stage.publisher::<HealthFrame>().unwrap();
+        drop((tx, stage));
+    }
+    assert_eq!(topic_services_exist(&supervisor, Topic::Health), [true, true]);
+    drop(hold);
+    assert_eq!(topic_services_exist(&supervisor, Topic::Health), [false, false]);
+    drop(supervisor);
+    cfg.remove_leftovers().expect("its files are removed");
+}

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use bus::{Bus, BusConfig, WaitMode};
 use detect::LeakEvent;
-use frames::{EstimateFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
+use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame, Topic};
 
 use crate::args::{check_udp_args, parse_source, RunArgs, RunSource};
 use crate::error::RunError;
@@ -491,6 +491,9 @@ struct Topics {
     frames_pubs: bus::PublisherWatch,
     /// What was said of the events' publishers.
     events_pubs: bus::PublisherWatch,
+    /// The health topic, which the supervisor does not read: created before
+    /// any stage starts (the subscribers above hold the other topics).
+    _health: bus::TopicHold<HealthFrame>,
 }
 
 impl Topics {
@@ -506,6 +509,7 @@ impl Topics {
             events_watch: bus.topic_watch::<LeakEventFrame>().map_err(e)?,
             frames_pubs: bus::PublisherWatch::new(Topic::Frames, 1),
             events_pubs: bus::PublisherWatch::new(Topic::Events, 1),
+            _health: bus.hold::<HealthFrame>().map_err(e)?,
         })
     }
 
