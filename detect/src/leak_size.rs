@@ -10,6 +10,9 @@ use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED
 mod decide;
 mod evidence;
 mod step;
+mod stretch;
+
+pub use stretch::{Stretch, STRETCH_SHARE};
 
 /// leakwatch's detector: thresholds on the estimated leak sizes.
 #[derive(Debug, Clone)]
@@ -132,6 +135,8 @@ pub fn thresholds(
 #[derive(Debug, Clone, Default)]
 struct HealthyRecord {
     values: [Vec<f64>; 3],
+    /// The time of each kept value, s.
+    times: Vec<f64>,
     next_t_s: f64,
     learned_s: f64,
     nis_sum: f64,
@@ -146,6 +151,7 @@ impl HealthyRecord {
         let n = (seconds / Self::EVERY_S).clamp(0.0, 1e6) as usize + 16;
         HealthyRecord {
             values: std::array::from_fn(|_| Vec::with_capacity(n)),
+            times: Vec::with_capacity(n),
             next_t_s: f64::NEG_INFINITY,
             learned_s: 0.0,
             nis_sum: 0.0,
@@ -164,6 +170,7 @@ impl HealthyRecord {
             for k in 0..3 {
                 self.values[k].push(q[k]);
             }
+            self.times.push(t_s);
         }
     }
 
@@ -378,6 +385,12 @@ impl CommissioningLearner {
     /// The internal leak's pressure factors learned so far (see [`Commissioning::internal_factors`]).
     pub fn internal_factors(&self) -> [f64; 2] {
         self.pressures.factors()
+    }
+
+    /// Per kind (ext1, ext2, int), the stretch of the learned data that holds
+    /// the largest share of its spread ([`Stretch`]).
+    pub fn largest_stretches(&self) -> [Option<Stretch>; 3] {
+        self.record.largest_stretches(self.internal_factors())
     }
 
     /// The commissioning, or why there is none (too little healthy data).

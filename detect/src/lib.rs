@@ -51,7 +51,9 @@ mod track;
 
 pub use config::{ClassifierConfig, Commissioning};
 pub use events::{EventKind, LeakEvent, Phase};
-pub use leak_size::{rice_threshold, thresholds, CommissioningLearner, LeakSizeDetector};
+pub use leak_size::{
+    rice_threshold, thresholds, CommissioningLearner, LeakSizeDetector, Stretch, STRETCH_SHARE,
+};
 pub use mae::MaeDetector;
 pub use stage::Classifier;
 

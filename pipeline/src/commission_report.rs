@@ -219,6 +219,10 @@ pub struct Learned {
     pub detectable_line: String,
     /// The leak filter's mean NIS on the recording (1; 3 when the model fits).
     pub nis_mean: f64,
+    /// Per kind, the stretch of the recording that sets its threshold, and
+    /// the threshold the rest would give (L/min at p_s/2); `None` for a kind
+    /// whose spread is the whole recording's.
+    pub set_by: [Option<(detect::Stretch, f64)>; 3],
 }
 
 /// Three values as `a/b/c` with three decimals.
@@ -254,11 +258,38 @@ impl Learned {
             three(self.thresholds_lpm),
             self.false_alarms_per_hour
         ));
+        out.extend(self.set_by_lines());
         out.push(self.detectable_line.clone());
         out.push(format!(
             "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
             self.nis_mean
         ));
+        out
+    }
+}
+
+impl Learned {
+    /// One line per kind whose threshold one stretch of the recording sets.
+    pub fn set_by_lines(&self) -> Vec<String> {
+        let kinds = ["ext1", "ext2", "int"];
+        let mut out = Vec::new();
+        for (k, set) in self.set_by.iter().enumerate() {
+            let Some((s, without)) = set else { continue };
+            out.push(format!(
+                "warning: the {} threshold ({:.3} L/min) is set by {:.1}-{:.1} s of the recording (rises up to {:.3} L/min, \
+                 {:.0} % of its spread); the rest would give {:.3} L/min. The model does not follow the rig there \
+                 (a fast move, a transient): {} leaks below the threshold are not seen; `leakwatch calibrate` on \
+                 this recording names what the model lacks, or commission on one without that stretch",
+                kinds[k],
+                self.thresholds_lpm[k],
+                s.from_s,
+                s.to_s,
+                s.peak_lpm,
+                100.0 * s.share,
+                without,
+                kinds[k]
+            ));
+        }
         out
     }
 }
@@ -348,6 +379,9 @@ impl CommissionRecord {
             h += &row(&format!("smallest detectable at {t:.0} °C"), *d);
         }
         h += "</table>\n";
+        for line in l.set_by_lines() {
+            h += &format!("<p class=\"note\"><b>{}</b></p>\n", esc(&line));
+        }
         if let Some(f) = l.internal_factors {
             h += &format!(
                 "<p class=\"note\">Internal leak's pressure factors r1/r2: {:.3}/{:.3}.</p>\n",
