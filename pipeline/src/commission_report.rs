@@ -278,8 +278,9 @@ impl Learned {
             out.push(format!(
                 "warning: the {} threshold ({:.3} L/min) is set by {:.1}-{:.1} s of the recording (rises up to {:.3} L/min, \
                  {:.0} % of its spread); the rest would give {:.3} L/min. The model does not follow the rig there \
-                 (a fast move, a transient): {} leaks below the threshold are not seen; `leakwatch calibrate` on \
-                 this recording names what the model lacks, or commission on one without that stretch",
+                 (a fast move, a transient; the transducers' lag and the lines' drop identified above are not in \
+                 the filters): {} leaks below the threshold are not seen; `leakwatch calibrate` on this recording \
+                 searches for what the model lacks, or commission on one without that stretch",
                 kinds[k],
                 self.thresholds_lpm[k],
                 s.from_s,
