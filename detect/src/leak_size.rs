@@ -1,18 +1,21 @@
-// Over 600 lines: the detector's state (33 fields), its arming and its healthy record; the per-estimate step is in step.rs, evidence.rs and decide.rs.
 //! leakwatch's detector: thresholds on the rise of the estimated leak sizes above
 //! a healthy baseline, the kind decided by the chamber flows each hypothesis
-//! implies (the per-sample step is in `step.rs`, `evidence.rs` and `decide.rs`).
+//! implies (the per-sample step is in `step.rs`, `evidence.rs` and `decide.rs`;
+//! the healthy state it learns, and a commissioning's learner, in `healthy.rs`).
 
 use crate::track::{Active, Arming, Stats};
-use crate::{signatures_with, ClassifierConfig, Commissioning, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
-use filter::{Estimate, FLAG_AFTER_GAP, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use crate::{signatures_with, ClassifierConfig, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
+use filter::Estimate;
 
 mod decide;
 mod evidence;
+mod healthy;
 mod step;
 mod stretch;
 
-pub use stretch::{Stretch, STRETCH_SHARE};
+pub use healthy::CommissioningLearner;
+use healthy::{HealthyRecord, RunningSpread};
+pub use stretch::{Stretch, STRETCH_SHARE, STRETCH_THRESHOLD_RATIO};
 
 /// leakwatch's detector: thresholds on the estimated leak sizes.
 #[derive(Debug, Clone)]
@@ -126,205 +129,6 @@ pub fn thresholds(
     (z, lpm)
 }
 
-/// Healthy values of the three single-leak sizes kept every 10 ms, and their
-/// statistics: the median as the offset, the upper semi-deviation as the
-/// spread (the RMS of the values above the median: a leak only adds flow, so
-/// the detector tests rises; the healthy estimate's upward wander with the
-/// operating point stays in it, its dips do not, a filter kicked down by a
-/// transient it cannot follow), and the rate of upcrossings of the median.
-#[derive(Debug, Clone, Default)]
-struct HealthyRecord {
-    values: [Vec<f64>; 3],
-    /// The time of each kept value, s.
-    times: Vec<f64>,
-    next_t_s: f64,
-    learned_s: f64,
-    nis_sum: f64,
-    nis_n: f64,
-}
-
-impl HealthyRecord {
-    /// Interval between kept values, s.
-    const EVERY_S: f64 = 0.01;
-
-    fn with_capacity_s(seconds: f64) -> Self {
-        let n = (seconds / Self::EVERY_S).clamp(0.0, 1e6) as usize + 16;
-        HealthyRecord {
-            values: std::array::from_fn(|_| Vec::with_capacity(n)),
-            times: Vec::with_capacity(n),
-            next_t_s: f64::NEG_INFINITY,
-            learned_s: 0.0,
-            nis_sum: 0.0,
-            nis_n: 0.0,
-        }
-    }
-
-    fn push(&mut self, t_s: f64, dt_s: f64, q: [f64; 3], nis: f64) {
-        self.learned_s += dt_s;
-        if nis.is_finite() {
-            self.nis_sum += nis.min(1e6);
-            self.nis_n += 1.0;
-        }
-        if t_s >= self.next_t_s {
-            self.next_t_s = t_s + Self::EVERY_S;
-            for k in 0..3 {
-                self.values[k].push(q[k]);
-            }
-            self.times.push(t_s);
-        }
-    }
-
-    /// Mean NIS of the learned samples (NaN if none).
-    fn nis_mean(&self) -> f64 {
-        if self.nis_n > 0.0 {
-            self.nis_sum / self.nis_n
-        } else {
-            f64::NAN
-        }
-    }
-
-    /// (offsets, spreads, upcrossings per second of the learned time) of the
-    /// signatures ([`signatures_with`] with `factors`) of the kept leak sizes.
-    fn summary(&self, factors: [f64; 2]) -> ([f64; 3], [f64; 3], [f64; 3]) {
-        let mut med = [f64::NAN; 3];
-        let mut spread = [f64::NAN; 3];
-        let mut cross = [0.0; 3];
-        let n = self.values[0].len();
-        let mut signatures: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
-        for i in 0..n {
-            let w = signatures_with([self.values[0][i], self.values[1][i], self.values[2][i]], factors);
-            for k in 0..3 {
-                signatures[k].push(w[k]);
-            }
-        }
-        for k in 0..3 {
-            let v = &signatures[k];
-            if v.is_empty() {
-                continue;
-            }
-            let m = median(v);
-            let (sum_sq, above) = v
-                .iter()
-                .filter(|x| **x > m)
-                .fold((0.0_f64, 0.0_f64), |(s, n), x| (s + (x - m).powi(2), n + 1.0));
-            med[k] = m;
-            spread[k] = (sum_sq / above.max(1.0)).sqrt();
-            let ups = v.windows(2).filter(|w| w[0] <= m && w[1] > m).count();
-            cross[k] = ups as f64 / self.learned_s.max(Self::EVERY_S);
-        }
-        (med, spread, cross)
-    }
-}
-
-/// The median of `v` (the mean of the middle two of an even count; NaN if empty).
-fn median(v: &[f64]) -> f64 {
-    let mut sorted = v.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    match sorted.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => sorted[n / 2],
-        n => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
-    }
-}
-
-/// Running statistics of the healthy rises of the three single-leak sizes,
-/// kept every 10 ms without storing them: mean and spread (Welford) and the
-/// upcrossings of the running mean, over all the time learned.
-#[derive(Debug, Clone, Copy, Default)]
-struct RunningSpread {
-    n: f64,
-    mean: [f64; 3],
-    m2: [f64; 3],
-    ups: [f64; 3],
-    above: [bool; 3],
-    next_t_s: f64,
-    learned_s: f64,
-}
-
-impl RunningSpread {
-    fn push(&mut self, t_s: f64, dt_s: f64, v: [f64; 3]) {
-        self.learned_s += dt_s;
-        if self.n > 0.0 && t_s < self.next_t_s {
-            return;
-        }
-        self.next_t_s = t_s + HealthyRecord::EVERY_S;
-        self.n += 1.0;
-        for k in 0..3 {
-            let d = v[k] - self.mean[k];
-            self.mean[k] += d / self.n;
-            self.m2[k] += d * (v[k] - self.mean[k]);
-            let above = v[k] > self.mean[k];
-            if above && !self.above[k] && self.n > 1.0 {
-                self.ups[k] += 1.0;
-            }
-            self.above[k] = above;
-        }
-    }
-
-    /// (spreads, upcrossings per second of the learned time).
-    fn summary(&self) -> ([f64; 3], [f64; 3]) {
-        let spread = std::array::from_fn(|k| (self.m2[k] / (self.n - 1.0).max(1.0)).sqrt());
-        let cross = std::array::from_fn(|k| self.ups[k] / self.learned_s.max(HealthyRecord::EVERY_S));
-        (spread, cross)
-    }
-}
-
-/// Sums of the chambers' pressures over the healthy samples, for the internal
-/// leak's pressure factors ([`signatures_with`]).
-#[derive(Debug, Clone, Copy, Default)]
-struct PressureSums {
-    /// Σ ssqrt(p1 − p2) (√Pa), Σ (p1 − p2)·sgn (Pa), Σ √p1, Σ √p2 (√Pa), count.
-    sums: [f64; 5],
-}
-
-impl PressureSums {
-    /// Adds one sample of the chamber pressures `p1_pa`, `p2_pa` (skipped if not finite).
-    fn push(&mut self, p1_pa: f64, p2_pa: f64) {
-        if !(p1_pa.is_finite() && p2_pa.is_finite()) {
-            return;
-        }
-        let s = ssqrt(p1_pa - p2_pa);
-        for (sum, v) in
-            self.sums
-                .iter_mut()
-                .zip([s, s * s, p1_pa.max(0.0).sqrt(), p2_pa.max(0.0).sqrt(), 1.0])
-        {
-            *sum += v;
-        }
-    }
-
-    /// The internal leak's pressure factors (r1, r2): ssqrt(p1 − p2)/√p_i at the
-    /// mean pressures where ssqrt(p1 − p2) stayed on one side of zero (its mean
-    /// beyond twice its spread), else the nominal (1, 1).
-    fn factors(&self) -> [f64; 2] {
-        let [s, s2, g1, g2, n] = self.sums;
-        if n < 2.0 {
-            return crate::NOMINAL_INTERNAL_FACTORS;
-        }
-        let (mean, g1, g2) = (s / n, g1 / n, g2 / n);
-        let spread = (s2 / n - mean * mean).max(0.0).sqrt();
-        if mean.abs() > 2.0 * spread && g1 > 0.0 && g2 > 0.0 {
-            [mean / g1, mean / g2]
-        } else {
-            crate::NOMINAL_INTERNAL_FACTORS
-        }
-    }
-}
-
-/// Learns a [`Commissioning`] from the leak filter's estimates of a healthy run:
-/// the offset, spread and upcrossing rate of each single-leak size after the
-/// filter has converged and settled, gaps and resets left out; and the
-/// internal leak's pressure factors ([`signatures_with`]) from the chambers'
-/// pressures over the same samples.
-#[derive(Debug, Clone)]
-pub struct CommissioningLearner {
-    settle_s: f64,
-    converged_at_s: Option<f64>,
-    record: HealthyRecord,
-    pressures: PressureSums,
-    last_t_s: f64,
-}
-
 /// The leak sizes [q_e1, q_e2, q_i] of an estimate, L/min at the nominal drop.
 pub(crate) fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
     [
@@ -332,88 +136,6 @@ pub(crate) fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
         e.state[8] / M3_S_PER_LPM,
         e.state[9] / M3_S_PER_LPM,
     ]
-}
-
-/// The signed square root, √|x|·sgn x.
-fn ssqrt(x: f64) -> f64 {
-    x.abs().sqrt().copysign(x)
-}
-
-impl CommissioningLearner {
-    /// A learner that starts `settle_s` after the filter has converged.
-    pub fn new(settle_s: f64) -> Self {
-        CommissioningLearner {
-            settle_s,
-            converged_at_s: None,
-            record: HealthyRecord::with_capacity_s(600.0),
-            pressures: PressureSums::default(),
-            last_t_s: f64::NAN,
-        }
-    }
-
-    /// Reads one estimate of the leak filter.
-    pub fn on_estimate(&mut self, e: &Estimate) {
-        if e.n_states < 10 {
-            return;
-        }
-        let bad = FLAG_SKIPPED | FLAG_RESET | FLAG_CONVERGING | FLAG_AFTER_GAP;
-        if e.flags & bad != 0 {
-            if e.flags & (FLAG_RESET | FLAG_CONVERGING) != 0 {
-                self.converged_at_s = None;
-            }
-            self.last_t_s = f64::NAN;
-            return;
-        }
-        let t0 = *self.converged_at_s.get_or_insert(e.t_s);
-        if e.t_s - t0 < self.settle_s {
-            return;
-        }
-        let q = leak_sizes_lpm(e);
-        if !q.iter().all(|v| v.is_finite()) {
-            return;
-        }
-        let dt_s = if self.last_t_s.is_finite() {
-            (e.t_s - self.last_t_s).clamp(0.0, 0.1)
-        } else {
-            0.0
-        };
-        self.last_t_s = e.t_s;
-        self.record.push(e.t_s, dt_s, q, e.nis);
-        self.pressures.push(e.state[1], e.state[2]);
-    }
-
-    /// The internal leak's pressure factors learned so far (see [`Commissioning::internal_factors`]).
-    pub fn internal_factors(&self) -> [f64; 2] {
-        self.pressures.factors()
-    }
-
-    /// Per kind (ext1, ext2, int), the stretch of the learned data that holds
-    /// the largest share of its spread ([`Stretch`]).
-    pub fn largest_stretches(&self) -> [Option<Stretch>; 3] {
-        self.record.largest_stretches(self.internal_factors())
-    }
-
-    /// The commissioning, or why there is none (too little healthy data).
-    pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
-        let internal_factors = self.internal_factors();
-        let record = &self.record;
-        let learned_s = record.learned_s;
-        if learned_s < min_s {
-            return Err(format!(
-                "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
-            ));
-        }
-        let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary(internal_factors);
-        Ok(Commissioning {
-            offsets_lpm,
-            spreads_lpm,
-            crossings_per_s,
-            healthy_s: learned_s,
-            nis_mean: record.nis_mean(),
-            source: source.to_string(),
-            internal_factors,
-        })
-    }
 }
 
 impl LeakSizeDetector {

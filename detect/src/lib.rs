@@ -53,6 +53,7 @@ pub use config::{ClassifierConfig, Commissioning};
 pub use events::{EventKind, LeakEvent, Phase};
 pub use leak_size::{
     rice_threshold, thresholds, CommissioningLearner, LeakSizeDetector, Stretch, STRETCH_SHARE,
+    STRETCH_THRESHOLD_RATIO,
 };
 pub use mae::MaeDetector;
 pub use stage::Classifier;

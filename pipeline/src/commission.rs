@@ -373,8 +373,8 @@ pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Optio
 }
 
 /// [`learn`], the leak filter's fit to the recording ([`FitTrace`]) and, per
-/// kind, the stretch of the recording that holds the largest share of its
-/// spread ([`detect::Stretch`]).
+/// kind, the stretch of the recording that sets its threshold, with the
+/// threshold the rest gives ([`detect::CommissioningLearner::thresholds_set_by_stretches`]).
 pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> {
     if cfg.leak_filter.states < 10 {
         return Err(format!(
@@ -401,16 +401,17 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         .finish(MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
     let theta = (theta_n > 0).then(|| theta_sum / theta_n as f64);
-    Ok((c, theta, fit, learner.largest_stretches()))
+    let set_by = learner.thresholds_set_by_stretches(&cfg.classifier, &c);
+    Ok((c, theta, fit, set_by))
 }
 
 /// What [`learn_traced`] gives: the commissioning, θ on the recording (1),
-/// the fit, the largest stretch per kind.
+/// the fit, per kind the stretch that sets its threshold and the rest's threshold (L/min).
 pub type LearnedTrace = (
     detect::Commissioning,
     Option<f64>,
     FitTrace,
-    [Option<detect::Stretch>; 3],
+    [Option<(detect::Stretch, f64)>; 3],
 );
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
@@ -438,10 +439,9 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         cfg = with_null_bias(&cfg, &bias);
         null_bias = Some((bias, datasheet_model.spool_null_bias_m));
     }
-    let (c, theta, fit, stretches) = learn_traced(input, &cfg)?;
+    let (c, theta, fit, set_by) = learn_traced(input, &cfg)?;
     cfg.model.oil_temperature.reference_stiffness = theta;
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
-    let set_by = setting_stretches(&cfg.classifier, &c, thr, stretches);
     let learned = Learned {
         theta,
         reference_c: cfg.model.oil_temperature.reference_c,
@@ -469,25 +469,6 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         fit,
     };
     Ok((cfg, record))
-}
-
-/// Per kind, the stretch that sets its threshold: it holds at least
-/// [`detect::STRETCH_SHARE`] of the kind's spread, and the rest of the
-/// recording alone would give less than half the threshold `thr` (L/min at
-/// p_s/2); with that threshold.
-fn setting_stretches(
-    classifier: &detect::ClassifierConfig,
-    c: &detect::Commissioning,
-    thr: [f64; 3],
-    stretches: [Option<detect::Stretch>; 3],
-) -> [Option<(detect::Stretch, f64)>; 3] {
-    std::array::from_fn(|k| {
-        let s = stretches[k].filter(|s| s.share >= detect::STRETCH_SHARE)?;
-        let mut spreads = c.spreads_lpm;
-        spreads[k] = s.spread_without_lpm;
-        let (_, without) = detect::thresholds(classifier, spreads, c.crossings_per_s);
-        (without[k] < 0.5 * thr[k]).then_some((s, without[k]))
-    })
 }
 
 /// The oil temperatures at which commissioning states the smallest detectable
@@ -589,54 +570,6 @@ pub fn report_path(out: &Path) -> std::path::PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A stretch is said when it holds half the spread or more and the rest
-    /// would give less than half the threshold; the threshold without it is
-    /// the rest's spread through the same formula.
-    #[test]
-    fn a_threshold_set_by_one_stretch_is_said_with_the_rests_threshold() {
-        let classifier = detect::ClassifierConfig::default();
-        let c = detect::Commissioning {
-            offsets_lpm: [0.0; 3],
-            spreads_lpm: [0.2, 0.2, 0.2],
-            crossings_per_s: [1.0; 3],
-            healthy_s: 100.0,
-            nis_mean: 3.0,
-            source: String::new(),
-            internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
-        };
-        let (_, thr) = detect::thresholds(&classifier, c.spreads_lpm, c.crossings_per_s);
-        let stretch = |share: f64, spread_without_lpm: f64| detect::Stretch {
-            from_s: 10.0,
-            to_s: 15.0,
-            peak_lpm: 0.6,
-            share,
-            spread_without_lpm,
-        };
-        let set = setting_stretches(
-            &classifier,
-            &c,
-            thr,
-            [
-                Some(stretch(0.9, 0.02)),
-                Some(stretch(0.4, 0.02)),
-                Some(stretch(0.9, 0.15)),
-            ],
-        );
-        let (s, without) = set[0].expect("ext1: 90 % of the spread, the rest a tenth of it");
-        assert_eq!(s, stretch(0.9, 0.02));
-        let (_, expected) = detect::thresholds(&classifier, [0.02, 0.2, 0.2], c.crossings_per_s);
-        assert_eq!(without, expected[0]);
-        assert!(without < 0.5 * thr[0], "{without} against {}", thr[0]);
-        assert!(
-            set[1].is_none(),
-            "ext2: 40 % of the spread is not one stretch's threshold"
-        );
-        assert!(
-            set[2].is_none(),
-            "int: the rest alone gives three quarters of the threshold"
-        );
-    }
 
     /// The smallest detectable leaks are stated at the ends and the middle of
     /// the model's operating range: the thresholds themselves at the

@@ -4,12 +4,16 @@
 //! move the model does not follow, a transient) is said, with the threshold
 //! the rest of the recording would give.
 
-use super::{median, HealthyRecord};
-use crate::signatures_with;
+use super::healthy::{median, HealthyRecord};
+use crate::{signatures_with, ClassifierConfig, Commissioning};
 
 /// Share of a kind's upper semi-variance from which one stretch is said to
 /// set its threshold (1).
 pub const STRETCH_SHARE: f64 = 0.5;
+
+/// A stretch sets a threshold when the rest of the recording would give
+/// less than this share of it (1).
+pub const STRETCH_THRESHOLD_RATIO: f64 = 0.5;
 
 /// One stretch of a commissioning recording above the median of one kind's
 /// healthy values.
@@ -42,6 +46,26 @@ impl HealthyRecord {
             largest_stretch(&v, &self.times[..n])
         })
     }
+}
+
+/// Per kind, the stretch of `stretches` that sets the threshold of
+/// commissioning `c` under settings `cfg`: it holds at least
+/// [`STRETCH_SHARE`] of the kind's spread, and the rest of the recording
+/// would give less than [`STRETCH_THRESHOLD_RATIO`] of the threshold; with
+/// the threshold the rest gives, L/min at p_s/2.
+pub(super) fn setting_thresholds(
+    cfg: &ClassifierConfig,
+    c: &Commissioning,
+    stretches: [Option<Stretch>; 3],
+) -> [Option<(Stretch, f64)>; 3] {
+    let (_, thr) = crate::thresholds(cfg, c.spreads_lpm, c.crossings_per_s);
+    std::array::from_fn(|k| {
+        let s = stretches[k].filter(|s| s.share >= STRETCH_SHARE)?;
+        let mut spreads = c.spreads_lpm;
+        spreads[k] = s.spread_without_lpm;
+        let (_, without) = crate::thresholds(cfg, spreads, c.crossings_per_s);
+        (without[k] < STRETCH_THRESHOLD_RATIO * thr[k]).then_some((s, without[k]))
+    })
 }
 
 /// The run of consecutive values of `v` (kept at `times`, s) above its median
@@ -84,6 +108,53 @@ fn largest_stretch(v: &[f64], times: &[f64]) -> Option<Stretch> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A stretch is said when it holds half the spread or more and the rest
+    /// would give less than half the threshold; the threshold without it is
+    /// the rest's spread through the same formula.
+    #[test]
+    fn a_threshold_set_by_one_stretch_is_said_with_the_rests_threshold() {
+        let cfg = ClassifierConfig::default();
+        let c = Commissioning {
+            offsets_lpm: [0.0; 3],
+            spreads_lpm: [0.2, 0.2, 0.2],
+            crossings_per_s: [1.0; 3],
+            healthy_s: 100.0,
+            nis_mean: 3.0,
+            source: String::new(),
+            internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
+        };
+        let (_, thr) = crate::thresholds(&cfg, c.spreads_lpm, c.crossings_per_s);
+        let stretch = |share: f64, spread_without_lpm: f64| Stretch {
+            from_s: 10.0,
+            to_s: 15.0,
+            peak_lpm: 0.6,
+            share,
+            spread_without_lpm,
+        };
+        let set = setting_thresholds(
+            &cfg,
+            &c,
+            [
+                Some(stretch(0.9, 0.02)),
+                Some(stretch(0.4, 0.02)),
+                Some(stretch(0.9, 0.15)),
+            ],
+        );
+        let (s, without) = set[0].expect("ext1: 90 % of the spread, the rest a tenth of it");
+        assert_eq!(s, stretch(0.9, 0.02));
+        let (_, expected) = crate::thresholds(&cfg, [0.02, 0.2, 0.2], c.crossings_per_s);
+        assert_eq!(without, expected[0]);
+        assert!(without < 0.5 * thr[0], "{without} against {}", thr[0]);
+        assert!(
+            set[1].is_none(),
+            "ext2: 40 % of the spread is not one stretch's threshold"
+        );
+        assert!(
+            set[2].is_none(),
+            "int: the rest alone gives three quarters of the threshold"
+        );
+    }
 
     #[test]
     fn one_excursion_is_found_with_its_share_and_the_spread_without_it() {
