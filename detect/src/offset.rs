@@ -8,7 +8,16 @@
 //! fitted to the rises of the sizes by least squares:
 //!
 //! - offset on channel c: rise(t) ≈ b·δ_c(t), one b per channel;
+//! - the same offset seen through the baseline: rise(t) ≈ b·(δ_c − δ̄_c)(t);
 //! - leak of kind k: rise_k(t) ≈ q, the other sizes ≈ 0.
+//!
+//! The rises are measured from a baseline that follows the sizes slowly (the
+//! detector's `baseline_tau_s`). It takes up the steady part of a standing
+//! offset's b·δ_c as it takes up any slow drift: δ̄_c is δ_c followed at the
+//! baseline's rate, and δ_c − δ̄_c is the part that swings with the flow. A
+//! drifting offset stays ahead of the baseline, so its rises keep some of the
+//! steady part: both forms are fitted, and the swing counts where it fits
+//! clearly better ([`SWING_FIT_RATIO`]).
 //!
 //! A rise an offset explains clearly better than every leak is not leak evidence. An
 //! offset that explains the rises over [`OFFSET_WINDOW_S`] and is large enough
@@ -29,6 +38,12 @@ pub const EPISODE_LEVEL: f64 = 0.5;
 /// they are no leak evidence, and it may be named. (Where the offset's response
 /// barely swings, as under a steady sine, both fit alike and neither wins.)
 pub const OFFSET_FIT_RATIO: f64 = 0.5;
+/// An offset's swing about its baseline is fitted in its place when it leaves
+/// less than this share of what the offset's response as the filter gives it
+/// leaves (1). A leak's steady rise, or a healthy rig's hoses, fit both forms
+/// alike; a standing offset's rises, once the baseline has taken up their
+/// steady part, fit the swing far better.
+pub const SWING_FIT_RATIO: f64 = 0.5;
 /// To be named, the offset's fit leaves at most this share of the rises'
 /// energy unexplained (1).
 pub const OFFSET_MAX_UNEXPLAINED: f64 = 0.5;
@@ -55,6 +70,15 @@ const EPISODE_MIN_S: f64 = 0.2;
 /// The transducers whose offsets are fitted, in the order of the response's rows.
 pub const OFFSET_CHANNEL_NAMES: [&str; 2] = ["p1", "p2"];
 
+/// The offset hypotheses fitted: per channel, its response as the filter
+/// gives it (h = c) and that response's swing about its baseline (h = 2 + c).
+const HYPOTHESES: usize = 4;
+
+/// The channel of offset hypothesis `h`.
+const fn channel_of(h: usize) -> usize {
+    h % 2
+}
+
 /// Exponentially weighted sums of both fits over the chamber flows' rises
 /// (w1, w2) (weights in s).
 #[derive(Debug, Clone, Copy, Default)]
@@ -63,20 +87,20 @@ struct Fit {
     w: f64,
     /// Σw·|rise|², (L/min)²·s.
     energy: f64,
-    /// Σw·δ_c·rise per channel, (L/min)²/MPa·s.
-    response_rise: [f64; 2],
-    /// Σw·|δ_c|² per channel, (L/min/MPa)²·s.
-    response_energy: [f64; 2],
+    /// Σw·δ_h·rise per offset hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s.
+    response_rise: [f64; HYPOTHESES],
+    /// Σw·|δ_h|² per offset hypothesis, (L/min/MPa)²·s.
+    response_energy: [f64; HYPOTHESES],
     /// Σw·rise, L/min·s.
     rise: [f64; 2],
 }
 
 impl Fit {
     /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
-    fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; 2]) {
+    fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
         self.w = keep * self.w + dt_s;
         self.energy = keep * self.energy + dt_s * (rise[0] * rise[0] + rise[1] * rise[1]);
-        for c in 0..2 {
+        for c in 0..HYPOTHESES {
             let d = &response[c];
             let dr = d[0] * rise[0] + d[1] * rise[1];
             let dd = d[0] * d[0] + d[1] * d[1];
@@ -88,7 +112,7 @@ impl Fit {
         }
     }
 
-    /// The offset of channel `c` that fits best, MPa (0 without a response).
+    /// The offset of hypothesis `c` that fits best, MPa (0 without a response).
     fn offset_mpa(&self, c: usize) -> f64 {
         if self.response_energy[c] > 0.0 {
             self.response_rise[c] / self.response_energy[c]
@@ -97,7 +121,7 @@ impl Fit {
         }
     }
 
-    /// The energy the offset of channel `c` explains, (L/min)²·s.
+    /// The energy the offset of hypothesis `c` explains, (L/min)²·s.
     fn explained_by_offset(&self, c: usize) -> f64 {
         self.offset_mpa(c) * self.response_rise[c]
     }
@@ -112,26 +136,34 @@ impl Fit {
         self.energy - best
     }
 
-    /// The channel whose offset explains most, and what its fit leaves, (L/min)²·s.
-    fn best_offset(&self) -> (usize, f64) {
-        let left = [0, 1].map(|c| self.energy - self.explained_by_offset(c));
-        if left[1] < left[0] {
-            (1, left[1])
-        } else {
-            (0, left[0])
-        }
+    /// The offset hypothesis that explains most, and what its fit leaves,
+    /// (L/min)²·s. A channel's swing about its baseline counts only where it
+    /// leaves less than [`SWING_FIT_RATIO`] of what its response as given
+    /// leaves: the baseline has taken up the offset's steady part.
+    /// Without `swing`, the responses as given alone.
+    fn best_offset(&self, swing: bool) -> (usize, f64) {
+        let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
+        (0..HYPOTHESES)
+            .filter(|&h| h < 2 || (swing && left[h] < SWING_FIT_RATIO * left[h - 2]))
+            .map(|h| (h, left[h]))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
     }
 
     /// Whether an offset's fit leaves less than `ratio` times what the best
     /// leak's leaves unexplained.
-    fn offset_fits_better(&self, directions: &[[f64; 2]; 3], ratio: f64) -> bool {
-        let (_, left) = self.best_offset();
+    fn offset_fits_better(&self, directions: &[[f64; 2]; 3], ratio: f64, swing: bool) -> bool {
+        let (_, left) = self.best_offset(swing);
         self.energy > 0.0 && left < ratio * self.unexplained_by_leak(directions)
     }
 
-    /// RMS of the rises that the offset of channel `c` explains, L/min.
+    /// RMS of the rises that the offset of hypothesis `c` explains, L/min.
     fn explained_rms_lpm(&self, c: usize) -> f64 {
         (self.explained_by_offset(c).max(0.0) / self.w.max(1e-12)).sqrt()
+    }
+
+    /// RMS of the rises that an offset of channel `c` explains in either form, L/min.
+    fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
+        self.explained_rms_lpm(c).max(self.explained_rms_lpm(c + 2))
     }
 }
 
@@ -191,6 +223,12 @@ pub struct OffsetWatch {
     smallest_threshold_lpm: f64,
     /// A sample period (s) and the window's decay over it (1).
     keep_for: (f64, f64),
+    /// Per channel: the baseline of its response δ̄_c in (w1, w2), L/min per MPa,
+    /// followed as the detector's baseline follows the sizes.
+    response_baseline: [[f64; 2]; 2],
+    /// The share (1) by which the detector's baseline moved toward the sizes at
+    /// this sample ([`OffsetWatch::follow_baseline`]).
+    baseline_step: f64,
 }
 
 impl OffsetWatch {
@@ -218,6 +256,8 @@ impl Default for OffsetWatch {
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
             keep_for: (0.0, 1.0),
+            response_baseline: [[0.0; 2]; 2],
+            baseline_step: 0.0,
         }
     }
 }
@@ -232,6 +272,13 @@ impl OffsetWatch {
         };
     }
 
+    /// The detector's baseline moved by `share` (1) of the way toward the
+    /// sizes at this sample: the responses' baselines follow by as much in
+    /// the next [`OffsetWatch::on_rise`].
+    pub fn follow_baseline(&mut self, share: f64) {
+        self.baseline_step = share;
+    }
+
     /// The named offset, if one stands.
     pub fn standing(&self) -> Option<StandingOffset> {
         self.standing
@@ -240,14 +287,18 @@ impl OffsetWatch {
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
+    /// The episode's fit takes the responses as given alone: over its first
+    /// seconds a leak's step fits some swing as well as it fits the leak.
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_MIN_S && f.offset_fits_better(&self.directions, OFFSET_FIT_RATIO)
+            f.w >= EPISODE_MIN_S && f.offset_fits_better(&self.directions, OFFSET_FIT_RATIO, false)
         });
-        let (c, _) = self.window.best_offset();
+        let (c, _) = self.window.best_offset(true);
         let window = self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self.window.offset_fits_better(&self.directions, OFFSET_FIT_RATIO);
+            && self
+                .window
+                .offset_fits_better(&self.directions, OFFSET_FIT_RATIO, true);
         episode || window
     }
 
@@ -268,6 +319,7 @@ impl OffsetWatch {
         thresholds_lpm: [f64; 3],
         next_id: &mut u64,
     ) -> Option<OffsetChange> {
+        let share = std::mem::take(&mut self.baseline_step);
         if !(rise
             .iter()
             .chain(response.iter().flatten())
@@ -277,11 +329,17 @@ impl OffsetWatch {
             return None;
         }
         self.directions = leak_directions(factors);
-        let response = response.map(|q| {
-            let w = crate::signatures_with(q, factors);
-            [w[0], w[1]]
-        });
-        let response = &response;
+        let mut hypotheses = [[0.0; 2]; HYPOTHESES];
+        for c in 0..2 {
+            let w = crate::signatures_with(response[c], factors);
+            for k in 0..2 {
+                let base = &mut self.response_baseline[c][k];
+                *base += share * (w[k] - *base);
+                hypotheses[c][k] = w[k];
+                hypotheses[2 + c][k] = w[k] - *base;
+            }
+        }
+        let response = &hypotheses;
         let rise3 = rise;
         let rise = [rise3[0], rise3[1]];
         // (the samples come at one period: the decay is computed once per period)
@@ -305,12 +363,12 @@ impl OffsetWatch {
         self.smallest_threshold_lpm = smallest;
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..2 {
-            if self.window.explained_rms_lpm(c) < 0.1 * smallest {
+            if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
                 self.low_since_s[c] = t_s;
             }
         }
         if let Some(s) = self.standing {
-            if self.window.explained_rms_lpm(s.channel) < 0.5 * level {
+            if self.window.channel_explained_rms_lpm(s.channel) < 0.5 * level {
                 let since = *self.fading_since_s.get_or_insert(t_s);
                 if t_s - since >= OFFSET_CLEAR_S {
                     self.standing = None;
@@ -323,19 +381,22 @@ impl OffsetWatch {
             }
             return None;
         }
-        let (c, left) = self.window.best_offset();
+        let (h, left) = self.window.best_offset(true);
         let named = self.watched_s >= OFFSET_WINDOW_S
-            && self.window.offset_fits_better(&self.directions, OFFSET_FIT_RATIO)
+            && self
+                .window
+                .offset_fits_better(&self.directions, OFFSET_FIT_RATIO, true)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
-            && self.window.explained_rms_lpm(c) > level
-            && self.window.offset_mpa(c).abs() > self.least_offset_mpa;
+            && self.window.explained_rms_lpm(h) > level
+            && self.window.offset_mpa(h).abs() > self.least_offset_mpa;
+        let c = channel_of(h);
         match (named, self.candidate) {
             (false, _) => self.candidate = None,
             (true, Some((j, t0))) if j == c => {
                 if t_s - t0 >= OFFSET_CONFIRM_S {
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: self.window.offset_mpa(c),
+                        offset_mpa: self.window.offset_mpa(h),
                         since_s: self.low_since_s[c],
                         event_id: *next_id,
                     };
@@ -378,4 +439,78 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
         ),
     };
     ev
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Feeds `seconds` of rises that an offset `b_mpa` on p2 makes, measured
+    /// from a baseline that follows the sizes with time constant `tau_s`
+    /// (0: fixed); returns the watch and whether it vetoed at the end.
+    fn watch_offset_on_p2(b_mpa: f64, tau_s: f64, seconds: f64) -> (OffsetWatch, Option<OffsetChange>) {
+        let dt = 0.01;
+        let factors = crate::NOMINAL_INTERNAL_FACTORS;
+        let mut watch = OffsetWatch::new(25e6);
+        let mut baseline = [0.0; 3];
+        let mut first = None;
+        let mut id = 1;
+        let steps = (seconds / dt) as usize;
+        for n in 0..steps {
+            let t = n as f64 * dt;
+            // δ on p2 moves ext2 with the valve's flow: small at rest, large in
+            // the moves of a 3-s cycle; δ on p1 moves ext1 in another rhythm.
+            let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+            let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+            let d1 = [
+                -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
+                0.0,
+                0.0,
+            ];
+            let sizes = crate::signatures_with(d2.map(|v| b_mpa * v), factors);
+            let share = if tau_s > 0.0 { dt / tau_s } else { 0.0 };
+            for k in 0..3 {
+                baseline[k] += share * (sizes[k] - baseline[k]);
+            }
+            let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
+            watch.follow_baseline(share);
+            let change = watch.on_rise(t, dt, rise, &[d1, d2], factors, [0.05; 3], &mut id);
+            first = first.or(change);
+        }
+        (watch, first)
+    }
+
+    #[test]
+    fn an_offset_is_named_from_rises_measured_from_a_following_baseline() {
+        for tau_s in [0.0, 15.0] {
+            let (watch, change) = watch_offset_on_p2(-0.5, tau_s, 60.0);
+            let Some(OffsetChange::Raised(s)) = change else {
+                panic!("no offset named with baseline_tau_s {tau_s}: {change:?}");
+            };
+            assert_eq!(s.channel, 1, "{s:?}");
+            assert!(
+                (s.offset_mpa + 0.5).abs() < 0.05,
+                "offset {} MPa, truth -0.5 (tau {tau_s})",
+                s.offset_mpa
+            );
+            assert!(watch.vetoes(), "tau {tau_s}");
+        }
+    }
+
+    #[test]
+    fn a_steady_leak_is_no_offset() {
+        let mut watch = OffsetWatch::new(25e6);
+        let mut id = 1;
+        let factors = crate::NOMINAL_INTERNAL_FACTORS;
+        for n in 0..6000 {
+            let t = n as f64 * 0.01;
+            let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+            let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+            let d1 = [-0.05, 0.0, 0.0];
+            watch.follow_baseline(0.01 / 15.0);
+            let change = watch.on_rise(t, 0.01, [0.0, 0.2, -0.1], &[d1, d2], factors, [0.05; 3], &mut id);
+            assert_eq!(change, None, "at {t} s");
+        }
+        assert!(!watch.vetoes());
+    }
 }

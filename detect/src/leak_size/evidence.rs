@@ -101,6 +101,7 @@ impl LeakSizeDetector {
             } else {
                 (dt_s / self.cfg.baseline_tau_s).min(1.0)
             };
+            self.offsets.follow_baseline(a);
             for k in 0..3 {
                 self.baseline_lpm[k] += a * (raw[k] - self.baseline_lpm[k]);
                 if reacquiring {
