@@ -149,10 +149,10 @@ impl Fit {
             .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
     }
 
-    /// Whether an offset's fit leaves less than `ratio` times what the best
+    /// Whether an offset's fit, leaving `left` ((L/min)²·s, of
+    /// [`Fit::best_offset`]), leaves less than `ratio` times what the best
     /// leak's leaves unexplained.
-    fn offset_fits_better(&self, directions: &[[f64; 2]; 3], ratio: f64, swing: bool) -> bool {
-        let (_, left) = self.best_offset(swing);
+    fn offset_fits_better(&self, left: f64, directions: &[[f64; 2]; 3], ratio: f64) -> bool {
         self.energy > 0.0 && left < ratio * self.unexplained_by_leak(directions)
     }
 
@@ -291,14 +291,15 @@ impl OffsetWatch {
     /// seconds a leak's step fits some swing as well as it fits the leak.
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_MIN_S && f.offset_fits_better(&self.directions, OFFSET_FIT_RATIO, false)
+            f.w >= EPISODE_MIN_S
+                && f.offset_fits_better(f.best_offset(false).1, &self.directions, OFFSET_FIT_RATIO)
         });
-        let (c, _) = self.window.best_offset(true);
+        let (c, left) = self.window.best_offset(true);
         let window = self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
             && self
                 .window
-                .offset_fits_better(&self.directions, OFFSET_FIT_RATIO, true);
+                .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO);
         episode || window
     }
 
@@ -385,7 +386,7 @@ impl OffsetWatch {
         let named = self.watched_s >= OFFSET_WINDOW_S
             && self
                 .window
-                .offset_fits_better(&self.directions, OFFSET_FIT_RATIO, true)
+                .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
             && self.window.explained_rms_lpm(h) > level
             && self.window.offset_mpa(h).abs() > self.least_offset_mpa;
