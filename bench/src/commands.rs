@@ -4,6 +4,7 @@ pub mod calibration;
 pub mod floors;
 pub mod instances;
 pub mod latency;
+pub mod operating_leak;
 pub mod replay;
 pub mod scale;
 pub mod sensor_faults;

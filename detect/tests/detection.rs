@@ -601,11 +601,15 @@ fn a_leak_present_at_start_is_seen_with_a_commissioning() {
     for s in &healthy {
         learner.on_estimate(&stage.on_sample(s).leak);
     }
-    let c = learner.finish(10.0, "healthy.csv").unwrap();
+    let c = learner
+        .finish(&ClassifierConfig::default(), 10.0, "healthy.csv")
+        .unwrap();
     assert!(c.healthy_s > 25.0 && c.healthy_s < 29.0, "{c:?}");
     assert!(c.spreads_lpm.iter().all(|s| *s > 0.0 && *s < 0.05), "{c:?}");
     // Too little healthy data is refused, not guessed.
-    assert!(detect::CommissioningLearner::new(2.0).finish(10.0, "").is_err());
+    assert!(detect::CommissioningLearner::new(2.0)
+        .finish(&ClassifierConfig::default(), 10.0, "")
+        .is_err());
     for (kind, expect) in [("ext1", EventKind::Ext1), ("int", EventKind::Int)] {
         let cfg = ClassifierConfig {
             commissioning: Some(c.clone()),

@@ -328,7 +328,9 @@ fn learned_factors(p: impl Fn(f64) -> (f64, f64)) -> [f64; 2] {
         (e.state[1], e.state[2]) = p(t);
         learner.on_estimate(&e);
     }
-    let c = learner.finish(10.0, "test").expect("commissioned");
+    let c = learner
+        .finish(&ClassifierConfig::default(), 10.0, "test")
+        .expect("commissioned");
     assert_eq!(c.internal_factors, learner.internal_factors());
     c.internal_factors
 }
@@ -373,7 +375,9 @@ fn commissioning_learns_the_rises_spread_not_the_dips() {
         let q = [0.02 + 0.01 * noise.gauss() + dip, 0.0, 0.0];
         learner.on_estimate(&estimate(t, q));
     }
-    let c = learner.finish(10.0, "test").expect("commissioned");
+    let c = learner
+        .finish(&ClassifierConfig::default(), 10.0, "test")
+        .expect("commissioned");
     // ext1's signature is q_e1 alone when the others are zero.
     assert!((c.offsets_lpm[0] - 0.02).abs() < 0.002, "{:?}", c.offsets_lpm);
     assert!((c.spreads_lpm[0] / 0.01 - 1.0).abs() < 0.1, "{:?}", c.spreads_lpm);

@@ -88,7 +88,15 @@ fn instances_of_both_rigs_are_written_as_folders_that_bench_detection_scores() {
                 let flow = t["fault"]["observed_mean_abs_flow_lpm_after_ramp"]
                     .as_f64()
                     .unwrap_or(f64::NAN);
-                assert!(flow > 0.0 && flow < 1.0, "{flow}");
+                // sized at its path's mean drop before it opens: it passes about its size
+                // (less once it has lowered its chamber's pressure)
+                let size = t["fault"]["size_lpm"].as_f64().unwrap_or(f64::NAN);
+                assert!(
+                    flow > 0.6 * size && flow < 1.2 * size,
+                    "{flow} L/min for {size}: {t:#}"
+                );
+                let dp = t["fault"]["calib_mean_dp_Pa"].as_f64().unwrap_or(f64::NAN);
+                assert!(dp > 1e5 && dp < 21e6, "{dp}");
             }
         }
         // the samples carry the oil's temperature, to 0.1 °C

@@ -369,7 +369,7 @@ pub fn with_null_bias(cfg: &Config, bias: &NullBias) -> Config {
 /// the θ at the recording's oil temperature, which the filter reads the
 /// temperature against when no `temp_c` comes ([`filter::oil`]).
 pub fn learn(input: &Path, cfg: &Config) -> Result<(detect::Commissioning, Option<f64>), String> {
-    learn_traced(input, cfg).map(|(c, theta, _, _)| (c, theta))
+    learn_traced(input, cfg).map(|t| (t.commissioning, t.theta))
 }
 
 /// [`learn`], the leak filter's fit to the recording ([`FitTrace`]) and, per
@@ -398,21 +398,33 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         }
     })?;
     let c = learner
-        .finish(MIN_HEALTHY_S, &input.display().to_string())
+        .finish(&cfg.classifier, MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
     let theta = (theta_n > 0).then(|| theta_sum / theta_n as f64);
     let set_by = learner.thresholds_set_by_stretches(&cfg.classifier, &c);
-    Ok((c, theta, fit, set_by))
+    Ok(LearnedTrace {
+        left_out_s: learner.left_out_s(&cfg.classifier),
+        commissioning: c,
+        theta,
+        fit,
+        set_by,
+    })
 }
 
-/// What [`learn_traced`] gives: the commissioning, θ on the recording (1),
-/// the fit, per kind the stretch that sets its threshold and the rest's threshold (L/min).
-pub type LearnedTrace = (
-    detect::Commissioning,
-    Option<f64>,
-    FitTrace,
-    [Option<(detect::Stretch, f64)>; 3],
-);
+/// What [`learn_traced`] gives.
+pub struct LearnedTrace {
+    /// The commissioning learned.
+    pub commissioning: detect::Commissioning,
+    /// θ's mean on the recording (1).
+    pub theta: Option<f64>,
+    /// The leak filter's fit to the recording.
+    pub fit: FitTrace,
+    /// Per kind, the stretch that sets its threshold and the rest's threshold (L/min at p_s/2).
+    pub set_by: [Option<(detect::Stretch, f64)>; 3],
+    /// The time left out, s: where the leak estimates made a pattern no leak can make
+    /// ([`detect::CommissioningLearner::left_out_s`]).
+    pub left_out_s: f64,
+}
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
 /// learns the commissioning with the bias held: the config to write.
@@ -439,13 +451,20 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         cfg = with_null_bias(&cfg, &bias);
         null_bias = Some((bias, datasheet_model.spool_null_bias_m));
     }
-    let (c, theta, fit, set_by) = learn_traced(input, &cfg)?;
+    let LearnedTrace {
+        commissioning: c,
+        theta,
+        fit,
+        set_by,
+        left_out_s,
+    } = learn_traced(input, &cfg)?;
     cfg.model.oil_temperature.reference_stiffness = theta;
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     let learned = Learned {
         theta,
         reference_c: cfg.model.oil_temperature.reference_c,
         healthy_s: c.healthy_s,
+        left_out_s,
         offsets_lpm: c.offsets_lpm,
         spreads_lpm: c.spreads_lpm,
         internal_factors: (c.internal_factors != detect::NOMINAL_INTERNAL_FACTORS)

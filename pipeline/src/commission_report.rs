@@ -203,6 +203,8 @@ pub struct Learned {
     pub reference_c: f64,
     /// Healthy data learned from, s.
     pub healthy_s: f64,
+    /// Data left out, s: where the leak estimates made a pattern no leak can make.
+    pub left_out_s: f64,
     /// Healthy offsets of the ext1, ext2 and int sizes, L/min at p_s/2.
     pub offsets_lpm: [f64; 3],
     /// Their healthy spreads, L/min at p_s/2.
@@ -247,6 +249,13 @@ impl Learned {
             three(self.offsets_lpm),
             three(self.spreads_lpm)
         ));
+        if self.left_out_s >= 0.05 {
+            out.push(format!(
+                "left out {:.1} s where the leak estimates made a pattern no leak can make (the model does not \
+                 follow the rig there; the detector takes no evidence from such a pattern either)",
+                self.left_out_s
+            ));
+        }
         if let Some(f) = self.internal_factors {
             out.push(format!(
                 "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",

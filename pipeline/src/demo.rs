@@ -155,5 +155,5 @@ fn commission_lift(cfg: &Config, seed: u64) -> Result<detect::Commissioning, Str
         let s = sim.step();
         learner.on_estimate(&stage.on_sample(&s).leak);
     }
-    learner.finish(10.0, "the simulated healthy lift")
+    learner.finish(&cfg.classifier, 10.0, "the simulated healthy lift")
 }

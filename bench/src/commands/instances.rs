@@ -22,13 +22,16 @@ use model::sim::OilWarmUp;
 use config::Config;
 use pipeline::simulate::{self, SimulateRequest};
 
+use super::operating_leak::{self, OperatingLeak};
+
 /// The oil temperatures a commissioning recording is held at, °C (one drawn per instance).
 pub const COMMISSION_TEMPS_C: [f64; 3] = [20.0, 30.0, 50.0];
 /// The range a run's oil starts and ends in, °C.
 pub const RUN_TEMP_RANGE_C: (f64, f64) = (20.0, 60.0);
 /// The range of a run's oil time constant, s.
 pub const RUN_TEMP_TAU_S: (f64, f64) = (60.0, 600.0);
-/// The leak sizes of the leak runs, L/min at the nominal drop (each of ext1, ext2, int).
+/// The leak sizes of the leak runs, L/min at the mean drop their path sees
+/// before they open ([`OperatingLeak`]; each of ext1, ext2, int).
 pub const LEAK_SIZES_LPM: [f64; 3] = [0.1, 0.25, 0.5];
 /// The leak kinds of the leak runs.
 pub const LEAK_KINDS: [&str; 3] = ["ext1", "ext2", "int"];
@@ -326,10 +329,11 @@ fn write_recording(
         (d.join("measured.csv"), d.join("truth.json"))
     };
     let cfg = instance_config(inst, Some(plan.oil));
-    let faults = match plan.leak {
-        Some((kind, size, onset)) => vec![format!("{kind}:{size}lpm@{onset}s")],
-        None => vec![],
+    let sized = match plan.leak {
+        Some((kind, size, onset)) => Some(size_on_healthy_twin(&cfg, plan, kind, size, onset)?),
+        None => None,
     };
+    let faults: Vec<String> = sized.iter().map(|l| l.spec.clone()).collect();
     let file = pipeline::out::create(&csv, force, &[])?;
     let (samples, seconds) = simulate_plan(&cfg, plan, &faults)?;
     let mut w = std::io::BufWriter::new(file);
@@ -348,6 +352,10 @@ fn write_recording(
             "size_lpm": size,
             "t_on_s": onset,
             "ramp_s": 0.0,
+            "coef_m3_s_sqrtPa": sized.as_ref().map(|l| l.coefficient),
+            "calib_mean_dp_Pa": sized.as_ref().map(|l| l.mean_drop_pa),
+            "calib_window_s": [operating_leak::CALIBRATION_START_S, onset],
+            "coef_rule": "coef = size_lpm/60000/sqrt(mean |dp| over calib_window_s of the healthy twin)",
             "observed_mean_abs_flow_lpm_after_ramp": mean,
             "observed_max_abs_flow_lpm": max,
         })
@@ -379,6 +387,21 @@ fn write_recording(
     let text = serde_json::to_string_pretty(&truth_json).map_err(|e| e.to_string())?;
     pipeline::out::write(&truth, (text + "\n").as_bytes(), force, &[])?;
     Ok(samples.len())
+}
+
+/// The leak `kind` of `size_lpm` (L/min) opening at `onset_s` (s) in `plan`,
+/// sized at the mean drop its path sees before then in the plan's healthy
+/// twin (the same seed without the leak): [`OperatingLeak`].
+fn size_on_healthy_twin(
+    cfg: &Config,
+    plan: &Plan,
+    kind: &str,
+    size_lpm: f64,
+    onset_s: f64,
+) -> Result<OperatingLeak, String> {
+    let path = model::LeakPath::from_name(kind).ok_or_else(|| format!("unknown leak kind `{kind}`"))?;
+    let (twin, _) = simulate_plan(cfg, plan, &[])?;
+    OperatingLeak::size(path, size_lpm, onset_s, &twin, cfg.model.return_pressure_pa)
 }
 
 /// Checks a request's numbers before anything is written.

@@ -25,6 +25,8 @@ use serde::Serialize;
 use config::Config;
 use pipeline::simulate::{self, SimulateRequest};
 
+use super::operating_leak::OperatingLeak;
+
 use super::instances::{self, InstancesRequest};
 
 mod report;
@@ -56,7 +58,7 @@ pub const SPIKE_SIZE: (f64, f64) = (2e6, 5e-3);
 pub const SPIKE_RATE_HZ: f64 = 0.5;
 /// A position drift's rate, mm/min (drawn in this range, either sign).
 pub const POSITION_DRIFT_MM_PER_MIN: (f64, f64) = (0.5, 2.0);
-/// The leak run's size, L/min at the nominal drop.
+/// The leak run's size, L/min at the mean drop its path sees before it opens ([`OperatingLeak`]).
 pub const LEAK_LPM: f64 = 0.25;
 /// The range a fault's onset is drawn in, s (the detector armed before it).
 pub const ONSET_S: (f64, f64) = (20.0, 40.0);
@@ -335,15 +337,19 @@ fn watch_run(
         Some(inst) => instances::instance_config(inst, Some(oil)),
         None => Config::default(),
     };
-    let leak_spec = leak.map(|kind| format!("{kind}:{LEAK_LPM}lpm@{onset_s}s"));
     let sensor_spec = sensor.map(|f| f.to_string());
-    let req = SimulateRequest {
+    let mut req = SimulateRequest {
         scenario: scenario.into(),
         seconds: Some(args.seconds),
         seed: rng.next_u64() >> 12,
-        faults: leak_spec.iter().cloned().collect(),
+        faults: Vec::new(),
         rig_variant: None,
     };
+    let leak_spec = match leak {
+        Some(kind) => Some(leak_on_healthy_twin(&sim_cfg, &req, kind, onset_s)?),
+        None => None,
+    };
+    req.faults = leak_spec.iter().cloned().collect();
     let sensor_specs: Vec<String> = sensor_spec.iter().cloned().collect();
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
@@ -372,6 +378,21 @@ fn watch_run(
         scenario,
         &events,
     ))
+}
+
+/// The `simulate` spec of a [`LEAK_LPM`] leak of `kind` opening at `onset_s`
+/// (s) in the run `req` under `cfg`, sized at the mean drop its path sees
+/// before then in the run's healthy twin ([`OperatingLeak`]).
+fn leak_on_healthy_twin(
+    cfg: &Config,
+    req: &SimulateRequest,
+    kind: &str,
+    onset_s: f64,
+) -> Result<String, String> {
+    let path = model::LeakPath::from_name(kind).ok_or_else(|| format!("unknown leak kind `{kind}`"))?;
+    let (mut twin, seconds) = simulate::build(cfg, req)?;
+    let samples = twin.run(onset_s.min(seconds));
+    OperatingLeak::size(path, LEAK_LPM, onset_s, &samples, cfg.model.return_pressure_pa).map(|l| l.spec)
 }
 
 /// Checks the command line before anything runs.

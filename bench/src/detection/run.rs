@@ -93,7 +93,11 @@ pub fn commission_rig(case: &Case) -> Result<detect::Commissioning, String> {
     for _ in 0..40_000 {
         learner.on_estimate(&stage.on_sample(&sim.step()).leak);
     }
-    learner.finish(10.0, "40 s healthy run of the same rig")
+    learner.finish(
+        &ClassifierConfig::default(),
+        10.0,
+        "40 s healthy run of the same rig",
+    )
 }
 
 pub(super) fn score(case: &Case, detector: &str, events: &[LeakEvent]) -> Outcome {

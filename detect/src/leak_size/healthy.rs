@@ -97,6 +97,60 @@ impl HealthyRecord {
     }
 }
 
+impl HealthyRecord {
+    /// Most passes of [`HealthyRecord::leak_like`] (each leaves out more or stops).
+    const LEAK_LIKE_PASSES: usize = 8;
+
+    /// This record without the kept values whose rises above the median make
+    /// a pattern no leak can make, by more than the thresholds under `cfg`
+    /// the rest gives ([`crate::leak_can_make_with`] with `factors`): the
+    /// detector takes no evidence from such a pattern, so it sets no
+    /// threshold. Repeated until no more values leave; with the time left
+    /// out, s.
+    pub(super) fn leak_like(&self, cfg: &ClassifierConfig, factors: [f64; 2]) -> (HealthyRecord, f64) {
+        let n = self.values[0].len().min(self.times.len());
+        let signatures: Vec<[f64; 3]> = (0..n)
+            .map(|i| signatures_with([self.values[0][i], self.values[1][i], self.values[2][i]], factors))
+            .collect();
+        let mut keep = vec![true; n];
+        let mut kept = self.clone();
+        for _ in 0..Self::LEAK_LIKE_PASSES {
+            let (med, spreads, crossings) = kept.summary(factors);
+            let (_, thr) = crate::thresholds(cfg, spreads, crossings);
+            let now: Vec<bool> = signatures
+                .iter()
+                .map(|w| crate::leak_can_make_with(std::array::from_fn(|k| w[k] - med[k]), thr, factors))
+                .collect();
+            if now == keep || now.iter().all(|k| !k) {
+                break;
+            }
+            keep = now;
+            kept = self.keeping(&keep);
+        }
+        let left_out_s = self.learned_s - kept.learned_s;
+        (kept, left_out_s)
+    }
+
+    /// The record of the values where `keep` holds, its learned time cut by
+    /// the share left out.
+    fn keeping(&self, keep: &[bool]) -> HealthyRecord {
+        let mut out = HealthyRecord {
+            values: Default::default(),
+            times: Vec::with_capacity(keep.len()),
+            ..self.clone()
+        };
+        for (i, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
+            for k in 0..3 {
+                out.values[k].push(self.values[k][i]);
+            }
+            out.times.push(self.times[i]);
+        }
+        let share = out.times.len() as f64 / keep.len().max(1) as f64;
+        out.learned_s = self.learned_s * share;
+        out
+    }
+}
+
 /// The median of `v` (the mean of the middle two of an even count; NaN if empty).
 pub(super) fn median(v: &[f64]) -> f64 {
     let mut sorted = v.to_vec();
@@ -268,28 +322,91 @@ impl CommissioningLearner {
         cfg: &ClassifierConfig,
         c: &Commissioning,
     ) -> [Option<(Stretch, f64)>; 3] {
-        super::stretch::setting_thresholds(cfg, c, self.record.largest_stretches(self.internal_factors()))
+        let factors = self.internal_factors();
+        let (record, _) = self.record.leak_like(cfg, factors);
+        super::stretch::setting_thresholds(cfg, c, record.largest_stretches(factors))
     }
 
-    /// The commissioning, or why there is none (too little healthy data).
-    pub fn finish(&self, min_s: f64, source: &str) -> Result<Commissioning, String> {
+    /// The time of the learned data the commissioning under `cfg` leaves out,
+    /// s: where the leak estimates made a pattern no leak can make
+    /// ([`crate::leak_can_make_with`]; the model does not follow the rig there).
+    pub fn left_out_s(&self, cfg: &ClassifierConfig) -> f64 {
+        self.record.leak_like(cfg, self.internal_factors()).1
+    }
+
+    /// The commissioning under settings `cfg`, or why there is none (less than
+    /// `min_s` of healthy data, s). The statistics leave out the values no leak
+    /// can make ([`CommissioningLearner::left_out_s`]).
+    pub fn finish(&self, cfg: &ClassifierConfig, min_s: f64, source: &str) -> Result<Commissioning, String> {
         let internal_factors = self.internal_factors();
-        let record = &self.record;
-        let learned_s = record.learned_s;
+        let learned_s = self.record.learned_s;
         if learned_s < min_s {
             return Err(format!(
                 "only {learned_s:.1} s of converged healthy data (at least {min_s} s after the filter settles is needed)"
             ));
         }
+        let (record, _) = self.record.leak_like(cfg, internal_factors);
         let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary(internal_factors);
         Ok(Commissioning {
             offsets_lpm,
             spreads_lpm,
             crossings_per_s,
-            healthy_s: learned_s,
+            healthy_s: record.learned_s,
             nis_mean: record.nis_mean(),
             source: source.to_string(),
             internal_factors,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 120 s of healthy leak sizes (uniform noise of ±0.01 L/min), with
+    /// `stretch` (ext1, ext2, int; L/min) added from 60 to 70 s.
+    fn record(stretch: [f64; 3]) -> HealthyRecord {
+        let mut r = HealthyRecord::with_capacity_s(120.0);
+        let mut seed = 1u64;
+        let mut noise = move || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.02
+        };
+        for i in 0..120_000 {
+            let t = i as f64 * 1e-3;
+            let q = if (60.0..70.0).contains(&t) {
+                stretch
+            } else {
+                [0.0; 3]
+            };
+            r.push(t, 1e-3, [q[0] + noise(), q[1] + noise(), q[2] + noise()], 3.0);
+        }
+        r
+    }
+
+    fn thresholds(r: &HealthyRecord) -> [f64; 3] {
+        let (_, spreads, crossings) = r.summary(crate::NOMINAL_INTERNAL_FACTORS);
+        crate::thresholds(&ClassifierConfig::default(), spreads, crossings).1
+    }
+
+    #[test]
+    fn a_pattern_no_leak_can_make_sets_no_threshold() {
+        let cfg = ClassifierConfig::default();
+        let factors = crate::NOMINAL_INTERNAL_FACTORS;
+        // the internal leak's estimate kicked negative for 10 s: chamber 1
+        // gains what chamber 2 loses, which reads as an ext2 rise of 0.5 L/min
+        let kicked = record([0.0, 0.0, -0.5]);
+        assert!(thresholds(&kicked)[1] > 0.2, "{:?}", thresholds(&kicked));
+        let (kept, left_out_s) = kicked.leak_like(&cfg, factors);
+        assert!((left_out_s - 10.0).abs() < 0.2, "{left_out_s}");
+        let thr = thresholds(&kept);
+        assert!(thr[1] < 0.05, "{thr:?}");
+        // an ext2 rise of the same size is a pattern a leak makes: it stays
+        let risen = record([0.0, 0.5, 0.0]);
+        let (kept, left_out_s) = risen.leak_like(&cfg, factors);
+        assert_eq!(left_out_s, 0.0);
+        assert!(thresholds(&kept)[1] > 0.2, "{:?}", thresholds(&kept));
     }
 }
