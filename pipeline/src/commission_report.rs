@@ -249,13 +249,7 @@ impl Learned {
             three(self.offsets_lpm),
             three(self.spreads_lpm)
         ));
-        if self.left_out_s >= 0.05 {
-            out.push(format!(
-                "left out {:.1} s where the leak estimates made a pattern no leak can make (the model does not \
-                 follow the rig there; the detector takes no evidence from such a pattern either)",
-                self.left_out_s
-            ));
-        }
+        out.extend(self.left_out_line());
         if let Some(f) = self.internal_factors {
             out.push(format!(
                 "the chambers rest at pressures whose difference keeps its sign: the internal leak's pressure factors {:.3}/{:.3} (r1/r2, docs/plant.md)",
@@ -278,7 +272,18 @@ impl Learned {
 }
 
 impl Learned {
-    /// One line per kind whose threshold one stretch of the recording sets.
+    /// The line that says how long the learning left out (none under 0.05 s).
+    pub fn left_out_line(&self) -> Option<String> {
+        (self.left_out_s >= 0.05).then(|| {
+            format!(
+                "left out {:.1} s where the leak estimates made a pattern no leak can make (the model does not \
+                 follow the rig there; the detector takes no evidence from such a pattern either)",
+                self.left_out_s
+            )
+        })
+    }
+
+    /// One line per kind whose threshold one stretch of the recording sets ([`Learned::set_by`]).
     pub fn set_by_lines(&self) -> Vec<String> {
         let kinds = ["ext1", "ext2", "int"];
         let mut out = Vec::new();
@@ -389,6 +394,9 @@ impl CommissionRecord {
             h += &row(&format!("smallest detectable at {t:.0} °C"), *d);
         }
         h += "</table>\n";
+        if let Some(line) = l.left_out_line() {
+            h += &format!("<p class=\"note\">{}</p>\n", esc(&line));
+        }
         for line in l.set_by_lines() {
             h += &format!("<p class=\"note\"><b>{}</b></p>\n", esc(&line));
         }
