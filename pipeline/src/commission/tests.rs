@@ -1,0 +1,54 @@
+//! Tests of the commissioning's statements.
+
+use super::*;
+
+/// The smallest detectable leaks are stated at the ends and the middle of
+/// the model's operating range: the thresholds themselves at the
+/// commissioning's temperature, wider away from it; a commissioning
+/// outside the range says so.
+#[test]
+fn the_detectable_leaks_are_stated_over_the_operating_range() {
+    let mut m = model::ActuatorParams {
+        valve_null_leakage_m3_s_pa: 1e-13,
+        ..model::ActuatorParams::default()
+    };
+    m.oil_temperature.operating_min_c = 10.0;
+    m.oil_temperature.operating_max_c = 50.0;
+    m.oil_temperature.reference_c = 30.0;
+    let thr = [0.03, 0.03, 0.04];
+    let line = detectable_over_temperature(&m, thr, [0.01, -0.01, 0.02]);
+    let at = |t: &str| -> Vec<f64> {
+        let rest = line.split(&format!("{t} °C ")).nth(1).expect(t);
+        let v = rest.split([',', ' ']).next().expect("values");
+        v.split('/').map(|x| x.parse().expect("a number")).collect()
+    };
+    let (cold, mid, warm) = (at("10"), at("30"), at("50"));
+    for k in 0..3 {
+        assert!((mid[k] - thr[k]).abs() < 1e-3, "{line}");
+        assert!(cold[k] > mid[k] + 1e-3 && warm[k] > mid[k] + 1e-3, "{line}");
+    }
+    assert!(!line.contains("outside"), "{line}");
+    // a tank thermometer's reading just below the range is not outside it
+    m.oil_temperature.reference_c = 9.0;
+    assert!(!detectable_over_temperature(&m, thr, [0.0; 3]).contains("outside"));
+    m.oil_temperature.reference_c = 55.0;
+    let line = detectable_over_temperature(&m, thr, [0.01, -0.01, 0.02]);
+    assert!(line.contains("outside the operating range 10-50 °C"), "{line}");
+}
+
+#[test]
+fn a_lag_is_held_against_the_datasheets_response_time() {
+    let lag = |value: f64, sigma: f64| identify::Estimate { value, sigma };
+    // plant_dev/double's p1: 1.64 ± 0.02 ms against 2.5 ms / ln 9 = 1.14 ms
+    let bound = Some(2.5e-3 / 9f64.ln());
+    let above = lag_against_datasheet(&lag(1.643e-3, 0.016e-3), bound);
+    assert!(
+        above.contains("above the 1.14 ms") && above.contains("another delay"),
+        "{above}"
+    );
+    let within = lag_against_datasheet(&lag(0.51e-3, 0.014e-3), bound);
+    assert!(within.contains("within the 1.14 ms"), "{within}");
+    // within 2 σ of the bound is within
+    assert!(lag_against_datasheet(&lag(1.16e-3, 0.02e-3), bound).contains("within"));
+    assert_eq!(lag_against_datasheet(&lag(1.643e-3, 0.016e-3), None), "");
+}
