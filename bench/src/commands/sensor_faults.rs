@@ -120,6 +120,10 @@ pub struct SensorFaultsArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Keeps each instance's commissioned config (inst_NNN/rig.toml) and each
+    /// run's recording (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`.
+    #[arg(long)]
+    pub keep: bool,
 }
 
 /// One scored run.
@@ -207,11 +211,17 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
             cfg
         })
     };
-    // the recording is rebuilt from the seed: only the reports are kept
-    let _ = std::fs::remove_file(&recording);
-    let _ = std::fs::remove_dir(&dir);
+    let rig = rig.map_err(|e| format!("instance {index}: {e}"))?;
+    if args.keep {
+        let text = toml::to_string(&rig).map_err(|e| format!("instance {index}'s config: {e}"))?;
+        pipeline::out::write(&dir.join("rig.toml"), text.as_bytes(), true, &[])?;
+    } else {
+        // the recording is rebuilt from the seed: only the reports are kept
+        let _ = std::fs::remove_file(&recording);
+        let _ = std::fs::remove_dir(&dir);
+    }
     Ok(Watched {
-        rig: rig.map_err(|e| format!("instance {index}: {e}"))?,
+        rig,
         instance,
         cycles,
         seed,
@@ -353,6 +363,15 @@ fn watch_run(
     let sensor_specs: Vec<String> = sensor_spec.iter().cloned().collect();
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
+    if args.keep {
+        let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
+        let path = args.out.join(format!("inst_{index:03}")).join(name);
+        let file = pipeline::out::create(&path, true, &[])?;
+        let mut w = std::io::BufWriter::new(file);
+        simulate::write_csv(&mut w, &samples)
+            .and_then(|_| std::io::Write::flush(&mut w))
+            .map_err(|e| dataset::output::message(&path, &e))?;
+    }
     let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(&w.rig))?;
     let mut events = Vec::new();
     for s in &samples {

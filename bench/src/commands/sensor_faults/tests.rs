@@ -184,8 +184,18 @@ fn one_thesis_instance_is_commissioned_watched_and_scored() {
         seconds: 75.0,
         out: dir.to_path_buf(),
         threads: Some(2),
+        keep: true,
     };
     command(&args, false).expect("the bench runs");
+    // --keep: the commissioned config parses and holds the learned state; every run's recording is there
+    let rig = std::fs::read_to_string(dir.join("inst_000/rig.toml")).expect("rig.toml");
+    let rig = Config::parse(&rig).expect("the kept config parses");
+    assert!(rig.classifier.commissioning.is_some());
+    for kind in RUN_KINDS {
+        let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
+        let rows = std::fs::read_to_string(dir.join("inst_000").join(&name)).expect(&name);
+        assert!(rows.lines().count() > 70_000, "{name}");
+    }
     let text = std::fs::read_to_string(dir.join("sensor_faults.json")).expect("the report");
     let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
     let runs = json["runs"].as_array().expect("runs");
