@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::stats::quantile;
-use detect::LeakEvent;
+use detect::{LeakEvent, Phase};
 use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
 
@@ -58,6 +58,8 @@ pub struct DataOutcome {
     pub size_final_lpm: f64,
     /// Leak events raised before the onset (or at all when healthy).
     pub false_alarms: u32,
+    /// Sensor events raised before the onset (or at all when healthy): these runs have no sensor fault.
+    pub sensor_events: u32,
     /// Time in which a false alarm could be raised (before the onset, or the whole run), s.
     pub clean_s: f64,
     /// Samples the run had.
@@ -80,6 +82,8 @@ pub struct DataOutcome {
 pub struct FileRun {
     /// The leak-size detector's leak events.
     pub events: Vec<LeakEvent>,
+    /// When a sensor event (any detector's) was raised, s.
+    pub sensor_raised_s: Vec<f64>,
     /// Samples read.
     pub samples: u64,
     /// Time of the last sample, s.
@@ -105,6 +109,8 @@ pub struct DataSummary {
     pub by_size: Vec<SizeRow>,
     /// False alarms in total.
     pub false_alarms: u32,
+    /// Sensor events in the clean time, in total (no run has a sensor fault).
+    pub sensor_events: u32,
     /// Clean hours (healthy runs plus pre-onset time).
     pub clean_hours: f64,
     /// Every run.
@@ -201,7 +207,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
     let limits = dataset::Limits::for_model(&set.model, set.leak_filter.sample_period_s);
     let mut reader = dataset::CsvReader::open(path, limits).map_err(|e| e.to_string())?;
     let mut chain = Chain::new(set)?;
-    let mut events = Vec::new();
+    let (mut events, mut sensor_raised_s) = (Vec::new(), Vec::new());
     let floors = [set.classifier.min_size_lpm, set.classifier.min_internal_size_lpm];
     let (mut n, mut t_end, mut t_detectable) = (0u64, 0.0, [f64::NAN; 2]);
     while let Some(row) = reader.next_row() {
@@ -219,6 +225,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         chain.step(&s, |ev| {
             if ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 events.push(ev)
+            } else if ev.kind.is_sensor() && ev.phase == Phase::Raised {
+                sensor_raised_s.push(ev.t_detect_s)
             }
         });
     }
@@ -226,6 +234,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(FileRun {
         events,
+        sensor_raised_s,
         samples: n,
         t_end_s: t_end,
         thresholds_lpm: chain.classifier().leak_size.thresholds_lpm(),
@@ -247,6 +256,7 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
     } else {
         truth.t_on_s.min(t_end_s)
     };
+    let sensor_events = run.sensor_raised_s.iter().filter(|t| **t < clean_s).count() as u32;
     let first = alarms.first;
     let mut o = DataOutcome {
         truth,
@@ -258,6 +268,7 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         size_first_lpm: f64::NAN,
         size_final_lpm: f64::NAN,
         false_alarms,
+        sensor_events,
         clean_s,
         samples,
         thresholds_lpm: run.thresholds_lpm,
@@ -371,10 +382,12 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
         })
         .collect();
     let false_alarms = runs.iter().map(|r| r.false_alarms).sum();
+    let sensor_events = runs.iter().map(|r| r.sensor_events).sum();
     let clean_hours = runs.iter().map(|r| r.clean_s).sum::<f64>() / 3600.0;
     DataSummary {
         by_size,
         false_alarms,
+        sensor_events,
         clean_hours,
         runs,
         wall_s,
@@ -459,8 +472,9 @@ pub fn data_markdown(r: &DataSummary) -> String {
          the time the real flow reached the detector's floor for its kind (`min_size_lpm` for an external \
          leak, `min_internal_size_lpm` for an internal one): a ramping leak cannot be declared earlier. \
          The first alarm may say `leak` with its kind pending; \"kind named after\" is the delay of the \
-         first alarm that names a kind, the kind scored.\n",
-        r.false_alarms, r.clean_hours
+         first alarm that names a kind, the kind scored.\n\nSensor events in the same time: {} (no run has a \
+         sensor fault).\n",
+        r.false_alarms, r.clean_hours, r.sensor_events
     ));
     s
 }
@@ -513,6 +527,8 @@ mod tests {
                 raised(EventKind::Leak, 2, 21.0, 0.12),
                 raised(EventKind::Ext1, 2, 22.5, 0.2),
             ],
+            // one sensor event before the onset, one after
+            sensor_raised_s: vec![5.0, 30.0],
             samples: 60_000,
             t_end_s: 60.0,
             thresholds_lpm: [0.04; 3],
@@ -523,6 +539,7 @@ mod tests {
         let o = score_run(truth("ext1"), &run);
         assert!(o.detected);
         assert_eq!((o.kind_first.as_str(), o.false_alarms), ("ext1", 1));
+        assert_eq!(o.sensor_events, 1);
         assert!((o.delay_s - 1.0).abs() < 1e-9, "{}", o.delay_s);
         assert!((o.delay_named_s - 2.5).abs() < 1e-9, "{}", o.delay_named_s);
         // from the external floor for an external leak, the internal one for an internal leak

@@ -59,6 +59,18 @@ impl EventKind {
         matches!(self, EventKind::Ext1 | EventKind::Ext2 | EventKind::Int)
     }
 
+    /// Whether this is a sensor event: a transducer stuck, saturated, dead, off or giving outliers.
+    pub fn is_sensor(self) -> bool {
+        matches!(
+            self,
+            EventKind::SensorStuck
+                | EventKind::SensorSaturated
+                | EventKind::SensorDead
+                | EventKind::SensorOffset
+                | EventKind::SensorSpikes
+        )
+    }
+
     /// Whether this is a leak alarm: a named leak kind or a leak whose kind is pending.
     pub fn is_leak_alarm(self) -> bool {
         self.is_leak() || self == EventKind::Leak

@@ -364,8 +364,7 @@ fn watch_run(
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
     if args.keep {
-        let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
-        let path = args.out.join(format!("inst_{index:03}")).join(name);
+        let path = kept_recording(args, index, kind);
         let file = pipeline::out::create(&path, true, &[])?;
         let mut w = std::io::BufWriter::new(file);
         simulate::write_csv(&mut w, &samples)
@@ -397,6 +396,13 @@ fn watch_run(
         scenario,
         &events,
     ))
+}
+
+/// Where `--keep` writes run `kind` of instance `index`: inst_NNN/KIND.csv
+/// (the kind's name in the reports, `_` for its spaces and dots).
+fn kept_recording(args: &SensorFaultsArgs, index: usize, kind: RunKind) -> PathBuf {
+    let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
+    args.out.join(format!("inst_{index:03}")).join(name)
 }
 
 /// The `simulate` spec of a [`LEAK_LPM`] leak of `kind` opening at `onset_s`

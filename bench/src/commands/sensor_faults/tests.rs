@@ -192,9 +192,9 @@ fn one_thesis_instance_is_commissioned_watched_and_scored() {
     let rig = Config::parse(&rig).expect("the kept config parses");
     assert!(rig.classifier.commissioning.is_some());
     for kind in RUN_KINDS {
-        let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
-        let rows = std::fs::read_to_string(dir.join("inst_000").join(&name)).expect(&name);
-        assert!(rows.lines().count() > 70_000, "{name}");
+        let path = kept_recording(&args, 0, kind);
+        let rows = std::fs::read_to_string(&path).expect("a kept recording");
+        assert!(rows.lines().count() > 70_000, "{}", path.display());
     }
     let text = std::fs::read_to_string(dir.join("sensor_faults.json")).expect("the report");
     let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
