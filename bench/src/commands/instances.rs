@@ -399,7 +399,7 @@ fn size_on_healthy_twin(
     size_lpm: f64,
     onset_s: f64,
 ) -> Result<OperatingLeak, String> {
-    let path = model::LeakPath::from_name(kind).ok_or_else(|| format!("unknown leak kind `{kind}`"))?;
+    let path = super::operating_leak::leak_path(kind)?;
     let (twin, _) = simulate_plan(cfg, plan, &[])?;
     OperatingLeak::size(path, size_lpm, onset_s, &twin, cfg.model.return_pressure_pa)
 }

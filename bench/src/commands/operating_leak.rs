@@ -15,6 +15,11 @@ pub const CALIBRATION_START_S: f64 = 1.0;
 /// for a flow grows without bound.
 pub const MIN_MEAN_DROP_PA: f64 = 1e4;
 
+/// The leak path a kind names (`ext1`, `ext2`, `int`), or an error naming the kind.
+pub fn leak_path(kind: &str) -> Result<LeakPath, String> {
+    LeakPath::from_name(kind).ok_or_else(|| format!("unknown leak kind `{kind}`"))
+}
+
 /// A square-root leak of `size_lpm` L/min on `path`, opening at `onset_s`,
 /// sized at the mean |drop| (Pa) its path sees in the healthy `samples`
 /// between [`CALIBRATION_START_S`] and `onset_s`, with the return at

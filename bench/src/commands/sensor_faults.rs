@@ -414,7 +414,7 @@ fn leak_on_healthy_twin(
     kind: &str,
     onset_s: f64,
 ) -> Result<String, String> {
-    let path = model::LeakPath::from_name(kind).ok_or_else(|| format!("unknown leak kind `{kind}`"))?;
+    let path = super::operating_leak::leak_path(kind)?;
     let (mut twin, seconds) = simulate::build(cfg, req)?;
     let samples = twin.run(onset_s.min(seconds));
     OperatingLeak::size(path, LEAK_LPM, onset_s, &samples, cfg.model.return_pressure_pa).map(|l| l.spec)
