@@ -1,6 +1,3 @@
-// Over 600 lines: the `Estimator` (its step, resets, re-anchoring after gaps and the oil's
-// temperature) is one state machine with the `Estimate` it fills; its gap handling could move
-// to a module of its own.
 //! The EKF core of the estimator stage: a square-root EKF tracking the
 //! actuator at 1 kHz against the healthy model of `model::process`
 //! (docs/model.md#process-model), with the residuals and moving averages the
@@ -15,22 +12,27 @@
 
 pub mod bias;
 pub mod ekf;
+mod estimate;
 pub mod mae;
 pub mod oil;
 pub mod outlier;
 pub mod stage;
+mod step;
 pub mod tuning;
 
-use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE, I_QE1, I_QI, N_MEAS};
+use model::process::{ProcessModel, I_BULK, I_QE1, I_QI};
 use model::{ActuatorParams, Sample};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 
 pub use bias::BiasResponse;
 pub use ekf::{Ekf, EkfError, Innovation};
+pub use estimate::Estimate;
 pub use mae::MovingMae;
-pub use oil::OilFromStiffness;
+pub use oil::{oil_stiffness_line, OilFromStiffness};
 pub use stage::{EstimatorStage, StageEstimate};
 pub use tuning::{Init, Tuning};
+
+use step::{make_filter, predict_only, reanchor_filter, step_filter, StepInput, StepMemory};
 
 /// Number of states an [`Estimate`] carries in [`Estimate::state`] (the 11-state
 /// leak model with spool bias; the 12th state of the 12-state layout, the oil's
@@ -74,84 +76,6 @@ pub const FLAGS_ALL: u32 = FLAG_RESET
 /// Distance from either end of the stroke within which an estimate carries
 /// [`FLAG_END_STOP`], m (an encoder count or two, plus the bounce of a stop).
 pub const END_STOP_MARGIN_M: f64 = 2e-3;
-
-/// What the estimator reports for one sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Estimate {
-    /// Sample time, s.
-    pub t_s: f64,
-    /// Number of entries of [`Self::state`] in use: the filter's states (6, 7, 10 or 11; the 12-state layout fills 11 and [`Self::bulk_scale`]).
-    pub n_states: u32,
-    /// Bit set of `FLAG_*`.
-    pub flags: u32,
-    /// A-posteriori state: x_sp m, p1 Pa, p2 Pa, x m, v m/s, v_sp m/s, F_e N, and the leak
-    /// sizes at nominal drop q_e1, q_e2, q_i m³/s, and the spool null bias b m
-    /// (entries past `n_states` are NaN).
-    pub state: [f64; MAX_STATES],
-    /// Standard deviation of each state, same units (NaN past `n_states`).
-    pub sigma: [f64; MAX_STATES],
-    /// 12-state layout: the oil's stiffness as a multiple of the model's effective
-    /// bulk modulus θ (1); NaN for the other layouts.
-    pub bulk_scale: f64,
-    /// One standard deviation of [`Self::bulk_scale`] (1); NaN for the other layouts.
-    pub bulk_scale_sigma: f64,
-    /// The measurement y = [x m, p1 Pa, p2 Pa] as received (NaN where absent).
-    pub measured: [f64; N_MEAS],
-    /// Valve command u, V (as received).
-    pub u_v: f64,
-    /// A-posteriori residual y − H x̂⁺: m, Pa, Pa (NaN where the channel was not used).
-    pub residual: [f64; N_MEAS],
-    /// Innovation y − H x̂⁻: m, Pa, Pa.
-    pub innovation: [f64; N_MEAS],
-    /// Standard deviation of each innovation, √diag(H P⁻ Hᵀ + R): m, Pa, Pa.
-    pub innovation_sigma: [f64; N_MEAS],
-    /// Moving average of |residual| of p1 and p2 over the MAE window, Pa.
-    pub mae_pa: [f64; 2],
-    /// Normalised innovation squared (χ² with 3 degrees of freedom when consistent).
-    pub nis: f64,
-    /// The oil temperature the model was at, °C: the sample's `temp_c`, else
-    /// the one read from θ ([`oil`]); NaN: neither.
-    pub oil_temp_c: f64,
-    /// One standard deviation of [`Self::oil_temp_c`], K: 0 when measured, from θ's
-    /// σ when read from θ, NaN when unknown.
-    pub oil_temp_sigma_k: f64,
-    /// One standard deviation of the laminar flows' factor since the reference
-    /// temperature (1): how far the model's null leakage may have moved from
-    /// what the commissioning saw ([`oil::laminar_factor_with_sigma`]); 0 at the reference.
-    pub laminar_factor_sigma: f64,
-    /// That σ times the model's null leakage per path at p_s/2, L/min.
-    pub null_leakage_band_lpm: f64,
-    /// How an offset of 1 MPa on p1 (row 0) and on p2 (row 1) would have moved
-    /// the leak sizes q_e1, q_e2, q_i by now, L/min per MPa ([`bias`]); zero
-    /// for the layouts without leak sizes.
-    pub offset_response_lpm_per_mpa: [[f64; 3]; 2],
-}
-
-impl Estimate {
-    pub(crate) fn empty(t_s: f64, n_states: u32) -> Self {
-        Estimate {
-            t_s,
-            n_states: n_states.min(MAX_STATES as u32),
-            flags: 0,
-            measured: [f64::NAN; N_MEAS],
-            u_v: f64::NAN,
-            state: [f64::NAN; MAX_STATES],
-            sigma: [f64::NAN; MAX_STATES],
-            bulk_scale: f64::NAN,
-            bulk_scale_sigma: f64::NAN,
-            residual: [f64::NAN; N_MEAS],
-            innovation: [f64::NAN; N_MEAS],
-            innovation_sigma: [f64::NAN; N_MEAS],
-            mae_pa: [f64::NAN; 2],
-            nis: f64::NAN,
-            oil_temp_c: f64::NAN,
-            oil_temp_sigma_k: f64::NAN,
-            laminar_factor_sigma: 0.0,
-            null_leakage_band_lpm: 0.0,
-            offset_response_lpm_per_mpa: [[0.0; 3]; 2],
-        }
-    }
-}
 
 /// The leak filter has converged once `convergence_time_s` has passed and
 /// the standard deviation of each leak size is below this share of its
@@ -644,252 +568,5 @@ impl Estimator {
         }
         out.flags |= flags;
         out
-    }
-}
-
-fn make_filter<const N: usize, const W: usize>(
-    tuning: &Tuning,
-    model: &ProcessModel,
-    measured: Option<[f64; 3]>,
-) -> Ekf<N, 3, W> {
-    let mut x0 = SVector::<f64, N>::zeros();
-    let p0 = tuning.p0_diag::<N>();
-    let q = tuning.q_diag::<N>();
-    let r = tuning.r_diag();
-    let scale = SVector::<f64, N>::from_fn(|i, _| SCALE[i]);
-    match (tuning.init, measured) {
-        (Init::Measured, Some([x, p1, p2])) => {
-            x0[1] = p1;
-            x0[2] = p2;
-            x0[3] = x;
-            if N >= 7 {
-                x0[I_FE] = model.params.pressure_force_n(p1, p2) - model.params.gravity_force_n();
-            }
-        }
-        _ => {
-            let p = tuning.init_pressure_pa;
-            x0[1] = p;
-            x0[2] = p;
-        }
-    }
-    // the oil's stiffness starts at the model's, whatever the start
-    if N == 12 {
-        x0[I_BULK] = 1.0;
-    }
-    let mut e = Ekf::new(x0, &p0, &q, r, scale);
-    e.set_random_walks_from(FIRST_RANDOM_WALK);
-    e
-}
-
-fn reanchor_filter<const N: usize, const W: usize>(
-    e: &mut Ekf<N, 3, W>,
-    tuning: &Tuning,
-    model: &ProcessModel,
-    measured: [f64; 3],
-) {
-    let fresh = make_filter::<N, W>(tuning, model, Some(measured));
-    e.reanchor(*fresh.state(), &tuning.p0_diag::<N>(), FIRST_SLOW_STATE.min(N));
-}
-
-fn predict_only<const N: usize, const W: usize>(e: &mut Ekf<N, 3, W>, model: &ProcessModel, u: f64) -> bool {
-    let (x, f, _) = model.step(e.state(), u);
-    e.predict(x, &f).is_ok()
-}
-
-/// What a filter step carries from one sample to the next besides the filter.
-struct StepMemory<'a> {
-    /// Samples the rod has rested, for θ's hold.
-    still_samples: &'a mut u32,
-    /// How the estimate answers a pressure offset.
-    offset_response: &'a mut BiasResponse,
-    /// The outlier watch.
-    outliers: &'a mut outlier::OutlierGate,
-}
-
-/// What one sample gives a filter step.
-struct StepInput {
-    /// Valve command, V.
-    u: f64,
-    /// Measurement [x m, p1 Pa, p2 Pa] (0 where a channel is not used).
-    y: SVector<f64, 3>,
-    /// Which channels update the filter.
-    use_channel: [bool; 3],
-    /// Whether the sample updates the filter at all.
-    usable: bool,
-    /// Whether a lone outlier is left out ([`outlier`]): in the leak filter
-    /// only (the thesis filter stays as published), and not while it
-    /// converges from its start, when large innovations are its own.
-    gate_outliers: bool,
-}
-
-/// One predict + update; fills `out`; returns whether the prediction was clamped.
-///
-/// On an x86-64 processor with AVX2 and FMA the whole step (the model's too)
-/// runs compiled for them: the model's arithmetic gives the same bits either
-/// way (Rust fuses no multiply-add it is not asked to), the filter's fuses
-/// its own ([`Ekf::predict`]).
-fn step_filter<const N: usize, const W: usize>(
-    e: &mut Ekf<N, 3, W>,
-    model: &ProcessModel,
-    input: &StepInput,
-    out: &mut Estimate,
-    memory: StepMemory,
-) -> Result<bool, EkfError> {
-    #[cfg(target_arch = "x86_64")]
-    if ekf::fused_vector_unit() {
-        // SAFETY: the processor has AVX2 and FMA (checked just above), the
-        // only requirement of a `target_feature` function.
-        return unsafe { step_filter_fma(e, model, input, out, memory) };
-    }
-    step_filter_body::<N, W, ekf::Separate>(e, model, input, out, memory)
-}
-
-/// [`step_filter_body`] compiled for AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn step_filter_fma<const N: usize, const W: usize>(
-    e: &mut Ekf<N, 3, W>,
-    model: &ProcessModel,
-    input: &StepInput,
-    out: &mut Estimate,
-    memory: StepMemory,
-) -> Result<bool, EkfError> {
-    step_filter_body::<N, W, ekf::Fused>(e, model, input, out, memory)
-}
-
-/// The body of [`step_filter`], its multiply-adds computed by `A` (the filter's
-/// own bodies are called directly: the processor was checked once, above).
-#[inline(always)]
-fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
-    e: &mut Ekf<N, 3, W>,
-    model: &ProcessModel,
-    input: &StepInput,
-    out: &mut Estimate,
-    memory: StepMemory,
-) -> Result<bool, EkfError> {
-    let StepInput {
-        u,
-        ref y,
-        use_channel,
-        usable,
-        gate_outliers,
-    } = *input;
-    let StepMemory {
-        still_samples,
-        offset_response,
-        outliers,
-    } = memory;
-    let (mut x_pred, mut f) = (SVector::<f64, N>::zeros(), SMatrix::<f64, N, N>::zeros());
-    let guard = model.step_into(e.state(), u, &mut x_pred, &mut f);
-    if N == 12 {
-        if e.state()[4].abs() < THETA_LEARNS_ABOVE_SIGMA_V * e.sigma_of(4) {
-            *still_samples = still_samples.saturating_add(1);
-        } else {
-            *still_samples = 0;
-        }
-    }
-    if N == 12 && *still_samples >= STILL_SAMPLES {
-        // θ scales the pressure change the net flow Q − A·v makes. While the
-        // rod rests, v̂ is noise, and that noise would pass for a change and
-        // pull θ toward 0 (an errors-in-variables bias): the A·v part leaves
-        // θ's column. The valve's and the leaks' flows stay (a chamber
-        // compressed against a stop still tells θ).
-        let (from_v1, from_v2) = model.bulk_column_from_velocity(e.state());
-        f[(1, I_BULK)] -= from_v1;
-        f[(2, I_BULK)] -= from_v2;
-    }
-    e.predict_lean::<A>(x_pred, &f)?;
-    offset_response.predict(&f);
-    let y_pred = ProcessModel::measure(e.state());
-    if usable {
-        // The channels that update: less a lone outlier once the filter has converged.
-        let mut updating = use_channel;
-        let inn =
-            e.update_selected_choosing::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, |nu, sigma| {
-                if gate_outliers {
-                    updating = outliers.gate(
-                        &[nu[0], nu[1], nu[2]],
-                        &[sigma[0], sigma[1], sigma[2]],
-                        use_channel,
-                    );
-                }
-                updating
-            })?;
-        offset_response.update(e, ProcessModel::MEASURED_STATES, updating);
-        let mut x = *e.state();
-        if model.keep_physical(&mut x).any() {
-            e.set_state(x);
-        }
-        let y_post = ProcessModel::measure(e.state());
-        for k in 0..3 {
-            out.innovation[k] = if use_channel[k] { inn.nu[k] } else { f64::NAN };
-            out.innovation_sigma[k] = inn.sigma[k];
-            out.residual[k] = if use_channel[k] {
-                y[k] - y_post[k]
-            } else {
-                f64::NAN
-            };
-        }
-        // A reading left out still counts in the NIS: the detector holds its
-        // evidence after such a burst as after any other.
-        let left_out: f64 = (0..3)
-            .filter(|&k| use_channel[k] && !updating[k])
-            .map(|k| (inn.nu[k] / inn.sigma[k]).powi(2))
-            .sum();
-        out.nis = inn.nis + left_out;
-    }
-    let x = e.state();
-    let sig = e.sigma();
-    for i in 0..N.min(MAX_STATES) {
-        out.state[i] = x[i];
-        out.sigma[i] = sig[i];
-    }
-    out.offset_response_lpm_per_mpa = offset_response.leak_sizes_lpm_per_mpa();
-    if N == 12 {
-        out.bulk_scale = x[I_BULK];
-        out.bulk_scale_sigma = sig[I_BULK];
-    }
-    Ok(guard.any())
-}
-
-/// The line that reports the oil's stiffness the leak filter estimated: θ (a
-/// multiple of the model's bulk modulus `model_bulk_modulus_pa`, Pa) ± `sigma`;
-/// below 0.9 it says what a soft rig usually means. `None` without an estimate.
-pub fn oil_stiffness_line(theta: f64, sigma: f64, model_bulk_modulus_pa: f64) -> Option<String> {
-    if !theta.is_finite() {
-        return None;
-    }
-    let hint = if theta < 0.9 {
-        ": softer than the model's, as with entrained air or long hoses (`leakwatch calibrate` on a \
-         healthy recording names it and puts it into the model)"
-    } else {
-        ""
-    };
-    Some(format!(
-        "oil stiffness: {theta:.3} ± {sigma:.3} of the model's bulk modulus ({:.0} of {:.0} MPa){hint}",
-        theta * model_bulk_modulus_pa / 1e6,
-        model_bulk_modulus_pa / 1e6
-    ))
-}
-
-#[cfg(test)]
-mod oil_stiffness_tests {
-    use super::oil_stiffness_line;
-
-    #[test]
-    fn the_oil_stiffness_line_names_theta_the_modulus_and_a_soft_rig() {
-        assert_eq!(oil_stiffness_line(f64::NAN, f64::NAN, 6.89e8), None);
-        assert_eq!(
-            oil_stiffness_line(0.98, 0.004, 6.89e8).unwrap(),
-            "oil stiffness: 0.980 ± 0.004 of the model's bulk modulus (675 of 689 MPa)"
-        );
-        let soft = oil_stiffness_line(0.74, 0.01, 6.89e8).unwrap();
-        assert!(
-            soft.starts_with(
-                "oil stiffness: 0.740 ± 0.010 of the model's bulk modulus (510 of 689 MPa): softer"
-            ),
-            "{soft}"
-        );
-        assert!(soft.contains("leakwatch calibrate"), "{soft}");
     }
 }

@@ -220,6 +220,26 @@ impl Estimator {
     }
 }
 
+/// The line that reports the oil's stiffness the leak filter estimated: θ (a
+/// multiple of the model's bulk modulus `model_bulk_modulus_pa`, Pa) ± `sigma`;
+/// below 0.9 it says what a soft rig usually means. `None` without an estimate.
+pub fn oil_stiffness_line(theta: f64, sigma: f64, model_bulk_modulus_pa: f64) -> Option<String> {
+    if !theta.is_finite() {
+        return None;
+    }
+    let hint = if theta < 0.9 {
+        ": softer than the model's, as with entrained air or long hoses (`leakwatch calibrate` on a \
+         healthy recording names it and puts it into the model)"
+    } else {
+        ""
+    };
+    Some(format!(
+        "oil stiffness: {theta:.3} ± {sigma:.3} of the model's bulk modulus ({:.0} of {:.0} MPa){hint}",
+        theta * model_bulk_modulus_pa / 1e6,
+        model_bulk_modulus_pa / 1e6
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -285,5 +305,22 @@ mod tests {
             o.observe(0.9 * (1.0 - 0.0045 * 10.0), 1e-3);
         }
         assert!((o.temperature_c() - 50.0).abs() < 1e-6, "{}", o.temperature_c());
+    }
+
+    #[test]
+    fn the_oil_stiffness_line_names_theta_the_modulus_and_a_soft_rig() {
+        assert_eq!(oil_stiffness_line(f64::NAN, f64::NAN, 6.89e8), None);
+        assert_eq!(
+            oil_stiffness_line(0.98, 0.004, 6.89e8).unwrap(),
+            "oil stiffness: 0.980 ± 0.004 of the model's bulk modulus (675 of 689 MPa)"
+        );
+        let soft = oil_stiffness_line(0.74, 0.01, 6.89e8).unwrap();
+        assert!(
+            soft.starts_with(
+                "oil stiffness: 0.740 ± 0.010 of the model's bulk modulus (510 of 689 MPa): softer"
+            ),
+            "{soft}"
+        );
+        assert!(soft.contains("leakwatch calibrate"), "{soft}");
     }
 }

@@ -1,6 +1,7 @@
 //! Tests of the square-root EKF: the triangularisation, agreement with the
 //! covariance form, and the lean step against the dense reference.
 
+use super::kernels::cholesky_columns;
 use super::*;
 use model::process::ProcessModel;
 use model::rng::Rng;
