@@ -1,0 +1,136 @@
+//! Tests of the offset watch: naming an offset, the reverse internal part, a
+//! steady leak left alone.
+
+use super::*;
+
+/// Feeds `seconds` of rises that an offset `b_mpa` on p2 makes, measured
+/// from a baseline that follows the sizes with time constant `tau_s`
+/// (0: fixed), with the model's own reverse internal flow of
+/// `artefact_lpm` for 2 s of every 10 (a rest under load after a fast
+/// move); returns the watch and the first change of the named offset.
+fn watch_offset_on_p2(
+    b_mpa: f64,
+    tau_s: f64,
+    seconds: f64,
+    artefact_lpm: f64,
+) -> (OffsetWatch, Option<OffsetChange>) {
+    let dt = 0.01;
+    let factors = crate::NOMINAL_INTERNAL_FACTORS;
+    let mut watch = OffsetWatch::new(25e6);
+    let mut baseline = [0.0; 3];
+    let mut first = None;
+    let mut id = 1;
+    let steps = (seconds / dt) as usize;
+    for n in 0..steps {
+        let t = n as f64 * dt;
+        // δ on p2 moves ext2 with the valve's flow: small at rest, large in
+        // the moves of a 3-s cycle; δ on p1 moves ext1 in another rhythm.
+        let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+        let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+        let d1 = [
+            -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
+            0.0,
+            0.0,
+        ];
+        let reverse = if t % 10.0 >= 8.0 { -artefact_lpm } else { 0.0 };
+        let q = [b_mpa * d2[0], b_mpa * d2[1], b_mpa * d2[2] + reverse];
+        let sizes = crate::signatures_with(q, factors);
+        let share = if tau_s > 0.0 { dt / tau_s } else { 0.0 };
+        for k in 0..3 {
+            baseline[k] += share * (sizes[k] - baseline[k]);
+        }
+        let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
+        watch.follow_baseline(share);
+        let change = watch.on_rise(t, dt, rise, &[d1, d2], factors, [0.05; 3], &mut id);
+        first = first.or(change);
+    }
+    (watch, first)
+}
+
+#[test]
+fn an_offset_is_named_from_rises_measured_from_a_following_baseline() {
+    for tau_s in [0.0, 15.0] {
+        let (watch, change) = watch_offset_on_p2(-0.5, tau_s, 60.0, 0.0);
+        let Some(OffsetChange::Raised(s)) = change else {
+            panic!("no offset named with baseline_tau_s {tau_s}: {change:?}");
+        };
+        assert_eq!(s.channel, 1, "{s:?}");
+        assert!(
+            (s.offset_mpa + 0.5).abs() < 0.05,
+            "offset {} MPa, truth -0.5 (tau {tau_s})",
+            s.offset_mpa
+        );
+        assert!(watch.vetoes(), "tau {tau_s}");
+    }
+}
+
+#[test]
+fn the_models_reverse_internal_flow_does_not_hide_an_offset() {
+    // an offset of −0.4 MPa on p2 among stretches of the reverse flow that
+    // no leak makes, each several times the offset's own part of the rises
+    let (watch, change) = watch_offset_on_p2(-0.4, 15.0, 90.0, 0.3);
+    let Some(OffsetChange::Raised(s)) = change else {
+        panic!("no offset named beside the reverse flow: {change:?}");
+    };
+    assert_eq!(s.channel, 1, "{s:?}");
+    assert!(
+        (s.offset_mpa + 0.4).abs() < 0.04,
+        "offset {} MPa, truth -0.4",
+        s.offset_mpa
+    );
+    assert!(watch.standing().is_some());
+}
+
+#[test]
+fn only_the_part_against_the_internal_leak_is_taken_out() {
+    let responses = [[0.3, 0.1], [0.0, -0.4], [0.1, 0.0], [0.2, 0.2]];
+    for factors in [[1.0, 1.0], [0.6, 1.3]] {
+        // what leaks make (ext1, ext2, an internal leak and mixes): untouched
+        for rise in [[0.2, 0.0], [0.0, 0.2], [0.2, -0.1], [0.1, 0.3]] {
+            let mut h = responses;
+            assert_eq!(without_reverse_internal(rise, factors, &mut h), rise);
+            assert_eq!(h, responses);
+        }
+        // an ext2 rise of 0.05 with 0.1 of reverse internal flow: the ext2 part stays
+        let [r1, r2] = factors;
+        let rise = [-0.1 * r1, 0.05 + 0.1 * r2];
+        let mut h = responses;
+        let left = without_reverse_internal(rise, factors, &mut h);
+        assert!(
+            left[0].abs() < 1e-12 && (left[1] - 0.05).abs() < 1e-12,
+            "{left:?}"
+        );
+        // each response loses its own part along the internal leak
+        for (got, was) in h.iter().zip(responses) {
+            let c = was[0] / r1;
+            assert!((got[0] - (was[0] - c * r1)).abs() < 1e-12, "{got:?} from {was:?}");
+            assert!((got[1] - (was[1] + c * r2)).abs() < 1e-12, "{got:?} from {was:?}");
+        }
+    }
+    // the internal leak feeding chamber 1 (p2 > p1): ext1 bounds the other side
+    let factors = [-1.0, -1.0];
+    let mut h = responses;
+    assert_eq!(without_reverse_internal([0.0, 0.2], factors, &mut h), [0.0, 0.2]);
+    let left = without_reverse_internal([0.15, -0.1], factors, &mut h);
+    assert!(
+        (left[0] - 0.05).abs() < 1e-12 && left[1].abs() < 1e-12,
+        "{left:?}"
+    );
+}
+
+#[test]
+fn a_steady_leak_is_no_offset() {
+    let mut watch = OffsetWatch::new(25e6);
+    let mut id = 1;
+    let factors = crate::NOMINAL_INTERNAL_FACTORS;
+    for n in 0..6000 {
+        let t = n as f64 * 0.01;
+        let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+        let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+        let d1 = [-0.05, 0.0, 0.0];
+        watch.follow_baseline(0.01 / 15.0);
+        let change = watch.on_rise(t, 0.01, [0.0, 0.2, -0.1], &[d1, d2], factors, [0.05; 3], &mut id);
+        assert_eq!(change, None, "at {t} s");
+    }
+    assert!(!watch.vetoes());
+}
