@@ -12,10 +12,10 @@ use frames::{EstimateFrame, HealthFrame, LeakEventFrame, SensorFrame, StatsFrame
 use recorder::{Entry, GapRecord, LogWriter, WriterOptions};
 use serde_json::{json, Value};
 
-#[path = "python/mcap.rs"]
-mod mcap;
-#[path = "python/rosbags.rs"]
-mod rosbags;
+#[path = "python/mcap_reader.rs"]
+mod mcap_reader;
+#[path = "python/rosbags_reader.rs"]
+mod rosbags_reader;
 
 fn f(x: f64) -> Value {
     json!({ "f64": x.to_bits() })
