@@ -84,7 +84,8 @@ impl LeakSizeDetector {
         let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.thresholds_now()[k]);
         let rise_now: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
         let leak_like = crate::leak_can_make_with(rise_now, self.thresholds_now(), self.internal_factors);
-        let up = settled && leak_like && (0..3).any(|k| rise_now[k] > band[k]);
+        let rise_leaks_make = crate::without_reverse_internal(rise_now, self.internal_factors);
+        let up = settled && leak_like && (0..3).any(|k| rise_leaks_make[k] > band[k]);
         let down = !leak_like && (0..3).any(|k| rise_now[k].abs() > band[k]);
         let longest = if up {
             self.cfg.baseline_hold_s
@@ -229,8 +230,7 @@ impl LeakSizeDetector {
         let mut strong = None;
         for k in 0..3 {
             let thr = thr[k];
-            // (the onset and the baseline a leak is sized from: its own rise as it is)
-            if rise_as_is[k] < 0.25 * thr {
+            if rise[k] < 0.25 * thr {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
