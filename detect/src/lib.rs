@@ -96,57 +96,6 @@ pub fn misfits_with(r: [f64; 3], factors: [f64; 2]) -> [f64; 3] {
     ]
 }
 
-/// Least magnitude of both internal-leak pressure factors (1) for a reverse
-/// internal part to be told ([`reverse_internal_part`]): with the chambers
-/// near each other the internal leak's direction is not pinned down.
-pub const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
-
-/// The part of chamber-flow rise `w` = (w1, w2) (L/min) that runs against an
-/// internal leak of pressure factors `factors` ([`signatures_with`]), L/min of
-/// nominal internal size (< 0), or `None` where it has none. An internal leak
-/// moves (w1, w2) along u = (r1, −r2); `w` is split along u and along the
-/// external leak whose ray bounds what leaks can make on that side (ext2 while
-/// r1 ≥ 0, else ext1). A negative part along u is a chamber gaining what the
-/// other loses, the wrong way for any leak: the model's own error. Taking
-/// c·u out of `w` leaves the rest on the bounding external leak's ray.
-pub fn reverse_internal_part(w: [f64; 2], factors: [f64; 2]) -> Option<f64> {
-    let [r1, r2] = factors;
-    let least = REVERSE_INTERNAL_LEAST_FACTOR;
-    if !(r1.abs() >= least && r2.abs() >= least) {
-        return None;
-    }
-    let along = internal_part(w, factors);
-    (along < 0.0).then_some(along)
-}
-
-/// The part of chamber-flow rise `w` (L/min) along the internal leak of
-/// pressure factors `factors`, `w` split along it and along the bounding
-/// external leak ([`reverse_internal_part`]), L/min of nominal internal size.
-pub(crate) fn internal_part(w: [f64; 2], factors: [f64; 2]) -> f64 {
-    let [r1, r2] = factors;
-    if r1 >= 0.0 {
-        w[0] / r1
-    } else {
-        -w[1] / r2
-    }
-}
-
-/// Rises `rise` = [w1, w2, int] ([`signatures_with`] with `factors`, L/min)
-/// with their part against the internal leak ([`reverse_internal_part`])
-/// taken out of the chamber flows (w1, w2). The internal leak's own rise is
-/// left as it is: that part only lowers it, and on a rise outside what leaks
-/// make (both chambers gaining) taking it out would raise it. Rises without
-/// such a part are returned as they are. The leak-size detector learns and
-/// tests these: the model's reverse internal wander (fast moves and the rests
-/// under load after them) otherwise reads as a rise of the bounding external
-/// leak (docs/detection/README.md, "Only patterns leaks can make").
-pub fn without_reverse_internal(rise: [f64; 3], factors: [f64; 2]) -> [f64; 3] {
-    match reverse_internal_part([rise[0], rise[1]], factors) {
-        Some(c) => [rise[0] - c * factors[0], rise[1] + c * factors[1], rise[2]],
-        None => rise,
-    }
-}
-
 /// [`misfits_with`] in the thesis rig's convention ([`NOMINAL_INTERNAL_FACTORS`]).
 pub fn misfits(r: [f64; 3]) -> [f64; 3] {
     misfits_with(r, NOMINAL_INTERNAL_FACTORS)
@@ -225,55 +174,4 @@ pub fn oil_band_lpm(
     let sigma = finite_or_zero(laminar_factor_sigma);
     let band = finite_or_zero(null_leakage_band_lpm);
     std::array::from_fn(|k| band + sigma * finite_or_zero(offsets_lpm[k]))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The rises of a single leak of nominal size `q` (L/min) of kind `k` (ext1, ext2, int).
-    fn leak(k: usize, q: f64, factors: [f64; 2]) -> [f64; 3] {
-        let mut sizes = [0.0; 3];
-        sizes[k] = q;
-        signatures_with(sizes, factors)
-    }
-
-    #[test]
-    fn the_rises_of_leaks_keep_their_part_and_the_reverse_internal_one_is_taken_out() {
-        // nominal, a single-rod lift's load (p1 > p2) and a load the other way (p2 > p1)
-        for factors in [NOMINAL_INTERNAL_FACTORS, [0.6, 1.4], [-0.7, -1.2]] {
-            for k in 0..3 {
-                let rise = leak(k, 0.2, factors);
-                assert_eq!(
-                    without_reverse_internal(rise, factors),
-                    rise,
-                    "{factors:?} kind {k}"
-                );
-            }
-            let mixed: [f64; 3] =
-                std::array::from_fn(|i| leak(0, 0.1, factors)[i] + leak(2, 0.1, factors)[i]);
-            assert_eq!(without_reverse_internal(mixed, factors), mixed, "{factors:?}");
-            // the model's reverse internal wander: nothing of it is left on the chambers' flows
-            let reverse = leak(2, -0.3, factors);
-            let left = without_reverse_internal(reverse, factors);
-            assert!(
-                left[0].abs() < 1e-12 && left[1].abs() < 1e-12,
-                "{factors:?} {left:?}"
-            );
-            assert_eq!(left[2], reverse[2]);
-            // an ext2 leak among that wander (p1 > p2) keeps its rise on chamber 2
-            if factors[0] > 0.0 {
-                let both: [f64; 3] = std::array::from_fn(|i| reverse[i] + leak(1, 0.2, factors)[i]);
-                let left = without_reverse_internal(both, factors);
-                assert!(
-                    (left[1] - 0.2).abs() < 1e-12 && left[0].abs() < 1e-12,
-                    "{factors:?} {left:?}"
-                );
-            }
-        }
-        // with the chambers at one pressure the internal leak's direction is not told
-        let near = [0.01, 1.0];
-        let reverse = leak(2, -0.3, near);
-        assert_eq!(without_reverse_internal(reverse, near), reverse);
-    }
 }

@@ -71,6 +71,10 @@ pub const OFFSET_CONFIRM_S: f64 = 2.0;
 pub const OFFSET_CLEAR_S: f64 = 10.0;
 /// Least weight an episode's fit needs before it can veto, s of samples.
 const EPISODE_MIN_S: f64 = 0.2;
+/// Least magnitude of both internal-leak pressure factors (1) for the reverse
+/// internal part to be told ([`without_reverse_internal`]): with the chambers
+/// near each other the internal leak's direction is not pinned down.
+const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
 
 /// The transducers whose offsets are fitted, in the order of the response's rows.
 pub const OFFSET_CHANNEL_NAMES: [&str; 2] = ["p1", "p2"];
@@ -200,11 +204,20 @@ fn without_reverse_internal(
     hypotheses: &mut [[f64; 2]; HYPOTHESES],
 ) -> [f64; 2] {
     let [r1, r2] = factors;
-    if crate::reverse_internal_part(rise, factors).is_none() {
+    // the part along u of v split along u and the bounding external leak
+    let along = |v: [f64; 2]| {
+        if r1 >= 0.0 {
+            v[0] / r1
+        } else {
+            -v[1] / r2
+        }
+    };
+    let least = REVERSE_INTERNAL_LEAST_FACTOR;
+    if !(r1.abs() >= least && r2.abs() >= least && along(rise) < 0.0) {
         return rise;
     }
     let take_out = |v: [f64; 2]| {
-        let c = crate::internal_part(v, factors);
+        let c = along(v);
         [v[0] - c * r1, v[1] + c * r2]
     };
     for h in hypotheses.iter_mut() {

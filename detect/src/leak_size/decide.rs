@@ -64,7 +64,7 @@ impl LeakSizeDetector {
                 // (pending: since when the kind now leading has led, on average)
                 other_since_s: (!decided).then_some((lead, e.t_s)),
             });
-            self.pending_rise_lpm = crate::without_reverse_internal(rise, self.internal_factors);
+            self.pending_rise_lpm = rise;
             let mut ev = self.event(
                 kind,
                 Phase::Raised,
@@ -137,7 +137,6 @@ impl LeakSizeDetector {
     ) {
         let Evidence {
             rise,
-            size,
             sigma_lpm,
             best,
             second,
@@ -170,7 +169,7 @@ impl LeakSizeDetector {
             if e.t_s - t0 >= self.cfg.kind_confirm_s {
                 a.other_since_s = None;
                 a.kind = EventKind::LEAKS[lead];
-                a.last_size_lpm = size[lead];
+                a.last_size_lpm = rise[lead];
                 a.last_update_s = e.t_s;
                 a.below_since_s = None;
                 self.active = Some(a);
@@ -179,7 +178,7 @@ impl LeakSizeDetector {
                     Phase::Raised,
                     a.id,
                     e.t_s,
-                    size[lead],
+                    rise[lead],
                     sigma_lpm[lead],
                     best,
                     second,
@@ -197,7 +196,7 @@ impl LeakSizeDetector {
                 Phase::Cleared,
                 a.id,
                 e.t_s,
-                size[lead],
+                rise[lead],
                 sigma_lpm[lead],
                 0.0,
                 0.0,
@@ -221,7 +220,6 @@ impl LeakSizeDetector {
     ) {
         let Evidence {
             rise,
-            size,
             misfit,
             sigma_lpm,
             score,
@@ -247,7 +245,7 @@ impl LeakSizeDetector {
                         a.id = id;
                         a.other_since_s = None;
                         a.below_since_s = None;
-                        a.last_size_lpm = size[lead];
+                        a.last_size_lpm = rise[lead];
                         a.last_update_s = e.t_s;
                         k = lead;
                         self.active = Some(a);
@@ -256,7 +254,7 @@ impl LeakSizeDetector {
                             Phase::Raised,
                             a.id,
                             e.t_s,
-                            size[k],
+                            rise[k],
                             sigma_lpm[k],
                             best,
                             score[from.0 as usize % 3].min(best),
@@ -276,7 +274,7 @@ impl LeakSizeDetector {
         } else {
             a.other_since_s = None;
         }
-        let size = size[k];
+        let size = rise[k];
         if a.low_for(
             size < 0.5 * self.thresholds_now()[k] && !invalid,
             e.t_s,

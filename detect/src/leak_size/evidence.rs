@@ -27,12 +27,8 @@ pub(super) struct Sight {
 /// The evidence of one estimate, per leak kind (ext1, ext2, int).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Evidence {
-    /// Rise of each hypothesis' size above its healthy baseline, without its
-    /// part against the internal leak ([`crate::without_reverse_internal`]):
-    /// what the detector weighs, L/min at p_s/2.
+    /// Rise of each hypothesis' size above its healthy baseline, L/min at p_s/2.
     pub rise: [f64; 3],
-    /// The same with that part kept: the sizes it reports, L/min at p_s/2.
-    pub size: [f64; 3],
     /// The part of the flow mismatch each hypothesis leaves unexplained, L/min.
     pub misfit: [f64; 3],
     /// σ of each hypothesis' size, L/min.
@@ -84,8 +80,7 @@ impl LeakSizeDetector {
         let band: [f64; 3] = std::array::from_fn(|k| self.cfg.baseline_hold * self.thresholds_now()[k]);
         let rise_now: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
         let leak_like = crate::leak_can_make_with(rise_now, self.thresholds_now(), self.internal_factors);
-        let rise_leaks_make = crate::without_reverse_internal(rise_now, self.internal_factors);
-        let up = settled && leak_like && (0..3).any(|k| rise_leaks_make[k] > band[k]);
+        let up = settled && leak_like && (0..3).any(|k| rise_now[k] > band[k]);
         let down = !leak_like && (0..3).any(|k| rise_now[k].abs() > band[k]);
         let longest = if up {
             self.cfg.baseline_hold_s
@@ -140,10 +135,7 @@ impl LeakSizeDetector {
         } = *sight;
         // Rise of each hypothesis' size above its healthy baseline, and how badly the
         // hypothesis fits (the part of the flow mismatch it leaves unexplained).
-        // (`rise_as_is` keeps the part against the internal leak, for the offset
-        // watch and the test of what leaks can make; the detector weighs `rise`.)
-        let rise_as_is: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
-        let rise = crate::without_reverse_internal(rise_as_is, self.internal_factors);
+        let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
         let misfit = misfits_with(rise, self.internal_factors);
         let sigma_q = [
             e.sigma[7] / M3_S_PER_LPM,
@@ -163,16 +155,12 @@ impl LeakSizeDetector {
         ];
         let sigma_lpm: [f64; 3] =
             std::array::from_fn(|k| root_sum_square(sigma_filter[k], self.stats[k].std()));
-        // (The refinement takes the rises as they are: it measures a spread about the
-        // mean, and without its reverse part ext1's rise stops at zero from below,
-        // which would halve that spread; the commissioning's upper semi-deviation
-        // is the same either way.)
         if self.active.is_none()
             && !blind
             && self.strong_since_s.is_none()
-            && (0..3).all(|k| rise_as_is[k] < self.cfg.baseline_hold * self.thresholds_now()[k])
+            && (0..3).all(|k| rise[k] < self.cfg.baseline_hold * self.thresholds_now()[k])
         {
-            self.refine_thresholds(e.t_s, dt_s, rise_as_is);
+            self.refine_thresholds(e.t_s, dt_s, rise);
         }
         // The smallest leak declared is a real flow of `min_size_lpm` (external) or
         // `min_internal_size_lpm` at the measured pressures: where a hypothesis'
@@ -193,7 +181,7 @@ impl LeakSizeDetector {
             let change = self.offsets.on_rise(
                 e.t_s,
                 dt_s,
-                rise_as_is,
+                rise,
                 &e.offset_response_lpm_per_mpa,
                 self.internal_factors,
                 thr,
@@ -226,7 +214,7 @@ impl LeakSizeDetector {
             .filter(|k| *k != lead)
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
-        let physical = crate::leak_can_make_with(rise_as_is, self.thresholds_now(), self.internal_factors);
+        let physical = crate::leak_can_make_with(rise, self.thresholds_now(), self.internal_factors);
         let mut strong = None;
         for k in 0..3 {
             let thr = thr[k];
@@ -270,7 +258,6 @@ impl LeakSizeDetector {
         }
         Evidence {
             rise,
-            size: rise_as_is,
             misfit,
             sigma_lpm,
             score,
