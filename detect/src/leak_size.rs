@@ -455,3 +455,6 @@ impl LeakSizeDetector {
         ev
     }
 }
+
+#[cfg(test)]
+mod tests;

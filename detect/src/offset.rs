@@ -335,6 +335,12 @@ impl OffsetWatch {
         self.standing
     }
 
+    /// Names `offset` as standing, as a fit would (for the detector's tests).
+    #[cfg(test)]
+    pub(crate) fn stand(&mut self, offset: StandingOffset) {
+        self.standing = Some(offset);
+    }
+
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.

@@ -2,7 +2,7 @@
 //! a leak raised (its kind named or pending), a pending kind named, a named
 //! leak followed (re-isolated, updated, cleared).
 
-use super::evidence::Evidence;
+use super::evidence::{Evidence, Sight};
 use super::LeakSizeDetector;
 use crate::track::Active;
 use crate::{misfits_with, EventKind, LeakEvent, Phase, KIND_AVERAGE_S};
@@ -125,16 +125,18 @@ impl LeakSizeDetector {
     }
 
     /// A leak of pending kind: names it once one kind has led clearly for
-    /// `kind_confirm_s`, or clears it.
+    /// `kind_confirm_s`, or clears it. While a transducer is named reading off
+    /// (`sight.misreading`) no kind is named: its offset is in the rises.
     pub(super) fn name_pending(
         &mut self,
         mut a: Active,
         e: &Estimate,
         dt_s: f64,
-        invalid: bool,
+        sight: &Sight,
         ev: &Evidence,
         out: &mut Option<LeakEvent>,
     ) {
+        let invalid = sight.invalid;
         let Evidence {
             rise,
             sigma_lpm,
@@ -145,7 +147,7 @@ impl LeakSizeDetector {
         // Kind pending: name it once one kind has led, clearly (it explains the
         // mismatch) and with a rise past half its threshold, for `kind_confirm_s`
         // (the same event id, raised again with its kind).
-        if !invalid {
+        if !invalid && !sight.misreading {
             let w = (dt_s / KIND_AVERAGE_S).min(1.0);
             for k in 0..3 {
                 self.pending_rise_lpm[k] += w * (rise[k] - self.pending_rise_lpm[k]);
@@ -158,6 +160,7 @@ impl LeakSizeDetector {
             .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a })
             .0;
         let leads = !invalid
+            && !sight.misreading
             && avg[lead] > 0.5 * self.thresholds_now()[lead]
             && avg_misfit[lead] <= self.cfg.isolation_max_misfit * avg[lead];
         a.other_since_s = match a.other_since_s {

@@ -53,9 +53,7 @@ impl LeakSizeDetector {
         let evidence = self.weigh_evidence(e, dt_s, &raw, &sight);
         match self.active {
             None => self.raise(e, &raw, &evidence, out),
-            Some(a) if a.kind == EventKind::Leak => {
-                self.name_pending(a, e, dt_s, sight.invalid, &evidence, out)
-            }
+            Some(a) if a.kind == EventKind::Leak => self.name_pending(a, e, dt_s, &sight, &evidence, out),
             Some(a) => self.follow_named(a, e, sight.invalid, &evidence, out),
         }
     }
