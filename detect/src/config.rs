@@ -16,6 +16,12 @@ schema::config_struct! {
         pub offsets_lpm: [f64; 3],
         /// Healthy spread of each (upper semi-deviation: RMS above the median), L/min at the nominal drop.
         pub spreads_lpm: [f64; 3],
+        /// Healthy spread of each kind's rise counted only where that kind explains
+        /// the rises clearly (the test that names it; 0 elsewhere), L/min at the
+        /// nominal drop; it sets the threshold a named leak must pass (NaN: not
+        /// learned, `spreads_lpm` stands in).
+        #[serde(default = "nan_per_kind")]
+        pub clear_spreads_lpm: [f64; 3],
         /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
         pub crossings_per_s: [f64; 3],
         /// Seconds of healthy, converged data learned from, s.
@@ -34,11 +40,28 @@ schema::config_struct! {
     }
 }
 
+fn nan_per_kind() -> [f64; 3] {
+    [f64::NAN; 3]
+}
+
 fn nominal_factors() -> [f64; 2] {
     crate::NOMINAL_INTERNAL_FACTORS
 }
 
 impl Commissioning {
+    /// The spreads that set the thresholds a named leak must pass, L/min:
+    /// [`Commissioning::clear_spreads_lpm`] where learned, else the spreads.
+    pub fn naming_spreads_lpm(&self) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let c = self.clear_spreads_lpm[k];
+            if c.is_nan() {
+                self.spreads_lpm[k]
+            } else {
+                c
+            }
+        })
+    }
+
     fn validate(&self) -> Result<(), String> {
         let all = self
             .offsets_lpm
@@ -80,6 +103,17 @@ impl Commissioning {
                  at most 1e6 per s, healthy_s at most 1e9 s, nis_mean finite or NaN"
                     .into(),
             );
+        }
+        if self
+            .clear_spreads_lpm
+            .iter()
+            .zip(&self.spreads_lpm)
+            .any(|(c, s)| !(c.is_nan() || (0.0..=*s).contains(c)))
+        {
+            return Err(format!(
+                "[classifier.commissioning] clear_spreads_lpm = {:?}: each between 0 and its spread (spreads_lpm), or NaN",
+                self.clear_spreads_lpm
+            ));
         }
         let [r1, r2] = self.internal_factors;
         if r1 * r2 <= 0.0 || r1.abs() > 10.0 || r2.abs() > 10.0 {

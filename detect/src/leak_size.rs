@@ -38,6 +38,11 @@ pub struct LeakSizeDetector {
     /// Threshold on the rise of each kind, in healthy spreads.
     threshold_z: [f64; 3],
     threshold_lpm: [f64; 3],
+    /// Threshold on the rise of each kind that names it (its rise explained
+    /// clearly), L/min: from the commissioning's clear spreads, else `threshold_lpm`.
+    naming_threshold_lpm: [f64; 3],
+    /// The healthy spread `naming_threshold_lpm` stands on, L/min.
+    naming_spread_lpm: [f64; 3],
     /// What the oil's temperature adds to each threshold now, L/min: the
     /// laminar flows' uncertainty since the commissioning's temperature
     /// ([`filter::Estimate::laminar_factor_sigma`]) on the model's null leakage
@@ -156,6 +161,8 @@ impl LeakSizeDetector {
             stats: [Stats::default(); 3],
             threshold_z: [f64::NAN; 3],
             threshold_lpm: [f64::NAN; 3],
+            naming_threshold_lpm: [f64::NAN; 3],
+            naming_spread_lpm: [f64::NAN; 3],
             oil_band_lpm: [0.0; 3],
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
@@ -215,9 +222,11 @@ impl LeakSizeDetector {
         self.cfg.commissioning.is_some()
     }
 
-    /// The thresholds on the rise of the ext1, ext2 and int sizes, L/min at the nominal drop (NaN before arming).
+    /// The thresholds that name each kind (ext1, ext2, int) on its rise
+    /// explained clearly, L/min at the nominal drop (NaN before arming): the
+    /// smallest leak named ([`crate::Commissioning::clear_spreads_lpm`]).
     pub fn thresholds_lpm(&self) -> [f64; 3] {
-        self.threshold_lpm
+        self.naming_threshold_lpm
     }
 
     /// The thresholds in healthy spreads (from the requested false-alarm rate; NaN before arming).
@@ -302,8 +311,20 @@ impl LeakSizeDetector {
         signatures_with(leak_sizes_lpm(e), self.internal_factors)
     }
 
-    fn arm_with(&mut self, means: [f64; 3], spreads: [f64; 3], crossings_per_s: [f64; 3], t_s: f64) {
+    /// Arms at time `t_s` (s) with healthy `means` and `spreads` (L/min), the
+    /// spreads of the naming test `naming_spreads` (L/min) and `crossings_per_s`
+    /// upcrossings of the mean per second.
+    fn arm_with(
+        &mut self,
+        means: [f64; 3],
+        spreads: [f64; 3],
+        naming_spreads: [f64; 3],
+        crossings_per_s: [f64; 3],
+        t_s: f64,
+    ) {
         self.set_thresholds(spreads, crossings_per_s);
+        self.naming_spread_lpm = naming_spreads;
+        self.naming_threshold_lpm = thresholds(&self.cfg, naming_spreads, crossings_per_s).1;
         self.armed_thresholds = (self.threshold_lpm, self.threshold_z, spreads);
         for k in 0..3 {
             self.last_low_s[k] = t_s;
@@ -352,6 +373,9 @@ impl LeakSizeDetector {
                     self.stats[k].m2 = spread[k] * spread[k];
                 }
             }
+            // (refined only without a commissioning: the naming test's spread is the whole spread)
+            self.naming_threshold_lpm = self.threshold_lpm;
+            self.naming_spread_lpm = std::array::from_fn(|k| self.stats[k].std());
         }
     }
 
@@ -425,7 +449,8 @@ impl LeakSizeDetector {
         let k = EventKind::LEAKS.iter().position(|x| *x == kind).unwrap_or(0);
         let g = self.flow_factor[k];
         let pn = 0.5 * self.cfg.supply_pressure_pa;
-        let spread = self.stats[k].std().max(1e-12);
+        // (the statistic against the spread of the naming test, whose threshold in spreads is the same)
+        let spread = self.naming_spread_lpm[k].max(1e-12);
         let z = size_nominal_lpm / spread;
         let mut ev = LeakEvent::plain(
             kind,

@@ -460,6 +460,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     } = learn_traced(input, &cfg)?;
     cfg.model.oil_temperature.reference_stiffness = theta;
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
+    let (_, naming) = detect::thresholds(&cfg.classifier, c.naming_spreads_lpm(), c.crossings_per_s);
     let learned = Learned {
         theta,
         reference_c: cfg.model.oil_temperature.reference_c,
@@ -470,9 +471,10 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         internal_factors: (c.internal_factors != detect::NOMINAL_INTERNAL_FACTORS)
             .then_some(c.internal_factors),
         thresholds_lpm: thr,
+        naming_thresholds_lpm: naming,
         false_alarms_per_hour: cfg.classifier.false_alarms_per_hour,
-        detectable: detectable_at(&cfg.model, thr, c.offsets_lpm),
-        detectable_line: detectable_over_temperature(&cfg.model, thr, c.offsets_lpm),
+        detectable: detectable_at(&cfg.model, naming, c.offsets_lpm),
+        detectable_line: detectable_over_temperature(&cfg.model, naming, c.offsets_lpm),
         nis_mean: c.nis_mean,
         set_by,
     };

@@ -211,8 +211,12 @@ pub struct Learned {
     pub spreads_lpm: [f64; 3],
     /// The internal leak's pressure factors r1/r2 when not the nominal ones (1).
     pub internal_factors: Option<[f64; 2]>,
-    /// The thresholds of ext1, ext2 and int, L/min at p_s/2.
+    /// The thresholds of ext1, ext2 and int on any rise, L/min at p_s/2 (a
+    /// rise past twice one raises a leak with its kind pending).
     pub thresholds_lpm: [f64; 3],
+    /// The thresholds that name each kind (its rise explained clearly), L/min
+    /// at p_s/2 ([`detect::Commissioning::clear_spreads_lpm`]).
+    pub naming_thresholds_lpm: [f64; 3],
     /// The false-alarm rate the thresholds are set for, 1/h.
     pub false_alarms_per_hour: f64,
     /// The smallest detectable leaks (L/min at p_s/2) at oil temperatures (°C).
@@ -257,7 +261,8 @@ impl Learned {
             ));
         }
         out.push(format!(
-            "the detector will raise leaks from {} L/min (ext1/ext2/int, at p_s/2) at {} false alarms per hour",
+            "the detector will name leaks from {} L/min (ext1/ext2/int, at p_s/2; thresholds on each kind's rises where it explains them clearly, {} on all its rises) at {} false alarms per hour",
+            three(self.naming_thresholds_lpm),
             three(self.thresholds_lpm),
             self.false_alarms_per_hour
         ));
@@ -389,7 +394,8 @@ impl CommissionRecord {
         };
         h += &row("healthy offset", l.offsets_lpm);
         h += &row("healthy spread", l.spreads_lpm);
-        h += &row("threshold", l.thresholds_lpm);
+        h += &row("threshold on all rises", l.thresholds_lpm);
+        h += &row("threshold that names the kind", l.naming_thresholds_lpm);
         for (t, d) in &l.detectable {
             h += &row(&format!("smallest detectable at {t:.0} °C"), *d);
         }

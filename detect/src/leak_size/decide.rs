@@ -279,7 +279,7 @@ impl LeakSizeDetector {
         }
         let size = rise[k];
         if a.low_for(
-            size < 0.5 * self.thresholds_now()[k] && !invalid,
+            size < 0.5 * self.naming_thresholds_now()[k] && !invalid,
             e.t_s,
             self.cfg.clear_s,
         ) {

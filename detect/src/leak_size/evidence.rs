@@ -33,7 +33,7 @@ pub(super) struct Evidence {
     pub misfit: [f64; 3],
     /// σ of each hypothesis' size, L/min.
     pub sigma_lpm: [f64; 3],
-    /// Each kind's explained rise over its threshold (1).
+    /// Each kind's explained rise over the threshold that names it (1).
     pub score: [f64; 3],
     /// The kind with the highest score, and that score.
     pub lead: usize,
@@ -166,17 +166,23 @@ impl LeakSizeDetector {
         // `min_internal_size_lpm` at the measured pressures: where a hypothesis'
         // drop is small (an internal leak while p1 ≈ p2), its size at p_s/2 is
         // poorly pinned down and must rise further.
-        let thr: [f64; 3] = std::array::from_fn(|k| {
-            let g = self.flow_factor[k];
-            let m = self.min_size_of(k);
-            let floor = if g.is_finite() {
-                m / g.max(MIN_FLOW_FACTOR)
-            } else {
-                m
-            };
-            self.thresholds_now()[k].max(floor)
-        });
-        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / thr[k]);
+        let floored = |now: [f64; 3]| -> [f64; 3] {
+            std::array::from_fn(|k| {
+                let g = self.flow_factor[k];
+                let m = self.min_size_of(k);
+                let floor = if g.is_finite() {
+                    m / g.max(MIN_FLOW_FACTOR)
+                } else {
+                    m
+                };
+                now[k].max(floor)
+            })
+        };
+        // Any rise is judged against `thr`; a kind named by its explained rise
+        // against `naming_thr` (learned where that kind's test could alarm).
+        let thr = floored(self.thresholds_now());
+        let naming_thr = floored(self.naming_thresholds_now());
+        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / naming_thr[k]);
         if !invalid {
             let change = self.offsets.on_rise(
                 e.t_s,
@@ -217,7 +223,7 @@ impl LeakSizeDetector {
         let physical = crate::leak_can_make_with(rise, self.thresholds_now(), self.internal_factors);
         let mut strong = None;
         for k in 0..3 {
-            let thr = thr[k];
+            let (thr, naming_thr) = (thr[k], naming_thr[k]);
             if rise[k] < 0.25 * thr {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
@@ -239,12 +245,13 @@ impl LeakSizeDetector {
             let clear = misfit[k] <= self.cfg.isolation_max_misfit * rise[k];
             // (a named event is followed while its kind leads; a pending one waits for a clear kind)
             let named = self.active.is_some_and(|a| a.kind != EventKind::Leak);
-            if k == lead && rise[k] > thr && best > 0.5 && evidence && (clear || named) {
+            if k == lead && rise[k] > naming_thr && best > 0.5 && evidence && (clear || named) {
                 if self.above_since_s[k].is_none() {
                     self.above_since_s[k] = Some(e.t_s);
                     self.above_evidence_s[k] = 0.0;
                 } else {
-                    self.above_evidence_s[k] += dt_s * ratio.min(self.cfg.confirm_gain_cap).max(1.0);
+                    let gain = rise[k] / naming_thr;
+                    self.above_evidence_s[k] += dt_s * gain.min(self.cfg.confirm_gain_cap).max(1.0);
                 }
             } else {
                 self.above_since_s[k] = None;

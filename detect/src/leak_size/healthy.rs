@@ -67,8 +67,28 @@ impl HealthyRecord {
     /// (offsets, spreads, upcrossings per second of the learned time) of the
     /// signatures ([`signatures_with`] with `factors`) of the kept leak sizes.
     pub(super) fn summary(&self, factors: [f64; 2]) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (med, spread, cross, _) = self.summary_with_clear(factors, f64::INFINITY);
+        (med, spread, cross)
+    }
+
+    /// Fewer kept values than this (1 s of them) where a kind explains the
+    /// rises clearly give no clear spread: the whole spread stands in.
+    const LEAST_CLEAR_VALUES: f64 = 100.0;
+
+    /// [`HealthyRecord::summary`] and each kind's clear spread, L/min: the RMS
+    /// of its rises above the median where the kind explains the rises clearly
+    /// (its misfit at most `max_misfit` of its rise: where the test that names
+    /// it could alarm), at most its whole spread. A kind's healthy excursions
+    /// in another kind's pattern (an internal leak's: chamber 1 losing what
+    /// chamber 2 gains) set no threshold of the test that never alarms on them.
+    pub(super) fn summary_with_clear(
+        &self,
+        factors: [f64; 2],
+        max_misfit: f64,
+    ) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
         let mut med = [f64::NAN; 3];
         let mut spread = [f64::NAN; 3];
+        let mut clear_spread = [f64::NAN; 3];
         let mut cross = [0.0; 3];
         let n = self.values[0].len();
         let mut signatures: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
@@ -79,21 +99,38 @@ impl HealthyRecord {
             }
         }
         for k in 0..3 {
+            if !signatures[k].is_empty() {
+                med[k] = median(&signatures[k]);
+            }
+        }
+        let clear = |i: usize, k: usize| {
+            let rise: [f64; 3] = std::array::from_fn(|j| signatures[j][i] - med[j]);
+            crate::misfits_with(rise, factors)[k] <= max_misfit * rise[k]
+        };
+        for k in 0..3 {
             let v = &signatures[k];
             if v.is_empty() {
                 continue;
             }
-            let m = median(v);
-            let (sum_sq, above) = v
-                .iter()
-                .filter(|x| **x > m)
-                .fold((0.0_f64, 0.0_f64), |(s, n), x| (s + (x - m).powi(2), n + 1.0));
-            med[k] = m;
-            spread[k] = (sum_sq / above.max(1.0)).sqrt();
+            let m = med[k];
+            let (mut sum_sq, mut above, mut clear_sum_sq, mut clear_above) = (0.0, 0.0, 0.0, 0.0);
+            for (i, x) in v.iter().enumerate().filter(|(_, x)| **x > m) {
+                let sq = (x - m).powi(2);
+                (sum_sq, above) = (sum_sq + sq, above + 1.0);
+                if clear(i, k) {
+                    (clear_sum_sq, clear_above) = (clear_sum_sq + sq, clear_above + 1.0);
+                }
+            }
+            spread[k] = (sum_sq / f64::max(above, 1.0)).sqrt();
+            clear_spread[k] = if clear_above >= Self::LEAST_CLEAR_VALUES {
+                (clear_sum_sq / clear_above).sqrt().min(spread[k])
+            } else {
+                spread[k]
+            };
             let ups = v.windows(2).filter(|w| w[0] <= m && w[1] > m).count();
             cross[k] = ups as f64 / self.learned_s.max(Self::EVERY_S);
         }
-        (med, spread, cross)
+        (med, spread, cross, clear_spread)
     }
 }
 
@@ -346,10 +383,12 @@ impl CommissioningLearner {
             ));
         }
         let (record, _) = self.record.leak_like(cfg, internal_factors);
-        let (offsets_lpm, spreads_lpm, crossings_per_s) = record.summary(internal_factors);
+        let (offsets_lpm, spreads_lpm, crossings_per_s, clear_spreads_lpm) =
+            record.summary_with_clear(internal_factors, cfg.isolation_max_misfit);
         Ok(Commissioning {
             offsets_lpm,
             spreads_lpm,
+            clear_spreads_lpm,
             crossings_per_s,
             healthy_s: record.learned_s,
             nis_mean: record.nis_mean(),
@@ -389,6 +428,23 @@ mod tests {
     fn thresholds(r: &HealthyRecord) -> [f64; 3] {
         let (_, spreads, crossings) = r.summary(crate::NOMINAL_INTERNAL_FACTORS);
         crate::thresholds(&ClassifierConfig::default(), spreads, crossings).1
+    }
+
+    #[test]
+    fn an_excursion_in_another_kinds_pattern_sets_no_naming_spread() {
+        let factors = crate::NOMINAL_INTERNAL_FACTORS;
+        let max_misfit = ClassifierConfig::default().isolation_max_misfit;
+        // an internal leak's pattern for 10 s: chamber 1 loses 0.1 L/min, chamber 2
+        // gains it; it widens ext1's spread, but ext1's test never alarms on it
+        let (_, spread, _, clear) = record([0.0, 0.0, 0.1]).summary_with_clear(factors, max_misfit);
+        assert!(spread[0] > 0.03, "{spread:?}");
+        assert!(clear[0] < 0.3 * spread[0], "{clear:?} against {spread:?}");
+        // the internal leak's own spread stands whole
+        assert!(clear[2] > 0.9 * spread[2], "{clear:?} against {spread:?}");
+        // an excursion in ext1's own pattern sets ext1's naming spread
+        let (_, spread, _, clear) = record([0.1, 0.0, 0.0]).summary_with_clear(factors, max_misfit);
+        assert!(spread[0] > 0.03, "{spread:?}");
+        assert!(clear[0] > 0.9 * spread[0], "{clear:?} against {spread:?}");
     }
 
     #[test]

@@ -14,6 +14,13 @@ impl LeakSizeDetector {
         std::array::from_fn(|k| self.threshold_lpm[k] + self.oil_band_lpm[k])
     }
 
+    /// The thresholds a named leak must pass in force, L/min at p_s/2: the
+    /// naming test's ([`Commissioning::clear_spreads_lpm`](crate::Commissioning::clear_spreads_lpm)),
+    /// widened like [`Self::thresholds_now`].
+    pub(super) fn naming_thresholds_now(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.naming_threshold_lpm[k] + self.oil_band_lpm[k])
+    }
+
     /// Takes the laminar flows' uncertainty of estimate `e` into
     /// [`Self::thresholds_now`]: the model's null leakage (its band) and the
     /// healthy offsets, each as uncertain as the laminar factor.
@@ -144,11 +151,16 @@ impl LeakSizeDetector {
     fn arm_on(&mut self, e: &Estimate, dt_s: f64) {
         // (the figures are copied out: no clone of the commissioning, which holds a String, per sample)
         if let (Arming::Converging, Some(c)) = (self.arming, self.cfg.commissioning.as_ref()) {
-            let (nis, offsets, spreads, crossings) =
-                (c.nis_mean, c.offsets_lpm, c.spreads_lpm, c.crossings_per_s);
+            let (nis, offsets, spreads, naming, crossings) = (
+                c.nis_mean,
+                c.offsets_lpm,
+                c.spreads_lpm,
+                c.naming_spreads_lpm(),
+                c.crossings_per_s,
+            );
             if e.flags & FLAG_CONVERGING == 0 {
                 self.nis_healthy = nis;
-                self.arm_with(offsets, spreads, crossings, e.t_s);
+                self.arm_with(offsets, spreads, naming, crossings, e.t_s);
             }
             return;
         }
@@ -171,7 +183,7 @@ impl LeakSizeDetector {
                 if self.record.learned_s >= self.cfg.warmup_s {
                     let (offsets, spreads, crossings) = self.record.summary(self.internal_factors);
                     self.nis_healthy = self.record.nis_mean();
-                    self.arm_with(offsets, spreads, crossings, e.t_s);
+                    self.arm_with(offsets, spreads, spreads, crossings, e.t_s);
                 }
             }
             _ => {}

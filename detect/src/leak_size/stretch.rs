@@ -118,6 +118,7 @@ mod tests {
         let c = Commissioning {
             offsets_lpm: [0.0; 3],
             spreads_lpm: [0.2, 0.2, 0.2],
+            clear_spreads_lpm: [f64::NAN; 3],
             crossings_per_s: [1.0; 3],
             healthy_s: 100.0,
             nis_mean: 3.0,

@@ -1,5 +1,6 @@
 //! The leak-size detector on a synthetic estimate stream: a leak raised with
-//! its kind pending is not named while a transducer is named reading off.
+//! its kind pending is not named while a transducer is named reading off; a
+//! commissioning's naming thresholds.
 
 use super::*;
 use crate::offset::StandingOffset;
@@ -98,4 +99,66 @@ fn a_pending_leak_is_not_named_while_a_transducer_reads_off() {
     let events = pending_then_clear(true);
     assert_eq!(raised(&events, EventKind::Leak), pending, "{events:#?}");
     assert!(raised(&events, EventKind::Ext1).is_empty(), "{events:#?}");
+}
+
+/// The events of 20 s at 1 kHz of a detector commissioned with healthy
+/// spreads of 0.03 L/min (ext1's naming spread `ext1_naming_spread_lpm`),
+/// whose leak sizes are `q_lpm` (q_e1, q_e2, q_i at the nominal drop) from 10 s on.
+fn commissioned_run(ext1_naming_spread_lpm: f64, q_lpm: [f64; 3]) -> Vec<LeakEvent> {
+    let cfg = ClassifierConfig {
+        commissioning: Some(crate::Commissioning {
+            offsets_lpm: [0.0; 3],
+            spreads_lpm: [0.03; 3],
+            clear_spreads_lpm: [ext1_naming_spread_lpm, 0.03, 0.03],
+            crossings_per_s: [1.0; 3],
+            healthy_s: 60.0,
+            nis_mean: 3.0,
+            source: "test".into(),
+            internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
+        }),
+        ..ClassifierConfig::default()
+    };
+    let mut det = LeakSizeDetector::new(cfg);
+    let mut events = Vec::new();
+    for i in 0..20_000 {
+        let t = i as f64 * 1e-3;
+        let q = if t < 10.0 { [0.0; 3] } else { q_lpm };
+        let mut out = None;
+        det.on_estimate(&estimate(t, q), &mut out);
+        events.extend(out);
+    }
+    events
+}
+
+#[test]
+fn a_leak_is_named_against_its_kinds_naming_threshold() {
+    // the thresholds at 1 upcrossing/s and 0.05 false alarms/h: 4.7 spreads,
+    // 0.14 L/min on every rise, 0.038 L/min on ext1's clear rises
+    let ext1 = |events: &[LeakEvent]| {
+        events
+            .iter()
+            .filter(|e| e.phase == Phase::Raised && e.kind == EventKind::Ext1)
+            .map(|e| e.t_detect_s)
+            .collect::<Vec<_>>()
+    };
+    // raised at once (its kind pending until ext1 has led for 1.5 s), then named ext1
+    let events = commissioned_run(0.008, [0.08, 0.0, 0.0]);
+    let named = ext1(&events);
+    assert!(
+        named.len() == 1 && (11.0..12.0).contains(&named[0]),
+        "{events:#?}"
+    );
+    assert!(
+        events[0].kind == EventKind::Leak && events[0].t_detect_s < 10.5,
+        "{events:#?}"
+    );
+    assert_eq!(events.len(), 2, "{events:#?}");
+    // without a naming spread (NaN: a commissioning that did not learn one) the
+    // whole spread names it: 0.08 L/min is below its threshold
+    let events = commissioned_run(f64::NAN, [0.08, 0.0, 0.0]);
+    assert!(events.is_empty(), "{events:#?}");
+    // an internal leak's pattern of the same rise on ext1 is not ext1's to name,
+    // and below every threshold on all rises: nothing is raised
+    let events = commissioned_run(0.008, [0.0, 0.0, 0.08]);
+    assert!(events.is_empty(), "{events:#?}");
 }

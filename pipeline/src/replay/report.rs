@@ -308,13 +308,13 @@ impl ReplayReport<'_> {
         let head = "<table><tr><th>L/min at p_s/2</th><th>ext1</th><th>ext2</th><th>int</th></tr>\n";
         let cfg = self.config;
         if let Some(c) = &cfg.classifier.commissioning {
-            let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
+            let (_, thr) = detect::thresholds(&cfg.classifier, c.naming_spreads_lpm(), c.crossings_per_s);
             h += &format!(
                 "<p class=\"note\">From the commissioning ({}), at {} false alarms per hour:</p>\n{head}",
                 esc(&c.source),
                 cfg.classifier.false_alarms_per_hour
             );
-            h += &row("threshold", thr);
+            h += &row("threshold that names the kind", thr);
             for (t, d) in crate::commission::detectable_at(&cfg.model, thr, c.offsets_lpm) {
                 h += &row(&format!("smallest detectable at {t:.0} °C"), d);
             }
