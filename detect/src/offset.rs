@@ -360,6 +360,20 @@ impl OffsetWatch {
         episode || window
     }
 
+    /// Whether an offset on a transducer explains the window's rises at least
+    /// as well as any leak, with its part of them past
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: then a leak is not
+    /// told from it on a kind's clear rises alone (at rest an offset on p_c
+    /// and an external leak from chamber c leave the same rises).
+    pub fn could_explain(&self) -> bool {
+        let (c, left) = self.window.best_offset(true);
+        self.watched_s >= OFFSET_WINDOW_S
+            && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
+            && self
+                .window
+                .offset_fits_better(left, &self.directions, 1.0 / OFFSET_FIT_RATIO)
+    }
+
     /// Reads one sample's rises `rise` (w1, w2, int; L/min at p_s/2, of
     /// [`crate::signatures_with`] with the internal leak's factors `factors`)
     /// with the filter's offset response `response` (q_e1, q_e2, q_i per MPa

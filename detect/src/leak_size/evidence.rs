@@ -48,6 +48,23 @@ pub(super) struct Evidence {
 }
 
 impl LeakSizeDetector {
+    /// Thresholds `now` (L/min at p_s/2) raised to the smallest leak declared:
+    /// a real flow of `min_size_lpm` (external) or `min_internal_size_lpm` at
+    /// the measured pressures (where a hypothesis' drop is small, an internal
+    /// leak while p1 ≈ p2, its size at p_s/2 is poorly pinned down and must rise further).
+    fn floored(&self, now: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let g = self.flow_factor[k];
+            let m = self.min_size_of(k);
+            let floor = if g.is_finite() {
+                m / g.max(MIN_FLOW_FACTOR)
+            } else {
+                m
+            };
+            now[k].max(floor)
+        })
+    }
+
     /// Follows the healthy baseline of the armed detector on estimate `e`
     /// (sizes `raw`, L/min) and says how far the estimate may be read.
     pub(super) fn follow_baseline(&mut self, e: &Estimate, dt_s: f64, raw: &[f64; 3]) -> Sight {
@@ -162,27 +179,9 @@ impl LeakSizeDetector {
         {
             self.refine_thresholds(e.t_s, dt_s, rise);
         }
-        // The smallest leak declared is a real flow of `min_size_lpm` (external) or
-        // `min_internal_size_lpm` at the measured pressures: where a hypothesis'
-        // drop is small (an internal leak while p1 ≈ p2), its size at p_s/2 is
-        // poorly pinned down and must rise further.
-        let floored = |now: [f64; 3]| -> [f64; 3] {
-            std::array::from_fn(|k| {
-                let g = self.flow_factor[k];
-                let m = self.min_size_of(k);
-                let floor = if g.is_finite() {
-                    m / g.max(MIN_FLOW_FACTOR)
-                } else {
-                    m
-                };
-                now[k].max(floor)
-            })
-        };
         // Any rise is judged against `thr`; a kind named by its explained rise
         // against `naming_thr` (learned where that kind's test could alarm).
-        let thr = floored(self.thresholds_now());
-        let naming_thr = floored(self.naming_thresholds_now());
-        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / naming_thr[k]);
+        let thr = self.floored(self.thresholds_now());
         if !invalid {
             let change = self.offsets.on_rise(
                 e.t_s,
@@ -199,6 +198,13 @@ impl LeakSizeDetector {
         }
         // Rises an offset on a transducer explains better than any leak are no leak evidence.
         let offset_like = misreading || self.offsets.vetoes();
+        // Where an offset explains them as well as a leak, a kind is named against `thr`.
+        let naming_thr = if self.offsets.could_explain() {
+            thr
+        } else {
+            self.floored(self.naming_thresholds_now())
+        };
+        let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / naming_thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
         let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
         let drift_misfit = misfits_with(drift, self.internal_factors);
