@@ -360,9 +360,10 @@ impl OffsetWatch {
         episode || window
     }
 
-    /// Whether an offset on a transducer explains the window's rises at least
-    /// as well as any leak, with its part of them past
-    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: then a leak is not
+    /// Whether an offset on a transducer could explain the window's rises:
+    /// its fit leaves at most 1/[`OFFSET_FIT_RATIO`] times what the best
+    /// leak's leaves unexplained, and its part of them is past
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold. Then a leak is not
     /// told from it on a kind's clear rises alone (at rest an offset on p_c
     /// and an external leak from chamber c leave the same rises).
     pub fn could_explain(&self) -> bool {
