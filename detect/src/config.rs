@@ -16,10 +16,10 @@ schema::config_struct! {
         pub offsets_lpm: [f64; 3],
         /// Healthy spread of each (upper semi-deviation: RMS above the median), L/min at the nominal drop.
         pub spreads_lpm: [f64; 3],
-        /// Healthy spread of each kind's rise counted only where that kind explains
-        /// the rises clearly (the test that names it; 0 elsewhere), L/min at the
-        /// nominal drop; it sets the threshold a named leak must pass (NaN: not
-        /// learned, `spreads_lpm` stands in).
+        /// Healthy spread of each kind's rises where that kind explains them clearly
+        /// (the test that names it): their RMS above the median, at most `spreads_lpm`,
+        /// L/min at the nominal drop; it sets the threshold a named leak must pass
+        /// (NaN: not learned, `spreads_lpm` stands in).
         #[serde(default = "nan_per_kind")]
         pub clear_spreads_lpm: [f64; 3],
         /// Upcrossings of the healthy offset per second, per kind (for the threshold, Rice's formula).
