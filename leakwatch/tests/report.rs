@@ -58,19 +58,26 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     );
     let html = std::fs::read_to_string(&html_path).unwrap();
 
-    // the thresholds: the terminal's line, the report's row
+    // the thresholds, naming and on all rises: the terminal's line, the report's rows
     let line = err
         .lines()
-        .find_map(|l| l.strip_prefix("the detector will raise leaks from "))
+        .find_map(|l| l.strip_prefix("the detector will name leaks from "))
         .expect("the thresholds are stated");
-    let terminal: Vec<String> = line
-        .split(' ')
-        .next()
-        .unwrap()
-        .split('/')
-        .map(str::to_string)
-        .collect();
-    assert_eq!(row(&html, "threshold"), terminal);
+    let three = |s: &str| -> Vec<String> {
+        s.split(' ')
+            .next()
+            .unwrap()
+            .split('/')
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(row(&html, "threshold that names the kind"), three(line));
+    let on_all = line
+        .split("clearly, ")
+        .nth(1)
+        .expect("the thresholds on all rises");
+    assert!(on_all.contains(" on all its rises"), "{line}");
+    assert_eq!(row(&html, "threshold on all rises"), three(on_all));
     // the offsets: the TOML's values, the terminal's and the report's
     let t: toml::Table = toml::from_str(&std::fs::read_to_string(&toml_path).unwrap()).unwrap();
     let c = &t["classifier"]["commissioning"];
@@ -149,7 +156,7 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     let report = std::fs::read_to_string(replayed.join("report.html")).unwrap();
     assert!(report.contains("Replay of healthy.csv on the rig of rig.toml"));
     for name in [
-        "threshold",
+        "threshold that names the kind",
         "smallest detectable at 20 °C",
         "smallest detectable at 60 °C",
     ] {

@@ -213,7 +213,7 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
     let err = stderr(&o);
     let line = err
         .lines()
-        .find_map(|l| l.strip_prefix("the detector will raise leaks from "))
+        .find_map(|l| l.strip_prefix("the detector will name leaks from "))
         .expect("the thresholds are stated");
     let sizes: Vec<f64> = line
         .split(' ')
