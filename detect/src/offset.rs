@@ -351,13 +351,17 @@ impl OffsetWatch {
             f.w >= EPISODE_MIN_S
                 && f.offset_fits_better(f.best_offset(false).1, &self.directions, OFFSET_FIT_RATIO)
         });
+        episode || self.window_offset_fits(OFFSET_FIT_RATIO)
+    }
+
+    /// Whether, over the window, the best offset's part of the rises is past
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
+    /// less than `ratio` times what the best leak's leaves.
+    fn window_offset_fits(&self, ratio: f64) -> bool {
         let (c, left) = self.window.best_offset(true);
-        let window = self.watched_s >= OFFSET_WINDOW_S
+        self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self
-                .window
-                .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO);
-        episode || window
+            && self.window.offset_fits_better(left, &self.directions, ratio)
     }
 
     /// Whether an offset on a transducer could explain the window's rises:
@@ -367,12 +371,7 @@ impl OffsetWatch {
     /// told from it on a kind's clear rises alone (at rest an offset on p_c
     /// and an external leak from chamber c leave the same rises).
     pub fn could_explain(&self) -> bool {
-        let (c, left) = self.window.best_offset(true);
-        self.watched_s >= OFFSET_WINDOW_S
-            && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self
-                .window
-                .offset_fits_better(left, &self.directions, 1.0 / OFFSET_FIT_RATIO)
+        self.window_offset_fits(1.0 / OFFSET_FIT_RATIO)
     }
 
     /// Reads one sample's rises `rise` (w1, w2, int; L/min at p_s/2, of
