@@ -30,6 +30,10 @@
 
 use crate::{EventKind, LeakEvent, Phase};
 
+mod fit;
+
+use fit::{channel_of, is_span, leak_directions, without_reverse_internal, Fit, HYPOTHESES};
+
 /// Time constant of the window the offsets are named over, s.
 pub const OFFSET_WINDOW_S: f64 = 10.0;
 /// An episode of high rises ends once they have all stayed below
@@ -49,12 +53,18 @@ pub const OFFSET_FIT_RATIO: f64 = 0.5;
 /// alike; a standing offset's rises, once the baseline has taken up their
 /// steady part, fit the swing far better.
 pub const SWING_FIT_RATIO: f64 = 0.5;
+/// A span error is fitted in place of an offset on its channel where it
+/// leaves less than this share of what the offset leaves (1): a healthy rig's
+/// hoses make rises that fit both alike.
+pub const SPAN_FIT_RATIO: f64 = 0.5;
 /// To be named, the offset's fit leaves at most this share of the rises'
 /// energy unexplained (1).
 pub const OFFSET_MAX_UNEXPLAINED: f64 = 0.5;
 /// To be named, the offset's part of the rises reaches this share of the
 /// smallest threshold, RMS over the window (1).
 pub const OFFSET_NAMED_SHARE: f64 = 0.3;
+/// Least span error named (1): a transducer's accuracy of reading.
+pub const SPAN_LEAST_ERROR: f64 = 0.005;
 /// Least offset named, as a share of the transducer's range (1): below it
 /// the offset is within a transducer's accuracy, and a healthy rig's hoses
 /// (the drop between a manifold transducer and its chamber, which moves with
@@ -74,165 +84,22 @@ const EPISODE_MIN_S: f64 = 0.2;
 /// Least magnitude of both internal-leak pressure factors (1) for the reverse
 /// internal part to be told ([`without_reverse_internal`]): with the chambers
 /// near each other the internal leak's direction is not pinned down.
-const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
+pub(crate) const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
 
 /// The transducers whose offsets are fitted, in the order of the response's rows.
 pub const OFFSET_CHANNEL_NAMES: [&str; 2] = ["p1", "p2"];
-
-/// The offset hypotheses fitted: per channel, its response as the filter
-/// gives it (h = c) and that response's swing about its baseline (h = 2 + c).
-const HYPOTHESES: usize = 4;
-
-/// The channel of offset hypothesis `h`.
-const fn channel_of(h: usize) -> usize {
-    h % 2
-}
-
-/// Exponentially weighted sums of both fits over the chamber flows' rises
-/// (w1, w2) (weights in s).
-#[derive(Debug, Clone, Copy, Default)]
-struct Fit {
-    /// Σw, s.
-    w: f64,
-    /// Σw·|rise|², (L/min)²·s.
-    energy: f64,
-    /// Σw·δ_h·rise per offset hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s.
-    response_rise: [f64; HYPOTHESES],
-    /// Σw·|δ_h|² per offset hypothesis, (L/min/MPa)²·s.
-    response_energy: [f64; HYPOTHESES],
-    /// Σw·rise, L/min·s.
-    rise: [f64; 2],
-}
-
-impl Fit {
-    /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
-    fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
-        self.w = keep * self.w + dt_s;
-        self.energy = keep * self.energy + dt_s * (rise[0] * rise[0] + rise[1] * rise[1]);
-        for c in 0..HYPOTHESES {
-            let d = &response[c];
-            let dr = d[0] * rise[0] + d[1] * rise[1];
-            let dd = d[0] * d[0] + d[1] * d[1];
-            self.response_rise[c] = keep * self.response_rise[c] + dt_s * dr;
-            self.response_energy[c] = keep * self.response_energy[c] + dt_s * dd;
-        }
-        for k in 0..2 {
-            self.rise[k] = keep * self.rise[k] + dt_s * rise[k];
-        }
-    }
-
-    /// The offset of hypothesis `c` that fits best, MPa (0 without a response).
-    fn offset_mpa(&self, c: usize) -> f64 {
-        if self.response_energy[c] > 0.0 {
-            self.response_rise[c] / self.response_energy[c]
-        } else {
-            0.0
-        }
-    }
-
-    /// The energy the offset of hypothesis `c` explains, (L/min)²·s.
-    fn explained_by_offset(&self, c: usize) -> f64 {
-        self.offset_mpa(c) * self.response_rise[c]
-    }
-
-    /// The energy the best steady leak leaves unexplained, (L/min)²·s: a leak
-    /// of kind k moves (w1, w2) along `directions[k]` (unit vectors).
-    fn unexplained_by_leak(&self, directions: &[[f64; 2]; 3]) -> f64 {
-        let best = directions
-            .iter()
-            .map(|u| (u[0] * self.rise[0] + u[1] * self.rise[1]).powi(2) / self.w.max(1e-12))
-            .fold(0.0, f64::max);
-        self.energy - best
-    }
-
-    /// The offset hypothesis that explains most, and what its fit leaves,
-    /// (L/min)²·s. A channel's swing about its baseline counts only where it
-    /// leaves less than [`SWING_FIT_RATIO`] of what its response as given
-    /// leaves: the baseline has taken up the offset's steady part.
-    /// Without `swing`, the responses as given alone.
-    fn best_offset(&self, swing: bool) -> (usize, f64) {
-        let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
-        (0..HYPOTHESES)
-            .filter(|&h| h < 2 || (swing && left[h] < SWING_FIT_RATIO * left[h - 2]))
-            .map(|h| (h, left[h]))
-            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
-    }
-
-    /// Whether an offset's fit, leaving `left` ((L/min)²·s, of
-    /// [`Fit::best_offset`]), leaves less than `ratio` times what the best
-    /// leak's leaves unexplained.
-    fn offset_fits_better(&self, left: f64, directions: &[[f64; 2]; 3], ratio: f64) -> bool {
-        self.energy > 0.0 && left < ratio * self.unexplained_by_leak(directions)
-    }
-
-    /// RMS of the rises that the offset of hypothesis `c` explains, L/min.
-    fn explained_rms_lpm(&self, c: usize) -> f64 {
-        (self.explained_by_offset(c).max(0.0) / self.w.max(1e-12)).sqrt()
-    }
-
-    /// RMS of the rises that an offset of channel `c` explains in either form, L/min.
-    fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
-        self.explained_rms_lpm(c).max(self.explained_rms_lpm(c + 2))
-    }
-}
-
-/// The unit directions in (w1, w2) of ext1, ext2 and int for the internal
-/// leak's pressure factors `factors` ([`crate::signatures_with`]).
-fn leak_directions(factors: [f64; 2]) -> [[f64; 2]; 3] {
-    let [r1, r2] = factors;
-    let n = (r1 * r1 + r2 * r2).sqrt().max(1e-12);
-    [[1.0, 0.0], [0.0, 1.0], [r1 / n, -r2 / n]]
-}
-
-/// The rise `rise` in (w1, w2) (L/min) with its part against an internal
-/// leak taken out, and the offset hypotheses' responses `hypotheses` with
-/// theirs, where the rise has such a part; else all as they are. An internal
-/// leak of the pressure factors `factors` moves (w1, w2) along u = (r1, −r2);
-/// the rise is split along u and along the external leak whose ray bounds
-/// what leaks can make on that side (ext2 while r1 ≥ 0, else ext1). A
-/// negative part along u is a chamber gaining what the other loses, the wrong
-/// way for any leak: it is what is taken out, of the rise and of every
-/// response alike.
-///
-/// The model makes that pattern itself: the fast moves of a handling cycle,
-/// and the rests under load after them, with no fault at all. No leak makes
-/// it, and an offset alone does not explain it: left in, it weighs on both
-/// fits alike, and a drift's smaller part of the rises is lost in it.
-fn without_reverse_internal(
-    rise: [f64; 2],
-    factors: [f64; 2],
-    hypotheses: &mut [[f64; 2]; HYPOTHESES],
-) -> [f64; 2] {
-    let [r1, r2] = factors;
-    // the part along u of v split along u and the bounding external leak
-    let along = |v: [f64; 2]| {
-        if r1 >= 0.0 {
-            v[0] / r1
-        } else {
-            -v[1] / r2
-        }
-    };
-    let least = REVERSE_INTERNAL_LEAST_FACTOR;
-    if !(r1.abs() >= least && r2.abs() >= least && along(rise) < 0.0) {
-        return rise;
-    }
-    let take_out = |v: [f64; 2]| {
-        let c = along(v);
-        [v[0] - c * r1, v[1] + c * r2]
-    };
-    for h in hypotheses.iter_mut() {
-        *h = take_out(*h);
-    }
-    take_out(rise)
-}
 
 /// A named offset.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StandingOffset {
     /// Channel index into [`OFFSET_CHANNEL_NAMES`].
     pub channel: usize,
-    /// The offset fitted when it was named, MPa (measured minus true).
+    /// The offset fitted when it was named, MPa (measured minus true); for
+    /// a span error, the offset it made on the reading then.
     pub offset_mpa: f64,
+    /// The span error fitted when it was named, 1 (the channel reads
+    /// (1 + g)·p); NaN where an offset fits better.
+    pub span_error: f64,
     /// Since when its part of the rises has been growing, s.
     pub since_s: f64,
     /// Event id of its `sensor-offset` event.
@@ -274,9 +141,12 @@ pub struct OffsetWatch {
     smallest_threshold_lpm: f64,
     /// A sample period (s) and the window's decay over it (1).
     keep_for: (f64, f64),
-    /// Per channel: the baseline of its response δ̄_c in (w1, w2), L/min per MPa,
-    /// followed as the detector's baseline follows the sizes.
-    response_baseline: [[f64; 2]; 2],
+    /// Per hypothesis given as is (not a swing): the baseline of its response
+    /// in (w1, w2) (L/min per MPa, or per unit span error), followed as the
+    /// detector's baseline follows the sizes.
+    response_baseline: [[f64; 2]; HYPOTHESES],
+    /// The pressures read at the last sample, MPa (0 where not read).
+    reading_mpa: [f64; 2],
     /// The share (1) by which the detector's baseline moved toward the sizes at
     /// this sample ([`OffsetWatch::follow_baseline`]).
     baseline_step: f64,
@@ -307,7 +177,8 @@ impl Default for OffsetWatch {
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
             keep_for: (0.0, 1.0),
-            response_baseline: [[0.0; 2]; 2],
+            response_baseline: [[0.0; 2]; HYPOTHESES],
+            reading_mpa: [0.0; 2],
             baseline_step: 0.0,
         }
     }
@@ -364,6 +235,14 @@ impl OffsetWatch {
             && self.window.offset_fits_better(left, &self.directions, ratio)
     }
 
+    /// Whether the misreading of hypothesis `h` fitted over the window is
+    /// past what a sound transducer reads off: [`SPAN_LEAST_ERROR`] for a
+    /// span error, the least offset for an offset.
+    fn large_enough(&self, h: usize) -> bool {
+        let least = if is_span(h) { SPAN_LEAST_ERROR } else { self.least_offset_mpa };
+        self.window.coefficient(h).abs() > least
+    }
+
     /// Whether an offset on a transducer could explain the window's rises:
     /// its fit leaves at most 1/[`OFFSET_FIT_RATIO`] times what the best
     /// leak's leaves unexplained, and its part of them is past
@@ -377,7 +256,8 @@ impl OffsetWatch {
     /// Reads one sample's rises `rise` (w1, w2, int; L/min at p_s/2, of
     /// [`crate::signatures_with`] with the internal leak's factors `factors`)
     /// with the filter's offset response `response` (q_e1, q_e2, q_i per MPa
-    /// on p1 and on p2), `dt_s` after the last, with the thresholds
+    /// on p1 and on p2) and the pressures read `reading_mpa` (p1, p2, MPa;
+    /// a span error's offset), `dt_s` after the last, with the thresholds
     /// `thresholds_lpm`; `next_id` gives an event id. Returns a change of the
     /// named offset.
     #[allow(clippy::too_many_arguments)]
@@ -387,6 +267,7 @@ impl OffsetWatch {
         dt_s: f64,
         rise: [f64; 3],
         response: &[[f64; 3]; 2],
+        reading_mpa: [f64; 2],
         factors: [f64; 2],
         thresholds_lpm: [f64; 3],
         next_id: &mut u64,
@@ -401,14 +282,18 @@ impl OffsetWatch {
             return None;
         }
         self.directions = leak_directions(factors);
+        // (a channel not read has no span error to fit)
+        self.reading_mpa = reading_mpa.map(|p| if p.is_finite() { p } else { 0.0 });
         let mut hypotheses = [[0.0; 2]; HYPOTHESES];
         for c in 0..2 {
             let w = crate::signatures_with(response[c], factors);
-            for k in 0..2 {
-                let base = &mut self.response_baseline[c][k];
-                *base += share * (w[k] - *base);
-                hypotheses[c][k] = w[k];
-                hypotheses[2 + c][k] = w[k] - *base;
+            for (h, scale) in [(c, 1.0), (4 + c, self.reading_mpa[c])] {
+                for k in 0..2 {
+                    let base = &mut self.response_baseline[h][k];
+                    *base += share * (scale * w[k] - *base);
+                    hypotheses[h][k] = scale * w[k];
+                    hypotheses[h + 2][k] = scale * w[k] - *base;
+                }
             }
         }
         let rise3 = rise;
@@ -460,7 +345,7 @@ impl OffsetWatch {
                 .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
             && self.window.explained_rms_lpm(h) > level
-            && self.window.offset_mpa(h).abs() > self.least_offset_mpa;
+            && self.large_enough(h);
         let c = channel_of(h);
         match (named, self.candidate) {
             (false, _) => self.candidate = None,
@@ -468,7 +353,8 @@ impl OffsetWatch {
                 if t_s - t0 >= OFFSET_CONFIRM_S {
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: self.window.offset_mpa(h),
+                        offset_mpa: self.window.coefficient(h) * if is_span(h) { self.reading_mpa[c] } else { 1.0 },
+                        span_error: if is_span(h) { self.window.coefficient(h) } else { f64::NAN },
                         since_s: self.low_since_s[c],
                         event_id: *next_id,
                     };
@@ -501,14 +387,24 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
     ev.channel = name.into();
     ev.detail = match phase {
         Phase::Cleared => format!("{name} reads true again: leak decisions resume"),
-        _ => format!(
-            "{name} reads {:.0} kPa {} (an offset or a span error, fitted over {:.0} s): the leak sizes move \
-             with the valve's flow as an offset on {name} makes them, not as a leak does; no leak decision \
-             while it stands",
-            s.offset_mpa.abs() * 1e3,
-            if s.offset_mpa >= 0.0 { "high" } else { "low" },
-            OFFSET_WINDOW_S
-        ),
+        _ => {
+            let high_low = |v: f64| if v >= 0.0 { "high" } else { "low" };
+            let reading = if s.span_error.is_finite() {
+                format!(
+                    "{:.1} % {} (a span error: {:.0} kPa at this pressure",
+                    s.span_error.abs() * 100.0,
+                    high_low(s.span_error),
+                    s.offset_mpa.abs() * 1e3
+                )
+            } else {
+                format!("{:.0} kPa {} (an offset", s.offset_mpa.abs() * 1e3, high_low(s.offset_mpa))
+            };
+            format!(
+                "{name} reads {reading}, fitted over {OFFSET_WINDOW_S:.0} s): the leak sizes move with the \
+                 valve's flow as a misreading of {name} makes them, not as a leak does; no leak decision \
+                 while it stands"
+            )
+        }
     };
     ev
 }

@@ -188,6 +188,7 @@ impl LeakSizeDetector {
                 dt_s,
                 rise,
                 &e.offset_response_lpm_per_mpa,
+                [e.measured[1] * 1e-6, e.measured[2] * 1e-6],
                 self.internal_factors,
                 thr,
                 &mut self.next_id,

@@ -63,6 +63,7 @@ fn pending_then_clear(offset_at_20_s: bool) -> Vec<LeakEvent> {
             det.offsets.stand(StandingOffset {
                 channel: 1,
                 offset_mpa: -0.3,
+                span_error: f64::NAN,
                 since_s: 5.0,
                 event_id: 99,
             });

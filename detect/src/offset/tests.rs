@@ -1,5 +1,5 @@
-//! Tests of the offset watch: naming an offset, the reverse internal part, a
-//! steady leak left alone.
+//! Tests of the offset watch: naming an offset and a span error, the reverse
+//! internal part, a steady leak left alone.
 
 use super::*;
 
@@ -41,7 +41,7 @@ fn watch_offset_on_p2(
         }
         let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
         watch.follow_baseline(share);
-        let change = watch.on_rise(t, dt, rise, &[d1, d2], factors, [0.05; 3], &mut id);
+        let change = watch.on_rise(t, dt, rise, &[d1, d2], [0.0; 2], factors, [0.05; 3], &mut id);
         first = first.or(change);
     }
     (watch, first)
@@ -129,8 +129,61 @@ fn a_steady_leak_is_no_offset() {
         let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
         let d1 = [-0.05, 0.0, 0.0];
         watch.follow_baseline(0.01 / 15.0);
-        let change = watch.on_rise(t, 0.01, [0.0, 0.2, -0.1], &[d1, d2], factors, [0.05; 3], &mut id);
+        let change = watch.on_rise(t, 0.01, [0.0, 0.2, -0.1], &[d1, d2], [0.0; 2], factors, [0.05; 3], &mut id);
         assert_eq!(change, None, "at {t} s");
     }
     assert!(!watch.vetoes());
+}
+
+/// Feeds `seconds` of the rises a span error `gain_error` (1) on p1 makes
+/// while p1 reads `p1_mpa(t)`, measured from a baseline that follows the
+/// sizes with a time constant of 15 s; returns the first change.
+fn watch_span_on_p1(gain_error: f64, seconds: f64, p1_mpa: impl Fn(f64) -> f64) -> Option<OffsetChange> {
+    let dt = 0.01;
+    let factors = crate::NOMINAL_INTERNAL_FACTORS;
+    let mut watch = OffsetWatch::new(25e6);
+    let mut baseline = [0.0; 3];
+    let mut first = None;
+    let mut id = 1;
+    for n in 0..(seconds / dt) as usize {
+        let t = n as f64 * dt;
+        let d1 = [
+            -0.1 - 0.4 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
+            0.0,
+            0.01,
+        ];
+        let d2 = [0.0, -0.1, 0.02];
+        let p1 = p1_mpa(t);
+        let q = d1.map(|d| gain_error * p1 * d);
+        let sizes = crate::signatures_with(q, factors);
+        let share = dt / 15.0;
+        for k in 0..3 {
+            baseline[k] += share * (sizes[k] - baseline[k]);
+        }
+        let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
+        watch.follow_baseline(share);
+        let change = watch.on_rise(t, dt, rise, &[d1, d2], [p1, 3.0], factors, [0.05; 3], &mut id);
+        first = first.or(change);
+    }
+    first
+}
+
+#[test]
+fn a_span_error_is_named_where_it_moves_with_the_pressure() {
+    // p1 swinging 2-14 MPa in a rhythm of its own: a 2 % span error makes
+    // offsets of 40-280 kPa, 160 kPa on average, under the least offset
+    // named (250 kPa)
+    let swinging = |t: f64| 8.0 + 6.0 * (2.0 * std::f64::consts::PI * t / 7.0).sin();
+    let Some(OffsetChange::Raised(s)) = watch_span_on_p1(0.02, 90.0, swinging) else {
+        panic!("no span error named");
+    };
+    assert_eq!(s.channel, 0, "{s:?}");
+    assert!(
+        (s.span_error - 0.02).abs() < 0.004,
+        "span error {} against 0.02",
+        s.span_error
+    );
+    // at a steady 8 MPa the same error is an offset of 160 kPa: a span fits
+    // no better than an offset, and the offset is within a transducer's accuracy
+    assert_eq!(watch_span_on_p1(0.02, 90.0, |_| 8.0), None);
 }

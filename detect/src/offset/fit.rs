@@ -1,0 +1,172 @@
+//! The least-squares fits of the offset watch: a misreading of p1 or p2
+//! against a steady leak, over the chamber flows' rises (w1, w2).
+
+use super::{REVERSE_INTERNAL_LEAST_FACTOR, SPAN_FIT_RATIO, SWING_FIT_RATIO};
+
+/// The misreadings fitted per channel c, as hypothesis h = 2·form + c:
+/// form 0, an offset (the filter's response δ_c as given); form 1, its swing
+/// about its baseline; form 2, a span error (δ_c times the channel's reading:
+/// the offset a gain error makes moves with the pressure); form 3, its swing.
+pub(crate) const HYPOTHESES: usize = 8;
+
+/// The channel of hypothesis `h`.
+pub(crate) const fn channel_of(h: usize) -> usize {
+    h % 2
+}
+
+/// Whether hypothesis `h` is a span error (its coefficient a gain error, 1)
+/// rather than an offset (MPa).
+pub(crate) const fn is_span(h: usize) -> bool {
+    h >= 4
+}
+
+/// Whether hypothesis `h` is a swing about its baseline (fitted in place of
+/// hypothesis `h − 2`, its response as given).
+const fn is_swing(h: usize) -> bool {
+    (h / 2) % 2 == 1
+}
+
+/// Exponentially weighted sums of both fits over the chamber flows' rises
+/// (w1, w2) (weights in s).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Fit {
+    /// Σw, s.
+    pub(crate) w: f64,
+    /// Σw·|rise|², (L/min)²·s.
+    pub(crate) energy: f64,
+    /// Σw·δ_h·rise per offset hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s.
+    pub(crate) response_rise: [f64; HYPOTHESES],
+    /// Σw·|δ_h|² per offset hypothesis, (L/min/MPa)²·s.
+    pub(crate) response_energy: [f64; HYPOTHESES],
+    /// Σw·rise, L/min·s.
+    pub(crate) rise: [f64; 2],
+}
+
+impl Fit {
+    /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
+    pub(crate) fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
+        self.w = keep * self.w + dt_s;
+        self.energy = keep * self.energy + dt_s * (rise[0] * rise[0] + rise[1] * rise[1]);
+        for c in 0..HYPOTHESES {
+            let d = &response[c];
+            let dr = d[0] * rise[0] + d[1] * rise[1];
+            let dd = d[0] * d[0] + d[1] * d[1];
+            self.response_rise[c] = keep * self.response_rise[c] + dt_s * dr;
+            self.response_energy[c] = keep * self.response_energy[c] + dt_s * dd;
+        }
+        for k in 0..2 {
+            self.rise[k] = keep * self.rise[k] + dt_s * rise[k];
+        }
+    }
+
+    /// The coefficient of hypothesis `c` that fits best: an offset in MPa, a
+    /// span error in 1 ([`is_span`]); 0 without a response.
+    pub(crate) fn coefficient(&self, c: usize) -> f64 {
+        if self.response_energy[c] > 0.0 {
+            self.response_rise[c] / self.response_energy[c]
+        } else {
+            0.0
+        }
+    }
+
+    /// The energy the offset of hypothesis `c` explains, (L/min)²·s.
+    pub(crate) fn explained_by_offset(&self, c: usize) -> f64 {
+        self.coefficient(c) * self.response_rise[c]
+    }
+
+    /// The energy the best steady leak leaves unexplained, (L/min)²·s: a leak
+    /// of kind k moves (w1, w2) along `directions[k]` (unit vectors).
+    pub(crate) fn unexplained_by_leak(&self, directions: &[[f64; 2]; 3]) -> f64 {
+        let best = directions
+            .iter()
+            .map(|u| (u[0] * self.rise[0] + u[1] * self.rise[1]).powi(2) / self.w.max(1e-12))
+            .fold(0.0, f64::max);
+        self.energy - best
+    }
+
+    /// The offset hypothesis that explains most, and what its fit leaves,
+    /// (L/min)²·s. A channel's swing about its baseline counts only where it
+    /// leaves less than [`SWING_FIT_RATIO`] of what its response as given
+    /// leaves: the baseline has taken up the offset's steady part.
+    /// A span error counts only where it leaves less than
+    /// [`SPAN_FIT_RATIO`] of what the channel's offset in the same form
+    /// leaves. Without `swing`, the responses as given alone.
+    pub(crate) fn best_offset(&self, swing: bool) -> (usize, f64) {
+        let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
+        (0..HYPOTHESES)
+            .filter(|&h| !is_swing(h) || (swing && left[h] < SWING_FIT_RATIO * left[h - 2]))
+            .filter(|&h| !is_span(h) || left[h] < SPAN_FIT_RATIO * left[h - 4])
+            .map(|h| (h, left[h]))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+    }
+
+    /// Whether an offset's fit, leaving `left` ((L/min)²·s, of
+    /// [`Fit::best_offset`]), leaves less than `ratio` times what the best
+    /// leak's leaves unexplained.
+    pub(crate) fn offset_fits_better(&self, left: f64, directions: &[[f64; 2]; 3], ratio: f64) -> bool {
+        self.energy > 0.0 && left < ratio * self.unexplained_by_leak(directions)
+    }
+
+    /// RMS of the rises that the offset of hypothesis `c` explains, L/min.
+    pub(crate) fn explained_rms_lpm(&self, c: usize) -> f64 {
+        (self.explained_by_offset(c).max(0.0) / self.w.max(1e-12)).sqrt()
+    }
+
+    /// RMS of the rises that a misreading of channel `c` explains in any form, L/min.
+    pub(crate) fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
+        (c..HYPOTHESES)
+            .step_by(2)
+            .map(|h| self.explained_rms_lpm(h))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The unit directions in (w1, w2) of ext1, ext2 and int for the internal
+/// leak's pressure factors `factors` ([`crate::signatures_with`]).
+pub(crate) fn leak_directions(factors: [f64; 2]) -> [[f64; 2]; 3] {
+    let [r1, r2] = factors;
+    let n = (r1 * r1 + r2 * r2).sqrt().max(1e-12);
+    [[1.0, 0.0], [0.0, 1.0], [r1 / n, -r2 / n]]
+}
+
+/// The rise `rise` in (w1, w2) (L/min) with its part against an internal
+/// leak taken out, and the offset hypotheses' responses `hypotheses` with
+/// theirs, where the rise has such a part; else all as they are. An internal
+/// leak of the pressure factors `factors` moves (w1, w2) along u = (r1, −r2);
+/// the rise is split along u and along the external leak whose ray bounds
+/// what leaks can make on that side (ext2 while r1 ≥ 0, else ext1). A
+/// negative part along u is a chamber gaining what the other loses, the wrong
+/// way for any leak: it is what is taken out, of the rise and of every
+/// response alike.
+///
+/// The model makes that pattern itself: the fast moves of a handling cycle,
+/// and the rests under load after them, with no fault at all. No leak makes
+/// it, and an offset alone does not explain it: left in, it weighs on both
+/// fits alike, and a drift's smaller part of the rises is lost in it.
+pub(crate) fn without_reverse_internal(
+    rise: [f64; 2],
+    factors: [f64; 2],
+    hypotheses: &mut [[f64; 2]],
+) -> [f64; 2] {
+    let [r1, r2] = factors;
+    // the part along u of v split along u and the bounding external leak
+    let along = |v: [f64; 2]| {
+        if r1 >= 0.0 {
+            v[0] / r1
+        } else {
+            -v[1] / r2
+        }
+    };
+    let least = REVERSE_INTERNAL_LEAST_FACTOR;
+    if !(r1.abs() >= least && r2.abs() >= least && along(rise) < 0.0) {
+        return rise;
+    }
+    let take_out = |v: [f64; 2]| {
+        let c = along(v);
+        [v[0] - c * r1, v[1] + c * r2]
+    };
+    for h in hypotheses.iter_mut() {
+        *h = take_out(*h);
+    }
+    take_out(rise)
+}
