@@ -239,7 +239,11 @@ impl OffsetWatch {
     /// past what a sound transducer reads off: [`SPAN_LEAST_ERROR`] for a
     /// span error, the least offset for an offset.
     fn large_enough(&self, h: usize) -> bool {
-        let least = if is_span(h) { SPAN_LEAST_ERROR } else { self.least_offset_mpa };
+        let least = if is_span(h) {
+            SPAN_LEAST_ERROR
+        } else {
+            self.least_offset_mpa
+        };
         self.window.coefficient(h).abs() > least
     }
 
@@ -353,8 +357,13 @@ impl OffsetWatch {
                 if t_s - t0 >= OFFSET_CONFIRM_S {
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: self.window.coefficient(h) * if is_span(h) { self.reading_mpa[c] } else { 1.0 },
-                        span_error: if is_span(h) { self.window.coefficient(h) } else { f64::NAN },
+                        offset_mpa: self.window.coefficient(h)
+                            * if is_span(h) { self.reading_mpa[c] } else { 1.0 },
+                        span_error: if is_span(h) {
+                            self.window.coefficient(h)
+                        } else {
+                            f64::NAN
+                        },
                         since_s: self.low_since_s[c],
                         event_id: *next_id,
                     };
@@ -397,7 +406,11 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
                     s.offset_mpa.abs() * 1e3
                 )
             } else {
-                format!("{:.0} kPa {} (an offset", s.offset_mpa.abs() * 1e3, high_low(s.offset_mpa))
+                format!(
+                    "{:.0} kPa {} (an offset",
+                    s.offset_mpa.abs() * 1e3,
+                    high_low(s.offset_mpa)
+                )
             };
             format!(
                 "{name} reads {reading}, fitted over {OFFSET_WINDOW_S:.0} s): the leak sizes move with the \

@@ -129,7 +129,16 @@ fn a_steady_leak_is_no_offset() {
         let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
         let d1 = [-0.05, 0.0, 0.0];
         watch.follow_baseline(0.01 / 15.0);
-        let change = watch.on_rise(t, 0.01, [0.0, 0.2, -0.1], &[d1, d2], [0.0; 2], factors, [0.05; 3], &mut id);
+        let change = watch.on_rise(
+            t,
+            0.01,
+            [0.0, 0.2, -0.1],
+            &[d1, d2],
+            [0.0; 2],
+            factors,
+            [0.05; 3],
+            &mut id,
+        );
         assert_eq!(change, None, "at {t} s");
     }
     assert!(!watch.vetoes());
