@@ -1,7 +1,7 @@
 //! Seeded sensor-fault tests on the thesis rig (12-state filter, no
 //! commissioning): a drifting pressure transducer is named `sensor-offset` on
 //! its channel with the sign of its offset, and no leak is raised while it
-//! stands; outliers are named `sensor-spikes` and raise no leak event; the
+//! stands; a span error is named as one; outliers are named `sensor-spikes` and raise no leak event; the
 //! same healthy run raises no sensor event.
 
 use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
@@ -70,6 +70,19 @@ fn a_drifting_pressure_transducer_is_named_and_then_raises_no_leak() {
             .collect();
         assert!(after.is_empty(), "{spec}: {after:?}");
     }
+}
+
+#[test]
+fn a_span_error_is_named_as_one_and_raises_no_leak() {
+    // +2.5 % on p1, grown over 40 s: about 100 kPa at the loaded sine's
+    // pressures, under the offset's floor (207 kPa); p1 swings with the cycle
+    let spec = "p1:span=+2.5%,ramp=40s@25s";
+    let events = run("loaded-sine", 150.0, 13, &[spec]);
+    let named = raised(&events, EventKind::SensorOffset).unwrap_or_else(|| panic!("{spec}: not named"));
+    assert_eq!(named.channel, "p1", "{}", named.detail);
+    assert!(named.detail.contains("% high (a span error"), "{}", named.detail);
+    assert!(named.t_detect_s > 25.0, "named at {}", named.t_detect_s);
+    assert!(leak_alarms(&events).is_empty(), "{:?}", leak_alarms(&events));
 }
 
 #[test]
