@@ -3,6 +3,37 @@
 
 use super::*;
 
+/// What the filter gives the watch at one sample: the leak sizes' flows
+/// (q_e1, q_e2, q_i, L/min), the offset responses (per MPa on p1 and on p2)
+/// and the pressures read (MPa).
+type Sample = ([f64; 3], [[f64; 3]; 2], [f64; 2]);
+
+/// Feeds `seconds` of the samples `at(t)` every 10 ms, the rises measured
+/// from a baseline that follows the sizes with time constant `tau_s` (0:
+/// fixed); returns the watch and the first change of the named misreading.
+fn drive(seconds: f64, tau_s: f64, at: impl Fn(f64) -> Sample) -> (OffsetWatch, Option<OffsetChange>) {
+    let dt = 0.01;
+    let factors = crate::NOMINAL_INTERNAL_FACTORS;
+    let mut watch = OffsetWatch::new(25e6);
+    let mut baseline = [0.0; 3];
+    let mut first = None;
+    let mut id = 1;
+    for n in 0..(seconds / dt) as usize {
+        let t = n as f64 * dt;
+        let (q, responses, reading) = at(t);
+        let sizes = crate::signatures_with(q, factors);
+        let share = if tau_s > 0.0 { dt / tau_s } else { 0.0 };
+        for k in 0..3 {
+            baseline[k] += share * (sizes[k] - baseline[k]);
+        }
+        let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
+        watch.follow_baseline(share);
+        let change = watch.on_rise(t, dt, rise, &responses, reading, factors, [0.05; 3], &mut id);
+        first = first.or(change);
+    }
+    (watch, first)
+}
+
 /// Feeds `seconds` of rises that an offset `b_mpa` on p2 makes, measured
 /// from a baseline that follows the sizes with time constant `tau_s`
 /// (0: fixed), with the model's own reverse internal flow of
@@ -14,15 +45,7 @@ fn watch_offset_on_p2(
     seconds: f64,
     artefact_lpm: f64,
 ) -> (OffsetWatch, Option<OffsetChange>) {
-    let dt = 0.01;
-    let factors = crate::NOMINAL_INTERNAL_FACTORS;
-    let mut watch = OffsetWatch::new(25e6);
-    let mut baseline = [0.0; 3];
-    let mut first = None;
-    let mut id = 1;
-    let steps = (seconds / dt) as usize;
-    for n in 0..steps {
-        let t = n as f64 * dt;
+    drive(seconds, tau_s, |t| {
         // δ on p2 moves ext2 with the valve's flow: small at rest, large in
         // the moves of a 3-s cycle; δ on p1 moves ext1 in another rhythm.
         let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
@@ -34,17 +57,8 @@ fn watch_offset_on_p2(
         ];
         let reverse = if t % 10.0 >= 8.0 { -artefact_lpm } else { 0.0 };
         let q = [b_mpa * d2[0], b_mpa * d2[1], b_mpa * d2[2] + reverse];
-        let sizes = crate::signatures_with(q, factors);
-        let share = if tau_s > 0.0 { dt / tau_s } else { 0.0 };
-        for k in 0..3 {
-            baseline[k] += share * (sizes[k] - baseline[k]);
-        }
-        let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
-        watch.follow_baseline(share);
-        let change = watch.on_rise(t, dt, rise, &[d1, d2], [0.0; 2], factors, [0.05; 3], &mut id);
-        first = first.or(change);
-    }
-    (watch, first)
+        (q, [d1, d2], [0.0; 2])
+    })
 }
 
 #[test]
@@ -148,14 +162,7 @@ fn a_steady_leak_is_no_offset() {
 /// while p1 reads `p1_mpa(t)`, measured from a baseline that follows the
 /// sizes with a time constant of 15 s; returns the first change.
 fn watch_span_on_p1(gain_error: f64, seconds: f64, p1_mpa: impl Fn(f64) -> f64) -> Option<OffsetChange> {
-    let dt = 0.01;
-    let factors = crate::NOMINAL_INTERNAL_FACTORS;
-    let mut watch = OffsetWatch::new(25e6);
-    let mut baseline = [0.0; 3];
-    let mut first = None;
-    let mut id = 1;
-    for n in 0..(seconds / dt) as usize {
-        let t = n as f64 * dt;
+    let (_, first) = drive(seconds, 15.0, |t| {
         let d1 = [
             -0.1 - 0.4 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
             0.0,
@@ -163,17 +170,8 @@ fn watch_span_on_p1(gain_error: f64, seconds: f64, p1_mpa: impl Fn(f64) -> f64) 
         ];
         let d2 = [0.0, -0.1, 0.02];
         let p1 = p1_mpa(t);
-        let q = d1.map(|d| gain_error * p1 * d);
-        let sizes = crate::signatures_with(q, factors);
-        let share = dt / 15.0;
-        for k in 0..3 {
-            baseline[k] += share * (sizes[k] - baseline[k]);
-        }
-        let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
-        watch.follow_baseline(share);
-        let change = watch.on_rise(t, dt, rise, &[d1, d2], [p1, 3.0], factors, [0.05; 3], &mut id);
-        first = first.or(change);
-    }
+        (d1.map(|d| gain_error * p1 * d), [d1, d2], [p1, 3.0])
+    });
     first
 }
 
