@@ -9,6 +9,9 @@
 //!
 //! - offset on channel c: rise(t) ≈ b·δ_c(t), one b per channel;
 //! - the same offset seen through the baseline: rise(t) ≈ b·(δ_c − δ̄_c)(t);
+//! - span error g on channel c, an offset g·p_c that moves with the pressure
+//!   read: rise(t) ≈ g·p_c(t)·δ_c(t), and the same through the baseline
+//!   (counted where it fits clearly better than the offset, [`SPAN_FIT_RATIO`]);
 //! - leak of kind k: rise_k(t) ≈ q, the other sizes ≈ 0.
 //!
 //! The rises are measured from a baseline that follows the sizes slowly (the
@@ -25,8 +28,9 @@
 //! responses too ([`without_reverse_internal`]).
 //!
 //! A rise an offset explains clearly better than every leak is not leak evidence. An
-//! offset that explains the rises over [`OFFSET_WINDOW_S`] and is large enough
-//! to matter is raised as `sensor-offset` on its channel, with b in MPa.
+//! offset or span error that explains the rises over [`OFFSET_WINDOW_S`] and is
+//! large enough to matter is raised as `sensor-offset` on its channel, with b
+//! in MPa or g in %.
 
 use crate::{EventKind, LeakEvent, Phase};
 

@@ -34,9 +34,11 @@ pub(crate) struct Fit {
     pub(crate) w: f64,
     /// Σw·|rise|², (L/min)²·s.
     pub(crate) energy: f64,
-    /// Σw·δ_h·rise per offset hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s.
+    /// Σw·δ_h·rise per hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s for an
+    /// offset, (L/min)²·s per unit error for a span.
     pub(crate) response_rise: [f64; HYPOTHESES],
-    /// Σw·|δ_h|² per offset hypothesis, (L/min/MPa)²·s.
+    /// Σw·|δ_h|² per hypothesis, (L/min/MPa)²·s for an offset, (L/min)²·s per
+    /// unit error squared for a span.
     pub(crate) response_energy: [f64; HYPOTHESES],
     /// Σw·rise, L/min·s.
     pub(crate) rise: [f64; 2],
