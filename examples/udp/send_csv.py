@@ -43,6 +43,10 @@ FLAG_X_SP_PRESENT = 1 << 0
 FLAG_F_LOAD_PRESENT = 1 << 1
 FLAG_END_OF_STREAM = 1 << 2
 FLAG_NO_SAMPLE = 1 << 3
+# Periods the sender may fall behind its schedule before it goes on from
+# where it is instead of catching up (a backlog sent at once overflows a
+# receiver's buffer as no sampling source would).
+MAX_BEHIND_PERIODS = 20
 # magic, version u16, flags u16, seq u64, t u x p1 p2 x_sp f_load f64: little-endian, no padding
 LAYOUT = struct.Struct("<4sHHQ7d")
 assert LAYOUT.size == 72
@@ -104,7 +108,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv", help="leakwatch CSV (t,u,x,p1,p2[,x_sp,f_load,...]), SI units")
     ap.add_argument("address", type=parse_address, help="receiver HOST:PORT, e.g. 127.0.0.1:5005")
-    ap.add_argument("--rate-hz", type=float, default=1000.0, help="datagrams per second (0 = as fast as possible)")
+    ap.add_argument("--rate-hz", type=float, default=1000.0, help="datagrams per second (0 = as fast as possible); a sender more than %d periods behind goes on from there, without a burst" % MAX_BEHIND_PERIODS)
     ap.add_argument("--start-seq", type=int, default=0, help="sequence number of the first datagram")
     ap.add_argument("--drop-every", type=positive_int, help="do not send every Nth datagram")
     ap.add_argument("--duplicate-every", type=positive_int, help="send every Nth datagram twice")
@@ -138,6 +142,10 @@ def main():
             delay = start + i * period - time.perf_counter()
             if delay > 0:
                 time.sleep(delay)
+            elif delay < -MAX_BEHIND_PERIODS * period:
+                # descheduled: go on at the rate from here, as a sampling
+                # source does, rather than send the backlog in one burst
+                start -= delay
         k = i + 1
         inject = i < last - 1
         flags = 0
