@@ -124,6 +124,9 @@ pub enum OffsetChange {
 pub struct OffsetWatch {
     /// Over [`OFFSET_WINDOW_S`]: names an offset.
     window: Fit,
+    /// The window's best misreading and what its fit leaves
+    /// ([`Fit::best_offset`] with swings), as of the last sample read.
+    window_best: (usize, f64),
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
     /// When the episode's rises were last high, s.
@@ -170,6 +173,7 @@ impl Default for OffsetWatch {
     fn default() -> Self {
         OffsetWatch {
             window: Fit::default(),
+            window_best: (0, 0.0),
             episode: None,
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
@@ -233,7 +237,7 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
     /// less than `ratio` times what the best leak's leaves.
     fn window_offset_fits(&self, ratio: f64) -> bool {
-        let (c, left) = self.window.best_offset(true);
+        let (c, left) = self.window_best;
         self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
             && self.window.offset_fits_better(left, &self.directions, ratio)
@@ -314,6 +318,7 @@ impl OffsetWatch {
         let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
+        self.window_best = self.window.best_offset(true);
         let high = (0..3).any(|k| rise3[k].abs() > EPISODE_LEVEL * thresholds_lpm[k]);
         if high {
             self.episode_high_s = t_s;
@@ -346,7 +351,7 @@ impl OffsetWatch {
             }
             return None;
         }
-        let (h, left) = self.window.best_offset(true);
+        let (h, left) = self.window_best;
         let named = self.watched_s >= OFFSET_WINDOW_S
             && self
                 .window
