@@ -58,11 +58,61 @@ impl LeakSizeDetector {
         self.last_t_s = e.t_s;
         let sight = self.follow_baseline(e, dt_s, &raw);
         let evidence = self.weigh_evidence(e, dt_s, &raw, &sight);
+        if self.withdraw_for_misreading(e, &evidence, out) {
+            return;
+        }
         match self.active {
             None => self.raise(e, &raw, &evidence, out),
             Some(a) if a.kind == EventKind::Leak => self.name_pending(a, e, dt_s, &sight, &evidence, out),
             Some(a) => self.follow_named(a, e, sight.invalid, &evidence, out),
         }
+    }
+
+    /// Withdraws the leak alarm standing when a transducer is named as reading
+    /// off, if it was raised after that transducer began to: its rises were
+    /// the misreading's. The alarm is cleared with a detail naming the
+    /// transducer; a leak raised before the misreading began stands. True
+    /// when an alarm was withdrawn (its event is in `out`).
+    fn withdraw_for_misreading(
+        &mut self,
+        e: &Estimate,
+        ev: &super::evidence::Evidence,
+        out: &mut Option<LeakEvent>,
+    ) -> bool {
+        let just_named = self
+            .sensor_event
+            .as_ref()
+            .is_some_and(|s| s.phase == crate::Phase::Raised);
+        let (Some(a), Some(s), true) = (self.active, self.offsets.standing(), just_named) else {
+            return false;
+        };
+        if a.t_onset_s < s.since_s {
+            return false;
+        }
+        self.active = None;
+        let k = EventKind::LEAKS
+            .iter()
+            .position(|x| *x == a.kind)
+            .unwrap_or(ev.lead);
+        let mut cleared = self.event(
+            a.kind,
+            crate::Phase::Cleared,
+            a.id,
+            e.t_s,
+            ev.rise[k],
+            ev.sigma_lpm[k],
+            0.0,
+            0.0,
+        );
+        cleared.detail = format!(
+            "withdrawn: {} has read off since {:.1} s (event {}); the rises since {:.1} s were its, not a leak's",
+            crate::offset::OFFSET_CHANNEL_NAMES[s.channel],
+            s.since_s,
+            s.event_id,
+            a.t_onset_s
+        );
+        *out = Some(cleared);
+        true
     }
 
     /// The validity gate: a gap the filter could not bridge, a skipped sample, a

@@ -1,5 +1,6 @@
 //! The leak-size detector on a synthetic estimate stream: a leak raised with
-//! its kind pending is not named while a transducer is named reading off; a
+//! its kind pending is not named while a transducer is named reading off, and
+//! is withdrawn when the transducer began reading off before it; a
 //! commissioning's naming thresholds.
 
 use super::*;
@@ -100,6 +101,66 @@ fn a_pending_leak_is_not_named_while_a_transducer_reads_off() {
     let events = pending_then_clear(true);
     assert_eq!(raised(&events, EventKind::Leak), pending, "{events:#?}");
     assert!(raised(&events, EventKind::Ext1).is_empty(), "{events:#?}");
+}
+
+/// The run of [`pending_then_clear`] without its ext1 stretch (both chambers
+/// lose 0.3 L/min from 15 s on), with p2 named reading off at 20 s since
+/// `since_s`, as the offset watch names it (its `sensor-offset` event
+/// waiting). Returns the leak events.
+fn pending_then_named_offset(since_s: f64) -> Vec<LeakEvent> {
+    let mut det = LeakSizeDetector::new(ClassifierConfig::default());
+    let mut events = Vec::new();
+    for i in 0..30_000 {
+        let t = i as f64 * 1e-3;
+        let wobble = 0.01 * (7.0 * t).sin() * (3.1 * t).cos();
+        let q = if t < 15.0 {
+            [wobble, -wobble, 0.0]
+        } else {
+            [0.3, 0.3, 0.0]
+        };
+        if i == 20_000 {
+            let offset = StandingOffset {
+                channel: 1,
+                offset_mpa: -0.3,
+                span_error: f64::NAN,
+                since_s,
+                event_id: 99,
+            };
+            det.offsets.stand(offset);
+            det.sensor_event = Some(crate::offset::offset_event(
+                crate::offset::OffsetChange::Raised(offset),
+                t,
+                "leak-size",
+            ));
+        }
+        let mut out = None;
+        det.on_estimate(&estimate(t, q), &mut out);
+        events.extend(out);
+    }
+    events
+}
+
+#[test]
+fn a_leak_alarm_raised_while_a_transducer_drifted_is_withdrawn_when_it_is_named() {
+    // p2 reading off since 5 s: the alarm raised at 15 s was its, cleared at 20 s
+    let events = pending_then_named_offset(5.0);
+    assert_eq!(events.len(), 2, "{events:#?}");
+    let (raised, cleared) = (&events[0], &events[1]);
+    assert!(raised.phase == Phase::Raised && (15.0..16.0).contains(&raised.t_detect_s));
+    assert_eq!(cleared.phase, Phase::Cleared, "{events:#?}");
+    assert_eq!(cleared.event_id, raised.event_id);
+    assert!((cleared.t_detect_s - 20.0).abs() < 1e-9, "{events:#?}");
+    assert!(
+        cleared
+            .detail
+            .starts_with("withdrawn: p2 has read off since 5.0 s (event 99)"),
+        "{}",
+        cleared.detail
+    );
+    // p2 reading off only since 18 s: the alarm of 15 s came first and stands
+    let events = pending_then_named_offset(18.0);
+    assert_eq!(events.len(), 1, "{events:#?}");
+    assert_eq!(events[0].phase, Phase::Raised);
 }
 
 /// The events of 20 s at 1 kHz of a detector commissioned with healthy
