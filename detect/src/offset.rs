@@ -27,9 +27,7 @@
 //! model's own and is left out of every fit, and out of the offsets'
 //! responses too ([`without_reverse_internal`]).
 //!
-//! A rise an offset explains clearly better than every leak is not leak
-//! evidence, and stays so while the offset still fits nearly as well
-//! ([`OFFSET_HOLD_RATIO`]). An
+//! A rise an offset explains clearly better than every leak is not leak evidence. An
 //! offset or span error that explains the rises over [`OFFSET_WINDOW_S`] and is
 //! large enough to matter is raised as `sensor-offset` on its channel, with b
 //! in MPa or g in %.
@@ -53,16 +51,6 @@ pub const EPISODE_LEVEL: f64 = 0.5;
 /// they are no leak evidence, and it may be named. (Where the offset's response
 /// barely swings, as under a steady sine, both fit alike and neither wins.)
 pub const OFFSET_FIT_RATIO: f64 = 0.5;
-/// Once rises have been vetoed for [`OFFSET_HOLD_AFTER_S`], the veto holds
-/// while the offset's fit leaves less than this share of what the best
-/// leak's leaves (1): the fits' ratio wanders about [`OFFSET_FIT_RATIO`] as
-/// the duty cycle moves, and a growing offset's rises would count as leak
-/// evidence wherever it dips above.
-pub const OFFSET_HOLD_RATIO: f64 = 0.7;
-/// How long the veto stands before [`OFFSET_HOLD_RATIO`] holds it, s: a
-/// leak's onset can fit an offset for a moment, a misreading's rises do for
-/// longer.
-pub const OFFSET_HOLD_AFTER_S: f64 = 2.0;
 /// An offset's swing about its baseline is fitted in its place when it leaves
 /// less than this share of what the offset's response as the filter gives it
 /// leaves (1). A leak's steady rise, or a healthy rig's hoses, fit both forms
@@ -86,6 +74,18 @@ pub const SPAN_LEAST_ERROR: f64 = 0.005;
 /// (the drop between a manifold transducer and its chamber, which moves with
 /// the oil's viscosity) make as much.
 pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.01;
+/// An offset below the least named ([`OFFSET_LEAST_SHARE_OF_RANGE`]) but past
+/// this share of it (1) is named where its fit leaves less than
+/// [`OFFSET_CLEAN_UNEXPLAINED`] of the rises' energy for
+/// [`OFFSET_CLEAN_CONFIRM_S`]: a healthy rig's hoses do not fit an offset
+/// that cleanly for that long.
+pub const OFFSET_CLEAN_FLOOR_SHARE: f64 = 0.5;
+/// Share of the rises' energy (1) a clean offset's fit leaves at most
+/// ([`OFFSET_CLEAN_FLOOR_SHARE`]).
+pub const OFFSET_CLEAN_UNEXPLAINED: f64 = 0.05;
+/// How long a clean offset's conditions hold before it is named, s
+/// ([`OFFSET_CLEAN_FLOOR_SHARE`]).
+pub const OFFSET_CLEAN_CONFIRM_S: f64 = 10.0;
 /// Over the window, an offset whose part of the rises reaches this share of
 /// the smallest threshold (RMS) and fits better than any leak makes its
 /// rises no leak evidence (1).
@@ -150,8 +150,6 @@ pub struct OffsetWatch {
     /// Since when a named offset's part has been low, s.
     fading_since_s: Option<f64>,
     standing: Option<StandingOffset>,
-    /// Since when the rises have been vetoed as an offset's, s, as of the last sample read.
-    vetoing_since_s: Option<f64>,
     /// The leak kinds' directions in (w1, w2) ([`leak_directions`]).
     directions: [[f64; 2]; 3],
     /// Least offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
@@ -194,7 +192,6 @@ impl Default for OffsetWatch {
             low_since_s: [f64::NEG_INFINITY; 2],
             fading_since_s: None,
             standing: None,
-            vetoing_since_s: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
             least_offset_mpa: 0.0,
             watched_s: 0.0,
@@ -240,18 +237,12 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
     /// The episode's fit takes the responses as given alone: over its first
     /// seconds a leak's step fits some swing as well as it fits the leak.
-    /// Once vetoed for [`OFFSET_HOLD_AFTER_S`], they stay so while the fits' ratio is below [`OFFSET_HOLD_RATIO`].
     pub fn vetoes(&self) -> bool {
-        self.vetoing_since_s.is_some()
-    }
-
-    /// Whether the episode's offset fit leaves less than `ratio` times what
-    /// its best leak's leaves, or the window's does ([`Self::window_offset_fits`]).
-    fn offset_explains(&self, ratio: f64) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_MIN_S && f.offset_fits_better(f.best_offset(false).1, &self.directions, ratio)
+            f.w >= EPISODE_MIN_S
+                && f.offset_fits_better(f.best_offset(false).1, &self.directions, OFFSET_FIT_RATIO)
         });
-        episode || self.window_offset_fits(ratio)
+        episode || self.window_offset_fits(OFFSET_FIT_RATIO)
     }
 
     /// Whether, over the window, the best offset's part of the rises is past
@@ -274,6 +265,23 @@ impl OffsetWatch {
             self.least_offset_mpa
         };
         self.window.coefficient(h).abs() > least
+    }
+
+    /// How long the naming conditions must hold for the misreading of
+    /// hypothesis `h`, whose fit leaves `left` ((L/min)²·s), to be named, s;
+    /// None where it is too small to name ([`Self::large_enough`],
+    /// [`OFFSET_CLEAN_FLOOR_SHARE`]).
+    fn confirm_s(&self, h: usize, left: f64) -> Option<f64> {
+        if self.large_enough(h) {
+            Some(OFFSET_CONFIRM_S)
+        } else if !is_span(h)
+            && left < OFFSET_CLEAN_UNEXPLAINED * self.window.energy
+            && self.window.coefficient(h).abs() > OFFSET_CLEAN_FLOOR_SHARE * self.least_offset_mpa
+        {
+            Some(OFFSET_CLEAN_CONFIRM_S)
+        } else {
+            None
+        }
     }
 
     /// Whether an offset on a transducer could explain the window's rises:
@@ -352,15 +360,6 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
-        let held = self
-            .vetoing_since_s
-            .is_some_and(|t0| t_s - t0 >= OFFSET_HOLD_AFTER_S);
-        let ratio = if held { OFFSET_HOLD_RATIO } else { OFFSET_FIT_RATIO };
-        self.vetoing_since_s = if self.offset_explains(ratio) {
-            self.vetoing_since_s.or(Some(t_s))
-        } else {
-            None
-        };
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..2 {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
@@ -387,13 +386,13 @@ impl OffsetWatch {
                 .window
                 .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
-            && self.window.explained_rms_lpm(h) > level
-            && self.large_enough(h);
+            && self.window.explained_rms_lpm(h) > level;
+        let confirm_s = if named { self.confirm_s(h, left) } else { None };
         let c = channel_of(h);
-        match (named, self.candidate) {
-            (false, _) => self.candidate = None,
-            (true, Some((j, t0))) if j == c => {
-                if t_s - t0 >= OFFSET_CONFIRM_S {
+        match (confirm_s, self.candidate) {
+            (None, _) => self.candidate = None,
+            (Some(confirm_s), Some((j, t0))) if j == c => {
+                if t_s - t0 >= confirm_s {
                     let s = StandingOffset {
                         channel: c,
                         offset_mpa: self.window.coefficient(h)
@@ -411,7 +410,7 @@ impl OffsetWatch {
                     return Some(OffsetChange::Raised(s));
                 }
             }
-            (true, _) => self.candidate = Some((c, t_s)),
+            (Some(_), _) => self.candidate = Some((c, t_s)),
         }
         None
     }
