@@ -143,6 +143,9 @@ pub struct FaultRunOutcome {
     pub scenario: String,
     /// Leak events raised (a pending `leak` included) that are not the run's leak.
     pub leak_events: usize,
+    /// Whether a leak alarm that is not the run's leak still stands at the
+    /// run's end (not cleared or withdrawn).
+    pub leak_alarm_at_end: bool,
     /// The first sensor event raised after the onset: kind, channel, time, s.
     pub first_sensor: Option<(String, String, f64)>,
     /// Sensor events raised before the onset (or in the healthy twin, at all).

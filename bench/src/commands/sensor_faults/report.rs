@@ -56,6 +56,9 @@ pub(super) fn score(
             right.map_or(f64::NAN, |e| e.t_detect_s - onset_s),
         )
     };
+    // (the last leak alarm's report: a re-isolation raises its successor, a clearing ends it)
+    let last_alarm = events.iter().rev().find(|e| e.kind.is_leak_alarm());
+    let leak_alarm_at_end = kind != RunKind::Leak && last_alarm.is_some_and(|e| e.phase != Phase::Cleared);
     FaultRunOutcome {
         instance,
         kind,
@@ -64,6 +67,7 @@ pub(super) fn score(
         onset_s,
         scenario: scenario.to_string(),
         leak_events,
+        leak_alarm_at_end,
         first_sensor,
         sensor_events_before_onset,
         named_right,
@@ -80,6 +84,8 @@ pub struct KindSummary {
     pub runs: usize,
     /// Runs with a leak event that is not their own leak.
     pub runs_with_leak_events: usize,
+    /// Runs that end with such a leak alarm standing.
+    pub runs_ending_with_a_leak_alarm: usize,
     /// Runs with a sensor event before the onset (or, healthy, at all).
     pub runs_with_early_sensor_events: usize,
     /// Runs named right: the sensor event on the faulty channel, or the leak's own kind first.
@@ -102,6 +108,7 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
                 kind,
                 runs: mine.len(),
                 runs_with_leak_events: mine.iter().filter(|r| r.leak_events > 0).count(),
+                runs_ending_with_a_leak_alarm: mine.iter().filter(|r| r.leak_alarm_at_end).count(),
                 runs_with_early_sensor_events: mine
                     .iter()
                     .filter(|r| r.sensor_events_before_onset > 0)
@@ -118,8 +125,8 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
 pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
     let mut s = format!(
         "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s\n\n\
-         | run | runs | with a leak event | sensor event before the onset | named right | median / longest time from onset |\n\
-         |---|---|---|---|---|---|\n",
+         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset |\n\
+         |---|---|---|---|---|---|---|\n",
         args.rig, args.instances, args.seed, args.seconds
     );
     for k in sums {
@@ -130,16 +137,18 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
             format!("{} ({pct:.0} %)", k.named_right)
         };
         s += &format!(
-            "| {} | {} | {} | {} | {named} | {:.1} / {:.1} s |\n",
+            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s |\n",
             k.kind.name(),
             k.runs,
             k.runs_with_leak_events,
+            k.runs_ending_with_a_leak_alarm,
             k.runs_with_early_sensor_events,
             k.median_delay_s,
             k.max_delay_s
         );
     }
     s += "\nNamed right: a sensor event on the faulty channel after the onset; for the leak run, \
-          its own kind named before any sensor event.\n";
+          its own kind named before any sensor event. A leak alarm standing at the end was neither \
+          cleared nor withdrawn when the transducer was named.\n";
     s
 }

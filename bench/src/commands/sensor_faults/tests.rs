@@ -63,8 +63,24 @@ fn a_pending_leak_counts_as_a_leak_event_in_a_sensor_fault_run() {
         &events,
     );
     assert_eq!(o.leak_events, 1);
+    assert!(o.leak_alarm_at_end);
     assert!(o.named_right);
     assert_eq!(o.delay_s, 2.0);
+    // cleared (withdrawn when the transducer was named): raised, but not standing at the end
+    let mut cleared = raised(EventKind::Leak, 52.0, "");
+    cleared.phase = Phase::Cleared;
+    let events = [events[0].clone(), events[1].clone(), cleared];
+    let o = score(
+        0,
+        RunKind::Stuck,
+        String::new(),
+        "x".into(),
+        30.0,
+        "lift",
+        &events,
+    );
+    assert_eq!(o.leak_events, 1);
+    assert!(!o.leak_alarm_at_end);
 }
 
 #[test]
