@@ -43,11 +43,21 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
     }
 }
 
+/// How a run names p2 reading off at 20 s: not at all, standing (as a
+/// detector's test would), or as the offset watch names it (its
+/// `sensor-offset` event waiting), since the given time (s).
+#[derive(Clone, Copy)]
+enum P2Offset {
+    None,
+    Standing,
+    Named { since_s: f64 },
+}
+
 /// 30 s at 1 kHz: healthy sizes with a small wobble until 15 s, then both
 /// chambers losing 0.3 L/min (no single kind explains it: raised with its kind
-/// pending), then from 20 s chamber 1 alone (ext1, clearly). With
-/// `offset_at_20_s`, a p2 offset is named standing at 20 s. Returns the events.
-fn pending_then_clear(offset_at_20_s: bool) -> Vec<LeakEvent> {
+/// pending); with `ext1_from_20_s`, from 20 s chamber 1 alone (ext1,
+/// clearly). p2 is named reading off at 20 s as `offset` says. Returns the events.
+fn pending_run(ext1_from_20_s: bool, offset: P2Offset) -> Vec<LeakEvent> {
     let mut det = LeakSizeDetector::new(ClassifierConfig::default());
     let mut events = Vec::new();
     for i in 0..30_000 {
@@ -55,19 +65,31 @@ fn pending_then_clear(offset_at_20_s: bool) -> Vec<LeakEvent> {
         let wobble = 0.01 * (7.0 * t).sin() * (3.1 * t).cos();
         let q = if t < 15.0 {
             [wobble, -wobble, 0.0]
-        } else if t < 20.0 {
+        } else if t < 20.0 || !ext1_from_20_s {
             [0.3, 0.3, 0.0]
         } else {
             [0.3, 0.0, 0.0]
         };
-        if offset_at_20_s && i == 20_000 {
-            det.offsets.stand(StandingOffset {
+        if i == 20_000 {
+            let standing = |since_s| StandingOffset {
                 channel: 1,
                 offset_mpa: -0.3,
                 span_error: f64::NAN,
-                since_s: 5.0,
+                since_s,
                 event_id: 99,
-            });
+            };
+            match offset {
+                P2Offset::None => {}
+                P2Offset::Standing => det.offsets.stand(standing(5.0)),
+                P2Offset::Named { since_s } => {
+                    det.offsets.stand(standing(since_s));
+                    det.sensor_event = Some(crate::offset::offset_event(
+                        crate::offset::OffsetChange::Raised(standing(since_s)),
+                        t,
+                        "leak-size",
+                    ));
+                }
+            }
         }
         let mut out = None;
         det.on_estimate(&estimate(t, q), &mut out);
@@ -86,7 +108,7 @@ fn a_pending_leak_is_not_named_while_a_transducer_reads_off() {
             .collect::<Vec<_>>()
     };
     // without an offset: raised pending at 15 s, named ext1 once chamber 1 alone loses
-    let events = pending_then_clear(false);
+    let events = pending_run(true, P2Offset::None);
     let pending = raised(&events, EventKind::Leak);
     assert!(
         pending.len() == 1 && (15.0..16.0).contains(&pending[0]),
@@ -98,52 +120,15 @@ fn a_pending_leak_is_not_named_while_a_transducer_reads_off() {
         "{events:#?}"
     );
     // with p2 named reading off: the same pending leak, never named
-    let events = pending_then_clear(true);
+    let events = pending_run(true, P2Offset::Standing);
     assert_eq!(raised(&events, EventKind::Leak), pending, "{events:#?}");
     assert!(raised(&events, EventKind::Ext1).is_empty(), "{events:#?}");
-}
-
-/// The run of [`pending_then_clear`] without its ext1 stretch (both chambers
-/// lose 0.3 L/min from 15 s on), with p2 named reading off at 20 s since
-/// `since_s`, as the offset watch names it (its `sensor-offset` event
-/// waiting). Returns the leak events.
-fn pending_then_named_offset(since_s: f64) -> Vec<LeakEvent> {
-    let mut det = LeakSizeDetector::new(ClassifierConfig::default());
-    let mut events = Vec::new();
-    for i in 0..30_000 {
-        let t = i as f64 * 1e-3;
-        let wobble = 0.01 * (7.0 * t).sin() * (3.1 * t).cos();
-        let q = if t < 15.0 {
-            [wobble, -wobble, 0.0]
-        } else {
-            [0.3, 0.3, 0.0]
-        };
-        if i == 20_000 {
-            let offset = StandingOffset {
-                channel: 1,
-                offset_mpa: -0.3,
-                span_error: f64::NAN,
-                since_s,
-                event_id: 99,
-            };
-            det.offsets.stand(offset);
-            det.sensor_event = Some(crate::offset::offset_event(
-                crate::offset::OffsetChange::Raised(offset),
-                t,
-                "leak-size",
-            ));
-        }
-        let mut out = None;
-        det.on_estimate(&estimate(t, q), &mut out);
-        events.extend(out);
-    }
-    events
 }
 
 #[test]
 fn a_leak_alarm_raised_while_a_transducer_drifted_is_withdrawn_when_it_is_named() {
     // p2 reading off since 5 s: the alarm raised at 15 s was its, cleared at 20 s
-    let events = pending_then_named_offset(5.0);
+    let events = pending_run(false, P2Offset::Named { since_s: 5.0 });
     assert_eq!(events.len(), 2, "{events:#?}");
     let (raised, cleared) = (&events[0], &events[1]);
     assert!(raised.phase == Phase::Raised && (15.0..16.0).contains(&raised.t_detect_s));
@@ -158,7 +143,7 @@ fn a_leak_alarm_raised_while_a_transducer_drifted_is_withdrawn_when_it_is_named(
         cleared.detail
     );
     // p2 reading off only since 18 s: the alarm of 15 s came first and stands
-    let events = pending_then_named_offset(18.0);
+    let events = pending_run(false, P2Offset::Named { since_s: 18.0 });
     assert_eq!(events.len(), 1, "{events:#?}");
     assert_eq!(events[0].phase, Phase::Raised);
 }

@@ -53,15 +53,10 @@ fn a_pending_leak_counts_as_a_leak_event_in_a_sensor_fault_run() {
         raised(EventKind::Leak, 50.0, ""),
         raised(EventKind::SensorStuck, 32.0, "x"),
     ];
-    let o = score(
-        0,
-        RunKind::Stuck,
-        String::new(),
-        "x".into(),
-        30.0,
-        "lift",
-        &events,
-    );
+    // a stuck x from 30 s on the lift's cycle
+    let stuck_x =
+        |events: &[LeakEvent]| score(0, RunKind::Stuck, String::new(), "x".into(), 30.0, "lift", events);
+    let o = stuck_x(&events);
     assert_eq!(o.leak_events, 1);
     assert!(o.leak_alarm_at_end);
     assert!(o.named_right);
@@ -70,15 +65,7 @@ fn a_pending_leak_counts_as_a_leak_event_in_a_sensor_fault_run() {
     let mut cleared = raised(EventKind::Leak, 52.0, "");
     cleared.phase = Phase::Cleared;
     let events = [events[0].clone(), events[1].clone(), cleared];
-    let o = score(
-        0,
-        RunKind::Stuck,
-        String::new(),
-        "x".into(),
-        30.0,
-        "lift",
-        &events,
-    );
+    let o = stuck_x(&events);
     assert_eq!(o.leak_events, 1);
     assert!(!o.leak_alarm_at_end);
 }
