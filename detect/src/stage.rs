@@ -166,10 +166,11 @@ impl Classifier {
         }
         let mut ev = None;
         self.leak_size.on_estimate(e, &mut ev);
-        if let Some(ev) = ev.take() {
+        // (a transducer named first: a leak alarm withdrawn at the same sample refers to it)
+        if let Some(ev) = self.leak_size.take_sensor_event() {
             emit(ev);
         }
-        if let Some(ev) = self.leak_size.take_sensor_event() {
+        if let Some(ev) = ev.take() {
             emit(ev);
         }
         if self.cfg.thesis_baseline {
