@@ -79,11 +79,15 @@ impl LeakSizeDetector {
         ev: &super::evidence::Evidence,
         out: &mut Option<LeakEvent>,
     ) -> bool {
+        // (a transducer named at this sample: its `sensor-offset` event is waiting)
         let just_named = self
             .sensor_event
             .as_ref()
             .is_some_and(|s| s.phase == crate::Phase::Raised);
-        let (Some(a), Some(s), true) = (self.active, self.offsets.standing(), just_named) else {
+        if !just_named {
+            return false;
+        }
+        let (Some(a), Some(s)) = (self.active, self.offsets.standing()) else {
             return false;
         };
         if a.t_onset_s < s.since_s {
