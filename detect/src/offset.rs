@@ -10,8 +10,10 @@
 //! - offset on channel c: rise(t) ≈ b·δ_c(t), one b per channel;
 //! - the same offset seen through the baseline: rise(t) ≈ b·(δ_c − δ̄_c)(t);
 //! - span error g on channel c, an offset g·p_c that moves with the pressure
-//!   read: rise(t) ≈ g·p_c(t)·δ_c(t), and the same through the baseline
-//!   (counted where it fits clearly better than the offset, [`SPAN_FIT_RATIO`]);
+//!   read: rise(t) ≈ g·σ_c(t), σ_c the filter's own response to it
+//!   ([`filter::Estimate::span_response_lpm`]), and the same through the
+//!   baseline (counted where it fits clearly better than the offset,
+//!   [`SPAN_FIT_RATIO`]);
 //! - leak of kind k: rise_k(t) ≈ q, the other sizes ≈ 0.
 //!
 //! The rises are measured from a baseline that follows the sizes slowly (the
@@ -104,6 +106,16 @@ pub(crate) const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
 
 /// The transducers whose offsets are fitted, in the order of the response's rows.
 pub const OFFSET_CHANNEL_NAMES: [&str; 2] = ["p1", "p2"];
+
+/// The filter's responses to a misreading of p1 (row 0) and p2 (row 1):
+/// how it would have moved the leak sizes q_e1, q_e2, q_i by now.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MisreadingResponse {
+    /// To a constant offset, L/min per MPa.
+    pub offset_lpm_per_mpa: [[f64; 3]; 2],
+    /// To a span error (the reading (1 + g)·p), L/min per unit g.
+    pub span_lpm: [[f64; 3]; 2],
+}
 
 /// A named offset.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -296,9 +308,10 @@ impl OffsetWatch {
 
     /// Reads one sample's rises `rise` (w1, w2, int; L/min at p_s/2, of
     /// [`crate::signatures_with`] with the internal leak's factors `factors`)
-    /// with the filter's offset response `response` (q_e1, q_e2, q_i per MPa
-    /// on p1 and on p2) and the pressures read `reading_mpa` (p1, p2, MPa;
-    /// a span error's offset), `dt_s` after the last, with the thresholds
+    /// with the filter's responses `response` to an offset (q_e1, q_e2, q_i
+    /// per MPa on p1 and on p2) and to a span error (L/min per unit error on
+    /// p1 and on p2) and the pressures read `reading_mpa` (p1, p2, MPa; a span
+    /// error's offset), `dt_s` after the last, with the thresholds
     /// `thresholds_lpm`; `next_id` gives an event id. Returns a change of the
     /// named offset.
     #[allow(clippy::too_many_arguments)]
@@ -307,7 +320,7 @@ impl OffsetWatch {
         t_s: f64,
         dt_s: f64,
         rise: [f64; 3],
-        response: &[[f64; 3]; 2],
+        response: &MisreadingResponse,
         reading_mpa: [f64; 2],
         factors: [f64; 2],
         thresholds_lpm: [f64; 3],
@@ -316,24 +329,25 @@ impl OffsetWatch {
         let share = std::mem::take(&mut self.baseline_step);
         if !(rise
             .iter()
-            .chain(response.iter().flatten())
+            .chain(response.offset_lpm_per_mpa.iter().flatten())
+            .chain(response.span_lpm.iter().flatten())
             .all(|v| v.is_finite())
             && dt_s > 0.0)
         {
             return None;
         }
         self.directions = leak_directions(factors);
-        // (a channel not read has no span error to fit)
+        // (a span error's offset at naming: g times the pressure read, 0 where not read)
         self.reading_mpa = reading_mpa.map(|p| if p.is_finite() { p } else { 0.0 });
         let mut hypotheses = [[0.0; 2]; HYPOTHESES];
         for c in 0..2 {
-            let w = crate::signatures_with(response[c], factors);
-            for (h, scale) in [(c, 1.0), (4 + c, self.reading_mpa[c])] {
+            for (h, r) in [(c, response.offset_lpm_per_mpa[c]), (4 + c, response.span_lpm[c])] {
+                let w = crate::signatures_with(r, factors);
                 for k in 0..2 {
                     let base = &mut self.response_baseline[h][k];
-                    *base += share * (scale * w[k] - *base);
-                    hypotheses[h][k] = scale * w[k];
-                    hypotheses[h + 2][k] = scale * w[k] - *base;
+                    *base += share * (w[k] - *base);
+                    hypotheses[h][k] = w[k];
+                    hypotheses[h + 2][k] = w[k] - *base;
                 }
             }
         }

@@ -75,6 +75,7 @@ impl EstimateWire for StageEstimate {
             out.offset_response_p1_lpm_per_mpa,
             out.offset_response_p2_lpm_per_mpa,
         ] = l.offset_response_lpm_per_mpa;
+        [out.span_response_p1_lpm, out.span_response_p2_lpm] = l.span_response_lpm;
     }
 
     fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
@@ -93,6 +94,7 @@ impl EstimateWire for StageEstimate {
             laminar_factor_sigma: f.laminar_factor_sigma,
             null_leakage_band_lpm: f.null_leakage_band_lpm,
             offset_response_lpm_per_mpa: [f.offset_response_p1_lpm_per_mpa, f.offset_response_p2_lpm_per_mpa],
+            span_response_lpm: [f.span_response_p1_lpm, f.span_response_p2_lpm],
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,
@@ -119,6 +121,7 @@ impl EstimateWire for StageEstimate {
             laminar_factor_sigma: f64::NAN,
             null_leakage_band_lpm: f64::NAN,
             offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
+            span_response_lpm: [[f64::NAN; 3]; 2],
             ..leak
         };
         StageEstimate {

@@ -7,9 +7,14 @@
 //! - measurement update: δ⁺ = δ⁻ + K·(e_c − H·δ⁻) (K the step's gain, e_c the
 //!   unit vector of channel c, H the measured states).
 //!
-//! The leak sizes' part of δ is the pattern an offset leaves on them: it
+//! A span error g on channel c (the reading (1 + g)·p_c) is an offset g·p_c(t)
+//! that moves with the pressure: its response follows the same recursion
+//! with e_c·p_c(t) in the update in place of e_c (p_c the reading).
+//!
+//! The leak sizes' part of δ is the pattern a misreading leaves on them: it
 //! swings with the valve's flow (an offset moves the orifice's drop), while a
-//! leak's is steady. The detector compares the two ([`BiasResponse::leak_sizes_lpm_per_mpa`]).
+//! leak's is steady. The detector compares the two
+//! ([`BiasResponse::leak_sizes_lpm_per_mpa`], [`BiasResponse::leak_sizes_lpm_per_span`]).
 
 use model::process::{FIRST_RANDOM_WALK, I_QE1, I_QI};
 use nalgebra::{SMatrix, SVector};
@@ -24,17 +29,25 @@ pub const OFFSET_CHANNELS: [usize; 2] = [1, 2];
 /// Cubic metres per second per pascal in one L/min per MPa.
 const M3_S_PA_PER_LPM_MPA: f64 = 1.0e-3 / 60.0 / 1.0e6;
 
-/// δ for an offset of 1 Pa on p1 and on p2, state units per Pa (zero until
-/// the filter has stepped with leak sizes).
+/// Cubic metres per second in one L/min.
+const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
+
+/// The misreadings followed, as rows of δ: an offset of 1 Pa on p1 and on
+/// p2, then a span error of 1 (a reading of 2·p) on p1 and on p2.
+const ROWS: usize = 4;
+
+/// δ for an offset of 1 Pa on p1 and on p2 (state units per Pa), and for a
+/// span error of 1 on p1 and on p2 (state units); zero until the filter has
+/// stepped with leak sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiasResponse {
-    delta: [[f64; MAX_LAYOUT_STATES]; 2],
+    delta: [[f64; MAX_LAYOUT_STATES]; ROWS],
 }
 
 impl Default for BiasResponse {
     fn default() -> Self {
         BiasResponse {
-            delta: [[0.0; MAX_LAYOUT_STATES]; 2],
+            delta: [[0.0; MAX_LAYOUT_STATES]; ROWS],
         }
     }
 }
@@ -67,13 +80,15 @@ impl BiasResponse {
     }
 
     /// The measurement update with the gain of the update `e` just made, over
-    /// the channels `use_channel` of the measured states `states`.
+    /// the channels `use_channel` of the measured states `states`, with the
+    /// readings `y` (SI; a span error's offset is g times its channel's).
     #[inline(always)]
     pub(crate) fn update<const N: usize, const W: usize>(
         &mut self,
         e: &Ekf<N, 3, W>,
         states: [usize; 3],
         use_channel: [bool; 3],
+        y: &SVector<f64, 3>,
     ) {
         if N <= I_QI {
             return;
@@ -86,11 +101,14 @@ impl BiasResponse {
                 *gain = e.gain_column(states[i], i);
             }
         }
-        for (c, d) in OFFSET_CHANNELS.iter().zip(&mut self.delta) {
+        for (row, d) in self.delta.iter_mut().enumerate() {
+            let c = OFFSET_CHANNELS[row % 2];
+            // the misreading's part of channel c's reading: 1 Pa, or g·p_c
+            let misread = if row < 2 { 1.0 } else { y[c] };
             let before = *d;
             for (i, k) in gains.iter().enumerate() {
                 if use_channel[i] {
-                    let unit = if i == *c { 1.0 } else { 0.0 };
+                    let unit = if i == c { misread } else { 0.0 };
                     let innovation = unit - before[states[i]];
                     for j in 0..N {
                         d[j] += k[j] * innovation;
@@ -103,8 +121,13 @@ impl BiasResponse {
     /// How an offset of 1 MPa on p1 (row 0) and on p2 (row 1) moves the leak
     /// sizes q_e1, q_e2, q_i, L/min per MPa (nominal drop).
     pub fn leak_sizes_lpm_per_mpa(&self) -> [[f64; 3]; 2] {
-        self.delta
-            .map(|d| std::array::from_fn(|k| d[I_QE1 + k] / M3_S_PA_PER_LPM_MPA))
+        [0, 1].map(|row| std::array::from_fn(|k| self.delta[row][I_QE1 + k] / M3_S_PA_PER_LPM_MPA))
+    }
+
+    /// How a span error of 1 on p1 (row 0) and on p2 (row 1) moves the leak
+    /// sizes q_e1, q_e2, q_i, L/min (a span error g moves them g times as much).
+    pub fn leak_sizes_lpm_per_span(&self) -> [[f64; 3]; 2] {
+        [2, 3].map(|row| std::array::from_fn(|k| self.delta[row][I_QE1 + k] / M3_S_PER_LPM))
     }
 }
 

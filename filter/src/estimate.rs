@@ -56,6 +56,11 @@ pub struct Estimate {
     /// the leak sizes q_e1, q_e2, q_i by now, L/min per MPa ([`bias`]); zero
     /// for the layouts without leak sizes.
     pub offset_response_lpm_per_mpa: [[f64; 3]; 2],
+    /// How a span error of 1 on p1 (row 0) and on p2 (row 1), a reading of
+    /// (1 + g)·p for g = 1, would have moved q_e1, q_e2, q_i by now, L/min
+    /// (g times as much for a span error g; [`bias`]); zero for the layouts
+    /// without leak sizes.
+    pub span_response_lpm: [[f64; 3]; 2],
 }
 
 impl Estimate {
@@ -80,6 +85,7 @@ impl Estimate {
             laminar_factor_sigma: 0.0,
             null_leakage_band_lpm: 0.0,
             offset_response_lpm_per_mpa: [[0.0; 3]; 2],
+            span_response_lpm: [[0.0; 3]; 2],
         }
     }
 }

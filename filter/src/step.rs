@@ -189,7 +189,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
                 }
                 updating
             })?;
-        offset_response.update(e, ProcessModel::MEASURED_STATES, updating);
+        offset_response.update(e, ProcessModel::MEASURED_STATES, updating, y);
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
@@ -219,6 +219,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         out.sigma[i] = sig[i];
     }
     out.offset_response_lpm_per_mpa = offset_response.leak_sizes_lpm_per_mpa();
+    out.span_response_lpm = offset_response.leak_sizes_lpm_per_span();
     if N == 12 {
         out.bulk_scale = x[I_BULK];
         out.bulk_scale_sigma = sig[I_BULK];

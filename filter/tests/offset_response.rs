@@ -1,54 +1,97 @@
-//! The filter's response to a pressure transducer's offset
-//! (`Estimate::offset_response_lpm_per_mpa`) against finite differences: the
-//! same recording run twice, once with a small offset added to p1 (p2) from
-//! the start, moves the leak sizes by the response times the offset.
+//! The filter's responses to a pressure transducer's misreading
+//! (`Estimate::offset_response_lpm_per_mpa`, `Estimate::span_response_lpm`)
+//! against finite differences: the same recording run twice, once with p1
+//! (p2) misread from the start, moves the leak sizes by the response times
+//! the misreading.
 
-use filter::{Estimator, Tuning};
+use filter::{Estimate, Estimator, Tuning};
 use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
 
-/// Leak sizes (L/min) of each estimate over a recording, with `offset_pa` added to channel `ch` (1: p1, 2: p2).
-fn run(samples: &[model::Sample], ch: usize, offset_pa: f64) -> (Vec<[f64; 3]>, Vec<[[f64; 3]; 2]>) {
+/// Leak sizes (L/min) and estimates over a recording whose channel `ch` (1:
+/// p1, 2: p2) reads `misread(p)` for a true p (Pa).
+fn run(samples: &[model::Sample], ch: usize, misread: impl Fn(f64) -> f64) -> (Vec<[f64; 3]>, Vec<Estimate>) {
     let mut est = Estimator::new(ActuatorParams::default(), Tuning::sensor_derived()).unwrap();
-    let (mut sizes, mut responses) = (Vec::new(), Vec::new());
+    let (mut sizes, mut estimates) = (Vec::new(), Vec::new());
     for s in samples {
         let mut s = *s;
         match ch {
-            1 => s.p1_pa += offset_pa,
-            _ => s.p2_pa += offset_pa,
+            1 => s.p1_pa = misread(s.p1_pa),
+            _ => s.p2_pa = misread(s.p2_pa),
         }
         let e = est.on_sample(&s);
         sizes.push(std::array::from_fn(|k| e.state[7 + k] * 6e4));
-        responses.push(e.offset_response_lpm_per_mpa);
+        estimates.push(e);
     }
-    (sizes, responses)
+    (sizes, estimates)
+}
+
+/// The loaded-random scenario's first 40 s, seed 4.
+fn recording() -> Vec<model::Sample> {
+    let rig = ActuatorParams::default();
+    let scenario = Scenario::by_name("loaded-random", 4, 40.0).unwrap();
+    let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), 4).unwrap();
+    (0..40_000).map(|_| sim.step()).collect()
+}
+
+/// The RMS of (seen − predicted) over the RMS of predicted, each sample's
+/// three sizes from 10 s on (the filter has converged), and whether any was
+/// predicted at all.
+fn miss(base: &[[f64; 3]], moved: &[[f64; 3]], predicted: impl Fn(usize, usize) -> f64) -> (f64, bool) {
+    let (mut err2, mut pred2) = (0.0, 0.0);
+    for i in 10_000..base.len() {
+        for k in 0..3 {
+            let p = predicted(i, k);
+            err2 += (moved[i][k] - base[i][k] - p).powi(2);
+            pred2 += p * p;
+        }
+    }
+    ((err2 / pred2).sqrt(), pred2 > 0.0)
 }
 
 #[test]
 fn an_offset_moves_the_leak_sizes_as_the_response_predicts() {
-    let rig = ActuatorParams::default();
-    let scenario = Scenario::by_name("loaded-random", 4, 40.0).unwrap();
-    let mut sim = Simulator::with_default_sensors(rig, scenario, FaultSchedule::default(), 4).unwrap();
-    let samples: Vec<model::Sample> = (0..40_000).map(|_| sim.step()).collect();
+    let samples = recording();
     let offset_pa = 2.0e4;
     for ch in [1, 2] {
-        let (base, response) = run(&samples, ch, 0.0);
-        let (moved, _) = run(&samples, ch, offset_pa);
-        // From 10 s on (the filter has converged): the change of each size
-        // against the response's prediction, over every sample.
-        let (mut err2, mut pred2) = (0.0, 0.0);
-        for i in 10_000..samples.len() {
-            for k in 0..3 {
-                let predicted = response[i][ch - 1][k] * offset_pa * 1e-6;
-                let seen = moved[i][k] - base[i][k];
-                err2 += (seen - predicted).powi(2);
-                pred2 += predicted.powi(2);
-            }
-        }
-        let rel = (err2 / pred2).sqrt();
-        assert!(pred2 > 0.0, "p{ch}: the response is zero");
+        let (base, e) = run(&samples, ch, |p| p);
+        let (moved, _) = run(&samples, ch, |p| p + offset_pa);
+        let (rel, any) = miss(&base, &moved, |i, k| {
+            e[i].offset_response_lpm_per_mpa[ch - 1][k] * offset_pa * 1e-6
+        });
+        assert!(any, "p{ch}: the response is zero");
         assert!(
             rel < 0.1,
             "p{ch}: the response misses the change by {:.0} % (RMS)",
+            100.0 * rel
+        );
+    }
+}
+
+#[test]
+fn a_span_error_moves_the_leak_sizes_as_its_response_predicts() {
+    // a 0.2 % span error: the offset it makes moves with the pressure, so the
+    // offset's response times the pressure now misses the change
+    let samples = recording();
+    let gain_error = 0.002;
+    for ch in [1, 2] {
+        let (base, e) = run(&samples, ch, |p| p);
+        let (moved, _) = run(&samples, ch, |p| (1.0 + gain_error) * p);
+        let (rel, any) = miss(&base, &moved, |i, k| {
+            e[i].span_response_lpm[ch - 1][k] * gain_error
+        });
+        assert!(any, "p{ch}: the response is zero");
+        assert!(
+            rel < 0.1,
+            "p{ch}: the response misses the change by {:.0} % (RMS)",
+            100.0 * rel
+        );
+        let (rel_now, _) = miss(&base, &moved, |i, k| {
+            e[i].offset_response_lpm_per_mpa[ch - 1][k] * gain_error * e[i].measured[ch] * 1e-6
+        });
+        assert!(
+            rel_now > 2.0 * rel,
+            "p{ch}: the offset's response at the pressure now misses by {:.0} %, the span's by {:.0} %",
+            100.0 * rel_now,
             100.0 * rel
         );
     }

@@ -15,7 +15,7 @@ pub const THESIS_STATES: usize = 7;
 /// The estimator's output for one sensor frame (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.EstimateFrame.v3")]
+#[type_name("leakwatch.EstimateFrame.v4")]
 pub struct EstimateFrame {
     /// Sequence number of the sensor frame this estimate is for.
     pub seq: u64,
@@ -87,6 +87,11 @@ pub struct EstimateFrame {
     /// The leak sizes' response to a constant offset on p2, L/min per MPa:
     /// ext1, ext2, int.
     pub offset_response_p2_lpm_per_mpa: [f64; 3],
+    /// The leak sizes' response to a span error of 1 on p1 (a reading of
+    /// (1 + g)·p for g = 1), L/min: ext1, ext2, int (g times as much for g).
+    pub span_response_p1_lpm: [f64; 3],
+    /// The leak sizes' response to a span error of 1 on p2, L/min: ext1, ext2, int.
+    pub span_response_p2_lpm: [f64; 3],
 }
 
 impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
@@ -126,6 +131,8 @@ impl Default for EstimateFrame {
             null_leakage_band_lpm: f64::NAN,
             offset_response_p1_lpm_per_mpa: [f64::NAN; 3],
             offset_response_p2_lpm_per_mpa: [f64::NAN; 3],
+            span_response_p1_lpm: [f64::NAN; 3],
+            span_response_p2_lpm: [f64::NAN; 3],
         }
     }
 }

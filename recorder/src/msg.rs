@@ -441,6 +441,8 @@ impl Message for EstimateFrame {
         null_leakage_band_lpm: f64_added,
         offset_response_p1_lpm_per_mpa: f64s_added,
         offset_response_p2_lpm_per_mpa: f64s_added,
+        span_response_p1_lpm: f64s_added,
+        span_response_p2_lpm: f64s_added,
     });
 }
 

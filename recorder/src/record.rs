@@ -305,7 +305,9 @@ record!(
         laminar_factor_sigma,
         null_leakage_band_lpm,
         offset_response_p1_lpm_per_mpa,
-        offset_response_p2_lpm_per_mpa
+        offset_response_p2_lpm_per_mpa,
+        span_response_p1_lpm,
+        span_response_p2_lpm
     ]
 );
 record!(

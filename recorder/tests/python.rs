@@ -167,6 +167,8 @@ fn expected_estimate(x: &EstimateFrame) -> Value {
         "laminar_factor_sigma": f(x.laminar_factor_sigma), "null_leakage_band_lpm": f(x.null_leakage_band_lpm),
         "offset_response_p1_lpm_per_mpa": fs(&LEAK_FLOWS, &x.offset_response_p1_lpm_per_mpa),
         "offset_response_p2_lpm_per_mpa": fs(&LEAK_FLOWS, &x.offset_response_p2_lpm_per_mpa),
+        "span_response_p1_lpm": fs(&LEAK_FLOWS, &x.span_response_p1_lpm),
+        "span_response_p2_lpm": fs(&LEAK_FLOWS, &x.span_response_p2_lpm),
     })
 }
 
@@ -262,6 +264,7 @@ fn write_log(path: &Path) {
             oil_temp_c: 41.5,
             laminar_factor_sigma: 0.02,
             offset_response_p1_lpm_per_mpa: [0.1, -0.2, 0.3],
+            span_response_p2_lpm: [1.5, -2.5, 0.5],
             ..EstimateFrame::default()
         };
         for k in 0..11 {

@@ -187,7 +187,10 @@ impl LeakSizeDetector {
                 e.t_s,
                 dt_s,
                 rise,
-                &e.offset_response_lpm_per_mpa,
+                &crate::offset::MisreadingResponse {
+                    offset_lpm_per_mpa: e.offset_response_lpm_per_mpa,
+                    span_lpm: e.span_response_lpm,
+                },
                 [e.measured[1] * 1e-6, e.measured[2] * 1e-6],
                 self.internal_factors,
                 thr,

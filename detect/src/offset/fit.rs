@@ -5,8 +5,8 @@ use super::{REVERSE_INTERNAL_LEAST_FACTOR, SPAN_FIT_RATIO, SWING_FIT_RATIO};
 
 /// The misreadings fitted per channel c, as hypothesis h = 2·form + c:
 /// form 0, an offset (the filter's response δ_c as given); form 1, its swing
-/// about its baseline; form 2, a span error (δ_c times the channel's reading:
-/// the offset a gain error makes moves with the pressure); form 3, its swing.
+/// about its baseline; form 2, a span error (the filter's response σ_c to
+/// one: the offset a gain error makes moves with the pressure); form 3, its swing.
 pub(crate) const HYPOTHESES: usize = 8;
 
 /// The channel of hypothesis `h`.

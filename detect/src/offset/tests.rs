@@ -8,6 +8,16 @@ use super::*;
 /// and the pressures read (MPa).
 type Sample = ([f64; 3], [[f64; 3]; 2], [f64; 2]);
 
+/// The responses of a filter whose offset responses `d` (L/min per MPa on p1
+/// and on p2) have been the same while the pressures read `reading` (MPa)
+/// stood: a span error's is then the offset's times the pressure.
+fn steady(d: [[f64; 3]; 2], reading: [f64; 2]) -> MisreadingResponse {
+    MisreadingResponse {
+        offset_lpm_per_mpa: d,
+        span_lpm: [0, 1].map(|c| d[c].map(|v| v * reading[c])),
+    }
+}
+
 /// Feeds `seconds` of the samples `at(t)` every 10 ms, the rises measured
 /// from a baseline that follows the sizes with time constant `tau_s` (0:
 /// fixed); returns the watch and the first change of the named misreading.
@@ -28,7 +38,8 @@ fn drive(seconds: f64, tau_s: f64, at: impl Fn(f64) -> Sample) -> (OffsetWatch, 
         }
         let rise: [f64; 3] = std::array::from_fn(|k| sizes[k] - baseline[k]);
         watch.follow_baseline(share);
-        let change = watch.on_rise(t, dt, rise, &responses, reading, factors, [0.05; 3], &mut id);
+        let response = steady(responses, reading);
+        let change = watch.on_rise(t, dt, rise, &response, reading, factors, [0.05; 3], &mut id);
         first = first.or(change);
     }
     (watch, first)
@@ -147,7 +158,7 @@ fn a_steady_leak_is_no_offset() {
             t,
             0.01,
             [0.0, 0.2, -0.1],
-            &[d1, d2],
+            &steady([d1, d2], [0.0; 2]),
             [0.0; 2],
             factors,
             [0.05; 3],
