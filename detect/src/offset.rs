@@ -149,7 +149,7 @@ pub struct OffsetWatch {
     /// Over [`OFFSET_WINDOW_S`]: names an offset.
     window: Fit,
     /// The window's best misreading and what its fit leaves
-    /// ([`Fit::best_offset`] with swings), as of the last sample read.
+    /// ([`Fit::best_offset`] in all forms), as of the last sample read.
     window_best: (usize, f64),
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
@@ -247,8 +247,9 @@ impl OffsetWatch {
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
-    /// The episode's fit takes the responses as given alone: over its first
-    /// seconds a leak's step fits some swing as well as it fits the leak.
+    /// The episode's fit takes the offsets' responses as given alone: over
+    /// its first seconds a leak's step fits some swing, or a span error's
+    /// response under a cycle that moves the pressure, as well as it fits the leak.
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
             f.w >= EPISODE_MIN_S

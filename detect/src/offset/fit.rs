@@ -92,12 +92,12 @@ impl Fit {
     /// leaves: the baseline has taken up the offset's steady part.
     /// A span error counts only where it leaves less than
     /// [`SPAN_FIT_RATIO`] of what the channel's offset in the same form
-    /// leaves. Without `swing`, the responses as given alone.
-    pub(crate) fn best_offset(&self, swing: bool) -> (usize, f64) {
+    /// leaves. Without `all_forms`, the offsets' responses as given alone.
+    pub(crate) fn best_offset(&self, all_forms: bool) -> (usize, f64) {
         let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
         (0..HYPOTHESES)
-            .filter(|&h| !is_swing(h) || (swing && left[h] < SWING_FIT_RATIO * left[h - 2]))
-            .filter(|&h| !is_span(h) || left[h] < SPAN_FIT_RATIO * left[h - 4])
+            .filter(|&h| !is_swing(h) || (all_forms && left[h] < SWING_FIT_RATIO * left[h - 2]))
+            .filter(|&h| !is_span(h) || (all_forms && left[h] < SPAN_FIT_RATIO * left[h - 4]))
             .map(|h| (h, left[h]))
             .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
     }

@@ -228,3 +228,27 @@ fn a_clean_offset_under_the_least_named_waits_for_the_clean_confirmation() {
     let (_, change) = watch_offset_on_p2(-0.3, 0.0, 13.0, 0.0);
     assert!(matches!(change, Some(OffsetChange::Raised(_))), "{change:?}");
 }
+
+#[test]
+fn an_episode_is_judged_on_the_offsets_as_given_alone() {
+    // rises that a span error's response on p1 makes exactly, while the
+    // offsets' responses swing in other rhythms: the fit in all forms
+    // finds the span; the episode's fit, offsets as given alone, does not
+    let mut fit = Fit::default();
+    for n in 0..2000 {
+        let t = n as f64 * 0.01;
+        let span = [1.0 + (t / 3.0).sin(), 0.2];
+        let mut h = [[0.0; 2]; HYPOTHESES];
+        h[0] = [(t / 0.7).cos(), 0.1];
+        h[1] = [0.05, (t / 1.3).sin()];
+        h[4] = span;
+        let rise = [0.03 * span[0], 0.03 * span[1]];
+        fit.add((-0.01f64 / OFFSET_WINDOW_S).exp(), 0.01, rise, &h);
+    }
+    let (all, left) = fit.best_offset(true);
+    assert_eq!(all, 4, "the span on p1 fits best");
+    assert!(left < 1e-6 * fit.energy, "{left} of {}", fit.energy);
+    let (given, left) = fit.best_offset(false);
+    assert!(!is_span(given) && given < 2, "hypothesis {given}");
+    assert!(left > 0.1 * fit.energy, "{left} of {}", fit.energy);
+}
