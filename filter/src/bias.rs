@@ -17,6 +17,7 @@
 //! ([`BiasResponse::leak_sizes_lpm_per_mpa`], [`BiasResponse::leak_sizes_lpm_per_span`]).
 
 use model::process::{FIRST_RANDOM_WALK, I_QE1, I_QI};
+use model::units::M3_S_PER_LPM;
 use nalgebra::{SMatrix, SVector};
 
 use crate::ekf::Ekf;
@@ -27,10 +28,7 @@ use crate::MAX_LAYOUT_STATES;
 pub const OFFSET_CHANNELS: [usize; 2] = [1, 2];
 
 /// Cubic metres per second per pascal in one L/min per MPa.
-const M3_S_PA_PER_LPM_MPA: f64 = 1.0e-3 / 60.0 / 1.0e6;
-
-/// Cubic metres per second in one L/min.
-const M3_S_PER_LPM: f64 = 1.0e-3 / 60.0;
+const M3_S_PA_PER_LPM_MPA: f64 = M3_S_PER_LPM / 1.0e6;
 
 /// The misreadings followed, as rows of δ: an offset of 1 Pa on p1 and on
 /// p2, then a span error of 1 (a reading of 2·p) on p1 and on p2.
