@@ -249,6 +249,7 @@ impl Estimator {
             let y = ProcessModel::measure(w.state());
             // (the result is thrown away with the copy)
             let input = StepInput {
+                t_s: 0.0,
                 u,
                 y,
                 use_channel: [true; 3],
@@ -488,6 +489,7 @@ impl Estimator {
         );
         let mut out = Estimate::empty(s.t_s, self.tuning.states);
         let input = StepInput {
+            t_s: s.t_s,
             u,
             y,
             use_channel,

@@ -82,6 +82,8 @@ pub(crate) struct StepMemory<'a> {
 
 /// What one sample gives a filter step.
 pub(crate) struct StepInput {
+    /// The sample's time, s.
+    pub(crate) t_s: f64,
     /// Valve command, V.
     pub(crate) u: f64,
     /// Measurement [x m, p1 Pa, p2 Pa] (0 where a channel is not used).
@@ -142,6 +144,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     memory: StepMemory,
 ) -> Result<bool, EkfError> {
     let StepInput {
+        t_s,
         u,
         ref y,
         use_channel,
@@ -182,6 +185,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
             e.update_selected_choosing::<A>(y, &y_pred, ProcessModel::MEASURED_STATES, |nu, sigma| {
                 if gate_outliers {
                     updating = outliers.gate(
+                        t_s,
                         &[nu[0], nu[1], nu[2]],
                         &[sigma[0], sigma[1], sigma[2]],
                         use_channel,
