@@ -75,12 +75,10 @@ impl OutlierGate {
         let mut left_out_now = [false; 3];
         for k in 0..3 {
             let others_agree = (0..3).all(|j| j == k || z[j] <= OTHERS_WITHIN_SIGMAS);
-            let gate = if t_s - self.last_two_s[k][0] <= SUSPECT_WINDOW_S {
-                SUSPECT_SIGMAS
-            } else {
-                OUTLIER_SIGMAS
-            };
-            if z[k] > gate && others_agree && !self.left_out_last[k] {
+            // (a stream whose time went back starts its suspicions afresh)
+            let suspect = (0.0..=SUSPECT_WINDOW_S).contains(&(t_s - self.last_two_s[k][0]));
+            let limit = if suspect { SUSPECT_SIGMAS } else { OUTLIER_SIGMAS };
+            if z[k] > limit && others_agree && !self.left_out_last[k] {
                 out[k] = false;
                 left_out_now[k] = true;
                 self.left_out += 1;
@@ -155,5 +153,7 @@ mod tests {
         }
         assert_eq!(g.gate(3.0, &spike, &sigma, [true; 3]), [true, true, false]);
         assert_eq!(g.gate(3.001, &spike, &sigma, [true; 3]), [true; 3]);
+        // a stream whose time went back (a restart from 0 s) is not suspect
+        assert_eq!(g.gate(0.5, &spike, &sigma, [true; 3]), [true; 3]);
     }
 }
