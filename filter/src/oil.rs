@@ -25,6 +25,13 @@ pub const OIL_ESTIMATE_STEP_K: f64 = 0.5;
 /// it θ says more than the oil's temperature (air, a softened hose).
 pub const OIL_ESTIMATE_SPAN_K: f64 = 40.0;
 
+/// The temperature read from θ stays within the operating range
+/// (`operating_min_c`..`operating_max_c` of the oil law) widened by this much,
+/// K: the oil does not leave its operating range, so a θ that says it did says
+/// something else (a pressure transducer reading off, air). Beyond it, the
+/// model's viscous terms are held at the range's edge.
+pub const OIL_RANGE_MARGIN_K: f64 = 5.0;
+
 /// Relative uncertainty of the laminar flows' change with temperature (1):
 /// Walther's law through a catalogue's two viscosities, against oils whose
 /// viscosity index lies 60 above or below the one the law assumes, and a
@@ -83,6 +90,10 @@ pub struct OilFromStiffness {
     observed_s: f64,
     reference_c: f64,
     bulk_per_k: f64,
+    /// The coldest and warmest temperature θ is read as, °C: the operating
+    /// range widened by [`OIL_RANGE_MARGIN_K`], and the reference within it.
+    lowest_c: f64,
+    highest_c: f64,
 }
 
 impl OilFromStiffness {
@@ -100,15 +111,18 @@ impl OilFromStiffness {
             observed_s: 0.0,
             reference_c: oil.reference_c,
             bulk_per_k: oil.bulk_modulus_per_k,
+            lowest_c: (oil.operating_min_c - OIL_RANGE_MARGIN_K).min(oil.reference_c),
+            highest_c: (oil.operating_max_c + OIL_RANGE_MARGIN_K).max(oil.reference_c),
         })
     }
 
     /// The temperature θ's low-pass says now, °C (within
-    /// [`OIL_ESTIMATE_SPAN_K`] of the reference).
+    /// [`OIL_ESTIMATE_SPAN_K`] of the reference and [`OIL_RANGE_MARGIN_K`] of
+    /// the operating range).
     pub fn temperature_c(&self) -> f64 {
         let dt = ((self.theta_mean / self.theta_ref - 1.0) / self.bulk_per_k)
             .clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
-        self.reference_c + dt
+        (self.reference_c + dt).clamp(self.lowest_c, self.highest_c)
     }
 
     /// The temperature the model is at, °C.
@@ -265,12 +279,47 @@ mod tests {
         assert!(o.settled());
         // θ's σ of 0.0045 is 1 K; k_β's share of the 30 K is 6 K
         assert!((o.sigma_k(0.0045) - 1f64.hypot(0.2 * (o.applied_c() - 30.0))).abs() < 1e-9);
-        // a stiffness far below the law's range is held at its span
+        // a stiffness far below the law's range is held at the operating range's top (60 °C) and its margin
+        for _ in 0..200_000 {
+            o.observe(0.3, 1e-3);
+        }
+        assert!((o.applied_c() - (60.0 + OIL_RANGE_MARGIN_K)).abs() < OIL_ESTIMATE_STEP_K);
+        assert_eq!(o.observe(f64::NAN, 1e-3), None);
+        // and far above it, at the range's bottom (20 °C) and its margin
+        for _ in 0..200_000 {
+            o.observe(1.5, 1e-3);
+        }
+        assert!((o.applied_c() - (20.0 - OIL_RANGE_MARGIN_K)).abs() < OIL_ESTIMATE_STEP_K);
+    }
+
+    #[test]
+    fn the_temperature_read_from_theta_stays_within_the_span_and_takes_in_the_reference() {
+        // a wide operating range: the span about the reference binds
+        let wide = OilTemperature {
+            reference_c: 30.0,
+            operating_min_c: -30.0,
+            operating_max_c: 120.0,
+            ..OilTemperature::default()
+        };
+        let mut o = OilFromStiffness::new(&wide, 1.0).expect("k_β");
         for _ in 0..200_000 {
             o.observe(0.3, 1e-3);
         }
         assert!((o.applied_c() - (30.0 + OIL_ESTIMATE_SPAN_K)).abs() < OIL_ESTIMATE_STEP_K);
-        assert_eq!(o.observe(f64::NAN, 1e-3), None);
+        // commissioned warmer than the operating range's top: the reference stays readable
+        let warm = OilTemperature {
+            reference_c: 75.0,
+            ..OilTemperature::default()
+        };
+        let mut o = OilFromStiffness::new(&warm, 1.0).expect("k_β");
+        for _ in 0..20_000 {
+            o.observe(1.0, 1e-3);
+        }
+        assert!((o.temperature_c() - 75.0).abs() < 1e-9, "{}", o.temperature_c());
+        for _ in 0..200_000 {
+            o.observe(0.3, 1e-3);
+        }
+        assert!((o.temperature_c() - 75.0).abs() < 1e-9, "{}", o.temperature_c());
     }
 
     #[test]
