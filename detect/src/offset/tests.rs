@@ -252,3 +252,49 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
     assert!(!is_span(given) && given < 2, "hypothesis {given}");
     assert!(left > 0.1 * fit.energy, "{left} of {}", fit.energy);
 }
+
+/// What an offset of `b_mpa` on p2 makes when its rises in the fast strokes
+/// are twice what its linear response says (the orifice's drop is then
+/// small beside the offset), beside the model's own error of `model_lpm`
+/// on ext1 in a rhythm of its own.
+fn under_predicted_offset_on_p2(b_mpa: f64, model_lpm: f64) -> impl Fn(f64) -> Sample {
+    move |t| {
+        let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+        let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+        let d1 = [
+            -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
+            0.0,
+            0.0,
+        ];
+        let b = b_mpa * (1.0 + swing);
+        let model = model_lpm * (std::f64::consts::TAU * t / 0.9).sin();
+        ([b * d2[0] + model, b * d2[1], b * d2[2]], [d1, d2], [0.0; 2])
+    }
+}
+
+#[test]
+fn a_long_episode_an_offset_fits_better_than_a_leak_but_not_twice_as_well_is_no_leak_evidence() {
+    // 9 s: the episode is long, and the 10 s window cannot veto yet
+    let offset = under_predicted_offset_on_p2(-0.2, 0.08);
+    let (watch, change) = drive(9.0, 15.0, &offset);
+    assert!(change.is_none(), "{change:?}");
+    let episode = watch.episode.expect("the rises started an episode");
+    assert!(episode.w >= EPISODE_LONG_S, "{}", episode.w);
+    let ratio = episode.best_offset(false).1 / episode.unexplained_by_leak(&watch.directions);
+    assert!(
+        ratio > OFFSET_FIT_RATIO && ratio < EPISODE_FIT_RATIO,
+        "the offset's fit leaves {ratio} of the leak's"
+    );
+    assert!(watch.vetoes());
+    // the same rises over a young episode (4 s) are still evidence
+    let (young, _) = drive(4.0, 15.0, &offset);
+    assert!(young.episode.is_some_and(|e| e.w < EPISODE_LONG_S));
+    assert!(!young.vetoes());
+    // a leak's steady rise on ext2, beside the same responses and model error (ext1), is evidence
+    let (watch, _) = drive(9.0, 15.0, |t| {
+        let (q, d, r) = offset(t);
+        ([q[0], 0.06, 0.0], d, r)
+    });
+    assert!(watch.episode.is_some_and(|e| e.w >= EPISODE_LONG_S));
+    assert!(!watch.vetoes());
+}
