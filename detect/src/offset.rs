@@ -256,7 +256,8 @@ impl OffsetWatch {
     }
 
     /// Whether the rises of the present episode fit an offset better than any
-    /// leak ([`OFFSET_FIT_RATIO`], or [`EPISODE_FIT_RATIO`] once it is long), or those of the window do with the offset's part of them past
+    /// leak ([`OFFSET_FIT_RATIO`], or [`EPISODE_FIT_RATIO`] once it is long),
+    /// or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
     /// The episode's fit takes the offsets' responses as given alone: over
     /// its first seconds a leak's step fits some swing, or a span error's
