@@ -53,17 +53,6 @@ pub const EPISODE_LEVEL: f64 = 0.5;
 /// they are no leak evidence, and it may be named. (Where the offset's response
 /// barely swings, as under a steady sine, both fit alike and neither wins.)
 pub const OFFSET_FIT_RATIO: f64 = 0.5;
-/// The rises of a long episode ([`EPISODE_LONG_S`]) are no leak evidence
-/// where an offset's fit leaves less than this share of what the best leak's
-/// fit leaves (1). Looser than [`OFFSET_FIT_RATIO`]: a drifting offset's rises
-/// come in the fast strokes, where its linear response under-predicts them,
-/// so its fit is better than a leak's but rarely twice as good.
-pub const EPISODE_FIT_RATIO: f64 = 0.75;
-/// An episode whose weight has reached this is long, s of samples (the
-/// weight decays over [`OFFSET_WINDOW_S`]: 5 s is about 7 s of episode, more
-/// than two strokes). A leak is raised within its episode's first second or
-/// two, so [`EPISODE_FIT_RATIO`] does not delay it.
-pub const EPISODE_LONG_S: f64 = 5.0;
 /// An offset's swing about its baseline is fitted in its place when it leaves
 /// less than this share of what the offset's response as the filter gives it
 /// leaves (1). A leak's steady rise, or a healthy rig's hoses, fit both forms
@@ -256,8 +245,7 @@ impl OffsetWatch {
     }
 
     /// Whether the rises of the present episode fit an offset better than any
-    /// leak ([`OFFSET_FIT_RATIO`], or [`EPISODE_FIT_RATIO`] once it is long),
-    /// or those of the window do with the offset's part of them past
+    /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
     /// The episode's fit takes the offsets' responses as given alone: over
     /// its first seconds a leak's step fits some swing, or a span error's
@@ -265,15 +253,7 @@ impl OffsetWatch {
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
             f.w >= EPISODE_MIN_S
-                && f.offset_fits_better(
-                    f.best_offset(false).1,
-                    &self.directions,
-                    if f.w >= EPISODE_LONG_S {
-                        EPISODE_FIT_RATIO
-                    } else {
-                        OFFSET_FIT_RATIO
-                    },
-                )
+                && f.offset_fits_better(f.best_offset(false).1, &self.directions, OFFSET_FIT_RATIO)
         });
         episode || self.window_offset_fits(OFFSET_FIT_RATIO)
     }
