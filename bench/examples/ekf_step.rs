@@ -83,6 +83,7 @@ fn main() {
                 vals.extend_from_slice(&o.mae_pa);
                 vals.extend_from_slice(o.offset_response_lpm_per_mpa.as_flattened());
                 vals.extend_from_slice(o.span_response_lpm.as_flattened());
+                vals.extend_from_slice(&o.position_offset_response_lpm_per_mm);
             }
             let mut h = 0xcbf29ce484222325u64;
             for v in &vals {

@@ -1,4 +1,4 @@
-//! A pressure transducer that reads off, told from a leak.
+//! A transducer that reads off, told from a leak.
 //!
 //! An offset b on p1 or p2 moves the leak sizes by b·δ_c(t), where δ_c is the
 //! filter's own response to an offset on that channel
@@ -14,6 +14,10 @@
 //!   ([`filter::Estimate::span_response_lpm`]), and the same through the
 //!   baseline (counted where it fits clearly better than the offset,
 //!   [`SPAN_FIT_RATIO`]);
+//! - offset b on x: rise(t) ≈ b·ξ(t), ξ the filter's own response to it
+//!   ([`filter::Estimate::position_offset_response_lpm_per_mm`]): the model
+//!   reads the chambers' volumes at the wrong place, one too large and one
+//!   too small; and the same through the baseline;
 //! - leak of kind k: rise_k(t) ≈ q, the other sizes ≈ 0.
 //!
 //! The rises are measured from a baseline that follows the sizes slowly (the
@@ -32,13 +36,16 @@
 //! A rise an offset explains clearly better than every leak is not leak evidence. An
 //! offset or span error that explains the rises over [`OFFSET_WINDOW_S`] and is
 //! large enough to matter is raised as `sensor-offset` on its channel, with b
-//! in MPa or g in %.
+//! in kPa (mm on x) or g in %.
 
 use crate::{EventKind, LeakEvent, Phase};
 
 mod fit;
 
-use fit::{channel_of, is_span, leak_directions, without_reverse_internal, Fit, HYPOTHESES};
+use fit::{
+    channel_of, is_position, is_span, leak_directions, without_reverse_internal, Fit,
+    FIRST_POSITION_HYPOTHESIS, HYPOTHESES,
+};
 
 /// Time constant of the window the offsets are named over, s.
 pub const OFFSET_WINDOW_S: f64 = 10.0;
@@ -76,6 +83,18 @@ pub const SPAN_LEAST_ERROR: f64 = 0.005;
 /// (the drop between a manifold transducer and its chamber, which moves with
 /// the oil's viscosity) make as much.
 pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.01;
+/// An offset on x is fitted in place of the pressures' misreadings where it
+/// leaves less than this share of what the best of them leaves (1): a drift
+/// of p1 or p2 moves the leak sizes in patterns an offset on x can partly fit.
+pub const POSITION_FIT_RATIO: f64 = 0.5;
+/// Largest offset on x fitted, mm: a transducer's zero drifts by a few mm at
+/// most. Where the filter's response to an offset on x is small, model error
+/// alone fits offsets of tens of mm.
+pub const POSITION_MOST_OFFSET_MM: f64 = 15.0;
+/// Least offset on x named, mm: a position transducer's accuracy is a
+/// fraction of it, and the chambers' volumes the model reads move by less
+/// than their tolerance.
+pub const POSITION_LEAST_OFFSET_MM: f64 = 1.0;
 /// An offset below the least named ([`OFFSET_LEAST_SHARE_OF_RANGE`]) but past
 /// this share of it (1) is named where its fit leaves less than
 /// [`OFFSET_CLEAN_UNEXPLAINED`] of the rises' energy for
@@ -104,17 +123,22 @@ const EPISODE_MIN_S: f64 = 0.2;
 /// near each other the internal leak's direction is not pinned down.
 pub(crate) const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
 
-/// The transducers whose offsets are fitted, in the order of the response's rows.
-pub const OFFSET_CHANNEL_NAMES: [&str; 2] = ["p1", "p2"];
+/// The transducers whose misreadings are fitted: the channels of [`StandingOffset`].
+pub const OFFSET_CHANNEL_NAMES: [&str; 3] = ["p1", "p2", "x"];
 
-/// The filter's responses to a misreading of p1 (row 0) and p2 (row 1):
+/// The channel of x in [`OFFSET_CHANNEL_NAMES`].
+const POSITION: usize = 2;
+
+/// The filter's responses to a misreading of p1 (row 0), p2 (row 1) and x:
 /// how it would have moved the leak sizes q_e1, q_e2, q_i by now.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct MisreadingResponse {
-    /// To a constant offset, L/min per MPa.
+    /// To a constant offset on p1 and p2, L/min per MPa.
     pub offset_lpm_per_mpa: [[f64; 3]; 2],
-    /// To a span error (the reading (1 + g)·p), L/min per unit g.
+    /// To a span error on p1 and p2 (the reading (1 + g)·p), L/min per unit g.
     pub span_lpm: [[f64; 3]; 2],
+    /// To a constant offset on x, L/min per mm.
+    pub position_lpm_per_mm: [f64; 3],
 }
 
 /// A named offset.
@@ -123,8 +147,11 @@ pub struct StandingOffset {
     /// Channel index into [`OFFSET_CHANNEL_NAMES`].
     pub channel: usize,
     /// The offset fitted when it was named, MPa (measured minus true); for
-    /// a span error, the offset it made on the reading then.
+    /// a span error, the offset it made on the reading then; NaN on x.
     pub offset_mpa: f64,
+    /// The offset on x fitted when it was named, mm (measured minus true);
+    /// NaN on p1 and p2.
+    pub offset_mm: f64,
     /// The span error fitted when it was named, 1 (the channel reads
     /// (1 + g)·p); NaN where an offset fits better.
     pub span_error: f64,
@@ -158,7 +185,7 @@ pub struct OffsetWatch {
     /// The channel meeting the naming conditions, and since when, s.
     candidate: Option<(usize, f64)>,
     /// Per channel: when its offset's part of the rises was last below a tenth of the threshold, s.
-    low_since_s: [f64; 2],
+    low_since_s: [f64; 3],
     /// Since when a named offset's part has been low, s.
     fading_since_s: Option<f64>,
     standing: Option<StandingOffset>,
@@ -201,7 +228,7 @@ impl Default for OffsetWatch {
             episode: None,
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
-            low_since_s: [f64::NEG_INFINITY; 2],
+            low_since_s: [f64::NEG_INFINITY; 3],
             fading_since_s: None,
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
@@ -247,9 +274,10 @@ impl OffsetWatch {
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
-    /// The episode's fit takes the offsets' responses as given alone: over
-    /// its first seconds a leak's step fits some swing, or a span error's
-    /// response under a cycle that moves the pressure, as well as it fits the leak.
+    /// The episode's fit takes p1's and p2's offsets' responses as given alone:
+    /// over its first seconds a leak's step fits some swing, or a span error's
+    /// response under a cycle that moves the pressure, as well as it fits the
+    /// leak; an offset on x grows too slowly to make an episode's step.
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
             f.w >= EPISODE_MIN_S
@@ -268,16 +296,23 @@ impl OffsetWatch {
             && self.window.offset_fits_better(left, &self.directions, ratio)
     }
 
-    /// Whether the misreading of hypothesis `h` fitted over the window is
-    /// past what a sound transducer reads off: [`SPAN_LEAST_ERROR`] for a
-    /// span error, the least offset for an offset.
-    fn large_enough(&self, h: usize) -> bool {
-        let least = if is_span(h) {
+    /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
+    /// for a span error, [`POSITION_LEAST_OFFSET_MM`] on x, the least
+    /// pressure offset (MPa) for an offset.
+    fn least(&self, h: usize) -> f64 {
+        if is_span(h) {
             SPAN_LEAST_ERROR
+        } else if is_position(h) {
+            POSITION_LEAST_OFFSET_MM
         } else {
             self.least_offset_mpa
-        };
-        self.window.coefficient(h).abs() > least
+        }
+    }
+
+    /// Whether the misreading of hypothesis `h` fitted over the window is
+    /// past what a sound transducer reads off ([`Self::least`]).
+    fn large_enough(&self, h: usize) -> bool {
+        self.window.coefficient(h).abs() > self.least(h)
     }
 
     /// How long the naming conditions must hold for the misreading of
@@ -289,7 +324,7 @@ impl OffsetWatch {
             Some(OFFSET_CONFIRM_S)
         } else if !is_span(h)
             && left < OFFSET_CLEAN_UNEXPLAINED * self.window.energy
-            && self.window.coefficient(h).abs() > OFFSET_CLEAN_FLOOR_SHARE * self.least_offset_mpa
+            && self.window.coefficient(h).abs() > OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
         {
             Some(OFFSET_CLEAN_CONFIRM_S)
         } else {
@@ -332,6 +367,7 @@ impl OffsetWatch {
             .iter()
             .chain(response.offset_lpm_per_mpa.iter().flatten())
             .chain(response.span_lpm.iter().flatten())
+            .chain(&response.position_lpm_per_mm)
             .all(|v| v.is_finite())
             && dt_s > 0.0)
         {
@@ -341,15 +377,21 @@ impl OffsetWatch {
         // (a span error's offset at naming: g times the pressure read, 0 where not read)
         self.reading_mpa = reading_mpa.map(|p| if p.is_finite() { p } else { 0.0 });
         let mut hypotheses = [[0.0; 2]; HYPOTHESES];
-        for c in 0..2 {
-            for (h, r) in [(c, response.offset_lpm_per_mpa[c]), (4 + c, response.span_lpm[c])] {
-                let w = crate::signatures_with(r, factors);
-                for k in 0..2 {
-                    let base = &mut self.response_baseline[h][k];
-                    *base += share * (w[k] - *base);
-                    hypotheses[h][k] = w[k];
-                    hypotheses[h + 2][k] = w[k] - *base;
-                }
+        // (each response as given at h, its swing at h + swing)
+        let given = [
+            (0, response.offset_lpm_per_mpa[0], 2),
+            (1, response.offset_lpm_per_mpa[1], 2),
+            (4, response.span_lpm[0], 2),
+            (5, response.span_lpm[1], 2),
+            (FIRST_POSITION_HYPOTHESIS, response.position_lpm_per_mm, 1),
+        ];
+        for (h, r, swing) in given {
+            let w = crate::signatures_with(r, factors);
+            for k in 0..2 {
+                let base = &mut self.response_baseline[h][k];
+                *base += share * (w[k] - *base);
+                hypotheses[h][k] = w[k];
+                hypotheses[h + swing][k] = w[k] - *base;
             }
         }
         let rise3 = rise;
@@ -376,7 +418,7 @@ impl OffsetWatch {
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
         let level = OFFSET_NAMED_SHARE * smallest;
-        for c in 0..2 {
+        for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
                 self.low_since_s[c] = t_s;
             }
@@ -408,10 +450,17 @@ impl OffsetWatch {
             (None, _) => self.candidate = None,
             (Some(confirm_s), Some((j, t0))) if j == c => {
                 if t_s - t0 >= confirm_s {
+                    let coefficient = self.window.coefficient(h);
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: self.window.coefficient(h)
-                            * if is_span(h) { self.reading_mpa[c] } else { 1.0 },
+                        offset_mpa: if c == POSITION {
+                            f64::NAN
+                        } else if is_span(h) {
+                            coefficient * self.reading_mpa[c]
+                        } else {
+                            coefficient
+                        },
+                        offset_mm: if c == POSITION { coefficient } else { f64::NAN },
                         span_error: if is_span(h) {
                             self.window.coefficient(h)
                         } else {
@@ -451,7 +500,9 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
         Phase::Cleared => format!("{name} reads true again: leak decisions resume"),
         _ => {
             let high_low = |v: f64| if v >= 0.0 { "high" } else { "low" };
-            let reading = if s.span_error.is_finite() {
+            let reading = if s.offset_mm.is_finite() {
+                format!("{:.1} mm {} (an offset", s.offset_mm.abs(), high_low(s.offset_mm))
+            } else if s.span_error.is_finite() {
                 format!(
                     "{:.1} % {} (a span error: {:.0} kPa at this pressure",
                     s.span_error.abs() * 100.0,

@@ -76,6 +76,7 @@ impl EstimateWire for StageEstimate {
             out.offset_response_p2_lpm_per_mpa,
         ] = l.offset_response_lpm_per_mpa;
         [out.span_response_p1_lpm, out.span_response_p2_lpm] = l.span_response_lpm;
+        out.offset_response_x_lpm_per_mm = l.position_offset_response_lpm_per_mm;
     }
 
     fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
@@ -95,6 +96,7 @@ impl EstimateWire for StageEstimate {
             null_leakage_band_lpm: f.null_leakage_band_lpm,
             offset_response_lpm_per_mpa: [f.offset_response_p1_lpm_per_mpa, f.offset_response_p2_lpm_per_mpa],
             span_response_lpm: [f.span_response_p1_lpm, f.span_response_p2_lpm],
+            position_offset_response_lpm_per_mm: f.offset_response_x_lpm_per_mm,
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,
@@ -122,6 +124,7 @@ impl EstimateWire for StageEstimate {
             null_leakage_band_lpm: f64::NAN,
             offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
             span_response_lpm: [[f64::NAN; 3]; 2],
+            position_offset_response_lpm_per_mm: [f64::NAN; 3],
             ..leak
         };
         StageEstimate {

@@ -82,11 +82,12 @@ class EstimateFrame(ctypes.Structure):
         ("offset_response_p2_lpm_per_mpa", ctypes.c_double * 3),
         ("span_response_p1_lpm", ctypes.c_double * 3),
         ("span_response_p2_lpm", ctypes.c_double * 3),
+        ("offset_response_x_lpm_per_mm", ctypes.c_double * 3),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.EstimateFrame.v4"
+        return "leakwatch.EstimateFrame.v5"
 
 
 KINDS = {1: "ext1", 2: "ext2", 3: "int", 10: "estimator-reset", 11: "sensor-stuck",

@@ -1,6 +1,6 @@
-//! How the filter's estimates answer an offset on a pressure transducer.
+//! How the filter's estimates answer a transducer that reads off.
 //!
-//! A constant offset b on channel c (p1 or p2) moves the estimate by δ·b,
+//! A constant offset b on channel c (p1, p2 or x) moves the estimate by δ·b,
 //! where δ follows the filter's own linear recursion along the trajectory:
 //!
 //! - time update: δ⁻ = F·δ⁺ (F the step's Jacobian);
@@ -13,8 +13,11 @@
 //!
 //! The leak sizes' part of δ is the pattern a misreading leaves on them: it
 //! swings with the valve's flow (an offset moves the orifice's drop), while a
-//! leak's is steady. The detector compares the two
-//! ([`BiasResponse::leak_sizes_lpm_per_mpa`], [`BiasResponse::leak_sizes_lpm_per_span`]).
+//! leak's is steady. An offset on x moves the chambers' volumes the model
+//! reads, one up and one down, and with them the pressure each flow makes.
+//! The detector compares the patterns with a leak's
+//! ([`BiasResponse::leak_sizes_lpm_per_mpa`], [`BiasResponse::leak_sizes_lpm_per_span`],
+//! [`BiasResponse::leak_sizes_lpm_per_mm`]).
 
 use model::process::{FIRST_RANDOM_WALK, I_QE1, I_QI};
 use model::units::M3_S_PER_LPM;
@@ -30,13 +33,23 @@ pub const OFFSET_CHANNELS: [usize; 2] = [1, 2];
 /// Cubic metres per second per pascal in one L/min per MPa.
 const M3_S_PA_PER_LPM_MPA: f64 = M3_S_PER_LPM / 1.0e6;
 
-/// The misreadings followed, as rows of δ: an offset of 1 Pa on p1 and on
-/// p2, then a span error of 1 (a reading of 2·p) on p1 and on p2.
-const ROWS: usize = 4;
+/// The measured position (index into the measurement [x, p1, p2]).
+const POSITION_CHANNEL: usize = 0;
 
-/// δ for an offset of 1 Pa on p1 and on p2 (state units per Pa), and for a
-/// span error of 1 on p1 and on p2 (state units); zero until the filter has
-/// stepped with leak sizes.
+/// Cubic metres per second per metre in one L/min per mm.
+const M3_S_M_PER_LPM_MM: f64 = M3_S_PER_LPM * 1.0e3;
+
+/// The misreadings followed, as rows of δ: an offset of 1 Pa on p1 and on
+/// p2, then a span error of 1 (a reading of 2·p) on p1 and on p2, then an
+/// offset of 1 m on x.
+const ROWS: usize = 5;
+
+/// The row of δ for an offset on x.
+const POSITION_ROW: usize = 4;
+
+/// δ for an offset of 1 Pa on p1 and on p2 (state units per Pa), for a
+/// span error of 1 on p1 and on p2 (state units), and for an offset of 1 m
+/// on x (state units per m); zero until the filter has stepped with leak sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiasResponse {
     delta: [[f64; MAX_LAYOUT_STATES]; ROWS],
@@ -100,9 +113,13 @@ impl BiasResponse {
             }
         }
         for (row, d) in self.delta.iter_mut().enumerate() {
-            let c = OFFSET_CHANNELS[row % 2];
-            // the misreading's part of channel c's reading: 1 Pa, or g·p_c
-            let misread = if row < 2 { 1.0 } else { y[c] };
+            let c = if row == POSITION_ROW {
+                POSITION_CHANNEL
+            } else {
+                OFFSET_CHANNELS[row % 2]
+            };
+            // the misreading's part of channel c's reading: 1 Pa, 1 m, or g·p_c
+            let misread = if row < 2 || row == POSITION_ROW { 1.0 } else { y[c] };
             let before = *d;
             for (i, k) in gains.iter().enumerate() {
                 if use_channel[i] {
@@ -126,6 +143,11 @@ impl BiasResponse {
     /// sizes q_e1, q_e2, q_i, L/min (a span error g moves them g times as much).
     pub fn leak_sizes_lpm_per_span(&self) -> [[f64; 3]; 2] {
         [2, 3].map(|row| std::array::from_fn(|k| self.delta[row][I_QE1 + k] / M3_S_PER_LPM))
+    }
+
+    /// How an offset of 1 mm on x moves the leak sizes q_e1, q_e2, q_i, L/min per mm.
+    pub fn leak_sizes_lpm_per_mm(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.delta[POSITION_ROW][I_QE1 + k] / M3_S_M_PER_LPM_MM)
     }
 }
 

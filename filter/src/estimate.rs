@@ -61,6 +61,9 @@ pub struct Estimate {
     /// (g times as much for a span error g; [`bias`]); zero for the layouts
     /// without leak sizes.
     pub span_response_lpm: [[f64; 3]; 2],
+    /// How an offset of 1 mm on x would have moved q_e1, q_e2, q_i by now,
+    /// L/min per mm ([`bias`]); zero for the layouts without leak sizes.
+    pub position_offset_response_lpm_per_mm: [f64; 3],
 }
 
 impl Estimate {
@@ -86,6 +89,7 @@ impl Estimate {
             null_leakage_band_lpm: 0.0,
             offset_response_lpm_per_mpa: [[0.0; 3]; 2],
             span_response_lpm: [[0.0; 3]; 2],
+            position_offset_response_lpm_per_mm: [0.0; 3],
         }
     }
 }

@@ -224,6 +224,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     }
     out.offset_response_lpm_per_mpa = offset_response.leak_sizes_lpm_per_mpa();
     out.span_response_lpm = offset_response.leak_sizes_lpm_per_span();
+    out.position_offset_response_lpm_per_mm = offset_response.leak_sizes_lpm_per_mm();
     if N == 12 {
         out.bulk_scale = x[I_BULK];
         out.bulk_scale_sigma = sig[I_BULK];

@@ -15,7 +15,7 @@ pub const THESIS_STATES: usize = 7;
 /// The estimator's output for one sensor frame (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.EstimateFrame.v4")]
+#[type_name("leakwatch.EstimateFrame.v5")]
 pub struct EstimateFrame {
     /// Sequence number of the sensor frame this estimate is for.
     pub seq: u64,
@@ -92,6 +92,9 @@ pub struct EstimateFrame {
     pub span_response_p1_lpm: [f64; 3],
     /// The leak sizes' response to a span error of 1 on p2, L/min: ext1, ext2, int.
     pub span_response_p2_lpm: [f64; 3],
+    /// The leak sizes' response to a constant offset on x, L/min per mm:
+    /// ext1, ext2, int.
+    pub offset_response_x_lpm_per_mm: [f64; 3],
 }
 
 impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
@@ -133,6 +136,7 @@ impl Default for EstimateFrame {
             offset_response_p2_lpm_per_mpa: [f64::NAN; 3],
             span_response_p1_lpm: [f64::NAN; 3],
             span_response_p2_lpm: [f64::NAN; 3],
+            offset_response_x_lpm_per_mm: [f64::NAN; 3],
         }
     }
 }

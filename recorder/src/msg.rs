@@ -443,6 +443,7 @@ impl Message for EstimateFrame {
         offset_response_p2_lpm_per_mpa: f64s_added,
         span_response_p1_lpm: f64s_added,
         span_response_p2_lpm: f64s_added,
+        offset_response_x_lpm_per_mm: f64s_added,
     });
 }
 

@@ -307,7 +307,8 @@ record!(
         offset_response_p1_lpm_per_mpa,
         offset_response_p2_lpm_per_mpa,
         span_response_p1_lpm,
-        span_response_p2_lpm
+        span_response_p2_lpm,
+        offset_response_x_lpm_per_mm
     ]
 );
 record!(

@@ -169,6 +169,7 @@ fn expected_estimate(x: &EstimateFrame) -> Value {
         "offset_response_p2_lpm_per_mpa": fs(&LEAK_FLOWS, &x.offset_response_p2_lpm_per_mpa),
         "span_response_p1_lpm": fs(&LEAK_FLOWS, &x.span_response_p1_lpm),
         "span_response_p2_lpm": fs(&LEAK_FLOWS, &x.span_response_p2_lpm),
+        "offset_response_x_lpm_per_mm": fs(&LEAK_FLOWS, &x.offset_response_x_lpm_per_mm),
     })
 }
 
@@ -265,6 +266,7 @@ fn write_log(path: &Path) {
             laminar_factor_sigma: 0.02,
             offset_response_p1_lpm_per_mpa: [0.1, -0.2, 0.3],
             span_response_p2_lpm: [1.5, -2.5, 0.5],
+            offset_response_x_lpm_per_mm: [0.25, -0.5, 0.125],
             ..EstimateFrame::default()
         };
         for k in 0..11 {

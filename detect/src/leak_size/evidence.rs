@@ -190,6 +190,7 @@ impl LeakSizeDetector {
                 &crate::offset::MisreadingResponse {
                     offset_lpm_per_mpa: e.offset_response_lpm_per_mpa,
                     span_lpm: e.span_response_lpm,
+                    position_lpm_per_mm: e.position_offset_response_lpm_per_mm,
                 },
                 [e.measured[1] * 1e-6, e.measured[2] * 1e-6],
                 self.internal_factors,

@@ -41,6 +41,7 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         null_leakage_band_lpm: f64::NAN,
         offset_response_lpm_per_mpa: [[0.0; 3]; 2],
         span_response_lpm: [[0.0; 3]; 2],
+        position_offset_response_lpm_per_mm: [0.0; 3],
     }
 }
 
@@ -75,6 +76,7 @@ fn pending_run(ext1_from_20_s: bool, offset: P2Offset) -> Vec<LeakEvent> {
             let standing = |since_s| StandingOffset {
                 channel: 1,
                 offset_mpa: -0.3,
+                offset_mm: f64::NAN,
                 span_error: f64::NAN,
                 since_s,
                 event_id: 99,

@@ -1,29 +1,59 @@
-//! The least-squares fits of the offset watch: a misreading of p1 or p2
+//! The least-squares fits of the offset watch: a misreading of p1, p2 or x
 //! against a steady leak, over the chamber flows' rises (w1, w2).
 
-use super::{REVERSE_INTERNAL_LEAST_FACTOR, SPAN_FIT_RATIO, SWING_FIT_RATIO};
+use super::{
+    POSITION_FIT_RATIO, POSITION_MOST_OFFSET_MM, REVERSE_INTERNAL_LEAST_FACTOR, SPAN_FIT_RATIO,
+    SWING_FIT_RATIO,
+};
 
-/// The misreadings fitted per channel c, as hypothesis h = 2·form + c:
-/// form 0, an offset (the filter's response δ_c as given); form 1, its swing
-/// about its baseline; form 2, a span error (the filter's response σ_c to
-/// one: the offset a gain error makes moves with the pressure); form 3, its swing.
-pub(crate) const HYPOTHESES: usize = 8;
+/// The misreadings fitted. Per pressure channel c (0 p1, 1 p2), hypothesis
+/// h = 2·form + c: form 0, an offset (the filter's response δ_c as given);
+/// form 1, its swing about its baseline; form 2, a span error (the filter's
+/// response σ_c to one: the offset a gain error makes moves with the
+/// pressure); form 3, its swing. Then x (channel 2): h = 8, an offset as
+/// given; h = 9, its swing.
+pub(crate) const HYPOTHESES: usize = 10;
 
-/// The channel of hypothesis `h`.
+/// The first hypothesis on x.
+pub(crate) const FIRST_POSITION_HYPOTHESIS: usize = 8;
+
+/// The channel of hypothesis `h` (0 p1, 1 p2, 2 x).
 pub(crate) const fn channel_of(h: usize) -> usize {
-    h % 2
+    if h < FIRST_POSITION_HYPOTHESIS {
+        h % 2
+    } else {
+        2
+    }
 }
 
 /// Whether hypothesis `h` is a span error (its coefficient a gain error, 1)
-/// rather than an offset (MPa).
+/// rather than an offset (MPa, or mm on x).
 pub(crate) const fn is_span(h: usize) -> bool {
-    h >= 4
+    h >= 4 && h < FIRST_POSITION_HYPOTHESIS
+}
+
+/// Whether hypothesis `h` is an offset on x (its coefficient in mm).
+pub(crate) const fn is_position(h: usize) -> bool {
+    h >= FIRST_POSITION_HYPOTHESIS
 }
 
 /// Whether hypothesis `h` is a swing about its baseline (fitted in place of
-/// hypothesis `h − 2`, its response as given).
+/// hypothesis [`as_given`]`(h)`, its response as given).
 const fn is_swing(h: usize) -> bool {
-    (h / 2) % 2 == 1
+    if h < FIRST_POSITION_HYPOTHESIS {
+        (h / 2) % 2 == 1
+    } else {
+        h == FIRST_POSITION_HYPOTHESIS + 1
+    }
+}
+
+/// The hypothesis whose response as given swing hypothesis `h` is taken about.
+const fn as_given(h: usize) -> usize {
+    if h < FIRST_POSITION_HYPOTHESIS {
+        h - 2
+    } else {
+        h - 1
+    }
 }
 
 /// Exponentially weighted sums of both fits over the chamber flows' rises
@@ -35,10 +65,10 @@ pub(crate) struct Fit {
     /// Σw·|rise|², (L/min)²·s.
     pub(crate) energy: f64,
     /// Σw·δ_h·rise per hypothesis ([`HYPOTHESES`]), (L/min)²/MPa·s for an
-    /// offset, (L/min)²·s per unit error for a span.
+    /// offset, (L/min)²·s per unit error for a span, (L/min)²/mm·s on x.
     pub(crate) response_rise: [f64; HYPOTHESES],
     /// Σw·|δ_h|² per hypothesis, (L/min/MPa)²·s for an offset, (L/min)²·s per
-    /// unit error squared for a span.
+    /// unit error squared for a span, (L/min/mm)²·s on x.
     pub(crate) response_energy: [f64; HYPOTHESES],
     /// Σw·rise, L/min·s.
     pub(crate) rise: [f64; 2],
@@ -61,8 +91,8 @@ impl Fit {
         }
     }
 
-    /// The coefficient of hypothesis `c` that fits best: an offset in MPa, a
-    /// span error in 1 ([`is_span`]); 0 without a response.
+    /// The coefficient of hypothesis `c` that fits best: an offset in MPa (in
+    /// mm on x, [`is_position`]), a span error in 1 ([`is_span`]); 0 without a response.
     pub(crate) fn coefficient(&self, c: usize) -> f64 {
         if self.response_energy[c] > 0.0 {
             self.response_rise[c] / self.response_energy[c]
@@ -92,14 +122,37 @@ impl Fit {
     /// leaves: the baseline has taken up the offset's steady part.
     /// A span error counts only where it leaves less than
     /// [`SPAN_FIT_RATIO`] of what the channel's offset in the same form
-    /// leaves. Without `all_forms`, the offsets' responses as given alone.
+    /// leaves. An offset on x counts only up to [`POSITION_MOST_OFFSET_MM`],
+    /// and where it leaves less than [`POSITION_FIT_RATIO`] of what the best
+    /// misreading of p1 or p2 leaves.
+    /// Without `all_forms`, the pressures' offsets' responses as given alone
+    /// (an offset on x grows at a transducer's drift, mm per minute: it makes
+    /// no episode's step).
     pub(crate) fn best_offset(&self, all_forms: bool) -> (usize, f64) {
         let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
-        (0..HYPOTHESES)
-            .filter(|&h| !is_swing(h) || (all_forms && left[h] < SWING_FIT_RATIO * left[h - 2]))
-            .filter(|&h| !is_span(h) || (all_forms && left[h] < SPAN_FIT_RATIO * left[h - 4]))
-            .map(|h| (h, left[h]))
-            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+        let best = |range: std::ops::Range<usize>| {
+            range
+                .filter(|&h| !is_swing(h) || (all_forms && left[h] < SWING_FIT_RATIO * left[as_given(h)]))
+                .filter(|&h| !is_span(h) || (all_forms && left[h] < SPAN_FIT_RATIO * left[h - 4]))
+                .map(|h| (h, left[h]))
+                .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+        };
+        let pressure = best(0..FIRST_POSITION_HYPOTHESIS);
+        let position = if all_forms {
+            best(FIRST_POSITION_HYPOTHESIS..HYPOTHESES)
+        } else {
+            (0, f64::INFINITY)
+        };
+        let position = if self.coefficient(position.0).abs() <= POSITION_MOST_OFFSET_MM {
+            position
+        } else {
+            (position.0, f64::INFINITY)
+        };
+        if position.1 < POSITION_FIT_RATIO * pressure.1 {
+            position
+        } else {
+            pressure
+        }
     }
 
     /// Whether an offset's fit, leaving `left` ((L/min)²·s, of
@@ -116,8 +169,8 @@ impl Fit {
 
     /// RMS of the rises that a misreading of channel `c` explains in any form, L/min.
     pub(crate) fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
-        (c..HYPOTHESES)
-            .step_by(2)
+        (0..HYPOTHESES)
+            .filter(|&h| channel_of(h) == c)
             .map(|h| self.explained_rms_lpm(h))
             .fold(0.0, f64::max)
     }
