@@ -126,9 +126,6 @@ pub(crate) const REVERSE_INTERNAL_LEAST_FACTOR: f64 = 0.05;
 /// The transducers whose misreadings are fitted: the channels of [`StandingOffset`].
 pub const OFFSET_CHANNEL_NAMES: [&str; 3] = ["p1", "p2", "x"];
 
-/// The channel of x in [`OFFSET_CHANNEL_NAMES`].
-const POSITION: usize = 2;
-
 /// The filter's responses to a misreading of p1 (row 0), p2 (row 1) and x:
 /// how it would have moved the leak sizes q_e1, q_e2, q_i by now.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -453,19 +450,15 @@ impl OffsetWatch {
                     let coefficient = self.window.coefficient(h);
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: if c == POSITION {
+                        offset_mpa: if is_position(h) {
                             f64::NAN
                         } else if is_span(h) {
                             coefficient * self.reading_mpa[c]
                         } else {
                             coefficient
                         },
-                        offset_mm: if c == POSITION { coefficient } else { f64::NAN },
-                        span_error: if is_span(h) {
-                            self.window.coefficient(h)
-                        } else {
-                            f64::NAN
-                        },
+                        offset_mm: if is_position(h) { coefficient } else { f64::NAN },
+                        span_error: if is_span(h) { coefficient } else { f64::NAN },
                         since_s: self.low_since_s[c],
                         event_id: *next_id,
                     };

@@ -17,12 +17,16 @@ pub(crate) const HYPOTHESES: usize = 10;
 /// The first hypothesis on x.
 pub(crate) const FIRST_POSITION_HYPOTHESIS: usize = 8;
 
+/// The channel of x (p1 is 0, p2 1), an index into
+/// [`super::OFFSET_CHANNEL_NAMES`].
+pub(crate) const POSITION_CHANNEL: usize = 2;
+
 /// The channel of hypothesis `h` (0 p1, 1 p2, 2 x).
 pub(crate) const fn channel_of(h: usize) -> usize {
     if h < FIRST_POSITION_HYPOTHESIS {
         h % 2
     } else {
-        2
+        POSITION_CHANNEL
     }
 }
 
