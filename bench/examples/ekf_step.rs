@@ -38,8 +38,10 @@ fn main() {
         for _ in 0..reps {
             let mut e =
                 filter::Estimator::new(model::ActuatorParams::default(), t.clone()).expect("estimator");
+            let mut out = filter::Estimate::default();
             for s in &samples {
-                acc += e.on_sample(std::hint::black_box(s)).nis;
+                e.on_sample_into(std::hint::black_box(s), &mut out);
+                acc += out.nis;
             }
         }
         println!("{acc}");

@@ -99,6 +99,8 @@ pub struct FileRun {
     /// (`min_size_lpm`, `min_internal_size_lpm`), s (NaN if never or not logged).
     /// A ramping leak cannot be declared before its flow gets there.
     pub t_detectable_s: [f64; 2],
+    /// The detector's floors, L/min: `min_size_lpm` and `min_internal_size_lpm`.
+    pub floors_lpm: [f64; 2],
 }
 
 /// Totals over a directory.
@@ -144,6 +146,18 @@ pub struct SizeRow {
     pub size_error_median: f64,
     /// 95th percentile of the same.
     pub size_error_p95: f64,
+}
+
+impl Truth {
+    /// When the leak's flow reached `floor_lpm` (L/min), s, for a recording
+    /// without the `q_leak` column: the flow taken to ramp linearly from the
+    /// onset to [`Truth::observed_flow_lpm`] over [`Truth::ramp_s`] (NaN without a leak).
+    pub fn t_flow_reaches_s(&self, floor_lpm: f64) -> f64 {
+        if self.observed_flow_lpm.is_nan() || self.observed_flow_lpm <= 0.0 {
+            return f64::NAN;
+        }
+        self.t_on_s + self.ramp_s * (floor_lpm / self.observed_flow_lpm).min(1.0)
+    }
 }
 
 fn num(v: &serde_json::Value, key: &str) -> f64 {
@@ -241,6 +255,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         thresholds_sigma: chain.classifier().leak_size.thresholds_sigma(),
         blind_s: chain.classifier().leak_size.blind_s(),
         t_detectable_s: t_detectable,
+        floors_lpm: floors,
     })
 }
 
@@ -285,7 +300,11 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         o.delay_named_s = alarms
             .first_named
             .map_or(f64::NAN, |n| n.t_detect_s - o.truth.t_on_s);
-        let t_floor = run.t_detectable_s[usize::from(o.truth.kind == "int")];
+        let internal = usize::from(o.truth.kind == "int");
+        let mut t_floor = run.t_detectable_s[internal];
+        if t_floor.is_nan() {
+            t_floor = o.truth.t_flow_reaches_s(run.floors_lpm[internal]);
+        }
         o.delay_after_detectable_s = ev.t_detect_s - t_floor.max(o.truth.t_on_s);
         o.size_first_lpm = named.size_lpm;
         o.size_final_lpm = last.size_lpm;
@@ -471,6 +490,8 @@ pub fn data_markdown(r: &DataSummary) -> String {
          the flow the rig really lost after the ramp. Delays are counted from the onset, and also from \
          the time the real flow reached the detector's floor for its kind (`min_size_lpm` for an external \
          leak, `min_internal_size_lpm` for an internal one): a ramping leak cannot be declared earlier. \
+         Where the recording has no `q_leak` column, that time is the truth's: its flow after the ramp \
+         reached linearly over `ramp_s`. \
          The first alarm may say `leak` with its kind pending; \"kind named after\" is the delay of the \
          first alarm that names a kind, the kind scored.\n\nSensor events in the same time: {} (no run has a \
          sensor fault).\n",
@@ -535,6 +556,7 @@ mod tests {
             thresholds_sigma: [5.0; 3],
             blind_s: 0.0,
             t_detectable_s: [20.64, 20.96],
+            floors_lpm: [0.04, 0.06],
         };
         let o = score_run(truth("ext1"), &run);
         assert!(o.detected);
@@ -555,6 +577,18 @@ mod tests {
             o.delay_after_detectable_s
         );
         assert_eq!(o.kind_first, "ext1", "named wrong");
+        // without a logged flow, from the truth's ramp: 0.25 L/min over 4 s
+        // reaches 0.04 L/min 0.64 s after the onset
+        let unlogged = FileRun {
+            t_detectable_s: [f64::NAN; 2],
+            ..run.clone()
+        };
+        let o = score_run(truth("ext1"), &unlogged);
+        assert!(
+            (o.delay_after_detectable_s - 0.36).abs() < 1e-9,
+            "{}",
+            o.delay_after_detectable_s
+        );
         let s = summarise_data(
             vec![score_run(truth("ext1"), &run), score_run(truth("int"), &run)],
             0.0,

@@ -66,7 +66,16 @@ pub struct Estimate {
     pub position_offset_response_lpm_per_mm: [f64; 3],
 }
 
+impl Default for Estimate {
+    /// An estimate of nothing: time 0, no states, every value NaN (the
+    /// responses 0), as a buffer for [`crate::Estimator::on_sample_into`].
+    fn default() -> Self {
+        Estimate::empty(0.0, 0)
+    }
+}
+
 impl Estimate {
+    #[inline]
     pub(crate) fn empty(t_s: f64, n_states: u32) -> Self {
         Estimate {
             t_s,

@@ -398,13 +398,21 @@ impl Estimator {
 
     /// Processes one sensor sample (one sample period after the previous one).
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
+        let mut e = Estimate::empty(s.t_s, self.tuning.states);
+        self.on_sample_into(s, &mut e);
+        e
+    }
+
+    /// [`Self::on_sample`] into `e`, which it overwrites whole: the hot path's
+    /// form (the estimate is written where the caller keeps it, not copied there).
+    pub fn on_sample_into(&mut self, s: &Sample, e: &mut Estimate) {
         let measured_temp = s.temp_c.is_finite();
         if measured_temp {
             // a thermometer: the model follows it, not θ
             self.oil_from_stiffness = None;
             self.follow_oil_temperature(s.temp_c);
         }
-        let mut e = self.on_sample_inner(s);
+        self.on_sample_inner(s, e);
         e.measured = [s.x_m, s.p1_pa, s.p2_pa];
         e.u_v = s.u_v;
         if measured_temp {
@@ -413,14 +421,15 @@ impl Estimator {
                 e.flags |= FLAG_CONVERGING;
             }
         } else if self.oil_from_stiffness.is_some() {
-            self.follow_oil_stiffness(&mut e);
+            self.follow_oil_stiffness(e);
         }
         e.oil_temp_c = self.oil_temp_c;
         (e.laminar_factor_sigma, e.null_leakage_band_lpm) = self.laminar_sigma;
-        e
     }
 
-    fn on_sample_inner(&mut self, s: &Sample) -> Estimate {
+    /// The filter's part of [`Self::on_sample_into`]: `out` starts empty.
+    fn on_sample_inner(&mut self, s: &Sample, out: &mut Estimate) {
+        *out = Estimate::empty(s.t_s, self.tuning.states);
         self.counters.samples += 1;
         let mut flags = 0;
         let just_started = !self.started;
@@ -436,9 +445,8 @@ impl Estimator {
         if !self.started {
             if !(usable && use_channel.iter().all(|u| *u)) {
                 self.counters.skipped += 1;
-                let mut e = Estimate::empty(s.t_s, self.tuning.states);
-                e.flags = FLAG_SKIPPED;
-                return e;
+                out.flags = FLAG_SKIPPED;
+                return;
             }
             let measured = [s.x_m, s.p1_pa, s.p2_pa];
             let tuning = &self.tuning;
@@ -487,7 +495,6 @@ impl Estimator {
             if use_channel[1] { s.p1_pa } else { 0.0 },
             if use_channel[2] { s.p2_pa } else { 0.0 },
         );
-        let mut out = Estimate::empty(s.t_s, self.tuning.states);
         let input = StepInput {
             t_s: s.t_s,
             u,
@@ -503,11 +510,11 @@ impl Estimator {
             outliers: &mut self.outliers,
         };
         let step = match &mut self.filter {
-            Filter::S6(e) => step_filter(e, &self.model, &input, &mut out, memory),
-            Filter::S7(e) => step_filter(e, &self.model, &input, &mut out, memory),
-            Filter::S10(e) => step_filter(e, &self.model, &input, &mut out, memory),
-            Filter::S11(e) => step_filter(e, &self.model, &input, &mut out, memory),
-            Filter::S12(e) => step_filter(e, &self.model, &input, &mut out, memory),
+            Filter::S6(e) => step_filter(e, &self.model, &input, out, memory),
+            Filter::S7(e) => step_filter(e, &self.model, &input, out, memory),
+            Filter::S10(e) => step_filter(e, &self.model, &input, out, memory),
+            Filter::S11(e) => step_filter(e, &self.model, &input, out, memory),
+            Filter::S12(e) => step_filter(e, &self.model, &input, out, memory),
         };
         match step {
             Ok(clamped) => {
@@ -521,7 +528,7 @@ impl Estimator {
                 self.started = false;
                 self.counters.resets += 1;
                 out.flags = flags | FLAG_RESET | FLAG_SKIPPED;
-                return out;
+                return;
             }
         }
         self.counters.outliers = self.outliers.left_out();
@@ -569,6 +576,5 @@ impl Estimator {
             flags |= FLAG_END_STOP;
         }
         out.flags |= flags;
-        out
     }
 }

@@ -38,8 +38,8 @@ use model::{ActuatorParams, Sample};
 
 use crate::{Estimate, Estimator, Tuning};
 
-/// What the stage reports for one sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What the stage reports for one sample (its default: both estimates empty).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StageEstimate {
     /// The leak filter's estimate.
     pub leak: Estimate,
@@ -195,6 +195,15 @@ impl EstimatorStage {
     /// time shows a gap is processed exactly as without the flag.
     #[inline]
     pub fn on_sample_flagged(&mut self, s: &Sample, after_gap: bool) -> StageEstimate {
+        let mut out = StageEstimate::default();
+        self.on_sample_flagged_into(s, after_gap, &mut out);
+        out
+    }
+
+    /// [`Self::on_sample_flagged`] into `out`, which it overwrites whole: the
+    /// hot path's form (the estimates are written where the caller keeps them).
+    #[inline]
+    pub fn on_sample_flagged_into(&mut self, s: &Sample, after_gap: bool, out: &mut StageEstimate) {
         let mut missing_before = 0;
         let mut restarted = false;
         if let (Some(t_prev_s), true) = (self.last_t_s, s.t_s.is_finite()) {
@@ -227,23 +236,18 @@ impl EstimatorStage {
         if s.t_s.is_finite() {
             self.last_t_s = Some(s.t_s);
         }
-        let mut leak = self.leak.on_sample(s);
-        let mut thesis = if self.thesis_runs {
-            self.thesis.on_sample(s)
+        self.leak.on_sample_into(s, &mut out.leak);
+        if self.thesis_runs {
+            self.thesis.on_sample_into(s, &mut out.thesis);
         } else {
-            let mut e = Estimate::empty(s.t_s, self.thesis.tuning().states);
-            e.flags = crate::FLAG_SKIPPED;
-            e
-        };
+            out.thesis = Estimate::empty(s.t_s, self.thesis.tuning().states);
+            out.thesis.flags = crate::FLAG_SKIPPED;
+        }
         if missing_before > 0 || restarted {
-            leak.flags |= crate::FLAG_AFTER_GAP;
-            thesis.flags |= crate::FLAG_AFTER_GAP;
+            out.leak.flags |= crate::FLAG_AFTER_GAP;
+            out.thesis.flags |= crate::FLAG_AFTER_GAP;
         }
-        StageEstimate {
-            leak,
-            thesis,
-            missing_before,
-        }
+        out.missing_before = missing_before;
     }
 }
 

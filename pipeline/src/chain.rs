@@ -61,6 +61,8 @@ impl ChainSettings {
 pub struct Chain {
     stage: EstimatorStage,
     classifier: Classifier,
+    /// The latest sample's estimates, written in place each step.
+    estimate: StageEstimate,
 }
 
 impl Chain {
@@ -77,6 +79,7 @@ impl Chain {
         Ok(Chain {
             stage,
             classifier: Classifier::new(set.classifier.clone())?,
+            estimate: StageEstimate::default(),
         })
     }
 
@@ -89,10 +92,11 @@ impl Chain {
     /// Estimates `sample`, hands it to the detectors (each event to
     /// `on_event`) and returns the estimate.
     #[inline]
-    pub fn step(&mut self, sample: &Sample, on_event: impl FnMut(LeakEvent)) -> StageEstimate {
-        let e = self.stage.on_sample(sample);
-        self.classifier.on_stage(&e, on_event);
-        e
+    pub fn step(&mut self, sample: &Sample, on_event: impl FnMut(LeakEvent)) -> &StageEstimate {
+        self.stage
+            .on_sample_flagged_into(sample, false, &mut self.estimate);
+        self.classifier.on_stage(&self.estimate, on_event);
+        &self.estimate
     }
 
     /// Ends the stream at sample time `t_s` (s): the detectors report a warm-up

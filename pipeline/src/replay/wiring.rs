@@ -76,6 +76,7 @@ pub(super) fn replay_single_thread(
     sink: &mut impl FnMut(&StageEstimate, &mut Summary),
     progress: &Progress<'_>,
 ) -> [u64; dataset::N_OPTIONAL] {
+    let mut e = StageEstimate::default();
     while let Some(row) = reader.next_row() {
         let sample = match row {
             Row::Sample(s) => s,
@@ -88,7 +89,7 @@ pub(super) fn replay_single_thread(
                 continue;
             }
         };
-        let e = stage.on_sample(&sample);
+        stage.on_sample_flagged_into(&sample, false, &mut e);
         sink(&e, summary);
         if summary.samples.is_multiple_of(65536) {
             progress.tick(summary.samples);
@@ -123,8 +124,11 @@ pub(super) fn replay_channels(
                         let mut ests = rx_free_out
                             .try_recv()
                             .unwrap_or_else(|_| Vec::with_capacity(BATCH));
-                        ests.clear();
-                        ests.extend(samples.iter().map(|s| stage.on_sample(s)));
+                        // (a recycled buffer has the batch's length already)
+                        ests.resize(samples.len(), StageEstimate::default());
+                        for (s, e) in samples.iter().zip(ests.iter_mut()) {
+                            stage.on_sample_flagged_into(s, false, e);
+                        }
                         // (a full return channel: the buffer is dropped)
                         let _ = tx_free_in.try_send(samples);
                         (ests, Vec::new())
