@@ -305,7 +305,11 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
     #[inline(always)]
     pub fn gain_column(&self, s: usize, i: usize) -> SVector<f64, N> {
         let mut g = SVector::<f64, N>::zeros();
-        for col in &self.s[..N] {
+        // only the columns that may be non-zero in row s: the full ones and,
+        // of the lower triangular rest, those up to s (the others' products
+        // are zeros, which would leave the sums' bits as they are)
+        let columns = self.full_cols.max(s + 1).min(N);
+        for col in &self.s[..columns] {
             let c = col[s];
             for (j, v) in g.iter_mut().enumerate() {
                 *v += col[j] * c;
