@@ -67,8 +67,9 @@ pub struct Estimate {
 }
 
 impl Default for Estimate {
-    /// An estimate of nothing: time 0, no states, every value NaN (the
-    /// responses 0), as a buffer for [`crate::Estimator::on_sample_into`].
+    /// An estimate of nothing: time 0, no states, no flags, every value NaN
+    /// but the responses and the null-leakage band (0), as a buffer for
+    /// [`crate::Estimator::on_sample_into`].
     fn default() -> Self {
         Estimate::empty(0.0, 0)
     }
