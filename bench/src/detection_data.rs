@@ -149,9 +149,8 @@ pub struct SizeRow {
 }
 
 impl Truth {
-    /// When the leak's flow reached `floor_lpm` (L/min), s, for a recording
-    /// without the `q_leak` column: the flow taken to ramp linearly from the
-    /// onset to [`Truth::observed_flow_lpm`] over [`Truth::ramp_s`] (NaN without a leak).
+    /// When the leak's flow reached `floor_lpm` (L/min), s: linearly from the onset to
+    /// [`Truth::observed_flow_lpm`] over [`Truth::ramp_s`] (NaN without a leak).
     pub fn t_flow_reaches_s(&self, floor_lpm: f64) -> f64 {
         if self.observed_flow_lpm.is_nan() || self.observed_flow_lpm <= 0.0 {
             return f64::NAN;
