@@ -399,3 +399,34 @@ pub(crate) enum BenchCommand {
     /// scored for leak events and for the sensor event on the faulty channel.
     SensorFaults(bench::commands::sensor_faults::SensorFaultsArgs),
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// Every command's long help, by its path (`leakwatch bench replay`).
+    fn helps(cmd: &mut clap::Command, path: &str, out: &mut Vec<(String, String)>) {
+        out.push((path.to_string(), cmd.render_long_help().to_string()));
+        for sub in cmd.get_subcommands_mut() {
+            let sub_path = format!("{path} {}", sub.get_name());
+            helps(sub, &sub_path, out);
+        }
+    }
+
+    #[test]
+    fn no_help_shows_a_rustdoc_link() {
+        let mut cli = super::Cli::command();
+        cli.build();
+        let mut all = Vec::new();
+        helps(&mut cli, "leakwatch", &mut all);
+        assert!(all.len() > 20, "{} commands", all.len());
+        assert!(all.iter().any(|(path, _)| path == "leakwatch bench replay"));
+        for (path, text) in &all {
+            // a doc comment's link, `[`Name`]`, is rustdoc's, not the user's
+            assert!(
+                !text.contains("[`"),
+                "`{path} --help` shows a rustdoc link:\n{text}"
+            );
+        }
+    }
+}

@@ -11,8 +11,10 @@ use filter::StageEstimate;
 /// The format of the estimates file (`--estimates`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EstimatesFormat {
-    /// Parquet for a batch and for an input of [`LONG_INPUT_BYTES`] or more,
-    /// CSV for a shorter single file (decided before the replay starts).
+    /// Parquet for a batch and for an input of 16 MiB or more (2 MiB
+    /// compressed: `.csv.gz`, `.mcap`), CSV for a shorter single file (decided
+    /// before the replay starts; the sizes: `LONG_INPUT_BYTES`,
+    /// `LONG_COMPRESSED_INPUT_BYTES`).
     #[default]
     Auto,
     /// estimates.csv: one text row per sample.
