@@ -43,8 +43,8 @@ use crate::{EventKind, LeakEvent, Phase};
 mod fit;
 
 use fit::{
-    channel_of, is_position, is_span, leak_directions, without_reverse_internal, Fit,
-    FIRST_POSITION_HYPOTHESIS, HYPOTHESES,
+    channel_of, is_position, is_span, leak_directions, swing_of, without_reverse_internal, Fit, AS_GIVEN,
+    HYPOTHESES,
 };
 
 /// Time constant of the window the offsets are named over, s.
@@ -374,21 +374,21 @@ impl OffsetWatch {
         // (a span error's offset at naming: g times the pressure read, 0 where not read)
         self.reading_mpa = reading_mpa.map(|p| if p.is_finite() { p } else { 0.0 });
         let mut hypotheses = [[0.0; 2]; HYPOTHESES];
-        // (each response as given at h, its swing at h + swing)
-        let given = [
-            (0, response.offset_lpm_per_mpa[0], 2),
-            (1, response.offset_lpm_per_mpa[1], 2),
-            (4, response.span_lpm[0], 2),
-            (5, response.span_lpm[1], 2),
-            (FIRST_POSITION_HYPOTHESIS, response.position_lpm_per_mm, 1),
+        // (each response as given at h, its swing about its baseline at swing_of(h))
+        let responses = [
+            response.offset_lpm_per_mpa[0],
+            response.offset_lpm_per_mpa[1],
+            response.span_lpm[0],
+            response.span_lpm[1],
+            response.position_lpm_per_mm,
         ];
-        for (h, r, swing) in given {
+        for (h, r) in AS_GIVEN.into_iter().zip(responses) {
             let w = crate::signatures_with(r, factors);
             for k in 0..2 {
                 let base = &mut self.response_baseline[h][k];
                 *base += share * (w[k] - *base);
                 hypotheses[h][k] = w[k];
-                hypotheses[h + swing][k] = w[k] - *base;
+                hypotheses[swing_of(h)][k] = w[k] - *base;
             }
         }
         let rise3 = rise;

@@ -60,6 +60,21 @@ const fn as_given(h: usize) -> usize {
     }
 }
 
+/// The hypotheses that take a response as given, in the order of the
+/// filter's responses: the offsets on p1 and p2, the span errors on p1 and
+/// p2, the offset on x.
+pub(crate) const AS_GIVEN: [usize; 5] = [0, 1, 4, 5, FIRST_POSITION_HYPOTHESIS];
+
+/// The swing hypothesis taken about hypothesis `h` (one of [`AS_GIVEN`]):
+/// the inverse of [`as_given`].
+pub(crate) const fn swing_of(h: usize) -> usize {
+    if h < FIRST_POSITION_HYPOTHESIS {
+        h + 2
+    } else {
+        h + 1
+    }
+}
+
 /// Exponentially weighted sums of both fits over the chamber flows' rises
 /// (w1, w2) (weights in s).
 #[derive(Debug, Clone, Copy, Default)]
