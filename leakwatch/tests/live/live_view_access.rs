@@ -10,10 +10,14 @@ use serde_json::Value;
 
 use crate::{example, free_port, sigterm, BIN, SERIAL};
 
-/// The status line of a WebSocket handshake for `path` on `port` (offering `foxglove.sdk.v1`).
-fn handshake_status(port: u16, path: &str) -> String {
+/// The status line of a WebSocket handshake for `path` on `port` (offering
+/// `foxglove.sdk.v1`); a refused connection panics with the server's `log`.
+fn handshake_status(port: u16, path: &str, log: &Path) -> String {
     use std::io::{Read, Write};
-    let mut s = std::net::TcpStream::connect(("127.0.0.1", port)).expect("the live view listens");
+    let mut s = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap_or_else(|e| {
+        let log = std::fs::read_to_string(log).unwrap_or_default();
+        panic!("the live view on port {port} refused {path}: {e}\n{log}")
+    });
     s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
     write!(
         s,
@@ -51,34 +55,39 @@ fn a_live_view_with_a_token_file_refuses_a_client_without_the_token() {
     )
     .unwrap();
     let prefix = format!("lwtk{}", std::process::id());
-    let port = free_port();
-    let log = std::fs::File::create(dir.join("liveview.log")).unwrap();
+    let log_path = dir.join("liveview.log");
+    let log = std::fs::File::create(&log_path).unwrap();
+    // port 0: the stage binds any free port and says which in its log
     let mut view = Command::new(BIN)
-        .args([
-            "stage",
-            "liveview",
-            "--rig",
-            "tk",
-            "--port",
-            &port.to_string(),
-            "--config",
-        ])
+        .args(["stage", "liveview", "--rig", "tk", "--port", "0", "--config"])
         .arg(&cfg)
         .env(bus::PREFIX_ENV, &prefix)
         .stderr(log)
         .spawn()
         .unwrap();
     let t0 = Instant::now();
-    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+    let port = loop {
+        let log = std::fs::read_to_string(&log_path).unwrap_or_default();
+        if let Some(port) = log
+            .split("Foxglove WebSocket on ws://127.0.0.1:")
+            .nth(1)
+            .and_then(|rest| rest.split(' ').next())
+            .and_then(|p| p.parse::<u16>().ok())
+        {
+            break port;
+        }
+        if let Ok(Some(status)) = view.try_wait() {
+            panic!("the live view stage ended ({status}) before it listened:\n{log}");
+        }
         assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the live view never listened"
+            t0.elapsed() < Duration::from_secs(60),
+            "the live view never said it listens:\n{log}"
         );
         std::thread::sleep(Duration::from_millis(50));
-    }
-    let none = handshake_status(port, "/");
-    let wrong = handshake_status(port, "/?token=tok-0123456789abcdefghiX");
-    let right = handshake_status(port, &format!("/?token={token}"));
+    };
+    let none = handshake_status(port, "/", &log_path);
+    let wrong = handshake_status(port, "/?token=tok-0123456789abcdefghiX", &log_path);
+    let right = handshake_status(port, &format!("/?token={token}"), &log_path);
     sigterm(&view);
     let _ = view.wait();
     BusConfig {
@@ -87,7 +96,7 @@ fn a_live_view_with_a_token_file_refuses_a_client_without_the_token() {
     }
     .remove_isolated_files()
     .unwrap();
-    let log = std::fs::read_to_string(dir.join("liveview.log")).unwrap();
+    let log = std::fs::read_to_string(&log_path).unwrap();
     assert_eq!(none, "HTTP/1.1 401 Unauthorized", "{log}");
     assert_eq!(wrong, "HTTP/1.1 401 Unauthorized", "{log}");
     assert!(right.starts_with("HTTP/1.1 101"), "{right}\n{log}");
