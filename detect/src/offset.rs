@@ -9,6 +9,8 @@
 //!
 //! - offset on channel c: rise(t) ≈ b·δ_c(t), one b per channel;
 //! - the same offset seen through the baseline: rise(t) ≈ b·(δ_c − δ̄_c)(t);
+//! - an offset that drifts: rise(t) ≈ (b + ḃ·τ)·δ_c(t), τ the sample's age,
+//!   |ḃ| at most [`MOST_DRIFT_MPA_PER_S`];
 //! - span error g on channel c, an offset g·p_c that moves with the pressure
 //!   read: rise(t) ≈ g·σ_c(t), σ_c the filter's own response to it
 //!   ([`filter::Estimate::span_response_lpm`]), and the same through the
@@ -87,6 +89,11 @@ pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.01;
 /// leaves less than this share of what the best of them leaves (1): a drift
 /// of p1 or p2 moves the leak sizes in patterns an offset on x can partly fit.
 pub const POSITION_FIT_RATIO: f64 = 0.5;
+/// Fastest drift of a pressure transducer's zero fitted, MPa/s (600 kPa a
+/// minute: twice the fastest a failing transducer is tested at). A leak that
+/// opens over seconds moves the sizes as an offset growing ten times faster
+/// would: the bound keeps the drifting offset from fitting a leak's onset.
+pub const MOST_DRIFT_MPA_PER_S: f64 = 0.01;
 /// Largest offset on x fitted, mm: a transducer's zero drifts by a few mm at
 /// most. Where the filter's response to an offset on x is small, model error
 /// alone fits offsets of tens of mm.
@@ -152,6 +159,10 @@ pub struct StandingOffset {
     /// The span error fitted when it was named, 1 (the channel reads
     /// (1 + g)·p); NaN where an offset fits better.
     pub span_error: f64,
+    /// The rate at which the offset on p1 or p2 grew when it was named, MPa/s
+    /// (measured minus true, per s); 0 where a standing offset fits better,
+    /// NaN for a span error and on x.
+    pub drift_mpa_per_s: f64,
     /// Since when its part of the rises has been growing, s.
     pub since_s: f64,
     /// Event id of its `sensor-offset` event.
@@ -205,6 +216,8 @@ pub struct OffsetWatch {
     /// The share (1) by which the detector's baseline moved toward the sizes at
     /// this sample ([`OffsetWatch::follow_baseline`]).
     baseline_step: f64,
+    /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]).
+    leak_named: bool,
 }
 
 impl OffsetWatch {
@@ -236,6 +249,7 @@ impl Default for OffsetWatch {
             response_baseline: [[0.0; 2]; HYPOTHESES],
             reading_mpa: [0.0; 2],
             baseline_step: 0.0,
+            leak_named: false,
         }
     }
 }
@@ -255,6 +269,15 @@ impl OffsetWatch {
     /// the next [`OffsetWatch::on_rise`].
     pub fn follow_baseline(&mut self, share: f64) {
         self.baseline_step = share;
+    }
+
+    /// Whether a leak of a named kind stands, as of the next
+    /// [`OffsetWatch::on_rise`]: then an offset on p1 or p2 is named only where
+    /// it could have grown at a transducer's drift ([`MOST_DRIFT_MPA_PER_S`])
+    /// since its part of the rises began to grow. One that appeared in
+    /// seconds, with the leak's onset, is the leak.
+    pub fn leak_named(&mut self, named: bool) {
+        self.leak_named = named;
     }
 
     /// The named offset, if one stands.
@@ -327,6 +350,23 @@ impl OffsetWatch {
         } else {
             None
         }
+    }
+
+    /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]) and
+    /// the pressure offset of hypothesis `h` fitted over the window is larger
+    /// than [`MOST_DRIFT_MPA_PER_S`] could have made it since its channel's
+    /// part of the rises began to grow, at `t_s` (s).
+    fn grew_past_a_drift(&self, h: usize, t_s: f64) -> bool {
+        if !self.leak_named || is_position(h) {
+            return false;
+        }
+        let c = channel_of(h);
+        let offset_mpa = if is_span(h) {
+            self.window.coefficient(h) * self.reading_mpa[c]
+        } else {
+            self.window.coefficient(h)
+        };
+        offset_mpa.abs() > MOST_DRIFT_MPA_PER_S * (t_s - self.low_since_s[c])
     }
 
     /// Whether an offset on a transducer could explain the window's rises:
@@ -445,6 +485,7 @@ impl OffsetWatch {
         let c = channel_of(h);
         match (confirm_s, self.candidate) {
             (None, _) => self.candidate = None,
+            (Some(_), _) if self.grew_past_a_drift(h, t_s) => self.candidate = None,
             (Some(confirm_s), Some((j, t0))) if j == c => {
                 if t_s - t0 >= confirm_s {
                     let coefficient = self.window.coefficient(h);
@@ -459,6 +500,11 @@ impl OffsetWatch {
                         },
                         offset_mm: if is_position(h) { coefficient } else { f64::NAN },
                         span_error: if is_span(h) { coefficient } else { f64::NAN },
+                        drift_mpa_per_s: if is_span(h) || is_position(h) {
+                            f64::NAN
+                        } else {
+                            self.window.drift_rate_mpa_per_s(h)
+                        },
                         since_s: self.low_since_s[c],
                         event_id: *next_id,
                     };
@@ -501,6 +547,13 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
                     s.span_error.abs() * 100.0,
                     high_low(s.span_error),
                     s.offset_mpa.abs() * 1e3
+                )
+            } else if s.drift_mpa_per_s != 0.0 {
+                format!(
+                    "{:.0} kPa {} (an offset drifting by {:.0} kPa a minute",
+                    s.offset_mpa.abs() * 1e3,
+                    high_low(s.offset_mpa),
+                    s.drift_mpa_per_s.abs() * 6e4
                 )
             } else {
                 format!(

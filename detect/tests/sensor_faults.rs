@@ -56,12 +56,27 @@ fn a_drifting_pressure_transducer_is_named_and_then_raises_no_leak() {
             "{spec}: {}",
             named.detail
         );
-        // named once past 1 % of the range (207 kPa here), not before
+        // named once past half of 1 % of the range (207 kPa here), where its fit is
+        // clean (detect::offset::OFFSET_CLEAN_FLOOR_SHARE), not before
         let rate_pa_s = if low { 150e3 / 60.0 } else { 200e3 / 60.0 };
         assert!(
-            named.t_detect_s > 20.0 + 0.8 * 207e3 / rate_pa_s,
-            "{spec}: named at {}",
-            named.t_detect_s
+            named.t_detect_s > 20.0 + detect::offset::OFFSET_CLEAN_FLOOR_SHARE * 207e3 / rate_pa_s,
+            "{spec}: named at {}: {}",
+            named.t_detect_s,
+            named.detail
+        );
+        // its drift told, within 10 % of the rate
+        let told_kpa_min: f64 = named
+            .detail
+            .split("drifting by ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|r| r.parse().ok())
+            .unwrap_or_else(|| panic!("{spec}: no drift told: {}", named.detail));
+        assert!(
+            (told_kpa_min - rate_pa_s * 0.06).abs() < 0.1 * rate_pa_s * 0.06,
+            "{spec}: {}",
+            named.detail
         );
         // while it stands, no leak is raised
         let after: Vec<_> = leak_alarms(&events)

@@ -183,6 +183,8 @@ impl LeakSizeDetector {
         // against `naming_thr` (learned where that kind's test could alarm).
         let thr = self.floored(self.thresholds_now());
         if !invalid {
+            self.offsets
+                .leak_named(self.active.is_some_and(|a| a.kind != EventKind::Leak));
             let change = self.offsets.on_rise(
                 e.t_s,
                 dt_s,

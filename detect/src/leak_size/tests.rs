@@ -77,6 +77,7 @@ fn pending_run(ext1_from_20_s: bool, offset: P2Offset) -> Vec<LeakEvent> {
                 channel: 1,
                 offset_mpa: -0.3,
                 offset_mm: f64::NAN,
+                drift_mpa_per_s: 0.0,
                 span_error: f64::NAN,
                 since_s,
                 event_id: 99,

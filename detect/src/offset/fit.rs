@@ -2,8 +2,8 @@
 //! against a steady leak, over the chamber flows' rises (w1, w2).
 
 use super::{
-    POSITION_FIT_RATIO, POSITION_MOST_OFFSET_MM, REVERSE_INTERNAL_LEAST_FACTOR, SPAN_FIT_RATIO,
-    SWING_FIT_RATIO,
+    MOST_DRIFT_MPA_PER_S, POSITION_FIT_RATIO, POSITION_MOST_OFFSET_MM, REVERSE_INTERNAL_LEAST_FACTOR,
+    SPAN_FIT_RATIO, SWING_FIT_RATIO,
 };
 
 /// The misreadings fitted. Per pressure channel c (0 p1, 1 p2), hypothesis
@@ -11,8 +11,16 @@ use super::{
 /// form 1, its swing about its baseline; form 2, a span error (the filter's
 /// response σ_c to one: the offset a gain error makes moves with the
 /// pressure); form 3, its swing. Then x (channel 2): h = 8, an offset as
-/// given; h = 9, its swing.
+/// given; h = 9, its swing. Each takes one response.
 pub(crate) const HYPOTHESES: usize = 10;
+
+/// The first drifting offset: h = 10 + c is an offset on p_c that grows at
+/// a steady rate (the response as given, times b + ḃ·τ).
+pub(crate) const FIRST_DRIFT_HYPOTHESIS: usize = HYPOTHESES;
+
+/// Every hypothesis fitted: those of one response ([`HYPOTHESES`]) and the
+/// two drifting offsets.
+pub(crate) const ALL_HYPOTHESES: usize = HYPOTHESES + 2;
 
 /// The first hypothesis on x.
 pub(crate) const FIRST_POSITION_HYPOTHESIS: usize = 8;
@@ -25,8 +33,10 @@ pub(crate) const POSITION_CHANNEL: usize = 2;
 pub(crate) const fn channel_of(h: usize) -> usize {
     if h < FIRST_POSITION_HYPOTHESIS {
         h % 2
-    } else {
+    } else if h < FIRST_DRIFT_HYPOTHESIS {
         POSITION_CHANNEL
+    } else {
+        h - FIRST_DRIFT_HYPOTHESIS
     }
 }
 
@@ -38,7 +48,12 @@ pub(crate) const fn is_span(h: usize) -> bool {
 
 /// Whether hypothesis `h` is an offset on x (its coefficient in mm).
 pub(crate) const fn is_position(h: usize) -> bool {
-    h >= FIRST_POSITION_HYPOTHESIS
+    h >= FIRST_POSITION_HYPOTHESIS && h < FIRST_DRIFT_HYPOTHESIS
+}
+
+/// Whether hypothesis `h` is a drifting offset on p1 or p2.
+pub(crate) const fn is_drift(h: usize) -> bool {
+    h >= FIRST_DRIFT_HYPOTHESIS
 }
 
 /// Whether hypothesis `h` is a swing about its baseline (fitted in place of
@@ -49,6 +64,19 @@ const fn is_swing(h: usize) -> bool {
     } else {
         h == FIRST_POSITION_HYPOTHESIS + 1
     }
+}
+
+/// The sums of a drifting offset's fit beyond its response's
+/// ([`Fit::response_rise`], [`Fit::response_energy`]), in the age τ ≤ 0 of
+/// each sample (s before the last one).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct DriftSums {
+    /// Σw·τ·δ·rise, (L/min)²/MPa·s².
+    pub(crate) age_response_rise: f64,
+    /// Σw·τ·|δ|², (L/min/MPa)²·s².
+    pub(crate) age_response_energy: f64,
+    /// Σw·τ²·|δ|², (L/min/MPa)²·s³.
+    pub(crate) age2_response_energy: f64,
 }
 
 /// The hypothesis whose response as given swing hypothesis `h` is taken about.
@@ -91,12 +119,22 @@ pub(crate) struct Fit {
     pub(crate) response_energy: [f64; HYPOTHESES],
     /// Σw·rise, L/min·s.
     pub(crate) rise: [f64; 2],
+    /// The drifting offsets' further sums, on p1 and p2.
+    pub(crate) drift: [DriftSums; 2],
 }
 
 impl Fit {
     /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
     pub(crate) fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
         self.w = keep * self.w + dt_s;
+        // (every past sample ages by dt_s; the new one has age 0)
+        for (c, d) in self.drift.iter_mut().enumerate() {
+            let (rr, re) = (self.response_rise[c], self.response_energy[c]);
+            d.age2_response_energy =
+                keep * (d.age2_response_energy - 2.0 * dt_s * d.age_response_energy + dt_s * dt_s * re);
+            d.age_response_energy = keep * (d.age_response_energy - dt_s * re);
+            d.age_response_rise = keep * (d.age_response_rise - dt_s * rr);
+        }
         self.energy = keep * self.energy + dt_s * (rise[0] * rise[0] + rise[1] * rise[1]);
         for c in 0..HYPOTHESES {
             let d = &response[c];
@@ -111,18 +149,59 @@ impl Fit {
     }
 
     /// The coefficient of hypothesis `c` that fits best: an offset in MPa (in
-    /// mm on x, [`is_position`]), a span error in 1 ([`is_span`]); 0 without a response.
+    /// mm on x, [`is_position`]; a drifting offset's at the last sample,
+    /// [`is_drift`]), a span error in 1 ([`is_span`]); 0 without a response.
     pub(crate) fn coefficient(&self, c: usize) -> f64 {
-        if self.response_energy[c] > 0.0 {
+        if is_drift(c) {
+            self.drift_fit(c - FIRST_DRIFT_HYPOTHESIS).0
+        } else if self.response_energy[c] > 0.0 {
             self.response_rise[c] / self.response_energy[c]
         } else {
             0.0
         }
     }
 
-    /// The energy the offset of hypothesis `c` explains, (L/min)²·s.
+    /// The energy the misreading of hypothesis `c` explains, (L/min)²·s.
     pub(crate) fn explained_by_offset(&self, c: usize) -> f64 {
-        self.coefficient(c) * self.response_rise[c]
+        if is_drift(c) {
+            self.drift_fit(c - FIRST_DRIFT_HYPOTHESIS).1
+        } else {
+            self.coefficient(c) * self.response_rise[c]
+        }
+    }
+
+    /// The rate of hypothesis `h`'s misreading, MPa/s: a drifting offset's
+    /// ([`is_drift`]); 0 for the others, which stand still.
+    pub(crate) fn drift_rate_mpa_per_s(&self, h: usize) -> f64 {
+        if is_drift(h) {
+            self.drift_fit(h - FIRST_DRIFT_HYPOTHESIS).2
+        } else {
+            0.0
+        }
+    }
+
+    /// The drifting offset on p_c (c 0 or 1) that fits best: b + ḃ·τ at the
+    /// sample of age τ, ḃ at most [`MOST_DRIFT_MPA_PER_S`] either way. Its
+    /// offset at the last sample b (MPa), the energy it explains
+    /// ((L/min)²·s) and its rate ḃ (MPa/s).
+    fn drift_fit(&self, c: usize) -> (f64, f64, f64) {
+        let (r0, e0) = (self.response_rise[c], self.response_energy[c]);
+        let d = &self.drift[c];
+        let (r1, e1, e2) = (d.age_response_rise, d.age_response_energy, d.age2_response_energy);
+        if e0 <= 0.0 {
+            return (0.0, 0.0, 0.0);
+        }
+        let det = e0 * e2 - e1 * e1;
+        let free_rate = if det > 1e-9 * e0 * e2 {
+            (e0 * r1 - e1 * r0) / det
+        } else {
+            0.0
+        };
+        let rate = free_rate.clamp(-MOST_DRIFT_MPA_PER_S, MOST_DRIFT_MPA_PER_S);
+        let b = (r0 - rate * e1) / e0;
+        // energy − what the fit leaves: 2(b·r0 + ḃ·r1) − (b²e0 + 2bḃe1 + ḃ²e2)
+        let explained = 2.0 * (b * r0 + rate * r1) - (b * b * e0 + 2.0 * b * rate * e1 + rate * rate * e2);
+        (b, explained, rate)
     }
 
     /// The energy the best steady leak leaves unexplained, (L/min)²·s: a leak
@@ -148,7 +227,7 @@ impl Fit {
     /// (an offset on x grows at a transducer's drift, mm per minute: it makes
     /// no episode's step).
     pub(crate) fn best_offset(&self, all_forms: bool) -> (usize, f64) {
-        let left: [f64; HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
+        let left: [f64; ALL_HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
         let best = |range: std::ops::Range<usize>| {
             range
                 .filter(|&h| !is_swing(h) || (all_forms && left[h] < SWING_FIT_RATIO * left[as_given(h)]))
@@ -157,6 +236,12 @@ impl Fit {
                 .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
         };
         let pressure = best(0..FIRST_POSITION_HYPOTHESIS);
+        let drifting = best(FIRST_DRIFT_HYPOTHESIS..ALL_HYPOTHESES);
+        let pressure = if drifting.1 < pressure.1 {
+            drifting
+        } else {
+            pressure
+        };
         let position = if all_forms {
             best(FIRST_POSITION_HYPOTHESIS..HYPOTHESES)
         } else {
@@ -188,7 +273,7 @@ impl Fit {
 
     /// RMS of the rises that a misreading of channel `c` explains in any form, L/min.
     pub(crate) fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
-        (0..HYPOTHESES)
+        (0..ALL_HYPOTHESES)
             .filter(|&h| channel_of(h) == c)
             .map(|h| self.explained_rms_lpm(h))
             .fold(0.0, f64::max)
