@@ -10,7 +10,8 @@
 //! - offset on channel c: rise(t) ≈ b·δ_c(t), one b per channel;
 //! - the same offset seen through the baseline: rise(t) ≈ b·(δ_c − δ̄_c)(t);
 //! - an offset that drifts: rise(t) ≈ (b + ḃ·τ)·δ_c(t), τ the sample's age,
-//!   |ḃ| at most [`MOST_DRIFT_MPA_PER_S`];
+//!   |ḃ| at most [`MOST_DRIFT_MPA_PER_S`], judged against a leak that grows:
+//!   rise_k(t) ≈ q + q̇·τ;
 //! - span error g on channel c, an offset g·p_c that moves with the pressure
 //!   read: rise(t) ≈ g·σ_c(t), σ_c the filter's own response to it
 //!   ([`filter::Estimate::span_response_lpm`]), and the same through the
@@ -91,8 +92,7 @@ pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.01;
 pub const POSITION_FIT_RATIO: f64 = 0.5;
 /// Fastest drift of a pressure transducer's zero fitted, MPa/s (600 kPa a
 /// minute: twice the fastest a failing transducer is tested at). A leak that
-/// opens over seconds moves the sizes as an offset growing ten times faster
-/// would: the bound keeps the drifting offset from fitting a leak's onset.
+/// opens over seconds moves the sizes as an offset growing far faster would.
 pub const MOST_DRIFT_MPA_PER_S: f64 = 0.01;
 /// Largest offset on x fitted, mm: a transducer's zero drifts by a few mm at
 /// most. Where the filter's response to an offset on x is small, model error
@@ -300,8 +300,10 @@ impl OffsetWatch {
     /// leak; an offset on x grows too slowly to make an episode's step.
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_MIN_S
-                && f.offset_fits_better(f.best_offset(false).1, &self.directions, OFFSET_FIT_RATIO)
+            f.w >= EPISODE_MIN_S && {
+                let (h, left) = f.best_offset(false, &self.directions);
+                f.offset_fits_better(h, left, &self.directions, OFFSET_FIT_RATIO)
+            }
         });
         episode || self.window_offset_fits(OFFSET_FIT_RATIO)
     }
@@ -310,10 +312,10 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
     /// less than `ratio` times what the best leak's leaves.
     fn window_offset_fits(&self, ratio: f64) -> bool {
-        let (c, left) = self.window_best;
+        let (h, left) = self.window_best;
         self.watched_s >= OFFSET_WINDOW_S
-            && self.window.explained_rms_lpm(c) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self.window.offset_fits_better(left, &self.directions, ratio)
+            && self.window.explained_rms_lpm(h) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
+            && self.window.offset_fits_better(h, left, &self.directions, ratio)
     }
 
     /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
@@ -441,7 +443,7 @@ impl OffsetWatch {
         let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
-        self.window_best = self.window.best_offset(true);
+        self.window_best = self.window.best_offset(true, &self.directions);
         let high = (0..3).any(|k| rise3[k].abs() > EPISODE_LEVEL * thresholds_lpm[k]);
         if high {
             self.episode_high_s = t_s;
@@ -478,7 +480,7 @@ impl OffsetWatch {
         let named = self.watched_s >= OFFSET_WINDOW_S
             && self
                 .window
-                .offset_fits_better(left, &self.directions, OFFSET_FIT_RATIO)
+                .offset_fits_better(h, left, &self.directions, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
             && self.window.explained_rms_lpm(h) > level;
         let confirm_s = if named { self.confirm_s(h, left) } else { None };

@@ -121,12 +121,14 @@ pub(crate) struct Fit {
     pub(crate) rise: [f64; 2],
     /// The drifting offsets' further sums, on p1 and p2.
     pub(crate) drift: [DriftSums; 2],
+    /// Σw·τ (s²), Σw·τ² (s³) and Σw·τ·rise (L/min·s²) over the samples'
+    /// ages τ ≤ 0: a growing leak's fit.
+    pub(crate) age: (f64, f64, [f64; 2]),
 }
 
 impl Fit {
     /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
     pub(crate) fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
-        self.w = keep * self.w + dt_s;
         // (every past sample ages by dt_s; the new one has age 0)
         for (c, d) in self.drift.iter_mut().enumerate() {
             let (rr, re) = (self.response_rise[c], self.response_energy[c]);
@@ -135,6 +137,13 @@ impl Fit {
             d.age_response_energy = keep * (d.age_response_energy - dt_s * re);
             d.age_response_rise = keep * (d.age_response_rise - dt_s * rr);
         }
+        let (t1, t2, tr) = &mut self.age;
+        *t2 = keep * (*t2 - 2.0 * dt_s * *t1 + dt_s * dt_s * self.w);
+        *t1 = keep * (*t1 - dt_s * self.w);
+        for k in 0..2 {
+            tr[k] = keep * (tr[k] - dt_s * self.rise[k]);
+        }
+        self.w = keep * self.w + dt_s;
         self.energy = keep * self.energy + dt_s * (rise[0] * rise[0] + rise[1] * rise[1]);
         for c in 0..HYPOTHESES {
             let d = &response[c];
@@ -226,7 +235,12 @@ impl Fit {
     /// Without `all_forms`, the pressures' offsets' responses as given alone
     /// (an offset on x grows at a transducer's drift, mm per minute: it makes
     /// no episode's step).
-    pub(crate) fn best_offset(&self, all_forms: bool) -> (usize, f64) {
+    /// Between the pressures' standing misreadings and their drifting offsets
+    /// it takes the one whose fit leaves the smaller share of what its leak
+    /// leaves ([`Fit::offset_fits_better`]; the leaks of kinds `directions`):
+    /// a drift fits everything a standing offset fits, and as much more as
+    /// its rate allows, so it is judged against a leak with a rate too.
+    pub(crate) fn best_offset(&self, all_forms: bool, directions: &[[f64; 2]; 3]) -> (usize, f64) {
         let left: [f64; ALL_HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
         let best = |range: std::ops::Range<usize>| {
             range
@@ -237,7 +251,9 @@ impl Fit {
         };
         let pressure = best(0..FIRST_POSITION_HYPOTHESIS);
         let drifting = best(FIRST_DRIFT_HYPOTHESIS..ALL_HYPOTHESES);
-        let pressure = if drifting.1 < pressure.1 {
+        let pressure = if drifting.1 * self.unexplained_by_leak(directions)
+            < pressure.1 * self.unexplained_by_growing_leak(directions)
+        {
             drifting
         } else {
             pressure
@@ -259,11 +275,45 @@ impl Fit {
         }
     }
 
-    /// Whether an offset's fit, leaving `left` ((L/min)²·s, of
-    /// [`Fit::best_offset`]), leaves less than `ratio` times what the best
-    /// leak's leaves unexplained.
-    pub(crate) fn offset_fits_better(&self, left: f64, directions: &[[f64; 2]; 3], ratio: f64) -> bool {
-        self.energy > 0.0 && left < ratio * self.unexplained_by_leak(directions)
+    /// The energy the best leak growing at a steady rate leaves unexplained,
+    /// (L/min)²·s: (q + q̇·τ) along `directions[k]` at the sample of age τ.
+    /// A drifting offset is judged against it: each has a rate to fit.
+    pub(crate) fn unexplained_by_growing_leak(&self, directions: &[[f64; 2]; 3]) -> f64 {
+        let (t1, t2, tr) = self.age;
+        let det = self.w * t2 - t1 * t1;
+        let best = directions
+            .iter()
+            .map(|u| {
+                let s0 = u[0] * self.rise[0] + u[1] * self.rise[1];
+                let s1 = u[0] * tr[0] + u[1] * tr[1];
+                if det > 1e-9 * self.w * t2 {
+                    // the normal equations' solution explains q·s0 + q̇·s1
+                    (t2 * s0 * s0 - 2.0 * t1 * s0 * s1 + self.w * s1 * s1) / det
+                } else {
+                    s0 * s0 / self.w.max(1e-12)
+                }
+            })
+            .fold(0.0, f64::max);
+        self.energy - best
+    }
+
+    /// Whether the misreading of hypothesis `h`, its fit leaving `left`
+    /// ((L/min)²·s, of [`Fit::best_offset`]), leaves less than `ratio` times
+    /// what the best leak's fit leaves unexplained: a steady leak's, or a
+    /// growing leak's for a drifting offset ([`is_drift`]).
+    pub(crate) fn offset_fits_better(
+        &self,
+        h: usize,
+        left: f64,
+        directions: &[[f64; 2]; 3],
+        ratio: f64,
+    ) -> bool {
+        let leak_left = if is_drift(h) {
+            self.unexplained_by_growing_leak(directions)
+        } else {
+            self.unexplained_by_leak(directions)
+        };
+        self.energy > 0.0 && left < ratio * leak_left
     }
 
     /// RMS of the rises that the offset of hypothesis `c` explains, L/min.

@@ -258,10 +258,10 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
         let rise = [0.03 * span[0], 0.03 * span[1]];
         fit.add((-0.01f64 / OFFSET_WINDOW_S).exp(), 0.01, rise, &h);
     }
-    let (all, left) = fit.best_offset(true);
+    let (all, left) = fit.best_offset(true, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(all, 4, "the span on p1 fits best");
     assert!(left < 1e-6 * fit.energy, "{left} of {}", fit.energy);
-    let (given, left) = fit.best_offset(false);
+    let (given, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert!(given < 2 || is_drift(given), "hypothesis {given}");
     assert!(left > 0.1 * fit.energy, "{left} of {}", fit.energy);
 }
@@ -384,7 +384,7 @@ fn a_drifting_offset_is_fitted_with_its_rate() {
         swing,
         |t| [0.05, -0.4 - 0.2 * (t / 1.3).sin()],
     );
-    let (h, left) = fit.best_offset(false);
+    let (h, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(h, FIRST_DRIFT_HYPOTHESIS, "the drifting offset on p1");
     assert_eq!(channel_of(h), 0);
     assert!(left < 1e-9 * fit.energy, "{left} of {}", fit.energy);
@@ -409,8 +409,8 @@ fn a_leaks_onset_is_no_drifting_offset() {
     let drift = FIRST_DRIFT_HYPOTHESIS;
     assert_eq!(fit.drift_rate_mpa_per_s(drift), -MOST_DRIFT_MPA_PER_S);
     let directions = leak_directions(crate::NOMINAL_INTERNAL_FACTORS);
-    let (_, left) = fit.best_offset(false);
-    assert!(!fit.offset_fits_better(left, &directions, OFFSET_FIT_RATIO));
+    let (h, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+    assert!(!fit.offset_fits_better(h, left, &directions, OFFSET_FIT_RATIO));
 }
 
 /// The rises of an offset on p2 of `b_mpa(t)` with p2's response swinging
@@ -454,4 +454,38 @@ fn beside_a_named_leak_only_an_offset_grown_at_a_drift_is_named() {
     };
     assert_eq!(s.channel, 1);
     assert!((s.drift_mpa_per_s + 0.005).abs() < 0.0005, "{s:?}");
+}
+
+#[test]
+fn a_growing_leak_is_fitted_with_its_rate() {
+    // ext1 growing from 0.1 L/min at 0.02 L/min per s for 20 s: a growing
+    // leak leaves nothing, a steady one leaves the ramp's spread
+    let fit = fit_offsets(20.0, |t| [0.1 + 0.02 * t, 0.0], |_| [-0.5, 0.0], |_| [0.0, -0.5]);
+    let directions = leak_directions(crate::NOMINAL_INTERNAL_FACTORS);
+    let growing = fit.unexplained_by_growing_leak(&directions);
+    assert!(growing.abs() < 1e-9 * fit.energy, "{growing} of {}", fit.energy);
+    let steady = fit.unexplained_by_leak(&directions);
+    assert!(steady > 0.01 * fit.energy, "{steady} of {}", fit.energy);
+}
+
+#[test]
+fn a_leak_opening_late_in_the_window_is_no_drifting_offset() {
+    // a 0.1 L/min ext1 step 15 s into 20 s, where p1's response is large and
+    // barely swings: a drift within the bound fits it better than a steady
+    // leak does, not better than a growing one; no veto
+    let d1 = |t: f64| [-5.0 * (1.0 + 0.05 * (std::f64::consts::PI * t / 2.0).sin()), 0.0];
+    let step = |t: f64| [if t >= 15.0 { 0.1 } else { 0.0 }, 0.0];
+    let fit = fit_offsets(20.0, step, d1, |_| [0.0, -0.5]);
+    let directions = leak_directions(crate::NOMINAL_INTERNAL_FACTORS);
+    let drift = FIRST_DRIFT_HYPOTHESIS;
+    let left = fit.energy - fit.explained_by_offset(drift);
+    assert!(
+        left < OFFSET_FIT_RATIO * fit.unexplained_by_leak(&directions),
+        "{left}"
+    );
+    let (h, left) = fit.best_offset(false, &directions);
+    assert!(
+        !fit.offset_fits_better(h, left, &directions, OFFSET_FIT_RATIO),
+        "hypothesis {h}"
+    );
 }
