@@ -58,6 +58,20 @@ fn drive_beside_a_leak(
     (watch, first)
 }
 
+/// The offset responses (L/min per MPa on p1 and on p2) at `t` (s): δ on p2
+/// moves ext2 with the valve's flow, small at rest and large in the moves of
+/// a 3-s cycle; δ on p1 moves ext1 in another rhythm.
+fn cycle_responses(t: f64) -> [[f64; 3]; 2] {
+    let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
+    let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
+    let d1 = [
+        -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
+        0.0,
+        0.0,
+    ];
+    [d1, d2]
+}
+
 /// Feeds `seconds` of rises that an offset `b_mpa` on p2 makes, measured
 /// from a baseline that follows the sizes with time constant `tau_s`
 /// (0: fixed), with the model's own reverse internal flow of
@@ -70,15 +84,7 @@ fn watch_offset_on_p2(
     artefact_lpm: f64,
 ) -> (OffsetWatch, Option<OffsetChange>) {
     drive(seconds, tau_s, |t| {
-        // δ on p2 moves ext2 with the valve's flow: small at rest, large in
-        // the moves of a 3-s cycle; δ on p1 moves ext1 in another rhythm.
-        let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
-        let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
-        let d1 = [
-            -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
-            0.0,
-            0.0,
-        ];
+        let [d1, d2] = cycle_responses(t);
         let reverse = if t % 10.0 >= 8.0 { -artefact_lpm } else { 0.0 };
         let q = [b_mpa * d2[0], b_mpa * d2[1], b_mpa * d2[2] + reverse];
         (q, [d1, d2], [0.0; 2])
@@ -422,13 +428,7 @@ fn offset_on_p2_beside_a_leak(
     b_mpa: impl Fn(f64) -> f64,
 ) -> Option<OffsetChange> {
     drive_beside_a_leak(seconds, 0.0, leak_named, |t| {
-        let swing = (std::f64::consts::PI * t / 1.5).sin().abs().powi(4);
-        let d2 = [0.0, -0.1 - 0.4 * swing, 0.02];
-        let d1 = [
-            -0.05 - 0.2 * (std::f64::consts::PI * t / 2.5).cos().powi(2),
-            0.0,
-            0.0,
-        ];
+        let [d1, d2] = cycle_responses(t);
         let b = b_mpa(t);
         ([b * d2[0], b * d2[1], b * d2[2]], [d1, d2], [0.0; 2])
     })
