@@ -31,7 +31,7 @@ use super::instances::{self, InstancesRequest};
 
 mod report;
 use report::score;
-pub use report::{markdown, summarise, KindSummary};
+pub use report::{markdown, summarise, KindSummary, Misreading};
 
 /// The kinds of run each instance gets: one healthy twin, one per fault, one leak.
 pub const RUN_KINDS: [RunKind; 7] = [
@@ -155,6 +155,8 @@ pub struct FaultRunOutcome {
     /// Time from the onset to the first sensor event on the right channel, or to
     /// the leak named right, s (NaN: none).
     pub delay_s: f64,
+    /// How far the fault made its transducer read off, beside the least the detector names.
+    pub misreading: Misreading,
 }
 
 /// An instance ready to watch: its config with its commissioning, the sim's rig, the duty cycles.
@@ -366,6 +368,9 @@ fn watch_run(
     let sensor_specs: Vec<String> = sensor_spec.iter().cloned().collect();
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
+    let misreading = sensor.map_or(Misreading::NONE, |f| {
+        Misreading::of(&f, &samples, w.rig.classifier.pressure_full_scale_pa)
+    });
     if args.keep {
         let path = kept_recording(args, index, kind);
         let file = pipeline::out::create(&path, true, &[])?;
@@ -390,7 +395,7 @@ fn watch_run(
     } else {
         onset_s
     };
-    Ok(score(
+    let mut outcome = score(
         index,
         kind,
         leak_spec.or(sensor_spec).unwrap_or_default(),
@@ -398,7 +403,9 @@ fn watch_run(
         onset,
         scenario,
         &events,
-    ))
+    );
+    outcome.misreading = misreading;
+    Ok(outcome)
 }
 
 /// Where `--keep` writes run `kind` of instance `index`: inst_NNN/KIND.csv

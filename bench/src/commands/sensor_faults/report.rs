@@ -1,6 +1,8 @@
 //! Scoring a sensor-fault run and the totals per run kind.
 
 use detect::{LeakEvent, Phase};
+use model::sample::Sample;
+use model::sensor_fault::{Channel, SensorFault, SensorFaultKind};
 use serde::Serialize;
 
 use super::{FaultRunOutcome, RunKind, SensorFaultsArgs, RUN_KINDS};
@@ -10,7 +12,76 @@ fn is_sensor_raise(e: &LeakEvent) -> bool {
     e.phase == Phase::Raised && !e.kind.is_leak_alarm() && !e.channel.is_empty()
 }
 
-/// Scores the events of one run against its fault (see [`FaultRunOutcome`]).
+/// How far a fault makes its transducer read off, beside the least the detector names.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Misreading {
+    /// The fault's misreading at its largest: on p1 or p2, kPa (a drift's offset
+    /// at the run's end; a span error's g times the channel's mean reading once
+    /// grown); on x, mm (the drift's offset at the run's end). NaN for the
+    /// healthy twin, a stuck or spiking transducer and the leak.
+    pub size: f64,
+    /// The least misreading the detector names on that channel, in the same
+    /// unit: [`detect::offset::OFFSET_LEAST_SHARE_OF_RANGE`] of the pressure
+    /// transducer's range, or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
+    pub least_named: f64,
+}
+
+impl Misreading {
+    /// None: a fault without a size to compare (or no fault).
+    pub const NONE: Misreading = Misreading {
+        size: f64::NAN,
+        least_named: f64::NAN,
+    };
+
+    /// The misreading of `fault` over the run `samples` (the faulty readings), on
+    /// pressure transducers of range `full_scale_pa` (Pa).
+    pub fn of(fault: &SensorFault, samples: &[Sample], full_scale_pa: f64) -> Misreading {
+        let end_s = samples.last().map_or(f64::NAN, |s| s.t_s);
+        let pressure = fault.channel.is_pressure();
+        let (si_per_unit, least_named) = if pressure {
+            (
+                1e3,
+                detect::offset::OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-3,
+            )
+        } else {
+            (1e-3, detect::offset::POSITION_LEAST_OFFSET_MM)
+        };
+        let size_si = match fault.kind {
+            SensorFaultKind::Drift { .. } => fault.drift_offset_si(end_s).abs(),
+            SensorFaultKind::Span { gain_error, ramp_s } if pressure => {
+                // (the readings carry the error: read/(1+g) is the pressure, g times it the misreading)
+                let grown_s = fault.onset_s + ramp_s;
+                let read: Vec<f64> = samples
+                    .iter()
+                    .filter(|s| s.t_s >= grown_s)
+                    .map(|s| {
+                        if fault.channel == Channel::P1 {
+                            s.p1_pa
+                        } else {
+                            s.p2_pa
+                        }
+                    })
+                    .filter(|p| p.is_finite())
+                    .collect();
+                let mean = read.iter().sum::<f64>() / read.len() as f64;
+                (gain_error / (1.0 + gain_error) * mean).abs()
+            }
+            _ => f64::NAN,
+        };
+        Misreading {
+            size: size_si / si_per_unit,
+            least_named,
+        }
+    }
+
+    /// Whether the misreading reaches the least the detector names.
+    pub fn past_least_named(&self) -> bool {
+        self.size >= self.least_named
+    }
+}
+
+/// Scores the events of one run against its fault (see [`FaultRunOutcome`];
+/// the misreading is the caller's to set).
 pub(super) fn score(
     instance: usize,
     kind: RunKind,
@@ -72,6 +143,7 @@ pub(super) fn score(
         sensor_events_before_onset,
         named_right,
         delay_s,
+        misreading: Misreading::NONE,
     }
 }
 
@@ -90,6 +162,10 @@ pub struct KindSummary {
     pub runs_with_early_sensor_events: usize,
     /// Runs named right: the sensor event on the faulty channel, or the leak's own kind first.
     pub named_right: usize,
+    /// Runs whose misreading reaches the least the detector names ([`Misreading`]).
+    pub past_least_named: usize,
+    /// Those of them named right.
+    pub past_least_named_right: usize,
     /// Median time from the onset to that, s (NaN: none).
     pub median_delay_s: f64,
     /// Longest such time, s (NaN: none).
@@ -104,6 +180,8 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
             let mine: Vec<&FaultRunOutcome> = runs.iter().filter(|r| r.kind == kind).collect();
             let mut delays: Vec<f64> = mine.iter().map(|r| r.delay_s).filter(|d| d.is_finite()).collect();
             let median = crate::stats::quantile(&mut delays, 0.5);
+            let past: Vec<&&FaultRunOutcome> =
+                mine.iter().filter(|r| r.misreading.past_least_named()).collect();
             KindSummary {
                 kind,
                 runs: mine.len(),
@@ -114,6 +192,8 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
                     .filter(|r| r.sensor_events_before_onset > 0)
                     .count(),
                 named_right: mine.iter().filter(|r| r.named_right).count(),
+                past_least_named: past.len(),
+                past_least_named_right: past.iter().filter(|r| r.named_right).count(),
                 median_delay_s: median,
                 max_delay_s: delays.iter().cloned().fold(f64::NAN, f64::max),
             }
@@ -125,8 +205,8 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
 pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
     let mut s = format!(
         "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s\n\n\
-         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset |\n\
-         |---|---|---|---|---|---|---|\n",
+         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | misreading past the least named: runs, named right |\n\
+         |---|---|---|---|---|---|---|---|\n",
         args.rig, args.instances, args.seed, args.seconds
     );
     for k in sums {
@@ -136,8 +216,17 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
         } else {
             format!("{} ({pct:.0} %)", k.named_right)
         };
+        let past = if k.past_least_named > 0
+            || matches!(
+                k.kind,
+                RunKind::PressureDrift | RunKind::Span | RunKind::PositionDrift
+            ) {
+            format!("{}, {}", k.past_least_named, k.past_least_named_right)
+        } else {
+            "-".to_string()
+        };
         s += &format!(
-            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s |\n",
+            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s | {past} |\n",
             k.kind.name(),
             k.runs,
             k.runs_with_leak_events,
@@ -149,6 +238,8 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
     }
     s += "\nNamed right: a sensor event on the faulty channel after the onset; for the leak run, \
           its own kind named before any sensor event. A leak alarm standing at the end was neither \
-          cleared nor withdrawn when the transducer was named.\n";
+          cleared nor withdrawn when the transducer was named. A misreading past the least named: \
+          a pressure offset (a drift's at the run's end, a span error's at the channel's mean reading) \
+          of at least 1 % of the transducer's range, an offset on x of at least 1 mm.\n";
     s
 }

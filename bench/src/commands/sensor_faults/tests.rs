@@ -1,5 +1,6 @@
 use super::*;
 use detect::{EventKind, LeakEvent, Phase};
+use model::sample::Sample;
 
 /// An event of `kind` raised at `t_s` (s) on `channel`.
 fn raised(kind: EventKind, t_s: f64, channel: &str) -> LeakEvent {
@@ -129,6 +130,56 @@ fn the_leak_run_is_named_right_only_by_its_own_kind_before_any_sensor_event() {
     assert_eq!(o.leak_events, 1);
 }
 
+/// A run of readings from 0 to `end_s` (s) at 1 kHz, p1 at `p1_pa` and p2 at twice it (Pa).
+fn readings(end_s: f64, p1_pa: f64) -> Vec<Sample> {
+    (0..=(end_s * 1e3) as usize)
+        .map(|i| Sample::new(i as f64 * 1e-3, 0.0, 0.1, p1_pa, 2.0 * p1_pa))
+        .collect()
+}
+
+#[test]
+fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading() {
+    let fault = |channel, kind| SensorFault {
+        channel,
+        kind,
+        onset_s: 20.0,
+    };
+    let run = readings(100.0, 5e6);
+    // a drift of 3 kPa/s from 20 s, capped at 500 kPa: 240 kPa by 100 s; 1 % of 25 MPa is 250 kPa
+    let drift = |max_abs_si| SensorFaultKind::Drift {
+        rate_si_per_s: -3e3,
+        max_abs_si,
+    };
+    let m = Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6);
+    assert!((m.size - 240.0).abs() < 1e-6 && m.least_named == 250.0, "{m:?}");
+    assert!(!m.past_least_named());
+    let m = Misreading::of(&fault(Channel::P2, drift(2e5)), &run, 25e6);
+    assert!((m.size - 200.0).abs() < 1e-6, "{m:?}");
+    // a span error of +2 % grown over 30 s: p1 reads 5 MPa, so 2/102 of it
+    let span = SensorFaultKind::Span {
+        gain_error: 0.02,
+        ramp_s: 30.0,
+    };
+    let m = Misreading::of(&fault(Channel::P1, span), &run, 25e6);
+    assert!((m.size - 5e3 * 0.02 / 1.02).abs() < 1e-9, "{m:?}");
+    let m = Misreading::of(&fault(Channel::P2, span), &run, 15e6);
+    assert!(
+        (m.size - 1e4 * 0.02 / 1.02).abs() < 1e-9 && (m.least_named - 150.0).abs() < 1e-9,
+        "{m:?}"
+    );
+    assert!(m.past_least_named());
+    // x drifting at 1.5 mm/min for 80 s: 2 mm, past the least named 1 mm
+    let x = SensorFaultKind::Drift {
+        rate_si_per_s: 1.5e-3 / 60.0,
+        max_abs_si: f64::INFINITY,
+    };
+    let m = Misreading::of(&fault(Channel::X, x), &run, 25e6);
+    assert!((m.size - 2.0).abs() < 1e-9 && m.least_named == 1.0, "{m:?}");
+    // a stuck transducer has no size to compare
+    let m = Misreading::of(&fault(Channel::P1, SensorFaultKind::Stuck), &run, 25e6);
+    assert!(m.size.is_nan() && !m.past_least_named());
+}
+
 #[test]
 fn the_drawn_faults_are_in_the_stated_ranges_and_their_specs_parse_back() {
     let mut rng = Rng::new(7);
@@ -208,6 +259,12 @@ fn one_thesis_instance_is_commissioned_watched_and_scored() {
     assert_eq!(run("healthy")["sensor_events_before_onset"], 0, "{text}");
     assert_eq!(run("stuck")["named_right"], true, "{text}");
     assert_eq!(run("leak")["named_right"], true, "{text}");
+    // the drifts and the span error carry their misreading (kPa or mm), the others none
+    for kind in ["pressure-drift", "span", "position-drift"] {
+        let size = run(kind)["misreading"]["size"].as_f64().expect("a size");
+        assert!(size > 0.0, "{kind}: {text}");
+    }
+    assert!(run("stuck")["misreading"]["size"].is_null(), "{text}");
     assert!(std::fs::read_to_string(dir.join("sensor_faults.md"))
         .expect("md")
         .contains("| stuck | 1 |"));
