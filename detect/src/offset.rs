@@ -111,17 +111,18 @@ pub const OFFSET_CLEAN_FLOOR_SHARE: f64 = 0.5;
 /// Share of the rises' energy (1) a clean offset's fit leaves at most
 /// ([`OFFSET_CLEAN_FLOOR_SHARE`]).
 pub const OFFSET_CLEAN_UNEXPLAINED: f64 = 0.05;
-/// How long a clean offset's conditions hold before it is named, s
-/// ([`OFFSET_CLEAN_FLOOR_SHARE`]).
+/// How long a clean offset's conditions hold before it is named, s of
+/// samples read ([`OFFSET_CLEAN_FLOOR_SHARE`]).
 pub const OFFSET_CLEAN_CONFIRM_S: f64 = 10.0;
 /// Over the window, an offset whose part of the rises reaches this share of
 /// the smallest threshold (RMS) and fits better than any leak makes its
 /// rises no leak evidence (1).
 pub const OFFSET_MATERIAL_SHARE: f64 = 0.15;
-/// The conditions to name an offset hold this long first, s.
+/// The conditions to name an offset hold this long first, s of samples
+/// read (a gap, or estimates the detector may not read, do not count).
 pub const OFFSET_CONFIRM_S: f64 = 2.0;
 /// A named offset clears once its part of the rises has stayed below half
-/// the naming level this long, s.
+/// the naming level this long, s of samples read.
 pub const OFFSET_CLEAR_S: f64 = 10.0;
 /// Least weight an episode's fit needs before it can veto, s of samples.
 const EPISODE_MIN_S: f64 = 0.2;
@@ -190,11 +191,13 @@ pub struct OffsetWatch {
     episode: Option<Fit>,
     /// When the episode's rises were last high, s.
     episode_high_s: f64,
-    /// The channel meeting the naming conditions, and since when, s.
+    /// The channel meeting the naming conditions, and the time watched when
+    /// it began to, s (of `watched_s`: a stretch the watch was not fed, a gap
+    /// or a reset, does not count towards confirming it).
     candidate: Option<(usize, f64)>,
     /// Per channel: when its offset's part of the rises was last below a tenth of the threshold, s.
     low_since_s: [f64; 3],
-    /// Since when a named offset's part has been low, s.
+    /// The time watched when a named offset's part went low, s (of `watched_s`).
     fading_since_s: Option<f64>,
     standing: Option<StandingOffset>,
     /// The leak kinds' directions in (w1, w2) ([`leak_directions`]).
@@ -464,8 +467,8 @@ impl OffsetWatch {
         }
         if let Some(s) = self.standing {
             if self.window.channel_explained_rms_lpm(s.channel) < 0.5 * level {
-                let since = *self.fading_since_s.get_or_insert(t_s);
-                if t_s - since >= OFFSET_CLEAR_S {
+                let since = *self.fading_since_s.get_or_insert(self.watched_s);
+                if self.watched_s - since >= OFFSET_CLEAR_S {
                     self.standing = None;
                     self.fading_since_s = None;
                     self.candidate = None;
@@ -488,8 +491,8 @@ impl OffsetWatch {
         match (confirm_s, self.candidate) {
             (None, _) => self.candidate = None,
             (Some(_), _) if self.grew_past_a_drift(h, t_s) => self.candidate = None,
-            (Some(confirm_s), Some((j, t0))) if j == c => {
-                if t_s - t0 >= confirm_s {
+            (Some(confirm_s), Some((j, watched_at_s))) if j == c => {
+                if self.watched_s - watched_at_s >= confirm_s {
                     let coefficient = self.window.coefficient(h);
                     let s = StandingOffset {
                         channel: c,
@@ -515,7 +518,7 @@ impl OffsetWatch {
                     return Some(OffsetChange::Raised(s));
                 }
             }
-            (Some(_), _) => self.candidate = Some((c, t_s)),
+            (Some(_), _) => self.candidate = Some((c, self.watched_s)),
         }
         None
     }

@@ -34,6 +34,21 @@ fn drive_beside_a_leak(
     leak_named: bool,
     at: impl Fn(f64) -> Sample,
 ) -> (OffsetWatch, Option<OffsetChange>) {
+    let (watch, first) = drive_pausing(seconds, tau_s, leak_named, (f64::INFINITY, 0.0), at);
+    (watch, first.map(|(_, change)| change))
+}
+
+/// [`drive_beside_a_leak`] with a pause: from `pause.0` (s) for `pause.1`
+/// (s) the watch is not fed (a gap, or estimates it may not read), and after
+/// it the samples go on where they stopped, their times later by the pause.
+/// Returns the watch, and the first change of the named misreading with its time, s.
+fn drive_pausing(
+    seconds: f64,
+    tau_s: f64,
+    leak_named: bool,
+    pause: (f64, f64),
+    at: impl Fn(f64) -> Sample,
+) -> (OffsetWatch, Option<(f64, OffsetChange)>) {
     let dt = 0.01;
     let factors = crate::NOMINAL_INTERNAL_FACTORS;
     let mut watch = OffsetWatch::new(25e6);
@@ -41,8 +56,9 @@ fn drive_beside_a_leak(
     let mut first = None;
     let mut id = 1;
     for n in 0..(seconds / dt) as usize {
-        let t = n as f64 * dt;
-        let (q, responses, reading) = at(t);
+        let fed_t = n as f64 * dt;
+        let t = if fed_t < pause.0 { fed_t } else { fed_t + pause.1 };
+        let (q, responses, reading) = at(fed_t);
         let sizes = crate::signatures_with(q, factors);
         let share = if tau_s > 0.0 { dt / tau_s } else { 0.0 };
         for k in 0..3 {
@@ -53,7 +69,7 @@ fn drive_beside_a_leak(
         watch.leak_named(leak_named);
         let response = steady(responses, reading);
         let change = watch.on_rise(t, dt, rise, &response, reading, factors, [0.05; 3], &mut id);
-        first = first.or(change);
+        first = first.or(change.map(|c| (t, c)));
     }
     (watch, first)
 }
@@ -106,6 +122,31 @@ fn an_offset_is_named_from_rises_measured_from_a_following_baseline() {
         );
         assert!(watch.vetoes(), "tau {tau_s}");
     }
+}
+
+#[test]
+fn a_pause_in_the_samples_does_not_count_towards_naming() {
+    // p2 reading 0.5 MPa low, the rises measured from a fixed baseline
+    let offset_on_p2 = |t: f64| {
+        let [d1, d2] = cycle_responses(t);
+        ([-0.5 * d2[0], -0.5 * d2[1], -0.5 * d2[2]], [d1, d2], [0.0; 2])
+    };
+    let (_, named) = drive_pausing(60.0, 0.0, false, (f64::INFINITY, 0.0), offset_on_p2);
+    let Some((named_s, OffsetChange::Raised(_))) = named else {
+        panic!("no offset named: {named:?}");
+    };
+    // 3 s without samples, 1 s before it was named (its conditions had held
+    // for 1 of the OFFSET_CONFIRM_S): named after 1 s more of samples
+    let pause = (named_s - 1.0, 3.0);
+    let (_, later) = drive_pausing(60.0, 0.0, false, pause, offset_on_p2);
+    let Some((later_s, OffsetChange::Raised(s))) = later else {
+        panic!("no offset named across the pause: {later:?}");
+    };
+    assert_eq!(s.channel, 1, "{s:?}");
+    assert!(
+        (later_s - (named_s + pause.1)).abs() < 0.015,
+        "named at {later_s} s across the pause, at {named_s} s without it"
+    );
 }
 
 #[test]
