@@ -154,24 +154,7 @@ impl LeakSizeDetector {
         // hypothesis fits (the part of the flow mismatch it leaves unexplained).
         let rise: [f64; 3] = std::array::from_fn(|k| raw[k] - self.baseline_lpm[k]);
         let misfit = misfits_with(rise, self.internal_factors);
-        let sigma_q = [
-            e.sigma[7] / M3_S_PER_LPM,
-            e.sigma[8] / M3_S_PER_LPM,
-            e.sigma[9] / M3_S_PER_LPM,
-        ];
-        // σ of each hypothesis' size: the filter's marginal σ (correlations ignored)
-        // combined with the spread the healthy estimate showed in the warm-up (the
-        // filter alone is overconfident about model error).
-        // (√(a² + b²) directly: these are L/min, far from where `hypot`'s
-        // guard against overflow matters, and it costs five library calls a sample)
-        let root_sum_square = |a: f64, b: f64| (a * a + b * b).sqrt();
-        let sigma_filter = [
-            root_sum_square(sigma_q[0], sigma_q[2]),
-            root_sum_square(sigma_q[1], sigma_q[2]),
-            0.5 * (sigma_q[0].powi(2) + sigma_q[1].powi(2) + 4.0 * sigma_q[2].powi(2)).sqrt(),
-        ];
-        let sigma_lpm: [f64; 3] =
-            std::array::from_fn(|k| root_sum_square(sigma_filter[k], self.stats[k].std()));
+        let sigma_lpm = self.sigma_lpm(e);
         if self.active.is_none()
             && !blind
             && self.strong_since_s.is_none()
@@ -183,25 +166,7 @@ impl LeakSizeDetector {
         // against `naming_thr` (learned where that kind's test could alarm).
         let thr = self.floored(self.thresholds_now());
         if !invalid {
-            self.offsets
-                .leak_named(self.active.is_some_and(|a| a.kind != EventKind::Leak));
-            let change = self.offsets.on_rise(
-                e.t_s,
-                dt_s,
-                rise,
-                &crate::offset::MisreadingResponse {
-                    offset_lpm_per_mpa: e.offset_response_lpm_per_mpa,
-                    span_lpm: e.span_response_lpm,
-                    position_lpm_per_mm: e.position_offset_response_lpm_per_mm,
-                },
-                [e.measured[1] * 1e-6, e.measured[2] * 1e-6],
-                self.internal_factors,
-                thr,
-                &mut self.next_id,
-            );
-            if let Some(change) = change {
-                self.sensor_event = Some(crate::offset::offset_event(change, e.t_s, "leak-size"));
-            }
+            self.watch_offsets(e, dt_s, rise, thr);
         }
         // Rises an offset on a transducer explains better than any leak are no leak evidence.
         let offset_like = misreading || self.offsets.vetoes();
@@ -213,19 +178,7 @@ impl LeakSizeDetector {
         };
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / naming_thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.
-        let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
-        let drift_misfit = misfits_with(drift, self.internal_factors);
-        let slow_lead = (0..3)
-            .map(|k| (k, (drift[k] - drift_misfit[k]) / self.cfg.slow_leak_lpm.max(1e-9)))
-            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 && slow_lead.1 > 1.0 && !offset_like {
-            match self.slow_since_s {
-                Some((j, _)) if j == slow_lead.0 => {}
-                _ => self.slow_since_s = Some((slow_lead.0, e.t_s)),
-            }
-        } else {
-            self.slow_since_s = None;
-        }
+        let slow_lead = self.follow_slow_lead(e.t_s, offset_like);
         let (lead, best) = (0..3)
             .map(|k| (k, score[k]))
             .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
@@ -287,5 +240,70 @@ impl LeakSizeDetector {
             strong,
             slow_lead,
         }
+    }
+
+    /// σ of each hypothesis' size on estimate `e`, L/min: the filter's marginal
+    /// σ (correlations ignored) combined with the spread the healthy estimate
+    /// showed in the warm-up (the filter alone is overconfident about model error).
+    fn sigma_lpm(&self, e: &Estimate) -> [f64; 3] {
+        let sigma_q = [
+            e.sigma[7] / M3_S_PER_LPM,
+            e.sigma[8] / M3_S_PER_LPM,
+            e.sigma[9] / M3_S_PER_LPM,
+        ];
+        // (√(a² + b²) directly: these are L/min, far from where `hypot`'s
+        // guard against overflow matters, and it costs five library calls a sample)
+        let root_sum_square = |a: f64, b: f64| (a * a + b * b).sqrt();
+        let sigma_filter = [
+            root_sum_square(sigma_q[0], sigma_q[2]),
+            root_sum_square(sigma_q[1], sigma_q[2]),
+            0.5 * (sigma_q[0].powi(2) + sigma_q[1].powi(2) + 4.0 * sigma_q[2].powi(2)).sqrt(),
+        ];
+        std::array::from_fn(|k| root_sum_square(sigma_filter[k], self.stats[k].std()))
+    }
+
+    /// Feeds the offset watch one sample's rises `rise` (L/min at p_s/2) on
+    /// estimate `e`, `dt_s` (s) after the last, against thresholds `thr`
+    /// (L/min); keeps the sensor event of a change of the named offset.
+    fn watch_offsets(&mut self, e: &Estimate, dt_s: f64, rise: [f64; 3], thr: [f64; 3]) {
+        self.offsets
+            .leak_named(self.active.is_some_and(|a| a.kind != EventKind::Leak));
+        let change = self.offsets.on_rise(
+            e.t_s,
+            dt_s,
+            rise,
+            &crate::offset::MisreadingResponse {
+                offset_lpm_per_mpa: e.offset_response_lpm_per_mpa,
+                span_lpm: e.span_response_lpm,
+                position_lpm_per_mm: e.position_offset_response_lpm_per_mm,
+            },
+            [e.measured[1] * 1e-6, e.measured[2] * 1e-6],
+            self.internal_factors,
+            thr,
+            &mut self.next_id,
+        );
+        if let Some(change) = change {
+            self.sensor_event = Some(crate::offset::offset_event(change, e.t_s, "leak-size"));
+        }
+    }
+
+    /// The kind whose baseline drift since the warm-up leads against
+    /// `slow_leak_lpm`, and by how much (1); at `t_s` (s) it starts or ends
+    /// the time that kind has led (none while `offset_like` or an event stands).
+    fn follow_slow_lead(&mut self, t_s: f64, offset_like: bool) -> (usize, f64) {
+        let drift: [f64; 3] = std::array::from_fn(|k| self.baseline_lpm[k] - self.stats[k].mean);
+        let drift_misfit = misfits_with(drift, self.internal_factors);
+        let slow_lead = (0..3)
+            .map(|k| (k, (drift[k] - drift_misfit[k]) / self.cfg.slow_leak_lpm.max(1e-9)))
+            .fold((0, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+        if self.active.is_none() && self.cfg.baseline_tau_s > 0.0 && slow_lead.1 > 1.0 && !offset_like {
+            match self.slow_since_s {
+                Some((j, _)) if j == slow_lead.0 => {}
+                _ => self.slow_since_s = Some((slow_lead.0, t_s)),
+            }
+        } else {
+            self.slow_since_s = None;
+        }
+        slow_lead
     }
 }
