@@ -394,7 +394,7 @@ pub(crate) enum BenchCommand {
     /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
     Detection(bench::commands::DetectionBenchArgs),
     /// Transducer faults on rig instances, watched by each instance's commissioned chain
-    /// (docs/plant.md#sensor-faults): per instance a healthy twin, a pressure drift, a span
+    /// (docs/sensor-faults.md): per instance a healthy twin, a pressure drift, a span
     /// error, a stuck and a spiking transducer, a position drift and a 0.25 L/min leak, each
     /// scored for leak events and for the sensor event on the faulty channel.
     SensorFaults(bench::commands::sensor_faults::SensorFaultsArgs),
