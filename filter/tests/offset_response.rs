@@ -77,6 +77,23 @@ impl Pair {
         (err2 / pred2).sqrt()
     }
 
+    /// What is left of the change when it is fitted with one coefficient on
+    /// `response(estimate, k)` (least squares over each sample's three sizes
+    /// from 10 s on), as a share of the change's energy (1).
+    fn left_by_fit(&self, response: impl Fn(&Estimate, usize) -> f64) -> f64 {
+        let (mut dr, mut dd, mut rr) = (0.0, 0.0, 0.0);
+        for i in 10_000..self.base.len() {
+            for k in 0..3 {
+                let d = response(&self.estimates[i], k);
+                let y = self.moved[i][k] - self.base[i][k];
+                dr += d * y;
+                dd += d * d;
+                rr += y * y;
+            }
+        }
+        1.0 - dr * dr / (dd * rr)
+    }
+
     /// [`Pair::miss`], asserted under 10 %.
     fn assert_predicted(&self, predicted: impl Fn(&Estimate, usize) -> f64) -> f64 {
         let rel = self.miss(predicted);
@@ -97,6 +114,28 @@ fn an_offset_moves_the_leak_sizes_as_the_response_predicts() {
     for ch in [1, 2] {
         let pair = Pair::new(&samples, ch, |p| p + offset_pa);
         pair.assert_predicted(|e, k| e.offset_response_lpm_per_mpa[ch - 1][k] * offset_pa * 1e-6);
+    }
+}
+
+#[test]
+fn an_offset_fits_its_own_channels_response_and_not_the_others() {
+    // The offset watch tells p1 from p2 by these fits. −0.2 MPa: its own
+    // channel's response leaves 0.5 % (p1) and 0.1 % (p2) of the change, the
+    // other's 55 %. At −0.5 MPa p1's response bends (5 % left; p2's 1 %).
+    let samples = recording();
+    for offset_pa in [-2.0e5, -5.0e5] {
+        for ch in [1, 2] {
+            let pair = Pair::new(&samples, ch, |p| p + offset_pa);
+            let own = pair.left_by_fit(|e, k| e.offset_response_lpm_per_mpa[ch - 1][k]);
+            let other = pair.left_by_fit(|e, k| e.offset_response_lpm_per_mpa[2 - ch][k]);
+            assert!(
+                own < 0.1 && other > 0.4,
+                "p{ch} read {} kPa off: its own response's fit leaves {:.1} %, the other's {:.1} %",
+                offset_pa * 1e-3,
+                100.0 * own,
+                100.0 * other
+            );
+        }
     }
 }
 
