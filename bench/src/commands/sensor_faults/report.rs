@@ -216,11 +216,11 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
         } else {
             format!("{} ({pct:.0} %)", k.named_right)
         };
-        let past = if k.past_least_named > 0
-            || matches!(
-                k.kind,
-                RunKind::PressureDrift | RunKind::Span | RunKind::PositionDrift
-            ) {
+        // (only drifts and span errors have a misreading to compare)
+        let past = if matches!(
+            k.kind,
+            RunKind::PressureDrift | RunKind::Span | RunKind::PositionDrift
+        ) {
             format!("{}, {}", k.past_least_named, k.past_least_named_right)
         } else {
             "-".to_string()
