@@ -46,8 +46,8 @@ use crate::{EventKind, LeakEvent, Phase};
 mod fit;
 
 use fit::{
-    channel_of, is_position, is_span, leak_directions, swing_of, without_reverse_internal, Fit, AS_GIVEN,
-    HYPOTHESES,
+    channel_of, is_position, is_span, leak_directions, swing_of, without_reverse_internal, BestOffset, Fit,
+    AS_GIVEN, HYPOTHESES,
 };
 
 /// Time constant of the window the offsets are named over, s.
@@ -186,7 +186,7 @@ pub struct OffsetWatch {
     window: Fit,
     /// The window's best misreading and what its fit leaves
     /// ([`Fit::best_offset`] in all forms), as of the last sample read.
-    window_best: (usize, f64),
+    window_best: BestOffset,
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
     /// When the episode's rises were last high, s.
@@ -237,7 +237,11 @@ impl Default for OffsetWatch {
     fn default() -> Self {
         OffsetWatch {
             window: Fit::default(),
-            window_best: (0, 0.0),
+            window_best: BestOffset {
+                h: 0,
+                left: 0.0,
+                leak_left: 0.0,
+            },
             episode: None,
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
@@ -304,8 +308,7 @@ impl OffsetWatch {
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
             f.w >= EPISODE_MIN_S && {
-                let (h, left) = f.best_offset(false, &self.directions);
-                f.offset_fits_better(h, left, &self.directions, OFFSET_FIT_RATIO)
+                f.offset_fits_better(&f.best_offset(false, &self.directions), OFFSET_FIT_RATIO)
             }
         });
         episode || self.window_offset_fits(OFFSET_FIT_RATIO)
@@ -315,10 +318,10 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
     /// less than `ratio` times what the best leak's leaves.
     fn window_offset_fits(&self, ratio: f64) -> bool {
-        let (h, left) = self.window_best;
+        let best = &self.window_best;
         self.watched_s >= OFFSET_WINDOW_S
-            && self.window.explained_rms_lpm(h) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self.window.offset_fits_better(h, left, &self.directions, ratio)
+            && self.window.explained_rms_lpm(best.h) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
+            && self.window.offset_fits_better(best, ratio)
     }
 
     /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
@@ -479,11 +482,11 @@ impl OffsetWatch {
             }
             return None;
         }
-        let (h, left) = self.window_best;
+        let BestOffset { h, left, .. } = self.window_best;
         let named = self.watched_s >= OFFSET_WINDOW_S
             && self
                 .window
-                .offset_fits_better(h, left, &self.directions, OFFSET_FIT_RATIO)
+                .offset_fits_better(&self.window_best, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
             && self.window.explained_rms_lpm(h) > level;
         let confirm_s = if named { self.confirm_s(h, left) } else { None };

@@ -126,6 +126,19 @@ pub(crate) struct Fit {
     pub(crate) age: (f64, f64, [f64; 2]),
 }
 
+/// The misreading that explains most ([`Fit::best_offset`]) and what the
+/// leaks leave beside it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BestOffset {
+    /// Its hypothesis.
+    pub(crate) h: usize,
+    /// The energy its fit leaves unexplained, (L/min)²·s.
+    pub(crate) left: f64,
+    /// The energy the best leak's fit leaves, (L/min)²·s: a growing leak's
+    /// for a drifting offset ([`is_drift`]), a steady leak's for the others.
+    pub(crate) leak_left: f64,
+}
+
 impl Fit {
     /// Adds a sample of weight `dt_s` after decaying the past by `keep` (1).
     pub(crate) fn add(&mut self, keep: f64, dt_s: f64, rise: [f64; 2], response: &[[f64; 2]; HYPOTHESES]) {
@@ -237,10 +250,10 @@ impl Fit {
     /// no episode's step).
     /// Between the pressures' standing misreadings and their drifting offsets
     /// it takes the one whose fit leaves the smaller share of what its leak
-    /// leaves ([`Fit::offset_fits_better`]; the leaks of kinds `directions`):
+    /// leaves ([`BestOffset::leak_left`]; the leaks of kinds `directions`):
     /// a drift fits everything a standing offset fits, and as much more as
     /// its rate allows, so it is judged against a leak with a rate too.
-    pub(crate) fn best_offset(&self, all_forms: bool, directions: &[[f64; 2]; 3]) -> (usize, f64) {
+    pub(crate) fn best_offset(&self, all_forms: bool, directions: &[[f64; 2]; 3]) -> BestOffset {
         let left: [f64; ALL_HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
         let best = |range: std::ops::Range<usize>| {
             range
@@ -251,9 +264,11 @@ impl Fit {
         };
         let pressure = best(0..FIRST_POSITION_HYPOTHESIS);
         let drifting = best(FIRST_DRIFT_HYPOTHESIS..ALL_HYPOTHESES);
-        let pressure = if drifting.1 * self.unexplained_by_leak(directions)
-            < pressure.1 * self.unexplained_by_growing_leak(directions)
-        {
+        let (steady, growing) = (
+            self.unexplained_by_leak(directions),
+            self.unexplained_by_growing_leak(directions),
+        );
+        let pressure = if drifting.1 * steady < pressure.1 * growing {
             drifting
         } else {
             pressure
@@ -268,10 +283,15 @@ impl Fit {
         } else {
             (position.0, f64::INFINITY)
         };
-        if position.1 < POSITION_FIT_RATIO * pressure.1 {
+        let (h, left) = if position.1 < POSITION_FIT_RATIO * pressure.1 {
             position
         } else {
             pressure
+        };
+        BestOffset {
+            h,
+            left,
+            leak_left: if is_drift(h) { growing } else { steady },
         }
     }
 
@@ -297,23 +317,10 @@ impl Fit {
         self.energy - best
     }
 
-    /// Whether the misreading of hypothesis `h`, its fit leaving `left`
-    /// ((L/min)²·s, of [`Fit::best_offset`]), leaves less than `ratio` times
-    /// what the best leak's fit leaves unexplained: a steady leak's, or a
-    /// growing leak's for a drifting offset ([`is_drift`]).
-    pub(crate) fn offset_fits_better(
-        &self,
-        h: usize,
-        left: f64,
-        directions: &[[f64; 2]; 3],
-        ratio: f64,
-    ) -> bool {
-        let leak_left = if is_drift(h) {
-            self.unexplained_by_growing_leak(directions)
-        } else {
-            self.unexplained_by_leak(directions)
-        };
-        self.energy > 0.0 && left < ratio * leak_left
+    /// Whether the best misreading `best` (of [`Fit::best_offset`] on this
+    /// fit) leaves less than `ratio` times what the best leak's fit leaves.
+    pub(crate) fn offset_fits_better(&self, best: &BestOffset, ratio: f64) -> bool {
+        self.energy > 0.0 && best.left < ratio * best.leak_left
     }
 
     /// RMS of the rises that the offset of hypothesis `c` explains, L/min.

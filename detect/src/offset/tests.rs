@@ -305,10 +305,12 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
         let rise = [0.03 * span[0], 0.03 * span[1]];
         fit.add((-0.01f64 / OFFSET_WINDOW_S).exp(), 0.01, rise, &h);
     }
-    let (all, left) = fit.best_offset(true, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+    let fit::BestOffset { h: all, left, .. } =
+        fit.best_offset(true, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(all, 4, "the span on p1 fits best");
     assert!(left < 1e-6 * fit.energy, "{left} of {}", fit.energy);
-    let (given, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+    let fit::BestOffset { h: given, left, .. } =
+        fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert!(given < 2 || is_drift(given), "hypothesis {given}");
     assert!(left > 0.1 * fit.energy, "{left} of {}", fit.energy);
 }
@@ -431,7 +433,8 @@ fn a_drifting_offset_is_fitted_with_its_rate() {
         swing,
         |t| [0.05, -0.4 - 0.2 * (t / 1.3).sin()],
     );
-    let (h, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+    let fit::BestOffset { h, left, .. } =
+        fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(h, FIRST_DRIFT_HYPOTHESIS, "the drifting offset on p1");
     assert_eq!(channel_of(h), 0);
     assert!(left < 1e-9 * fit.energy, "{left} of {}", fit.energy);
@@ -456,8 +459,8 @@ fn a_leaks_onset_is_no_drifting_offset() {
     let drift = FIRST_DRIFT_HYPOTHESIS;
     assert_eq!(fit.drift_rate_mpa_per_s(drift), -MOST_DRIFT_MPA_PER_S);
     let directions = leak_directions(crate::NOMINAL_INTERNAL_FACTORS);
-    let (h, left) = fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
-    assert!(!fit.offset_fits_better(h, left, &directions, OFFSET_FIT_RATIO));
+    let best = fit.best_offset(false, &directions);
+    assert!(!fit.offset_fits_better(&best, OFFSET_FIT_RATIO));
 }
 
 /// The rises of an offset on p2 of `b_mpa(t)` with p2's response swinging
@@ -524,9 +527,10 @@ fn a_leak_opening_late_in_the_window_is_no_drifting_offset() {
         left < OFFSET_FIT_RATIO * fit.unexplained_by_leak(&directions),
         "{left}"
     );
-    let (h, left) = fit.best_offset(false, &directions);
+    let best = fit.best_offset(false, &directions);
     assert!(
-        !fit.offset_fits_better(h, left, &directions, OFFSET_FIT_RATIO),
-        "hypothesis {h}"
+        !fit.offset_fits_better(&best, OFFSET_FIT_RATIO),
+        "hypothesis {}",
+        best.h
     );
 }
