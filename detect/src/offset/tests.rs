@@ -534,3 +534,64 @@ fn a_leak_opening_late_in_the_window_is_no_drifting_offset() {
         best.h
     );
 }
+
+/// Per second from 8 to 120 s of an offset of −0.3 MPa on p2 from
+/// `offset_from_s` (s) and an ext1 leak opening at `leak_from_s` (s) and
+/// growing to 0.4 L/min over `ramp_s` (s): (s, the offset fits better by
+/// [`OFFSET_FIT_RATIO`], it could explain the rises, the window vetoes).
+fn window_veto_states(offset_from_s: f64, leak_from_s: f64, ramp_s: f64) -> Vec<(u32, bool, bool, bool)> {
+    let at = |t: f64| {
+        let [d1, d2] = cycle_responses(t);
+        let b = if t >= offset_from_s { -0.3 } else { 0.0 };
+        let leak = 0.4 * ((t - leak_from_s) / ramp_s).clamp(0.0, 1.0);
+        ([b * d2[0] + leak, b * d2[1], b * d2[2]], [d1, d2], [0.0; 2])
+    };
+    (8..=120)
+        .map(|s| {
+            let (watch, _) = drive(f64::from(s), 0.0, at);
+            let fits = watch.window_offset_fits(OFFSET_FIT_RATIO);
+            (
+                s,
+                fits,
+                watch.could_explain(),
+                watch.window_veto_since_s.is_some(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_window_veto_stands_until_a_leak_fits_clearly_better() {
+    // from the start, an offset on p2; a leak opens at 30 s and grows
+    // over 60 s: for a while it fits about as well as the offset (the
+    // veto stands), then clearly better (it lifts)
+    let states = window_veto_states(0.0, 30.0, 60.0);
+    assert!(states[12].3, "no veto before the leak: {:?}", states[12]);
+    for &(s, fits, could, vetoes) in &states {
+        assert!(!fits || vetoes, "at {s} s the offset fits better and no veto");
+        assert!(
+            !vetoes || fits || could,
+            "at {s} s a veto the offset cannot explain"
+        );
+    }
+    let held = states
+        .iter()
+        .filter(|&&(_, fits, _, vetoes)| vetoes && !fits)
+        .count();
+    assert!(
+        held >= 10,
+        "the veto stood past the offset's clear fit for {held} s"
+    );
+    assert!(
+        !states.last().is_some_and(|st| st.3),
+        "the leak never lifted the veto"
+    );
+    // the offset from 5 s, a leak from 15 s that grows over 5 s: the veto
+    // has stood less than a window when the offset no longer fits better,
+    // and lifts at once
+    let states = window_veto_states(5.0, 15.0, 5.0);
+    assert!(states.iter().any(|st| st.1), "the offset never vetoed");
+    for &(s, fits, _, vetoes) in &states {
+        assert_eq!(fits, vetoes, "at {s} s");
+    }
+}
