@@ -221,9 +221,6 @@ pub struct OffsetWatch {
     baseline_step: f64,
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]).
     leak_named: bool,
-    /// Since when (s of `watched_s`) the window's rises have been no leak
-    /// evidence ([`OffsetWatch::vetoes`]); None while they are.
-    window_veto_since_s: Option<f64>,
 }
 
 impl OffsetWatch {
@@ -260,7 +257,6 @@ impl Default for OffsetWatch {
             reading_mpa: [0.0; 2],
             baseline_step: 0.0,
             leak_named: false,
-            window_veto_since_s: None,
         }
     }
 }
@@ -305,12 +301,6 @@ impl OffsetWatch {
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
-    /// A window's veto that has stood for [`OFFSET_WINDOW_S`] stands while its
-    /// offset could still explain the rises ([`OffsetWatch::could_explain`]):
-    /// a drifting transducer's fit moves about [`OFFSET_FIT_RATIO`] as the
-    /// cycle moves the pressures, and a leak's fit must then be clearly the
-    /// better to lift it. A healthy rig's rises fit an offset that well for
-    /// seconds, not for a window.
     /// The episode's fit takes p1's and p2's offsets' responses as given alone:
     /// over its first seconds a leak's step fits some swing, or a span error's
     /// response under a cycle that moves the pressure, as well as it fits the
@@ -321,19 +311,7 @@ impl OffsetWatch {
                 f.offset_fits_better(&f.best_offset(false, &self.directions), OFFSET_FIT_RATIO)
             }
         });
-        episode || self.window_veto_since_s.is_some()
-    }
-
-    /// Follows the window's veto ([`OffsetWatch::vetoes`]) at this sample.
-    fn follow_window_veto(&mut self) {
-        let held = self
-            .window_veto_since_s
-            .is_some_and(|since| self.watched_s - since >= OFFSET_WINDOW_S && self.could_explain());
-        self.window_veto_since_s = if self.window_offset_fits(OFFSET_FIT_RATIO) || held {
-            Some(self.window_veto_since_s.unwrap_or(self.watched_s))
-        } else {
-            None
-        };
+        episode || self.window_offset_fits(OFFSET_FIT_RATIO)
     }
 
     /// Whether, over the window, the best offset's part of the rises is past
@@ -484,7 +462,6 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
-        self.follow_window_veto();
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
