@@ -18,6 +18,37 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         return;
     }
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let view = run_a_leak_with_the_live_view();
+    let c = &view.client;
+    assert_eq!(c["subprotocol"], "foxglove.websocket.v1");
+    the_live_view_and_the_log_share_one_time_base(&view);
+    assert_eq!(c["server_info"]["metadata"]["rig"], "lv1");
+    assert_eq!(c["bad"], 0);
+    every_channel_is_advertised_in_range_and_at_its_rate(&view);
+    the_leak_is_in_the_estimates_the_health_and_the_events(&view);
+    the_live_views_log_counts_the_frames_and_its_cpu(&view.out);
+}
+
+/// A run of `leakwatch run --live-view` read by the Foxglove client.
+struct LiveViewRun {
+    /// The scratch folder that holds the run's config and output (removed
+    /// when the run is dropped).
+    _dir: scratch::ScratchDir,
+    /// The run's output folder.
+    out: std::path::PathBuf,
+    /// The run's summary (stdout).
+    summary: String,
+    /// The client's report (examples/liveview/foxglove_client.py's JSON).
+    client: Value,
+    /// The wall clock before the run started and after it ended, ns.
+    wall_ns: (u64, u64),
+}
+
+/// Runs 16 s of rig `lv1` with a 1 L/min ext1 leak from 10 s and its live
+/// view, read for up to 40 s by the Foxglove client on the v1 protocol's
+/// earlier name; checks both succeeded and the summary names every file
+/// the run left beside its log.
+fn run_a_leak_with_the_live_view() -> LiveViewRun {
     let dir = tmpdir("view");
     let cfg = short_warmup_config_with(&dir, "");
     let out = dir.join("run");
@@ -74,10 +105,21 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         "{stdout}\n{}",
         String::from_utf8_lossy(&client.stderr)
     );
-    let c: Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(c["subprotocol"], "foxglove.websocket.v1");
-    // one time base: the live view's time of a frame is the log's, to the ns,
-    // and the log's times are the wall clock of the run
+    let client: Value = serde_json::from_str(&stdout).unwrap();
+    LiveViewRun {
+        _dir: dir,
+        out,
+        summary: summary.into_owned(),
+        client,
+        wall_ns: (wall_before, wall_after),
+    }
+}
+
+/// The live view's time of a frame is the log's, to the ns, and the log's
+/// times are the wall clock of the run.
+fn the_live_view_and_the_log_share_one_time_base(view: &LiveViewRun) {
+    let (c, out) = (&view.client, &view.out);
+    let (wall_before, wall_after) = view.wall_ns;
     let log = recorder::LogReader::open(&out.join("run.mcap"))
         .unwrap()
         .read()
@@ -110,8 +152,13 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         wall_before < first && last < wall_after,
         "{wall_before} < {first}..{last} < {wall_after}"
     );
-    assert_eq!(c["server_info"]["metadata"]["rig"], "lv1");
-    assert_eq!(c["bad"], 0);
+}
+
+/// The layout's channels are advertised; each channel is JSON with a JSON
+/// Schema and carried a message; pressures and position in their physical
+/// ranges; frames and estimates at 50 Hz of rig time, health at 10 Hz.
+fn every_channel_is_advertised_in_range_and_at_its_rate(view: &LiveViewRun) {
+    let (c, out, summary) = (&view.client, &view.out, &view.summary);
     // the Foxglove layout, named at start, shows only channels the live view advertised
     let layout_path = out.join(live::layout::LAYOUT_FILE_NAME);
     assert!(
@@ -137,10 +184,7 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
             c["counts"]
         );
     }
-    let range = |t: &str, f: &str| {
-        let r = &c["ranges"][format!("/leakwatch/lv1/{t}")][f];
-        (r[0].as_f64().unwrap(), r[1].as_f64().unwrap())
-    };
+    let range = |t: &str, f: &str| range_of(c, t, f);
     for (t, f) in [
         ("frames", "p1_pa"),
         ("frames", "p2_pa"),
@@ -172,7 +216,13 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
         (h1 - h0 + 1.0 - nh).abs() < 2.0 && nh > 100.0,
         "health: {nh} of seq {h0}..{h1}"
     );
-    // the leak: in the estimates, in the health, and every raised leak event of the run
+}
+
+/// The leak in the estimates, in the health (above its threshold), and every
+/// raised leak event of the run's events.json among the live view's events.
+fn the_leak_is_in_the_estimates_the_health_and_the_events(view: &LiveViewRun) {
+    let (c, out) = (&view.client, &view.out);
+    let range = |t: &str, f: &str| range_of(c, t, f);
     let last = &c["last"]["/leakwatch/lv1/estimates"];
     let ext1 = last["leak_ext1_lpm"].as_f64().unwrap();
     assert!(ext1 > 0.5 && ext1 < 3.0, "last ext1 estimate {ext1} L/min");
@@ -223,7 +273,18 @@ fn the_live_view_serves_a_running_rig_to_a_foxglove_client() {
     for r in &raised {
         assert!(live.contains(r), "{r:?} not in the live view's events {live:?}");
     }
-    // the live view's own account: what it sent, and its CPU
+}
+
+/// The least and the largest value of field `f` the client read on rig
+/// lv1's topic `t`.
+fn range_of(c: &Value, t: &str, f: &str) -> (f64, f64) {
+    let r = &c["ranges"][format!("/leakwatch/lv1/{t}")][f];
+    (r[0].as_f64().unwrap(), r[1].as_f64().unwrap())
+}
+
+/// The live view's own account in liveview.log: the frames it received, and
+/// its CPU under 10 % of a core.
+fn the_live_views_log_counts_the_frames_and_its_cpu(out: &std::path::Path) {
     let log = std::fs::read_to_string(out.join("liveview.log")).unwrap();
     let cpu_pct: f64 = log
         .split(" % of one core")
