@@ -51,7 +51,7 @@ impl Misreading {
             SensorFaultKind::Span { gain_error, ramp_s } if pressure => {
                 // (the readings carry the error: read/(1+g) is the pressure, g times it the misreading)
                 let grown_s = fault.onset_s + ramp_s;
-                let read: Vec<f64> = samples
+                let (sum, n) = samples
                     .iter()
                     .filter(|s| s.t_s >= grown_s)
                     .map(|s| {
@@ -62,8 +62,9 @@ impl Misreading {
                         }
                     })
                     .filter(|p| p.is_finite())
-                    .collect();
-                let mean = read.iter().sum::<f64>() / read.len() as f64;
+                    .fold((0.0, 0.0), |(sum, n), p| (sum + p, n + 1.0));
+                // (NaN where no reading came after the ramp)
+                let mean = sum / n;
                 (gain_error / (1.0 + gain_error) * mean).abs()
             }
             _ => f64::NAN,
