@@ -43,6 +43,8 @@ pub fn example(single_rod: bool) -> Datasheet {
             noise_pa: 8.0e3,
             location: TransducerLocation::Manifold,
             response_time_s: 2.0e-3,
+            zero_offset_max_pa: 50.0e3,
+            span_error_max_fraction: 0.005,
         },
         position_sensor: PositionSensorSheet {
             resolution_m: 2.0e-6,
@@ -274,6 +276,16 @@ fn transducer_lines(t: &TransducerSheet) -> Vec<Line> {
             "response_time_s",
             num(t.response_time_s),
             "10-90 % response time, the datasheet's maximum, s (0: not given)",
+        ),
+        (
+            "zero_offset_max_pa",
+            num(t.zero_offset_max_pa),
+            "each one's zero offset, the datasheet's maximum, Pa (0: not given)",
+        ),
+        (
+            "span_error_max_fraction",
+            num(t.span_error_max_fraction),
+            "each one's span error, the datasheet's maximum (0.005: 0.5 %; 0: not given)",
         ),
     ]
 }

@@ -1,5 +1,5 @@
 //! Identifies what a datasheet does not pin down, from a healthy recording of
-//! a rig's normal operation (docs/plant.md, "Identification"): the valve's
+//! a rig's normal operation (docs/identification.md): the valve's
 //! flow gain per port, its null leakage, the spool's null bias and the oil's
 //! effective stiffness with the dead volumes.
 //!
@@ -24,14 +24,18 @@
 //!
 //! The standard deviations are the least-squares ones. They assume white
 //! window errors, so they are a floor: model errors that persist over many
-//! windows (supply sag, a line drop) bias a value by more than its σ.
+//! windows (supply sag, a line drop) bias a value by more than its σ. The
+//! transducers' zero offsets and span errors move the null leakage by more
+//! than its σ too: [`null_leakage_tolerance`] measures by how much.
 
 #![forbid(unsafe_code)]
 
 mod fit;
 mod mechanics;
+mod tolerance;
 
 pub use mechanics::{identify_mechanics, Mechanics, HALF_WINDOW, MIN_EQUATIONS, SLIDING_M_S};
+pub use tolerance::{null_leakage_tolerance, NullLeakageTolerance, TransducerTolerance};
 
 use model::{ActuatorParams, Sample};
 

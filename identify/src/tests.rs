@@ -438,3 +438,5 @@ fn the_lines_drop_is_fitted_and_leaves_the_null_leakage_right() {
         id.line_resistance_pa_s_per_m3
     );
 }
+
+mod tolerance;

@@ -240,6 +240,8 @@ impl Datasheet {
                 noise_pa: 8.0e3,
                 location: TransducerLocation::CylinderPorts,
                 response_time_s: 0.0,
+                zero_offset_max_pa: 50.0e3,
+                span_error_max_fraction: 0.005,
             },
             position_sensor: PositionSensorSheet {
                 resolution_m: 2.0e-6,
@@ -288,6 +290,8 @@ mod tests {
                 noise_pa: 8.0e3,
                 location: TransducerLocation::CylinderPorts,
                 response_time_s: 0.0,
+                zero_offset_max_pa: 50.0e3,
+                span_error_max_fraction: 0.005,
             },
             position_sensor: PositionSensorSheet {
                 resolution_m: 2.0e-6,

@@ -51,6 +51,8 @@ impl Datasheet {
                 noise_pa: 8.0e3,
                 location: TransducerLocation::Manifold,
                 response_time_s: 0.0,
+                zero_offset_max_pa: 50.0e3,
+                span_error_max_fraction: 0.005,
             },
             position_sensor: PositionSensorSheet {
                 resolution_m: 2.0e-6,

@@ -25,6 +25,11 @@ use config::Config;
 
 pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
 
+mod balances;
+#[cfg(test)]
+use balances::lag_against_datasheet;
+use balances::{flow_balance, force_balance};
+
 /// Reads `input` into the rows [`identify::identify`] takes.
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
@@ -50,20 +55,6 @@ fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
     Ok(rows)
 }
 
-/// What an identified transducer lag `e` (s) says against the longest lag the
-/// datasheet's response time allows, `bound_s` (s; `None`: not given): a lag
-/// beyond it by more than 2 σ holds another delay.
-fn lag_against_datasheet(e: &identify::Estimate, bound_s: Option<f64>) -> String {
-    match bound_s {
-        None => String::new(),
-        Some(b) if e.value > b + 2.0 * e.sigma => format!(
-            "; above the {:.2} ms the datasheet's response time allows: another delay is in it (the hose, the DAQ's timing)",
-            b * 1e3
-        ),
-        Some(b) => format!("; within the {:.2} ms the datasheet's response time allows", b * 1e3),
-    }
-}
-
 /// What `identify` finds on one healthy recording: the flow balance's
 /// parameters, and the rod's mass and friction (or why not).
 pub struct Found {
@@ -71,6 +62,10 @@ pub struct Found {
     pub rig: identify::Identification,
     /// Mass and friction ([`identify::identify_mechanics`]), or why they were not identified.
     pub mechanics: Result<identify::Mechanics, String>,
+    /// How far the transducers' zero offsets and span errors the datasheet
+    /// allows move the null leakage ([`identify::null_leakage_tolerance`]):
+    /// `None` without them in `[datasheet.pressure_transducers]`, or without a null leakage.
+    pub null_leakage_tolerance: Option<identify::NullLeakageTolerance>,
 }
 
 /// The identification of the rig on the healthy recording `input` against
@@ -86,7 +81,23 @@ pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
         .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))?;
     let mechanics = identify::identify_mechanics(&cfg.model, dt, &rows)
         .map_err(|e| format!("{}: cannot identify the rod's mechanics: {e}", input.display()));
-    Ok(Found { rig, mechanics })
+    let null_leakage_tolerance = transducer_tolerance(cfg)
+        .and_then(|tol| identify::null_leakage_tolerance(&cfg.model, dt, &rows, noise, &rig, tol));
+    Ok(Found {
+        rig,
+        mechanics,
+        null_leakage_tolerance,
+    })
+}
+
+/// The pressure transducers' tolerances `cfg`'s datasheet gives, if any.
+fn transducer_tolerance(cfg: &Config) -> Option<identify::TransducerTolerance> {
+    let t = cfg.datasheet.as_ref()?.pressure_transducers;
+    let tol = identify::TransducerTolerance {
+        zero_offset_max_pa: t.zero_offset_max_pa,
+        span_error_max_fraction: t.span_error_max_fraction,
+    };
+    (!tol.is_unknown()).then_some(tol)
 }
 
 /// Identifies the valve's flow gains, null leakage and the oil's stiffness on
@@ -100,9 +111,10 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     let Found {
         rig: id,
         mechanics: found_mechanics,
+        null_leakage_tolerance,
     } = identify_on(input, cfg)?;
     let mut said = Identified::default();
-    flow_balance(&id, cfg, &mut said);
+    flow_balance(&id, null_leakage_tolerance, cfg, &mut said);
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
     match found_mechanics {
@@ -116,162 +128,6 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
         eprintln!("{line}");
     }
     Ok((out, said))
-}
-
-/// What the flow balance identified (`id`) against the model of `cfg`, and
-/// what the recording cannot tell apart.
-fn flow_balance(id: &identify::Identification, cfg: &Config, out: &mut Identified) {
-    let dt = cfg.leak_filter.sample_period_s;
-    let m = &cfg.model;
-    let (wa, wb) = m.area_gradients_m2_per_m();
-    out.windows = (
-        id.windows,
-        identify::WINDOW_SAMPLES as f64 * dt * 1e3,
-        id.moving_windows,
-    );
-    out.gap_lpm = (id.gap_before_lpm, id.gap_after_lpm, id.sensor_floor_lpm);
-    let ga = &id.valve_gain_a;
-    let two_ports = !(m.rod_side_area_m2.is_none() && m.area_gradient_b_m2_per_m.is_none());
-    let port_a = if two_ports {
-        "port A area gradient"
-    } else {
-        "valve area gradient"
-    };
-    out.flow
-        .push(Param::new(port_a, &ga.scaled(wa), "mm²/mm", 1e3, wa));
-    if two_ports {
-        out.flow.push(Param::new(
-            "port B area gradient",
-            &id.valve_gain_b.scaled(wb),
-            "mm²/mm",
-            1e3,
-            wb,
-        ));
-    }
-    let two_pi = 2.0 * std::f64::consts::PI;
-    out.flow.extend([
-        Param::new(
-            "effective bulk modulus",
-            &id.bulk_modulus_pa,
-            "MPa",
-            1e-6,
-            m.bulk_modulus_pa,
-        ),
-        Param::new(
-            "valve null leakage C_L",
-            &id.null_leakage_m3_s_pa,
-            "1e-13 m³/(s·Pa)",
-            1e13,
-            m.valve_null_leakage_m3_s_pa,
-        ),
-        Param::new(
-            "supply sag",
-            &id.supply_sag_pa_per_m3_s,
-            "MPa per m³/s",
-            1e-6,
-            m.supply_sag_pa_per_m3_s,
-        ),
-        Param::new(
-            "spool -90° frequency",
-            &id.spool_natural_freq_rad_s.scaled(1.0 / two_pi),
-            "Hz",
-            1.0,
-            m.spool_natural_freq_rad_s / two_pi,
-        ),
-    ]);
-    let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
-    for (channel, found) in ["p1", "p2"].iter().zip(&id.pressure_lag_s) {
-        out.notes.push(match found {
-            identify::Found::Identified(e) => format!(
-                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters){}",
-                e.value * 1e3,
-                e.sigma * 1e3,
-                lag_against_datasheet(e, transducers.and_then(|t| t.lag_bound_s()))
-            ),
-            identify::Found::NotIdentifiable(why) => {
-                format!("  {channel} transducer lag: not identifiable from this recording: {why}")
-            }
-        });
-    }
-    out.notes.push(match &id.line_resistance_pa_s_per_m3 {
-        identify::Found::Identified(e) => format!(
-            "  line resistance, transducers to chambers: {:.0} ± {:.0} MPa per m³/s (the line's drop, \
-             fitted beside the null leakage; reported, not put into the filters)",
-            e.value * 1e-6,
-            e.sigma * 1e-6
-        ),
-        identify::Found::NotIdentifiable(why) => {
-            format!("  line resistance, transducers to chambers: not identifiable from this recording: {why}")
-        }
-    });
-    out.notes.push(match id.oil_temp_c {
-        Some(t) => format!(
-            "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \
-             and a live temp_c moves the model from it"
-        ),
-        None => format!(
-            "  oil temperature: not recorded (no temp_c column): the identified values hold at the \
-             recording's temperature, taken as [model.oil_temperature] reference_c = {:.1} °C; set it \
-             to the oil's temperature during the recording (the tank's thermometer): the live model \
-             moves from it, with temp_c or with the temperature the leak filter reads from the oil's stiffness",
-            m.oil_temperature.reference_c
-        ),
-    });
-    // what this recording cannot tell apart, said rather than guessed
-    out.notes.push(
-        "  transducer offsets: not separable from this recording: the flow balance uses pressure \
-         changes (an offset cancels); in the force balance an offset difference reads as a static \
-         load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them"
-            .to_string(),
-    );
-}
-
-/// What the force balance identified (`mech`) against the model of `cfg`.
-fn force_balance(mech: &identify::Mechanics, cfg: &Config, out: &mut Identified) {
-    let m = &cfg.model;
-    let transducers = cfg.datasheet.as_ref().map(|d| d.pressure_transducers);
-    let f = m.friction.extend();
-    out.force_gap_n = Some((mech.equations, mech.gap_before_n, mech.gap_after_n));
-    let viscous = match transducers.map(|t| t.location) {
-        Some(model::datasheet::TransducerLocation::Manifold) => {
-            "viscous friction (apparent: with the hoses' drop, the transducers being at the manifold)"
-        }
-        _ => "viscous friction (apparent)",
-    };
-    out.mechanics = vec![
-        Param::new("moving mass", &mech.mass_kg, "kg", 1.0, m.mass_kg),
-        Param::new("Coulomb friction", &mech.coulomb_n, "N", 1.0, f.slip_n),
-        Param::new("static friction", &mech.static_n, "N", 1.0, f.static_n),
-        Param::new(
-            "Stribeck velocity",
-            &mech.stribeck_velocity_m_s,
-            "mm/s",
-            1e3,
-            f.stribeck_velocity_m_s,
-        ),
-        Param::new(
-            viscous,
-            &mech.viscous_n_s_per_m,
-            "N·s/m",
-            1.0,
-            f.viscous_n_s_per_m,
-        ),
-        Param::new(
-            "static force (weight and load)",
-            &mech.static_force_n,
-            "N",
-            1.0,
-            m.gravity_force_n(),
-        ),
-    ];
-    if let Some((k, contact_m)) = mech.contact_spring {
-        out.notes.push(format!(
-            "  a workpiece: a contact spring of {:.4e} ± {:.1e} N/m from {:.1} mm on (in the force balance, and now in the model's load)",
-            k.value,
-            k.sigma,
-            contact_m * 1e3
-        ));
-    }
 }
 
 /// Least healthy, converged data a commissioning needs, s.

@@ -186,6 +186,13 @@ schema::config_struct! {
         /// Their 10-90 % response time, the datasheet's maximum, s (0: not given, the default).
         #[serde(default)]
         pub response_time_s: f64 => ["s", num!("a time", 0, 1)],
+        /// Each one's zero offset, the datasheet's maximum, Pa (0: not given, the default).
+        #[serde(default)]
+        pub zero_offset_max_pa: f64 => ["Pa", num!("an offset", 0, 1e7)],
+        /// Each one's span error, the datasheet's maximum, as a fraction of the
+        /// reading (0.005: 0.5 %; 0: not given, the default).
+        #[serde(default)]
+        pub span_error_max_fraction: f64 => ["", num!("a fraction", 0, 0.5)],
     }
 }
 
