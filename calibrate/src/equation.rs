@@ -34,6 +34,13 @@ pub const SATURATION_MARGIN_PA: f64 = 0.3e6;
 /// Spool residuals per window (evenly spaced samples of the window).
 pub const SPOOL_POINTS: usize = 5;
 
+/// A measured velocity within this many σ of its noise
+/// ([`ShootSettings::velocity_noise_m_s`]) is read as at rest by the force
+/// balance: the friction then holds the drive up to static friction. Without
+/// it a noisy sensor's rod at rest reads as sliding, its friction flipping
+/// between ±static friction from sample to sample.
+pub const STICK_BAND_SIGMAS: f64 = 3.0;
+
 /// Residuals per window: chamber 1, chamber 2, force, then the spool points
 /// when the spool is measured.
 pub fn per_window(d: &Prepared) -> usize {
@@ -63,6 +70,7 @@ pub fn residuals(
     let pr = p.return_pressure_pa;
     let per = per_window(d);
     let ps = p.supply_pressure_pa;
+    let at_rest_m_s = STICK_BAND_SIGMAS * set.velocity_noise_m_s;
     let mut r = Vec::with_capacity(windows.len() * per);
     for &(a, b) in windows {
         // a chamber at tank or supply pressure: the orifice law is stiff
@@ -103,7 +111,7 @@ pub fn residuals(
             let load = p.load.force_n(x, v);
             let end_stop = model::dynamics::end_stop_force_n(p, x, v);
             let drive = p.pressure_force_n(p1, p2) - gravity - load + end_stop;
-            let fr = friction_force_n(&p.friction, v, drive);
+            let fr = friction_force_n(&p.friction, if v.abs() <= at_rest_m_s { 0.0 } else { v }, drive);
             force += drive - fr;
         }
         let n = (b - a) as f64;

@@ -194,6 +194,11 @@ pub(crate) fn setup(
         stride: opts.compare_stride.max(1),
         scale_x_m: opts.scale_x_m,
         scale_p_pa: opts.scale_p_pa,
+        velocity_noise_m_s: crate::shoot::velocity_noise_m_s(
+            opts.position_noise_m,
+            dt,
+            opts.velocity_half_width,
+        ),
     };
     Ok(Setup {
         data,

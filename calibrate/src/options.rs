@@ -68,6 +68,11 @@ pub struct CalibrateOptions {
     /// Half-width of the local quadratic fit of positions that estimates the
     /// velocity at each window start, samples.
     pub velocity_half_width: usize,
+    /// Standard deviation of the position sensor's noise beyond its
+    /// quantisation, m (`[sensors] position_noise_m`; 0: an encoder that only
+    /// counts). The force balance reads a velocity within three σ of the
+    /// velocity's noise as at rest ([`crate::shoot::velocity_noise_m_s`]).
+    pub position_noise_m: f64,
     /// For an effect with two forms (`bulk-modulus`): least paired t statistic,
     /// over every window of the record, of the per-window mean squared
     /// residual of the other form minus the chosen one, for the chosen form
@@ -104,6 +109,7 @@ impl Default for CalibrateOptions {
             screen_keep: 3,
             keep_traces: true,
             velocity_half_width: 1,
+            position_noise_m: 0.0,
             min_form_t: 3.0,
             min_form_gap_ratio: 2.0,
         }

@@ -36,6 +36,7 @@ fn breakdown_of(case: &str) -> Vec<RegimeBin> {
         stride: o.compare_stride,
         scale_x_m: o.scale_x_m,
         scale_p_pa: o.scale_p_pa,
+        velocity_noise_m_s: 0.0,
     };
     let b = breakdown(&nominal_model(), &d, &d.windows, &set);
     for r in &b {

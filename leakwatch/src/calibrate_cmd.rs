@@ -61,8 +61,10 @@ pub fn run(
     let measured = calibrate::load_measured(&input).map_err(|e| e.to_string())?;
     let opts = calibrate::CalibrateOptions {
         candidates: effects,
+        position_noise_m: config::Config::load_or_default(config)?.sensors.position_noise_m,
         ..calibrate::CalibrateOptions::default()
     };
+    say_stick_band(&opts, &measured);
     let span = match (measured.first(), measured.last()) {
         (Some(a), Some(b)) => b.t_s - a.t_s,
         _ => 0.0,
@@ -117,6 +119,26 @@ pub fn run(
     out::write(&report, record.html()?.as_bytes(), force, &inputs)?;
     say_result(&cal, &files, &report)?;
     Ok(())
+}
+
+/// Says how wide the force balance's band of rest is when the position
+/// sensor's noise widens it ([`calibrate::equation::STICK_BAND_SIGMAS`]).
+fn say_stick_band(opts: &calibrate::CalibrateOptions, measured: &[model::Sample]) {
+    let dt_s = match measured {
+        [a, b, ..] => b.t_s - a.t_s,
+        _ => return,
+    };
+    if opts.position_noise_m <= 0.0 || dt_s.is_nan() || dt_s <= 0.0 {
+        return;
+    }
+    let sigma = calibrate::shoot::velocity_noise_m_s(opts.position_noise_m, dt_s, opts.velocity_half_width);
+    eprintln!(
+        "the position sensor's noise ({:.1} µm) leaves {:.1} mm/s of noise on the velocity: \
+         the force balance reads a rod within {:.1} mm/s as at rest",
+        opts.position_noise_m * 1e6,
+        sigma * 1e3,
+        calibrate::equation::STICK_BAND_SIGMAS * sigma * 1e3
+    );
 }
 
 /// Prints what calibration `cal` found: the gap before, each effect added
