@@ -64,7 +64,6 @@ pub fn run(
         position_noise_m: config::Config::load_or_default(config)?.sensors.position_noise_m,
         ..calibrate::CalibrateOptions::default()
     };
-    say_stick_band(&opts, &measured);
     let span = match (measured.first(), measured.last()) {
         (Some(a), Some(b)) => b.t_s - a.t_s,
         _ => 0.0,
@@ -92,6 +91,7 @@ pub fn run(
             calibrate::run_with_progress(&measured, &model, &opts, &progress).map_err(|e| e.to_string())?
         }
     };
+    say_stick_band(&opts, cal.data.sample_period_s);
     for w in &cal.warnings {
         eprintln!("note: {w}");
     }
@@ -121,20 +121,17 @@ pub fn run(
     Ok(())
 }
 
-/// Says how wide the force balance's band of rest is when the position
-/// sensor's noise widens it ([`calibrate::equation::STICK_BAND_SIGMAS`]).
-fn say_stick_band(opts: &calibrate::CalibrateOptions, measured: &[model::Sample]) {
-    let dt_s = match measured {
-        [a, b, ..] => b.t_s - a.t_s,
-        _ => return,
-    };
+/// Says how wide the force balance's band of rest was at the sample period
+/// `dt_s` (s) when the position sensor's noise widened it
+/// ([`calibrate::equation::STICK_BAND_SIGMAS`]).
+fn say_stick_band(opts: &calibrate::CalibrateOptions, dt_s: f64) {
     if opts.position_noise_m <= 0.0 || dt_s.is_nan() || dt_s <= 0.0 {
         return;
     }
     let sigma = calibrate::shoot::velocity_noise_m_s(opts.position_noise_m, dt_s, opts.velocity_half_width);
     eprintln!(
-        "the position sensor's noise ({:.1} µm) leaves {:.1} mm/s of noise on the velocity: \
-         the force balance reads a rod within {:.1} mm/s as at rest",
+        "note: the position sensor's noise ({:.1} µm) leaves {:.1} mm/s of noise on the velocity: \
+         the force balance read a rod within {:.1} mm/s as at rest",
         opts.position_noise_m * 1e6,
         sigma * 1e3,
         calibrate::equation::STICK_BAND_SIGMAS * sigma * 1e3
