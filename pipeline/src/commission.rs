@@ -90,14 +90,14 @@ pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
     })
 }
 
-/// The pressure transducers' tolerances `cfg`'s datasheet gives, if any.
+/// The pressure transducers' tolerances `cfg`'s datasheet gives (zero where
+/// not given; [`identify::null_leakage_tolerance`] skips unknown ones).
 fn transducer_tolerance(cfg: &Config) -> Option<identify::TransducerTolerance> {
     let t = cfg.datasheet.as_ref()?.pressure_transducers;
-    let tol = identify::TransducerTolerance {
+    Some(identify::TransducerTolerance {
         zero_offset_max_pa: t.zero_offset_max_pa,
         span_error_max_fraction: t.span_error_max_fraction,
-    };
-    (!tol.is_unknown()).then_some(tol)
+    })
 }
 
 /// Identifies the valve's flow gains, null leakage and the oil's stiffness on
