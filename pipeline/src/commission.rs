@@ -26,9 +26,11 @@ use config::Config;
 pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
 
 mod balances;
+mod reach;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
+pub use reach::{ResponseTrace, SensorReach};
 
 /// Reads `input` into the rows [`identify::identify`] takes.
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
@@ -245,9 +247,11 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
     let (mut theta_sum, mut theta_n) = (0.0, 0u64);
     let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
     let mut fit = FitTrace::default();
+    let mut responses = ResponseTrace::default();
     replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
         learner.on_estimate(e);
         fit.push(e);
+        responses.push(e);
         if e.bulk_scale.is_finite() && e.flags & unsettled == 0 {
             theta_sum += e.bulk_scale;
             theta_n += 1;
@@ -264,6 +268,7 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         theta,
         fit,
         set_by,
+        responses,
     })
 }
 
@@ -280,6 +285,8 @@ pub struct LearnedTrace {
     /// The time left out, s: where the leak estimates made a pattern no leak can make
     /// ([`detect::CommissioningLearner::left_out_s`]).
     pub left_out_s: f64,
+    /// The leak filter's responses to a misreading of each transducer on the recording.
+    pub responses: ResponseTrace,
 }
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
@@ -313,6 +320,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         fit,
         set_by,
         left_out_s,
+        responses,
     } = learn_traced(input, &cfg)?;
     cfg.model.oil_temperature.reference_stiffness = theta;
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
@@ -333,6 +341,11 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         detectable_line: detectable_over_temperature(&cfg.model, naming, c.offsets_lpm),
         nis_mean: c.nis_mean,
         set_by,
+        sensor_reach: SensorReach::new(
+            responses.typical_rms(c.internal_factors),
+            thr,
+            cfg.classifier.pressure_full_scale_pa,
+        ),
     };
     for line in learned.lines() {
         eprintln!("{line}");

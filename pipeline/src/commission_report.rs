@@ -229,6 +229,8 @@ pub struct Learned {
     /// the threshold the rest would give (L/min at p_s/2); `None` for a kind
     /// whose spread is the whole recording's.
     pub set_by: [Option<(detect::Stretch, f64)>; 3],
+    /// The smallest misreading of each transducer named on a duty cycle like the recording's.
+    pub sensor_reach: crate::commission::SensorReach,
 }
 
 /// Three values as `a/b/c` with three decimals.
@@ -268,6 +270,7 @@ impl Learned {
         ));
         out.extend(self.set_by_lines());
         out.push(self.detectable_line.clone());
+        out.push(self.sensor_reach.line());
         out.push(format!(
             "the leak filter's mean NIS on this recording is {:.1} (3 when the model fits the rig)",
             self.nis_mean
@@ -400,6 +403,7 @@ impl CommissionRecord {
             h += &row(&format!("smallest detectable at {t:.0} °C"), *d);
         }
         h += "</table>\n";
+        h += &format!("<p class=\"note\">{}</p>\n", esc(&l.sensor_reach.line()));
         if let Some(line) = l.left_out_line() {
             h += &format!("<p class=\"note\">{}</p>\n", esc(&line));
         }

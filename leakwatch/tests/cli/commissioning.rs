@@ -260,4 +260,20 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
         assert!((reference[k] - sizes[k]).abs() < 1.5e-3, "{line}");
         assert!(cold[k] >= reference[k] && warm[k] >= reference[k], "{line}");
     }
+    // and the smallest transducer offsets it names on this duty cycle: the
+    // pressures' at 1 % of the 20.7 MPa range (their response shows 17/23
+    // kPa); x's where its response shows it (measured 3.6 mm), within the
+    // 1-15 mm the detector fits
+    let reach = err
+        .lines()
+        .find(|l| l.starts_with("transducer offsets named"))
+        .expect("the transducers' reach is stated");
+    assert!(reach.contains("p1 from 207 kPa, p2 from 207 kPa"), "{reach}");
+    let x_mm: f64 = reach
+        .split("x from ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("x is watched on the thesis rig: {reach}"));
+    assert!((1.0..=15.0).contains(&x_mm), "{reach}");
 }

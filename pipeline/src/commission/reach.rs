@@ -1,0 +1,215 @@
+//! How large a misreading of each transducer the detector names on the
+//! commissioning recording's duty cycle, and whether it watches x at all.
+//!
+//! The detector names an offset on a channel once the leak sizes' change it
+//! explains reaches [`OFFSET_NAMED_SHARE`] of the smallest threshold (RMS over
+//! [`OFFSET_WINDOW_S`]) and the offset passes the least named
+//! ([`detect::offset`]). The leak filter gives its own response to a
+//! misreading of each channel on every sample, so the recording says how large
+//! an offset must be before its part of the rises reaches that level.
+
+use detect::offset::{
+    OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE, OFFSET_WINDOW_S, POSITION_LEAST_OFFSET_MM,
+    POSITION_MOST_OFFSET_MM,
+};
+
+/// The leak filter's responses to a misreading over a recording, every
+/// [`ResponseTrace::EVERY`]-th settled estimate.
+#[derive(Debug, Clone, Default)]
+pub struct ResponseTrace {
+    /// Sample times, s.
+    t_s: Vec<f64>,
+    /// Per kept estimate, the responses to 1 MPa on p1 and on p2 and to 1 mm
+    /// on x: each the change of q_e1, q_e2, q_i, L/min.
+    responses: Vec<[[f64; 3]; 3]>,
+    /// Estimates seen.
+    seen: u64,
+}
+
+impl ResponseTrace {
+    /// One estimate in this many is kept (100 Hz at 1 kHz).
+    pub const EVERY: u64 = 10;
+
+    /// Takes estimate `e` (kept every [`Self::EVERY`]-th, while the filter is settled).
+    pub fn push(&mut self, e: &filter::Estimate) {
+        self.seen += 1;
+        let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
+        if !(self.seen - 1).is_multiple_of(Self::EVERY) || e.flags & unsettled != 0 {
+            return;
+        }
+        let r = [
+            e.offset_response_lpm_per_mpa[0],
+            e.offset_response_lpm_per_mpa[1],
+            e.position_offset_response_lpm_per_mm,
+        ];
+        if r.iter().flatten().all(|v| v.is_finite()) && e.t_s.is_finite() {
+            self.t_s.push(e.t_s);
+            self.responses.push(r);
+        }
+    }
+
+    /// The median over the recording of each response's RMS over the
+    /// detector's window, in the rises' plane (w1, w2) of the internal leak's
+    /// pressure factors `factors`: p1 and p2 in L/min per MPa, x in L/min per
+    /// mm. 0 where the recording is shorter than a window.
+    pub fn typical_rms(&self, factors: [f64; 2]) -> [f64; 3] {
+        let (mut mean_square, mut weight) = ([0.0; 3], 0.0);
+        let mut windows: [Vec<f64>; 3] = Default::default();
+        let start_s = self.t_s.first().copied().unwrap_or(0.0);
+        for (i, (t, r)) in self.t_s.iter().zip(&self.responses).enumerate() {
+            let dt = if i == 0 { 0.0 } else { t - self.t_s[i - 1] };
+            let keep = (-dt.max(0.0) / OFFSET_WINDOW_S).exp();
+            weight = keep * weight + (1.0 - keep);
+            for c in 0..3 {
+                let w = detect::signatures_with(r[c], factors);
+                mean_square[c] = keep * mean_square[c] + (1.0 - keep) * (w[0] * w[0] + w[1] * w[1]);
+                if t - start_s >= OFFSET_WINDOW_S {
+                    windows[c].push((mean_square[c] / weight).sqrt());
+                }
+            }
+        }
+        windows.map(|mut w| median(&mut w))
+    }
+}
+
+/// The median of `v` (0 when empty).
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The smallest misreading of each transducer the detector names on a duty
+/// cycle like the recording's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorReach {
+    /// The offset on p1 and on p2 whose part of the rises reaches the naming
+    /// level, kPa (infinite where the recording's flow shows none).
+    pub pressure_shown_kpa: [f64; 2],
+    /// The least offset on a pressure transducer named, kPa
+    /// ([`OFFSET_LEAST_SHARE_OF_RANGE`] of its range).
+    pub pressure_least_kpa: f64,
+    /// The offset on x whose part of the rises reaches the naming level, mm
+    /// (infinite where the recording shows none).
+    pub position_shown_mm: f64,
+    /// The typical response of the leak sizes to 1 mm on x, L/min (RMS over the window).
+    pub position_response_lpm_per_mm: f64,
+    /// The naming level: the leak sizes' change an offset must explain, L/min (RMS).
+    pub naming_level_lpm: f64,
+}
+
+impl SensorReach {
+    /// The reach for the typical responses `typical_rms` ([`ResponseTrace::typical_rms`]),
+    /// the detector's thresholds `thresholds_lpm` (L/min at p_s/2) and the
+    /// pressure transducers' range `full_scale_pa` (Pa).
+    pub fn new(typical_rms: [f64; 3], thresholds_lpm: [f64; 3], full_scale_pa: f64) -> SensorReach {
+        let level = OFFSET_NAMED_SHARE * thresholds_lpm.iter().copied().fold(f64::INFINITY, f64::min);
+        let shown = |rms: f64| if rms > 0.0 { level / rms } else { f64::INFINITY };
+        SensorReach {
+            pressure_shown_kpa: [shown(typical_rms[0]) * 1e3, shown(typical_rms[1]) * 1e3],
+            pressure_least_kpa: OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-3,
+            position_shown_mm: shown(typical_rms[2]),
+            position_response_lpm_per_mm: typical_rms[2],
+            naming_level_lpm: level,
+        }
+    }
+
+    /// The smallest offset named on p1 and on p2, kPa (infinite: none is).
+    pub fn pressure_named_kpa(&self) -> [f64; 2] {
+        self.pressure_shown_kpa.map(|s| s.max(self.pressure_least_kpa))
+    }
+
+    /// The smallest offset named on x, mm; `None` where x is not watched: an
+    /// offset would show only past the largest the detector fits
+    /// ([`POSITION_MOST_OFFSET_MM`]).
+    pub fn position_named_mm(&self) -> Option<f64> {
+        if self.position_shown_mm <= POSITION_MOST_OFFSET_MM {
+            Some(self.position_shown_mm.max(POSITION_LEAST_OFFSET_MM))
+        } else {
+            None
+        }
+    }
+
+    /// The terminal's line.
+    pub fn line(&self) -> String {
+        let named = self.pressure_named_kpa();
+        let pressure = |c: usize| {
+            if named[c].is_finite() {
+                format!("p{} from {:.0} kPa", c + 1, named[c])
+            } else {
+                format!(
+                    "p{} not watched (no flow on this recording shows an offset)",
+                    c + 1
+                )
+            }
+        };
+        let position = match self.position_named_mm() {
+            Some(mm) => format!("x from {mm:.1} mm"),
+            None => format!(
+                "x not watched: 1 mm on x moves the leak sizes by {:.4} L/min, so an offset shows only past {:.0} mm, \
+                 beyond the {:.0} mm the detector fits (a drifting position sensor is not seen on this rig)",
+                self.position_response_lpm_per_mm, self.position_shown_mm, POSITION_MOST_OFFSET_MM
+            ),
+        };
+        format!(
+            "transducer offsets named on a duty cycle like this recording's: {}, {} (the least named is {:.0} kPa, \
+             1 % of the range; the leak sizes show {:.0}/{:.0} kPa); {position}",
+            pressure(0),
+            pressure(1),
+            self.pressure_least_kpa,
+            self.pressure_shown_kpa[0],
+            self.pressure_shown_kpa[1],
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plant rig's x: 0.0004 L/min per mm against a smallest threshold of
+    /// 0.03 L/min shows only past 22.5 mm, beyond the 15 mm fitted: not
+    /// watched. The thesis rig's 0.01 L/min per mm shows at 0.9 mm: named from
+    /// the least, 1 mm. Pressures: the 1 % floor where the response is
+    /// strong, the response's own level where it is weak.
+    #[test]
+    fn the_reach_follows_the_responses_and_the_floors() {
+        let plant = SensorReach::new([0.5, 0.05, 0.0004], [0.05, 0.03, 0.04], 25e6);
+        assert!((plant.naming_level_lpm - 0.009).abs() < 1e-12);
+        assert!((plant.position_shown_mm - 22.5).abs() < 1e-9);
+        assert_eq!(plant.position_named_mm(), None);
+        let named = plant.pressure_named_kpa();
+        assert!((named[0] - 250.0).abs() < 1e-9 && (plant.pressure_shown_kpa[0] - 18.0).abs() < 1e-9);
+        assert!((named[1] - 250.0).abs() < 1e-9);
+        let weak = SensorReach::new([0.02, 0.0, 0.01], [0.05, 0.03, 0.04], 20.7e6);
+        assert!((weak.pressure_named_kpa()[0] - 450.0).abs() < 1e-9);
+        assert!(weak.pressure_named_kpa()[1].is_infinite());
+        assert_eq!(weak.position_named_mm(), Some(1.0));
+        let line = plant.line();
+        assert!(
+            line.contains("p1 from 250 kPa") && line.contains("x not watched"),
+            "{line}"
+        );
+        assert!(weak.line().contains("p2 not watched") && weak.line().contains("x from 1.0 mm"));
+    }
+
+    /// A response that swings steadily (RMS 0.3 over every window) gives its
+    /// RMS; the first window's worth of samples is left out.
+    #[test]
+    fn the_typical_response_is_the_windows_rms() {
+        let mut trace = ResponseTrace::default();
+        for i in 0..3000 {
+            let t = i as f64 * 0.01;
+            let s = 0.3 * std::f64::consts::SQRT_2 * (2.0 * std::f64::consts::PI * t).sin();
+            trace.t_s.push(t);
+            // ext1 only: (w1, w2) = (s, 0) for any factors
+            trace.responses.push([[s, 0.0, 0.0], [0.0; 3], [0.0; 3]]);
+        }
+        let rms = trace.typical_rms([-0.7, -0.6]);
+        assert!((rms[0] - 0.3).abs() < 0.01, "{rms:?}");
+        assert_eq!(rms[1], 0.0);
+        assert_eq!(ResponseTrace::default().typical_rms([1.0, 1.0]), [0.0; 3]);
+    }
+}
