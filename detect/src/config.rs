@@ -37,6 +37,11 @@ schema::config_struct! {
         /// recording's mean pressures where p1 − p2 kept its sign, else (1, 1).
         #[serde(default = "nominal_factors")]
         pub internal_factors: [f64; 2],
+        /// The least offset the detector names on p1 and on p2 (kPa) and on x
+        /// (mm), on a duty cycle like the recording's, as `commission` stated
+        /// it: inf, that channel is not watched; NaN, not stated.
+        #[serde(default = "nan_per_kind")]
+        pub least_offsets_named: [f64; 3],
     }
 }
 
@@ -70,6 +75,11 @@ impl Commissioning {
             .chain(&self.crossings_per_s)
             .chain(&self.internal_factors)
             .chain(std::iter::once(&self.healthy_s));
+        if let Some(v) = self.least_offsets_named.iter().find(|v| **v <= 0.0) {
+            return Err(format!(
+                "[classifier.commissioning] least_offsets_named holds {v}: each is positive, inf (not watched) or nan (not stated)"
+            ));
+        }
         for v in all {
             if !v.is_finite() {
                 return Err(format!(

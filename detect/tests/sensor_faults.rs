@@ -119,3 +119,36 @@ fn a_healthy_run_raises_no_sensor_event() {
     assert!(sensor.is_empty(), "{sensor:?}");
     assert!(leak_alarms(&events).is_empty(), "{:?}", leak_alarms(&events));
 }
+
+/// A commissioning that found x not watched says so at start; one that
+/// names x from some mm, or an older one without the statement, does not;
+/// a statement that is not positive is refused, naming the field.
+#[test]
+fn the_start_note_says_when_x_is_not_watched() {
+    let commissioned = |least: [f64; 3]| ClassifierConfig {
+        commissioning: Some(detect::Commissioning {
+            offsets_lpm: [0.0; 3],
+            spreads_lpm: [0.03; 3],
+            clear_spreads_lpm: [0.03; 3],
+            crossings_per_s: [1.0; 3],
+            healthy_s: 100.0,
+            nis_mean: 3.0,
+            source: "healthy.csv".into(),
+            internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
+            least_offsets_named: least,
+        }),
+        ..ClassifierConfig::default()
+    };
+    let note = |least| Classifier::new(commissioned(least)).unwrap().start_note();
+    let plant = note([250.0, 250.0, f64::INFINITY]);
+    assert!(plant.contains("an offset on x is not watched"), "{plant}");
+    for watched in [[207.0, 207.0, 3.6], [f64::NAN; 3]] {
+        let n = note(watched);
+        assert!(
+            n.starts_with("commissioned from healthy.csv") && !n.contains("not watched"),
+            "{n}"
+        );
+    }
+    let err = Classifier::new(commissioned([250.0, 0.0, 3.0])).err().unwrap();
+    assert!(err.contains("least_offsets_named holds 0"), "{err}");
+}

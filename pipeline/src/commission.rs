@@ -289,6 +289,18 @@ pub struct LearnedTrace {
     pub responses: ResponseTrace,
 }
 
+/// The smallest misreading of each transducer the detector names with
+/// commissioning `c` and config `cfg`, on the duty cycle of the recording the
+/// leak filter's `responses` come from.
+pub fn sensor_reach(responses: &ResponseTrace, c: &detect::Commissioning, cfg: &Config) -> SensorReach {
+    let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
+    SensorReach::new(
+        responses.typical_rms(c.internal_factors),
+        thr,
+        cfg.classifier.pressure_full_scale_pa,
+    )
+}
+
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then
 /// learns the commissioning with the bias held: the config to write.
 pub fn commission(input: &Path, cfg: &Config) -> Result<Config, String> {
@@ -315,7 +327,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         null_bias = Some((bias, datasheet_model.spool_null_bias_m));
     }
     let LearnedTrace {
-        commissioning: c,
+        commissioning: mut c,
         theta,
         fit,
         set_by,
@@ -341,12 +353,9 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         detectable_line: detectable_over_temperature(&cfg.model, naming, c.offsets_lpm),
         nis_mean: c.nis_mean,
         set_by,
-        sensor_reach: SensorReach::new(
-            responses.typical_rms(c.internal_factors),
-            thr,
-            cfg.classifier.pressure_full_scale_pa,
-        ),
+        sensor_reach: sensor_reach(&responses, &c, &cfg),
     };
+    c.least_offsets_named = learned.sensor_reach.least_named();
     for line in learned.lines() {
         eprintln!("{line}");
     }

@@ -163,6 +163,8 @@ pub struct FaultRunOutcome {
 struct Watched {
     /// The commissioned config (model, filters, detector).
     rig: Config,
+    /// What commissioning said the detector names on each transducer.
+    reach: pipeline::commission::SensorReach,
     /// The drawn instance (press, lift); `None`: the built-in rig simulates itself.
     instance: Option<Instance>,
     /// The duty cycles its runs take in turn.
@@ -206,17 +208,19 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
     let mut w = std::io::BufWriter::new(file);
     simulate::write_csv(&mut w, &samples).map_err(|e| dataset::output::message(&recording, &e))?;
     drop(w);
-    let rig = if instance.is_some() {
-        pipeline::commission::commission(&recording, &cfg)
+    let commissioned = if instance.is_some() {
+        pipeline::commission::commission_recorded(&recording, &cfg)
+            .map(|(rig, record)| (rig, record.learned.sensor_reach))
     } else {
-        pipeline::commission::learn(&recording, &cfg).map(|(c, theta)| {
+        pipeline::commission::learn_traced(&recording, &cfg).map(|t| {
+            let reach = pipeline::commission::sensor_reach(&t.responses, &t.commissioning, &cfg);
             let mut cfg = cfg.clone();
-            cfg.model.oil_temperature.reference_stiffness = theta;
-            cfg.classifier.commissioning = Some(c);
-            cfg
+            cfg.model.oil_temperature.reference_stiffness = t.theta;
+            cfg.classifier.commissioning = Some(t.commissioning);
+            (cfg, reach)
         })
     };
-    let rig = rig.map_err(|e| format!("instance {index}: {e}"))?;
+    let (rig, reach) = commissioned.map_err(|e| format!("instance {index}: {e}"))?;
     if args.keep {
         let text = toml::to_string(&rig).map_err(|e| format!("instance {index}'s config: {e}"))?;
         pipeline::out::write(&dir.join("rig.toml"), text.as_bytes(), true, &[])?;
@@ -227,6 +231,7 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
     }
     Ok(Watched {
         rig,
+        reach,
         instance,
         cycles,
         seed,
@@ -369,7 +374,7 @@ fn watch_run(
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
     let misreading = sensor.map_or(Misreading::NONE, |f| {
-        Misreading::of(&f, &samples, w.rig.classifier.pressure_full_scale_pa)
+        Misreading::of(&f, &samples, w.rig.classifier.pressure_full_scale_pa).stated_by(f.channel, &w.reach)
     });
     if args.keep {
         let path = kept_recording(args, index, kind);

@@ -394,6 +394,7 @@ impl CommissioningLearner {
             nis_mean: record.nis_mean(),
             source: source.to_string(),
             internal_factors,
+            least_offsets_named: [f64::NAN; 3],
         })
     }
 }

@@ -124,6 +124,7 @@ mod tests {
             nis_mean: 3.0,
             source: String::new(),
             internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
+            least_offsets_named: [f64::NAN; 3],
         };
         let (_, thr) = crate::thresholds(&cfg, c.spreads_lpm, c.crossings_per_s);
         let stretch = |share: f64, spread_without_lpm: f64| Stretch {

@@ -166,6 +166,7 @@ fn commissioned_run(ext1_naming_spread_lpm: f64, q_lpm: [f64; 3]) -> Vec<LeakEve
             nis_mean: 3.0,
             source: "test".into(),
             internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
+            least_offsets_named: [f64::NAN; 3],
         }),
         ..ClassifierConfig::default()
     };

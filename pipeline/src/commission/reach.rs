@@ -132,6 +132,13 @@ impl SensorReach {
         }
     }
 
+    /// The least offset named on p1 and on p2 (kPa) and on x (mm); inf: not
+    /// watched ([`detect::Commissioning::least_offsets_named`]).
+    pub fn least_named(&self) -> [f64; 3] {
+        let [p1, p2] = self.pressure_named_kpa();
+        [p1, p2, self.position_named_mm().unwrap_or(f64::INFINITY)]
+    }
+
     /// The terminal's line.
     pub fn line(&self) -> String {
         let named = self.pressure_named_kpa();

@@ -24,6 +24,11 @@ pub struct Misreading {
     /// unit: [`detect::offset::OFFSET_LEAST_SHARE_OF_RANGE`] of the pressure
     /// transducer's range, or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
     pub least_named: f64,
+    /// The least misreading commissioning said the detector names on that
+    /// channel, on a duty cycle like its recording's, in the same unit
+    /// ([`pipeline::commission::SensorReach`]); infinite: it said the channel
+    /// is not watched; NaN: not stated.
+    pub stated: f64,
 }
 
 impl Misreading {
@@ -31,6 +36,7 @@ impl Misreading {
     pub const NONE: Misreading = Misreading {
         size: f64::NAN,
         least_named: f64::NAN,
+        stated: f64::NAN,
     };
 
     /// The misreading of `fault` over the run `samples` (the faulty readings), on
@@ -72,12 +78,34 @@ impl Misreading {
         Misreading {
             size: size_si / si_per_unit,
             least_named,
+            stated: f64::NAN,
         }
+    }
+
+    /// The same, with the least commissioning stated on `channel` by `reach`.
+    pub fn stated_by(self, channel: Channel, reach: &pipeline::commission::SensorReach) -> Misreading {
+        let least = reach.least_named();
+        let stated = match channel {
+            Channel::P1 => least[0],
+            Channel::P2 => least[1],
+            Channel::X => least[2],
+        };
+        Misreading { stated, ..self }
     }
 
     /// Whether the misreading reaches the least the detector names.
     pub fn past_least_named(&self) -> bool {
         self.size >= self.least_named
+    }
+
+    /// Whether the misreading reaches the least commissioning stated.
+    pub fn past_stated(&self) -> bool {
+        self.size >= self.stated
+    }
+
+    /// Whether commissioning said the channel is not watched.
+    pub fn said_not_watched(&self) -> bool {
+        self.stated == f64::INFINITY
     }
 }
 
@@ -167,6 +195,12 @@ pub struct KindSummary {
     pub past_least_named: usize,
     /// Those of them named right.
     pub past_least_named_right: usize,
+    /// Runs whose misreading reaches the least commissioning stated ([`Misreading::stated`]).
+    pub past_stated: usize,
+    /// Those of them named right.
+    pub past_stated_right: usize,
+    /// Runs on a channel commissioning said is not watched.
+    pub said_not_watched: usize,
     /// Median time from the onset to that, s (NaN: none).
     pub median_delay_s: f64,
     /// Longest such time, s (NaN: none).
@@ -195,6 +229,12 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
                 named_right: mine.iter().filter(|r| r.named_right).count(),
                 past_least_named: past.len(),
                 past_least_named_right: past.iter().filter(|r| r.named_right).count(),
+                past_stated: mine.iter().filter(|r| r.misreading.past_stated()).count(),
+                past_stated_right: mine
+                    .iter()
+                    .filter(|r| r.misreading.past_stated() && r.named_right)
+                    .count(),
+                said_not_watched: mine.iter().filter(|r| r.misreading.said_not_watched()).count(),
                 median_delay_s: median,
                 max_delay_s: delays.iter().cloned().fold(f64::NAN, f64::max),
             }
@@ -206,8 +246,8 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
 pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
     let mut s = format!(
         "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s\n\n\
-         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | misreading past the least named: runs, named right |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | misreading past the least named: runs, named right | past what commissioning stated: runs, named right (said not watched) |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
         args.rig, args.instances, args.seed, args.seconds
     );
     for k in sums {
@@ -218,16 +258,22 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
             format!("{} ({pct:.0} %)", k.named_right)
         };
         // (only drifts and span errors have a misreading to compare)
-        let past = if matches!(
+        let (past, stated) = if matches!(
             k.kind,
             RunKind::PressureDrift | RunKind::Span | RunKind::PositionDrift
         ) {
-            format!("{}, {}", k.past_least_named, k.past_least_named_right)
+            (
+                format!("{}, {}", k.past_least_named, k.past_least_named_right),
+                format!(
+                    "{}, {} ({})",
+                    k.past_stated, k.past_stated_right, k.said_not_watched
+                ),
+            )
         } else {
-            "-".to_string()
+            ("-".to_string(), "-".to_string())
         };
         s += &format!(
-            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s | {past} |\n",
+            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s | {past} | {stated} |\n",
             k.kind.name(),
             k.runs,
             k.runs_with_leak_events,
@@ -241,6 +287,8 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
           its own kind named before any sensor event. A leak alarm standing at the end was neither \
           cleared nor withdrawn when the transducer was named. A misreading past the least named: \
           a pressure offset (a drift's at the run's end, a span error's at the channel's mean reading) \
-          of at least 1 % of the transducer's range, an offset on x of at least 1 mm.\n";
+          of at least 1 % of the transducer's range, an offset on x of at least 1 mm. What commissioning \
+          stated: the least offset it said it names on the channel, on a duty cycle like its recording's; \
+          not watched: it said an offset on x shows only past the largest fitted.\n";
     s
 }

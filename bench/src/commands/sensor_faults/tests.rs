@@ -175,6 +175,19 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
     };
     let m = Misreading::of(&fault(Channel::X, x), &run, 25e6);
     assert!((m.size - 2.0).abs() < 1e-9 && m.least_named == 1.0, "{m:?}");
+    // against what commissioning stated: on a plant rig whose x moves the
+    // leak sizes by 0.0004 L/min per mm, x is not watched (past 22.5 mm);
+    // the pressures from the 1 % floor; on a rig whose x moves them by 0.01,
+    // from 1 mm
+    let plant = pipeline::commission::SensorReach::new([0.5, 0.05, 0.0004], [0.05, 0.03, 0.04], 25e6);
+    let stated = m.stated_by(Channel::X, &plant);
+    assert!(stated.said_not_watched() && !stated.past_stated(), "{stated:?}");
+    assert!(Misreading::NONE.stated.is_nan() && !Misreading::NONE.said_not_watched());
+    let thesis = pipeline::commission::SensorReach::new([0.5, 0.05, 0.01], [0.05, 0.03, 0.04], 25e6);
+    let stated = m.stated_by(Channel::X, &thesis);
+    assert!(stated.stated == 1.0 && stated.past_stated() && !stated.said_not_watched());
+    let drift = Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6).stated_by(Channel::P2, &plant);
+    assert!(drift.stated == 250.0 && !drift.past_stated(), "{drift:?}");
     // a stuck transducer has no size to compare
     let m = Misreading::of(&fault(Channel::P1, SensorFaultKind::Stuck), &run, 25e6);
     assert!(m.size.is_nan() && !m.past_least_named());
