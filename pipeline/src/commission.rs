@@ -295,7 +295,7 @@ pub struct LearnedTrace {
 pub fn sensor_reach(responses: &ResponseTrace, c: &detect::Commissioning, cfg: &Config) -> SensorReach {
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     SensorReach::new(
-        responses.typical_rms(c.internal_factors),
+        responses.typical_rms(c.internal_factors, cfg.classifier.baseline_tau_s),
         thr,
         cfg.classifier.pressure_full_scale_pa,
     )

@@ -261,8 +261,8 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
         assert!(cold[k] >= reference[k] && warm[k] >= reference[k], "{line}");
     }
     // and the smallest transducer offsets it names on this duty cycle: the
-    // pressures' at 1 % of the 20.7 MPa range (their response shows 17/23
-    // kPa); x's where its response shows it (measured 3.6 mm), within the
+    // pressures' at 1 % of the 20.7 MPa range (their response shows 19/30
+    // kPa); x's where its response shows it (measured 4.1 mm), within the
     // 1-15 mm the detector fits
     let reach = err
         .lines()

@@ -6,7 +6,9 @@
 //! [`OFFSET_WINDOW_S`]) and the offset passes the least named
 //! ([`detect::offset`]). The leak filter gives its own response to a
 //! misreading of each channel on every sample, so the recording says how large
-//! an offset must be before its part of the rises reaches that level.
+//! an offset must be before its part of the rises reaches that level. The
+//! rises are measured from a baseline that takes up a standing offset's
+//! steady part, so the part that counts is the response's swing about it.
 
 use detect::offset::{
     OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE, OFFSET_WINDOW_S, POSITION_LEAST_OFFSET_MM,
@@ -48,21 +50,50 @@ impl ResponseTrace {
         }
     }
 
-    /// The median over the recording of each response's RMS over the
-    /// detector's window, in the rises' plane (w1, w2) of the internal leak's
-    /// pressure factors `factors`: p1 and p2 in L/min per MPa, x in L/min per
-    /// mm. 0 where the recording is shorter than a window.
-    pub fn typical_rms(&self, factors: [f64; 2]) -> [f64; 3] {
+    /// The median over the recording of each response's swing about its
+    /// baseline, RMS over the detector's window, in the rises' plane (w1, w2)
+    /// of the internal leak's pressure factors `factors`: p1 and p2 in L/min
+    /// per MPa, x in L/min per mm. The baseline follows the response at the
+    /// detector's `baseline_tau_s` (s), as the rises' baseline takes up a
+    /// standing offset's steady part. 0 where the recording is shorter than
+    /// a window.
+    pub fn typical_rms(&self, factors: [f64; 2], baseline_tau_s: f64) -> [f64; 3] {
+        let plane = |r: &[[f64; 3]; 3]| -> [[f64; 2]; 3] {
+            std::array::from_fn(|c| {
+                let [w1, w2, _] = detect::signatures_with(r[c], factors);
+                [w1, w2]
+            })
+        };
+        // (the baseline starts at the recording's mean, where it stands once settled)
+        let n = self.responses.len().max(1) as f64;
+        let mut base = [[0.0; 2]; 3];
+        for w in self.responses.iter().map(plane) {
+            for c in 0..3 {
+                for k in 0..2 {
+                    base[c][k] += w[c][k] / n;
+                }
+            }
+        }
         let (mut mean_square, mut weight) = ([0.0; 3], 0.0);
         let mut windows: [Vec<f64>; 3] = Default::default();
         let start_s = self.t_s.first().copied().unwrap_or(0.0);
         for (i, (t, r)) in self.t_s.iter().zip(&self.responses).enumerate() {
-            let dt = if i == 0 { 0.0 } else { t - self.t_s[i - 1] };
-            let keep = (-dt.max(0.0) / OFFSET_WINDOW_S).exp();
+            let dt = if i == 0 {
+                0.0
+            } else {
+                (t - self.t_s[i - 1]).max(0.0)
+            };
+            let keep = (-dt / OFFSET_WINDOW_S).exp();
+            let follow = 1.0 - (-dt / baseline_tau_s.max(1e-3)).exp();
             weight = keep * weight + (1.0 - keep);
+            let w = plane(r);
             for c in 0..3 {
-                let w = detect::signatures_with(r[c], factors);
-                mean_square[c] = keep * mean_square[c] + (1.0 - keep) * (w[0] * w[0] + w[1] * w[1]);
+                let mut swing_square = 0.0;
+                for k in 0..2 {
+                    base[c][k] += follow * (w[c][k] - base[c][k]);
+                    swing_square += (w[c][k] - base[c][k]).powi(2);
+                }
+                mean_square[c] = keep * mean_square[c] + (1.0 - keep) * swing_square;
                 if t - start_s >= OFFSET_WINDOW_S {
                     windows[c].push((mean_square[c] / weight).sqrt());
                 }
@@ -94,7 +125,7 @@ pub struct SensorReach {
     /// The offset on x whose part of the rises reaches the naming level, mm
     /// (infinite where the recording shows none).
     pub position_shown_mm: f64,
-    /// The typical response of the leak sizes to 1 mm on x, L/min (RMS over the window).
+    /// The typical swing of the leak sizes about their baseline for 1 mm on x, L/min (RMS over the window).
     pub position_response_lpm_per_mm: f64,
     /// The naming level: the leak sizes' change an offset must explain, L/min (RMS).
     pub naming_level_lpm: f64,
@@ -155,7 +186,7 @@ impl SensorReach {
         let position = match self.position_named_mm() {
             Some(mm) => format!("x from {mm:.1} mm"),
             None => format!(
-                "x not watched: 1 mm on x moves the leak sizes by {:.4} L/min, so an offset shows only past {:.0} mm, \
+                "x not watched: 1 mm on x swings the leak sizes by {:.4} L/min about their baseline, so an offset shows only past {:.0} mm, \
                  beyond the {:.0} mm the detector fits (a drifting position sensor is not seen on this rig)",
                 self.position_response_lpm_per_mm, self.position_shown_mm, POSITION_MOST_OFFSET_MM
             ),
@@ -202,21 +233,29 @@ mod tests {
         assert!(weak.line().contains("p2 not watched") && weak.line().contains("x from 1.0 mm"));
     }
 
-    /// A response that swings steadily (RMS 0.3 over every window) gives its
-    /// RMS; the first window's worth of samples is left out.
+    /// A response that swings steadily (RMS 0.3 over every window) about
+    /// zero gives its RMS; a steady response gives next to nothing (the
+    /// baseline takes it up), and a steady part under the swing is left out;
+    /// the first window's worth of samples is left out.
     #[test]
-    fn the_typical_response_is_the_windows_rms() {
-        let mut trace = ResponseTrace::default();
-        for i in 0..3000 {
-            let t = i as f64 * 0.01;
-            let s = 0.3 * std::f64::consts::SQRT_2 * (2.0 * std::f64::consts::PI * t).sin();
-            trace.t_s.push(t);
-            // ext1 only: (w1, w2) = (s, 0) for any factors
-            trace.responses.push([[s, 0.0, 0.0], [0.0; 3], [0.0; 3]]);
-        }
-        let rms = trace.typical_rms([-0.7, -0.6]);
+    fn the_typical_response_is_the_swing_about_its_baseline() {
+        let trace = |steady: f64, swing: f64| {
+            let mut trace = ResponseTrace::default();
+            for i in 0..6000 {
+                let t = i as f64 * 0.01;
+                let s = steady + swing * std::f64::consts::SQRT_2 * (2.0 * std::f64::consts::PI * t).sin();
+                trace.t_s.push(t);
+                // ext1 only: (w1, w2) = (s, 0) for any factors
+                trace.responses.push([[s, 0.0, 0.0], [0.0; 3], [0.0; 3]]);
+            }
+            trace.typical_rms([-0.7, -0.6], 15.0)
+        };
+        let rms = trace(0.0, 0.3);
         assert!((rms[0] - 0.3).abs() < 0.01, "{rms:?}");
         assert_eq!(rms[1], 0.0);
-        assert_eq!(ResponseTrace::default().typical_rms([1.0, 1.0]), [0.0; 3]);
+        assert!(trace(0.5, 0.0)[0] < 1e-9, "{:?}", trace(0.5, 0.0));
+        let under = trace(0.5, 0.3);
+        assert!((under[0] - 0.3).abs() < 0.01, "{under:?}");
+        assert_eq!(ResponseTrace::default().typical_rms([1.0, 1.0], 15.0), [0.0; 3]);
     }
 }
