@@ -67,6 +67,13 @@ impl Commissioning {
         })
     }
 
+    /// What commissioning found the detector cannot watch on this rig, as a
+    /// phrase (`None`: nothing, or not stated).
+    pub fn not_watched(&self) -> Option<&'static str> {
+        (self.least_offsets_named[2] == f64::INFINITY)
+            .then_some("an offset on x is not watched (commissioning found it moves the leak sizes too little on this rig)")
+    }
+
     fn validate(&self) -> Result<(), String> {
         let all = self
             .offsets_lpm

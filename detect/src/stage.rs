@@ -96,11 +96,7 @@ impl Classifier {
                 "commissioned from {} ({:.0} s of healthy data): a leak present at start is seen once the filter has converged{}",
                 if c.source.is_empty() { "a healthy recording" } else { &c.source },
                 c.healthy_s,
-                if c.least_offsets_named[2] == f64::INFINITY {
-                    "; an offset on x is not watched (commissioning found it moves the leak sizes too little on this rig)"
-                } else {
-                    ""
-                }
+                c.not_watched().map(|p| format!("; {p}")).unwrap_or_default()
             ),
             None => format!(
                 "not commissioned: the healthy state is learned in the first {:.0} s after the filter converges; a leak \

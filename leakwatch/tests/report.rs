@@ -163,6 +163,44 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
         assert_eq!(row(&report, name), row(&html, name), "{name}");
     }
     assert!(report.contains("Leak alarms (0)"), "a healthy recording");
+    // the record holds the transducers' reach as the terminal says it; on
+    // this rig x is watched (the e2e commissioning test: from 4.1 mm)
+    let reach = err
+        .lines()
+        .find(|l| l.starts_with("transducer offsets named"))
+        .unwrap();
+    assert!(html.contains(reach), "{reach}");
+    assert!(!report.contains("is not watched"));
+    // a commissioning that found x not watched (a plant rig's): the replay
+    // says so at start and in its report
+    let text = std::fs::read_to_string(&toml_path).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("least_offsets_named"))
+        .unwrap();
+    let plant = d.join("plant.toml");
+    std::fs::write(
+        &plant,
+        text.replace(line, "least_offsets_named = [250.0, 250.0, inf]"),
+    )
+    .unwrap();
+    let unwatched = d.join("unwatched");
+    let o = leakwatch(&[
+        "replay",
+        healthy.to_str().unwrap(),
+        "--config",
+        plant.to_str().unwrap(),
+        "--out",
+        unwatched.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("; an offset on x is not watched"),
+        "{}",
+        stderr(&o)
+    );
+    let report = std::fs::read_to_string(unwatched.join("report.html")).unwrap();
+    assert!(report.contains("<b>An offset on x is not watched (commissioning found"));
 }
 
 /// `plot --out X.svg` of a replay of a simulated 0.5 L/min ext1 leak draws

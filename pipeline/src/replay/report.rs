@@ -256,6 +256,11 @@ impl ReplayReport<'_> {
             lf.first_oil_outside_range_s,
         );
         h += "</table>\n";
+        if let Some(phrase) = cfg.commissioning.as_ref().and_then(|c| c.not_watched()) {
+            let mut sentence = phrase.to_string();
+            sentence[..1].make_ascii_uppercase();
+            h += &format!("<p class=\"note\"><b>{}</b>.</p>\n", esc(&sentence));
+        }
         let Some(view) = view else {
             return h;
         };
