@@ -65,6 +65,9 @@ pub const FLAG_END_STOP: u32 = 1 << 6;
 /// ([`Tuning::max_bridged_gap_samples`]): its fast states restarted from this sample
 /// (set with [`FLAG_AFTER_GAP`]; a bridged gap carries [`FLAG_AFTER_GAP`] alone).
 pub const FLAG_REANCHORED: u32 = 1 << 7;
+/// The flag bits of an estimate that is not yet a settled one: reset,
+/// unused or still converging (what averages over a recording leave out).
+pub const FLAGS_UNSETTLED: u32 = FLAG_CONVERGING | FLAG_SKIPPED | FLAG_RESET;
 /// Every flag bit an [`Estimate`] can carry (the wire's end-of-stream bit is not one).
 pub const FLAGS_ALL: u32 = FLAG_RESET
     | FLAG_SKIPPED

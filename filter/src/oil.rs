@@ -11,7 +11,7 @@
 use model::params::OilTemperature;
 use model::ActuatorParams;
 
-use crate::{Estimate, Estimator, FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED, OIL_TEMP_STEP_K};
+use crate::{Estimate, Estimator, FLAGS_UNSETTLED, FLAG_CONVERGING, OIL_TEMP_STEP_K};
 
 /// Time constant of the low-pass on θ that the temperature is read from, s:
 /// the oil warms over minutes, θ jitters over a duty cycle's strokes.
@@ -207,7 +207,7 @@ impl Estimator {
     /// [`OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_viscosity_temperature`]).
     /// Allocates nothing.
     pub(crate) fn follow_oil_stiffness(&mut self, e: &mut Estimate) {
-        let usable = self.started && e.flags & (FLAG_CONVERGING | FLAG_SKIPPED | FLAG_RESET) == 0;
+        let usable = self.started && e.flags & FLAGS_UNSETTLED == 0;
         let Some(oil) = self.oil_from_stiffness.as_mut() else {
             return;
         };

@@ -245,14 +245,13 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
     let mut at_reference = cfg.clone();
     at_reference.model.oil_temperature.reference_stiffness = None;
     let (mut theta_sum, mut theta_n) = (0.0, 0u64);
-    let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
     let mut fit = FitTrace::default();
     let mut responses = ResponseTrace::default();
     replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
         learner.on_estimate(e);
         fit.push(e);
         responses.push(e);
-        if e.bulk_scale.is_finite() && e.flags & unsettled == 0 {
+        if e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0 {
             theta_sum += e.bulk_scale;
             theta_n += 1;
         }

@@ -35,8 +35,7 @@ impl ResponseTrace {
     /// Takes estimate `e` (kept every [`Self::EVERY`]-th, while the filter is settled).
     pub fn push(&mut self, e: &filter::Estimate) {
         self.seen += 1;
-        let unsettled = filter::FLAG_CONVERGING | filter::FLAG_SKIPPED | filter::FLAG_RESET;
-        if !(self.seen - 1).is_multiple_of(Self::EVERY) || e.flags & unsettled != 0 {
+        if !(self.seen - 1).is_multiple_of(Self::EVERY) || e.flags & filter::FLAGS_UNSETTLED != 0 {
             return;
         }
         let r = [
