@@ -160,6 +160,13 @@ pub fn score(
             tau,
         ));
     }
+    params.push(row(
+        "DAQ sample jitter (µs RMS; the model has none)",
+        1e6,
+        0.0,
+        &id.sample_jitter_s,
+        p.and_then(|p| num(p, &["jitter"])),
+    ));
     if let Some(m) = mechanics {
         // The generator's factors at the recording's temperature, where it wrote them.
         let factor = |key: &str| {

@@ -4,12 +4,15 @@
 
 use model::dynamics::{null_leakage_flows, orifice_flows, LeakSet};
 use model::{ActuatorParams, Sample};
-use nalgebra::{DMatrix, DVector};
 
 use crate::{
     judge, Estimate, Found, Identification, Row, SensorNoise, MAX_LAG_S, MIN_MOVING_WINDOWS,
     PLAUSIBLE_COMPLIANCE, PLAUSIBLE_GAIN, PLAUSIBLE_SPOOL_FREQUENCY, RESOLVED_SIGMAS, WINDOW_SAMPLES,
 };
+
+mod solve;
+
+use solve::{chamber_rms, solve, Fitted};
 
 /// Euler sub-steps per sample of the spool's model (h = 0.1 ms at 1 kHz).
 const SPOOL_SUBSTEPS: u32 = 10;
@@ -46,7 +49,11 @@ struct Rows {
 }
 
 /// Builds the windows' equations from the recording.
-fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -> Rows {
+///
+/// The sensor floor counts each window's two position and two pressure
+/// readings: their noise, and the DAQ's timing jitter `jitter_s` (s) times
+/// their rates at the window's ends.
+fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, jitter_s: f64) -> Rows {
     let leaks = LeakSet::from_params(p);
     let (a1, a2) = p.areas_m2();
     let wn = p.spool_natural_freq_rad_s;
@@ -82,7 +89,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
         }
         (f(&rows[k + 2].sample) - f(&rows[k - 2].sample)) / (4.0 * dt_s)
     };
-    let (mut pd1_first, mut pd2_first) = (0.0, 0.0);
+    let (mut pd1_first, mut pd2_first, mut xd_first) = (0.0, 0.0, 0.0);
     // The valve's flows over the previous interval, m³/s (for the line drop's rate).
     let mut q_prev: Option<[f64; 2]> = None;
     for (k, pair) in rows.windows(2).enumerate() {
@@ -127,6 +134,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
         if n == 0 {
             pd1_first = rate(k, |s| s.p1_pa);
             pd2_first = rate(k, |s| s.p2_pa);
+            xd_first = rate(k, |s| s.x_m);
         }
         let nl = null_leakage_flows(&unit_cl, x_sp_mean, p1, p2);
         let qs = orifice_flows(&sagged, x_sp_mean, p1, p2);
@@ -172,102 +180,19 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -
             let sp = noise.pressure_pa / p.bulk_modulus_pa;
             out.floor2[0] += 2.0 * ((a1 * noise.position_m).powi(2) + (vm1 * sp).powi(2));
             out.floor2[1] += 2.0 * ((a2 * noise.position_m).powi(2) + (vm2 * sp).powi(2));
+            // the jitter: each reading off by its rate times δ
+            let xd_last = rate(k + 1, |s| s.x_m);
+            let (pd1_last, pd2_last) = (rate(k + 1, |s| s.p1_pa), rate(k + 1, |s| s.p2_pa));
+            let (c1, c2) = (vm1 / p.bulk_modulus_pa, vm2 / p.bulk_modulus_pa);
+            let j2 = jitter_s * jitter_s;
+            let position2 = xd_first * xd_first + xd_last * xd_last;
+            out.floor2[0] += j2 * (a1 * a1 * position2 + c1 * c1 * (pd1_first.powi(2) + pd1_last.powi(2)));
+            out.floor2[1] += j2 * (a2 * a2 * position2 + c2 * c2 * (pd2_first.powi(2) + pd2_last.powi(2)));
             (acc1, acc2, rhs1, rhs2, dx, n, v1_sum, v2_sum) =
                 ([0.0; UNKNOWNS], [0.0; UNKNOWNS], 0.0, 0.0, 0.0, 0, 0.0, 0.0);
         }
     }
     out
-}
-
-/// Weighted least squares over the columns `cols` with the other unknowns
-/// fixed at `fixed`: (solution over all unknowns, their standard deviations, RMS
-/// residual per chamber in m³ per window).
-fn solve(rows: &Rows, cols: &[Vec<usize>], fixed: &[f64; UNKNOWNS], weights: [f64; 2]) -> Option<Fitted> {
-    let m = rows.y1.len() + rows.y2.len();
-    let k = cols.len();
-    if m <= k {
-        return None;
-    }
-    let mut a = DMatrix::<f64>::zeros(m, k);
-    let mut y = DVector::<f64>::zeros(m);
-    let free: Vec<usize> = cols.iter().flatten().copied().collect();
-    let chambers = [(&rows.x1, &rows.y1, weights[0]), (&rows.x2, &rows.y2, weights[1])];
-    let mut r = 0;
-    for (xs, ys, w) in chambers {
-        for (x, yv) in xs.iter().zip(ys.iter()) {
-            let mut known = 0.0;
-            for (u, fx) in fixed.iter().enumerate() {
-                if !free.contains(&u) {
-                    known += x[u] * fx;
-                }
-            }
-            for (c, group) in cols.iter().enumerate() {
-                a[(r, c)] = w * group.iter().map(|&u| x[u]).sum::<f64>();
-            }
-            y[r] = w * (yv - known);
-            r += 1;
-        }
-    }
-    // Columns scaled to unit norm for the conditioning of the normal equations.
-    let scale: Vec<f64> = (0..k)
-        .map(|c| {
-            let n = a.column(c).norm();
-            if n > 0.0 {
-                n
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    for (c, s) in scale.iter().enumerate() {
-        a.column_mut(c).scale_mut(1.0 / s);
-    }
-    let ata = a.transpose() * &a;
-    let inv = ata.clone().try_inverse()?;
-    let sol = &inv * (a.transpose() * &y);
-    let resid = &y - &a * &sol;
-    let dof = (m - k) as f64;
-    let var = resid.norm_squared() / dof;
-    let mut theta = *fixed;
-    let mut sigma = [f64::NAN; UNKNOWNS];
-    for c in 0..k {
-        for &u in &cols[c] {
-            theta[u] = sol[c] / scale[c];
-            sigma[u] = (var * inv[(c, c)]).sqrt() / scale[c];
-        }
-    }
-    Some(Fitted {
-        theta,
-        sigma,
-        rms: [
-            chamber_rms(&rows.x1, &rows.y1, &theta),
-            chamber_rms(&rows.x2, &rows.y2, &theta),
-        ],
-    })
-}
-
-struct Fitted {
-    /// Every unknown: fitted, or as fixed.
-    theta: [f64; UNKNOWNS],
-    /// Standard deviation of each fitted unknown (NaN for a fixed one).
-    sigma: [f64; UNKNOWNS],
-    rms: [f64; 2],
-}
-
-/// RMS of one chamber's window errors at the unknowns `theta`, m³.
-fn chamber_rms(xs: &[[f64; UNKNOWNS]], ys: &[f64], theta: &[f64; UNKNOWNS]) -> f64 {
-    if xs.is_empty() {
-        return 0.0;
-    }
-    let ss: f64 = xs
-        .iter()
-        .zip(ys)
-        .map(|(x, y)| {
-            let e: f64 = x.iter().zip(theta).map(|(a, b)| a * b).sum::<f64>() - y;
-            e * e
-        })
-        .sum();
-    (ss / xs.len() as f64).sqrt()
 }
 
 /// One linearised fit of [`crate::identify`] around the model `p`.
@@ -280,7 +205,9 @@ pub(crate) fn identify_once(
     if dt_s.is_nan() || dt_s <= 0.0 {
         return Err(format!("sample period {dt_s} s: must be positive"));
     }
-    let built = build_rows(p, dt_s, rows, noise);
+    let sample_jitter_s = crate::jitter::sample_jitter(rows, dt_s, noise);
+    let jitter_s = sample_jitter_s.estimate().map_or(0.0, |e| e.value);
+    let built = build_rows(p, dt_s, rows, noise, jitter_s);
     let windows = built.y1.len();
     if built.moving < MIN_MOVING_WINDOWS {
         return Err(format!(
@@ -341,6 +268,7 @@ pub(crate) fn identify_once(
         gap_before_lpm: pooled(rms_before),
         gap_after_lpm: pooled(fit.rms),
         sensor_floor_lpm: pooled(floor),
+        sample_jitter_s,
         oil_temp_c: None,
     })
 }

@@ -31,6 +31,7 @@
 #![forbid(unsafe_code)]
 
 mod fit;
+mod jitter;
 mod mechanics;
 mod tolerance;
 
@@ -167,8 +168,13 @@ pub struct Identification {
     pub gap_before_lpm: f64,
     /// The same with the identified parameters, L/min.
     pub gap_after_lpm: f64,
-    /// The part of the gap the sensors' noise alone makes, L/min.
+    /// The part of the gap the sensors' noise and the DAQ's timing jitter
+    /// alone make, L/min.
     pub sensor_floor_lpm: f64,
+    /// The DAQ's sample-time jitter, s (RMS of the instants about their
+    /// grid): from the position's second differences, which grow with the
+    /// rod's speed as v·δ. Counted in the sensor floor where identified.
+    pub sample_jitter_s: Found,
     /// The recording's mean oil temperature, °C, when its rows carry one
     /// (`temp_c` in at least half of them): the temperature the identified
     /// values hold at.
@@ -192,6 +198,8 @@ pub struct SensorNoise {
     pub position_m: f64,
     /// Pressure noise, Pa (RMS).
     pub pressure_pa: f64,
+    /// The position sensor's count, m (its quantisation step).
+    pub position_step_m: f64,
 }
 
 /// Identifies the rig on `rows` (a healthy recording at sample period `dt_s`,

@@ -44,6 +44,10 @@ schema::config_struct! {
         /// transducers sit, and each chamber, Pa/(m³/s) (0: transducers at the
         /// cylinder ports): the manifold reads p1 + R·Q1 and p2 − R·Q2, Q the valve's flows.
         pub line_resistance_pa_s_per_m3: f64 = 0.0 => ["Pa/(m³/s)", num!("a resistance", 0, 1e13)],
+        /// Standard deviation of the DAQ's sample instants about their grid, s
+        /// (0: none): every channel of a sample is read at t + δ, δ drawn
+        /// normal, while the sample is stamped t.
+        pub sample_jitter_s: f64 = 0.0 => ["s", num!("a time", 0, 1e-3)],
     }
 }
 

@@ -6,7 +6,7 @@
 use schema::{int, num};
 use serde::{Deserialize, Serialize};
 
-use crate::dynamics::{derivative, rk4_step, state_at_rest, Forces, LeakSet, State, I_X};
+use crate::dynamics::{derivative, rk4_step, state_at_rest, Forces, LeakSet, State, I_P1, I_P2, I_X};
 use crate::fault::FaultSchedule;
 use crate::leakage::LeakFlows;
 use crate::params::{ActuatorParams, InvalidParam};
@@ -326,11 +326,22 @@ impl Simulator {
     /// the sensor faults, through the sensor models. The noise is drawn in the
     /// same order with and without faults.
     fn read_sensors(&mut self, s: &State, t_s: f64) -> [f64; 3] {
-        let p = if self.sensors.has_installation_effects() {
+        let mut p = if self.sensors.has_installation_effects() {
             self.at_transducers(s)
         } else {
             [s[1], s[2]]
         };
+        let mut s = *s;
+        if self.sensors.sample_jitter_s > 0.0 && self.sensors.enabled {
+            // read at t + δ: each value moved by its rate times δ (the
+            // pressures' rates do not depend on the command)
+            let delta = self.sensors.sample_jitter_s * self.rng.normal();
+            let (rate, _) = derivative(&self.rig, &s, 0.0, &self.leaks_at(t_s));
+            s[I_X] += rate[I_X] * delta;
+            p[0] += rate[I_P1] * delta;
+            p[1] += rate[I_P2] * delta;
+        }
+        let s = &s;
         let (sensors, rng) = (&self.sensors, &mut self.rng);
         let Some(run) = self.sensor_faults.as_mut() else {
             return [

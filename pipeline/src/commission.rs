@@ -78,6 +78,7 @@ pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
     let noise = identify::SensorNoise {
         position_m: cfg.sensors.position_sigma_m(),
         pressure_pa: cfg.sensors.pressure_sigma_pa(),
+        position_step_m: cfg.sensors.encoder_resolution_m,
     };
     let rig = identify::identify(&cfg.model, dt, &rows, noise)
         .map_err(|e| format!("{}: cannot identify the rig: {e}", input.display()))?;

@@ -90,6 +90,72 @@ fn an_installation_reads_the_line_drop_offset_span_and_lag() {
     }
 }
 
+/// A DAQ that reads each sample at t + δ (δ normal, σ 50 µs) stamps it t:
+/// the position reads x + v·δ and the pressures p + ṗ·δ, one δ for all
+/// channels; without jitter nothing changes, bit for bit.
+#[test]
+fn a_jittering_daq_reads_each_value_moved_by_its_rate() {
+    use model::dynamics::{derivative, LeakSet, I_P1, I_V, I_X};
+    let rig = model::ActuatorParams::vertical_lift();
+    let exact = SensorParams {
+        encoder_resolution_m: 1e-9,
+        pressure_noise_pa: 0.0,
+        adc_bits: 24,
+        pressure_full_scale_pa: 25e6,
+        ..SensorParams::default()
+    };
+    let sigma = 50e-6;
+    let sim = |sensors: SensorParams| {
+        let sc = Scenario::by_name("lift", 3, 20.0).expect("scenario");
+        Simulator::new(
+            rig.clone(),
+            sensors,
+            SimSettings::default(),
+            sc,
+            FaultSchedule::default(),
+            3,
+        )
+        .expect("rig")
+    };
+    let mut jittered = sim(SensorParams {
+        sample_jitter_s: sigma,
+        ..exact
+    });
+    let (mut n, mut sum2, mut worst) = (0usize, 0.0, 0.0_f64);
+    for _ in 0..20_000 {
+        let s = jittered.step();
+        let t = jittered.truth().state;
+        let (rate, _) = derivative(&rig, &t, 0.0, &LeakSet::from_params(&rig));
+        // the δ this sample was read at, from the position; the pressure moved by its rate times it
+        if t[I_V].abs() > 0.02 {
+            let delta = (s.x_m - t[I_X]) / t[I_V];
+            let p1 = t[I_P1] + rate[I_P1] * delta;
+            worst = worst.max((s.p1_pa - p1).abs() / (rate[I_P1].abs() * sigma).max(1e3));
+            sum2 += delta * delta;
+            n += 1;
+        }
+    }
+    assert!(n > 2000, "the rod moved in {n} samples only");
+    let rms = (sum2 / n as f64).sqrt();
+    assert!(
+        (rms / sigma - 1.0).abs() < 0.1,
+        "δ RMS {rms} s against σ {sigma} s"
+    );
+    assert!(worst < 0.01, "a pressure off its rate times δ by {worst} of σ·ṗ");
+    // without jitter the readings are those of the default settings
+    let (mut a, mut b) = (
+        sim(exact),
+        sim(SensorParams {
+            sample_jitter_s: 0.0,
+            ..exact
+        }),
+    );
+    let bits = |s: model::Sample| s.columns().map(f64::to_bits);
+    for _ in 0..2000 {
+        assert_eq!(bits(a.step()), bits(b.step()));
+    }
+}
+
 /// The simulated pump's ripple (±0.4 % of p_s at 250 Hz): the valve sees
 /// p_s·(1 + 0.004·sin(2π·250·t)) at each sample; through the open valve the
 /// chambers carry more of 250 Hz than without it; with no ripple a run is the

@@ -115,6 +115,17 @@ pub(super) fn flow_balance(
             format!("  line resistance, transducers to chambers: not identifiable from this recording: {why}")
         }
     });
+    out.notes.push(match &id.sample_jitter_s {
+        identify::Found::Identified(e) => format!(
+            "  DAQ sample timing: {:.1} ± {:.1} µs jitter (RMS; from the position's noise, which grows with \
+             the rod's speed; counted in the sensor floor)",
+            e.value * 1e6,
+            e.sigma * 1e6
+        ),
+        identify::Found::NotIdentifiable(why) => {
+            format!("  DAQ sample timing: no jitter counted in the sensor floor: {why}")
+        }
+    });
     out.notes.push(match id.oil_temp_c {
         Some(t) => format!(
             "  oil temperature: {t:.1} °C (the recording's temp_c): the identified values hold there, \
