@@ -114,6 +114,9 @@ pub struct Ekf<const N: usize, const M: usize, const W: usize = N> {
     r: SVector<f64, M>,
     /// Measurement noise standard deviations √r, SI (Potter's γ).
     r_sqrt: SVector<f64, M>,
+    /// The measurement noise variances given at the start, SI: `r` less what
+    /// [`Ekf::set_measurement_rates`] adds.
+    r_given: SVector<f64, M>,
     /// x_scale[j] / x_scale[i] by columns (`ratio[j][i]`), zero in the
     /// padding: scales column j of a Jacobian.
     ratio: [[f64; W]; N],
@@ -156,12 +159,24 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
             q_var,
             r: r_diag,
             r_sqrt: r_diag.map(|r| r.max(0.0).sqrt()),
+            r_given: r_diag,
             ratio,
             walks_from: N,
             work: [[0.0; W]; N],
         };
         f.reset(x0, p0_diag);
         f
+    }
+
+    /// Sets each measurement's noise variance to the one given at the start
+    /// plus (`rates[i]` · `jitter_s`)²: a reading taken δ off its stamp is
+    /// off by its rate times δ (rates in SI per s, the jitter in s, RMS).
+    pub fn set_measurement_rates(&mut self, rates: [f64; M], jitter_s: f64) {
+        for (i, rate) in rates.iter().enumerate() {
+            let r = self.r_given[i] + (rate * jitter_s).powi(2);
+            self.r[i] = r;
+            self.r_sqrt[i] = r.max(0.0).sqrt();
+        }
     }
 
     /// Declares states `first..N` random walks: rows `first..N` of every

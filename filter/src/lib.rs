@@ -258,6 +258,7 @@ impl Estimator {
                 use_channel: [true; 3],
                 usable: true,
                 gate_outliers: false,
+                jitter_s: 0.0,
             };
             let memory = StepMemory {
                 still_samples: &mut 0,
@@ -506,6 +507,7 @@ impl Estimator {
             usable,
             gate_outliers: self.tuning.states >= LEAK_LAYOUT_STATES
                 && s.t_s - self.t0_s >= self.tuning.convergence_time_s,
+            jitter_s: self.tuning.sample_jitter_s,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,

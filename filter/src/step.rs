@@ -96,6 +96,9 @@ pub(crate) struct StepInput {
     /// only (the thesis filter stays as published), and not while it
     /// converges from its start, when large innovations are its own.
     pub(crate) gate_outliers: bool,
+    /// The DAQ's sample-time jitter the measurement noise counts, s (RMS; 0:
+    /// none, R as tuned).
+    pub(crate) jitter_s: f64,
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
@@ -150,6 +153,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         use_channel,
         usable,
         gate_outliers,
+        jitter_s,
     } = *input;
     let StepMemory {
         still_samples,
@@ -174,6 +178,13 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         let (from_v1, from_v2) = model.bulk_column_from_velocity(e.state());
         f[(1, I_BULK)] -= from_v1;
         f[(2, I_BULK)] -= from_v2;
+    }
+    if jitter_s > 0.0 {
+        // each reading is off by its rate times the jitter: the measured
+        // states' rates over this step, from the prediction
+        let prior = e.state();
+        let rates = ProcessModel::MEASURED_STATES.map(|i| (x_pred[i] - prior[i]) / model.dt_s);
+        e.set_measurement_rates(rates, jitter_s);
     }
     e.predict_lean::<A>(x_pred, &f)?;
     offset_response.predict(&f);

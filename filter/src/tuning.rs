@@ -64,6 +64,11 @@ schema::config_struct! {
         pub r_x_m2: f64 = 1e-4 => ["m²", num!("a number", 1e-30, 100.0)],
         /// R of each chamber pressure, Pa².
         pub r_p_pa2: f64 = 1e6 => ["Pa²", num!("a number", 1e-30, 1e18)],
+        /// The DAQ's sample-time jitter, s (RMS; 0: none): a reading taken
+        /// δ off its stamp is off by its rate times δ, so each channel's R
+        /// grows by (rate · jitter)² at the predicted rates. `commission`
+        /// sets it from the recording (docs/identification.md).
+        pub sample_jitter_s: f64 = 0.0 => ["s", num!("a time", 0.0, 0.001)],
         /// P0 of the spool position, m².
         pub p0_x_sp_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
         /// P0 of each chamber pressure, Pa².

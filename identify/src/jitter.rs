@@ -18,6 +18,8 @@ use crate::{Estimate, Found, Row, SensorNoise, RESOLVED_SIGMAS};
 const STENCIL: usize = 10;
 /// Sum of the third difference's squared weights (1 + 9 + 9 + 1).
 const WEIGHT: f64 = 20.0;
+/// Readings one third difference spans.
+const DIFFERENCE_SPAN: usize = 4;
 /// Largest acceleration of a sample the fit reads, m/s²: the rod moves
 /// steadily there.
 const STEADY_M_S2: f64 = 0.5;
@@ -29,7 +31,7 @@ const COUNTS_PER_SAMPLE: f64 = 2.0;
 /// dithered by the noise, and their error follows the speed in a pattern.
 const MOST_STEP_PER_SIGMA: f64 = 2.0;
 /// Fewest samples the fit needs.
-const MIN_SAMPLES: usize = 1000;
+const MIN_SAMPLES: usize = 500;
 /// Largest jitter accepted, as a share of the sample period (1).
 const MOST_SHARE_OF_PERIOD: f64 = 0.2;
 
@@ -52,7 +54,9 @@ pub(crate) fn sample_jitter(rows: &[Row], dt_s: f64, noise: SensorNoise) -> Foun
     let span = 2.0 * STENCIL as f64 * dt_s;
     // (20·v², (Δ³x)²) per sample read
     let mut points: Vec<(f64, f64)> = Vec::new();
-    for k in STENCIL..rows.len().saturating_sub(STENCIL) {
+    // every fourth sample: the differences then share no reading, and the
+    // fit's σ holds for independent points
+    for k in (STENCIL..rows.len().saturating_sub(STENCIL)).step_by(DIFFERENCE_SPAN) {
         if rows[k + 1 - STENCIL..=k + STENCIL].iter().any(|r| r.after_gap) {
             continue;
         }

@@ -120,6 +120,10 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     flow_balance(&id, null_leakage_tolerance, cfg, &mut said);
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
+    // the leak filter's measurement noise counts the DAQ's jitter read here
+    if let Some(j) = id.sample_jitter_s.estimate() {
+        out.leak_filter.sample_jitter_s = j.value;
+    }
     match found_mechanics {
         Ok(mech) => {
             force_balance(&mech, cfg, &mut said);

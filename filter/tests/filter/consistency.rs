@@ -93,3 +93,98 @@ fn nis_is_chi_square_on_a_matched_linear_system() {
     let mean = sum / n;
     assert!((mean - 2.0).abs() < 0.06, "mean NIS {mean}, expected 2");
 }
+
+/// A DAQ that reads each sample 30 µs (RMS) off its stamp puts v·δ on the
+/// position. On the lift's cycle (model = rig) the position innovations at
+/// speed grow by the jitter's variance, mean (v·σ_δ)², and by part of it
+/// again (the estimate carries the past readings' v·δ); counted
+/// ([`Tuning::sample_jitter_s`]), the filter's innovation variance grows by
+/// about as much (its R by exactly that, its prior a little). Without a jitter the steps are the tuning's, bit for bit.
+#[test]
+fn a_counted_jitter_adds_its_variance_to_the_position_innovations() {
+    let rig = ActuatorParams::vertical_lift();
+    let jitter_s = 30e-6;
+    let sensors = |jitter_s: f64| model::SensorParams {
+        encoder_resolution_m: 2e-6,
+        position_noise_m: 3e-6,
+        pressure_full_scale_pa: 25e6,
+        adc_bits: 16,
+        pressure_noise_pa: 8e3,
+        sample_jitter_s: jitter_s,
+        ..model::SensorParams::default()
+    };
+    let record = |jitter_s: f64| {
+        let scenario = model::Scenario::by_name("lift", 3, 60.0).expect("scenario");
+        let rig = rig.clone();
+        let settings = model::SimSettings::default();
+        let mut sim = model::Simulator::new(
+            rig,
+            sensors(jitter_s),
+            settings,
+            scenario,
+            model::FaultSchedule::default(),
+            7,
+        )
+        .expect("rig");
+        sim.run(60.0)
+    };
+    let s = sensors(0.0);
+    let tuning = Tuning {
+        r_x_m2: s.position_sigma_m().powi(2),
+        r_p_pa2: s.pressure_sigma_pa().powi(2),
+        ..Tuning::sensor_derived()
+    };
+    // over the samples after 10 s where the rod moves faster than 0.1 m/s:
+    // mean ν_x², mean σ_x² (the filter's innovation variance), mean v², m² and m²/s²
+    let at_speed = |samples: &[model::Sample], jitter_s: f64| {
+        let tuning = Tuning {
+            sample_jitter_s: jitter_s,
+            ..tuning.clone()
+        };
+        let mut est = Estimator::new(rig.clone(), tuning).unwrap();
+        let (mut n, mut nu2, mut c, mut v2) = (0usize, 0.0, 0.0, 0.0);
+        for s in samples {
+            let e = est.on_sample(s);
+            if s.t_s > 10.0 && e.state[4].abs() > 0.1 {
+                nu2 += e.innovation[0].powi(2);
+                c += e.innovation_sigma[0].powi(2);
+                v2 += e.state[4].powi(2);
+                n += 1;
+            }
+        }
+        let n = n.max(1) as f64;
+        (nu2 / n, c / n, v2 / n, n)
+    };
+    let (clean, jittered) = (record(0.0), record(jitter_s));
+    let (nu2_clean, c_clean, _, n) = at_speed(&clean, 0.0);
+    let (nu2_jittered, _, v2, _) = at_speed(&jittered, 0.0);
+    let (_, c_counted, _, _) = at_speed(&jittered, jitter_s);
+    assert!(n > 1000.0, "{n} samples at speed");
+    let share = jitter_s * jitter_s * v2;
+    let grown = nu2_jittered - nu2_clean;
+    // at least the reading's own v·δ; the estimate carries part of the past ones
+    assert!(
+        (1.0..1.5).contains(&(grown / share)),
+        "the innovations grew by {grown:e} m² against the jitter's {share:e}"
+    );
+    // R's part is the jitter's variance; the prior's grows a little with it
+    let counted = c_counted - c_clean;
+    assert!(
+        (1.0..1.25).contains(&(counted / share)),
+        "the innovation variance grew by {counted:e} m² against the jitter's {share:e}"
+    );
+    // no jitter: the same bits as a tuning that never had the field set
+    let mut a = Estimator::new(rig.clone(), tuning.clone()).unwrap();
+    let mut b = Estimator::new(
+        rig.clone(),
+        Tuning {
+            sample_jitter_s: 0.0,
+            ..tuning.clone()
+        },
+    )
+    .unwrap();
+    for s in &jittered[..5000] {
+        let (x, y) = (a.on_sample(s), b.on_sample(s));
+        assert_eq!(x.state.map(f64::to_bits), y.state.map(f64::to_bits));
+    }
+}

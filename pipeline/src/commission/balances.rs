@@ -118,7 +118,8 @@ pub(super) fn flow_balance(
     out.notes.push(match &id.sample_jitter_s {
         identify::Found::Identified(e) => format!(
             "  DAQ sample timing: {:.1} ± {:.1} µs jitter (RMS; from the position's noise, which grows with \
-             the rod's speed; counted in the sensor floor)",
+             the rod's speed; counted in the sensor floor and, as [leak_filter] sample_jitter_s, in the \
+             leak filter's measurement noise)",
             e.value * 1e6,
             e.sigma * 1e6
         ),
