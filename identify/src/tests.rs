@@ -374,13 +374,8 @@ fn a_right_model_on_noisy_sensors_leaves_the_sensor_floor() {
     let mut floors = Vec::new();
     for jitter_s in [0.0, 30e-6] {
         let sensors = model::SensorParams {
-            encoder_resolution_m: 2e-6,
-            position_noise_m: 3e-6,
-            pressure_full_scale_pa: 25e6,
-            adc_bits: 16,
-            pressure_noise_pa: 8e3,
             sample_jitter_s: jitter_s,
-            ..model::SensorParams::default()
+            ..model::SensorParams::plant()
         };
         let rows = record_with(&rig, sensors, "lift", 60.0, 0);
         let noise = SensorNoise {

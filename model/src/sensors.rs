@@ -58,6 +58,20 @@ impl SensorParams {
         Ok(self.check_ranges("sensors")?)
     }
 
+    /// The plant rigs' sensors (plant_dev's datasheets): a position sensor
+    /// of 2 µm counts with 3 µm noise, pressure transducers over 0-25 MPa
+    /// through 16 bits with 8 kPa noise; no installation effects, no jitter.
+    pub fn plant() -> Self {
+        SensorParams {
+            encoder_resolution_m: 2e-6,
+            position_noise_m: 3e-6,
+            pressure_full_scale_pa: 25e6,
+            adc_bits: 16,
+            pressure_noise_pa: 8e3,
+            ..SensorParams::default()
+        }
+    }
+
     /// Ideal sensors: measurements equal the true states.
     pub fn ideal() -> Self {
         SensorParams {

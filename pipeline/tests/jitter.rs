@@ -15,13 +15,8 @@ use model::{FaultSchedule, SensorParams};
 fn commissioned_jitter_s(jitter_s: f64) -> f64 {
     let rig = ActuatorParams::vertical_lift();
     let sensors = SensorParams {
-        encoder_resolution_m: 2e-6,
-        position_noise_m: 3e-6,
-        pressure_full_scale_pa: 25e6,
-        adc_bits: 16,
-        pressure_noise_pa: 8e3,
         sample_jitter_s: jitter_s,
-        ..SensorParams::default()
+        ..SensorParams::plant()
     };
     let scenario = Scenario::by_name("lift", 3, 60.0).expect("scenario");
     let mut sim = Simulator::new(

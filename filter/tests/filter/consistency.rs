@@ -105,13 +105,8 @@ fn a_counted_jitter_adds_its_variance_to_the_position_innovations() {
     let rig = ActuatorParams::vertical_lift();
     let jitter_s = 30e-6;
     let sensors = |jitter_s: f64| model::SensorParams {
-        encoder_resolution_m: 2e-6,
-        position_noise_m: 3e-6,
-        pressure_full_scale_pa: 25e6,
-        adc_bits: 16,
-        pressure_noise_pa: 8e3,
         sample_jitter_s: jitter_s,
-        ..model::SensorParams::default()
+        ..model::SensorParams::plant()
     };
     let record = |jitter_s: f64| {
         let scenario = model::Scenario::by_name("lift", 3, 60.0).expect("scenario");
