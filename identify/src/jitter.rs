@@ -77,6 +77,13 @@ pub(crate) fn sample_jitter(rows: &[Row], dt_s: f64, noise: SensorNoise) -> Foun
         ));
     }
     let (slope, sigma) = fitted_slope(&points);
+    if slope < -RESOLVED_SIGMAS * sigma {
+        return Found::NotIdentifiable(format!(
+            "the position's noise falls with the speed ({:.1} ± {:.1} µs²): the rod's own motion is in it, not a jitter",
+            slope * 1e12,
+            sigma * 1e12
+        ));
+    }
     if slope.is_nan() || slope <= RESOLVED_SIGMAS * sigma {
         return Found::NotIdentifiable(format!(
             "not resolved from zero ({:.1} ± {:.1} µs²)",
