@@ -65,10 +65,9 @@ pub const EPISODE_LEVEL: f64 = 0.5;
 pub const OFFSET_FIT_RATIO: f64 = 0.5;
 /// Once the window's offset vetoes leak evidence ([`OFFSET_FIT_RATIO`]), it
 /// keeps vetoing while its fit leaves less than this share of what the best
-/// leak's leaves (1), as long as a transducer's drift could have made it
-/// ([`MOST_DRIFT_MPA_PER_S`]). A drifting offset's fit hovers about the entry
-/// ratio as the drift moves the filter's oil estimate; an offset that grew in
-/// seconds is a leak (on an open-loop sine an internal leak fits one).
+/// leak's leaves (1). A drifting offset's fit hovers about the entry ratio as
+/// the drift moves the filter's oil estimate; a leak's onset takes the ratio
+/// past 1.
 pub const OFFSET_HOLD_RATIO: f64 = 0.7;
 /// An offset's swing about its baseline is fitted in its place when it leaves
 /// less than this share of what the offset's response as the filter gives it
@@ -195,8 +194,7 @@ pub struct OffsetWatch {
     /// ([`Fit::best_offset`] in all forms), as of the last sample read.
     window_best: BestOffset,
     /// Whether the window's offset vetoes leak evidence, as of the last
-    /// sample read (entered at [`OFFSET_FIT_RATIO`], held to [`OFFSET_HOLD_RATIO`]
-    /// while a drift could have made it).
+    /// sample read (entered at [`OFFSET_FIT_RATIO`], held to [`OFFSET_HOLD_RATIO`]).
     window_vetoes: bool,
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
@@ -378,16 +376,7 @@ impl OffsetWatch {
     /// than [`MOST_DRIFT_MPA_PER_S`] could have made it since its channel's
     /// part of the rises began to grow, at `t_s` (s).
     fn grew_past_a_drift(&self, h: usize, t_s: f64) -> bool {
-        self.leak_named && self.faster_than_a_drift(h, t_s)
-    }
-
-    /// Whether the pressure offset of hypothesis `h` fitted over the window
-    /// (a span error's at the present pressure) is larger than
-    /// [`MOST_DRIFT_MPA_PER_S`] could have made it since its channel's part
-    /// of the rises began to grow, at `t_s` (s). False on x: an offset on x
-    /// grows at a transducer's drift.
-    fn faster_than_a_drift(&self, h: usize, t_s: f64) -> bool {
-        if is_position(h) {
+        if !self.leak_named || is_position(h) {
             return false;
         }
         let c = channel_of(h);
@@ -484,15 +473,17 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
+        self.window_vetoes = self.window_offset_fits(if self.window_vetoes {
+            OFFSET_HOLD_RATIO
+        } else {
+            OFFSET_FIT_RATIO
+        });
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
                 self.low_since_s[c] = t_s;
             }
         }
-        // (a veto is held only for an offset a transducer's drift could have made)
-        let hold = self.window_vetoes && !self.faster_than_a_drift(self.window_best.h, t_s);
-        self.window_vetoes = self.window_offset_fits(if hold { OFFSET_HOLD_RATIO } else { OFFSET_FIT_RATIO });
         if let Some(s) = self.standing {
             if self.window.channel_explained_rms_lpm(s.channel) < 0.5 * level {
                 let since = *self.fading_since_s.get_or_insert(self.watched_s);
