@@ -63,12 +63,6 @@ pub const EPISODE_LEVEL: f64 = 0.5;
 /// they are no leak evidence, and it may be named. (Where the offset's response
 /// barely swings, as under a steady sine, both fit alike and neither wins.)
 pub const OFFSET_FIT_RATIO: f64 = 0.5;
-/// Once the window's offset vetoes leak evidence ([`OFFSET_FIT_RATIO`]), it
-/// keeps vetoing while its fit leaves less than this share of what the best
-/// leak's leaves (1). A drifting offset's fit hovers about the entry ratio as
-/// the drift moves the filter's oil estimate; a leak's onset takes the ratio
-/// past 1.
-pub const OFFSET_HOLD_RATIO: f64 = 0.7;
 /// An offset's swing about its baseline is fitted in its place when it leaves
 /// less than this share of what the offset's response as the filter gives it
 /// leaves (1). A leak's steady rise, or a healthy rig's hoses, fit both forms
@@ -193,9 +187,6 @@ pub struct OffsetWatch {
     /// The window's best misreading and what its fit leaves
     /// ([`Fit::best_offset`] in all forms), as of the last sample read.
     window_best: BestOffset,
-    /// Whether the window's offset vetoes leak evidence, as of the last
-    /// sample read (entered at [`OFFSET_FIT_RATIO`], held to [`OFFSET_HOLD_RATIO`]).
-    window_vetoes: bool,
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
     /// When the episode's rises were last high, s.
@@ -251,7 +242,6 @@ impl Default for OffsetWatch {
                 left: 0.0,
                 leak_left: 0.0,
             },
-            window_vetoes: false,
             episode: None,
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
@@ -310,8 +300,7 @@ impl OffsetWatch {
 
     /// Whether the rises of the present episode fit an offset better than any
     /// leak, or those of the window do with the offset's part of them past
-    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold (held as
-    /// [`OFFSET_HOLD_RATIO`] says): they are no leak evidence.
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold: they are no leak evidence.
     /// The episode's fit takes p1's and p2's offsets' responses as given alone:
     /// over its first seconds a leak's step fits some swing, or a span error's
     /// response under a cycle that moves the pressure, as well as it fits the
@@ -322,7 +311,7 @@ impl OffsetWatch {
                 f.offset_fits_better(&f.best_offset(false, &self.directions), OFFSET_FIT_RATIO)
             }
         });
-        episode || self.window_vetoes
+        episode || self.window_offset_fits(OFFSET_FIT_RATIO)
     }
 
     /// Whether, over the window, the best offset's part of the rises is past
@@ -473,11 +462,6 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
-        self.window_vetoes = self.window_offset_fits(if self.window_vetoes {
-            OFFSET_HOLD_RATIO
-        } else {
-            OFFSET_FIT_RATIO
-        });
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {

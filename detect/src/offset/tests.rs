@@ -322,22 +322,9 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
 /// Returns the first change.
 fn watch_position(b_mm: f64, scale: f64, steady_leak_lpm: f64) -> (OffsetWatch, Option<OffsetChange>) {
     let mut watch = OffsetWatch::new(25e6);
-    let first = feed_position(&mut watch, 0.0..60.0, b_mm, scale, steady_leak_lpm);
-    (watch, first)
-}
-
-/// Feeds `watch` the samples of [`watch_position`] over `seconds` (s);
-/// returns the first change.
-fn feed_position(
-    watch: &mut OffsetWatch,
-    seconds: std::ops::Range<f64>,
-    b_mm: f64,
-    scale: f64,
-    steady_leak_lpm: f64,
-) -> Option<OffsetChange> {
     let (mut id, mut first) = (1, None);
     let factors = crate::NOMINAL_INTERNAL_FACTORS;
-    for n in (seconds.start * 100.0).round() as usize..(seconds.end * 100.0).round() as usize {
+    for n in 0..6000 {
         let t = n as f64 * 0.01;
         let swing = (std::f64::consts::PI * t / 2.0).sin().abs().powi(2);
         let xi = [0.009 * (1.0 + swing), -0.012 * (1.0 + 0.5 * swing), 0.001].map(|v| scale * v);
@@ -351,39 +338,7 @@ fn feed_position(
         let change = watch.on_rise(t, 0.01, rise, &response, [8.0, 3.0], factors, [0.05; 3], &mut id);
         first = first.or(change);
     }
-    first
-}
-
-#[test]
-fn a_veto_holds_while_its_offset_fits_clearly_better_and_lifts_at_a_leak() {
-    // an offset of 3 mm on x alone for 30 s: the window vetoes
-    let mut held = OffsetWatch::new(25e6);
-    feed_position(&mut held, 0.0..30.0, 3.0, 1.0, 0.0);
-    assert!(held.vetoes());
-    // then a small steady ext2 rise beside it, for 60 s: the offset's fit
-    // leaves between the entry and the hold ratio of what a leak's leaves
-    feed_position(&mut held, 30.0..90.0, 3.0, 1.0, 0.015);
-    let ratio = |w: &OffsetWatch| w.window_best.left / w.window_best.leak_left;
-    assert!(
-        ratio(&held) > OFFSET_FIT_RATIO && ratio(&held) < OFFSET_HOLD_RATIO,
-        "{}",
-        ratio(&held)
-    );
-    assert!(held.vetoes());
-    // the same rises from the start never enter the veto
-    let mut fresh = OffsetWatch::new(25e6);
-    feed_position(&mut fresh, 0.0..90.0, 3.0, 1.0, 0.015);
-    assert!(
-        (ratio(&fresh) - ratio(&held)).abs() < 0.01,
-        "{} {}",
-        ratio(&fresh),
-        ratio(&held)
-    );
-    assert!(!fresh.vetoes());
-    // a leak of 0.05 L/min beside the offset fits as well as it: released
-    feed_position(&mut held, 90.0..120.0, 3.0, 1.0, 0.05);
-    assert!(ratio(&held) > OFFSET_HOLD_RATIO, "{}", ratio(&held));
-    assert!(!held.vetoes());
+    (watch, first)
 }
 
 #[test]
