@@ -195,17 +195,18 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
     out
 }
 
-/// One linearised fit of [`crate::identify`] around the model `p`.
+/// One linearised fit of [`crate::identify`] around the model `p`, with the
+/// DAQ's jitter `sample_jitter_s` read once on the recording.
 pub(crate) fn identify_once(
     p: &ActuatorParams,
     dt_s: f64,
     rows: &[Row],
     noise: SensorNoise,
+    sample_jitter_s: &Found,
 ) -> Result<Identification, String> {
     if dt_s.is_nan() || dt_s <= 0.0 {
         return Err(format!("sample period {dt_s} s: must be positive"));
     }
-    let sample_jitter_s = crate::jitter::sample_jitter(rows, dt_s, noise);
     let jitter_s = sample_jitter_s.estimate().map_or(0.0, |e| e.value);
     let built = build_rows(p, dt_s, rows, noise, jitter_s);
     let windows = built.y1.len();
@@ -268,7 +269,7 @@ pub(crate) fn identify_once(
         gap_before_lpm: pooled(rms_before),
         gap_after_lpm: pooled(fit.rms),
         sensor_floor_lpm: pooled(floor),
-        sample_jitter_s,
+        sample_jitter_s: sample_jitter_s.clone(),
         oil_temp_c: None,
     })
 }

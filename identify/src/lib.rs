@@ -212,7 +212,9 @@ pub fn identify(
     rows: &[Row],
     noise: SensorNoise,
 ) -> Result<Identification, String> {
-    let mut id = fit::identify_once(p, dt_s, rows, noise)?;
+    // the jitter is the recording's, whatever the model: read once
+    let jitter = jitter::sample_jitter(rows, dt_s, noise);
+    let mut id = fit::identify_once(p, dt_s, rows, noise, &jitter)?;
     let mut at = p.clone();
     for _ in 0..3 {
         let Some(w) = id.spool_natural_freq_rad_s.estimate() else {
@@ -224,7 +226,7 @@ pub fn identify(
         at.spool_natural_freq_rad_s = w.value;
         id = Identification {
             gap_before_lpm: id.gap_before_lpm,
-            ..fit::identify_once(&at, dt_s, rows, noise)?
+            ..fit::identify_once(&at, dt_s, rows, noise, &jitter)?
         };
     }
     id.oil_temp_c = mean_oil_temp_c(rows);

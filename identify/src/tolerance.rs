@@ -79,7 +79,8 @@ pub fn null_leakage_tolerance(
     if let Some(w) = id.spool_natural_freq_rad_s.estimate() {
         at.spool_natural_freq_rad_s = w.value;
     }
-    let base = null_leakage(&at, dt_s, rows, noise)?;
+    let fit = |rows: &[Row]| null_leakage(&at, dt_s, rows, noise, &id.sample_jitter_s);
+    let base = fit(rows)?;
     let (mut sum_sq, mut worst) = (0.0, 0.0);
     for channel in 0..2 {
         for (offset_pa, span) in [(tol.zero_offset_max_pa, 0.0), (0.0, tol.span_error_max_fraction)] {
@@ -87,8 +88,8 @@ pub fn null_leakage_tolerance(
                 continue;
             }
             // both ways: the fit's columns (the line's) may come and go with them
-            let up = null_leakage(&at, dt_s, &misread(rows, channel, offset_pa, span), noise)? - base;
-            let down = null_leakage(&at, dt_s, &misread(rows, channel, -offset_pa, -span), noise)? - base;
+            let up = fit(&misread(rows, channel, offset_pa, span))? - base;
+            let down = fit(&misread(rows, channel, -offset_pa, -span))? - base;
             sum_sq += (up * up + down * down) / 6.0;
             worst += up.abs().max(down.abs());
         }
@@ -99,9 +100,19 @@ pub fn null_leakage_tolerance(
     })
 }
 
-/// The null leakage one fit finds on `rows` against `p`, m³/(s·Pa).
-fn null_leakage(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise) -> Option<f64> {
-    match identify_once(p, dt_s, rows, noise).ok()?.null_leakage_m3_s_pa {
+/// The null leakage one fit finds on `rows` against `p`, m³/(s·Pa), with the
+/// DAQ's jitter `jitter` read on the recording.
+fn null_leakage(
+    p: &ActuatorParams,
+    dt_s: f64,
+    rows: &[Row],
+    noise: SensorNoise,
+    jitter: &Found,
+) -> Option<f64> {
+    match identify_once(p, dt_s, rows, noise, jitter)
+        .ok()?
+        .null_leakage_m3_s_pa
+    {
         Found::Identified(e) => Some(e.value),
         Found::NotIdentifiable(_) => None,
     }
