@@ -44,6 +44,10 @@
 use crate::{EventKind, LeakEvent, Phase};
 
 mod fit;
+mod hold;
+
+use hold::VetoHold;
+pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
 
 use fit::{
     channel_of, is_position, is_span, leak_directions, swing_of, without_reverse_internal, BestOffset, Fit,
@@ -221,6 +225,8 @@ pub struct OffsetWatch {
     baseline_step: f64,
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]).
     leak_named: bool,
+    /// Whether the window's offset vetoes leak evidence, held while it drifts.
+    window_veto: VetoHold,
 }
 
 impl OffsetWatch {
@@ -257,6 +263,7 @@ impl Default for OffsetWatch {
             reading_mpa: [0.0; 2],
             baseline_step: 0.0,
             leak_named: false,
+            window_veto: VetoHold::default(),
         }
     }
 }
@@ -305,13 +312,14 @@ impl OffsetWatch {
     /// over its first seconds a leak's step fits some swing, or a span error's
     /// response under a cycle that moves the pressure, as well as it fits the
     /// leak; an offset on x grows too slowly to make an episode's step.
+    /// The window's veto is held while the offset drifts ([`OFFSET_HOLD_RATIO`]).
     pub fn vetoes(&self) -> bool {
         let episode = self.episode.as_ref().is_some_and(|f| {
             f.w >= EPISODE_MIN_S && {
                 f.offset_fits_better(&f.best_offset(false, &self.directions), OFFSET_FIT_RATIO)
             }
         });
-        episode || self.window_offset_fits(OFFSET_FIT_RATIO)
+        episode || self.window_veto.vetoes()
     }
 
     /// Whether, over the window, the best offset's part of the rises is past
@@ -462,6 +470,16 @@ impl OffsetWatch {
         }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
+        let left = (self.window_best.left, self.window_best.leak_left);
+        let mut window_veto = self.window_veto;
+        window_veto.update(
+            left,
+            OFFSET_FIT_RATIO,
+            |ratio| self.window_offset_fits(ratio),
+            self.watched_s,
+            dt_s,
+        );
+        self.window_veto = window_veto;
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
