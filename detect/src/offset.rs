@@ -326,10 +326,15 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
     /// less than `ratio` times what the best leak's leaves.
     fn window_offset_fits(&self, ratio: f64) -> bool {
-        let best = &self.window_best;
+        self.window_offset_material() && self.window.offset_fits_better(&self.window_best, ratio)
+    }
+
+    /// Whether, over the window, the best offset's part of the rises is past
+    /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold.
+    fn window_offset_material(&self) -> bool {
         self.watched_s >= OFFSET_WINDOW_S
-            && self.window.explained_rms_lpm(best.h) > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-            && self.window.offset_fits_better(best, ratio)
+            && self.window.explained_rms_lpm(self.window_best.h)
+                > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
     }
 
     /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
@@ -471,15 +476,8 @@ impl OffsetWatch {
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
         let left = (self.window_best.left, self.window_best.leak_left);
-        let mut window_veto = self.window_veto;
-        window_veto.update(
-            left,
-            OFFSET_FIT_RATIO,
-            |ratio| self.window_offset_fits(ratio),
-            self.watched_s,
-            dt_s,
-        );
-        self.window_veto = window_veto;
+        let material = self.window_offset_material() && self.window.energy > 0.0;
+        self.window_veto.update(left, material, self.watched_s, dt_s);
         let level = OFFSET_NAMED_SHARE * smallest;
         for c in 0..OFFSET_CHANNEL_NAMES.len() {
             if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {

@@ -2,7 +2,7 @@
 //! not let go while the offset still fits nearly as well as before.
 //!
 //! The share is what the best offset's fit leaves over what the best leak's
-//! leaves (1): under [`OFFSET_FIT_RATIO`](super::OFFSET_FIT_RATIO) the offset
+//! leaves (1): under [`OFFSET_FIT_RATIO`] the offset
 //! vetoes. A drifting offset's share creeps up over minutes as the filter's
 //! slow states take part of it up, and flickers about the entry ratio on the
 //! way: each rise above it let the leak evidence through. So a veto that has
@@ -13,6 +13,8 @@
 //! within a second) is not held; a drift's slower creep is held until it
 //! passes [`OFFSET_HOLD_RATIO`]. A veto entered by a share falling as fast
 //! (a leak's onset whose rises happen to fit an offset) is not held.
+
+use super::OFFSET_FIT_RATIO;
 
 /// The share (1) the veto holds to, once held.
 pub const OFFSET_HOLD_RATIO: f64 = 0.7;
@@ -60,20 +62,22 @@ impl VetoHold {
     }
 
     /// Reads one sample of period `dt_s` (s), `watched_s` (s) into the watch:
-    /// the share `offset_left / leak_left` (what each best fit leaves, any
-    /// unit; NaN where no leak fit leaves anything) and `fits(ratio)`, whether
-    /// the offset fits at that ratio. The veto stands where it fits at
-    /// `entry_ratio`, or where it was entered with the share falling slowly,
-    /// has stood for [`OFFSET_HOLD_TAU_S`] and fits at [`OFFSET_HOLD_RATIO`]
-    /// with its share rising slowly. Returns whether it stands.
+    /// what the best offset's and the best leak's fits leave (any one unit),
+    /// and whether the offset's part of the rises is `material`. The offset
+    /// fits at a ratio where it is material and its fit leaves less than the
+    /// ratio times the leak's. The veto stands where it fits at
+    /// [`OFFSET_FIT_RATIO`], or where it was entered with the share falling
+    /// slowly, has stood for [`OFFSET_HOLD_TAU_S`] and fits at
+    /// [`OFFSET_HOLD_RATIO`] with its share rising slowly. Returns whether it
+    /// stands.
     pub(super) fn update(
         &mut self,
         (offset_left, leak_left): (f64, f64),
-        entry_ratio: f64,
-        fits: impl Fn(f64) -> bool,
+        material: bool,
         watched_s: f64,
         dt_s: f64,
     ) -> bool {
+        let fits = |ratio: f64| material && offset_left < ratio * leak_left;
         let share = if leak_left > 0.0 {
             (offset_left / leak_left).min(SHARE_CAP)
         } else {
@@ -93,7 +97,7 @@ impl VetoHold {
             }
         }
         let stood = self.vetoes && self.entered_slowly && watched_s - self.since_s >= OFFSET_HOLD_TAU_S;
-        let vetoes = fits(entry_ratio) || (stood && rising_slowly && fits(OFFSET_HOLD_RATIO));
+        let vetoes = fits(OFFSET_FIT_RATIO) || (stood && rising_slowly && fits(OFFSET_HOLD_RATIO));
         if vetoes && !self.vetoes {
             self.since_s = watched_s;
             self.entered_slowly = !falling_fast;
@@ -117,7 +121,7 @@ mod tests {
             .map(|n| {
                 let t = (n + 1) as f64 * dt;
                 let s = share(t);
-                hold.update((s, 1.0), 0.5, |ratio| s < ratio, t, dt)
+                hold.update((s, 1.0), true, t, dt)
             })
             .collect()
     }
@@ -189,9 +193,9 @@ mod tests {
     fn without_a_leak_fit_to_compare_with_the_veto_is_not_held() {
         let mut hold = VetoHold::default();
         for n in 1..=1000 {
-            assert!(hold.update((0.3, 1.0), 0.5, |r| 0.3 < r, n as f64 * 0.01, 0.01));
+            assert!(hold.update((0.3, 1.0), true, n as f64 * 0.01, 0.01));
         }
         // The leak's fit leaves nothing (NaN share): only the entry ratio counts.
-        assert!(!hold.update((0.3, 0.0), 0.5, |r| r > 0.6, 10.01, 0.01));
+        assert!(!hold.update((0.3, 0.0), true, 10.01, 0.01));
     }
 }
