@@ -167,9 +167,18 @@ mod tests {
             // a unit offset, then a unit velocity (whose responses are 1/ω_n smaller)
             for (col, start, scale) in [(0, [1.0, 0.0], 1.0), (1, [0.0, 1.0], 1.0 / wn)] {
                 let ([z, v], mean) = integrated(wn, zeta, start);
-                assert!((step.phi[0][col] - z).abs() < 1e-8 * scale, "x_sp: ω {wn} ζ {zeta} column {col}");
-                assert!((step.phi[1][col] - v).abs() < 1e-8 * scale * wn, "v_sp: ω {wn} ζ {zeta} column {col}");
-                assert!((step.mean[col] - mean).abs() < 1e-8 * scale, "mean: ω {wn} ζ {zeta} column {col}");
+                assert!(
+                    (step.phi[0][col] - z).abs() < 1e-8 * scale,
+                    "x_sp: ω {wn} ζ {zeta} column {col}"
+                );
+                assert!(
+                    (step.phi[1][col] - v).abs() < 1e-8 * scale * wn,
+                    "v_sp: ω {wn} ζ {zeta} column {col}"
+                );
+                assert!(
+                    (step.mean[col] - mean).abs() < 1e-8 * scale,
+                    "mean: ω {wn} ζ {zeta} column {col}"
+                );
             }
         }
     }
