@@ -259,7 +259,6 @@ impl Estimator {
                 usable: true,
                 gate_outliers: false,
                 jitter_s: 0.0,
-                line_resistance_pa_s_per_m3: 0.0,
             };
             let memory = StepMemory {
                 still_samples: &mut 0,
@@ -509,7 +508,6 @@ impl Estimator {
             gate_outliers: self.tuning.states >= LEAK_LAYOUT_STATES
                 && s.t_s - self.t0_s >= self.tuning.convergence_time_s,
             jitter_s: self.tuning.sample_jitter_s,
-            line_resistance_pa_s_per_m3: self.tuning.line_resistance_pa_s_per_m3,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,

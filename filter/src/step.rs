@@ -2,7 +2,6 @@
 //! update on the measured channels), its start and its re-anchoring, for
 //! every layout's number of states.
 
-use model::dynamics::valve_flows;
 use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE};
 use nalgebra::{SMatrix, SVector};
 
@@ -100,9 +99,6 @@ pub(crate) struct StepInput {
     /// The DAQ's sample-time jitter the measurement noise counts, s (RMS; 0:
     /// none, R as tuned).
     pub(crate) jitter_s: f64,
-    /// The line's resistance between the manifold's transducers and the
-    /// chambers, Pa/(m³/s) (0: transducers at the ports).
-    pub(crate) line_resistance_pa_s_per_m3: f64,
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
@@ -158,7 +154,6 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         usable,
         gate_outliers,
         jitter_s,
-        line_resistance_pa_s_per_m3,
     } = *input;
     let StepMemory {
         still_samples,
@@ -193,15 +188,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     }
     e.predict_lean::<A>(x_pred, &f)?;
     offset_response.predict(&f);
-    let mut y_pred = ProcessModel::measure(e.state());
-    if line_resistance_pa_s_per_m3 > 0.0 {
-        // transducers at the manifold read p1 + R·Q1 and p2 − R·Q2 (the
-        // drop's slopes in the states are left out of H: R·∂Q/∂p is below 1 %)
-        let s = e.state();
-        let q = valve_flows(&model.params, s[0], s[1], s[2]);
-        y_pred[1] += line_resistance_pa_s_per_m3 * q.q1_m3_s;
-        y_pred[2] -= line_resistance_pa_s_per_m3 * q.q2_m3_s;
-    }
+    let y_pred = ProcessModel::measure(e.state());
     if usable {
         // The channels that update: less a lone outlier once the filter has converged.
         let mut updating = use_channel;

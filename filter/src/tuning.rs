@@ -69,12 +69,6 @@ schema::config_struct! {
         /// grows by (rate · jitter)² at the predicted rates. `commission`
         /// sets it from the recording (docs/identification.md).
         pub sample_jitter_s: f64 = 0.0 => ["s", num!("a time", 0.0, 0.001)],
-        /// The laminar resistance of the line between the valve manifold, where
-        /// the pressure transducers sit, and each chamber, Pa/(m³/s) (0: the
-        /// transducers at the cylinder's ports): the readings are taken as
-        /// p1 + R·Q1 and p2 − R·Q2 at the predicted valve flows. `commission`
-        /// sets it when it resolves the line's drop (docs/identification.md).
-        pub line_resistance_pa_s_per_m3: f64 = 0.0 => ["Pa/(m³/s)", num!("a resistance", 0.0, 1e13)],
         /// P0 of the spool position, m².
         pub p0_x_sp_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
         /// P0 of each chamber pressure, Pa².

@@ -157,8 +157,8 @@ pub struct Identification {
     pub pressure_lag_s: [Found; 2],
     /// The line resistance between the transducers (at the valve's manifold)
     /// and the chambers, Pa/(m³/s): the transducers read p1 + R·Q1 and
-    /// p2 − R·Q2, Q the valve's flows. When resolved, every other unknown is
-    /// the fit's with it, and `commission` puts R into the leak filter.
+    /// p2 − R·Q2, Q the valve's flows. Fitted so that the line's drop does
+    /// not bias the null leakage; reported, not put into the filters.
     pub line_resistance_pa_s_per_m3: Found,
     /// Windows of [`WINDOW_SAMPLES`] used, and how many of them moved.
     pub windows: usize,

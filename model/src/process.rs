@@ -33,7 +33,6 @@ use crate::params::ActuatorParams;
 mod discrete;
 pub use discrete::STOP_SUBSTEPS;
 mod rhs;
-mod spool;
 #[cfg(test)]
 mod tests;
 
@@ -101,9 +100,6 @@ pub struct ProcessModel {
     /// `params` are those they were derived from; [`ProcessModel::set_params`]
     /// derives them again).
     derived: rhs::Derived,
-    /// The spool's exact transition over one sample (layouts of 10+ states),
-    /// from `params` and `dt_s` as they were last derived.
-    spool: spool::SpoolStep,
 }
 
 /// The continuous right-hand side and its Jacobian at one state.
@@ -121,7 +117,6 @@ impl ProcessModel {
         let leaks = LeakSet::from_params(&params);
         let p_max_pa = 1.5 * params.supply_pressure_pa;
         let derived = rhs::Derived::of(&params);
-        let spool = spool::SpoolStep::of(params.spool_natural_freq_rad_s, params.spool_damping_ratio, dt_s);
         ProcessModel {
             params,
             dt_s,
@@ -130,7 +125,6 @@ impl ProcessModel {
             p_min_pa: -1.0e5,
             p_max_pa,
             derived,
-            spool,
         }
     }
 
@@ -140,8 +134,6 @@ impl ProcessModel {
     pub fn params_changed(&mut self) {
         self.leaks = LeakSet::from_params(&self.params);
         self.derived = rhs::Derived::of(&self.params);
-        let p = &self.params;
-        self.spool = spool::SpoolStep::of(p.spool_natural_freq_rad_s, p.spool_damping_ratio, self.dt_s);
     }
 
     /// The nominal pressure drop at which the 10-state layout's leak sizes are given, Pa (p_s/2).

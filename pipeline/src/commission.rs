@@ -124,10 +124,6 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     if let Some(j) = id.sample_jitter_s.estimate() {
         out.leak_filter.sample_jitter_s = j.value;
     }
-    // and the manifold line's drop resolved here
-    if let Some(r) = id.line_resistance_pa_s_per_m3.estimate() {
-        out.leak_filter.line_resistance_pa_s_per_m3 = r.value;
-    }
     match found_mechanics {
         Ok(mech) => {
             force_balance(&mech, cfg, &mut said);

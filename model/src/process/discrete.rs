@@ -3,7 +3,6 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::spool::SpoolStep;
 use super::{Guard, ProcessModel, BULK_SCALE_RANGE, I_BULK};
 
 /// Euler sub-steps per sample while the rod is in an end stop (h = 0.125 ms at
@@ -13,10 +12,8 @@ pub const STOP_SUBSTEPS: u32 = 8;
 impl ProcessModel {
     /// One sample step: x(k+1) and the discrete Jacobian F = ∂x(k+1)/∂x(k)
     /// (Euler in `substeps` sub-steps: forward for the 6- and 7-state layouts,
-    /// the thesis'; for the layouts with leaks symplectic, whose rod velocity
-    /// steps with the pressures at the end of the step, with the spool's rows
-    /// exact and the valve's flows at the spool's mean over the step,
-    /// docs/model.md#the-spools-step), with the state kept physical.
+    /// the thesis'; symplectic for the layouts with leaks, whose rod velocity
+    /// steps with the pressures at the end of the step), with the state kept physical.
     pub fn step<const N: usize>(
         &self,
         s: &SVector<f64, N>,
@@ -48,15 +45,10 @@ impl ProcessModel {
             self.substeps.max(1)
         };
         let h = self.dt_s / n as f64;
-        let spool = self.spool_step(h);
         let mut f = SVector::<f64, N>::zeros();
         if n == 1 {
             // F = I + A·h, built in place (A is sparse: most entries stay 0 or 1).
-            if N >= 10 {
-                self.linearise_at_mean_spool(&spool, s, u_v, &mut f, jac);
-            } else {
-                self.linearise_into(s, u_v, &mut f, jac);
-            }
+            self.linearise_into(s, u_v, &mut f, jac);
             for ((x, s), f) in x.iter_mut().zip(s.iter()).zip(f.iter()) {
                 *x = s + f * h;
             }
@@ -69,19 +61,12 @@ impl ProcessModel {
             for d in 0..N {
                 jac[(d, d)] += 1.0;
             }
-            if N >= 10 {
-                self.exact_spool_rows(&spool, s, u_v, x, jac);
-            }
         } else {
             *x = *s;
             let mut step_jac = SMatrix::<f64, N, N>::zeros();
             for i in 0..n {
                 let start = *x;
-                if N >= 10 {
-                    self.linearise_at_mean_spool(&spool, &start, u_v, &mut f, &mut step_jac);
-                } else {
-                    self.linearise_into(&start, u_v, &mut f, &mut step_jac);
-                }
+                self.linearise_into(&start, u_v, &mut f, &mut step_jac);
                 *x += f * h;
                 // I + A·h
                 step_jac *= h;
@@ -91,39 +76,10 @@ impl ProcessModel {
                 for d in 0..N {
                     step_jac[(d, d)] += 1.0;
                 }
-                if N >= 10 {
-                    self.exact_spool_rows(&spool, &start, u_v, x, &mut step_jac);
-                }
                 *jac = if i == 0 { step_jac } else { step_jac * *jac };
             }
         }
         self.keep_physical(x)
-    }
-
-    /// f and ∂f/∂x (into `f` and `a`) with the valve's flows at the spool's
-    /// mean over the (sub-)step `spool` from `s` (10+ states): x_sp's column
-    /// carried through the mean to x_sp, v_sp and the null bias state.
-    #[inline(always)]
-    fn linearise_at_mean_spool<const N: usize>(
-        &self,
-        spool: &SpoolStep,
-        s: &SVector<f64, N>,
-        u_v: f64,
-        f: &mut SVector<f64, N>,
-        a: &mut SMatrix<f64, N, N>,
-    ) {
-        let (mean, d) = self.mean_spool(spool, s, u_v);
-        let mut at = *s;
-        at[0] = mean;
-        self.linearise_into(&at, u_v, f, a);
-        for r in (1..N).filter(|&r| r != 5) {
-            let c = a[(r, 0)];
-            a[(r, 0)] = c * d[0];
-            a[(r, 5)] += c * d[1];
-            if N >= 11 {
-                a[(r, super::I_BIAS)] += c * d[2];
-            }
-        }
     }
 
     /// Symplectic Euler for the hydraulic mode: the rod's velocity steps with

@@ -107,7 +107,7 @@ pub(super) fn flow_balance(
     out.notes.push(match &id.line_resistance_pa_s_per_m3 {
         identify::Found::Identified(e) => format!(
             "  line resistance, transducers to chambers: {:.0} ± {:.0} MPa per m³/s (the line's drop, \
-             fitted beside the other unknowns; the leak filter takes it off its readings)",
+             fitted beside the null leakage; reported, not put into the filters)",
             e.value * 1e-6,
             e.sigma * 1e-6
         ),
