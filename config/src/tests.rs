@@ -479,3 +479,64 @@ fn a_range_hint_comes_from_the_schema_for_every_section() {
         assert!(e.ends_with(hint), "{text}: {e}");
     }
 }
+
+/// The plant_dev rigs' configs in `examples/plant_dev/` (their datasheet.json
+/// entered into `leakwatch init`'s template) load, and give the rig facts that
+/// datasheet.json's own `derived_for_leakwatch` block states: areas, hose
+/// volumes, the valve's area gradients, the spool's frequency and the
+/// measurement noise.
+#[test]
+fn the_plant_dev_examples_give_the_rig_facts_their_datasheets_state() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/plant_dev");
+    let close = |what: &str, got: f64, want: f64| {
+        assert!(
+            ((got - want) / want).abs() < 1e-9,
+            "{what}: {got:e} against {want:e}"
+        );
+    };
+    let (annulus, gradient, gradient_b) = (1.198_713_946_89e-3, 3.303_214_902_03e-2, 1.981_928_941_22e-2);
+    for (file, areas, hose_volume, gradients, mass) in [
+        (
+            "double.toml",
+            (annulus, annulus),
+            6.967_227_837_59e-5,
+            (gradient, gradient),
+            27.5,
+        ),
+        (
+            "differential.toml",
+            (2.002_961_666_2e-3, annulus),
+            1.140_091_827_97e-4,
+            (gradient, gradient_b),
+            185.0,
+        ),
+    ] {
+        let c = Config::load(&dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
+        let m = &c.model;
+        let (a1, a2) = m.areas_m2();
+        close(&format!("{file}: cap-side area"), a1, areas.0);
+        close(&format!("{file}: rod-side area"), a2, areas.1);
+        close(&format!("{file}: dead volume A"), m.dead_volume_1_m3, hose_volume);
+        close(&format!("{file}: dead volume B"), m.dead_volume_2_m3, hose_volume);
+        let (g1, g2) = m.area_gradients_m2_per_m();
+        close(&format!("{file}: area gradient A"), g1, gradients.0);
+        close(&format!("{file}: area gradient B"), g2, gradients.1);
+        close(
+            &format!("{file}: spool ω_n"),
+            m.spool_natural_freq_rad_s,
+            816.814_089_933,
+        );
+        close(&format!("{file}: spool gain"), m.spool_gain_m_per_v, 3e-5);
+        close(&format!("{file}: mass"), m.mass_kg, mass);
+        close(
+            &format!("{file}: R of p"),
+            c.leak_filter.r_p_pa2,
+            64_012_126.966_1,
+        );
+        close(
+            &format!("{file}: R of x"),
+            c.leak_filter.r_x_m2,
+            9.333_333_333_33e-12,
+        );
+    }
+}
