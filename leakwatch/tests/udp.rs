@@ -89,7 +89,7 @@ fn sender_count(stdout: &str, key: &str) -> u64 {
         .unwrap_or_else(|| panic!("no {key} in {stdout}"))
 }
 
-/// A simulated 30 s leak run, streamed at 5 kHz over loopback by the Python
+/// A simulated 30 s leak run, streamed at 2 kHz over loopback by the Python
 /// sender into `leakwatch run --source udp://...`, gives exactly the events of
 /// `leakwatch replay` of the same CSV: the live stages see the same samples
 /// in the same order, so the same decisions at the same samples, bit for bit.
@@ -139,7 +139,9 @@ fn a_leak_run_streamed_over_udp_gives_the_events_of_replay() {
         .spawn()
         .unwrap();
     wait_for_line(&out.join("acquisition.log"), "waiting for datagrams");
-    let sent = send(&csv, port, &["--rate-hz", "5000"]);
+    // twice real time: at 5 kHz a loaded 2-core machine let the estimator's
+    // subscriber buffer overflow (17 of 30,000 frames missed in one run)
+    let sent = send(&csv, port, &["--rate-hz", "2000"]);
     let o = run.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(

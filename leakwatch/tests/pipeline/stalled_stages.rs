@@ -164,11 +164,20 @@ fn a_stopped_estimator_or_classifier_is_noticed_without_a_false_alarm() {
             "{stderr}"
         );
         let st = &lat["stalls"][stage];
-        assert_eq!(
-            (st["count"].as_u64(), st["killed"].as_u64()),
-            (Some(stalls), Some(killed)),
+        // each SIGSTOP is a stall of its own; a loaded machine may add one
+        // (a stage starved at start), so they are counted from the warnings
+        let stopped = stderr
+            .lines()
+            .filter(|l| {
+                l.contains(&format!("the {stage} has made no progress for 1.5 s")) && l.contains("SIGSTOP?")
+            })
+            .count() as u64;
+        assert_eq!(stopped, stalls, "{stderr}");
+        assert!(
+            st["count"].as_u64().is_some_and(|n| n >= stalls),
             "{lat:#}\n{stderr}"
         );
+        assert_eq!(st["killed"].as_u64(), Some(killed), "{lat:#}\n{stderr}");
         let longest = st["longest_s"].as_f64().unwrap();
         let gap = lat["stages"][stage]["seq_gaps"].as_u64().unwrap();
         // the 256-frame subscriber buffer overflowed while it was stopped
