@@ -10,17 +10,17 @@ use filter::Tuning;
 fn main() {
     // `profile chain [REPS]`: the default chain (the leak filter and the
     // classifier) REPS times (default once) over 60 s, untimed (for
-    // `valgrind --tool=callgrind` or `perf record`); `profile chain-thesis`:
-    // the same with the thesis' baseline, once.
+    // `valgrind --tool=callgrind` or `perf record`); `profile chain-thesis
+    // [REPS]`: the same with the thesis' baseline.
     let profile = std::env::args().nth(1).as_deref() == Some("profile");
     let chain = std::env::args().nth(2);
     if profile && matches!(chain.as_deref(), Some("chain" | "chain-thesis")) {
         let samples = recorded_samples(60.0);
+        let reps = std::env::args().nth(3).and_then(|a| a.parse().ok()).unwrap_or(1);
         let tp = if chain.as_deref() == Some("chain") {
-            let reps = std::env::args().nth(3).and_then(|a| a.parse().ok()).unwrap_or(1);
             chain_throughput(&samples, reps)
         } else {
-            chain_throughput_with_thesis(&samples, 1)
+            chain_throughput_with_thesis(&samples, reps)
         };
         println!("{}", tp.samples);
         return;
