@@ -26,10 +26,15 @@ struct ChannelWatch {
     /// Time of the last reading, s.
     last_t_s: f64,
     last: f64,
+    /// Since when the present reading has held, s (its first sample).
+    last_since_s: f64,
     same: u32,
     /// The sum of the leak filter's NIS over the `same` repeated readings.
     same_nis_sum: f64,
     saturated: u32,
+    /// Since when the present run of readings at the range's end, or without a
+    /// usable value, has lasted, s (its first sample).
+    bad_since_s: f64,
     dead: u32,
     raised: Option<(EventKind, u64)>,
     /// Outliers.
@@ -272,6 +277,9 @@ impl Classifier {
             if v.is_finite() {
                 w.dead = 0;
                 w.same = if v == w.last { w.same + 1 } else { 0 };
+                if w.same == 0 {
+                    w.last_since_s = e.t_s;
+                }
                 w.same_nis_sum = if w.same == 0 {
                     0.0
                 } else {
@@ -280,7 +288,13 @@ impl Classifier {
                 w.last = v;
                 let sat = c > 0 && (v <= 0.0 || v >= self.cfg.pressure_full_scale_pa);
                 w.saturated = if sat { w.saturated + 1 } else { 0 };
+                if w.saturated <= 1 && w.dead == 0 {
+                    w.bad_since_s = e.t_s;
+                }
             } else {
+                if w.dead == 0 {
+                    w.bad_since_s = e.t_s;
+                }
                 w.dead += 1;
                 w.same = 0;
                 w.saturated = 0;
@@ -326,7 +340,17 @@ impl Classifier {
                     };
                     let ev = self.plain(k, e.t_s, CHANNELS[c], &detail);
                     w.raised = Some((k, ev.event_id));
+                    let since_s = if k == EventKind::SensorStuck {
+                        w.last_since_s
+                    } else {
+                        w.bad_since_s
+                    };
+                    let fault = format!("{} {} (event {})", CHANNELS[c], k.name(), ev.event_id);
                     emit(ev);
+                    // (a leak alarm raised on the channel's bad readings is withdrawn)
+                    if let Some(cleared) = self.leak_size.withdraw_for_fault(e.t_s, since_s, &fault) {
+                        emit(cleared);
+                    }
                 }
                 (None, Some((k, id))) => {
                     let mut ev = self.plain(k, e.t_s, CHANNELS[c], "the channel is back");

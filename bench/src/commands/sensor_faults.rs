@@ -102,8 +102,17 @@ impl RunKind {
 #[derive(Debug, Clone, clap::Args)]
 pub struct SensorFaultsArgs {
     /// The rig: `press` (double-rod), `lift` (vertical single-rod) or `thesis` (the built-in rig).
-    #[arg(long, value_parser = ["press", "lift", "thesis"])]
-    pub rig: String,
+    #[arg(long, value_parser = ["press", "lift", "thesis"], required_unless_present = "data", conflicts_with = "data")]
+    pub rig: Option<String>,
+    /// A plant-style folder (like plant_dev's: `commission_cold.csv[.gz]`,
+    /// `datasheet.toml` or `--config`, `run_*/`): the faults are laid onto its
+    /// healthy recordings, watched by the chain commissioned as `bench
+    /// detection --data` does; instance i takes recording i mod R.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// With `--data`: the config (the folder's `datasheet.toml` without it).
+    #[arg(long, requires = "data")]
+    pub config: Option<PathBuf>,
     /// Number of instances.
     #[arg(long, default_value_t = 12)]
     pub instances: usize,
@@ -111,7 +120,7 @@ pub struct SensorFaultsArgs {
     /// instances as `bench instances` with this seed).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Length of every run, s.
+    /// Length of every run, s (with `--data`: the recordings' own).
     #[arg(long, default_value_t = 360.0)]
     pub seconds: f64,
     /// Output directory for sensor_faults.md and sensor_faults.json.
@@ -124,6 +133,13 @@ pub struct SensorFaultsArgs {
     /// run's recording (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`.
     #[arg(long)]
     pub keep: bool,
+}
+
+impl SensorFaultsArgs {
+    /// The simulated rig's name (empty with `--data`).
+    pub fn rig_name(&self) -> &str {
+        self.rig.as_deref().unwrap_or("")
+    }
 }
 
 /// One scored run.
@@ -178,11 +194,12 @@ const THESIS_CYCLES: &[&str] = &["loaded-random", "loaded-sine"];
 
 /// Commissions instance `index` of `args.rig`; says what it learned on stderr.
 fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched, String> {
+    let rig = args.rig_name();
     let dir = args.out.join(format!("inst_{index:03}"));
     pipeline::out::dir(&dir)?;
     let recording = dir.join("commission.csv");
     let seed = instances::instance_seed(args.seed, index);
-    let (cfg, instance, cycles, samples) = if args.rig == "thesis" {
+    let (cfg, instance, cycles, samples) = if rig == "thesis" {
         let cfg = Config::default();
         let req = SimulateRequest {
             scenario: THESIS_CYCLES[0].into(),
@@ -194,7 +211,7 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
         let (mut sim, seconds) = simulate::build(&cfg, &req)?;
         (cfg, None, THESIS_CYCLES, sim.run(seconds))
     } else {
-        let (nominal, cycles) = instances::nominal(&args.rig)?;
+        let (nominal, cycles) = instances::nominal(rig)?;
         let inst = Instance::draw(&nominal, seed);
         let plans = instances::plan_instance(&instances_request(args), cycles, index, inst.seed);
         let plan = plans.first().ok_or("no commissioning recording planned")?;
@@ -241,7 +258,7 @@ fn commission_instance(args: &SensorFaultsArgs, index: usize) -> Result<Watched,
 /// The `bench instances` request whose instances and commissioning recordings these are.
 fn instances_request(args: &SensorFaultsArgs) -> InstancesRequest {
     InstancesRequest {
-        rig: args.rig.clone(),
+        rig: args.rig_name().to_string(),
         instances: args.instances,
         seed: args.seed,
         out: args.out.clone(),
@@ -339,7 +356,7 @@ fn watch_run(
     let kind = RUN_KINDS[k];
     // the rig's name in the seed: each rig draws its own faults
     let salt = args
-        .rig
+        .rig_name()
         .bytes()
         .fold(0u64, |h, b| h.rotate_left(8) ^ u64::from(b));
     let mut rng = Rng::new(w.seed ^ salt ^ 0x5E_45_0F_A1 ^ ((k as u64 + 1) << 40));
@@ -467,6 +484,9 @@ fn parallel<T: Send>(
 /// `leakwatch bench sensor-faults`: commissions each instance, watches its runs,
 /// prints the table and writes sensor_faults.md and .json into `args.out`.
 pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
+    if let Some(dir) = &args.data {
+        return recorded::command(args, dir, force);
+    }
     check(args)?;
     pipeline::out::dir(&args.out)?;
     for name in ["sensor_faults.md", "sensor_faults.json"] {
@@ -476,7 +496,8 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
     let t0 = std::time::Instant::now();
     eprintln!(
         "commissioning {} instances of the {} rig",
-        args.instances, args.rig
+        args.instances,
+        args.rig_name()
     );
     let watched = parallel(args.instances, threads, |i| commission_instance(args, i))?;
     let jobs = args.instances * RUN_KINDS.len();
@@ -489,7 +510,7 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
     let md = markdown(args, &sums);
     print!("{md}");
     let json = serde_json::json!({
-        "rig": args.rig,
+        "rig": args.rig_name(),
         "instances": args.instances,
         "seed": args.seed,
         "seconds": args.seconds,
@@ -513,5 +534,6 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
     Ok(())
 }
 
+mod recorded;
 #[cfg(test)]
 mod tests;

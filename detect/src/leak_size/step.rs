@@ -119,6 +119,31 @@ impl LeakSizeDetector {
         true
     }
 
+    /// Withdraws the leak alarm standing when a transducer is named stuck,
+    /// dead or saturated at `t_s` (s), if it opened after the channel's bad
+    /// readings began at `since_s` (s): its rises were the frozen or missing
+    /// channel's. `fault` says which (e.g. "x has not changed", event 7).
+    /// Returns the alarm's clearing; a leak that opened before stands.
+    pub fn withdraw_for_fault(&mut self, t_s: f64, since_s: f64, fault: &str) -> Option<LeakEvent> {
+        let a = self.active.filter(|a| a.t_onset_s >= since_s)?;
+        self.active = None;
+        let mut cleared = self.event(
+            a.kind,
+            crate::Phase::Cleared,
+            a.id,
+            t_s,
+            a.last_size_lpm,
+            0.0,
+            0.0,
+            0.0,
+        );
+        cleared.detail = format!(
+            "withdrawn: {fault} since {since_s:.1} s; the rises since {:.1} s were its, not a leak's",
+            a.t_onset_s
+        );
+        Some(cleared)
+    }
+
     /// The validity gate: a gap the filter could not bridge, a skipped sample, a
     /// reset, a channel left out, a NIS burst or a command too fast for the
     /// model make the evidence invalid for a while. False for a skipped sample

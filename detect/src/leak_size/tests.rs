@@ -156,6 +156,14 @@ fn a_leak_alarm_raised_while_a_transducer_drifted_is_withdrawn_when_it_is_named(
 /// spreads of 0.03 L/min (ext1's naming spread `ext1_naming_spread_lpm`),
 /// whose leak sizes are `q_lpm` (q_e1, q_e2, q_i at the nominal drop) from 10 s on.
 fn commissioned_run(ext1_naming_spread_lpm: f64, q_lpm: [f64; 3]) -> Vec<LeakEvent> {
+    commissioned_detector_run(ext1_naming_spread_lpm, q_lpm).1
+}
+
+/// [`commissioned_run`], and the detector after it.
+fn commissioned_detector_run(
+    ext1_naming_spread_lpm: f64,
+    q_lpm: [f64; 3],
+) -> (LeakSizeDetector, Vec<LeakEvent>) {
     let cfg = ClassifierConfig {
         commissioning: Some(crate::Commissioning {
             offsets_lpm: [0.0; 3],
@@ -179,7 +187,37 @@ fn commissioned_run(ext1_naming_spread_lpm: f64, q_lpm: [f64; 3]) -> Vec<LeakEve
         det.on_estimate(&estimate(t, q), &mut out);
         events.extend(out);
     }
-    events
+    (det, events)
+}
+
+#[test]
+fn a_leak_that_opened_on_a_stuck_channels_readings_is_withdrawn_when_it_is_named() {
+    // ext1 from 10 s: raised at once, named ext1 by 12 s, standing at 20 s
+    let (mut det, events) = commissioned_detector_run(0.008, [0.08, 0.0, 0.0]);
+    assert_eq!(events.len(), 2, "{events:#?}");
+    let onset = events[0].t_onset_s;
+    assert!((9.5..=10.5).contains(&onset), "{events:#?}");
+    // a channel stuck since after the onset: the leak opened before, and stands
+    assert!(det
+        .withdraw_for_fault(20.0, onset + 0.5, "x sensor-stuck (event 7)")
+        .is_none());
+    // stuck since before it: the alarm is withdrawn, its kind and id kept
+    let cleared = det
+        .withdraw_for_fault(20.0, onset - 0.5, "x sensor-stuck (event 7)")
+        .expect("withdrawn");
+    assert_eq!((cleared.kind, cleared.phase), (EventKind::Ext1, Phase::Cleared));
+    assert_eq!(cleared.event_id, events[1].event_id);
+    assert!(
+        cleared
+            .detail
+            .starts_with("withdrawn: x sensor-stuck (event 7) since"),
+        "{}",
+        cleared.detail
+    );
+    // nothing stands any more
+    assert!(det
+        .withdraw_for_fault(20.0, 0.0, "x sensor-stuck (event 7)")
+        .is_none());
 }
 
 #[test]

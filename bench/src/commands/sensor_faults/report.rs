@@ -244,13 +244,29 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
 
 /// The report's table in Markdown.
 pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
+    let title = match &args.data {
+        Some(dir) => format!(
+            "# Sensor faults on the healthy recordings of {}: {} instances, seed {}",
+            dir.file_name()
+                .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned()),
+            args.instances,
+            args.seed
+        ),
+        None => format!(
+            "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s",
+            args.rig_name(),
+            args.instances,
+            args.seed,
+            args.seconds
+        ),
+    };
     let mut s = format!(
-        "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s\n\n\
+        "{title}\n\n\
          | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | misreading past the least named: runs, named right | past what commissioning stated: runs, named right (said not watched) |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
-        args.rig, args.instances, args.seed, args.seconds
+         |---|---|---|---|---|---|---|---|---|\n"
     );
-    for k in sums {
+    // (a kind no run carried is left out: a recording carries no leak)
+    for k in sums.iter().filter(|k| k.runs > 0) {
         let pct = 100.0 * k.named_right as f64 / k.runs.max(1) as f64;
         let named = if k.kind == RunKind::Healthy {
             "-".to_string()

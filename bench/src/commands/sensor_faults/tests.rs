@@ -245,7 +245,9 @@ fn the_drawn_faults_are_in_the_stated_ranges_and_their_specs_parse_back() {
 fn one_thesis_instance_is_commissioned_watched_and_scored() {
     let dir = scratch::ScratchDir::new("sensor-faults");
     let args = SensorFaultsArgs {
-        rig: "thesis".into(),
+        rig: Some("thesis".into()),
+        data: None,
+        config: None,
         instances: 1,
         seed: 3,
         seconds: 75.0,
@@ -283,4 +285,79 @@ fn one_thesis_instance_is_commissioned_watched_and_scored() {
         .contains("| stuck | 1 |"));
     // the second run refuses to overwrite without --force
     assert!(command(&args, false).is_err());
+}
+
+/// Writes `seconds` of the built-in rig on `scenario` (seed `seed`) to `path`.
+fn write_recording(path: &std::path::Path, scenario: &str, seconds: f64, seed: u64) {
+    let req = SimulateRequest {
+        scenario: scenario.into(),
+        seconds: Some(seconds),
+        seed,
+        faults: vec![],
+        rig_variant: None,
+    };
+    let (mut sim, seconds) = simulate::build(&Config::default(), &req).expect("a simulator");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).expect("a file"));
+    simulate::write_csv(&mut w, &sim.run(seconds)).expect("written");
+}
+
+/// `--data` on a plant-style folder of the built-in rig (a commissioning
+/// recording, one healthy run and one leak run): the chain is commissioned on
+/// the recording, the faults are laid onto the healthy run only, every sensor
+/// kind is watched once per instance and the healthy run once, no leak run.
+#[test]
+fn a_folders_healthy_recordings_carry_the_drawn_faults() {
+    let data = scratch::ScratchDir::new("sensor-faults-data");
+    write_recording(&data.join("commission_cold.csv"), "loaded-random", 60.0, 5);
+    for (run, fault) in [
+        ("run_000", "null"),
+        ("run_001", r#"{"kind": "ext1", "size_lpm": 0.5, "t_on_s": 5.0}"#),
+    ] {
+        let dir = data.join(run);
+        std::fs::create_dir(&dir).expect("a run folder");
+        write_recording(&dir.join("measured.csv"), "loaded-random", 75.0, 6);
+        let truth = format!(r#"{{"fault": {fault}, "scenario": {{"name": "loaded-random"}}}}"#);
+        std::fs::write(dir.join("truth.json"), truth).expect("truth");
+    }
+    let out = scratch::ScratchDir::new("sensor-faults-data-out");
+    let args = SensorFaultsArgs {
+        rig: None,
+        data: Some(data.to_path_buf()),
+        config: None,
+        instances: 2,
+        seed: 3,
+        seconds: 360.0,
+        out: out.to_path_buf(),
+        threads: Some(2),
+        keep: false,
+    };
+    command(&args, false).expect("the bench runs");
+    let text = std::fs::read_to_string(out.join("sensor_faults.json")).expect("the report");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(
+        json["recordings"],
+        serde_json::json!(["run_000 loaded-random"]),
+        "{text}"
+    );
+    let runs = json["runs"].as_array().expect("runs");
+    // the healthy run once, five sensor faults per instance
+    assert_eq!(runs.len(), 1 + 2 * 5, "{text}");
+    let of = |kind: &str| runs.iter().filter(|r| r["kind"] == kind).collect::<Vec<_>>();
+    assert!(of("leak").is_empty());
+    assert_eq!(of("healthy")[0]["leak_events"], 0, "{text}");
+    assert_eq!(of("healthy")[0]["sensor_events_before_onset"], 0, "{text}");
+    for stuck in of("stuck") {
+        assert_eq!(stuck["named_right"], true, "{text}");
+    }
+    // each instance draws its own faults
+    assert_ne!(of("pressure-drift")[0]["spec"], of("pressure-drift")[1]["spec"]);
+    let md = std::fs::read_to_string(out.join("sensor_faults.md")).expect("md");
+    assert!(
+        md.starts_with("# Sensor faults on the healthy recordings of "),
+        "{md}"
+    );
+    assert!(
+        md.contains("| stuck | 2 |") && !md.contains("| leak 0.25 L/min |"),
+        "{md}"
+    );
 }
