@@ -4,7 +4,8 @@
 //! The folder is laid out like plant_dev: `commission_cold.csv[.gz]`,
 //! `datasheet.toml` (or `--config`) and `run_*/` with `measured.csv[.gz]` and
 //! `truth.json`. The chain is commissioned as `bench detection --data` does
-//! (the README's workflow). Each run whose truth has no fault is a healthy
+//! (the README's workflow; without a recording, each run learns its healthy
+//! state in its first seconds). Each run whose truth has no fault is a healthy
 //! recording; instance i takes recording i mod R (R recordings) and draws its
 //! own faults. Each fault is laid onto the recorded readings as the simulator
 //! lays it onto its own ([`SensorFaultRun`]): a drift's offset and a span's
@@ -61,10 +62,12 @@ impl RecordedRig {
                 (rig, Some(record.learned.sensor_reach))
             }
             (None, false) => {
-                return Err(format!(
-                    "{}: no commissioning recording (commission_cold.csv[.gz]) and the config is not commissioned",
+                eprintln!(
+                    "{}: no commissioning recording (commission_cold.csv[.gz]): each run's healthy state is learned \
+                     in its first seconds, as `bench detection --data` does",
                     dir.display()
-                ))
+                );
+                (cfg, None)
             }
         };
         let recordings = healthy_runs(dir)?
