@@ -111,7 +111,7 @@ pub struct SensorFaultsArgs {
     #[arg(long)]
     pub data: Option<PathBuf>,
     /// With `--data`: the config (the folder's `datasheet.toml` without it).
-    #[arg(long, requires = "data")]
+    #[arg(long, requires = "data", conflicts_with = "rig")]
     pub config: Option<PathBuf>,
     /// Number of instances.
     #[arg(long, default_value_t = 12)]
@@ -121,7 +121,7 @@ pub struct SensorFaultsArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Length of every run, s (with `--data`: the recordings' own).
-    #[arg(long, default_value_t = 360.0)]
+    #[arg(long, default_value_t = 360.0, conflicts_with = "data")]
     pub seconds: f64,
     /// Output directory for sensor_faults.md and sensor_faults.json.
     #[arg(long)]
@@ -130,8 +130,9 @@ pub struct SensorFaultsArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// Keeps each instance's commissioned config (inst_NNN/rig.toml) and each
-    /// run's recording (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`.
-    #[arg(long)]
+    /// run's recording (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`
+    /// (not with `--data`).
+    #[arg(long, conflicts_with = "data")]
     pub keep: bool,
 }
 
