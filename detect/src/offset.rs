@@ -42,9 +42,9 @@
 //! in kPa (mm on x) or g in %.
 
 use crate::{EventKind, LeakEvent, Phase};
-
 mod fit;
 mod hold;
+mod rival;
 
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};

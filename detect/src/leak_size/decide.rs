@@ -79,6 +79,9 @@ impl LeakSizeDetector {
                 ev.kind = EventKind::Leak;
                 ev.detail = format!("kind pending, {} leads: {}", kind.name(), ev.detail);
             }
+            if let Some(rival) = self.offsets.rival_misreading() {
+                ev.detail += &format!("; {rival} would explain the rises as well: check that transducer");
+            }
             *out = Some(ev);
         } else if let (true, Some((j, t0))) = (
             self.above_since_s[lead].is_none() && self.strong_since_s.is_none(),

@@ -534,3 +534,20 @@ fn a_leak_opening_late_in_the_window_is_no_drifting_offset() {
         best.h
     );
 }
+
+#[test]
+fn a_rival_misreading_is_said_only_past_half_the_least_named() {
+    // p2 reading 0.5 MPa low: said in kPa, on p2, low
+    let (watch, _) = watch_offset_on_p2(-0.5, 0.0, 60.0, 0.0);
+    let said = watch.rival_misreading().expect("a rival");
+    let kpa: f64 = said
+        .strip_prefix("p2 reading ")
+        .and_then(|s| s.strip_suffix(" kPa low"))
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{said}"));
+    assert!((kpa - 500.0).abs() < 50.0, "{said}");
+    // 0.1 MPa fits as well, but lies within a sound transducer's tolerance (under 125 kPa)
+    let (watch, _) = watch_offset_on_p2(-0.1, 0.0, 60.0, 0.0);
+    assert!(watch.could_explain());
+    assert_eq!(watch.rival_misreading(), None);
+}

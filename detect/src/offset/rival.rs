@@ -1,0 +1,33 @@
+//! The misreading that explains a leak's rises as well as a leak does, in
+//! words, for the leak's event: the operator is told which transducer to check.
+
+use super::fit::{channel_of, is_position, is_span};
+use super::{OffsetWatch, OFFSET_CHANNEL_NAMES, OFFSET_CLEAN_FLOOR_SHARE};
+
+impl OffsetWatch {
+    /// The window's best misreading in words ("p2 reading 162 kPa low"),
+    /// where it could explain the rises as well as a leak
+    /// ([`OffsetWatch::could_explain`]) and is at least
+    /// [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: a smaller one lies
+    /// within a sound transducer's tolerance, and a leak's rises often fit one.
+    /// None otherwise.
+    pub fn rival_misreading(&self) -> Option<String> {
+        let h = self.window_best.h;
+        let b = self.window.coefficient(h);
+        if !self.could_explain() || b.abs() < OFFSET_CLEAN_FLOOR_SHARE * self.least(h) {
+            return None;
+        }
+        let name = OFFSET_CHANNEL_NAMES[channel_of(h)];
+        let high_low = if b >= 0.0 { "high" } else { "low" };
+        Some(if is_position(h) {
+            format!("{name} reading {:.1} mm {high_low}", b.abs())
+        } else if is_span(h) {
+            format!(
+                "{name} reading {:.1} % {high_low} (a span error)",
+                b.abs() * 100.0
+            )
+        } else {
+            format!("{name} reading {:.0} kPa {high_low}", b.abs() * 1e3)
+        })
+    }
+}
