@@ -288,7 +288,7 @@ impl Classifier {
                 w.last = v;
                 let sat = c > 0 && (v <= 0.0 || v >= self.cfg.pressure_full_scale_pa);
                 w.saturated = if sat { w.saturated + 1 } else { 0 };
-                if w.saturated <= 1 && w.dead == 0 {
+                if w.saturated <= 1 {
                     w.bad_since_s = e.t_s;
                 }
             } else {

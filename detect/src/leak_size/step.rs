@@ -122,7 +122,7 @@ impl LeakSizeDetector {
     /// Withdraws the leak alarm standing when a transducer is named stuck,
     /// dead or saturated at `t_s` (s), if it opened after the channel's bad
     /// readings began at `since_s` (s): its rises were the frozen or missing
-    /// channel's. `fault` says which (e.g. "x has not changed", event 7).
+    /// channel's. `fault` says which (e.g. "x sensor-stuck (event 7)").
     /// Returns the alarm's clearing; a leak that opened before stands.
     pub fn withdraw_for_fault(&mut self, t_s: f64, since_s: f64, fault: &str) -> Option<LeakEvent> {
         let a = self.active.filter(|a| a.t_onset_s >= since_s)?;
