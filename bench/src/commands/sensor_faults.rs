@@ -489,10 +489,7 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
         return recorded::command(args, dir, force);
     }
     check(args)?;
-    pipeline::out::dir(&args.out)?;
-    for name in ["sensor_faults.md", "sensor_faults.json"] {
-        pipeline::out::check(&args.out.join(name), force, &[])?;
-    }
+    prepare_out(args, force)?;
     let threads = args.threads.unwrap_or_else(pipeline::batch::cores).max(1);
     let t0 = std::time::Instant::now();
     eprintln!(
@@ -507,19 +504,41 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
         let (i, k) = (j / RUN_KINDS.len(), j % RUN_KINDS.len());
         watch_run(args, i, &watched[i], k)
     })?;
-    let sums = summarise(&runs);
-    let md = markdown(args, &sums);
-    print!("{md}");
-    let json = serde_json::json!({
+    let set = serde_json::json!({
         "rig": args.rig_name(),
         "instances": args.instances,
         "seed": args.seed,
         "seconds": args.seconds,
-        "wall_s": t0.elapsed().as_secs_f64(),
-        "summary": sums,
-        "runs": runs,
     });
-    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
+    report(args, force, set, &runs, t0)
+}
+
+/// Makes `args.out` and checks that its reports may be written (`force`).
+fn prepare_out(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
+    pipeline::out::dir(&args.out)?;
+    for name in ["sensor_faults.md", "sensor_faults.json"] {
+        pipeline::out::check(&args.out.join(name), force, &[])?;
+    }
+    Ok(())
+}
+
+/// Prints the table of `runs` and writes sensor_faults.md and .json into
+/// `args.out`: the JSON object `set` says which runs these are, beside the
+/// wall time since `t0`, the totals per kind and the runs.
+fn report(
+    args: &SensorFaultsArgs,
+    force: bool,
+    mut set: serde_json::Value,
+    runs: &[FaultRunOutcome],
+    t0: std::time::Instant,
+) -> Result<(), String> {
+    let sums = summarise(runs);
+    let md = markdown(args, &sums);
+    print!("{md}");
+    set["wall_s"] = serde_json::json!(t0.elapsed().as_secs_f64());
+    set["summary"] = serde_json::to_value(&sums).map_err(|e| e.to_string())?;
+    set["runs"] = serde_json::to_value(runs).map_err(|e| e.to_string())?;
+    let text = serde_json::to_string_pretty(&set).map_err(|e| e.to_string())?;
     pipeline::out::write(&args.out.join("sensor_faults.md"), md.as_bytes(), force, &[])?;
     pipeline::out::write(
         &args.out.join("sensor_faults.json"),

@@ -154,10 +154,7 @@ pub(super) fn command(args: &SensorFaultsArgs, dir: &Path, force: bool) -> Resul
     if args.instances == 0 {
         return Err("--instances 0: nothing to run".into());
     }
-    pipeline::out::dir(&args.out)?;
-    for name in ["sensor_faults.md", "sensor_faults.json"] {
-        pipeline::out::check(&args.out.join(name), force, &[])?;
-    }
+    super::prepare_out(args, force)?;
     let threads = args.threads.unwrap_or_else(pipeline::batch::cores).max(1);
     let t0 = std::time::Instant::now();
     let rig = RecordedRig::load(dir, args.config.as_deref())?;
@@ -169,32 +166,13 @@ pub(super) fn command(args: &SensorFaultsArgs, dir: &Path, force: bool) -> Resul
         dir.display()
     );
     let runs = super::parallel(jobs.len(), threads, |j| rig.watch(args, jobs[j].0, jobs[j].1))?;
-    let sums = super::summarise(&runs);
-    let md = super::markdown(args, &sums);
-    print!("{md}");
-    let json = serde_json::json!({
+    let set = serde_json::json!({
         "data": dir.display().to_string(),
         "recordings": rig.recordings.iter().map(|(run, scenario, _)| format!("{run} {scenario}")).collect::<Vec<_>>(),
         "instances": args.instances,
         "seed": args.seed,
-        "wall_s": t0.elapsed().as_secs_f64(),
-        "summary": sums,
-        "runs": runs,
     });
-    let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
-    pipeline::out::write(&args.out.join("sensor_faults.md"), md.as_bytes(), force, &[])?;
-    pipeline::out::write(
-        &args.out.join("sensor_faults.json"),
-        (text + "\n").as_bytes(),
-        force,
-        &[],
-    )?;
-    eprintln!(
-        "wrote {} in {:.0} s",
-        args.out.display(),
-        t0.elapsed().as_secs_f64()
-    );
-    Ok(())
+    super::report(args, force, set, &runs, t0)
 }
 
 /// The run folders of `dir` (`run_*`, sorted) whose truth has no fault.
