@@ -168,8 +168,9 @@ impl LeakSizeDetector {
         if !invalid {
             self.watch_offsets(e, dt_s, rise, thr);
         }
-        // Rises an offset on a transducer explains better than any leak are no leak evidence.
-        let offset_like = misreading || self.offsets.vetoes();
+        // Rises an offset on a transducer explains better than any leak are no leak
+        // evidence, nor are those a misreading past a sound transducer's explains as well.
+        let offset_like = misreading || self.offsets.vetoes() || self.offsets.rivals_leak();
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
         let naming_thr = if self.offsets.could_explain() {
             thr

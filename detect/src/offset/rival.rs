@@ -1,10 +1,22 @@
-//! The misreading that explains a leak's rises as well as a leak does, in
-//! words, for the leak's event: the operator is told which transducer to check.
+//! The misreading that rivals a leak: one that fits the rises at least as
+//! well holds the leak back; one that fits them nearly as well is said in the
+//! leak's event, so the operator is told which transducer to check.
 
 use super::fit::{channel_of, is_position, is_span};
 use super::{OffsetWatch, OFFSET_CHANNEL_NAMES, OFFSET_CLEAN_FLOOR_SHARE};
 
 impl OffsetWatch {
+    /// Whether the window's best misreading fits the rises at least as well
+    /// as the best leak does, with its part of them material, and is at least
+    /// [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: then the rises are no
+    /// leak evidence. A leak is raised only where it fits better than every
+    /// misreading a transducer past its tolerance could make.
+    pub fn rivals_leak(&self) -> bool {
+        let h = self.window_best.h;
+        self.window_offset_fits(1.0)
+            && self.window.coefficient(h).abs() >= OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
+    }
+
     /// The window's best misreading in words ("p2 reading 162 kPa low"),
     /// where it could explain the rises as well as a leak
     /// ([`OffsetWatch::could_explain`]) and is at least

@@ -551,3 +551,43 @@ fn a_rival_misreading_is_said_only_past_half_the_least_named() {
     assert!(watch.could_explain());
     assert_eq!(watch.rival_misreading(), None);
 }
+
+/// The window after 60 s of rises an offset `b_mpa` on p2 makes beside a
+/// steady ext2 flow of `steady_lpm`, from a fixed baseline.
+fn offset_on_p2_and_steady_ext2(b_mpa: f64, steady_lpm: f64) -> OffsetWatch {
+    drive(60.0, 0.0, |t| {
+        let [d1, d2] = cycle_responses(t);
+        (
+            [b_mpa * d2[0], b_mpa * d2[1] + steady_lpm, b_mpa * d2[2]],
+            [d1, d2],
+            [0.0; 2],
+        )
+    })
+    .0
+}
+
+/// The share the best offset's fit leaves of what the best leak's leaves (1).
+fn offset_to_leak_left(w: &OffsetWatch) -> f64 {
+    w.window_best.left / w.window_best.leak_left
+}
+
+#[test]
+fn a_misreading_that_fits_as_well_as_a_leak_rivals_it_past_half_the_least_named() {
+    // p2 0.3 MPa low beside 0.08 L/min: the offset fits better, not twice as well
+    let w = offset_on_p2_and_steady_ext2(-0.3, 0.08);
+    let ratio = offset_to_leak_left(&w);
+    assert!((0.5..1.0).contains(&ratio), "{ratio}");
+    assert!(!w.vetoes());
+    assert!(w.rivals_leak());
+    // as well, but 86 kPa: within a sound transducer's tolerance (under 125 kPa)
+    let w = offset_on_p2_and_steady_ext2(-0.05, 0.012);
+    let ratio = offset_to_leak_left(&w);
+    assert!((0.5..1.0).contains(&ratio), "{ratio}");
+    assert!(w.window.coefficient(w.window_best.h).abs() < 0.125);
+    assert!(!w.rivals_leak());
+    // the leak fits better: no rival, though 190 kPa could explain it
+    let w = offset_on_p2_and_steady_ext2(-0.1, 0.03);
+    assert!(offset_to_leak_left(&w) > 1.0);
+    assert!(w.could_explain() && w.window.coefficient(w.window_best.h).abs() > 0.125);
+    assert!(!w.rivals_leak());
+}
