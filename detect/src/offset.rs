@@ -374,11 +374,17 @@ impl OffsetWatch {
     }
 
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]) and
-    /// the pressure offset of hypothesis `h` fitted over the window is larger
-    /// than [`MOST_DRIFT_MPA_PER_S`] could have made it since its channel's
-    /// part of the rises began to grow, at `t_s` (s).
+    /// the offset of hypothesis `h` grew faster than a drift
+    /// ([`Self::faster_than_a_drift`]).
     fn grew_past_a_drift(&self, h: usize, t_s: f64) -> bool {
-        if !self.leak_named || is_position(h) {
+        self.leak_named && self.faster_than_a_drift(h, t_s)
+    }
+
+    /// Whether the pressure offset of hypothesis `h` fitted over the window is
+    /// larger than [`MOST_DRIFT_MPA_PER_S`] could have made it since its
+    /// channel's part of the rises began to grow, at `t_s` (s). False on x.
+    fn faster_than_a_drift(&self, h: usize, t_s: f64) -> bool {
+        if is_position(h) {
             return false;
         }
         let c = channel_of(h);

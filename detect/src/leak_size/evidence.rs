@@ -170,7 +170,7 @@ impl LeakSizeDetector {
         }
         // Rises an offset on a transducer explains better than any leak are no leak
         // evidence, nor are those a misreading past a sound transducer's explains as well.
-        let offset_like = misreading || self.offsets.vetoes() || self.offsets.rivals_leak();
+        let offset_like = misreading || self.offsets.vetoes() || self.offsets.rivals_leak(e.t_s);
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
         let naming_thr = if self.offsets.could_explain() {
             thr

@@ -6,15 +6,19 @@ use super::fit::{channel_of, is_position, is_span};
 use super::{OffsetWatch, OFFSET_CHANNEL_NAMES, OFFSET_CLEAN_FLOOR_SHARE};
 
 impl OffsetWatch {
-    /// Whether the window's best misreading fits the rises at least as well
-    /// as the best leak does, with its part of them material, and is at least
-    /// [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: then the rises are no
-    /// leak evidence. A leak is raised only where it fits better than every
-    /// misreading a transducer past its tolerance could make.
-    pub fn rivals_leak(&self) -> bool {
+    /// Whether, at `t_s` (s), the window's best misreading fits the rises at
+    /// least as well as the best leak does, with its part of them material,
+    /// is at least [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named, and could
+    /// have grown at a transducer's drift since its part began to grow
+    /// ([`super::MOST_DRIFT_MPA_PER_S`]): then the rises are no leak evidence.
+    /// A leak is raised only where it fits better than every misreading a
+    /// drifting transducer past its tolerance could make; one that appeared
+    /// in seconds, with a leak's onset, is the leak.
+    pub fn rivals_leak(&self, t_s: f64) -> bool {
         let h = self.window_best.h;
         self.window_offset_fits(1.0)
             && self.window.coefficient(h).abs() >= OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
+            && !self.faster_than_a_drift(h, t_s)
     }
 
     /// The window's best misreading in words ("p2 reading 162 kPa low"),
