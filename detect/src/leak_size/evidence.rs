@@ -169,7 +169,8 @@ impl LeakSizeDetector {
             self.watch_offsets(e, dt_s, rise, thr);
         }
         // Rises an offset on a transducer explains better than any leak are no leak
-        // evidence, nor are those a misreading past a sound transducer's explains as well.
+        // evidence; nor are those that a drifting transducer past its tolerance
+        // explains as well as a leak does.
         let offset_like = misreading || self.offsets.vetoes() || self.offsets.rivals_leak(e.t_s);
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
         let naming_thr = if self.offsets.could_explain() {

@@ -600,8 +600,9 @@ fn a_misreading_that_fits_as_well_as_a_leak_rivals_it_past_half_the_least_named(
 
 #[test]
 fn a_misreading_that_appeared_faster_than_a_drift_is_no_rival() {
-    // the first case above from 30 s on: its part of the rises grew within
-    // a second, and a drift of at most 10 kPa/s makes 0.3 MPa in 30 s
+    // the first case above from 30 s on: fitted as a drift it reads over
+    // 0.3 MPa now, but its part of the rises grew within a second, and a
+    // drift of at most 10 kPa/s makes 0.3 MPa in 30 s
     let w = offset_on_p2_and_steady_ext2_from(-0.3, 0.08, 30.0);
     assert!(offset_to_leak_left(&w) < 1.0, "{}", offset_to_leak_left(&w));
     let b = w.window.coefficient(w.window_best.h);
