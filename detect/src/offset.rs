@@ -42,6 +42,7 @@
 //! in kPa (mm on x) or g in %.
 
 use crate::{EventKind, LeakEvent, Phase};
+
 mod fit;
 mod hold;
 mod rival;
@@ -326,7 +327,8 @@ impl OffsetWatch {
     /// [`OFFSET_MATERIAL_SHARE`] of the smallest threshold and its fit leaves
     /// less than `ratio` times what the best leak's leaves.
     fn window_offset_fits(&self, ratio: f64) -> bool {
-        self.window_offset_material() && self.window.offset_fits_better(&self.window_best, ratio)
+        // (the comparison first: it is two numbers, the material part a fit)
+        self.window.offset_fits_better(&self.window_best, ratio) && self.window_offset_material()
     }
 
     /// Whether, over the window, the best offset's part of the rises is past

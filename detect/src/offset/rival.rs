@@ -16,9 +16,14 @@ impl OffsetWatch {
     /// in seconds, with a leak's onset, is the leak.
     pub fn rivals_leak(&self, t_s: f64) -> bool {
         let h = self.window_best.h;
-        self.window_offset_fits(1.0)
-            && self.window.coefficient(h).abs() >= OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
-            && !self.faster_than_a_drift(h, t_s)
+        self.window_offset_fits(1.0) && self.past_tolerance(h) && !self.faster_than_a_drift(h, t_s)
+    }
+
+    /// Whether the misreading of hypothesis `h` fitted over the window is at
+    /// least [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: a smaller one
+    /// lies within a sound transducer's tolerance.
+    fn past_tolerance(&self, h: usize) -> bool {
+        self.window.coefficient(h).abs() >= OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
     }
 
     /// The window's best misreading in words ("p2 reading 162 kPa low"),
@@ -29,10 +34,10 @@ impl OffsetWatch {
     /// None otherwise.
     pub fn rival_misreading(&self) -> Option<String> {
         let h = self.window_best.h;
-        let b = self.window.coefficient(h);
-        if !self.could_explain() || b.abs() < OFFSET_CLEAN_FLOOR_SHARE * self.least(h) {
+        if !self.could_explain() || !self.past_tolerance(h) {
             return None;
         }
+        let b = self.window.coefficient(h);
         let name = OFFSET_CHANNEL_NAMES[channel_of(h)];
         let high_low = if b >= 0.0 { "high" } else { "low" };
         Some(if is_position(h) {
