@@ -330,10 +330,13 @@ impl Fit {
 
     /// RMS of the rises that a misreading of channel `c` explains in any form, L/min.
     pub(crate) fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
-        (0..ALL_HYPOTHESES)
+        // (the largest energy's RMS: the square root and the division keep
+        // the order, so one root gives the largest RMS exactly)
+        let most = (0..ALL_HYPOTHESES)
             .filter(|&h| channel_of(h) == c)
-            .map(|h| self.explained_rms_lpm(h))
-            .fold(0.0, f64::max)
+            .map(|h| self.explained_by_offset(h).max(0.0))
+            .fold(0.0, f64::max);
+        (most / self.w.max(1e-12)).sqrt()
     }
 }
 
