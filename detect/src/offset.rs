@@ -389,13 +389,20 @@ impl OffsetWatch {
         if is_position(h) {
             return false;
         }
-        let c = channel_of(h);
-        let offset_mpa = if is_span(h) {
-            self.window.coefficient(h) * self.reading_mpa[c]
+        self.pressure_offset_mpa(h).abs() > MOST_DRIFT_MPA_PER_S * (t_s - self.low_since_s[channel_of(h)])
+    }
+
+    /// The offset on p1 or p2 the misreading of hypothesis `h` fitted over the
+    /// window makes, MPa: a span error's at the pressure read. NaN on x.
+    fn pressure_offset_mpa(&self, h: usize) -> f64 {
+        let b = self.window.coefficient(h);
+        if is_position(h) {
+            f64::NAN
+        } else if is_span(h) {
+            b * self.reading_mpa[channel_of(h)]
         } else {
-            self.window.coefficient(h)
-        };
-        offset_mpa.abs() > MOST_DRIFT_MPA_PER_S * (t_s - self.low_since_s[c])
+            b
+        }
     }
 
     /// Whether an offset on a transducer could explain the window's rises:
@@ -523,13 +530,7 @@ impl OffsetWatch {
                     let coefficient = self.window.coefficient(h);
                     let s = StandingOffset {
                         channel: c,
-                        offset_mpa: if is_position(h) {
-                            f64::NAN
-                        } else if is_span(h) {
-                            coefficient * self.reading_mpa[c]
-                        } else {
-                            coefficient
-                        },
+                        offset_mpa: self.pressure_offset_mpa(h),
                         offset_mm: if is_position(h) { coefficient } else { f64::NAN },
                         span_error: if is_span(h) { coefficient } else { f64::NAN },
                         drift_mpa_per_s: if is_span(h) || is_position(h) {
