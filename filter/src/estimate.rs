@@ -26,7 +26,8 @@ pub struct Estimate {
     pub bulk_scale: f64,
     /// One standard deviation of [`Self::bulk_scale`] (1); NaN for the other layouts.
     pub bulk_scale_sigma: f64,
-    /// The measurement y = [x m, p1 Pa, p2 Pa] as received (NaN where absent).
+    /// The measurement y = [x m, p1 Pa, p2 Pa] the filter used: as received,
+    /// less the model's transducer misreading (`pressure_misreading_pa`; NaN where absent).
     pub measured: [f64; N_MEAS],
     /// Valve command u, V (as received).
     pub u_v: f64,

@@ -400,7 +400,8 @@ impl Estimator {
         self.oil_temp_c
     }
 
-    /// Processes one sensor sample (one sample period after the previous one).
+    /// Processes one sensor sample (one sample period after the previous one),
+    /// its pressures less the model's `pressure_misreading_pa`.
     pub fn on_sample(&mut self, s: &Sample) -> Estimate {
         let mut e = Estimate::empty(s.t_s, self.tuning.states);
         self.on_sample_into(s, &mut e);
@@ -410,6 +411,19 @@ impl Estimator {
     /// [`Self::on_sample`] into `e`, which it overwrites whole: the hot path's
     /// form (the estimate is written where the caller keeps it, not copied there).
     pub fn on_sample_into(&mut self, s: &Sample, e: &mut Estimate) {
+        // the transducers' misreading the model knows comes off each reading
+        let misreading_pa = self.params_at_reference.pressure_misreading_pa;
+        let corrected;
+        let s = if misreading_pa == [0.0; 2] {
+            s
+        } else {
+            corrected = Sample {
+                p1_pa: s.p1_pa - misreading_pa[0],
+                p2_pa: s.p2_pa - misreading_pa[1],
+                ..*s
+            };
+            &corrected
+        };
         let measured_temp = s.temp_c.is_finite();
         if measured_temp {
             // a thermometer: the model follows it, not θ

@@ -15,6 +15,8 @@ mod lift;
 mod log_readers;
 #[path = "cli/logs.rs"]
 mod logs;
+#[path = "cli/misreading.rs"]
+mod misreading;
 #[path = "cli/outputs.rs"]
 mod outputs;
 #[path = "cli/run.rs"]

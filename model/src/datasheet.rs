@@ -41,7 +41,7 @@ schema::config_struct! {
 
 /// The config fields a datasheet derives: (section, field, the datasheet fact
 /// it comes from). Written once: a config with a `[datasheet]` may not set them.
-pub const DERIVED_FIELDS: [(&str, &str, &str); 28] = [
+pub const DERIVED_FIELDS: [(&str, &str, &str); 30] = [
     ("model", "piston_area_m2", "cylinder.bore_m and rod_m"),
     ("model", "rod_side_area_m2", "cylinder.kind, bore_m and rod_m"),
     ("model", "mounting_angle_rad", "cylinder.mounting_angle_deg"),
@@ -88,6 +88,16 @@ pub const DERIVED_FIELDS: [(&str, &str, &str); 28] = [
     ),
     ("sensors", "adc_bits", "pressure_transducers.adc_bits"),
     ("sensors", "pressure_noise_pa", "pressure_transducers.noise_pa"),
+    (
+        "sensors",
+        "pressure_zero_offset_max_pa",
+        "pressure_transducers.zero_offset_max_pa",
+    ),
+    (
+        "sensors",
+        "pressure_span_error_max",
+        "pressure_transducers.span_error_max_fraction",
+    ),
     ("leak_filter", "r_x_m2", "position_sensor"),
     ("leak_filter", "r_p_pa2", "pressure_transducers"),
 ];
@@ -179,6 +189,8 @@ impl Datasheet {
             pressure_full_scale_pa: t.full_scale_pa,
             adc_bits: t.adc_bits,
             pressure_noise_pa: t.noise_pa,
+            pressure_zero_offset_max_pa: t.zero_offset_max_pa,
+            pressure_span_error_max: t.span_error_max_fraction,
             ..*base
         }
     }

@@ -160,6 +160,12 @@ schema::config_struct! {
             "Pa per m³/s",
             Range::Stated("0 (no sag) or a pressure drop from 1 to 1e14 Pa per m³/s")
         ],
+        /// What the p1 and p2 transducers read above the chamber pressures at the
+        /// working point, Pa (their zero offsets and span errors there): the
+        /// filters take it off each reading and a simulation adds it.
+        /// `commission` fits it to the healthy leak estimates (docs/plant.md,
+        /// "Commissioning fits the transducers' misreading").
+        pub pressure_misreading_pa: [f64; 2] = [0.0; 2] => ["Pa", num!("misreadings", -1e7, 1e7)],
         /// Return (tank) pressure p_r, Pa (gauge).
         pub return_pressure_pa: f64 = 0.0 => ["Pa", num!("a pressure", 0, 1e8)],
         /// Laminar leakage conductance of each of the valve's four metering lands at

@@ -37,6 +37,12 @@ schema::config_struct! {
         pub pressure_offset_pa: [f64; 2] = [0.0; 2] => ["Pa", num!("offsets", -1e7, 1e7)],
         /// Span errors of the p1 and p2 transducers, relative (0.005: reads 0.5 % high).
         pub pressure_gain_error: [f64; 2] = [0.0; 2] => ["", num!("span errors", -0.5, 0.5)],
+        /// The largest zero offset of each pressure transducer, Pa (the datasheet's;
+        /// 0: not given): `commission` holds the misreading it fits within it.
+        pub pressure_zero_offset_max_pa: f64 = 0.0 => ["Pa", num!("an offset", 0, 1e7)],
+        /// The largest span error of each pressure transducer, as a fraction of
+        /// the reading (the datasheet's; 0.005: 0.5 %; 0: not given).
+        pub pressure_span_error_max: f64 = 0.0 => ["", num!("a fraction", 0, 0.5)],
         /// Time constant of both transducers' first-order lag, s (0: none), applied
         /// to the pressures at the sample rate.
         pub pressure_lag_s: f64 = 0.0 => ["s", num!("a time constant", 0, 1)],

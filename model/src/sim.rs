@@ -331,6 +331,12 @@ impl Simulator {
         } else {
             [s[1], s[2]]
         };
+        // the misreading the model knows of ([`ActuatorParams::pressure_misreading_pa`])
+        for (p, z) in p.iter_mut().zip(self.rig.pressure_misreading_pa) {
+            if z != 0.0 {
+                *p += z;
+            }
+        }
         let mut s = *s;
         if self.sensors.sample_jitter_s > 0.0 && self.sensors.enabled {
             // read at t + δ: each value moved by its rate times δ (the

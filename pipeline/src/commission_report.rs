@@ -326,6 +326,8 @@ pub struct CommissionRecord {
     pub identified: Identified,
     /// The spool's null bias found, and the datasheet's (model's) before it, m.
     pub null_bias: Option<(NullBias, f64)>,
+    /// The transducers' misreading fitted, and whether it was taken.
+    pub misreading: Option<crate::commission::MisreadingTaken>,
     /// The healthy state and the thresholds.
     pub learned: Learned,
     /// The leak filter's fit to the recording.
@@ -374,7 +376,17 @@ impl CommissionRecord {
                 b.bias_m * 1e6
             )
         });
-        h += &id.html(null_bias.as_deref().unwrap_or(""));
+        let mut extra = null_bias.unwrap_or_default();
+        if let Some(m) = self.misreading.filter(|m| m.taken) {
+            for (name, z) in ["p1", "p2"].iter().zip(m.found.pa) {
+                extra += &format!(
+                    "<tr><td>{name} transducer's misreading at the working point</td><td class=\"n\">{:+.1}</td><td class=\"n\">–</td><td class=\"n\">0</td><td class=\"n\">{:+.1}</td><td>kPa</td></tr>\n",
+                    z * 1e-3,
+                    z * 1e-3
+                );
+            }
+        }
+        h += &id.html(&extra);
         h += &self.learned_html(l);
         h += "<h2>The fit to the recording</h2>\n";
         h += &crate::html::figure(&self.fit.figure(&format!("The leak filter on {name}")))?;

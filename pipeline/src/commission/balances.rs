@@ -142,9 +142,10 @@ pub(super) fn flow_balance(
     });
     // what this recording cannot tell apart, said rather than guessed
     out.notes.push(
-        "  transducer offsets: not separable from this recording: the flow balance uses pressure \
+        "  transducer offsets: not separable in the balances: the flow balance uses pressure \
          changes (an offset cancels); in the force balance an offset difference reads as a static \
-         load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them"
+         load and a common offset as supply pressure; a reading at zero pressure (pump off) gives them \
+         (commissioning fits their misreading at the working point to the leak filter, below)"
             .to_string(),
     );
 }
