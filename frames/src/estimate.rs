@@ -43,7 +43,8 @@ pub struct EstimateFrame {
     pub innovation: [f64; 3],
     /// Leak filter: standard deviation of each innovation: m, Pa, Pa.
     pub innovation_sigma: [f64; 3],
-    /// The measurement as received: x m, p1 Pa, p2 Pa (NaN where absent).
+    /// The measurement the filter used: x m, p1 Pa, p2 Pa, the model's
+    /// transducer misreading taken off (NaN where absent).
     pub measured: [f64; 3],
     /// The valve command as received, V.
     pub u_v: f64,
