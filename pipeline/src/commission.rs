@@ -327,11 +327,12 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     let (mut identified_cfg, identified) = identify_rig_said(input, cfg)?;
     // the identified model is now the rig's; the datasheet it started from is not written again
     identified_cfg.datasheet = None;
-    let (mut cfg, mut bias, mut trace) = bias_then_learn(input, &identified_cfg)?;
+    let mut pass = bias_then_learn(input, &identified_cfg)?;
     let misreading = match tolerance {
-        Some(t) => fit_misreading(input, &identified_cfg, t, (&mut cfg, &mut bias, &mut trace))?,
+        Some(t) => fit_misreading(input, &identified_cfg, t, &mut pass)?,
         None => None,
     };
+    let Pass { mut cfg, bias, trace } = pass;
     if let Some(m) = &misreading {
         eprintln!("{}", m.line());
     }
@@ -391,10 +392,17 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     Ok((cfg, record))
 }
 
+/// What one pass over the healthy recording gives: the config with the null
+/// bias held, the bias, and what the learning traced.
+struct Pass {
+    cfg: Config,
+    bias: Option<NullBias>,
+    trace: LearnedTrace,
+}
+
 /// The null bias identified on `input` under `cfg` (layouts with a bias
-/// state, 11 and 12) and held, then the commissioning learned with it: the
-/// config with the bias, the bias, and what the learning traced.
-fn bias_then_learn(input: &Path, cfg: &Config) -> Result<(Config, Option<NullBias>, LearnedTrace), String> {
+/// state, 11 and 12) and held, then the commissioning learned with it.
+fn bias_then_learn(input: &Path, cfg: &Config) -> Result<Pass, String> {
     let mut cfg = cfg.clone();
     let mut bias = None;
     if cfg.leak_filter.states >= 11 {
@@ -403,7 +411,7 @@ fn bias_then_learn(input: &Path, cfg: &Config) -> Result<(Config, Option<NullBia
         bias = Some(b);
     }
     let trace = learn_traced(input, &cfg)?;
-    Ok((cfg, bias, trace))
+    Ok(Pass { cfg, bias, trace })
 }
 
 /// The least share of the healthy spreads' energy (Σ spread²) a fitted
@@ -417,44 +425,45 @@ const MISREADING_LEAST_SHARE: f64 = 1.0 / 3.0;
 /// read less the misreading taken so far.
 const MISREADING_ROUNDS: usize = 3;
 
-/// Fits the transducers' misreading to the commissioning in `current` (the
-/// config, bias and trace learned from `identified` on `input`) and takes it
-/// while each round takes [`MISREADING_LEAST_SHARE`] of the healthy spreads'
-/// energy away, replacing `current` each time ([`MisreadingFit`]); `None`
-/// when the recording cannot tell it.
+/// Fits the transducers' misreading to the commissioning of `pass` (learned
+/// from `identified` on `input`) and takes it while each round takes
+/// [`MISREADING_LEAST_SHARE`] of the healthy spreads' energy away, replacing
+/// `pass` each time ([`MisreadingFit`]); `None` when the recording cannot tell it.
 fn fit_misreading(
     input: &Path,
     identified: &Config,
     tol: identify::TransducerTolerance,
-    current: (&mut Config, &mut Option<NullBias>, &mut LearnedTrace),
+    pass: &mut Pass,
 ) -> Result<Option<MisreadingTaken>, String> {
-    let (cfg, bias, trace) = current;
-    let before = trace.commissioning.spreads_lpm;
+    let before = pass.trace.commissioning.spreads_lpm;
     let mut outcome: Option<MisreadingTaken> = None;
     for _ in 0..MISREADING_ROUNDS {
-        let taken_pa = cfg.model.pressure_misreading_pa;
-        let Some(m) = trace
-            .misreading
-            .solve(tol.zero_offset_max_pa, tol.span_error_max_fraction, taken_pa)
+        let taken_pa = pass.cfg.model.pressure_misreading_pa;
+        let Some(m) =
+            pass.trace
+                .misreading
+                .solve(tol.zero_offset_max_pa, tol.span_error_max_fraction, taken_pa)
         else {
             break;
         };
         let mut trial = identified.clone();
         trial.model.pressure_misreading_pa = m.pa;
-        let (trial_cfg, trial_bias, trial_trace) = bias_then_learn(input, &trial)?;
-        let after = trial_trace.commissioning.spreads_lpm;
-        if energy(after) > (1.0 - MISREADING_LEAST_SHARE) * energy(trace.commissioning.spreads_lpm) {
+        let trial = bias_then_learn(input, &trial)?;
+        let after = trial.trace.commissioning.spreads_lpm;
+        let taken =
+            energy(after) <= (1.0 - MISREADING_LEAST_SHARE) * energy(pass.trace.commissioning.spreads_lpm);
+        if !taken {
             outcome.get_or_insert(MisreadingTaken {
                 found: m,
-                taken: false,
+                taken,
                 spreads_lpm: [before, after],
             });
             break;
         }
-        (*cfg, *bias, *trace) = (trial_cfg, trial_bias, trial_trace);
+        *pass = trial;
         outcome = Some(MisreadingTaken {
             found: m,
-            taken: true,
+            taken,
             spreads_lpm: [before, after],
         });
     }
