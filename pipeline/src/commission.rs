@@ -31,7 +31,7 @@ mod reach;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
-pub use misreading::{Misreading, MisreadingFit, MisreadingTaken};
+pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
 
 /// Reads `input` into the rows [`identify::identify`] takes.
@@ -413,13 +413,6 @@ fn bias_then_learn(input: &Path, cfg: &Config) -> Result<Pass, String> {
     let trace = learn_traced(input, &cfg)?;
     Ok(Pass { cfg, bias, trace })
 }
-
-/// The least share of the healthy spreads' energy (Σ spread²) a fitted
-/// misreading must take away to be taken (1): on the in-repo lift a fit that
-/// took 27 % lowered a naming threshold its runs then crossed four times in
-/// 0.4 h, while on the press every fit that took a third or more held
-/// (docs/plant.md, "Commissioning fits the transducers' misreading").
-const MISREADING_LEAST_SHARE: f64 = 1.0 / 3.0;
 
 /// Rounds of the misreading's fit at most: each refits on the recording
 /// read less the misreading taken so far.
