@@ -24,6 +24,21 @@ mod run;
 #[path = "cli/simulate.rs"]
 mod simulate;
 
+/// A config as a user writes it for a rig: its `sheet` in `[datasheet]`, and
+/// in `[model]` only what no datasheet gives (`model` less the derived fields).
+fn datasheet_config(sheet: model::Datasheet, model: &model::ActuatorParams) -> toml::Table {
+    let mut rest = toml::Table::try_from(model).unwrap();
+    for (section, field, _) in model::datasheet::DERIVED_FIELDS {
+        if section == "model" {
+            rest.remove(field);
+        }
+    }
+    let mut cfg = toml::Table::new();
+    cfg.insert("datasheet".into(), toml::Value::try_from(sheet).unwrap());
+    cfg.insert("model".into(), toml::Value::Table(rest));
+    cfg
+}
+
 /// `seconds` of `scenario` on the config `config`'s rig, with `fault`, to `out`.
 fn simulate_scenario(
     scenario: &str,

@@ -2,7 +2,7 @@
 
 use crate::common::*;
 
-use crate::simulate_scenario;
+use crate::{datasheet_config, simulate_scenario};
 
 /// A vertical single-rod lift (`ActuatorParams::vertical_lift`: 2.0/1.2e-3 m²,
 /// 200 kg, matched valve) through the README's workflow: commissioned on a
@@ -15,19 +15,10 @@ fn a_single_rod_lift_is_commissioned_and_each_leak_found_and_named() {
     let d = tmpdir("lift_folder");
     // The lift described as a user would: its datasheet, and in [model] only
     // what no datasheet gives (friction, damping, end stops); installed as a plant's is.
-    let lift = model::ActuatorParams::vertical_lift();
-    let mut rest = toml::Table::try_from(&lift).unwrap();
-    for (section, field, _) in model::datasheet::DERIVED_FIELDS {
-        if section == "model" {
-            rest.remove(field);
-        }
-    }
-    let mut cfg = toml::Table::new();
-    cfg.insert(
-        "datasheet".into(),
-        toml::Value::try_from(model::Datasheet::vertical_lift()).unwrap(),
+    let mut cfg = datasheet_config(
+        model::Datasheet::vertical_lift(),
+        &model::ActuatorParams::vertical_lift(),
     );
-    cfg.insert("model".into(), toml::Value::Table(rest));
     // and what an installation adds (the simulated rig's sensors; the model has none
     // of it): transducers at the valve manifold (0.15 MPa at 50 L/min), lagging
     // 0.5 ms, with offsets and span errors

@@ -2,30 +2,44 @@
 
 use crate::common::*;
 
-use crate::simulate_scenario;
+use crate::{datasheet_config, simulate_scenario};
 
 /// The press's datasheet config (`Datasheet::press` and the `[model]` facts
 /// no datasheet gives), its simulated transducers reading off by
 /// `installation` (a `[sensors]` table).
 fn press_config(installation: &str) -> String {
-    let press = model::ActuatorParams::press();
-    let mut rest = toml::Table::try_from(&press).unwrap();
-    for (section, field, _) in model::datasheet::DERIVED_FIELDS {
-        if section == "model" {
-            rest.remove(field);
-        }
-    }
-    let mut cfg = toml::Table::new();
-    cfg.insert(
-        "datasheet".into(),
-        toml::Value::try_from(model::Datasheet::press()).unwrap(),
-    );
-    cfg.insert("model".into(), toml::Value::Table(rest));
+    let mut cfg = datasheet_config(model::Datasheet::press(), &model::ActuatorParams::press());
     cfg.insert(
         "sensors".into(),
         toml::Value::Table(toml::from_str(installation).unwrap()),
     );
     toml::to_string(&cfg).unwrap()
+}
+
+/// `leakwatch commission` of a simulated healthy minute of the press under
+/// the config `sheet`, in `d` with names from `name`: its stderr, the
+/// config it wrote, and the recording's mean p1 and p2 readings (Pa).
+fn commission_press(
+    d: &std::path::Path,
+    sheet: &std::path::Path,
+    name: &str,
+) -> (String, toml::Table, [f64; 2]) {
+    let rec = d.join(format!("{name}.csv"));
+    simulate_scenario("press", sheet, "60", "11", "none", &rec);
+    let means = [column_mean(&rec, "p1"), column_mean(&rec, "p2")];
+    let out = d.join(format!("{name}.toml"));
+    let o = leakwatch(&[
+        "commission",
+        rec.to_str().unwrap(),
+        "--config",
+        sheet.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let written = toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    (err, written, means)
 }
 
 /// The mean of CSV column `name` of `csv`.
@@ -52,27 +66,13 @@ fn commissioning_fits_a_transducers_misreading_and_takes_it_off() {
         press_config("pressure_offset_pa = [45e3, -40e3]\npressure_gain_error = [0.004, -0.004]\n"),
     )
     .unwrap();
-    let rec = d.join("healthy.csv");
-    simulate_scenario("press", &sheet, "60", "11", "none", &rec);
-    let means = [column_mean(&rec, "p1"), column_mean(&rec, "p2")];
+    let (err, written, means) = commission_press(&d, &sheet, "healthy");
     let truth = [45e3 + 0.004 * means[0], -40e3 - 0.004 * means[1]];
-    let out = d.join("rig.toml");
-    let o = leakwatch(&[
-        "commission",
-        rec.to_str().unwrap(),
-        "--config",
-        sheet.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = stderr(&o);
-    assert!(o.status.success(), "{err}");
     let line = err
         .lines()
         .find(|l| l.starts_with("transducers' misreading"))
         .unwrap_or_else(|| panic!("no misreading line in {err}"));
     assert!(line.contains("taken off each reading"), "{line}");
-    let written: toml::Table = toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let fitted: Vec<f64> = written["model"]["pressure_misreading_pa"]
         .as_array()
         .unwrap()
@@ -106,23 +106,10 @@ fn commissioning_fits_a_transducers_misreading_and_takes_it_off() {
     // transducers that read true: nothing much to fit
     let true_sheet = d.join("true.toml");
     std::fs::write(&true_sheet, press_config("pressure_offset_pa = [0.0, 0.0]\n")).unwrap();
-    let rec = d.join("healthy_true.csv");
-    simulate_scenario("press", &true_sheet, "60", "11", "none", &rec);
-    let out = d.join("rig_true.toml");
-    let o = leakwatch(&[
-        "commission",
-        rec.to_str().unwrap(),
-        "--config",
-        true_sheet.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let written: toml::Table = toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let (err, written, _) = commission_press(&d, &true_sheet, "healthy_true");
     let fitted = written["model"]["pressure_misreading_pa"].as_array().unwrap();
     assert!(
         fitted.iter().all(|v| v.as_float().unwrap().abs() < 25e3),
-        "{fitted:?}: {}",
-        stderr(&o)
+        "{fitted:?}: {err}"
     );
 }
