@@ -13,6 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::stats::quantile;
+use crate::truth_flow::FloorClock;
 use detect::{LeakEvent, Phase};
 use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
@@ -94,10 +95,12 @@ pub struct FileRun {
     pub thresholds_sigma: [f64; 3],
     /// Seconds without evidence after arming, s.
     pub blind_s: f64,
-    /// First time the logged leak flow (`q_leak`, never shown to the detector)
-    /// reached the detector's floor for an external leak and for an internal one
-    /// (`min_size_lpm`, `min_internal_size_lpm`), s (NaN if never or not logged).
-    /// A ramping leak cannot be declared before its flow gets there.
+    /// First time the logged leak flow (`q_leak`, never shown to the detector),
+    /// or a run folder's `truth_flow.csv[.gz]`, reached the detector's floor for
+    /// an external leak and for an internal one (`min_size_lpm`,
+    /// `min_internal_size_lpm`) and held there for `confirm_s`, s (NaN if never
+    /// or not logged): `crate::truth_flow::FloorClock`. A leak cannot be
+    /// declared before its flow gets there.
     pub t_detectable_s: [f64; 2],
     /// The detector's floors, L/min: `min_size_lpm` and `min_internal_size_lpm`.
     pub floors_lpm: [f64; 2],
@@ -222,7 +225,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
     let mut chain = Chain::new(set)?;
     let (mut events, mut sensor_raised_s) = (Vec::new(), Vec::new());
     let floors = [set.classifier.min_size_lpm, set.classifier.min_internal_size_lpm];
-    let (mut n, mut t_end, mut t_detectable) = (0u64, 0.0, [f64::NAN; 2]);
+    let mut clock = FloorClock::new(floors, set.classifier.confirm_s);
+    let (mut n, mut t_end) = (0u64, 0.0);
     while let Some(row) = reader.next_row() {
         let s = match row {
             dataset::Row::Sample(s) | dataset::Row::AfterGap(s, _) => s,
@@ -230,11 +234,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         };
         n += 1;
         t_end = s.t_s;
-        for (t, floor) in t_detectable.iter_mut().zip(floors) {
-            if t.is_nan() && s.q_leak_lpm.abs() >= floor {
-                *t = s.t_s;
-            }
-        }
+        clock.push(s.t_s, s.q_leak_lpm);
         chain.step(&s, |ev| {
             if ev.kind.is_leak_alarm() && ev.detector == "leak-size" {
                 events.push(ev)
@@ -253,7 +253,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         thresholds_lpm: chain.classifier().leak_size.thresholds_lpm(),
         thresholds_sigma: chain.classifier().leak_size.thresholds_sigma(),
         blind_s: chain.classifier().leak_size.blind_s(),
-        t_detectable_s: t_detectable,
+        t_detectable_s: clock.reached_s(),
         floors_lpm: floors,
     })
 }
@@ -335,7 +335,13 @@ pub fn score_dir(
     let score = |i: usize| {
         let d = &dirs[i];
         let truth = read_truth(d)?;
-        let run = detect_file(&measured_file(d)?, set)?;
+        let mut run = detect_file(&measured_file(d)?, set)?;
+        if let Some(flows) = crate::truth_flow::file(d).filter(|_| run.t_detectable_s[0].is_nan()) {
+            if truth.t_on_s.is_finite() {
+                let clock = FloorClock::new(run.floors_lpm, set.classifier.confirm_s);
+                run.t_detectable_s = crate::truth_flow::floor_times(&flows, truth.t_on_s, clock)?;
+            }
+        }
         Ok(score_run(truth, &run))
     };
     let runs = crate::work::try_map(dirs.len(), threads, score, progress)?;
@@ -488,9 +494,10 @@ pub fn data_markdown(r: &DataSummary) -> String {
         "\nFalse alarms: {} in {:.2} clean hours (healthy runs and pre-onset time). Sizes are scored against \
          the flow the rig really lost after the ramp. Delays are counted from the onset, and also from \
          the time the real flow reached the detector's floor for its kind (`min_size_lpm` for an external \
-         leak, `min_internal_size_lpm` for an internal one): a ramping leak cannot be declared earlier. \
-         Where the recording has no `q_leak` column, that time is the truth's: its flow after the ramp \
-         reached linearly over `ramp_s`. \
+         leak, `min_internal_size_lpm` for an internal one) and held there for `confirm_s`: a leak cannot be declared before its flow gets \
+         there (up a ramp, or across a resting rod's chambers that it has equalised). Where the recording \
+         has no `q_leak` column, that time is read from the run's `truth_flow.csv[.gz]`; without one, it is \
+         the truth's: its flow after the ramp reached linearly over `ramp_s`. \
          The first alarm may say `leak` with its kind pending; \"kind named after\" is the delay of the \
          first alarm that names a kind, the kind scored.\n\nSensor events in the same time: {} (no run has a \
          sensor fault).\n",

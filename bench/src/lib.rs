@@ -12,4 +12,5 @@ pub mod replay;
 pub mod speed;
 pub mod stats;
 pub mod thesis;
+pub mod truth_flow;
 pub mod work;

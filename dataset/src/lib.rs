@@ -33,7 +33,7 @@ mod reader;
 mod samples;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};
-pub use reader::{CsvReader, FileSource, Row};
+pub use reader::{open_text, CsvReader, FileSource, Row};
 pub use samples::{RowSource, SampleChecks, SampleRows};
 
 /// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).

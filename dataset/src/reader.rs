@@ -35,23 +35,28 @@ const READ_BUFFER_BYTES: usize = 256 << 10;
 /// A buffered byte source: a plain file, or a gzip-compressed one decoded on the fly.
 pub type FileSource = Box<dyn BufRead + Send>;
 
+/// Opens a text file for buffered reading; a name ending in `.gz` is
+/// decompressed on the fly (gzip), anything else is read as plain text.
+pub fn open_text(path: &Path) -> std::io::Result<FileSource> {
+    let file = File::open(path)?;
+    let gz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    Ok(if gz {
+        Box::new(BufReader::with_capacity(
+            READ_BUFFER_BYTES,
+            flate2::read::MultiGzDecoder::new(file),
+        ))
+    } else {
+        Box::new(BufReader::with_capacity(READ_BUFFER_BYTES, file))
+    })
+}
+
 impl CsvReader<FileSource> {
-    /// Opens `path` and reads its header; a name ending in `.gz` is decompressed
-    /// on the fly (gzip), anything else is read as plain text.
+    /// Opens `path` (through [`open_text`]: plain or gzip) and reads its header.
     pub fn open(path: &Path, limits: Limits) -> Result<Self, DatasetError> {
-        let file = File::open(path).map_err(|source| DatasetError::Io {
+        let source = open_text(path).map_err(|source| DatasetError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        let gz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gz"));
-        let source: FileSource = if gz {
-            Box::new(BufReader::with_capacity(
-                READ_BUFFER_BYTES,
-                flate2::read::MultiGzDecoder::new(file),
-            ))
-        } else {
-            Box::new(BufReader::with_capacity(READ_BUFFER_BYTES, file))
-        };
         CsvReader::new(source, path, limits)
     }
 }
