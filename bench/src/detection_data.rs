@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::stats::quantile;
-use crate::truth_flow::FloorClock;
+use crate::truth_flow::{FloorClock, TrueFlows};
 use detect::{LeakEvent, Phase};
 use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
@@ -76,6 +76,9 @@ pub struct DataOutcome {
     /// `min_internal_size_lpm` for an internal one), s (NaN if none; the onset for a step).
     /// Negative if the alarm came before the real flow reached the floor.
     pub delay_after_detectable_s: f64,
+    /// The true flow averaged as the detector averages its size, at the first
+    /// named alarm and at the last, L/min (NaN without the run's true flows).
+    pub true_flow_lpm: [f64; 2],
 }
 
 /// What the chain did on one recorded file.
@@ -104,6 +107,10 @@ pub struct FileRun {
     pub t_detectable_s: [f64; 2],
     /// The detector's floors, L/min: `min_size_lpm` and `min_internal_size_lpm`.
     pub floors_lpm: [f64; 2],
+    /// The time constant over which the detector averages a leak's size, s (`size_window_s`).
+    pub size_window_s: f64,
+    /// The run's true leak flows, where its folder has them (`truth_flow.csv[.gz]`).
+    pub true_flows: Option<TrueFlows>,
 }
 
 /// Totals over a directory.
@@ -255,6 +262,8 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         blind_s: chain.classifier().leak_size.blind_s(),
         t_detectable_s: clock.reached_s(),
         floors_lpm: floors,
+        size_window_s: set.classifier.size_window_s,
+        true_flows: None,
     })
 }
 
@@ -289,6 +298,7 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         thresholds_sigma: run.thresholds_sigma,
         blind_s: run.blind_s,
         delay_after_detectable_s: f64::NAN,
+        true_flow_lpm: [f64::NAN; 2],
     };
     if let Some(ev) = first {
         let named = alarms.first_named.unwrap_or(ev);
@@ -307,6 +317,11 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         o.delay_after_detectable_s = ev.t_detect_s - t_floor.max(o.truth.t_on_s);
         o.size_first_lpm = named.size_lpm;
         o.size_final_lpm = last.size_lpm;
+        if let Some(flows) = &run.true_flows {
+            let (t_on, ramp) = (o.truth.t_on_s, o.truth.ramp_s);
+            o.true_flow_lpm =
+                [named, last].map(|e| flows.mean_lpm(e.t_detect_s, run.size_window_s, t_on, ramp));
+        }
     }
     o
 }
@@ -336,11 +351,13 @@ pub fn score_dir(
         let d = &dirs[i];
         let truth = read_truth(d)?;
         let mut run = detect_file(&measured_file(d)?, set)?;
-        if let Some(flows) = crate::truth_flow::file(d).filter(|_| run.t_detectable_s[0].is_nan()) {
-            if truth.t_on_s.is_finite() {
+        if let Some(path) = crate::truth_flow::file(d).filter(|_| truth.t_on_s.is_finite()) {
+            let flows = TrueFlows::read(&path)?;
+            if run.t_detectable_s[0].is_nan() {
                 let clock = FloorClock::new(run.floors_lpm, set.classifier.confirm_s);
-                run.t_detectable_s = crate::truth_flow::floor_times(&flows, truth.t_on_s, clock)?;
+                run.t_detectable_s = flows.floor_times(truth.t_on_s, clock);
             }
+            run.true_flows = Some(flows);
         }
         Ok(score_run(truth, &run))
     };
@@ -377,18 +394,22 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
                 .map(|o| o.delay_after_detectable_s)
                 .filter(|d| d.is_finite())
                 .collect();
-            let err =
-                |o: &&&DataOutcome, s: f64| (s - o.truth.observed_flow_lpm).abs() / o.truth.observed_flow_lpm;
+            let err = |o: &&&DataOutcome, s: f64, at: usize| {
+                let truth = Some(o.true_flow_lpm[at])
+                    .filter(|q| *q > 0.0)
+                    .unwrap_or(o.truth.observed_flow_lpm);
+                (s - truth).abs() / truth
+            };
             let right = |o: &&&DataOutcome| o.kind_first == o.truth.kind;
             let mut e_first: Vec<f64> = these
                 .iter()
                 .filter(right)
-                .map(|o| err(&o, o.size_first_lpm))
+                .map(|o| err(&o, o.size_first_lpm, 0))
                 .collect();
             let mut e_last: Vec<f64> = these
                 .iter()
                 .filter(|o| o.kind_final == o.truth.kind)
-                .map(|o| err(&o, o.size_final_lpm))
+                .map(|o| err(&o, o.size_final_lpm, 1))
                 .collect();
             SizeRow {
                 size_nominal_lpm: size,
@@ -492,7 +513,8 @@ pub fn data_markdown(r: &DataSummary) -> String {
     }
     s.push_str(&format!(
         "\nFalse alarms: {} in {:.2} clean hours (healthy runs and pre-onset time). Sizes are scored against \
-         the flow the rig really lost after the ramp. Delays are counted from the onset, and also from \
+         the flow the rig really lost after the ramp; where the run has `truth_flow.csv[.gz]`, against \
+         its true flow averaged as the detector averages the size (over `size_window_s`) at that alarm. Delays are counted from the onset, and also from \
          the time the real flow reached the detector's floor for its kind (`min_size_lpm` for an external \
          leak, `min_internal_size_lpm` for an internal one) and held there for `confirm_s`: a leak cannot be declared before its flow gets \
          there (up a ramp, or across a resting rod's chambers that it has equalised). Where the recording \
@@ -563,6 +585,8 @@ mod tests {
             blind_s: 0.0,
             t_detectable_s: [20.64, 20.96],
             floors_lpm: [0.04, 0.06],
+            size_window_s: 2.0,
+            true_flows: None,
         };
         let o = score_run(truth("ext1"), &run);
         assert!(o.detected);
@@ -603,5 +627,28 @@ mod tests {
         assert_eq!((row.runs, row.p_detect, row.p_kind_first), (2, 1.0, 0.5));
         assert!((row.delay_named_median_s - 2.5).abs() < 1e-9);
         assert!(data_markdown(&s).contains("| 0.25 | 2 | 100 % | 50 % | 1.00 | 1.00 | 0.20 | 2.50 |"));
+        // the named size 0.2 L/min: 20 % under the run's mean flow (0.25), right
+        // against a true flow of 0.2 L/min over the detector's window
+        assert!(
+            (row.size_error_median - 0.2).abs() < 1e-9,
+            "{}",
+            row.size_error_median
+        );
+        let t_s: Vec<f64> = (0..60_000).map(|i| f64::from(i) * 1e-3).collect();
+        // the truth's ramp: 0.2 L/min fully open, from 20 s over 4 s
+        let flow_lpm = t_s
+            .iter()
+            .map(|&t| 0.2 * ((t - 20.0) / 4.0).clamp(0.0, 1.0))
+            .collect();
+        let with_flows = FileRun {
+            true_flows: Some(TrueFlows { t_s, flow_lpm }),
+            ..run.clone()
+        };
+        let o = score_run(truth("ext1"), &with_flows);
+        // named at 22.5 s, 5/8 open: it passed 0.125 L/min, and the 0.2 named is 60 % over
+        assert!((o.true_flow_lpm[1] - 0.125).abs() < 1e-6, "{:?}", o.true_flow_lpm);
+        let s = summarise_data(vec![o], 0.0);
+        let e = s.by_size[0].size_error_median;
+        assert!((e - 0.6).abs() < 1e-5, "{e}");
     }
 }
