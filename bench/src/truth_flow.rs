@@ -70,11 +70,6 @@ impl FloorClock {
     pub fn reached_s(&self) -> [f64; 2] {
         self.reached_s
     }
-
-    /// Whether both floors have been reached.
-    pub fn done(&self) -> bool {
-        self.reached_s.iter().all(|t| !t.is_nan())
-    }
 }
 
 /// A run's true leak flow per sample: the largest of the three (one leak per
