@@ -41,18 +41,19 @@
 //! large enough to matter is raised as `sensor-offset` on its channel, with b
 //! in kPa (mm on x) or g in %.
 
-use crate::{EventKind, LeakEvent, Phase};
-
+mod event;
 mod fit;
 mod hold;
 mod rival;
 
+pub use event::offset_event;
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
+pub use rival::{EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S};
 
 use fit::{
-    channel_of, is_position, is_span, leak_directions, swing_of, without_reverse_internal, BestOffset, Fit,
-    AS_GIVEN, HYPOTHESES,
+    channel_of, is_drift, is_position, is_span, leak_directions, swing_of, without_reverse_internal,
+    BestOffset, Fit, AS_GIVEN, HYPOTHESES,
 };
 
 /// Time constant of the window the offsets are named over, s.
@@ -169,7 +170,9 @@ pub struct StandingOffset {
     /// (measured minus true, per s); 0 where a standing offset fits better,
     /// NaN for a span error and on x.
     pub drift_mpa_per_s: f64,
-    /// Since when its part of the rises has been growing, s.
+    /// Since when it has read off, s: a drift's fitted line back to zero,
+    /// else when the channel's part of the rises was last low; no earlier
+    /// than the first sample the watch read.
     pub since_s: f64,
     /// Event id of its `sensor-offset` event.
     pub event_id: u64,
@@ -202,6 +205,8 @@ pub struct OffsetWatch {
     candidate: Option<(usize, f64)>,
     /// Per channel: when its offset's part of the rises was last below a tenth of the threshold, s.
     low_since_s: [f64; 3],
+    /// The time of the first sample read, s; NaN before it.
+    started_s: f64,
     /// The time watched when a named offset's part went low, s (of `watched_s`).
     fading_since_s: Option<f64>,
     standing: Option<StandingOffset>,
@@ -253,6 +258,7 @@ impl Default for OffsetWatch {
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
             low_since_s: [f64::NEG_INFINITY; 3],
+            started_s: f64::NAN,
             fading_since_s: None,
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
@@ -392,6 +398,22 @@ impl OffsetWatch {
         self.pressure_offset_mpa(h).abs() > MOST_DRIFT_MPA_PER_S * (t_s - self.low_since_s[channel_of(h)])
     }
 
+    /// Since when the misreading of hypothesis `h` has read off, at `t_s` (s):
+    /// a drift's fitted line back to zero where its rate is under
+    /// [`MOST_DRIFT_MPA_PER_S`] (its first part is too small to show), else
+    /// when its channel's part of the rises was last low; no earlier than the
+    /// first sample read.
+    fn since_s(&self, h: usize, t_s: f64) -> f64 {
+        let rate = self.window.drift_rate_mpa_per_s(h);
+        let b = self.window.coefficient(h);
+        let since = if is_drift(h) && rate.abs() < MOST_DRIFT_MPA_PER_S && b * rate > 0.0 {
+            t_s - b / rate
+        } else {
+            self.low_since_s[channel_of(h)]
+        };
+        since.max(self.started_s)
+    }
+
     /// The offset on p1 or p2 the misreading of hypothesis `h` fitted over the
     /// window makes, MPa: a span error's at the pressure read. NaN on x.
     fn pressure_offset_mpa(&self, h: usize) -> f64 {
@@ -447,6 +469,9 @@ impl OffsetWatch {
             return None;
         }
         self.directions = leak_directions(factors);
+        if self.started_s.is_nan() {
+            self.started_s = t_s;
+        }
         // (a span error's offset at naming: g times the pressure read, 0 where not read)
         self.reading_mpa = reading_mpa.map(|p| if p.is_finite() { p } else { 0.0 });
         let mut hypotheses = [[0.0; 2]; HYPOTHESES];
@@ -538,7 +563,7 @@ impl OffsetWatch {
                         } else {
                             self.window.drift_rate_mpa_per_s(h)
                         },
-                        since_s: self.low_since_s[c],
+                        since_s: self.since_s(h, t_s),
                         event_id: *next_id,
                     };
                     *next_id += 1;
@@ -550,59 +575,6 @@ impl OffsetWatch {
         }
         None
     }
-}
-
-/// The `sensor-offset` event of `change` at time `t_s` (s), from `detector`.
-pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent {
-    let (phase, s) = match change {
-        OffsetChange::Raised(s) => (Phase::Raised, s),
-        OffsetChange::Cleared(s) => (Phase::Cleared, s),
-    };
-    let mut ev = LeakEvent::plain(
-        EventKind::SensorOffset,
-        phase,
-        detector,
-        s.event_id,
-        t_s,
-        s.since_s,
-    );
-    let name = OFFSET_CHANNEL_NAMES[s.channel];
-    ev.channel = name.into();
-    ev.detail = match phase {
-        Phase::Cleared => format!("{name} reads true again: leak decisions resume"),
-        _ => {
-            let high_low = |v: f64| if v >= 0.0 { "high" } else { "low" };
-            let reading = if s.offset_mm.is_finite() {
-                format!("{:.1} mm {} (an offset", s.offset_mm.abs(), high_low(s.offset_mm))
-            } else if s.span_error.is_finite() {
-                format!(
-                    "{:.1} % {} (a span error: {:.0} kPa at this pressure",
-                    s.span_error.abs() * 100.0,
-                    high_low(s.span_error),
-                    s.offset_mpa.abs() * 1e3
-                )
-            } else if s.drift_mpa_per_s != 0.0 {
-                format!(
-                    "{:.0} kPa {} (an offset drifting by {:.0} kPa a minute",
-                    s.offset_mpa.abs() * 1e3,
-                    high_low(s.offset_mpa),
-                    s.drift_mpa_per_s.abs() * 6e4
-                )
-            } else {
-                format!(
-                    "{:.0} kPa {} (an offset",
-                    s.offset_mpa.abs() * 1e3,
-                    high_low(s.offset_mpa)
-                )
-            };
-            format!(
-                "{name} reads {reading}, fitted over {OFFSET_WINDOW_S:.0} s): the leak sizes move with the \
-                 valve's flow as a misreading of {name} makes them, not as a leak does; no leak decision \
-                 while it stands"
-            )
-        }
-    };
-    ev
 }
 
 #[cfg(test)]

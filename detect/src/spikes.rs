@@ -95,6 +95,12 @@ impl SpikeWatch {
             .all(|s| s.is_finite() && t_s - s <= SPIKE_WINDOW_S)
     }
 
+    /// Time of the oldest of the last [`SPIKES_TO_RAISE`] outliers, s (NaN:
+    /// fewer seen): where an event raised on them began.
+    pub fn first_of_recent_s(&self) -> f64 {
+        self.recent_s[0]
+    }
+
     /// Whether the last outlier is more than [`SPIKE_WINDOW_S`] old at `t_s`.
     pub fn is_quiet(&self, t_s: f64) -> bool {
         let last = self.recent_s[SPIKES_TO_RAISE - 1];
@@ -136,6 +142,11 @@ mod tests {
         for (_, size) in &found {
             assert!((size - 2e6).abs() < 1e5, "{size}");
         }
+        assert!(
+            (w.first_of_recent_s() - 8.0).abs() < 1e-9,
+            "{}",
+            w.first_of_recent_s()
+        );
         assert!(w.is_spiking(12.6));
         assert!(!w.is_spiking(38.1));
         assert!(w.is_quiet(43.0));

@@ -247,7 +247,9 @@ impl Classifier {
                     unit.0,
                     self.cfg.recovery_s
                 );
-                let ev = self.plain(EventKind::SensorSpikes, t_s, CHANNELS[c], &detail);
+                let mut ev = self.plain(EventKind::SensorSpikes, t_s, CHANNELS[c], &detail);
+                // (its onset: the first of the outliers that raised it)
+                ev.t_onset_s = w.spikes.first_of_recent_s();
                 w.spikes_raised = Some(ev.event_id);
                 emit(ev);
             }
@@ -338,13 +340,15 @@ impl Classifier {
                         ),
                         _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
                     };
-                    let ev = self.plain(k, e.t_s, CHANNELS[c], &detail);
-                    w.raised = Some((k, ev.event_id));
                     let since_s = if k == EventKind::SensorStuck {
                         w.last_since_s
                     } else {
                         w.bad_since_s
                     };
+                    let mut ev = self.plain(k, e.t_s, CHANNELS[c], &detail);
+                    // (its onset: the channel's first frozen, missing or saturated reading)
+                    ev.t_onset_s = since_s;
+                    w.raised = Some((k, ev.event_id));
                     let fault = format!("{} {} (event {})", CHANNELS[c], k.name(), ev.event_id);
                     emit(ev);
                     // (a leak alarm raised on the channel's bad readings is withdrawn)

@@ -78,6 +78,8 @@ fn a_drifting_pressure_transducer_is_named_and_then_raises_no_leak() {
             "{spec}: {}",
             named.detail
         );
+        // since when: its drift's start, within 10 s
+        assert!((named.t_onset_s - 20.0).abs() < 10.0, "{spec}: {named:?}");
         // while it stands, no leak is raised
         let after: Vec<_> = leak_alarms(&events)
             .into_iter()
@@ -107,6 +109,11 @@ fn outliers_are_named_and_raise_no_leak() {
     let named = raised(&events, EventKind::SensorSpikes).expect("spikes named");
     assert_eq!(named.channel, "p2");
     assert!(named.t_detect_s > 20.0);
+    // since its first outlier: after the onset, before the third outlier
+    assert!(
+        named.t_onset_s >= 20.0 && named.t_onset_s < named.t_detect_s,
+        "{named:?}"
+    );
 }
 
 #[test]

@@ -174,6 +174,9 @@ pub struct FaultRunOutcome {
     pub delay_s: f64,
     /// How far the fault made its transducer read off, beside the least the detector names.
     pub misreading: Misreading,
+    /// The onset the sensor event on the right channel stated (its
+    /// `t_onset_s`) minus the fault's onset, s (NaN: none, or none stated).
+    pub stated_onset_error_s: f64,
 }
 
 /// An instance ready to watch: its config with its commissioning, the sim's rig, the duty cycles.

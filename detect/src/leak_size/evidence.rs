@@ -171,7 +171,11 @@ impl LeakSizeDetector {
         // Rises an offset on a transducer explains better than any leak are no leak
         // evidence; nor are those that a drifting transducer past its tolerance
         // explains as well as a leak does.
-        let offset_like = misreading || self.offsets.vetoes() || self.offsets.rivals_leak(e.t_s);
+        // No new leak is raised on an episode a growing misreading fits nearly as well.
+        let offset_like = misreading
+            || self.offsets.vetoes()
+            || self.offsets.rivals_leak(e.t_s)
+            || (self.active.is_none() && self.offsets.rivals_new_leak());
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
         let naming_thr = if self.offsets.could_explain() {
             thr

@@ -5,6 +5,16 @@
 use super::fit::{channel_of, is_position, is_span};
 use super::{OffsetWatch, OFFSET_CHANNEL_NAMES, OFFSET_CLEAN_FLOOR_SHARE};
 
+/// How long an episode must have lasted before its misreading holds back a
+/// new leak ([`OffsetWatch::rivals_new_leak`]): its weight, s (its length
+/// discounted over [`super::OFFSET_WINDOW_S`]: 3 s of weight is 3.6 s).
+pub const EPISODE_RIVAL_WEIGHT_S: f64 = 3.0;
+
+/// The share (1) of what the best leak's fit leaves under which an
+/// episode's misreading holds back a new leak; it vetoes all leak evidence
+/// under [`super::OFFSET_FIT_RATIO`].
+pub const EPISODE_RIVAL_RATIO: f64 = 0.7;
+
 impl OffsetWatch {
     /// Whether, at `t_s` (s), the window's best misreading fits the rises at
     /// least as well as the best leak does, with its part of them material,
@@ -17,6 +27,20 @@ impl OffsetWatch {
     pub fn rivals_leak(&self, t_s: f64) -> bool {
         let h = self.window_best.h;
         self.window_offset_fits(1.0) && self.past_tolerance(h) && !self.faster_than_a_drift(h, t_s)
+    }
+
+    /// Whether the present episode has lasted [`EPISODE_RIVAL_WEIGHT_S`] and
+    /// a misreading of p1 or p2 (its response as given, standing or
+    /// drifting) leaves less than [`EPISODE_RIVAL_RATIO`] of what the best
+    /// leak's fit leaves: then no new leak is raised on its rises.
+    /// A misreading that grows shows for seconds with the flow before its
+    /// rises reach a threshold; a leak's onset starts an episode of its own
+    /// and is raised within its first seconds.
+    pub fn rivals_new_leak(&self) -> bool {
+        self.episode.as_ref().is_some_and(|f| {
+            f.w >= EPISODE_RIVAL_WEIGHT_S
+                && f.offset_fits_better(&f.best_offset(false, &self.directions), EPISODE_RIVAL_RATIO)
+        })
     }
 
     /// Whether the misreading of hypothesis `h` fitted over the window is at

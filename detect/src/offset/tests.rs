@@ -551,3 +551,21 @@ fn a_channels_explained_rms_is_its_largest_hypothesis_rms() {
     }
     assert!(w.window.channel_explained_rms_lpm(1) > 0.01);
 }
+
+#[test]
+fn a_named_offset_says_since_when_it_has_read_off() {
+    // a drift of −4 kPa/s on p2 from 12 s: since its fitted line's zero
+    let drift = |t: f64| -0.004 * (t - 12.0).max(0.0);
+    let Some(OffsetChange::Raised(s)) = offset_on_p2_beside_a_leak(150.0, false, drift) else {
+        panic!("the drift not named");
+    };
+    assert!(s.drift_mpa_per_s < 0.0, "{s:?}");
+    assert!((s.since_s - 12.0).abs() < 3.0, "{s:?}");
+    let detail = offset_event(OffsetChange::Raised(s), 60.0, "leak-size").detail;
+    assert!(detail.contains(&format!("since {:.1} s", s.since_s)), "{detail}");
+    // an offset standing from the first sample: since the first sample read
+    let Some(OffsetChange::Raised(s)) = offset_on_p2_beside_a_leak(60.0, false, |_| -0.5) else {
+        panic!("the standing offset not named");
+    };
+    assert_eq!(s.since_s, 0.0, "{s:?}");
+}

@@ -67,9 +67,12 @@ fn dead_and_stuck_sensors_are_reported() {
     let dead = find(EventKind::SensorDead, Phase::Raised).expect("dead p2 reported");
     assert_eq!(dead.channel, "p2");
     assert!((14.19..14.21).contains(&dead.t_detect_s), "{dead:?}");
+    // each says since when: its first missing, or frozen, reading
+    assert!((13.99..14.01).contains(&dead.t_onset_s), "{dead:?}");
     assert!(find(EventKind::SensorDead, Phase::Cleared).is_some());
     let stuck = find(EventKind::SensorStuck, Phase::Raised).expect("stuck p1 reported");
     assert_eq!(stuck.channel, "p1");
+    assert!((19.99..20.01).contains(&stuck.t_onset_s), "{stuck:?}");
     assert!(find(EventKind::SensorStuck, Phase::Cleared).is_some());
     assert!(raised(&events, "leak-size").is_empty(), "{events:#?}");
 }

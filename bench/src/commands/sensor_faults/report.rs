@@ -156,6 +156,13 @@ pub(super) fn score(
             right.map_or(f64::NAN, |e| e.t_detect_s - onset_s),
         )
     };
+    let stated_onset_error_s = match kind {
+        RunKind::Leak => f64::NAN,
+        _ => sensors_after
+            .iter()
+            .find(|e| e.channel == channel)
+            .map_or(f64::NAN, |e| e.t_onset_s - onset_s),
+    };
     // (the last leak alarm's report: a re-isolation raises its successor, a clearing ends it)
     let last_alarm = events.iter().rev().find(|e| e.kind.is_leak_alarm());
     let leak_alarm_at_end = kind != RunKind::Leak && last_alarm.is_some_and(|e| e.phase != Phase::Cleared);
@@ -173,6 +180,7 @@ pub(super) fn score(
         named_right,
         delay_s,
         misreading: Misreading::NONE,
+        stated_onset_error_s,
     }
 }
 
@@ -205,6 +213,9 @@ pub struct KindSummary {
     pub median_delay_s: f64,
     /// Longest such time, s (NaN: none).
     pub max_delay_s: f64,
+    /// Median of |the onset the sensor event stated − the fault's|, s, over
+    /// the runs named right (NaN: none).
+    pub median_onset_error_s: f64,
 }
 
 /// The totals per run kind, in [`RUN_KINDS`] order.
@@ -215,6 +226,11 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
             let mine: Vec<&FaultRunOutcome> = runs.iter().filter(|r| r.kind == kind).collect();
             let mut delays: Vec<f64> = mine.iter().map(|r| r.delay_s).filter(|d| d.is_finite()).collect();
             let median = crate::stats::quantile(&mut delays, 0.5);
+            let mut onset_errors: Vec<f64> = mine
+                .iter()
+                .map(|r| r.stated_onset_error_s.abs())
+                .filter(|d| d.is_finite())
+                .collect();
             let past: Vec<&&FaultRunOutcome> =
                 mine.iter().filter(|r| r.misreading.past_least_named()).collect();
             KindSummary {
@@ -237,6 +253,7 @@ pub fn summarise(runs: &[FaultRunOutcome]) -> Vec<KindSummary> {
                 said_not_watched: mine.iter().filter(|r| r.misreading.said_not_watched()).count(),
                 median_delay_s: median,
                 max_delay_s: delays.iter().cloned().fold(f64::NAN, f64::max),
+                median_onset_error_s: crate::stats::quantile(&mut onset_errors, 0.5),
             }
         })
         .collect()
@@ -262,8 +279,8 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
     };
     let mut s = format!(
         "{title}\n\n\
-         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | misreading past the least named: runs, named right | past what commissioning stated: runs, named right (said not watched) |\n\
-         |---|---|---|---|---|---|---|---|---|\n"
+         | run | runs | with a leak event | ending with a leak alarm standing | sensor event before the onset | named right | median / longest time from onset | stated onset, median error | misreading past the least named: runs, named right | past what commissioning stated: runs, named right (said not watched) |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n"
     );
     // (a kind no run carried is left out: a recording carries no leak)
     for k in sums.iter().filter(|k| k.runs > 0) {
@@ -289,18 +306,20 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
             ("-".to_string(), "-".to_string())
         };
         s += &format!(
-            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s | {past} | {stated} |\n",
+            "| {} | {} | {} | {} | {} | {named} | {:.1} / {:.1} s | {:.1} s | {past} | {stated} |\n",
             k.kind.name(),
             k.runs,
             k.runs_with_leak_events,
             k.runs_ending_with_a_leak_alarm,
             k.runs_with_early_sensor_events,
             k.median_delay_s,
-            k.max_delay_s
+            k.max_delay_s,
+            k.median_onset_error_s
         );
     }
     s += "\nNamed right: a sensor event on the faulty channel after the onset; for the leak run, \
-          its own kind named before any sensor event. A leak alarm standing at the end was neither \
+          its own kind named before any sensor event. The stated onset: the time the sensor event on the \
+          faulty channel says it began to read off, against the fault's onset. A leak alarm standing at the end was neither \
           cleared nor withdrawn when the transducer was named. A misreading past the least named: \
           a pressure offset (a drift's at the run's end, a span error's at the channel's mean reading) \
           of at least 1 % of the transducer's range, an offset on x of at least 1 mm. What commissioning \

@@ -16,11 +16,13 @@ fn raised(kind: EventKind, t_s: f64, channel: &str) -> LeakEvent {
 
 #[test]
 fn a_sensor_event_on_the_faulty_channel_after_the_onset_is_named_right() {
-    let events = [
+    let mut events = [
         raised(EventKind::SensorOffset, 10.0, "p2"),
         raised(EventKind::SensorOffset, 31.5, "p2"),
         raised(EventKind::SensorOffset, 33.0, "p1"),
     ];
+    // p1's event says it has read off since 28.5 s
+    events[2].t_onset_s = 28.5;
     let o = score(
         0,
         RunKind::PressureDrift,
@@ -35,6 +37,7 @@ fn a_sensor_event_on_the_faulty_channel_after_the_onset_is_named_right() {
     assert_eq!(o.sensor_events_before_onset, 1);
     assert_eq!(o.leak_events, 0);
     assert_eq!(o.first_sensor, Some(("sensor-offset".into(), "p2".into(), 31.5)));
+    assert_eq!(o.stated_onset_error_s, -1.5);
     // on the wrong channel only: not named right
     let o = score(
         0,
@@ -45,7 +48,7 @@ fn a_sensor_event_on_the_faulty_channel_after_the_onset_is_named_right() {
         "lift",
         &events[..2],
     );
-    assert!(!o.named_right && o.delay_s.is_nan());
+    assert!(!o.named_right && o.delay_s.is_nan() && o.stated_onset_error_s.is_nan());
 }
 
 #[test]

@@ -79,3 +79,56 @@ fn a_misreading_that_appeared_faster_than_a_drift_is_no_rival() {
     // the same misreading present for 60 s rivals the leak (the case above)
     assert!(offset_on_p2_and_steady_ext2(-0.3, 0.08).rivals_leak(60.0));
 }
+
+/// The watch after `seconds` of the rises an offset on p2 of `b_mpa(t)`
+/// makes beside a steady ext2 flow of `ext2_lpm(t)`, from a fixed baseline.
+fn offset_and_ext2_until(
+    seconds: f64,
+    b_mpa: impl Fn(f64) -> f64,
+    ext2_lpm: impl Fn(f64) -> f64,
+) -> OffsetWatch {
+    drive(seconds, 0.0, |t| {
+        let [d1, d2] = cycle_responses(t);
+        let b = b_mpa(t);
+        (
+            [b * d2[0], b * d2[1] + ext2_lpm(t), b * d2[2]],
+            [d1, d2],
+            [0.0; 2],
+        )
+    })
+    .0
+}
+
+#[test]
+fn a_misreading_grown_over_a_long_episode_holds_back_a_new_leak() {
+    // p2 drifting low at 5 kPa/s: its rises pass half the threshold from
+    // about 10 s, with the flow; by 20 s the episode is long and fits it
+    let drift = |t: f64| -0.005 * t;
+    let w = offset_and_ext2_until(20.0, drift, |_| 0.0);
+    assert!(w.episode.as_ref().is_some_and(|f| f.w >= EPISODE_RIVAL_WEIGHT_S));
+    assert!(w.rivals_new_leak());
+    // a steady ext2 leak of 0.06 L/min stepping in at 20 s: not held back
+    // once its episode is long (it fits the leak better than any misreading)
+    let step = |t: f64| if t >= 20.0 { 0.06 } else { 0.0 };
+    let w = offset_and_ext2_until(30.0, |_| 0.0, step);
+    assert!(w.episode.is_some() && !w.rivals_new_leak());
+}
+
+#[test]
+fn a_leak_ramping_in_as_the_flow_grows_is_not_held_back_in_its_first_seconds() {
+    // the rod starts from rest at 20 s: p2's response grows over 2 s as the
+    // flow does, and an ext2 leak ramps in over the same 2 s; its rises fit
+    // the misreading far better than a steady leak
+    let ramp = |t: f64| ((t - 20.0) / 2.0).clamp(0.0, 1.0);
+    let at = |t: f64| {
+        let d2 = [0.0, -0.05 - 0.4 * ramp(t), 0.02];
+        ([0.0, 0.06 * ramp(t), 0.0], [[-0.05, 0.0, 0.0], d2], [0.0; 2])
+    };
+    let w = drive(21.8, 0.0, at).0;
+    let f = w.episode.as_ref().expect("an episode");
+    let best = f.best_offset(false, &w.directions);
+    assert!(best.left < EPISODE_RIVAL_RATIO * best.leak_left, "{best:?}");
+    // it is the leak's own episode, too short to hold it back
+    assert!(f.w < EPISODE_RIVAL_WEIGHT_S);
+    assert!(!w.rivals_new_leak());
+}
