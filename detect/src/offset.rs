@@ -197,6 +197,10 @@ pub struct OffsetWatch {
     window_best: BestOffset,
     /// Since the rises last passed [`EPISODE_LEVEL`] of a threshold: vetoes leak evidence.
     episode: Option<Fit>,
+    /// The episode's best misreading, p1's and p2's offsets' responses as
+    /// given alone ([`Fit::best_offset`]), as of the last sample read; None
+    /// before the episode is [`EPISODE_MIN_S`] long.
+    episode_best: Option<BestOffset>,
     /// When the episode's rises were last high, s.
     episode_high_s: f64,
     /// The channel meeting the naming conditions, and the time watched when
@@ -255,6 +259,7 @@ impl Default for OffsetWatch {
                 leak_left: 0.0,
             },
             episode: None,
+            episode_best: None,
             episode_high_s: f64::NEG_INFINITY,
             candidate: None,
             low_since_s: [f64::NEG_INFINITY; 3],
@@ -321,12 +326,16 @@ impl OffsetWatch {
     /// leak; an offset on x grows too slowly to make an episode's step.
     /// The window's veto is held while the offset drifts ([`OFFSET_HOLD_RATIO`]).
     pub fn vetoes(&self) -> bool {
-        let episode = self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_MIN_S && {
-                f.offset_fits_better(&f.best_offset(false, &self.directions), OFFSET_FIT_RATIO)
-            }
-        });
-        episode || self.window_veto.vetoes()
+        self.episode_fits(OFFSET_FIT_RATIO) || self.window_veto.vetoes()
+    }
+
+    /// Whether the episode, once [`EPISODE_MIN_S`] long, fits its best
+    /// misreading ([`Self::episode_best`]) at `ratio` of what the best leak leaves.
+    fn episode_fits(&self, ratio: f64) -> bool {
+        match (&self.episode, &self.episode_best) {
+            (Some(f), Some(best)) => f.offset_fits_better(best, ratio),
+            _ => false,
+        }
     }
 
     /// Whether, over the window, the best offset's part of the rises is past
@@ -513,6 +522,12 @@ impl OffsetWatch {
         if let Some(f) = &mut self.episode {
             f.add(keep, dt_s, rise, response);
         }
+        // (fitted once a sample: the veto and the rival to a new leak both read it)
+        self.episode_best = self
+            .episode
+            .as_ref()
+            .filter(|f| f.w >= EPISODE_MIN_S)
+            .map(|f| f.best_offset(false, &self.directions));
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
         let left = (self.window_best.left, self.window_best.leak_left);

@@ -37,10 +37,10 @@ impl OffsetWatch {
     /// rises reach a threshold; a leak's onset starts an episode of its own
     /// and is raised within its first seconds.
     pub fn rivals_new_leak(&self) -> bool {
-        self.episode.as_ref().is_some_and(|f| {
-            f.w >= EPISODE_RIVAL_WEIGHT_S
-                && f.offset_fits_better(&f.best_offset(false, &self.directions), EPISODE_RIVAL_RATIO)
-        })
+        self.episode
+            .as_ref()
+            .is_some_and(|f| f.w >= EPISODE_RIVAL_WEIGHT_S)
+            && self.episode_fits(EPISODE_RIVAL_RATIO)
     }
 
     /// Whether the misreading of hypothesis `h` fitted over the window is at
