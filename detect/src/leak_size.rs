@@ -98,6 +98,9 @@ pub struct LeakSizeDetector {
     offsets: crate::offset::OffsetWatch,
     /// A `sensor-offset` event waiting for [`Self::take_sensor_event`].
     sensor_event: Option<LeakEvent>,
+    /// The position has repeated exactly since a moment the pressures misfit:
+    /// perhaps a frozen encoder on a moving rod ([`Self::suspect_frozen_position`]).
+    frozen_position: bool,
 }
 
 /// The threshold in spreads for a requested false-alarm rate `rate_per_h`, with
@@ -189,12 +192,22 @@ impl LeakSizeDetector {
             next_id: 1,
             offsets,
             sensor_event: None,
+            frozen_position: false,
         }
     }
 
     /// No leak evidence before `t_s` (s): a reading the filter took in was an outlier.
     pub fn hold_evidence_until(&mut self, t_s: f64) {
         self.invalid_until_s = self.invalid_until_s.max(t_s);
+    }
+
+    /// Whether the position reading may be frozen on a moving rod (the
+    /// classifier's watch of x): while it may, no new leak is raised on rises an
+    /// internal leak leads. A frozen encoder leaves the rod's travel to the
+    /// pressures: one chamber fills and the other empties, an internal leak's
+    /// pattern. An external leak shows on one chamber only and is still raised.
+    pub fn suspect_frozen_position(&mut self, suspect: bool) {
+        self.frozen_position = suspect;
     }
 
     /// The `sensor-offset` event the last estimate gave, if any (taken once).

@@ -20,6 +20,21 @@ pub const STUCK_SUSPECT_SAMPLES: u32 = 200;
 /// 0.5 L/min opening while the rod rests, 10 for a moment).
 pub const X_STUCK_NIS_RATIO: f64 = 30.0;
 
+/// A position repeated exactly this many times, with the leak filter's mean NIS
+/// over the repeat past [`X_SUSPECT_NIS_RATIO`] times the healthy mean, may be a
+/// frozen encoder on a moving rod: while the repeat lasts no new leak is raised
+/// on rises an internal leak leads
+/// ([`LeakSizeDetector::suspect_frozen_position`]). An encoder frozen as the
+/// rod slows leaves the rest of its travel to the pressures, which the leak
+/// filter reads as an internal leak within 0.2 s; `stuck_samples` names it
+/// once the rod moves again.
+pub const X_SUSPECT_SAMPLES: u32 = 20;
+
+/// The factor on the healthy mean NIS over a position's repeat that makes it
+/// suspect ([`X_SUSPECT_SAMPLES`]): an encoder frozen on a slowing rod leaves
+/// 40-60 over the first 50 ms on the plant rigs.
+pub const X_SUSPECT_NIS_RATIO: f64 = 10.0;
+
 /// Per-channel sensor watch: stuck, saturated, dead.
 #[derive(Debug, Clone, Copy, Default)]
 struct ChannelWatch {
@@ -31,6 +46,8 @@ struct ChannelWatch {
     same: u32,
     /// The sum of the leak filter's NIS over the `same` repeated readings.
     same_nis_sum: f64,
+    /// The present repeat of a position reading is suspect ([`X_SUSPECT_SAMPLES`]).
+    repeat_suspect: bool,
     saturated: u32,
     /// Since when the present run of readings at the range's end, or without a
     /// usable value, has lasted, s (its first sample).
@@ -264,12 +281,12 @@ impl Classifier {
     }
 
     /// Whether the position's repeated readings of watch `w` leave the leak
-    /// filter's NIS above [`X_STUCK_NIS_RATIO`] times the healthy mean: the
-    /// pressures say the rod moves while the encoder does not.
-    fn x_repeat_misfits(&self, w: &ChannelWatch) -> bool {
+    /// filter's NIS above `ratio` times the healthy mean: the pressures say the
+    /// rod moves while the encoder does not.
+    fn x_repeat_misfits(&self, w: &ChannelWatch, ratio: f64) -> bool {
         // (NaN before arming: `max` then gives 3)
         let healthy = self.leak_size.nis_healthy().max(3.0);
-        w.same > 0 && w.same_nis_sum / f64::from(w.same) > X_STUCK_NIS_RATIO * healthy
+        w.same > 0 && w.same_nis_sum / f64::from(w.same) > ratio * healthy
     }
 
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
@@ -303,7 +320,13 @@ impl Classifier {
             }
             // The rod may legitimately rest (stiction, a stop): a repeated position is
             // stuck only while the pressures say the rod moves ([`X_STUCK_NIS_RATIO`]).
-            let may_be_stuck = c > 0 || self.x_repeat_misfits(&w);
+            let may_be_stuck = c > 0 || self.x_repeat_misfits(&w, X_STUCK_NIS_RATIO);
+            if c == 0 {
+                w.repeat_suspect = w.same > 0
+                    && (w.repeat_suspect
+                        || (w.same >= X_SUSPECT_SAMPLES && self.x_repeat_misfits(&w, X_SUSPECT_NIS_RATIO)));
+                self.leak_size.suspect_frozen_position(w.repeat_suspect);
+            }
             let now = if w.dead >= self.cfg.dead_samples {
                 Some(EventKind::SensorDead)
             } else if w.saturated >= self.cfg.saturated_samples {

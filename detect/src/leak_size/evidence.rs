@@ -193,6 +193,8 @@ impl LeakSizeDetector {
             .map(|k| score[k])
             .fold(f64::NEG_INFINITY, f64::max);
         let physical = crate::leak_can_make_with(rise, self.thresholds_now(), self.internal_factors);
+        // (a frozen position's pattern: no new leak while an internal leak leads)
+        let frozen_x = self.frozen_position && self.active.is_none() && lead == 2;
         let mut strong = None;
         for k in 0..3 {
             let (thr, naming_thr) = (thr[k], naming_thr[k]);
@@ -202,6 +204,7 @@ impl LeakSizeDetector {
             }
             let evidence = !invalid
                 && !offset_like
+                && !frozen_x
                 && physical
                 && (!blind || rise[k] > self.cfg.excursion_override * thr);
             let ratio = rise[k] / thr;
