@@ -91,7 +91,9 @@ schema::config_struct! {
         pub mae_window_samples: usize = 4000 => ["samples", int!(1, 3600000, "(an hour at 1 kHz)")],
         /// Longest run of missing samples bridged by prediction; after a longer gap the
         /// fast states restart from the next sample and the leak sizes and spool bias are kept.
-        pub max_bridged_gap_samples: u32 = 5 => ["samples", int!(0, 3600000, "(an hour at 1 kHz)")],
+        /// A DAQ's dropouts of up to 10 ms are bridged: a re-anchor blinds the detector
+        /// for `recovery_s`, and a poor prediction across the gap trips the NIS gate anyway.
+        pub max_bridged_gap_samples: u32 = 10 => ["samples", int!(0, 3600000, "(an hour at 1 kHz)")],
         /// A position innovation beyond this, m (or beyond 20 of its standard deviations,
         /// if larger), held for 200 samples, resets the filter; 0 = never (the thesis'
         /// filter, whose R_x trusts the encoder to 1 cm only, drifts by centimetres).
