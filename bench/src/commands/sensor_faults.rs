@@ -129,10 +129,10 @@ pub struct SensorFaultsArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Keeps each instance's commissioned config (inst_NNN/rig.toml) and each
-    /// run's recording (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`
-    /// (not with `--data`).
-    #[arg(long, conflicts_with = "data")]
+    /// Keeps each instance's commissioned config (inst_NNN/rig.toml; with
+    /// `--data` the one config, rig.toml) and each run's recording
+    /// (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`.
+    #[arg(long)]
     pub keep: bool,
 }
 
@@ -436,7 +436,7 @@ fn watch_run(
 
 /// Where `--keep` writes run `kind` of instance `index`: inst_NNN/KIND.csv
 /// (the kind's name in the reports, `_` for its spaces and dots).
-fn kept_recording(args: &SensorFaultsArgs, index: usize, kind: RunKind) -> PathBuf {
+pub(super) fn kept_recording(args: &SensorFaultsArgs, index: usize, kind: RunKind) -> PathBuf {
     let name = format!("{}.csv", kind.name().replace([' ', '.', '/'], "_"));
     args.out.join(format!("inst_{index:03}")).join(name)
 }

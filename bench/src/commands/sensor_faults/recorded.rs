@@ -18,6 +18,7 @@ use config::Config;
 use model::rng::Rng;
 use model::sample::Sample;
 use model::sensor_fault::{Channel, SensorFaultRun, SensorFaultSchedule};
+use pipeline::simulate;
 
 use super::{draw_fault, score, FaultRunOutcome, Misreading, RunKind, SensorFaultsArgs, ONSET_S, RUN_KINDS};
 
@@ -113,6 +114,17 @@ impl RecordedRig {
             faults: sensor.iter().copied().collect(),
         };
         let samples = with_faults(healthy, schedule, rng.next_u64());
+        if args.keep {
+            let path = super::kept_recording(args, index, kind);
+            if let Some(dir) = path.parent() {
+                std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+            }
+            let file = pipeline::out::create(&path, true, &[])?;
+            let mut w = std::io::BufWriter::new(file);
+            simulate::write_csv(&mut w, &samples)
+                .and_then(|_| std::io::Write::flush(&mut w))
+                .map_err(|e| dataset::output::message(&path, &e))?;
+        }
         let misreading = sensor.map_or(Misreading::NONE, |f| {
             let m = Misreading::of(&f, &samples, self.rig.classifier.pressure_full_scale_pa);
             match &self.reach {
@@ -159,6 +171,10 @@ pub(super) fn command(args: &SensorFaultsArgs, dir: &Path, force: bool) -> Resul
     let t0 = std::time::Instant::now();
     let rig = RecordedRig::load(dir, args.config.as_deref())?;
     let jobs = rig.jobs(args.instances);
+    if args.keep {
+        let text = toml::to_string(&rig.rig).map_err(|e| format!("the commissioned config: {e}"))?;
+        pipeline::out::write(&args.out.join("rig.toml"), text.as_bytes(), force, &[])?;
+    }
     eprintln!(
         "watching {} runs on {} healthy recordings of {} on {threads} threads",
         jobs.len(),

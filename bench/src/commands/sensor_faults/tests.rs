@@ -332,7 +332,7 @@ fn a_folders_healthy_recordings_carry_the_drawn_faults() {
         seconds: 360.0,
         out: out.to_path_buf(),
         threads: Some(2),
-        keep: false,
+        keep: true,
     };
     command(&args, false).expect("the bench runs");
     let text = std::fs::read_to_string(out.join("sensor_faults.json")).expect("the report");
@@ -354,6 +354,30 @@ fn a_folders_healthy_recordings_carry_the_drawn_faults() {
     }
     // each instance draws its own faults
     assert_ne!(of("pressure-drift")[0]["spec"], of("pressure-drift")[1]["spec"]);
+    // --keep: the one commissioned config, and each run's recording with its fault laid on
+    let rig = std::fs::read_to_string(out.join("rig.toml")).expect("rig.toml");
+    assert!(Config::parse(&rig)
+        .expect("the kept config parses")
+        .classifier
+        .commissioning
+        .is_some());
+    let stuck = of("stuck")[1];
+    let column = match stuck["channel"].as_str() {
+        Some("x") => 2,
+        Some("p1") => 3,
+        _ => 4,
+    };
+    let kept = std::fs::read_to_string(kept_recording(&args, 1, RunKind::Stuck)).expect("a kept recording");
+    let rows: Vec<Vec<&str>> = kept.lines().skip(1).map(|r| r.split(',').collect()).collect();
+    assert!(rows.len() >= 74_000, "{}", rows.len());
+    // frozen over the last 30 s (the onset is drawn up to 40 s), the other channels not
+    let last = &rows[rows.len() - 1];
+    assert!(
+        rows[45_000..].iter().all(|r| r[column] == last[column]),
+        "{stuck}"
+    );
+    let other = if column == 3 { 4 } else { 3 };
+    assert!(rows[45_000..].iter().any(|r| r[other] != last[other]));
     let md = std::fs::read_to_string(out.join("sensor_faults.md")).expect("md");
     assert!(
         md.starts_with("# Sensor faults on the healthy recordings of "),
