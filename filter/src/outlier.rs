@@ -7,7 +7,8 @@
 //! and the leak sizes. A channel is left out of one sample's update when its
 //! innovation passes [`OUTLIER_SIGMAS`] while every other used channel's
 //! stays within [`OTHERS_WITHIN_SIGMAS`] (or within a [`OUTLIER_DOMINANCE`]th
-//! of the outlier's own), and it was not left out on the
+//! of the outlier's own, up to [`OTHERS_WITHIN_MOST_SIGMAS`]), and it was
+//! not left out on the
 //! sample before. A reading that stays off (a step, a stuck or drifting
 //! transducer, the model's own error at a reversal) updates the filter from
 //! its second sample on.
@@ -27,12 +28,18 @@ pub const SUSPECT_SIGMAS: f64 = 25.0;
 pub const SUSPECT_WINDOW_S: f64 = 30.0;
 /// The other used channels' innovations stay within this many σ (1).
 pub const OTHERS_WITHIN_SIGMAS: f64 = 5.0;
-/// Or within the outlier's own σ count over this (1): a 5 mm spike on the
-/// position (a thousand σ and more) is as lone while the pressures swing by
-/// 6 σ with a ripple the model does not follow (the press at rest after a
-/// stroke). Taken, it kicked the leak sizes by 0.15 L/min, which outlived
-/// the 2 s the detector holds its evidence after a burst.
+/// Or within the outlier's own σ count over this (1), up to
+/// [`OTHERS_WITHIN_MOST_SIGMAS`]: a 5 mm spike on the position (a thousand σ
+/// and more) is as lone while the pressures swing by 6 σ with a ripple the
+/// model does not follow (the press at rest after a stroke). Taken, it
+/// kicked the leak sizes by 0.15 L/min, which outlived the 2 s the detector
+/// holds its evidence after a burst.
 pub const OUTLIER_DOMINANCE: f64 = 10.0;
+/// The most σ the other channels may be off for a channel to be an outlier
+/// (1): past it the filter itself is lost, and leaving out the channel most
+/// off would keep it lost (on random readings the rod's speed ran away to
+/// 5e7 m/s).
+pub const OTHERS_WITHIN_MOST_SIGMAS: f64 = 10.0;
 
 /// The outlier watch over the three measured channels (x, p1, p2).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +88,7 @@ impl OutlierGate {
         let mut out = use_channel;
         let mut left_out_now = [false; 3];
         for k in 0..3 {
-            let within = OTHERS_WITHIN_SIGMAS.max(z[k] / OUTLIER_DOMINANCE);
+            let within = (z[k] / OUTLIER_DOMINANCE).clamp(OTHERS_WITHIN_SIGMAS, OTHERS_WITHIN_MOST_SIGMAS);
             let others_agree = (0..3).all(|j| j == k || z[j] <= within);
             // (a stream whose time went back starts its suspicions afresh)
             let suspect = (0.0..=SUSPECT_WINDOW_S).contains(&(t_s - self.last_two_s[k][0]));
@@ -116,13 +123,14 @@ mod tests {
         // the model off on both pressures (a reversal): nothing left out
         assert_eq!(g.gate(0.0, &[0.0, 8e5, 9e5], &sigma, [true; 3]), [true; 3]);
         // a 5 mm spike on x (5000 σ) while the pressures swing by 9 σ: left out;
-        // by 11 σ with a 100 σ jump on x: taken
+        // by 11 σ with a 100 σ jump on x, or with a 5 mm spike (the filter lost): taken
         assert_eq!(
             g.gate(0.0, &[5e-3, 9e4, -9e4], &sigma, [true; 3]),
             [false, true, true]
         );
         assert_eq!(g.gate(0.0, &[0.0; 3], &sigma, [true; 3]), [true; 3]);
         assert_eq!(g.gate(0.0, &[1e-4, 1.1e5, 0.0], &sigma, [true; 3]), [true; 3]);
+        assert_eq!(g.gate(0.0, &[5e-3, 1.1e5, 0.0], &sigma, [true; 3]), [true; 3]);
         // just within the gate: taken
         assert_eq!(g.gate(0.0, &[0.0, 0.0, 4.9e5], &sigma, [true; 3]), [true; 3]);
         assert_eq!(g.left_out(), 2);
