@@ -398,12 +398,7 @@ fn watch_run(
         Misreading::of(&f, &samples, w.rig.classifier.pressure_full_scale_pa).stated_by(f.channel, &w.reach)
     });
     if args.keep {
-        let path = kept_recording(args, index, kind);
-        let file = pipeline::out::create(&path, true, &[])?;
-        let mut w = std::io::BufWriter::new(file);
-        simulate::write_csv(&mut w, &samples)
-            .and_then(|_| std::io::Write::flush(&mut w))
-            .map_err(|e| dataset::output::message(&path, &e))?;
+        keep_recording(args, index, kind, &samples)?;
     }
     let mut chain = pipeline::Chain::new(&pipeline::ChainSettings::from(&w.rig))?;
     let mut events = Vec::new();
@@ -432,6 +427,25 @@ fn watch_run(
     );
     outcome.misreading = misreading;
     Ok(outcome)
+}
+
+/// Writes run `kind` of instance `index`, `samples`, where `--keep` keeps it
+/// ([`kept_recording`]; its folder made if missing).
+pub(super) fn keep_recording(
+    args: &SensorFaultsArgs,
+    index: usize,
+    kind: RunKind,
+    samples: &[model::Sample],
+) -> Result<(), String> {
+    let path = kept_recording(args, index, kind);
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let file = pipeline::out::create(&path, true, &[])?;
+    // (`write_csv` flushes)
+    simulate::write_csv(&mut std::io::BufWriter::new(file), samples)
+        .map(|_| ())
+        .map_err(|e| dataset::output::message(&path, &e))
 }
 
 /// Where `--keep` writes run `kind` of instance `index`: inst_NNN/KIND.csv

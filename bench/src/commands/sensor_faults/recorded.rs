@@ -18,7 +18,6 @@ use config::Config;
 use model::rng::Rng;
 use model::sample::Sample;
 use model::sensor_fault::{Channel, SensorFaultRun, SensorFaultSchedule};
-use pipeline::simulate;
 
 use super::{draw_fault, score, FaultRunOutcome, Misreading, RunKind, SensorFaultsArgs, ONSET_S, RUN_KINDS};
 
@@ -115,15 +114,7 @@ impl RecordedRig {
         };
         let samples = with_faults(healthy, schedule, rng.next_u64());
         if args.keep {
-            let path = super::kept_recording(args, index, kind);
-            if let Some(dir) = path.parent() {
-                std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-            }
-            let file = pipeline::out::create(&path, true, &[])?;
-            let mut w = std::io::BufWriter::new(file);
-            simulate::write_csv(&mut w, &samples)
-                .and_then(|_| std::io::Write::flush(&mut w))
-                .map_err(|e| dataset::output::message(&path, &e))?;
+            super::keep_recording(args, index, kind, &samples)?;
         }
         let misreading = sensor.map_or(Misreading::NONE, |f| {
             let m = Misreading::of(&f, &samples, self.rig.classifier.pressure_full_scale_pa);

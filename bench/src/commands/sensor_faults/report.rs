@@ -135,7 +135,7 @@ pub(super) fn score(
     let first_sensor = sensors_after
         .first()
         .map(|e| (e.kind.name().to_string(), e.channel.clone(), e.t_detect_s));
-    let (leak_events, named_right, delay_s) = if kind == RunKind::Leak {
+    let (leak_events, named_right, delay_s, stated_onset_error_s) = if kind == RunKind::Leak {
         // the run's own leak: its first named kind must be the truth, before any sensor event
         let first_named = raised().find(|e| e.kind.is_leak() && e.t_detect_s >= onset_s);
         let first_sensor_t = sensors_after.first().map_or(f64::INFINITY, |e| e.t_detect_s);
@@ -144,9 +144,9 @@ pub(super) fn score(
             .count();
         match first_named {
             Some(e) if e.kind.name() == channel && e.t_detect_s <= first_sensor_t => {
-                (before, true, e.t_detect_s - onset_s)
+                (before, true, e.t_detect_s - onset_s, f64::NAN)
             }
-            _ => (before, false, f64::NAN),
+            _ => (before, false, f64::NAN, f64::NAN),
         }
     } else {
         let right = sensors_after.iter().find(|e| e.channel == channel);
@@ -154,14 +154,8 @@ pub(super) fn score(
             raised().filter(|e| e.kind.is_leak_alarm()).count(),
             right.is_some(),
             right.map_or(f64::NAN, |e| e.t_detect_s - onset_s),
+            right.map_or(f64::NAN, |e| e.t_onset_s - onset_s),
         )
-    };
-    let stated_onset_error_s = match kind {
-        RunKind::Leak => f64::NAN,
-        _ => sensors_after
-            .iter()
-            .find(|e| e.channel == channel)
-            .map_or(f64::NAN, |e| e.t_onset_s - onset_s),
     };
     // (the last leak alarm's report: a re-isolation raises its successor, a clearing ends it)
     let last_alarm = events.iter().rev().find(|e| e.kind.is_leak_alarm());
