@@ -204,8 +204,9 @@ pub const PRESSURE_NEGATIVE_MARGIN: f64 = 0.02;
 impl ActuatorParams {
     /// These parameters at oil temperature `temp_c` (°C), from `base` (the
     /// parameters at the law's reference temperature): the bulk modulus, the
-    /// seals' viscous friction, the valve's null leakage and the linear leaks
-    /// scaled by [`OilTemperature::factors`], everything else as `base` has it.
+    /// seals' viscous and dry friction, the valve's null leakage and the linear
+    /// leaks scaled by [`OilTemperature::factors`], everything else as `base`
+    /// has it.
     /// Writes fields in place (no allocation); `self.leaks` must be `base.leaks`
     /// in length. Returns the factors.
     pub fn set_oil_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
@@ -214,16 +215,21 @@ impl ActuatorParams {
         f
     }
 
-    /// As [`Self::set_oil_temperature`], but only the terms that follow the
-    /// oil's viscosity (the seals' viscous friction, the valve's null leakage
-    /// and the linear leaks); the bulk modulus stays as it is. A filter whose
+    /// As [`Self::set_oil_temperature`], but the bulk modulus stays as it is:
+    /// only the terms that follow the oil's viscosity (the seals' viscous
+    /// friction, the valve's null leakage and the linear leaks) and the seals'
+    /// dry friction move. A filter whose
     /// oil-stiffness state θ carries the bulk modulus uses this with the
     /// temperature it infers from θ. Allocates nothing. Returns the factors.
     pub fn set_oil_viscosity_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
         let f = base.oil_temperature.factors(temp_c);
         self.friction.viscous_n_s_per_m = base.friction.viscous_n_s_per_m * f.viscous_friction;
+        self.friction.static_n = base.friction.static_n * f.dry_friction;
+        self.friction.slip_n = base.friction.slip_n * f.dry_friction;
         if let (Some(r), Some(b)) = (self.friction.retract.as_mut(), base.friction.retract) {
             r.viscous_n_s_per_m = b.viscous_n_s_per_m * f.viscous_friction;
+            r.static_n = b.static_n * f.dry_friction;
+            r.slip_n = b.slip_n * f.dry_friction;
         }
         self.valve_null_leakage_m3_s_pa = base.valve_null_leakage_m3_s_pa * f.laminar_flow;
         for (l, b) in self.leaks.iter_mut().zip(&base.leaks) {

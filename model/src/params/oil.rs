@@ -2,7 +2,9 @@
 //! temperature"): the bulk modulus falls linearly, the viscosity follows
 //! Walther's law (ASTM D341) through the oil's two catalogue viscosities, and
 //! with the viscosity the seals' viscous friction (∝ √ν, a lubricating film)
-//! and every laminar flow (∝ 1/ν: the valve's null leakage, a linear leak).
+//! and every laminar flow (∝ 1/ν: the valve's null leakage, a linear leak);
+//! the seals' dry (static and Coulomb) friction falls linearly as the seals'
+//! elastomer softens.
 
 use schema::num;
 use serde::{Deserialize, Serialize};
@@ -14,6 +16,9 @@ const WALTHER_OFFSET_MM2_S: f64 = 0.7;
 /// The lowest bulk-modulus factor the linear law gives (1): 100 K above the
 /// reference a mineral oil still has half its stiffness.
 const MIN_BULK_FACTOR: f64 = 0.5;
+/// The lowest dry-friction factor the linear law gives (1): a seal keeps
+/// most of its grip however warm the oil.
+const MIN_DRY_FRICTION_FACTOR: f64 = 0.5;
 
 schema::config_struct! {
     /// The oil's temperature law, relative to the temperature the model's
@@ -32,6 +37,10 @@ schema::config_struct! {
         pub viscosity_100c_mm2_s: f64 = 6.8 => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
         /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
         pub bulk_modulus_per_k: f64 = -0.0045 => ["(1/K)", num!("a relative change per kelvin", -0.02, 0)],
+        /// Relative change of the seals' static and Coulomb friction per kelvin,
+        /// 1/K (elastomer seals on mineral oil about −0.004: 10 % less from 30
+        /// to 55 °C).
+        pub dry_friction_per_k: f64 = -0.004 => ["(1/K)", num!("a relative change per kelvin", -0.02, 0.02)],
         /// The lowest oil temperature the rig runs at, °C (its operating range):
         /// `commission` states the smallest detectable leaks over the range, and a
         /// replay says how long the oil was outside it.
@@ -62,6 +71,8 @@ pub struct OilFactors {
     pub viscous_friction: f64,
     /// Laminar flows (null leakage, linear leaks): 1 / the viscosity's factor.
     pub laminar_flow: f64,
+    /// The seals' static and Coulomb friction.
+    pub dry_friction: f64,
 }
 
 impl OilFactors {
@@ -71,6 +82,7 @@ impl OilFactors {
         viscosity: 1.0,
         viscous_friction: 1.0,
         laminar_flow: 1.0,
+        dry_friction: 1.0,
     };
 }
 
@@ -101,6 +113,8 @@ impl OilTemperature {
             viscosity,
             viscous_friction: viscosity.sqrt(),
             laminar_flow: 1.0 / viscosity,
+            dry_friction: (1.0 + self.dry_friction_per_k * (temp_c - self.reference_c))
+                .max(MIN_DRY_FRICTION_FACTOR),
         }
     }
 }
@@ -128,7 +142,13 @@ mod tests {
             ..OilTemperature::default()
         };
         let f = oil.factors(30.0);
-        for v in [f.bulk_modulus, f.viscosity, f.viscous_friction, f.laminar_flow] {
+        for v in [
+            f.bulk_modulus,
+            f.viscosity,
+            f.viscous_friction,
+            f.laminar_flow,
+            f.dry_friction,
+        ] {
             assert!((v - 1.0).abs() < 1e-12);
         }
         let f = oil.factors(55.0);
@@ -137,6 +157,8 @@ mod tests {
         assert!((f.viscosity - ratio).abs() < 1e-12);
         assert!((f.viscous_friction - ratio.sqrt()).abs() < 1e-12);
         assert!((f.laminar_flow * ratio - 1.0).abs() < 1e-12);
+        assert!((f.dry_friction - (1.0 - 0.004 * 25.0)).abs() < 1e-12);
         assert_eq!(oil.factors(1000.0).bulk_modulus, MIN_BULK_FACTOR);
+        assert_eq!(oil.factors(1000.0).dry_friction, MIN_DRY_FRICTION_FACTOR);
     }
 }

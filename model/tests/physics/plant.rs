@@ -225,8 +225,9 @@ fn the_pumps_ripple_reaches_the_chambers() {
 }
 
 /// A warm-up (25 → 55 °C, τ = 10 s) scales the rig by the oil's laws at every
-/// sample: the bulk modulus linearly, the seals' viscous friction by √(ν/ν_ref)
-/// and the valve's null leakage and a linear leak by ν_ref/ν (Walther's ν); the
+/// sample: the bulk modulus linearly, the seals' viscous friction by √(ν/ν_ref),
+/// their static and Coulomb friction linearly (−0.4 %/K), and the valve's null
+/// leakage and a linear leak by ν_ref/ν (Walther's ν); the
 /// measured channel reads the temperature to 0.1 °C, an unmeasured one NaN; the
 /// rest of the rig is untouched.
 #[test]
@@ -274,7 +275,13 @@ fn a_warming_oil_scales_stiffness_friction_and_laminar_flows_by_its_laws() {
             assert!((viscous - ratio.sqrt()).abs() < 1e-12);
             assert!((r.valve_null_leakage_m3_s_pa / 3e-13 * ratio - 1.0).abs() < 1e-12);
             assert!((r.leaks[0].coefficient / 1e-12 * ratio - 1.0).abs() < 1e-12);
-            assert_eq!(r.friction.slip_n, rig.friction.slip_n);
+            let dry = 1.0 - 0.004 * (temp - 25.0);
+            assert!((r.friction.slip_n / rig.friction.slip_n - dry).abs() < 1e-12);
+            assert!((r.friction.static_n / rig.friction.static_n - dry).abs() < 1e-12);
+            assert_eq!(
+                r.friction.stribeck_velocity_m_s,
+                rig.friction.stribeck_velocity_m_s
+            );
             assert_eq!(r.mass_kg, rig.mass_kg);
             if measured {
                 assert!(
