@@ -8,10 +8,9 @@
 //! innovation passes [`OUTLIER_SIGMAS`] while every other used channel's
 //! stays within [`OTHERS_WITHIN_SIGMAS`] (or within a [`OUTLIER_DOMINANCE`]th
 //! of the outlier's own, up to [`OTHERS_WITHIN_MOST_SIGMAS`]), and it was
-//! not left out on the
-//! sample before. A reading that stays off (a step, a stuck or drifting
-//! transducer, the model's own error at a reversal) updates the filter from
-//! its second sample on.
+//! not left out on the sample before. A reading that stays off (a step, a
+//! stuck or drifting transducer, the model's own error at a reversal) updates
+//! the filter from its second sample on.
 //!
 //! A channel that has given two such outliers within [`SUSPECT_WINDOW_S`] is
 //! suspect: its lone readings are left out from [`SUSPECT_SIGMAS`] on. The
