@@ -206,10 +206,13 @@ impl Config {
     }
 
     /// Sets the detector's rig facts from where they are written: the supply
-    /// pressure from `[model]`, the transducers' full scale from `[sensors]`.
+    /// pressure from `[model]`, the transducers' full scale and the position
+    /// reading's noise in counts from `[sensors]`.
     pub fn derive_rig_facts(&mut self) {
         self.classifier.supply_pressure_pa = self.model.supply_pressure_pa;
         self.classifier.pressure_full_scale_pa = self.sensors.pressure_full_scale_pa;
+        self.classifier.position_noise_counts =
+            self.sensors.position_noise_m / self.sensors.encoder_resolution_m;
     }
 
     /// Checks every section, naming the first bad field with its range and unit.

@@ -342,10 +342,14 @@ fn run_cpus_name_known_stages_and_existing_cpus() {
 /// file's copy loads when it agrees and is refused by name when it does not.
 #[test]
 fn the_detectors_rig_facts_come_from_model_and_sensors() {
-    let c = Config::parse("[model]\nsupply_pressure_pa = 21e6\n[sensors]\npressure_full_scale_pa = 25e6\n")
-        .unwrap();
+    let c = Config::parse(
+        "[model]\nsupply_pressure_pa = 21e6\n[sensors]\npressure_full_scale_pa = 25e6\n\
+         encoder_resolution_m = 2e-6\nposition_noise_m = 3e-6\n",
+    )
+    .unwrap();
     assert_eq!(c.classifier.supply_pressure_pa, 21e6);
     assert_eq!(c.classifier.pressure_full_scale_pa, 25e6);
+    assert!((c.classifier.position_noise_counts - 1.5).abs() < 1e-12);
     let d = Config::default();
     assert_eq!(d.classifier.supply_pressure_pa, d.model.supply_pressure_pa);
     assert_eq!(
@@ -447,7 +451,14 @@ fn the_schema_declares_every_setting_of_the_default_config_and_nothing_else() {
         .filter(|f| f.skipped)
         .map(|f| f.key)
         .collect();
-    assert_eq!(skipped, ["supply_pressure_pa", "pressure_full_scale_pa"]);
+    assert_eq!(
+        skipped,
+        [
+            "supply_pressure_pa",
+            "pressure_full_scale_pa",
+            "position_noise_counts"
+        ]
+    );
 }
 
 #[test]

@@ -280,6 +280,13 @@ schema::config_struct! {
         /// (not read from or written to a config file).
         #[serde(skip)]
         pub pressure_full_scale_pa: f64 = 20.7e6 => ["Pa", num!("a number", 100000.0, 1000000000.0)],
+        /// Noise of the position reading over one count of it (standard
+        /// deviation, counts): a rig fact, not a setting, set by the config loader
+        /// from `[sensors] position_noise_m / encoder_resolution_m` (not read from
+        /// or written to a config file). From one count up a healthy reading does
+        /// not repeat for long ([`crate::stage::X_NOISY_COUNTS`]).
+        #[serde(skip)]
+        pub position_noise_counts: f64 = 0.0 => ["counts", num!("a number", 0.0, 10000000.0)],
     }
 }
 

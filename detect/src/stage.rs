@@ -35,6 +35,17 @@ pub const X_SUSPECT_SAMPLES: u32 = 20;
 /// 40-60 over the first 50 ms on the plant rigs.
 pub const X_SUSPECT_NIS_RATIO: f64 = 10.0;
 
+/// A position sensor whose noise spans this many counts or more (its standard
+/// deviation over one count, `[sensors]`) does not repeat a reading for long
+/// while healthy: two readings agree about once in four at 1.5 counts, and
+/// the longest repeat on healthy plant-rig recordings of 360 000-600 000
+/// samples is 10. On such a sensor a repeat of [`X_SUSPECT_SAMPLES`] holds the
+/// leak decision and one of `stuck_samples` is stuck whatever the pressures
+/// say (a frozen encoder on a creeping rod leaves the NIS near its healthy
+/// mean). Below it (an encoder that only counts) a resting rod repeats its
+/// reading, and the NIS rules decide.
+pub const X_NOISY_COUNTS: f64 = 1.0;
+
 /// Per-channel sensor watch: stuck, saturated, dead.
 #[derive(Debug, Clone, Copy, Default)]
 struct ChannelWatch {
@@ -318,13 +329,16 @@ impl Classifier {
                 w.same = 0;
                 w.saturated = 0;
             }
-            // The rod may legitimately rest (stiction, a stop): a repeated position is
-            // stuck only while the pressures say the rod moves ([`X_STUCK_NIS_RATIO`]).
-            let may_be_stuck = c > 0 || self.x_repeat_misfits(&w, X_STUCK_NIS_RATIO);
+            // The rod may legitimately rest (stiction, a stop): a repeated position from
+            // a sensor without noise is stuck only while the pressures say the rod
+            // moves ([`X_STUCK_NIS_RATIO`]); a noisy one's is stuck ([`X_NOISY_COUNTS`]).
+            let x_noisy = self.cfg.position_noise_counts >= X_NOISY_COUNTS;
+            let may_be_stuck = c > 0 || x_noisy || self.x_repeat_misfits(&w, X_STUCK_NIS_RATIO);
             if c == 0 {
                 w.repeat_suspect = w.same > 0
                     && (w.repeat_suspect
-                        || (w.same >= X_SUSPECT_SAMPLES && self.x_repeat_misfits(&w, X_SUSPECT_NIS_RATIO)));
+                        || (w.same >= X_SUSPECT_SAMPLES
+                            && (x_noisy || self.x_repeat_misfits(&w, X_SUSPECT_NIS_RATIO))));
                 self.leak_size.suspect_frozen_position(w.repeat_suspect);
             }
             let now = if w.dead >= self.cfg.dead_samples {
@@ -336,9 +350,15 @@ impl Classifier {
             } else {
                 None
             };
-            // (a position is not held on suspicion: a leak opening while the rod rests
-            // raises the NIS over a repeat for a moment, and the leak must be seen)
-            if (c > 0 && w.same >= STUCK_SUSPECT_SAMPLES) || now == Some(EventKind::SensorStuck) {
+            // (a noiseless position is not held on suspicion: a leak opening while the
+            // rod rests raises the NIS over a repeat for a moment, and the leak must be
+            // seen; a noisy one's repeat is itself the fault's sign)
+            let held = if c > 0 {
+                w.same >= STUCK_SUSPECT_SAMPLES
+            } else {
+                x_noisy && w.same >= X_SUSPECT_SAMPLES
+            };
+            if held || now == Some(EventKind::SensorStuck) {
                 self.leak_size.hold_evidence_until(e.t_s + self.cfg.recovery_s);
             }
             let dt_s = if w.last_t_s > 0.0 {
@@ -355,6 +375,10 @@ impl Classifier {
                             format!("no usable {} value for {} samples", CHANNELS[c], w.dead)
                         }
                         EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
+                        _ if c == 0 && x_noisy => format!(
+                            "x has not changed for {} samples, though its noise spans {:.1} counts",
+                            w.same, self.cfg.position_noise_counts
+                        ),
                         _ if c == 0 => format!(
                             "x has not changed for {} samples while the pressures say the rod moves \
                              (mean NIS {:.0} over them)",

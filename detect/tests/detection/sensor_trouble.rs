@@ -1,7 +1,7 @@
 //! Sensor trouble: gaps, NaN and a restart, dead and stuck sensors, a frozen position.
 
-use detect::{EventKind, LeakEvent, Phase};
-use model::{ActuatorParams, FaultSchedule, Scenario, Simulator};
+use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
+use model::{ActuatorParams, FaultSchedule, Scenario, SensorParams, SimSettings, Simulator};
 
 use crate::{default_stage, off_nominal_rig, raised};
 
@@ -84,10 +84,33 @@ fn with_frozen_position(
     frozen: std::ops::Range<usize>,
     samples: usize,
 ) -> Vec<LeakEvent> {
-    let mut sim =
-        Simulator::with_default_sensors(ActuatorParams::default(), scenario, FaultSchedule::default(), 62)
-            .unwrap();
-    let (mut stage, mut cls) = default_stage();
+    with_frozen_reading(scenario, SensorParams::default(), frozen, samples)
+}
+
+/// [`with_frozen_position`] read through `sensors`, the classifier told their
+/// full scale and position noise as the config loader does.
+fn with_frozen_reading(
+    scenario: Scenario,
+    sensors: SensorParams,
+    frozen: std::ops::Range<usize>,
+    samples: usize,
+) -> Vec<LeakEvent> {
+    let mut sim = Simulator::new(
+        ActuatorParams::default(),
+        sensors,
+        SimSettings::default(),
+        scenario,
+        FaultSchedule::default(),
+        62,
+    )
+    .unwrap();
+    let (mut stage, _) = default_stage();
+    let mut cls = Classifier::new(ClassifierConfig {
+        pressure_full_scale_pa: sensors.pressure_full_scale_pa,
+        position_noise_counts: sensors.position_noise_m / sensors.encoder_resolution_m,
+        ..ClassifierConfig::default()
+    })
+    .unwrap();
     let (mut events, mut held) = (Vec::new(), 0.0);
     for k in 0..samples {
         let mut s = sim.step();
@@ -133,4 +156,32 @@ fn a_frozen_position_is_stuck_only_while_the_pressures_say_the_rod_moves() {
         events.iter().all(|e| e.kind != EventKind::SensorStuck),
         "{events:#?}"
     );
+}
+
+/// A position sensor whose noise spans counts (the plant rigs': 3 µm on 2 µm)
+/// does not repeat a reading while healthy, resting rod or not: frozen on a
+/// resting rod, where the pressures fit the rest and say nothing, it is
+/// `sensor-stuck` on x after `stuck_samples`, and no leak is raised.
+#[test]
+fn a_noisy_position_frozen_on_a_resting_rod_is_stuck() {
+    let mut resting = Scenario::by_name("closed-loop-random", 62, 30.0).unwrap();
+    resting.drive = model::scenario::Drive::ClosedLoopSteps {
+        levels: vec![(0.0, 0.3), (3.0, 0.25)],
+    };
+    let events = with_frozen_reading(resting, SensorParams::plant(), 15_000..25_000, 30_000);
+    let stuck = events
+        .iter()
+        .find(|e| e.kind == EventKind::SensorStuck && e.phase == Phase::Raised)
+        .unwrap_or_else(|| panic!("a frozen noisy x is stuck: {events:#?}"));
+    assert_eq!(stuck.channel, "x");
+    assert!((14.99..15.01).contains(&stuck.t_onset_s), "{stuck:?}");
+    assert!((16.99..17.01).contains(&stuck.t_detect_s), "{stuck:?}");
+    assert!(stuck.detail.contains("noise spans 1.5 counts"), "{stuck:?}");
+    assert!(
+        events
+            .iter()
+            .any(|e| e.kind == EventKind::SensorStuck && e.phase == Phase::Cleared && e.t_detect_s >= 24.99),
+        "{events:#?}"
+    );
+    assert!(events.iter().all(|e| !e.kind.is_leak()), "{events:#?}");
 }
