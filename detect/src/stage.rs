@@ -300,6 +300,31 @@ impl Classifier {
         w.same > 0 && w.same_nis_sum / f64::from(w.same) > ratio * healthy
     }
 
+    /// What a raised sensor fault of kind `k` on channel `c` (its watch `w`) says:
+    /// what the channel did, and that no leak is decided while it stands.
+    fn fault_detail(&self, k: EventKind, c: usize, w: &ChannelWatch, x_noisy: bool) -> String {
+        let what = match k {
+            EventKind::SensorDead => format!("no usable {} value for {} samples", CHANNELS[c], w.dead),
+            EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
+            _ if c == 0 && x_noisy => format!(
+                "x has not changed for {} samples, though its noise spans {:.1} counts",
+                w.same, self.cfg.position_noise_counts
+            ),
+            _ if c == 0 => format!(
+                "x has not changed for {} samples while the pressures say the rod moves \
+                 (mean NIS {:.0} over them)",
+                w.same,
+                w.same_nis_sum / f64::from(w.same.max(1))
+            ),
+            _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
+        };
+        format!(
+            "{what}; no leak is decided while it stands; once it clears, the healthy state is learned \
+             again over {} s",
+            self.cfg.settle_s + self.cfg.warmup_s
+        )
+    }
+
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
         for c in 0..3 {
             let v = e.measured[c];
@@ -370,23 +395,7 @@ impl Classifier {
             self.check_spikes(c, &mut w, e.t_s, dt_s, v, emit);
             match (now, w.raised) {
                 (Some(k), None) => {
-                    let detail = match k {
-                        EventKind::SensorDead => {
-                            format!("no usable {} value for {} samples", CHANNELS[c], w.dead)
-                        }
-                        EventKind::SensorSaturated => format!("{} at the end of its range", CHANNELS[c]),
-                        _ if c == 0 && x_noisy => format!(
-                            "x has not changed for {} samples, though its noise spans {:.1} counts",
-                            w.same, self.cfg.position_noise_counts
-                        ),
-                        _ if c == 0 => format!(
-                            "x has not changed for {} samples while the pressures say the rod moves \
-                             (mean NIS {:.0} over them)",
-                            w.same,
-                            w.same_nis_sum / f64::from(w.same.max(1))
-                        ),
-                        _ => format!("{} has not changed for {} samples", CHANNELS[c], w.same),
-                    };
+                    let detail = self.fault_detail(k, c, &w, x_noisy);
                     let since_s = if k == EventKind::SensorStuck {
                         w.last_since_s
                     } else {
@@ -404,7 +413,12 @@ impl Classifier {
                     }
                 }
                 (None, Some((k, id))) => {
-                    let mut ev = self.plain(k, e.t_s, CHANNELS[c], "the channel is back");
+                    let back = format!(
+                        "the channel is back; leaks are decided again once the healthy state is learned \
+                         again over {} s",
+                        self.cfg.settle_s + self.cfg.warmup_s
+                    );
+                    let mut ev = self.plain(k, e.t_s, CHANNELS[c], &back);
                     ev.phase = Phase::Cleared;
                     ev.event_id = id;
                     w.raised = None;

@@ -204,7 +204,7 @@ impl Estimator {
 
     /// Reads the oil's temperature from θ of estimate `e` (once the filter has
     /// converged) and sets the model's viscous terms to it when it moved by
-    /// [`OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_viscosity_temperature`]).
+    /// [`OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_temperature_keeping_bulk_modulus`]).
     /// Allocates nothing.
     pub(crate) fn follow_oil_stiffness(&mut self, e: &mut Estimate) {
         let usable = self.started && e.flags & FLAGS_UNSETTLED == 0;
@@ -221,7 +221,7 @@ impl Estimator {
         if let Some(t) = moved {
             self.model
                 .params
-                .set_oil_viscosity_temperature(&self.params_at_reference, t);
+                .set_oil_temperature_keeping_bulk_modulus(&self.params_at_reference, t);
             self.model.params_changed();
             self.set_laminar_sigma(t, sigma_t_k);
         }

@@ -210,7 +210,7 @@ impl ActuatorParams {
     /// Writes fields in place (no allocation); `self.leaks` must be `base.leaks`
     /// in length. Returns the factors.
     pub fn set_oil_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
-        let f = self.set_oil_viscosity_temperature(base, temp_c);
+        let f = self.set_oil_temperature_keeping_bulk_modulus(base, temp_c);
         self.bulk_modulus_pa = base.bulk_modulus_pa * f.bulk_modulus;
         f
     }
@@ -221,7 +221,11 @@ impl ActuatorParams {
     /// dry friction move. A filter whose
     /// oil-stiffness state θ carries the bulk modulus uses this with the
     /// temperature it infers from θ. Allocates nothing. Returns the factors.
-    pub fn set_oil_viscosity_temperature(&mut self, base: &ActuatorParams, temp_c: f64) -> OilFactors {
+    pub fn set_oil_temperature_keeping_bulk_modulus(
+        &mut self,
+        base: &ActuatorParams,
+        temp_c: f64,
+    ) -> OilFactors {
         let f = base.oil_temperature.factors(temp_c);
         self.friction.viscous_n_s_per_m = base.friction.viscous_n_s_per_m * f.viscous_friction;
         self.friction.static_n = base.friction.static_n * f.dry_friction;

@@ -178,9 +178,17 @@ fn a_noisy_position_frozen_on_a_resting_rod_is_stuck() {
     assert!((16.99..17.01).contains(&stuck.t_detect_s), "{stuck:?}");
     assert!(stuck.detail.contains("noise spans 1.5 counts"), "{stuck:?}");
     assert!(
-        events
-            .iter()
-            .any(|e| e.kind == EventKind::SensorStuck && e.phase == Phase::Cleared && e.t_detect_s >= 24.99),
+        stuck.detail.contains(
+            "no leak is decided while it stands; once it clears, the healthy state is learned again over 8 s"
+        ),
+        "{stuck:?}"
+    );
+    assert!(
+        events.iter().any(|e| e.kind == EventKind::SensorStuck
+            && e.phase == Phase::Cleared
+            && e.t_detect_s >= 24.99
+            && e.detail
+                .starts_with("the channel is back; leaks are decided again")),
         "{events:#?}"
     );
     assert!(events.iter().all(|e| !e.kind.is_leak()), "{events:#?}");
