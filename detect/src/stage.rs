@@ -37,13 +37,13 @@ pub const X_SUSPECT_NIS_RATIO: f64 = 10.0;
 
 /// A position sensor whose noise spans this many counts or more (its standard
 /// deviation over one count, `[sensors]`) does not repeat a reading for long
-/// while healthy: two readings agree about once in four at 1.5 counts, and
-/// the longest repeat on healthy plant-rig recordings of 360 000-600 000
-/// samples is 10. On such a sensor a repeat of [`X_SUSPECT_SAMPLES`] holds the
-/// leak decision and one of `stuck_samples` is stuck whatever the pressures
-/// say (a frozen encoder on a creeping rod leaves the NIS near its healthy
-/// mean). Below it (an encoder that only counts) a resting rod repeats its
-/// reading, and the NIS rules decide.
+/// while healthy: at 1.5 counts two readings in a row agree about once in
+/// five at rest, and the longest repeat on healthy plant-rig recordings of
+/// 360 000-600 000 samples is 10. On such a sensor a repeat of
+/// [`X_SUSPECT_SAMPLES`] holds the leak decision and one of `stuck_samples` is
+/// stuck whatever the pressures say (a frozen encoder on a creeping rod leaves
+/// the NIS near its healthy mean). Below it (an encoder that only counts) a
+/// resting rod repeats its reading, and the NIS rules decide.
 pub const X_NOISY_COUNTS: f64 = 1.0;
 
 /// Per-channel sensor watch: stuck, saturated, dead.

@@ -203,8 +203,9 @@ impl Estimator {
     }
 
     /// Reads the oil's temperature from θ of estimate `e` (once the filter has
-    /// converged) and sets the model's viscous terms to it when it moved by
-    /// [`OIL_ESTIMATE_STEP_K`] ([`ActuatorParams::set_oil_temperature_keeping_bulk_modulus`]).
+    /// converged) and, when it moved by [`OIL_ESTIMATE_STEP_K`], sets every
+    /// term of the model that follows it but the bulk modulus
+    /// ([`ActuatorParams::set_oil_temperature_keeping_bulk_modulus`]).
     /// Allocates nothing.
     pub(crate) fn follow_oil_stiffness(&mut self, e: &mut Estimate) {
         let usable = self.started && e.flags & FLAGS_UNSETTLED == 0;
