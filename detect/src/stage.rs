@@ -135,7 +135,7 @@ impl Classifier {
                 "not commissioned: the healthy state is learned in the first {:.0} s after the filter converges; a leak \
                  present now or opening in that time cannot be seen (run `leakwatch commission HEALTHY.csv` and pass its \
                  file with --config)",
-                self.cfg.settle_s + self.cfg.warmup_s
+                self.learning_s()
             ),
         }
     }
@@ -227,7 +227,7 @@ impl Classifier {
                 &format!(
                     "warm-up too short to learn thresholds: {seen:.2} s of converged healthy data, {} s needed \
                      ({} s to settle + {} s to learn)",
-                    self.cfg.settle_s + self.cfg.warmup_s,
+                    self.learning_s(),
                     self.cfg.settle_s,
                     self.cfg.warmup_s
                 ),
@@ -321,11 +321,18 @@ impl Classifier {
         format!(
             "{what}; no leak is decided while it stands; once it clears, the healthy state is learned \
              again over {} s",
-            self.cfg.settle_s + self.cfg.warmup_s
+            self.learning_s()
         )
     }
 
+    /// How long the healthy state takes to learn after the filter converges,
+    /// at the start or after a sensor fault clears, s (`settle_s` + `warmup_s`).
+    fn learning_s(&self) -> f64 {
+        self.cfg.settle_s + self.cfg.warmup_s
+    }
+
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
+        let x_noisy = self.cfg.position_noise_counts >= X_NOISY_COUNTS;
         for c in 0..3 {
             let v = e.measured[c];
             let mut w = self.channels[c];
@@ -357,7 +364,6 @@ impl Classifier {
             // The rod may legitimately rest (stiction, a stop): a repeated position from
             // a sensor without noise is stuck only while the pressures say the rod
             // moves ([`X_STUCK_NIS_RATIO`]); a noisy one's is stuck ([`X_NOISY_COUNTS`]).
-            let x_noisy = self.cfg.position_noise_counts >= X_NOISY_COUNTS;
             let may_be_stuck = c > 0 || x_noisy || self.x_repeat_misfits(&w, X_STUCK_NIS_RATIO);
             if c == 0 {
                 w.repeat_suspect = w.same > 0
@@ -416,7 +422,7 @@ impl Classifier {
                     let back = format!(
                         "the channel is back; leaks are decided again once the healthy state is learned \
                          again over {} s",
-                        self.cfg.settle_s + self.cfg.warmup_s
+                        self.learning_s()
                     );
                     let mut ev = self.plain(k, e.t_s, CHANNELS[c], &back);
                     ev.phase = Phase::Cleared;
