@@ -43,6 +43,7 @@
 
 mod event;
 mod fit;
+mod floors;
 mod hold;
 mod rival;
 
@@ -87,11 +88,27 @@ pub const OFFSET_MAX_UNEXPLAINED: f64 = 0.5;
 pub const OFFSET_NAMED_SHARE: f64 = 0.3;
 /// Least span error named (1): a transducer's accuracy of reading.
 pub const SPAN_LEAST_ERROR: f64 = 0.005;
-/// Least offset named, as a share of the transducer's range (1): below it
-/// the offset is within a transducer's accuracy, and a healthy rig's hoses
-/// (the drop between a manifold transducer and its chamber, which moves with
-/// the oil's viscosity) make as much.
-pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.01;
+/// Least standing offset named, as a share of the transducer's range (1):
+/// below it the offset is within a sound transducer's accuracy (a datasheet's
+/// ±50 kPa zero and ±0.5 % span read up to 100 kPa off at 10 MPa).
+pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.005;
+/// Least drifting offset named, as a share of the transducer's range (1): a
+/// drift's rate also fits a healthy model's error that moves as the oil warms,
+/// and a healthy rig's hoses (the drop between a manifold transducer and its
+/// chamber, which moves with the oil's viscosity) make as much.
+pub const DRIFT_LEAST_SHARE_OF_RANGE: f64 = 0.01;
+/// A drifting offset is named from [`DRIFT_LEAST_SHARE_OF_RANGE`] where its
+/// rate moves it by at least this share of itself over [`OFFSET_WINDOW_S`]
+/// (1); a slower one from [`OFFSET_LEAST_SHARE_OF_RANGE`], as a standing one.
+/// A healthy model's error fitted as a drift moves fast: 250-600 kPa a minute
+/// at 160-170 kPa on the in-repo lift, a quarter of itself and more.
+pub const DRIFT_LEAST_MOVE_SHARE: f64 = 0.1;
+/// An offset on p1 or p2 under the least drifting offset named
+/// ([`DRIFT_LEAST_SHARE_OF_RANGE`]) is named only where its fit leaves less
+/// than this share of what the best misreading of the other pressure channel
+/// leaves (1), and that leaves more than [`OFFSET_CLEAN_UNEXPLAINED`] of the
+/// rises' energy: that small, the two channels' responses often fit alike.
+pub const CHANNEL_FIT_RATIO: f64 = 0.5;
 /// An offset on x is fitted in place of the pressures' misreadings where it
 /// leaves less than this share of what the best of them leaves (1): a drift
 /// of p1 or p2 moves the leak sizes in patterns an offset on x can partly fit.
@@ -108,8 +125,8 @@ pub const POSITION_MOST_OFFSET_MM: f64 = 15.0;
 /// fraction of it, and the chambers' volumes the model reads move by less
 /// than their tolerance.
 pub const POSITION_LEAST_OFFSET_MM: f64 = 1.0;
-/// An offset below the least named ([`OFFSET_LEAST_SHARE_OF_RANGE`]) but past
-/// this share of it (1) is named where its fit leaves less than
+/// An offset below the least named ([`OFFSET_LEAST_SHARE_OF_RANGE`], or
+/// [`DRIFT_LEAST_SHARE_OF_RANGE`] drifting) but past this share of it (1) is named where its fit leaves less than
 /// [`OFFSET_CLEAN_UNEXPLAINED`] of the rises' energy for
 /// [`OFFSET_CLEAN_CONFIRM_S`]: a healthy rig's hoses do not fit an offset
 /// that cleanly for that long.
@@ -216,8 +233,10 @@ pub struct OffsetWatch {
     standing: Option<StandingOffset>,
     /// The leak kinds' directions in (w1, w2) ([`leak_directions`]).
     directions: [[f64; 2]; 3],
-    /// Least offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
+    /// Least standing offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
     least_offset_mpa: f64,
+    /// Least drifting offset named, MPa ([`DRIFT_LEAST_SHARE_OF_RANGE`] of the range).
+    least_drift_mpa: f64,
     /// Time the window has been filled over, s (nothing is named before [`OFFSET_WINDOW_S`]).
     watched_s: f64,
     /// The smallest of the last thresholds read, L/min.
@@ -244,6 +263,7 @@ impl OffsetWatch {
     pub fn new(full_scale_pa: f64) -> Self {
         OffsetWatch {
             least_offset_mpa: OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-6,
+            least_drift_mpa: DRIFT_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-6,
             ..OffsetWatch::default()
         }
     }
@@ -268,6 +288,7 @@ impl Default for OffsetWatch {
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
             least_offset_mpa: 0.0,
+            least_drift_mpa: 0.0,
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
             keep_for: (0.0, 1.0),
@@ -286,6 +307,7 @@ impl OffsetWatch {
         *self = OffsetWatch {
             standing: self.standing,
             least_offset_mpa: self.least_offset_mpa,
+            least_drift_mpa: self.least_drift_mpa,
             ..OffsetWatch::default()
         };
     }
@@ -352,42 +374,6 @@ impl OffsetWatch {
         self.watched_s >= OFFSET_WINDOW_S
             && self.window.explained_rms_lpm(self.window_best.h)
                 > OFFSET_MATERIAL_SHARE * self.smallest_threshold_lpm
-    }
-
-    /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
-    /// for a span error, [`POSITION_LEAST_OFFSET_MM`] on x, the least
-    /// pressure offset (MPa) for an offset.
-    fn least(&self, h: usize) -> f64 {
-        if is_span(h) {
-            SPAN_LEAST_ERROR
-        } else if is_position(h) {
-            POSITION_LEAST_OFFSET_MM
-        } else {
-            self.least_offset_mpa
-        }
-    }
-
-    /// Whether the misreading of hypothesis `h` fitted over the window is
-    /// past what a sound transducer reads off ([`Self::least`]).
-    fn large_enough(&self, h: usize) -> bool {
-        self.window.coefficient(h).abs() > self.least(h)
-    }
-
-    /// How long the naming conditions must hold for the misreading of
-    /// hypothesis `h`, whose fit leaves `left` ((L/min)²·s), to be named, s;
-    /// None where it is too small to name ([`Self::large_enough`],
-    /// [`OFFSET_CLEAN_FLOOR_SHARE`]).
-    fn confirm_s(&self, h: usize, left: f64) -> Option<f64> {
-        if self.large_enough(h) {
-            Some(OFFSET_CONFIRM_S)
-        } else if !is_span(h)
-            && left < OFFSET_CLEAN_UNEXPLAINED * self.window.energy
-            && self.window.coefficient(h).abs() > OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
-        {
-            Some(OFFSET_CLEAN_CONFIRM_S)
-        } else {
-            None
-        }
     }
 
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]) and
@@ -559,7 +545,8 @@ impl OffsetWatch {
                 .window
                 .offset_fits_better(&self.window_best, OFFSET_FIT_RATIO)
             && left < OFFSET_MAX_UNEXPLAINED * self.window.energy
-            && self.window.explained_rms_lpm(h) > level;
+            && self.window.explained_rms_lpm(h) > level
+            && self.channel_told(h, left);
         let confirm_s = if named { self.confirm_s(h, left) } else { None };
         let c = channel_of(h);
         match (confirm_s, self.candidate) {

@@ -295,6 +295,15 @@ impl Fit {
         }
     }
 
+    /// The least energy a misreading of the other pressure channel than
+    /// `c` leaves unexplained, in any of its forms, (L/min)²·s.
+    pub(crate) fn other_pressure_channel_left(&self, c: usize) -> f64 {
+        (0..ALL_HYPOTHESES)
+            .filter(|&h| !is_position(h) && channel_of(h) != c)
+            .map(|h| self.energy - self.explained_by_offset(h))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The energy the best leak growing at a steady rate leaves unexplained,
     /// (L/min)²·s: (q + q̇·τ) along `directions[k]` at the sample of age τ.
     /// A drifting offset is judged against it: each has a rate to fit.

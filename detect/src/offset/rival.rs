@@ -3,7 +3,7 @@
 //! leak's event, so the operator is told which transducer to check.
 
 use super::fit::{channel_of, is_position, is_span};
-use super::{OffsetWatch, OFFSET_CHANNEL_NAMES, OFFSET_CLEAN_FLOOR_SHARE};
+use super::{OffsetWatch, OFFSET_CHANNEL_NAMES};
 
 /// How long an episode must have lasted before its misreading holds back a
 /// new leak ([`OffsetWatch::rivals_new_leak`]): its weight, s (its length
@@ -18,7 +18,8 @@ pub const EPISODE_RIVAL_RATIO: f64 = 0.7;
 impl OffsetWatch {
     /// Whether, at `t_s` (s), the window's best misreading fits the rises at
     /// least as well as the best leak does, with its part of them material,
-    /// is at least [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named, and could
+    /// is past a sound transducer's tolerance (on p1 or p2 the least standing
+    /// offset named, [`super::OFFSET_LEAST_SHARE_OF_RANGE`]), and could
     /// have grown at a transducer's drift since its part began to grow
     /// ([`super::MOST_DRIFT_MPA_PER_S`]): then the rises are no leak evidence.
     /// A leak is raised only where it fits better than every misreading a
@@ -44,17 +45,17 @@ impl OffsetWatch {
     }
 
     /// Whether the misreading of hypothesis `h` fitted over the window is at
-    /// least [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: a smaller one
-    /// lies within a sound transducer's tolerance.
+    /// least its tolerance ([`OffsetWatch::tolerance`]): a smaller one lies
+    /// within a sound transducer's.
     fn past_tolerance(&self, h: usize) -> bool {
-        self.window.coefficient(h).abs() >= OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
+        self.window.coefficient(h).abs() >= self.tolerance(h)
     }
 
     /// The window's best misreading in words ("p2 reading 162 kPa low"),
     /// where it could explain the rises as well as a leak
-    /// ([`OffsetWatch::could_explain`]) and is at least
-    /// [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named: a smaller one lies
-    /// within a sound transducer's tolerance, and a leak's rises often fit one.
+    /// ([`OffsetWatch::could_explain`]) and is past a sound transducer's
+    /// tolerance (as in [`OffsetWatch::rivals_leak`]): a smaller one lies
+    /// within it, and a leak's rises often fit one.
     /// None otherwise.
     pub fn rival_misreading(&self) -> Option<String> {
         let h = self.window_best.h;

@@ -22,7 +22,8 @@ pub struct Misreading {
     pub size: f64,
     /// The least misreading the detector names on that channel, in the same
     /// unit: [`detect::offset::OFFSET_LEAST_SHARE_OF_RANGE`] of the pressure
-    /// transducer's range, or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
+    /// transducer's range ([`detect::offset::DRIFT_LEAST_SHARE_OF_RANGE`]
+    /// for a drift), or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
     pub least_named: f64,
     /// The least misreading commissioning said the detector names on that
     /// channel, on a duty cycle like its recording's, in the same unit
@@ -45,10 +46,11 @@ impl Misreading {
         let end_s = samples.last().map_or(f64::NAN, |s| s.t_s);
         let pressure = fault.channel.is_pressure();
         let (si_per_unit, least_named) = if pressure {
-            (
-                1e3,
-                detect::offset::OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-3,
-            )
+            let share = match fault.kind {
+                SensorFaultKind::Drift { .. } => detect::offset::DRIFT_LEAST_SHARE_OF_RANGE,
+                _ => detect::offset::OFFSET_LEAST_SHARE_OF_RANGE,
+            };
+            (1e3, share * full_scale_pa * 1e-3)
         } else {
             (1e-3, detect::offset::POSITION_LEAST_OFFSET_MM)
         };
@@ -89,6 +91,12 @@ impl Misreading {
             Channel::P1 => least[0],
             Channel::P2 => least[1],
             Channel::X => least[2],
+        };
+        // (a drift is named from the least drifting offset, whatever the flow shows)
+        let stated = if stated.is_finite() {
+            stated.max(self.least_named)
+        } else {
+            stated
         };
         Misreading { stated, ..self }
     }
@@ -316,8 +324,9 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
           faulty channel says it began to read off, against the fault's onset. A leak alarm standing at the end was neither \
           cleared nor withdrawn when the transducer was named. A misreading past the least named: \
           a pressure offset (a drift's at the run's end, a span error's at the channel's mean reading) \
-          of at least 1 % of the transducer's range, an offset on x of at least 1 mm. What commissioning \
-          stated: the least offset it said it names on the channel, on a duty cycle like its recording's; \
+          of at least 0.5 % of the transducer's range (1 % for a drift), an offset on x of at least 1 mm. \
+          What commissioning stated: the least offset it said it names on the channel, on a duty cycle like \
+          its recording's (at least the least named); \
           not watched: it said an offset on x shows only past the largest fitted.\n";
     s
 }

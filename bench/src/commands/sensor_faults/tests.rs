@@ -148,7 +148,7 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
         onset_s: 20.0,
     };
     let run = readings(100.0, 5e6);
-    // a drift of 3 kPa/s from 20 s, capped at 500 kPa: 240 kPa by 100 s; 1 % of 25 MPa is 250 kPa
+    // a drift of 3 kPa/s from 20 s, capped at 500 kPa: 240 kPa by 100 s; a drift is named from 1 % of 25 MPa, 250 kPa
     let drift = |max_abs_si| SensorFaultKind::Drift {
         rate_si_per_s: -3e3,
         max_abs_si,
@@ -158,7 +158,8 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
     assert!(!m.past_least_named());
     let m = Misreading::of(&fault(Channel::P2, drift(2e5)), &run, 25e6);
     assert!((m.size - 200.0).abs() < 1e-6, "{m:?}");
-    // a span error of +2 % grown over 30 s: p1 reads 5 MPa, so 2/102 of it
+    // a span error of +2 % grown over 30 s: p1 reads 5 MPa, so 2/102 of it;
+    // named from 0.5 % of the range (75 kPa of 15 MPa)
     let span = SensorFaultKind::Span {
         gain_error: 0.02,
         ramp_s: 30.0,
@@ -167,7 +168,7 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
     assert!((m.size - 5e3 * 0.02 / 1.02).abs() < 1e-9, "{m:?}");
     let m = Misreading::of(&fault(Channel::P2, span), &run, 15e6);
     assert!(
-        (m.size - 1e4 * 0.02 / 1.02).abs() < 1e-9 && (m.least_named - 150.0).abs() < 1e-9,
+        (m.size - 1e4 * 0.02 / 1.02).abs() < 1e-9 && (m.least_named - 75.0).abs() < 1e-9,
         "{m:?}"
     );
     assert!(m.past_least_named());
@@ -180,7 +181,7 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
     assert!((m.size - 2.0).abs() < 1e-9 && m.least_named == 1.0, "{m:?}");
     // against what commissioning stated: on a plant rig whose x moves the
     // leak sizes by 0.0004 L/min per mm, x is not watched (past 22.5 mm);
-    // the pressures from the 1 % floor; on a rig whose x moves them by 0.01,
+    // the pressures from the 0.5 % floor (a drift from 1 %); on a rig whose x moves them by 0.01,
     // from 1 mm
     let plant = pipeline::commission::SensorReach::new([0.5, 0.05, 0.0004], [0.05, 0.03, 0.04], 25e6);
     let stated = m.stated_by(Channel::X, &plant);

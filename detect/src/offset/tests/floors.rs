@@ -1,0 +1,63 @@
+//! The least misreadings named: a standing offset's, a drifting one's, and
+//! the channel that must be told from the other under the drifting floor.
+
+use super::*;
+
+/// Feeds `seconds` of rises that an offset `b(t)` (MPa) on p2 makes through
+/// the responses `responses(t)`, from a fixed baseline; returns the first
+/// change with its time, s.
+fn watch_p2(
+    seconds: f64,
+    b: impl Fn(f64) -> f64,
+    responses: impl Fn(f64) -> [[f64; 3]; 2],
+) -> Option<(f64, OffsetChange)> {
+    let (_, first) = drive_pausing(seconds, 0.0, false, (f64::INFINITY, 0.0), |t| {
+        let r = responses(t);
+        (r[1].map(|d| b(t) * d), r, [0.0; 2])
+    });
+    first
+}
+
+#[test]
+fn an_offset_under_the_drifting_floor_is_named_only_where_its_channel_is_told() {
+    // p1's response as p2's: either channel fits the rises alike
+    let alike = |t: f64| {
+        let d2 = cycle_responses(t)[1];
+        [d2, d2]
+    };
+    // 150 kPa: past the least standing offset (125 kPa), under the drifting
+    // floor (250 kPa): not named
+    assert_eq!(watch_p2(60.0, |_| -0.15, alike), None);
+    // told from p1 by its own rhythm: named
+    let Some((_, OffsetChange::Raised(s))) = watch_p2(60.0, |_| -0.15, cycle_responses) else {
+        panic!("the told offset not named");
+    };
+    assert_eq!(s.channel, 1, "{s:?}");
+    // 300 kPa, past the drifting floor: named though p1 fits alike
+    assert!(matches!(
+        watch_p2(60.0, |_| -0.3, alike),
+        Some((_, OffsetChange::Raised(_)))
+    ));
+}
+
+#[test]
+fn a_drift_is_named_from_the_drifting_floor_only_where_it_moves_fast() {
+    // 300 kPa a minute from 0: 50 kPa over the window, a third of itself at
+    // 150 kPa; the drifting floor's clean half (125 kPa, at 25 s) holds it
+    // for the clean confirmation's 10 s
+    let fast = |t: f64| -0.005 * t;
+    let Some((named_s, OffsetChange::Raised(s))) = watch_p2(120.0, fast, cycle_responses) else {
+        panic!("the fast drift not named");
+    };
+    assert!(named_s >= 34.0, "named at {named_s} s: {s:?}");
+    assert!(s.drift_mpa_per_s < -0.004, "{s:?}");
+    // 30 kPa a minute: 5 kPa over the window, 4 % of itself at 125 kPa: named
+    // as a standing offset is, from the clean half of 125 kPa (62.5 kPa, at
+    // 125 s), long before it reaches 125 kPa (250 s)
+    let slow = |t: f64| -0.0005 * t;
+    let Some((named_s, OffsetChange::Raised(s))) = watch_p2(300.0, slow, cycle_responses) else {
+        panic!("the slow drift not named");
+    };
+    assert_eq!(s.channel, 1, "{s:?}");
+    assert!((125.0..200.0).contains(&named_s), "named at {named_s} s: {s:?}");
+}
