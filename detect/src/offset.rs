@@ -126,7 +126,8 @@ pub const POSITION_MOST_OFFSET_MM: f64 = 15.0;
 /// than their tolerance.
 pub const POSITION_LEAST_OFFSET_MM: f64 = 1.0;
 /// An offset below the least named ([`OFFSET_LEAST_SHARE_OF_RANGE`], or
-/// [`DRIFT_LEAST_SHARE_OF_RANGE`] drifting) but past this share of it (1) is named where its fit leaves less than
+/// [`DRIFT_LEAST_SHARE_OF_RANGE`] drifting) but past this share of it (1) is
+/// named where its fit leaves less than
 /// [`OFFSET_CLEAN_UNEXPLAINED`] of the rises' energy for
 /// [`OFFSET_CLEAN_CONFIRM_S`]: a healthy rig's hoses do not fit an offset
 /// that cleanly for that long.

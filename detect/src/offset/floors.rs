@@ -52,11 +52,11 @@ impl OffsetWatch {
     /// rises' energy and this one less than [`CHANNEL_FIT_RATIO`] of that.
     /// A span error and an offset on x are told by their own tests.
     pub(super) fn channel_told(&self, h: usize, left: f64) -> bool {
+        if is_span(h) || is_position(h) || self.window.coefficient(h).abs() > self.least_drift_mpa {
+            return true;
+        }
         let other = self.window.other_pressure_channel_left(channel_of(h));
-        is_span(h)
-            || is_position(h)
-            || self.window.coefficient(h).abs() > self.least_drift_mpa
-            || (other > OFFSET_CLEAN_UNEXPLAINED * self.window.energy && left < CHANNEL_FIT_RATIO * other)
+        other > OFFSET_CLEAN_UNEXPLAINED * self.window.energy && left < CHANNEL_FIT_RATIO * other
     }
 
     /// Whether the misreading of hypothesis `h` fitted over the window is

@@ -261,14 +261,17 @@ fn commissioning_identifies_the_spool_null_bias_and_holds_it() {
         assert!(cold[k] >= reference[k] && warm[k] >= reference[k], "{line}");
     }
     // and the smallest transducer offsets it names on this duty cycle: the
-    // pressures' at 1 % of the 20.7 MPa range (their response shows 19/30
-    // kPa); x's where its response shows it (measured 4.1 mm), within the
-    // 1-15 mm the detector fits
+    // pressures' at 0.5 % of the 20.7 MPa range, 1 % drifting (their
+    // response shows 19/30 kPa); x's where its response shows it (measured
+    // 4.1 mm), within the 1-15 mm the detector fits
     let reach = err
         .lines()
         .find(|l| l.starts_with("transducer offsets named"))
         .expect("the transducers' reach is stated");
-    assert!(reach.contains("p1 from 207 kPa, p2 from 207 kPa"), "{reach}");
+    assert!(
+        reach.contains("p1 from 104 kPa, p2 from 104 kPa") && reach.contains("207 kPa for a drifting one"),
+        "{reach}"
+    );
     let x_mm: f64 = reach
         .split("x from ")
         .nth(1)
