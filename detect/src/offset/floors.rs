@@ -59,22 +59,19 @@ impl OffsetWatch {
         other > OFFSET_CLEAN_UNEXPLAINED * self.window.energy && left < CHANNEL_FIT_RATIO * other
     }
 
-    /// Whether the misreading of hypothesis `h` fitted over the window is
-    /// past what a sound transducer reads off ([`Self::least`]).
-    fn large_enough(&self, h: usize) -> bool {
-        self.window.coefficient(h).abs() > self.least(h)
-    }
-
     /// How long the naming conditions must hold for the misreading of
-    /// hypothesis `h`, whose fit leaves `left` ((L/min)²·s), to be named, s;
-    /// None where it is too small to name ([`Self::large_enough`],
-    /// [`OFFSET_CLEAN_FLOOR_SHARE`]).
+    /// hypothesis `h`, whose fit leaves `left` ((L/min)²·s), to be named, s:
+    /// [`OFFSET_CONFIRM_S`] past its least ([`Self::least`]),
+    /// [`OFFSET_CLEAN_CONFIRM_S`] past [`OFFSET_CLEAN_FLOOR_SHARE`] of it where
+    /// the fit is clean; None where it is too small to name.
     pub(super) fn confirm_s(&self, h: usize, left: f64) -> Option<f64> {
-        if self.large_enough(h) {
+        // (the least read once: a drift's takes its fitted rate)
+        let (b, least) = (self.window.coefficient(h).abs(), self.least(h));
+        if b > least {
             Some(OFFSET_CONFIRM_S)
         } else if !is_span(h)
             && left < OFFSET_CLEAN_UNEXPLAINED * self.window.energy
-            && self.window.coefficient(h).abs() > OFFSET_CLEAN_FLOOR_SHARE * self.least(h)
+            && b > OFFSET_CLEAN_FLOOR_SHARE * least
         {
             Some(OFFSET_CLEAN_CONFIRM_S)
         } else {
