@@ -103,11 +103,12 @@ pub const DRIFT_LEAST_SHARE_OF_RANGE: f64 = 0.01;
 /// A healthy model's error fitted as a drift moves fast: 250-600 kPa a minute
 /// at 160-170 kPa on the in-repo lift, a quarter of itself and more.
 pub const DRIFT_LEAST_MOVE_SHARE: f64 = 0.1;
-/// An offset on p1 or p2 under the least drifting offset named
-/// ([`DRIFT_LEAST_SHARE_OF_RANGE`]) is named only where its fit leaves less
-/// than this share of what the best misreading of the other pressure channel
-/// leaves (1), and that leaves more than [`OFFSET_CLEAN_UNEXPLAINED`] of the
-/// rises' energy: that small, the two channels' responses often fit alike.
+/// An offset on p1 or p2 is named only where its fit leaves less than this
+/// share of what the best misreading of the other pressure channel leaves
+/// (1), and that leaves more than [`OFFSET_CLEAN_UNEXPLAINED`] of the rises'
+/// energy: the two channels' responses often fit alike (on a double-rod
+/// press, p1 reading high as p2 reading low), and the channel named is the
+/// transducer the operator checks.
 pub const CHANNEL_FIT_RATIO: f64 = 0.5;
 /// An offset on x is fitted in place of the pressures' misreadings where it
 /// leaves less than this share of what the best of them leaves (1): a drift

@@ -1,7 +1,8 @@
 //! The least misreadings named, and what a small one must show first: a
 //! standing offset from [`OFFSET_LEAST_SHARE_OF_RANGE`](super::OFFSET_LEAST_SHARE_OF_RANGE),
 //! one that drifts fast from [`DRIFT_LEAST_SHARE_OF_RANGE`](super::DRIFT_LEAST_SHARE_OF_RANGE),
-//! a small one told from the other pressure channel ([`CHANNEL_FIT_RATIO`]).
+//! and an offset on p1 or p2 told from the other pressure channel
+//! ([`CHANNEL_FIT_RATIO`]).
 
 use super::fit::{channel_of, is_drift, is_position, is_span};
 use super::{
@@ -46,13 +47,13 @@ impl OffsetWatch {
     }
 
     /// Whether the misreading of hypothesis `h`, whose fit leaves `left`
-    /// ((L/min)²·s), is told from the other pressure channel's: past the
-    /// least drifting offset named, or fitting clearly better: the other
-    /// channel's best leaves more than [`OFFSET_CLEAN_UNEXPLAINED`] of the
-    /// rises' energy and this one less than [`CHANNEL_FIT_RATIO`] of that.
-    /// A span error and an offset on x are told by their own tests.
+    /// ((L/min)²·s), is told from the other pressure channel's: it fits
+    /// clearly better: the other channel's best leaves more than
+    /// [`OFFSET_CLEAN_UNEXPLAINED`] of the rises' energy and this one less
+    /// than [`CHANNEL_FIT_RATIO`] of that. A span error and an offset on x
+    /// are told by their own tests.
     pub(super) fn channel_told(&self, h: usize, left: f64) -> bool {
-        if is_span(h) || is_position(h) || self.window.coefficient(h).abs() > self.least_drift_mpa {
+        if is_span(h) || is_position(h) {
             return true;
         }
         let other = self.window.other_pressure_channel_left(channel_of(h));
