@@ -97,6 +97,18 @@ pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.005;
 /// and a healthy rig's hoses (the drop between a manifold transducer and its
 /// chamber, which moves with the oil's viscosity) make as much.
 pub const DRIFT_LEAST_SHARE_OF_RANGE: f64 = 0.01;
+
+/// The least pressure offset named on a transducer of range `full_scale_pa`
+/// (Pa), in Pa: [`DRIFT_LEAST_SHARE_OF_RANGE`] of it for an offset that
+/// drifts fast (`drifting`), else [`OFFSET_LEAST_SHARE_OF_RANGE`].
+pub fn least_pressure_offset_pa(full_scale_pa: f64, drifting: bool) -> f64 {
+    let share = if drifting {
+        DRIFT_LEAST_SHARE_OF_RANGE
+    } else {
+        OFFSET_LEAST_SHARE_OF_RANGE
+    };
+    share * full_scale_pa
+}
 /// A drifting offset is named from [`DRIFT_LEAST_SHARE_OF_RANGE`] where its
 /// rate moves it by at least this share of itself over [`OFFSET_WINDOW_S`]
 /// (1); a slower one from [`OFFSET_LEAST_SHARE_OF_RANGE`], as a standing one.
@@ -264,8 +276,8 @@ impl OffsetWatch {
     /// A watch for pressure transducers of range `full_scale_pa` (Pa).
     pub fn new(full_scale_pa: f64) -> Self {
         OffsetWatch {
-            least_offset_mpa: OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-6,
-            least_drift_mpa: DRIFT_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-6,
+            least_offset_mpa: least_pressure_offset_pa(full_scale_pa, false) * 1e-6,
+            least_drift_mpa: least_pressure_offset_pa(full_scale_pa, true) * 1e-6,
             ..OffsetWatch::default()
         }
     }

@@ -11,7 +11,7 @@
 //! steady part, so the part that counts is the response's swing about it.
 
 use detect::offset::{
-    DRIFT_LEAST_SHARE_OF_RANGE, OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE, OFFSET_WINDOW_S,
+    least_pressure_offset_pa, OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE, OFFSET_WINDOW_S,
     POSITION_LEAST_OFFSET_MM, POSITION_MOST_OFFSET_MM,
 };
 
@@ -122,7 +122,7 @@ pub struct SensorReach {
     /// ([`OFFSET_LEAST_SHARE_OF_RANGE`] of its range).
     pub pressure_least_kpa: f64,
     /// The least drifting offset on a pressure transducer named, kPa
-    /// ([`DRIFT_LEAST_SHARE_OF_RANGE`] of its range).
+    /// ([`detect::offset::DRIFT_LEAST_SHARE_OF_RANGE`] of its range).
     pub pressure_least_drifting_kpa: f64,
     /// The offset on x whose part of the rises reaches the naming level, mm
     /// (infinite where the recording shows none).
@@ -142,8 +142,8 @@ impl SensorReach {
         let shown = |rms: f64| if rms > 0.0 { level / rms } else { f64::INFINITY };
         SensorReach {
             pressure_shown_kpa: [shown(typical_rms[0]) * 1e3, shown(typical_rms[1]) * 1e3],
-            pressure_least_kpa: OFFSET_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-3,
-            pressure_least_drifting_kpa: DRIFT_LEAST_SHARE_OF_RANGE * full_scale_pa * 1e-3,
+            pressure_least_kpa: least_pressure_offset_pa(full_scale_pa, false) * 1e-3,
+            pressure_least_drifting_kpa: least_pressure_offset_pa(full_scale_pa, true) * 1e-3,
             position_shown_mm: shown(typical_rms[2]),
             position_response_lpm_per_mm: typical_rms[2],
             naming_level_lpm: level,
@@ -196,10 +196,11 @@ impl SensorReach {
         };
         format!(
             "transducer offsets named on a duty cycle like this recording's: {}, {} (the least named is {:.0} kPa, \
-             0.5 % of the range, {:.0} kPa for a drifting one; the leak sizes show {:.0}/{:.0} kPa); {position}",
+             {} % of the range, {:.0} kPa for a drifting one; the leak sizes show {:.0}/{:.0} kPa); {position}",
             pressure(0),
             pressure(1),
             self.pressure_least_kpa,
+            OFFSET_LEAST_SHARE_OF_RANGE * 100.0,
             self.pressure_least_drifting_kpa,
             self.pressure_shown_kpa[0],
             self.pressure_shown_kpa[1],

@@ -46,11 +46,11 @@ impl Misreading {
         let end_s = samples.last().map_or(f64::NAN, |s| s.t_s);
         let pressure = fault.channel.is_pressure();
         let (si_per_unit, least_named) = if pressure {
-            let share = match fault.kind {
-                SensorFaultKind::Drift { .. } => detect::offset::DRIFT_LEAST_SHARE_OF_RANGE,
-                _ => detect::offset::OFFSET_LEAST_SHARE_OF_RANGE,
-            };
-            (1e3, share * full_scale_pa * 1e-3)
+            let drifting = matches!(fault.kind, SensorFaultKind::Drift { .. });
+            (
+                1e3,
+                detect::offset::least_pressure_offset_pa(full_scale_pa, drifting) * 1e-3,
+            )
         } else {
             (1e-3, detect::offset::POSITION_LEAST_OFFSET_MM)
         };
