@@ -48,6 +48,7 @@ mod hold;
 mod rival;
 
 pub use event::offset_event;
+pub use floors::least_pressure_offset_pa;
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
 pub use rival::{EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S};
@@ -97,18 +98,6 @@ pub const OFFSET_LEAST_SHARE_OF_RANGE: f64 = 0.005;
 /// and a healthy rig's hoses (the drop between a manifold transducer and its
 /// chamber, which moves with the oil's viscosity) make as much.
 pub const DRIFT_LEAST_SHARE_OF_RANGE: f64 = 0.01;
-
-/// The least pressure offset named on a transducer of range `full_scale_pa`
-/// (Pa), in Pa: [`DRIFT_LEAST_SHARE_OF_RANGE`] of it for an offset that
-/// drifts fast (`drifting`), else [`OFFSET_LEAST_SHARE_OF_RANGE`].
-pub fn least_pressure_offset_pa(full_scale_pa: f64, drifting: bool) -> f64 {
-    let share = if drifting {
-        DRIFT_LEAST_SHARE_OF_RANGE
-    } else {
-        OFFSET_LEAST_SHARE_OF_RANGE
-    };
-    share * full_scale_pa
-}
 /// A drifting offset is named from [`DRIFT_LEAST_SHARE_OF_RANGE`] where its
 /// rate moves it by at least this share of itself over [`OFFSET_WINDOW_S`]
 /// (1); a slower one from [`OFFSET_LEAST_SHARE_OF_RANGE`], as a standing one.

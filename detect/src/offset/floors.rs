@@ -6,9 +6,22 @@
 
 use super::fit::{channel_of, is_drift, is_position, is_span};
 use super::{
-    OffsetWatch, CHANNEL_FIT_RATIO, DRIFT_LEAST_MOVE_SHARE, OFFSET_CLEAN_CONFIRM_S, OFFSET_CLEAN_FLOOR_SHARE,
-    OFFSET_CLEAN_UNEXPLAINED, OFFSET_CONFIRM_S, OFFSET_WINDOW_S, POSITION_LEAST_OFFSET_MM, SPAN_LEAST_ERROR,
+    OffsetWatch, CHANNEL_FIT_RATIO, DRIFT_LEAST_MOVE_SHARE, DRIFT_LEAST_SHARE_OF_RANGE,
+    OFFSET_CLEAN_CONFIRM_S, OFFSET_CLEAN_FLOOR_SHARE, OFFSET_CLEAN_UNEXPLAINED, OFFSET_CONFIRM_S,
+    OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_WINDOW_S, POSITION_LEAST_OFFSET_MM, SPAN_LEAST_ERROR,
 };
+
+/// The least pressure offset named on a transducer of range `full_scale_pa`
+/// (Pa), in Pa: [`DRIFT_LEAST_SHARE_OF_RANGE`] of it for an offset that
+/// drifts fast (`drifting`), else [`OFFSET_LEAST_SHARE_OF_RANGE`].
+pub fn least_pressure_offset_pa(full_scale_pa: f64, drifting: bool) -> f64 {
+    let share = if drifting {
+        DRIFT_LEAST_SHARE_OF_RANGE
+    } else {
+        OFFSET_LEAST_SHARE_OF_RANGE
+    };
+    share * full_scale_pa
+}
 
 impl OffsetWatch {
     /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
