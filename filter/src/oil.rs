@@ -7,6 +7,19 @@
 //! The terms that follow the viscosity (the valve's null leakage, the linear
 //! leaks, the seals' viscous friction) are then set from that temperature.
 //! θ itself keeps carrying the bulk modulus.
+//!
+//! θ also answers an error in the model's laminar flows: a null leakage set
+//! too large for the oil pulls θ down as a warmer oil does (commissioning
+//! measures that pull, s per unit of the laminar factor L). With the model
+//! at temperature T_a, θ ≈ θ_ref·(1 + k_β·(T − T_ref)) + s·(L(T_a) − L(T)).
+//! The temperature is read from that relation, not from the stiffness term
+//! alone: read from the stiffness alone, a model set warmer leaks more, θ
+//! falls further and the reading runs to the range's end (a press whose
+//! valve leaks at the catalogue's maximum did, from the filter's start-up).
+//! Where the pull cancels most of the stiffness' own change with
+//! temperature ([`READABLE_SHARE`]), θ does not tell the temperature: the
+//! model stays at the reference and the temperature is as uncertain as the
+//! operating range.
 
 use model::params::OilTemperature;
 use model::ActuatorParams;
@@ -75,6 +88,16 @@ pub fn settled_sigma_k(oil: &OilTemperature, temp_c: f64) -> f64 {
 /// nothing about the temperature).
 const MIN_BULK_PER_K: f64 = 1e-4;
 
+/// The share of the stiffness' own change with temperature (θ_ref·k_β per
+/// K) that must remain, all over the range θ is read in, once the laminar
+/// flows' pull on θ is taken out, for θ to tell the temperature (1): at half,
+/// an error of θ reads as at most twice the temperature error it would on
+/// a rig without null leakage.
+pub const READABLE_SHARE: f64 = 0.5;
+
+/// Points of the table θ is read against over the range ([`OilFromStiffness`]).
+const TABLE_POINTS: usize = 257;
+
 /// The temperature read from θ, and when it last moved the model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OilFromStiffness {
@@ -94,6 +117,19 @@ pub struct OilFromStiffness {
     /// range widened by [`OIL_RANGE_MARGIN_K`], and the reference within it.
     lowest_c: f64,
     highest_c: f64,
+    /// The pull s on θ per unit of the laminar factor's error (1; 0: none).
+    pull: f64,
+    /// Whether θ tells the temperature at the reference ([`READABLE_SHARE`]).
+    readable: bool,
+    /// The table's points (first, last) between which θ tells the
+    /// temperature, the reference among them: the reading stays within.
+    readable_points: (usize, usize),
+    /// With a pull: θ_ref·(1 + k_β·(T − T_ref)) − s·L(T) at [`TABLE_POINTS`]
+    /// temperatures evenly from `lowest_c` to `highest_c`, and L(T) there (1).
+    stiffness_less_pull: [f64; TABLE_POINTS],
+    laminar: [f64; TABLE_POINTS],
+    /// L at the temperature the model is at (1).
+    laminar_applied: f64,
 }
 
 impl OilFromStiffness {
@@ -104,7 +140,11 @@ impl OilFromStiffness {
         if oil.bulk_modulus_per_k.abs() < MIN_BULK_PER_K || !(theta_ref.is_finite() && theta_ref > 0.0) {
             return None;
         }
-        Some(OilFromStiffness {
+        let pull = oil
+            .stiffness_per_laminar_factor
+            .filter(|s| s.is_finite())
+            .unwrap_or(0.0);
+        let mut o = OilFromStiffness {
             theta_mean: theta_ref,
             theta_ref,
             applied_c: oil.reference_c,
@@ -113,16 +153,118 @@ impl OilFromStiffness {
             bulk_per_k: oil.bulk_modulus_per_k,
             lowest_c: (oil.operating_min_c - OIL_RANGE_MARGIN_K).min(oil.reference_c),
             highest_c: (oil.operating_max_c + OIL_RANGE_MARGIN_K).max(oil.reference_c),
-        })
+            pull,
+            readable: true,
+            readable_points: (0, TABLE_POINTS - 1),
+            stiffness_less_pull: [0.0; TABLE_POINTS],
+            laminar: [1.0; TABLE_POINTS],
+            laminar_applied: 1.0,
+        };
+        if pull != 0.0 {
+            o.tabulate(oil);
+        }
+        Some(o)
+    }
+
+    /// The temperature of table point `i`, °C.
+    fn table_c(&self, i: usize) -> f64 {
+        self.lowest_c + (self.highest_c - self.lowest_c) * i as f64 / (TABLE_POINTS - 1) as f64
+    }
+
+    /// Fills the table θ is read against under a pull and finds where θ
+    /// tells the temperature: θ_ref·(1 + k_β·(T − T_ref)) − s·L(T) must
+    /// change with T in the stiffness' own direction, by at least
+    /// [`READABLE_SHARE`] of θ_ref·k_β a kelvin, between every two points
+    /// from the reference's out (the warm end goes first: L steepens there).
+    fn tabulate(&mut self, oil: &OilTemperature) {
+        let own = self.theta_ref * self.bulk_per_k;
+        for i in 0..TABLE_POINTS {
+            let t = self.table_c(i);
+            self.laminar[i] = oil.factors(t).laminar_flow;
+            self.stiffness_less_pull[i] = self.theta_ref * (1.0 + self.bulk_per_k * (t - self.reference_c))
+                - self.pull * self.laminar[i];
+        }
+        let step_k = (self.highest_c - self.lowest_c) / (TABLE_POINTS - 1) as f64;
+        let h = &self.stiffness_less_pull;
+        let tells = |i: usize| step_k > 0.0 && (h[i + 1] - h[i]) / step_k / own >= READABLE_SHARE;
+        // the segment the reference lies in
+        let at = (((self.reference_c - self.lowest_c) / step_k.max(f64::MIN_POSITIVE)).floor() as usize)
+            .min(TABLE_POINTS - 2);
+        self.readable = tells(at);
+        let (mut first, mut last) = (at, at + 1);
+        while first > 0 && tells(first - 1) {
+            first -= 1;
+        }
+        while last < TABLE_POINTS - 1 && tells(last) {
+            last += 1;
+        }
+        self.readable_points = (first, last);
+        self.laminar_applied = oil.factors(self.applied_c).laminar_flow;
+    }
+
+    /// The oil temperatures between which θ tells the temperature, °C (the
+    /// range θ is read in where there is no pull; equal ends where it tells none).
+    pub fn readable_range_c(&self) -> (f64, f64) {
+        if !self.readable {
+            return (self.reference_c, self.reference_c);
+        }
+        (
+            self.table_c(self.readable_points.0),
+            self.table_c(self.readable_points.1),
+        )
+    }
+
+    /// Whether θ tells the oil's temperature at the reference on this rig ([`READABLE_SHARE`]).
+    pub fn readable(&self) -> bool {
+        self.readable
+    }
+
+    /// The pull s on θ per unit of the laminar factor's error it was built with (1).
+    pub fn pull(&self) -> f64 {
+        self.pull
     }
 
     /// The temperature θ's low-pass says now, °C (within
     /// [`OIL_ESTIMATE_SPAN_K`] of the reference and [`OIL_RANGE_MARGIN_K`] of
     /// the operating range).
     pub fn temperature_c(&self) -> f64 {
-        let dt = ((self.theta_mean / self.theta_ref - 1.0) / self.bulk_per_k)
-            .clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
-        (self.reference_c + dt).clamp(self.lowest_c, self.highest_c)
+        if !self.readable {
+            return self.reference_c;
+        }
+        let t = if self.pull == 0.0 {
+            let dt = ((self.theta_mean / self.theta_ref - 1.0) / self.bulk_per_k)
+                .clamp(-OIL_ESTIMATE_SPAN_K, OIL_ESTIMATE_SPAN_K);
+            self.reference_c + dt
+        } else {
+            self.read_against_table().clamp(
+                self.reference_c - OIL_ESTIMATE_SPAN_K,
+                self.reference_c + OIL_ESTIMATE_SPAN_K,
+            )
+        };
+        t.clamp(self.lowest_c, self.highest_c)
+    }
+
+    /// The temperature (°C) where θ_ref·(1 + k_β·ΔT) − s·L(T) meets
+    /// θ̄ − s·L(T_a) in the table (monotone where readable: the table's ends
+    /// beyond it), linearly between its points.
+    fn read_against_table(&self) -> f64 {
+        let target = self.theta_mean - self.pull * self.laminar_applied;
+        let (first, last) = self.readable_points;
+        let h = &self.stiffness_less_pull[first..=last];
+        // (monotone there: h falls with T where k_β < 0, rises where k_β > 0)
+        let falling = self.bulk_per_k < 0.0;
+        let below = |v: f64| if falling { v > target } else { v < target };
+        // the first point past the target
+        let i = h.partition_point(|&v| below(v));
+        if i == 0 {
+            return self.table_c(first);
+        }
+        if i >= h.len() {
+            return self.table_c(last);
+        }
+        let (a, b) = (h[i - 1], h[i]);
+        let w = if b != a { (target - a) / (b - a) } else { 0.0 };
+        self.table_c(first + i - 1) + w * (self.table_c(first + i) - self.table_c(first + i - 1))
     }
 
     /// The temperature the model is at, °C.
@@ -139,7 +281,23 @@ impl OilFromStiffness {
     /// θ's own and k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
     /// reference); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
     pub fn sigma_k(&self, theta_sigma: f64) -> f64 {
-        let from_theta = theta_sigma / (self.theta_ref * self.bulk_per_k.abs());
+        if !self.readable {
+            // the temperature may be anywhere in the range θ is read in
+            return (self.reference_c - self.lowest_c).max(self.highest_c - self.reference_c);
+        }
+        // read at an end of the range θ tells it in (short of the range's
+        // end): the oil may lie anywhere beyond it
+        let (lo, hi) = self.readable_range_c();
+        let beyond = if self.pull == 0.0 {
+            0.0
+        } else if self.applied_c <= lo + OIL_ESTIMATE_STEP_K {
+            lo - self.lowest_c
+        } else if self.applied_c >= hi - OIL_ESTIMATE_STEP_K {
+            self.highest_c - hi
+        } else {
+            0.0
+        };
+        let from_theta = theta_sigma / (self.theta_ref * self.bulk_per_k.abs()) + beyond;
         let from_slope = BULK_SLOPE_UNCERTAINTY * (self.applied_c - self.reference_c);
         let unsettled = if self.settled() {
             0.0
@@ -165,7 +323,23 @@ impl OilFromStiffness {
             return None;
         }
         self.applied_c = t;
+        if self.pull != 0.0 {
+            self.laminar_applied = self.laminar_at(t);
+        }
         Some(t)
+    }
+
+    /// L at `temp_c` (°C) from the table, linearly between its points.
+    fn laminar_at(&self, temp_c: f64) -> f64 {
+        let span = self.highest_c - self.lowest_c;
+        if span <= 0.0 {
+            return self.laminar[0];
+        }
+        let x = ((temp_c - self.lowest_c) / span * (TABLE_POINTS - 1) as f64)
+            .clamp(0.0, (TABLE_POINTS - 1) as f64);
+        let i = (x.floor() as usize).min(TABLE_POINTS - 2);
+        let w = x - i as f64;
+        self.laminar[i] + w * (self.laminar[i + 1] - self.laminar[i])
     }
 }
 
@@ -355,6 +529,88 @@ mod tests {
             o.observe(0.9 * (1.0 - 0.0045 * 10.0), 1e-3);
         }
         assert!((o.temperature_c() - 50.0).abs() < 1e-6, "{}", o.temperature_c());
+    }
+
+    /// θ as the filter gives it for oil at `true_c` (°C) with the model set
+    /// to `applied_c`: the stiffness' change and the pull `pull` of the
+    /// laminar flows' error.
+    fn theta_seen(oil: &OilTemperature, theta_ref: f64, pull: f64, true_c: f64, applied_c: f64) -> f64 {
+        let l = |t: f64| oil.factors(t).laminar_flow;
+        theta_ref * (1.0 + oil.bulk_modulus_per_k * (true_c - oil.reference_c))
+            + pull * (l(applied_c) - l(true_c))
+    }
+
+    /// Follows θ (1 ms steps over 300 s) for oil at `true_c` (°C); returns
+    /// the temperature the model was set to at the end.
+    fn follow(o: &mut OilFromStiffness, oil: &OilTemperature, pull: f64, true_c: f64) -> f64 {
+        for _ in 0..300_000 {
+            let theta = theta_seen(oil, o.theta_ref, pull, true_c, o.applied_c());
+            o.observe(theta, 1e-3);
+        }
+        o.applied_c()
+    }
+
+    #[test]
+    fn with_the_laminar_pull_taken_out_the_reading_settles_on_the_oils_temperature() {
+        let mut oil = OilTemperature {
+            reference_c: 45.0,
+            ..OilTemperature::default()
+        };
+        // a pull that leaves about two thirds of the stiffness' own signal
+        let pull = -0.04;
+        oil.stiffness_per_laminar_factor = Some(pull);
+        let mut o = OilFromStiffness::new(&oil, 0.97).expect("k_β");
+        assert!(o.readable());
+        // a start-up transient first kicks θ to the soft (warm) side
+        for _ in 0..2_000 {
+            o.observe(0.90, 1e-3);
+        }
+        assert!(o.applied_c() > 50.0, "{}", o.applied_c());
+        let read = follow(&mut o, &oil, pull, 35.0);
+        assert!((read - 35.0).abs() <= OIL_ESTIMATE_STEP_K, "{read}");
+        // θ tells the temperature from the range's cold end to where L
+        // steepens: beyond it the reading stops, as uncertain as the rest
+        let (lo, hi) = o.readable_range_c();
+        assert!(
+            lo == 20.0 - OIL_RANGE_MARGIN_K && (50.0..60.0).contains(&hi),
+            "{lo}..{hi}"
+        );
+        let warm = follow(&mut o, &oil, pull, 62.0);
+        assert!((warm - hi).abs() <= OIL_ESTIMATE_STEP_K, "{warm}");
+        assert!(
+            o.sigma_k(0.0) >= 60.0 + OIL_RANGE_MARGIN_K - hi,
+            "{}",
+            o.sigma_k(0.0)
+        );
+    }
+
+    #[test]
+    fn a_pull_that_cancels_the_stiffness_signal_leaves_the_temperature_unread() {
+        // a press whose valve leaks at the catalogue's maximum: θ −0.137 per unit of L
+        let mut oil = OilTemperature {
+            reference_c: 49.4,
+            ..OilTemperature::default()
+        };
+        oil.stiffness_per_laminar_factor = Some(-0.137);
+        let mut o = OilFromStiffness::new(&oil, 0.974).expect("k_β");
+        assert!(!o.readable());
+        assert_eq!(o.pull(), -0.137);
+        // whatever θ says, the model stays at the reference
+        for _ in 0..20_000 {
+            // (it says so once, as it settles)
+            assert!(o.observe(0.85, 1e-3).is_none_or(|t| t == 49.4));
+        }
+        assert_eq!(o.temperature_c(), 49.4);
+        // as uncertain as the farthest end of the range θ is read in (20 °C less the margin)
+        let widest = 49.4 - (20.0 - OIL_RANGE_MARGIN_K);
+        assert!((o.sigma_k(0.001) - widest).abs() < 1e-9, "{}", o.sigma_k(0.001));
+        // without the pull the same θ reads as warm oil
+        oil.stiffness_per_laminar_factor = None;
+        let mut plain = OilFromStiffness::new(&oil, 0.974).expect("k_β");
+        for _ in 0..20_000 {
+            plain.observe(0.85, 1e-3);
+        }
+        assert!(plain.temperature_c() > 60.0, "{}", plain.temperature_c());
     }
 
     #[test]

@@ -26,11 +26,13 @@ use config::Config;
 pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
 
 mod balances;
+mod laminar_pull;
 mod misreading;
 mod reach;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
+pub use laminar_pull::{laminar_pull, PROBE as LAMINAR_PROBE};
 pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
 
@@ -356,6 +358,13 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         ..
     } = trace;
     cfg.model.oil_temperature.reference_stiffness = theta;
+    cfg.model.oil_temperature.stiffness_per_laminar_factor = match theta {
+        Some(t) => laminar_pull(input, &cfg, t)?,
+        None => None,
+    };
+    if let Some(line) = oil_reading_line(&cfg.model.oil_temperature) {
+        eprintln!("{line}");
+    }
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     let (_, naming) = detect::thresholds(&cfg.classifier, c.naming_spreads_lpm(), c.crossings_per_s);
     let learned = Learned {
@@ -390,6 +399,28 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         fit,
     };
     Ok((cfg, record))
+}
+
+/// What commissioning says of reading the oil's temperature from θ under the
+/// oil law `oil` (its reference stiffness and the laminar flows' pull on
+/// θ set); `None` where θ is not read.
+fn oil_reading_line(oil: &model::params::OilTemperature) -> Option<String> {
+    let o = filter::oil::OilFromStiffness::new(oil, oil.reference_stiffness?)?;
+    let pull = format!(
+        "the leak filter's θ moves {:+.4} per unit of the laminar flows' factor (the valve's null leakage)",
+        o.pull()
+    );
+    Some(if o.readable() {
+        format!("oil temperature without temp_c: read from θ; {pull}, taken out of the reading")
+    } else {
+        format!(
+            "oil temperature without temp_c: not readable from θ on this rig: {pull}, which cancels more than {:.0} % of the stiffness' own change with temperature; the model stays at {:.1} °C and the thresholds widen for the whole operating range ({:.0}-{:.0} °C); a thermometer's temp_c lets it watch closer",
+            100.0 * (1.0 - filter::oil::READABLE_SHARE),
+            oil.reference_c,
+            oil.operating_min_c,
+            oil.operating_max_c
+        )
+    })
 }
 
 /// What one pass over the healthy recording gives: the config with the null
@@ -490,8 +521,18 @@ pub fn detectable_at(
     offsets_lpm: [f64; 3],
 ) -> [(f64, [f64; 3]); 3] {
     let oil = &model.oil_temperature;
+    // (where θ does not tell the temperature the model stays at the reference,
+    // as uncertain as the operating range, whatever the oil's temperature)
+    let unreadable = oil
+        .reference_stiffness
+        .and_then(|theta| filter::oil::OilFromStiffness::new(oil, theta))
+        .filter(|o| !o.readable());
     stated_temperatures_c(oil).map(|t| {
-        let (sigma, band) = filter::oil::null_leakage_band(model, t, filter::oil::settled_sigma_k(oil, t));
+        let (model_c, sigma_k) = match &unreadable {
+            Some(o) => (oil.reference_c, o.sigma_k(0.0)),
+            None => (t, filter::oil::settled_sigma_k(oil, t)),
+        };
+        let (sigma, band) = filter::oil::null_leakage_band(model, model_c, sigma_k);
         let widen = detect::oil_band_lpm(sigma, band, offsets_lpm);
         (t, std::array::from_fn(|k| thr[k] + widen[k]))
     })

@@ -56,6 +56,17 @@ schema::config_struct! {
             "times the model's bulk modulus",
             num!("a stiffness", 0.2, 2)
         ],
+        /// How far θ moves per unit of error in the model's laminar flows
+        /// (the valve's null leakage, the linear leaks), 1 per unit of their
+        /// factor (`commission` measures it on its recording). A valve that
+        /// leaks much at null pulls θ as a change of the oil's temperature
+        /// does: the temperature is read from θ with that pull taken out.
+        /// Absent: none.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub stiffness_per_laminar_factor: Option<f64> = None => [
+            "(1)",
+            num!("a change of stiffness per unit of laminar factor", -2, 2)
+        ],
     }
 }
 
