@@ -32,6 +32,7 @@ mod reach;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
+use laminar_pull::oil_reading_line;
 pub use laminar_pull::{laminar_pull, PROBE as LAMINAR_PROBE};
 pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
@@ -399,28 +400,6 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         fit,
     };
     Ok((cfg, record))
-}
-
-/// What commissioning says of reading the oil's temperature from θ under the
-/// oil law `oil` (its reference stiffness and the laminar flows' pull on
-/// θ set); `None` where θ is not read.
-fn oil_reading_line(oil: &model::params::OilTemperature) -> Option<String> {
-    let o = filter::oil::OilFromStiffness::new(oil, oil.reference_stiffness?)?;
-    let pull = format!(
-        "the leak filter's θ moves {:+.4} per unit of the laminar flows' factor (the valve's null leakage)",
-        o.pull()
-    );
-    Some(if o.readable() {
-        format!("oil temperature without temp_c: read from θ; {pull}, taken out of the reading")
-    } else {
-        format!(
-            "oil temperature without temp_c: not readable from θ on this rig: {pull}, which cancels more than {:.0} % of the stiffness' own change with temperature; the model stays at {:.1} °C and the thresholds widen for the whole operating range ({:.0}-{:.0} °C); a thermometer's temp_c lets it watch closer",
-            100.0 * (1.0 - filter::oil::READABLE_SHARE),
-            oil.reference_c,
-            oil.operating_min_c,
-            oil.operating_max_c
-        )
-    })
 }
 
 /// What one pass over the healthy recording gives: the config with the null

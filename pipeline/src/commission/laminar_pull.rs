@@ -2,7 +2,8 @@
 //! model's laminar flows (the valve's null leakage, the linear leaks): the
 //! recording replayed once more with those flows half again as large
 //! ([`PROBE`]). Without `temp_c` the filter reads the oil's temperature from
-//! θ with this pull taken out ([`filter::oil`]).
+//! θ with this pull taken out ([`filter::oil`]); `commission` says whether
+//! θ tells the temperature ([`oil_reading_line`]).
 
 use std::path::Path;
 
@@ -48,4 +49,26 @@ pub fn laminar_pull(input: &Path, cfg: &Config, theta: f64) -> Result<Option<f64
         l.coefficient *= 1.0 + PROBE;
     }
     Ok(mean_theta(input, &probed)?.map(|t| (t - theta) / PROBE))
+}
+
+/// What commissioning says of reading the oil's temperature from θ under the
+/// oil law `oil` (its reference stiffness and the laminar flows' pull on
+/// θ set); `None` where θ is not read.
+pub(super) fn oil_reading_line(oil: &model::params::OilTemperature) -> Option<String> {
+    let o = filter::oil::OilFromStiffness::new(oil, oil.reference_stiffness?)?;
+    let pull = format!(
+        "the leak filter's θ moves {:+.4} per unit of the laminar flows' factor (the valve's null leakage)",
+        o.pull()
+    );
+    Some(if o.readable() {
+        format!("oil temperature without temp_c: read from θ; {pull}, taken out of the reading")
+    } else {
+        format!(
+            "oil temperature without temp_c: not readable from θ on this rig: {pull}, which cancels more than {:.0} % of the stiffness' own change with temperature; the model stays at {:.1} °C and the thresholds widen for the whole operating range ({:.0}-{:.0} °C); a thermometer's temp_c lets it watch closer",
+            100.0 * (1.0 - filter::oil::READABLE_SHARE),
+            oil.reference_c,
+            oil.operating_min_c,
+            oil.operating_max_c
+        )
+    })
 }
