@@ -89,8 +89,8 @@ pub fn settled_sigma_k(oil: &OilTemperature, temp_c: f64) -> f64 {
 const MIN_BULK_PER_K: f64 = 1e-4;
 
 /// The share of the stiffness' own change with temperature (θ_ref·k_β per
-/// K) that must remain, all over the range θ is read in, once the laminar
-/// flows' pull on θ is taken out, for θ to tell the temperature (1): at half,
+/// K) that must remain, from the reference to where the reading stops, once
+/// the laminar flows' pull on θ is taken out, for θ to tell the temperature (1): at half,
 /// an error of θ reads as at most twice the temperature error it would on
 /// a rig without null leakage.
 pub const READABLE_SHARE: f64 = 0.5;
@@ -125,9 +125,10 @@ pub struct OilFromStiffness {
     /// temperature, the reference among them: the reading stays within.
     readable_points: (usize, usize),
     /// With a pull: θ_ref·(1 + k_β·(T − T_ref)) − s·L(T) at [`TABLE_POINTS`]
-    /// temperatures evenly from `lowest_c` to `highest_c`, and L(T) there (1).
+    /// temperatures evenly from `lowest_c` to `highest_c` (1).
     stiffness_less_pull: [f64; TABLE_POINTS],
-    laminar: [f64; TABLE_POINTS],
+    /// The oil law L(T) is taken from.
+    oil: OilTemperature,
     /// L at the temperature the model is at (1).
     laminar_applied: f64,
 }
@@ -157,11 +158,11 @@ impl OilFromStiffness {
             readable: true,
             readable_points: (0, TABLE_POINTS - 1),
             stiffness_less_pull: [0.0; TABLE_POINTS],
-            laminar: [1.0; TABLE_POINTS],
+            oil: *oil,
             laminar_applied: 1.0,
         };
         if pull != 0.0 {
-            o.tabulate(oil);
+            o.tabulate();
         }
         Some(o)
     }
@@ -176,13 +177,12 @@ impl OilFromStiffness {
     /// change with T in the stiffness' own direction, by at least
     /// [`READABLE_SHARE`] of θ_ref·k_β a kelvin, between every two points
     /// from the reference's out (the warm end goes first: L steepens there).
-    fn tabulate(&mut self, oil: &OilTemperature) {
+    fn tabulate(&mut self) {
         let own = self.theta_ref * self.bulk_per_k;
         for i in 0..TABLE_POINTS {
             let t = self.table_c(i);
-            self.laminar[i] = oil.factors(t).laminar_flow;
             self.stiffness_less_pull[i] = self.theta_ref * (1.0 + self.bulk_per_k * (t - self.reference_c))
-                - self.pull * self.laminar[i];
+                - self.pull * self.oil.factors(t).laminar_flow;
         }
         let step_k = (self.highest_c - self.lowest_c) / (TABLE_POINTS - 1) as f64;
         let h = &self.stiffness_less_pull;
@@ -199,7 +199,7 @@ impl OilFromStiffness {
             last += 1;
         }
         self.readable_points = (first, last);
-        self.laminar_applied = oil.factors(self.applied_c).laminar_flow;
+        self.laminar_applied = self.oil.factors(self.applied_c).laminar_flow;
     }
 
     /// The oil temperatures between which θ tells the temperature, °C (the
@@ -324,22 +324,10 @@ impl OilFromStiffness {
         }
         self.applied_c = t;
         if self.pull != 0.0 {
-            self.laminar_applied = self.laminar_at(t);
+            // (once a move of the model, not a sample)
+            self.laminar_applied = self.oil.factors(t).laminar_flow;
         }
         Some(t)
-    }
-
-    /// L at `temp_c` (°C) from the table, linearly between its points.
-    fn laminar_at(&self, temp_c: f64) -> f64 {
-        let span = self.highest_c - self.lowest_c;
-        if span <= 0.0 {
-            return self.laminar[0];
-        }
-        let x = ((temp_c - self.lowest_c) / span * (TABLE_POINTS - 1) as f64)
-            .clamp(0.0, (TABLE_POINTS - 1) as f64);
-        let i = (x.floor() as usize).min(TABLE_POINTS - 2);
-        let w = x - i as f64;
-        self.laminar[i] + w * (self.laminar[i + 1] - self.laminar[i])
     }
 }
 
@@ -430,203 +418,4 @@ pub fn oil_stiffness_line(theta: f64, sigma: f64, model_bulk_modulus_pa: f64) ->
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_stiffness_13_percent_down_reads_as_30_k_above_the_reference() {
-        let oil = OilTemperature {
-            reference_c: 30.0,
-            ..OilTemperature::default()
-        };
-        let mut o = OilFromStiffness::new(&oil, 1.0).expect("k_β −0.0045");
-        assert_eq!(o.observe(1.0, 1e-3), None);
-        // unsettled, the temperature is as unsure as half the span
-        assert!(o.sigma_k(0.0) >= 0.5 * OIL_ESTIMATE_SPAN_K);
-        let theta = 1.0 - 0.0045 * 30.0;
-        let mut last = None;
-        for _ in 0..200_000 {
-            last = o.observe(theta, 1e-3).or(last);
-        }
-        let t = last.expect("moved");
-        assert!((t - 60.0).abs() < OIL_ESTIMATE_STEP_K, "{t}");
-        assert!((o.temperature_c() - 60.0).abs() < 1e-6);
-        assert!(o.settled());
-        // θ's σ of 0.0045 is 1 K; k_β's share of the 30 K is 6 K
-        assert!((o.sigma_k(0.0045) - 1f64.hypot(0.2 * (o.applied_c() - 30.0))).abs() < 1e-9);
-        // a stiffness far below the law's range is held at the operating range's top (60 °C) and its margin
-        for _ in 0..200_000 {
-            o.observe(0.3, 1e-3);
-        }
-        assert!((o.applied_c() - (60.0 + OIL_RANGE_MARGIN_K)).abs() < OIL_ESTIMATE_STEP_K);
-        assert_eq!(o.observe(f64::NAN, 1e-3), None);
-        // and far above it, at the range's bottom (20 °C) and its margin
-        for _ in 0..200_000 {
-            o.observe(1.5, 1e-3);
-        }
-        assert!((o.applied_c() - (20.0 - OIL_RANGE_MARGIN_K)).abs() < OIL_ESTIMATE_STEP_K);
-    }
-
-    #[test]
-    fn the_temperature_read_from_theta_stays_within_the_span_and_takes_in_the_reference() {
-        // a wide operating range: the span about the reference binds
-        let wide = OilTemperature {
-            reference_c: 30.0,
-            operating_min_c: -30.0,
-            operating_max_c: 120.0,
-            ..OilTemperature::default()
-        };
-        let mut o = OilFromStiffness::new(&wide, 1.0).expect("k_β");
-        for _ in 0..200_000 {
-            o.observe(0.3, 1e-3);
-        }
-        assert!((o.applied_c() - (30.0 + OIL_ESTIMATE_SPAN_K)).abs() < OIL_ESTIMATE_STEP_K);
-        // commissioned warmer than the operating range's top: the reference stays readable
-        let warm = OilTemperature {
-            reference_c: 75.0,
-            ..OilTemperature::default()
-        };
-        let mut o = OilFromStiffness::new(&warm, 1.0).expect("k_β");
-        for _ in 0..20_000 {
-            o.observe(1.0, 1e-3);
-        }
-        assert!((o.temperature_c() - 75.0).abs() < 1e-9, "{}", o.temperature_c());
-        for _ in 0..200_000 {
-            o.observe(0.3, 1e-3);
-        }
-        assert!((o.temperature_c() - 75.0).abs() < 1e-9, "{}", o.temperature_c());
-    }
-
-    #[test]
-    fn the_laminar_factor_is_sure_at_the_reference_and_less_so_away_from_it() {
-        let oil = OilTemperature {
-            reference_c: 30.0,
-            ..OilTemperature::default()
-        };
-        let (f, s) = laminar_factor_with_sigma(&oil, 30.0, 0.0);
-        assert!((f - 1.0).abs() < 1e-12 && s.abs() < 1e-12);
-        let (f, s) = laminar_factor_with_sigma(&oil, 55.0, 0.0);
-        // ν(30)/ν(55) of an HLP 46 of VI 100 is about 3
-        assert!((2.8..3.3).contains(&f), "{f}");
-        assert!((s - VISCOSITY_LAW_UNCERTAINTY * (f - 1.0)).abs() < 1e-12);
-        let (_, s2) = laminar_factor_with_sigma(&oil, 55.0, 2.0);
-        // about 4 % a kelvin at 55 °C
-        assert!((s2 - s) / f > 0.06 && (s2 - s) / f < 0.1, "{}", (s2 - s) / f);
-    }
-
-    #[test]
-    fn an_oil_law_without_a_stiffness_slope_infers_nothing() {
-        let oil = OilTemperature {
-            bulk_modulus_per_k: 0.0,
-            ..OilTemperature::default()
-        };
-        assert!(OilFromStiffness::new(&oil, 1.0).is_none());
-        let oil = OilTemperature::default();
-        assert!(OilFromStiffness::new(&oil, f64::NAN).is_none());
-        // relative to the commissioning's θ: 0.9 there, 0.9·(1 − 0.0045·10) is 10 K warmer
-        let mut o = OilFromStiffness::new(&oil, 0.9).expect("a stiffness");
-        for _ in 0..100_000 {
-            o.observe(0.9 * (1.0 - 0.0045 * 10.0), 1e-3);
-        }
-        assert!((o.temperature_c() - 50.0).abs() < 1e-6, "{}", o.temperature_c());
-    }
-
-    /// θ as the filter gives it for oil at `true_c` (°C) with the model set
-    /// to `applied_c`: the stiffness' change and the pull `pull` of the
-    /// laminar flows' error.
-    fn theta_seen(oil: &OilTemperature, theta_ref: f64, pull: f64, true_c: f64, applied_c: f64) -> f64 {
-        let l = |t: f64| oil.factors(t).laminar_flow;
-        theta_ref * (1.0 + oil.bulk_modulus_per_k * (true_c - oil.reference_c))
-            + pull * (l(applied_c) - l(true_c))
-    }
-
-    /// Follows θ (1 ms steps over 300 s) for oil at `true_c` (°C); returns
-    /// the temperature the model was set to at the end.
-    fn follow(o: &mut OilFromStiffness, oil: &OilTemperature, pull: f64, true_c: f64) -> f64 {
-        for _ in 0..300_000 {
-            let theta = theta_seen(oil, o.theta_ref, pull, true_c, o.applied_c());
-            o.observe(theta, 1e-3);
-        }
-        o.applied_c()
-    }
-
-    #[test]
-    fn with_the_laminar_pull_taken_out_the_reading_settles_on_the_oils_temperature() {
-        let mut oil = OilTemperature {
-            reference_c: 45.0,
-            ..OilTemperature::default()
-        };
-        // a pull that leaves about two thirds of the stiffness' own signal
-        let pull = -0.04;
-        oil.stiffness_per_laminar_factor = Some(pull);
-        let mut o = OilFromStiffness::new(&oil, 0.97).expect("k_β");
-        assert!(o.readable());
-        // a start-up transient first kicks θ to the soft (warm) side
-        for _ in 0..2_000 {
-            o.observe(0.90, 1e-3);
-        }
-        assert!(o.applied_c() > 50.0, "{}", o.applied_c());
-        let read = follow(&mut o, &oil, pull, 35.0);
-        assert!((read - 35.0).abs() <= OIL_ESTIMATE_STEP_K, "{read}");
-        // θ tells the temperature from the range's cold end to where L
-        // steepens: beyond it the reading stops, as uncertain as the rest
-        let (lo, hi) = o.readable_range_c();
-        assert!(
-            lo == 20.0 - OIL_RANGE_MARGIN_K && (50.0..60.0).contains(&hi),
-            "{lo}..{hi}"
-        );
-        let warm = follow(&mut o, &oil, pull, 62.0);
-        assert!((warm - hi).abs() <= OIL_ESTIMATE_STEP_K, "{warm}");
-        assert!(
-            o.sigma_k(0.0) >= 60.0 + OIL_RANGE_MARGIN_K - hi,
-            "{}",
-            o.sigma_k(0.0)
-        );
-    }
-
-    #[test]
-    fn a_pull_that_cancels_the_stiffness_signal_leaves_the_temperature_unread() {
-        // a press whose valve leaks at the catalogue's maximum: θ −0.137 per unit of L
-        let mut oil = OilTemperature {
-            reference_c: 49.4,
-            ..OilTemperature::default()
-        };
-        oil.stiffness_per_laminar_factor = Some(-0.137);
-        let mut o = OilFromStiffness::new(&oil, 0.974).expect("k_β");
-        assert!(!o.readable());
-        assert_eq!(o.pull(), -0.137);
-        // whatever θ says, the model stays at the reference
-        for _ in 0..20_000 {
-            // (it says so once, as it settles)
-            assert!(o.observe(0.85, 1e-3).is_none_or(|t| t == 49.4));
-        }
-        assert_eq!(o.temperature_c(), 49.4);
-        // as uncertain as the farthest end of the range θ is read in (20 °C less the margin)
-        let widest = 49.4 - (20.0 - OIL_RANGE_MARGIN_K);
-        assert!((o.sigma_k(0.001) - widest).abs() < 1e-9, "{}", o.sigma_k(0.001));
-        // without the pull the same θ reads as warm oil
-        oil.stiffness_per_laminar_factor = None;
-        let mut plain = OilFromStiffness::new(&oil, 0.974).expect("k_β");
-        for _ in 0..20_000 {
-            plain.observe(0.85, 1e-3);
-        }
-        assert!(plain.temperature_c() > 60.0, "{}", plain.temperature_c());
-    }
-
-    #[test]
-    fn the_oil_stiffness_line_names_theta_the_modulus_and_a_soft_rig() {
-        assert_eq!(oil_stiffness_line(f64::NAN, f64::NAN, 6.89e8), None);
-        assert_eq!(
-            oil_stiffness_line(0.98, 0.004, 6.89e8).unwrap(),
-            "oil stiffness: 0.980 ± 0.004 of the model's bulk modulus (675 of 689 MPa)"
-        );
-        let soft = oil_stiffness_line(0.74, 0.01, 6.89e8).unwrap();
-        assert!(
-            soft.starts_with(
-                "oil stiffness: 0.740 ± 0.010 of the model's bulk modulus (510 of 689 MPa): softer"
-            ),
-            "{soft}"
-        );
-        assert!(soft.contains("leakwatch calibrate"), "{soft}");
-    }
-}
+mod tests;

@@ -26,16 +26,16 @@ use config::Config;
 pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
 
 mod balances;
-mod laminar_pull;
 mod misreading;
 mod reach;
+mod theta;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
-use laminar_pull::oil_reading_line;
-pub use laminar_pull::{laminar_pull, PROBE as LAMINAR_PROBE};
 pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
+pub use theta::{laminar_pull, PROBE as LAMINAR_PROBE};
+use theta::{nothing_read_from_theta, oil_reading_line, ThetaMean};
 
 /// Reads `input` into the rows [`identify::identify`] takes.
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
@@ -253,10 +253,8 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         ));
     }
     let mut learner = CommissioningLearner::new(cfg.classifier.settle_s);
-    // the model as the recording's oil has it: nothing read from θ yet
-    let mut at_reference = cfg.clone();
-    at_reference.model.oil_temperature.reference_stiffness = None;
-    let (mut theta_sum, mut theta_n) = (0.0, 0u64);
+    let at_reference = nothing_read_from_theta(cfg);
+    let mut theta = ThetaMean::default();
     let mut fit = FitTrace::default();
     let mut responses = ResponseTrace::default();
     let mut misreading = MisreadingFit::default();
@@ -265,15 +263,12 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         fit.push(e);
         responses.push(e);
         misreading.push(e);
-        if e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0 {
-            theta_sum += e.bulk_scale;
-            theta_n += 1;
-        }
+        theta.push(e);
     })?;
     let c = learner
         .finish(&cfg.classifier, MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
-    let theta = (theta_n > 0).then(|| theta_sum / theta_n as f64);
+    let theta = theta.mean();
     let set_by = learner.thresholds_set_by_stretches(&cfg.classifier, &c);
     Ok(LearnedTrace {
         left_out_s: learner.left_out_s(&cfg.classifier),

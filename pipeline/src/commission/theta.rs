@@ -1,4 +1,5 @@
-//! How far the leak filter's oil stiffness θ moves per unit of error in the
+//! The leak filter's oil stiffness θ on the commissioning recording: its
+//! mean ([`ThetaMean`]), and how far it moves per unit of error in the
 //! model's laminar flows (the valve's null leakage, the linear leaks): the
 //! recording replayed once more with those flows half again as large
 //! ([`PROBE`]). Without `temp_c` the filter reads the oil's temperature from
@@ -10,6 +11,36 @@ use std::path::Path;
 use config::Config;
 use model::LeakLaw;
 
+/// `cfg` with the model as the recording's oil has it: nothing read from θ
+/// (no reference stiffness), so the leak filter's θ is the recording's own.
+pub(super) fn nothing_read_from_theta(cfg: &Config) -> Config {
+    let mut at_reference = cfg.clone();
+    at_reference.model.oil_temperature.reference_stiffness = None;
+    at_reference
+}
+
+/// The leak filter's mean θ over the settled estimates of a replay (1).
+#[derive(Debug, Default)]
+pub(super) struct ThetaMean {
+    sum: f64,
+    n: u64,
+}
+
+impl ThetaMean {
+    /// Takes θ of estimate `e` where it is finite and the filter settled.
+    pub(super) fn push(&mut self, e: &filter::Estimate) {
+        if e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0 {
+            self.sum += e.bulk_scale;
+            self.n += 1;
+        }
+    }
+
+    /// The mean (1); `None` without a settled θ.
+    pub(super) fn mean(&self) -> Option<f64> {
+        (self.n > 0).then(|| self.sum / self.n as f64)
+    }
+}
+
 /// The laminar flows' factor of the second pass is 1 + this (1): about
 /// what 12 K of warming does to them near 40 °C.
 pub const PROBE: f64 = 0.5;
@@ -18,16 +49,14 @@ pub const PROBE: f64 = 0.5;
 /// model at the reference temperature: nothing read from θ); `None`
 /// without a θ state.
 fn mean_theta(input: &Path, cfg: &Config) -> Result<Option<f64>, String> {
-    let mut at_reference = cfg.clone();
-    at_reference.model.oil_temperature.reference_stiffness = None;
-    let (mut sum, mut n) = (0.0, 0u64);
-    super::replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
-        if e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0 {
-            sum += e.bulk_scale;
-            n += 1;
-        }
-    })?;
-    Ok((n > 0).then(|| sum / n as f64))
+    let mut theta = ThetaMean::default();
+    super::replay_estimates(
+        input,
+        &nothing_read_from_theta(cfg),
+        cfg.leak_filter.clone(),
+        |e| theta.push(e),
+    )?;
+    Ok(theta.mean())
 }
 
 /// The pull s on θ per unit of the laminar flows' factor (1), measured on
