@@ -189,10 +189,11 @@ impl Estimator {
         let measured_p_range_pa = params.measured_pressure_range_pa();
         let mut params = params;
         if tuning.states < 10 {
-            // The thesis' layouts keep the thesis' model: no supply sag (its
+            // The thesis' layouts keep the thesis' model: no line drop, no supply sag (its
             // published start, 1e4 m² on the rod position, throws the state
             // where the sagged orifice law's finite differences overflow).
             params.supply_sag_pa_per_m3_s = 0.0;
+            params.line_resistance_pa_s_per_m3 = 0.0;
         }
         let params_at_reference = params.clone();
         let oil_from_stiffness = match params.oil_temperature.reference_stiffness {

@@ -188,7 +188,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     }
     e.predict_lean::<A>(x_pred, &f)?;
     offset_response.predict(&f);
-    let y_pred = ProcessModel::measure(e.state());
+    let y_pred = model.read(e.state());
     if usable {
         // The channels that update: less a lone outlier once the filter has converged.
         let mut updating = use_channel;
@@ -209,7 +209,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
         }
-        let y_post = ProcessModel::measure(e.state());
+        let y_post = model.read(e.state());
         for k in 0..3 {
             out.innovation[k] = if use_channel[k] { inn.nu[k] } else { f64::NAN };
             out.innovation_sigma[k] = inn.sigma[k];

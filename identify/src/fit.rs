@@ -228,17 +228,9 @@ pub(crate) fn identify_once(
     let (cl_with_line, with_line) = fit_flow_balance(p, &built, double_rod, &mut at_line, true)?;
     let line_resistance_pa_s_per_m3 = line_resistance(&with_line);
     let (null_leakage, fit) = if line_resistance_pa_s_per_m3.estimate().is_some() {
-        // The filters read the manifold's pressures as the chambers': the
-        // other unknowns are refitted without the line's drop, at the null
-        // leakage found with it (which the oil's temperature scales).
-        let mut at = model;
-        if let Some(c) = cl_with_line.estimate() {
-            at[C_L] = c.value;
-        }
-        (
-            cl_with_line,
-            two_pass(&built, &column_groups(double_rod, false).0, &at)?,
-        )
+        // The leak filter predicts the readings with the line's drop: every
+        // unknown is the fit's with it.
+        (cl_with_line, with_line)
     } else {
         // No line drop resolved: the fit without its column.
         fit_flow_balance(p, &built, double_rod, &mut model, false)?
@@ -307,14 +299,6 @@ fn column_groups(double_rod: bool, line: bool) -> (Vec<Vec<usize>>, Vec<Vec<usiz
         c
     };
     (cols, with_cl)
-}
-
-/// The weighted least squares over the columns `cols` around `model`: equal
-/// weights, then each chamber weighted by its residual RMS.
-fn two_pass(built: &Rows, cols: &[Vec<usize>], model: &[f64; UNKNOWNS]) -> Result<Fitted, String> {
-    let first = solve(built, cols, model, [1.0, 1.0]).ok_or_else(unsolvable)?;
-    let w = [1.0 / first.rms[0].max(1e-30), 1.0 / first.rms[1].max(1e-30)];
-    solve(built, cols, model, w).ok_or_else(unsolvable)
 }
 
 /// The error of a flow balance that cannot be solved.

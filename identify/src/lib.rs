@@ -158,7 +158,8 @@ pub struct Identification {
     /// The line resistance between the transducers (at the valve's manifold)
     /// and the chambers, Pa/(m³/s): the transducers read p1 + R·Q1 and
     /// p2 − R·Q2, Q the valve's flows. Fitted so that the line's drop does
-    /// not bias the null leakage; reported, not put into the filters.
+    /// not bias the null leakage; where resolved, every other value is the
+    /// fit's with it and [`Identification::apply`] puts it into the model.
     pub line_resistance_pa_s_per_m3: Found,
     /// Windows of [`WINDOW_SAMPLES`] used, and how many of them moved.
     pub windows: usize,
@@ -235,7 +236,8 @@ pub fn identify(
 
 impl Identification {
     /// `p` with what was identified put in: the area gradients scaled by the
-    /// flow gains, the null leakage, the bulk modulus, the supply sag, and the
+    /// flow gains, the null leakage, the bulk modulus, the supply sag, the line
+    /// resistance (0 where not resolved: the fit is then without it), and the
     /// oil law's reference temperature when the recording carried one (the
     /// null bias is left to the leak filter's commissioning, which identifies
     /// it with the filter's own model of the spool).
@@ -258,6 +260,12 @@ impl Identification {
         if let Some(s) = self.supply_sag_pa_per_m3_s.estimate() {
             out.supply_sag_pa_per_m3_s = s.value;
         }
+        // the other values were fitted with the line's drop where it was
+        // resolved, without it where not
+        out.line_resistance_pa_s_per_m3 = self
+            .line_resistance_pa_s_per_m3
+            .estimate()
+            .map_or(0.0, |r| r.value);
         if let Some(t) = self.oil_temp_c {
             out.oil_temperature.reference_c = t;
         }

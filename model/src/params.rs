@@ -166,6 +166,15 @@ schema::config_struct! {
         /// `commission` fits it to the healthy leak estimates (docs/plant.md,
         /// "Commissioning fits the transducers' misreading").
         pub pressure_misreading_pa: [f64; 2] = [0.0; 2] => ["Pa", num!("misreadings", -1e7, 1e7)],
+        /// Resistance of the lines between the chambers and the p1/p2
+        /// transducers, Pa/(m³/s), held over the oil's temperature (0: the
+        /// transducers read the chambers). Transducers at the valve's
+        /// manifold read p1 + R·Q1 and p2 − R·Q2; the leak filter predicts its
+        /// readings so. `commission` identifies it where the recording resolves it.
+        pub line_resistance_pa_s_per_m3: f64 = 0.0 => [
+            "Pa per m³/s",
+            num!("a line resistance", 0, 1e12)
+        ],
         /// Return (tank) pressure p_r, Pa (gauge).
         pub return_pressure_pa: f64 = 0.0 => ["Pa", num!("a pressure", 0, 1e8)],
         /// Laminar leakage conductance of each of the valve's four metering lands at

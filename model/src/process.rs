@@ -31,7 +31,8 @@ use crate::dynamics::LeakSet;
 use crate::params::ActuatorParams;
 
 mod discrete;
-pub use discrete::STOP_SUBSTEPS;
+use discrete::SpoolStep;
+pub use discrete::{spool_mean, spool_transition, STOP_SUBSTEPS};
 mod rhs;
 #[cfg(test)]
 mod tests;
@@ -100,6 +101,10 @@ pub struct ProcessModel {
     /// `params` are those they were derived from; [`ProcessModel::set_params`]
     /// derives them again).
     derived: rhs::Derived,
+    /// The spool's exact step over one sample, for `params` and `dt_s` as
+    /// they were derived (a model whose spool, period or sub-steps changed
+    /// computes it afresh in every step).
+    spool_step: SpoolStep,
 }
 
 /// The continuous right-hand side and its Jacobian at one state.
@@ -117,6 +122,7 @@ impl ProcessModel {
         let leaks = LeakSet::from_params(&params);
         let p_max_pa = 1.5 * params.supply_pressure_pa;
         let derived = rhs::Derived::of(&params);
+        let spool_step = SpoolStep::of(params.spool_natural_freq_rad_s, params.spool_damping_ratio, dt_s);
         ProcessModel {
             params,
             dt_s,
@@ -125,6 +131,7 @@ impl ProcessModel {
             p_min_pa: -1.0e5,
             p_max_pa,
             derived,
+            spool_step,
         }
     }
 
@@ -134,6 +141,12 @@ impl ProcessModel {
     pub fn params_changed(&mut self) {
         self.leaks = LeakSet::from_params(&self.params);
         self.derived = rhs::Derived::of(&self.params);
+        let h = self.dt_s / f64::from(self.substeps.max(1));
+        self.spool_step = SpoolStep::of(
+            self.params.spool_natural_freq_rad_s,
+            self.params.spool_damping_ratio,
+            h,
+        );
     }
 
     /// The nominal pressure drop at which the 10-state layout's leak sizes are given, Pa (p_s/2).
@@ -158,6 +171,23 @@ impl ProcessModel {
     #[inline]
     pub fn measure<const N: usize>(s: &SVector<f64, N>) -> SVector<f64, N_MEAS> {
         SVector::<f64, N_MEAS>::new(s[3], s[1], s[2])
+    }
+
+    /// What the transducers read of a state, y = [x, p1, p2] (m, Pa, Pa): the
+    /// chambers' pressures plus the line's laminar drop between them and the
+    /// transducers, R·Q1 into chamber 1 and −R·Q2 out of chamber 2, with R the
+    /// model's `line_resistance_pa_s_per_m3` (0: the transducers read the
+    /// chambers, [`Self::measure`]). H stays the selector: R·∂Q/∂x is left out.
+    #[inline]
+    pub fn read<const N: usize>(&self, s: &SVector<f64, N>) -> SVector<f64, N_MEAS> {
+        let mut y = Self::measure(s);
+        let r = self.params.line_resistance_pa_s_per_m3;
+        if r > 0.0 {
+            let q = crate::dynamics::valve_flows(&self.params, s[0], s[1], s[2]);
+            y[1] += r * q.q1_m3_s;
+            y[2] -= r * q.q2_m3_s;
+        }
+        y
     }
 
     /// The states the measurement y = [x, p1, p2] reads, in its order (H is

@@ -107,12 +107,15 @@ pub(super) fn flow_balance(
     out.notes.push(match &id.line_resistance_pa_s_per_m3 {
         identify::Found::Identified(e) => format!(
             "  line resistance, transducers to chambers: {:.0} ± {:.0} MPa per m³/s (the line's drop, \
-             fitted beside the null leakage; reported, not put into the filters)",
+             fitted beside the null leakage; in the model: the leak filter predicts its readings with it)",
             e.value * 1e-6,
             e.sigma * 1e-6
         ),
         identify::Found::NotIdentifiable(why) => {
-            format!("  line resistance, transducers to chambers: not identifiable from this recording: {why}")
+            format!(
+                "  line resistance, transducers to chambers: not identifiable from this recording: {why}; \
+                 the model reads the chambers at the transducers (0)"
+            )
         }
     });
     out.notes.push(match &id.sample_jitter_s {

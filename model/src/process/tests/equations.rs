@@ -52,3 +52,44 @@ fn guard_clamps_unphysical_pressures() {
     assert_eq!(s[2], m.params.nominal_chamber_pressure_pa());
     assert!((s[3] - (m.params.x_max_m + 0.01)).abs() < 1e-12);
 }
+
+/// Transducers at the manifold read the chambers plus the line's drop: with
+/// the spool open to extend, p1 reads R·Q1 above chamber 1 and p2 reads R·Q2
+/// below chamber 2, Q the orifice law's flows (C_d·w·x_sp·√(2Δp/ρ), worked
+/// out here); with R = 0 the reading is the chambers'.
+#[test]
+fn manifold_transducers_read_the_lines_drop() {
+    let r = 2e8;
+    let p = ActuatorParams {
+        line_resistance_pa_s_per_m3: r,
+        ..ActuatorParams::default()
+    };
+    let (ps, rho, cd, w) = (
+        p.supply_pressure_pa,
+        p.oil_density_kg_m3,
+        p.discharge_coefficient,
+        p.area_gradient_m2_per_m,
+    );
+    let (x_sp, p1, p2) = (1e-4, 6e6, 4e6);
+    let s = SVector::<f64, 10>::from([x_sp, p1, p2, 0.3, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let q1 = cd * w * x_sp * (2.0 * (ps - p1) / rho).sqrt();
+    let q2 = cd * w * x_sp * (2.0 * p2 / rho).sqrt();
+    let y = ProcessModel::new(p.clone(), 1e-3).read(&s);
+    assert_eq!(y[0], 0.3);
+    assert!(
+        (y[1] - (p1 + r * q1)).abs() < 1e-6 * r * q1,
+        "{} against {}",
+        y[1],
+        p1 + r * q1
+    );
+    assert!(
+        (y[2] - (p2 - r * q2)).abs() < 1e-6 * r * q2,
+        "{} against {}",
+        y[2],
+        p2 - r * q2
+    );
+    // tens of kPa a third of the way open (a manifold shows 0.1-0.2 MPa at full flow)
+    assert!(r * q1 > 2e4 && r * q1 < 5e4, "{}", r * q1);
+    let at_ports = ProcessModel::new(ActuatorParams::default(), 1e-3);
+    assert_eq!(at_ports.read(&s), ProcessModel::measure(&s));
+}

@@ -208,3 +208,105 @@ fn the_symplectic_step_keeps_an_undamped_hydraulic_mode_and_forward_euler_grows_
     );
     assert!(forward > 100.0, "forward Euler: amplitude ×{forward}");
 }
+
+/// The layouts with leaks step the spool exactly (its dynamics are linear):
+/// after 1 ms from rest under a full command step, position and velocity
+/// match 1000 RK4 steps of 1 µs to 1e-9 of the step, with the null bias
+/// estimate's column (11 states) 1 − Φ₀₀ and −Φ₁₀; the thesis' 7 states keep
+/// forward Euler, whose spool overshoots: at ω_n·T = 0.7 it moves 17 % further.
+#[test]
+fn the_layouts_with_leaks_step_the_spool_exactly() {
+    let mut p = ActuatorParams::vertical_lift();
+    p.spool_natural_freq_rad_s = 700.0;
+    let m = ProcessModel::new(p.clone(), 1e-3);
+    let (wn, zeta, k) = (
+        p.spool_natural_freq_rad_s,
+        p.spool_damping_ratio,
+        p.spool_gain_m_per_v,
+    );
+    let u = 10.0;
+    // the reference: RK4 of the spool alone
+    let deriv = |y: [f64; 2]| {
+        [
+            y[1],
+            -2.0 * zeta * wn * y[1] - wn * wn * (y[0] - p.spool_null_bias_m - k * u),
+        ]
+    };
+    let mut y = [0.0, 0.0];
+    let h = 1e-6;
+    for _ in 0..1000 {
+        let k1 = deriv(y);
+        let k2 = deriv([y[0] + 0.5 * h * k1[0], y[1] + 0.5 * h * k1[1]]);
+        let k3 = deriv([y[0] + 0.5 * h * k2[0], y[1] + 0.5 * h * k2[1]]);
+        let k4 = deriv([y[0] + h * k3[0], y[1] + h * k3[1]]);
+        for i in 0..2 {
+            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+    let mut s = SVector::<f64, 11>::zeros();
+    (s[1], s[2], s[3]) = (8.0e6, 12.0e6, 0.2);
+    let (next, jac, _) = m.step(&s, u);
+    assert!((next[0] - y[0]).abs() < 1e-9 * k * u, "{} vs {}", next[0], y[0]);
+    assert!(
+        (next[5] - y[1]).abs() < 1e-9 * k * u * wn,
+        "{} vs {}",
+        next[5],
+        y[1]
+    );
+    let phi = spool_transition(wn, zeta, 1e-3);
+    assert_eq!(jac[(0, 0)], phi[0][0]);
+    assert_eq!(jac[(5, 5)], phi[1][1]);
+    assert!((jac[(0, I_BIAS)] - (1.0 - phi[0][0])).abs() < 1e-15);
+    assert!((jac[(5, I_BIAS)] + phi[1][0]).abs() < 1e-12 * wn);
+    assert_eq!(jac[(0, 1)], 0.0);
+    // the thesis' 7 states: forward Euler, whose spool overshoots the exact one's peak
+    let (mut exact, mut euler) = (s, SVector::<f64, 7>::from_iterator(s.iter().take(7).copied()));
+    let (mut exact_peak, mut euler_peak) = (0.0f64, 0.0f64);
+    for _ in 0..20 {
+        exact = m.step(&exact, u).0;
+        euler = m.step(&euler, u).0;
+        exact_peak = exact_peak.max(exact[0]);
+        euler_peak = euler_peak.max(euler[0]);
+    }
+    let rest = p.spool_null_bias_m + k * u;
+    let (exact_over, euler_over) = (exact_peak / rest - 1.0, euler_peak / rest - 1.0);
+    // ζ = 0.7: the exact overshoot is e^(−πζ/√(1−ζ²)) = 4.6 %
+    assert!((exact_over - 0.046).abs() < 0.005, "exact overshoot {exact_over}");
+    assert!(euler_over > 0.1, "Euler overshoot {euler_over}");
+}
+
+/// The spool's transition matrix is exp(A·h) on both sides of critical
+/// damping and at it: its columns solve the spool's equation (checked by
+/// Φ(2h) = Φ(h)², and Φ(h) ≈ I + A·h + A²h²/2 for small h).
+#[test]
+fn the_spools_transition_is_the_matrix_exponential() {
+    for zeta in [0.3, 0.7, 1.0, 1.5] {
+        let wn = 700.0;
+        let a = [[0.0, 1.0], [-wn * wn, -2.0 * zeta * wn]];
+        let mul = |x: [[f64; 2]; 2], y: [[f64; 2]; 2]| -> [[f64; 2]; 2] {
+            std::array::from_fn(|i| std::array::from_fn(|j| x[i][0] * y[0][j] + x[i][1] * y[1][j]))
+        };
+        let (one, two) = (spool_transition(wn, zeta, 1e-3), spool_transition(wn, zeta, 2e-3));
+        let squared = mul(one, one);
+        for i in 0..2 {
+            for j in 0..2 {
+                let scale = if i == 1 && j == 0 { wn * wn } else { 1.0 };
+                assert!(
+                    (squared[i][j] - two[i][j]).abs() < 1e-12 * scale.max(wn),
+                    "ζ {zeta}: {squared:?} {two:?}"
+                );
+            }
+        }
+        let h = 1e-6;
+        let small = spool_transition(wn, zeta, h);
+        let a2 = mul(a, a);
+        for i in 0..2 {
+            for j in 0..2 {
+                let taylor = if i == j { 1.0 } else { 0.0 } + a[i][j] * h + a2[i][j] * h * h / 2.0;
+                // (the next term, A³h³/6: under ((1 + 2ζ)·ω_n·h)³ in units of ω_n^(i−j))
+                let tol = ((1.0 + 2.0 * zeta) * wn * h).powi(3) * wn.powi(i as i32 - j as i32);
+                assert!((small[i][j] - taylor).abs() < tol, "ζ {zeta} [{i}][{j}]");
+            }
+        }
+    }
+}
