@@ -101,10 +101,11 @@ pub struct ProcessModel {
     /// `params` are those they were derived from; [`ProcessModel::set_params`]
     /// derives them again).
     derived: rhs::Derived,
-    /// The spool's exact step over one sample, for `params` and `dt_s` as
-    /// they were derived (a model whose spool, period or sub-steps changed
-    /// computes it afresh in every step).
-    spool_step: SpoolStep,
+    /// The spool's exact step over a free step's and over an end stop's
+    /// sub-step, for `params`, `dt_s` and `substeps` as they were derived (a
+    /// model whose spool, period or sub-steps changed since computes it
+    /// afresh in every step).
+    spool_steps: [SpoolStep; 2],
 }
 
 /// The continuous right-hand side and its Jacobian at one state.
@@ -122,7 +123,7 @@ impl ProcessModel {
         let leaks = LeakSet::from_params(&params);
         let p_max_pa = 1.5 * params.supply_pressure_pa;
         let derived = rhs::Derived::of(&params);
-        let spool_step = SpoolStep::of(params.spool_natural_freq_rad_s, params.spool_damping_ratio, dt_s);
+        let spool_steps = SpoolStep::for_steps(&params, dt_s, 1);
         ProcessModel {
             params,
             dt_s,
@@ -131,7 +132,7 @@ impl ProcessModel {
             p_min_pa: -1.0e5,
             p_max_pa,
             derived,
-            spool_step,
+            spool_steps,
         }
     }
 
@@ -141,12 +142,7 @@ impl ProcessModel {
     pub fn params_changed(&mut self) {
         self.leaks = LeakSet::from_params(&self.params);
         self.derived = rhs::Derived::of(&self.params);
-        let h = self.dt_s / f64::from(self.substeps.max(1));
-        self.spool_step = SpoolStep::of(
-            self.params.spool_natural_freq_rad_s,
-            self.params.spool_damping_ratio,
-            h,
-        );
+        self.spool_steps = SpoolStep::for_steps(&self.params, self.dt_s, self.substeps);
     }
 
     /// The nominal pressure drop at which the 10-state layout's leak sizes are given, Pa (p_s/2).

@@ -255,6 +255,17 @@ impl SpoolStep {
             psi: spool_mean(wn, zeta, h),
         }
     }
+
+    /// The steps of `params`' spool over a free step and over an end stop's
+    /// sub-step at sample period `dt_s` (s) with `substeps` sub-steps.
+    pub(crate) fn for_steps(
+        params: &crate::params::ActuatorParams,
+        dt_s: f64,
+        substeps: u32,
+    ) -> [SpoolStep; 2] {
+        let (wn, zeta) = (params.spool_natural_freq_rad_s, params.spool_damping_ratio);
+        [substeps.max(1), substeps.max(STOP_SUBSTEPS)].map(|n| SpoolStep::of(wn, zeta, dt_s / f64::from(n)))
+    }
 }
 
 impl ProcessModel {
@@ -265,10 +276,9 @@ impl ProcessModel {
     fn spool_step_for(&self, h: f64) -> SpoolStep {
         let p = &self.params;
         let key = [p.spool_natural_freq_rad_s, p.spool_damping_ratio, h];
-        if self.spool_step.key == key {
-            self.spool_step
-        } else {
-            SpoolStep::of(key[0], key[1], key[2])
+        match self.spool_steps.iter().find(|s| s.key == key) {
+            Some(s) => *s,
+            None => SpoolStep::of(key[0], key[1], key[2]),
         }
     }
 }
