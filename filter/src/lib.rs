@@ -203,9 +203,7 @@ impl Estimator {
             _ => None,
         };
         let mut model = ProcessModel::new(params, tuning.sample_period_s);
-        model.substeps = tuning.substeps;
-        // (the spool's steps for these sub-steps)
-        model.params_changed();
+        model.set_substeps(tuning.substeps);
         let filter = match tuning.states {
             6 => Filter::S6(make_filter::<6, 8>(&tuning, &model, None)),
             7 => Filter::S7(make_filter::<7, 8>(&tuning, &model, None)),

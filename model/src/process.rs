@@ -89,7 +89,8 @@ pub struct ProcessModel {
     pub params: ActuatorParams,
     /// Sample period T, s.
     pub dt_s: f64,
-    /// Euler sub-steps per sample (1 = the thesis' plain forward Euler).
+    /// Euler sub-steps per sample (1 = the thesis' plain forward Euler); set
+    /// with [`Self::set_substeps`], which keeps the spool's steps for them.
     pub substeps: u32,
     /// Leaks that are part of the model itself (from `params.leaks`).
     pub leaks: LeakSet,
@@ -134,6 +135,13 @@ impl ProcessModel {
             derived,
             spool_steps,
         }
+    }
+
+    /// Sets the Euler sub-steps per sample (`substeps`) and derives the
+    /// spool's steps for them. Allocates nothing.
+    pub fn set_substeps(&mut self, substeps: u32) {
+        self.substeps = substeps;
+        self.params_changed();
     }
 
     /// Derives what the model keeps from `params` again (its own leaks and the
