@@ -137,6 +137,20 @@ impl ProcessModel {
         }
     }
 
+    /// The spool's null bias at state `s`, m: the model's plus the bias
+    /// state's in the layouts that estimate it (11 and 12 states).
+    #[inline(always)]
+    pub(crate) fn spool_bias_m<const N: usize>(&self, s: &SVector<f64, N>) -> f64 {
+        self.params.spool_null_bias_m + if N >= 11 { s[I_BIAS] } else { 0.0 }
+    }
+
+    /// Where the spool comes to rest under the command `u_v` (V) held, m:
+    /// its null bias at `s` plus k_sp·u.
+    #[inline(always)]
+    pub(crate) fn spool_rest_m<const N: usize>(&self, s: &SVector<f64, N>, u_v: f64) -> f64 {
+        self.spool_bias_m(s) + self.params.spool_gain_m_per_v * u_v
+    }
+
     /// Sets the Euler sub-steps per sample (`substeps`) and derives the
     /// spool's steps for them. Allocates nothing.
     pub fn set_substeps(&mut self, substeps: u32) {

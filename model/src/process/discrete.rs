@@ -112,10 +112,8 @@ impl ProcessModel {
             self.linearise_into(s, u_v, f, a);
             return;
         }
-        let p = &self.params;
         let psi = spool.psi;
-        let bias = p.spool_null_bias_m + if N >= 11 { s[I_BIAS] } else { 0.0 };
-        let rest = bias + p.spool_gain_m_per_v * u_v;
+        let rest = self.spool_rest_m(s, u_v);
         let mut at = *s;
         at[0] = rest + psi[0] * (s[0] - rest) + psi[1] * s[5];
         self.linearise_into(&at, u_v, f, a);
@@ -145,10 +143,8 @@ impl ProcessModel {
         x: &mut SVector<f64, N>,
         jac: &mut SMatrix<f64, N, N>,
     ) {
-        let p = &self.params;
         let phi = spool.phi;
-        let bias = p.spool_null_bias_m + if N >= 11 { s[I_BIAS] } else { 0.0 };
-        let rest = bias + p.spool_gain_m_per_v * u_v;
+        let rest = self.spool_rest_m(s, u_v);
         let (dx, v) = (s[0] - rest, s[5]);
         x[0] = rest + phi[0][0] * dx + phi[0][1] * v;
         x[5] = phi[1][0] * dx + phi[1][1] * v;

@@ -205,7 +205,7 @@ impl ProcessModel {
         let wn = p.spool_natural_freq_rad_s;
         f[0] = v_sp;
         a[(0, 5)] = 1.0;
-        let bias = p.spool_null_bias_m + if N >= 11 { s[I_BIAS] } else { 0.0 };
+        let bias = self.spool_bias_m(s);
         f[5] = -2.0 * p.spool_damping_ratio * wn * v_sp - wn * wn * (x_sp - bias)
             + p.spool_gain_m_per_v * wn * wn * u_v;
         if N >= 11 {
