@@ -18,6 +18,7 @@ pub mod oil;
 pub mod outlier;
 pub mod stage;
 mod step;
+pub mod track;
 pub mod tuning;
 
 use model::process::{ProcessModel, I_BULK, I_QE1, I_QI};
@@ -30,6 +31,7 @@ pub use estimate::Estimate;
 pub use mae::MovingMae;
 pub use oil::{oil_stiffness_line, OilFromStiffness};
 pub use stage::{EstimatorStage, StageEstimate};
+pub use track::{TrackWatch, Tracking, DIVERGED_SAMPLES};
 pub use tuning::{Init, Tuning};
 
 use step::{make_filter, predict_only, reanchor_filter, step_filter, StepInput, StepMemory};
@@ -148,8 +150,9 @@ pub struct Estimator {
     offset_response: BiasResponse,
     /// Readings far off the prediction, left out of the update.
     outliers: outlier::OutlierGate,
-    diverged_samples: u32,
-    /// A gap too long to bridge by prediction was seen: re-anchor on the next full sample.
+    /// Whether the filter follows the readings ([`track`]).
+    track: TrackWatch,
+    /// A gap too long to bridge, or a lost track ([`track`]): re-anchor on the next full sample.
     reanchor_pending: bool,
     /// The range a measured pressure must be in to be used, Pa
     /// ([`ActuatorParams::measured_pressure_range_pa`], as for CSV rows).
@@ -177,9 +180,6 @@ const FIRST_SLOW_STATE: usize = 7;
 
 /// Typical magnitudes used to scale the filter's internal algebra.
 const SCALE: [f64; MAX_LAYOUT_STATES] = [1e-5, 1e6, 1e6, 1e-3, 1e-2, 1e-2, 1e2, 1e-6, 1e-6, 1e-6, 1e-6, 1.0];
-
-/// Samples of persistent divergence before a reset (see [`Tuning::divergence_reset_m`]).
-pub const DIVERGED_SAMPLES: u32 = 200;
 
 impl Estimator {
     /// A stage for model parameters `params` and filter settings `tuning`.
@@ -225,7 +225,7 @@ impl Estimator {
             still_samples: 0,
             offset_response: BiasResponse::default(),
             outliers: outlier::OutlierGate::default(),
-            diverged_samples: 0,
+            track: TrackWatch::default(),
             reanchor_pending: false,
             measured_p_range_pa,
             counters: EstimatorCounters::default(),
@@ -484,7 +484,7 @@ impl Estimator {
             self.outliers.clear();
             self.t0_s = s.t_s;
             self.leaks_converged = false;
-            self.diverged_samples = 0;
+            self.track.clear();
             self.mae[0].clear();
             self.mae[1].clear();
             self.reanchor_pending = false;
@@ -501,7 +501,7 @@ impl Estimator {
             self.reanchor_pending = false;
             self.offset_response.clear();
             self.outliers.clear();
-            self.diverged_samples = 0;
+            self.track.clear();
             flags |= FLAG_REANCHORED;
         }
         // The command of a sample is held until the next one (a zero-order hold): the
@@ -564,16 +564,18 @@ impl Estimator {
                 self.mae[k].mean()
             };
         }
-        let diverged_limit = self.tuning.divergence_reset_m.max(20.0 * out.innovation_sigma[0]);
-        if self.tuning.divergence_reset_m > 0.0 && use_channel[0] && out.innovation[0].abs() > diverged_limit
+        let watch_lost = input.gate_outliers && self.tuning.init == Init::Measured;
+        let (nu_x, sigma_x) = (out.innovation[0], out.innovation_sigma[0]);
+        match self
+            .track
+            .after_sample(out.nis, watch_lost, nu_x, sigma_x, self.tuning.divergence_reset_m)
         {
-            self.diverged_samples += 1;
-            if self.diverged_samples >= DIVERGED_SAMPLES {
+            Tracking::Follows => {}
+            Tracking::Lost => self.reanchor_pending = true,
+            Tracking::Diverged => {
                 self.started = false;
                 self.counters.resets += 1;
             }
-        } else {
-            self.diverged_samples = 0;
         }
         if s.t_s - self.t0_s < self.tuning.convergence_time_s {
             flags |= FLAG_CONVERGING;
