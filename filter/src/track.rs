@@ -66,26 +66,27 @@ impl TrackWatch {
         divergence_reset_m: f64,
     ) -> Tracking {
         let limit_m = divergence_reset_m.max(20.0 * sigma_x_m);
-        if divergence_reset_m > 0.0 && nu_x_m.abs() > limit_m {
-            self.diverged_samples += 1;
-            if self.diverged_samples >= DIVERGED_SAMPLES {
-                self.clear();
-                return Tracking::Diverged;
-            }
-        } else {
-            self.diverged_samples = 0;
+        let off = divergence_reset_m > 0.0 && nu_x_m.abs() > limit_m;
+        if count_run(&mut self.diverged_samples, off, DIVERGED_SAMPLES) {
+            self.clear();
+            return Tracking::Diverged;
         }
-        if watch_lost && nis > LOST_TRACK_NIS {
-            self.lost_samples += 1;
-            if self.lost_samples >= LOST_TRACK_SAMPLES {
-                self.clear();
-                return Tracking::Lost;
-            }
-        } else {
-            self.lost_samples = 0;
+        if count_run(
+            &mut self.lost_samples,
+            watch_lost && nis > LOST_TRACK_NIS,
+            LOST_TRACK_SAMPLES,
+        ) {
+            self.clear();
+            return Tracking::Lost;
         }
         Tracking::Follows
     }
+}
+
+/// Counts `run` up while `beyond`, back to 0 otherwise; whether it has reached `limit`.
+fn count_run(run: &mut u32, beyond: bool, limit: u32) -> bool {
+    *run = if beyond { *run + 1 } else { 0 };
+    *run >= limit
 }
 
 #[cfg(test)]

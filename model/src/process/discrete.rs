@@ -54,44 +54,50 @@ impl ProcessModel {
         let mut f = SVector::<f64, N>::zeros();
         if n == 1 {
             // F = I + A·h, built in place (A is sparse: most entries stay 0 or 1).
-            self.linearise_over_step(s, u_v, &spool, &mut f, jac);
-            for ((x, s), f) in x.iter_mut().zip(s.iter()).zip(f.iter()) {
-                *x = s + f * h;
-            }
-            for v in jac.as_mut_slice() {
-                *v *= h;
-            }
-            if N >= 10 {
-                self.semi_implicit_velocity(s, x, jac);
-            }
-            for d in 0..N {
-                jac[(d, d)] += 1.0;
-            }
-            if N >= 10 {
-                self.exact_spool_step(s, u_v, &spool, x, jac);
-            }
+            self.euler_substep(s, u_v, &spool, h, &mut f, x, jac);
         } else {
-            *x = *s;
             let mut step_jac = SMatrix::<f64, N, N>::zeros();
+            let mut start = *s;
             for i in 0..n {
-                let start = *x;
-                self.linearise_over_step(&start, u_v, &spool, &mut f, &mut step_jac);
-                *x += f * h;
-                // I + A·h
-                step_jac *= h;
-                if N >= 10 {
-                    self.semi_implicit_velocity(&start, x, &mut step_jac);
-                }
-                for d in 0..N {
-                    step_jac[(d, d)] += 1.0;
-                }
-                if N >= 10 {
-                    self.exact_spool_step(&start, u_v, &spool, x, &mut step_jac);
-                }
+                self.euler_substep(&start, u_v, &spool, h, &mut f, x, &mut step_jac);
+                start = *x;
                 *jac = if i == 0 { step_jac } else { step_jac * *jac };
             }
         }
         self.keep_physical(x)
+    }
+
+    /// One (sub-)step of length `h` (s) from `s` under `u_v` (V): its end into
+    /// `x` and its F = I + A·h into `jac` (symplectic in the rod's velocity and
+    /// the spool stepped exactly in the layouts with leaks); `f` is scratch.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn euler_substep<const N: usize>(
+        &self,
+        s: &SVector<f64, N>,
+        u_v: f64,
+        spool: &SpoolStep,
+        h: f64,
+        f: &mut SVector<f64, N>,
+        x: &mut SVector<f64, N>,
+        jac: &mut SMatrix<f64, N, N>,
+    ) {
+        self.linearise_over_step(s, u_v, spool, f, jac);
+        for ((x, s), f) in x.iter_mut().zip(s.iter()).zip(f.iter()) {
+            *x = s + f * h;
+        }
+        for v in jac.as_mut_slice() {
+            *v *= h;
+        }
+        if N >= 10 {
+            self.semi_implicit_velocity(s, x, jac);
+        }
+        for d in 0..N {
+            jac[(d, d)] += 1.0;
+        }
+        if N >= 10 {
+            self.exact_spool_step(s, u_v, spool, x, jac);
+        }
     }
 
     /// f and A = ∂f/∂x for a (sub-)step (its spool step `spool`) from `s` under `u_v` (V).
