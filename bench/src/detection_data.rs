@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use crate::stats::quantile;
 use crate::truth_flow::{FloorClock, TrueFlows};
-use detect::{LeakEvent, Phase};
+use detect::{BlindSeconds, LeakEvent, Phase};
 use pipeline::{Chain, ChainSettings};
 use serde::Serialize;
 
@@ -71,6 +71,8 @@ pub struct DataOutcome {
     pub thresholds_sigma: [f64; 3],
     /// Seconds without evidence after arming (gaps, excursions, NIS), s.
     pub blind_s: f64,
+    /// The same seconds by cause, s.
+    pub blind_by_cause: BlindSeconds,
     /// Delay of the first alarm from the time the real flow reached the
     /// detector's floor for the leak's kind (`min_size_lpm` for an external leak,
     /// `min_internal_size_lpm` for an internal one), s (NaN if none; the onset for a step).
@@ -98,6 +100,8 @@ pub struct FileRun {
     pub thresholds_sigma: [f64; 3],
     /// Seconds without evidence after arming, s.
     pub blind_s: f64,
+    /// The same seconds by cause, s.
+    pub blind_by_cause: BlindSeconds,
     /// First time the logged leak flow (`q_leak`, never shown to the detector),
     /// or a run folder's `truth_flow.csv[.gz]`, reached the detector's floor for
     /// an external leak and for an internal one (`min_size_lpm`,
@@ -125,6 +129,10 @@ pub struct DataSummary {
     pub sensor_events: u32,
     /// Clean hours (healthy runs plus pre-onset time).
     pub clean_hours: f64,
+    /// Seconds without evidence after arming over every run, s.
+    pub blind_s: f64,
+    /// The same seconds by cause, s.
+    pub blind_by_cause: BlindSeconds,
     /// Every run.
     pub runs: Vec<DataOutcome>,
     /// Wall time, s.
@@ -260,6 +268,7 @@ pub fn detect_file(path: &Path, set: &ChainSettings) -> Result<FileRun, String> 
         thresholds_lpm: chain.classifier().leak_size.thresholds_lpm(),
         thresholds_sigma: chain.classifier().leak_size.thresholds_sigma(),
         blind_s: chain.classifier().leak_size.blind_s(),
+        blind_by_cause: chain.classifier().leak_size.blind_by_cause(),
         t_detectable_s: clock.reached_s(),
         floors_lpm: floors,
         size_window_s: set.classifier.size_window_s,
@@ -297,6 +306,7 @@ pub fn score_run(truth: Truth, run: &FileRun) -> DataOutcome {
         thresholds_lpm: run.thresholds_lpm,
         thresholds_sigma: run.thresholds_sigma,
         blind_s: run.blind_s,
+        blind_by_cause: run.blind_by_cause,
         delay_after_detectable_s: f64::NAN,
         true_flow_lpm: [f64::NAN; 2],
     };
@@ -429,11 +439,17 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
     let false_alarms = runs.iter().map(|r| r.false_alarms).sum();
     let sensor_events = runs.iter().map(|r| r.sensor_events).sum();
     let clean_hours = runs.iter().map(|r| r.clean_s).sum::<f64>() / 3600.0;
+    let mut blind_by_cause = BlindSeconds::default();
+    for r in &runs {
+        blind_by_cause += r.blind_by_cause;
+    }
     DataSummary {
         by_size,
         false_alarms,
         sensor_events,
         clean_hours,
+        blind_s: runs.iter().map(|r| r.blind_s).sum(),
+        blind_by_cause,
         runs,
         wall_s,
     }
@@ -522,8 +538,15 @@ pub fn data_markdown(r: &DataSummary) -> String {
          the truth's: its flow after the ramp reached linearly over `ramp_s`. \
          The first alarm may say `leak` with its kind pending; \"kind named after\" is the delay of the \
          first alarm that names a kind, the kind scored.\n\nSensor events in the same time: {} (no run has a \
-         sensor fault).\n",
-        r.false_alarms, r.clean_hours, r.sensor_events
+         sensor fault).\n\nWithout evidence after arming: {:.1} s over all runs ({}).\n",
+        r.false_alarms,
+        r.clean_hours,
+        r.sensor_events,
+        r.blind_s,
+        match r.blind_by_cause.describe() {
+            d if d.is_empty() => "none".to_string(),
+            d => d,
+        }
     ));
     s
 }

@@ -7,12 +7,15 @@ use crate::track::{Active, Arming, Stats};
 use crate::{signatures_with, ClassifierConfig, EventKind, LeakEvent, Phase, M3_S_PER_LPM};
 use filter::Estimate;
 
+mod blind;
 mod decide;
 mod evidence;
 mod healthy;
 mod step;
 mod stretch;
 
+use blind::BlindCauses;
+pub use blind::{BlindCause, BlindSeconds};
 pub use healthy::CommissioningLearner;
 use healthy::{HealthyRecord, RunningSpread};
 pub use stretch::{Stretch, STRETCH_SHARE, STRETCH_THRESHOLD_RATIO};
@@ -83,6 +86,8 @@ pub struct LeakSizeDetector {
     reacquire_after_s: f64,
     /// Seconds without evidence since the detector armed (gaps, resets, excursions, NIS), s.
     blind_s: f64,
+    /// The same seconds, charged to their causes.
+    blind_causes: BlindCauses,
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
     flow_factor: [f64; 3],
     last_low_s: [f64; 3],
@@ -184,6 +189,7 @@ impl LeakSizeDetector {
             reversals_per_s: 0.0,
             reacquire_after_s: f64::NEG_INFINITY,
             blind_s: 0.0,
+            blind_causes: BlindCauses::default(),
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
             pending_rise_lpm: [0.0; 3],
@@ -199,6 +205,7 @@ impl LeakSizeDetector {
     /// No leak evidence before `t_s` (s): a reading the filter took in was an outlier.
     pub fn hold_evidence_until(&mut self, t_s: f64) {
         self.invalid_until_s = self.invalid_until_s.max(t_s);
+        self.blind_causes.hold(BlindCause::SuspectReading, t_s);
     }
 
     /// Whether the position reading may be frozen on a moving rod (the
@@ -260,6 +267,11 @@ impl LeakSizeDetector {
     /// Seconds in which no evidence was gathered after arming (gaps, resets, excursions, NIS), s.
     pub fn blind_s(&self) -> f64 {
         self.blind_s
+    }
+
+    /// The seconds of [`Self::blind_s`] by cause, s (they add up to it).
+    pub fn blind_by_cause(&self) -> BlindSeconds {
+        self.blind_causes.seconds()
     }
 
     /// The healthy offsets of the three hypothesis sizes learned in the warm-up, L/min.

@@ -52,8 +52,8 @@ mod track;
 pub use config::{ClassifierConfig, Commissioning};
 pub use events::{EventKind, LeakEvent, Phase};
 pub use leak_size::{
-    rice_threshold, thresholds, CommissioningLearner, LeakSizeDetector, Stretch, STRETCH_SHARE,
-    STRETCH_THRESHOLD_RATIO,
+    rice_threshold, thresholds, BlindCause, BlindSeconds, CommissioningLearner, LeakSizeDetector, Stretch,
+    STRETCH_SHARE, STRETCH_THRESHOLD_RATIO,
 };
 pub use mae::MaeDetector;
 pub use stage::Classifier;

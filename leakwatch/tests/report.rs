@@ -163,6 +163,20 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
         assert_eq!(row(&report, name), row(&html, name), "{name}");
     }
     assert!(report.contains("Leak alarms (0)"), "a healthy recording");
+    // the seconds without evidence by cause add up to the blind seconds, and
+    // the report gives summary.json's
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(replayed.join("summary.json")).unwrap()).unwrap();
+    let watch = &summary["watch"];
+    let causes = watch["blind_by_cause"].as_object().unwrap();
+    assert_eq!(causes.len(), 8, "{causes:?}");
+    let total: f64 = causes.values().map(|v| v.as_f64().unwrap()).sum();
+    assert!(
+        (total - watch["blind_s"].as_f64().unwrap()).abs() < 1e-6,
+        "{watch}"
+    );
+    let excursions = format!("{:.1}", causes["excursion_s"].as_f64().unwrap());
+    assert_eq!(row(&report, "excursions"), vec![excursions]);
     // the record holds the transducers' reach as the terminal says it; on
     // this rig x is watched (the e2e commissioning test: from 4.1 mm)
     let reach = err

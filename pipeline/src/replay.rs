@@ -13,11 +13,13 @@ use serde::Serialize;
 
 use crate::estimates_out::{EstimatesFormat, EstimatesWriter};
 use config::Config;
+pub use watch::Watch;
 use wiring::{replay_channels, replay_single_thread, Progress};
 
 pub mod figure;
 pub mod report;
 pub mod trace;
+mod watch;
 mod wiring;
 
 /// How the stages are connected.
@@ -119,24 +121,6 @@ pub struct ResidualRms {
     pub oil_outside_range_s: f64,
     /// Sample time it first was, s (NaN: never).
     pub first_oil_outside_range_s: f64,
-}
-
-/// How much of a run the leak-size detector watched: from arming to the end,
-/// less the time it took no evidence (gaps it could not bridge, resets,
-/// excursions, a filter that did not track).
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct Watch {
-    /// Length of the run, s (first to last sample).
-    pub run_s: f64,
-    /// When the detector armed (its thresholds learned or loaded), s; null if never.
-    pub armed_at_s: Option<f64>,
-    /// Seconds it watched (armed and taking evidence), s.
-    pub watched_s: f64,
-    /// Seconds after arming without evidence, s.
-    pub blind_s: f64,
-    /// Why it never armed (the `not-armed` event's detail), if it did not.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub not_armed: Option<String>,
 }
 
 /// The estimates file a replay wrote, in summary.json.
@@ -542,29 +526,6 @@ fn new_summary(req: &ReplayRequest) -> Summary {
             Wiring::SingleThread => "single-thread".into(),
         },
         ..Summary::default()
-    }
-}
-
-impl Watch {
-    /// What the detectors of `cls` watched of a replay from `first_t` to
-    /// `last_t` (s), with its `events` (a warm-up that never ended is one).
-    fn of(cls: &detect::Classifier, events: &[LeakEvent], first_t: f64, last_t: f64) -> Watch {
-        let armed_at_s = cls.leak_size.armed_at_s();
-        let blind_s = cls.leak_size.blind_s();
-        Watch {
-            run_s: if first_t.is_finite() {
-                (last_t - first_t).max(0.0)
-            } else {
-                0.0
-            },
-            armed_at_s,
-            watched_s: armed_at_s.map_or(0.0, |a| (last_t - a - blind_s).max(0.0)),
-            blind_s: if armed_at_s.is_some() { blind_s } else { 0.0 },
-            not_armed: events
-                .iter()
-                .find(|e| e.kind == detect::EventKind::NotArmed)
-                .map(|e| e.detail.to_string()),
-        }
     }
 }
 

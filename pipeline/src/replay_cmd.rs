@@ -283,14 +283,22 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
             );
             crate::status::set_not_watched();
         }
-        Some(armed) => eprintln!(
-            "watched {:.1} of {:.1} s ({:.0} %): armed at {:.1} s, {:.1} s without evidence after it",
-            w.watched_s,
-            w.run_s,
-            100.0 * w.watched_s / w.run_s.max(1e-9),
-            armed,
-            w.blind_s
-        ),
+        Some(armed) => {
+            let causes = w.blind_by_cause.describe();
+            eprintln!(
+                "watched {:.1} of {:.1} s ({:.0} %): armed at {:.1} s, {:.1} s without evidence after it{}",
+                w.watched_s,
+                w.run_s,
+                100.0 * w.watched_s / w.run_s.max(1e-9),
+                armed,
+                w.blind_s,
+                if causes.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({causes})")
+                }
+            )
+        }
     }
     let e = &s.estimates;
     eprintln!(

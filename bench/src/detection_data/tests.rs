@@ -51,6 +51,7 @@ fn a_run_is_scored_at_its_first_alarm_and_its_first_named_kind() {
         thresholds_lpm: [0.04; 3],
         thresholds_sigma: [5.0; 3],
         blind_s: 0.0,
+        blind_by_cause: detect::BlindSeconds::default(),
         t_detectable_s: [20.64, 20.96],
         floors_lpm: [0.04, 0.06],
         size_window_s: 2.0,

@@ -2,7 +2,7 @@
 //! measures rises from ([`Sight`]: how far it may trust the estimate), and the
 //! evidence of each leak kind ([`Evidence`]).
 
-use super::LeakSizeDetector;
+use super::{BlindCause, LeakSizeDetector};
 use crate::{misfits_with, EventKind, M3_S_PER_LPM, REACQUIRE_S};
 use filter::Estimate;
 
@@ -74,6 +74,7 @@ impl LeakSizeDetector {
         let excursion = self.excursion(e);
         if excursion {
             self.blind_until_s = self.blind_until_s.max(e.t_s + self.cfg.excursion_recovery_s);
+            self.blind_causes.hold(BlindCause::Excursion, self.blind_until_s);
         }
         // After a gap, a reset or while the filter is not tracking nothing counts, not
         // even a large rise; during an excursion only a very large one does.
@@ -84,6 +85,8 @@ impl LeakSizeDetector {
         let blind = invalid || misreading || e.t_s < self.blind_until_s;
         if blind {
             self.blind_s += dt_s;
+            self.blind_causes
+                .charge(e.t_s, dt_s, self.awaiting_convergence, misreading);
         }
         // A rise past `baseline_hold` of its threshold holds the baseline for up to
         // `baseline_hold_s`: a leak that opens over seconds is not absorbed before it

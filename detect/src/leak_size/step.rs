@@ -2,7 +2,7 @@
 //! then the baseline and the evidence (`evidence.rs`) and the decision
 //! (`decide.rs`: the alarm, kind pending or named, re-isolation, updates, clearing).
 
-use super::LeakSizeDetector;
+use super::{BlindCause, LeakSizeDetector};
 use crate::track::Arming;
 use crate::{EventKind, LeakEvent, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, NIS_RATIO_WINDOW_S};
 use filter::{Estimate, FLAG_CONVERGING, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED};
@@ -158,6 +158,12 @@ impl LeakSizeDetector {
         let recover = e.t_s + self.cfg.recovery_s;
         if e.flags & (FLAG_SKIPPED | FLAG_REANCHORED | FLAG_RESET) != 0 {
             self.invalid_until_s = self.invalid_until_s.max(recover);
+            let cause = if e.flags & (FLAG_SKIPPED | FLAG_RESET) != 0 {
+                BlindCause::Restart
+            } else {
+                BlindCause::Reanchored
+            };
+            self.blind_causes.hold(cause, recover);
             if e.flags & FLAG_RESET != 0 {
                 // The filter started again from its initial leak sizes: the baseline
                 // is taken again once it has settled. (After a gap the filter keeps
@@ -165,6 +171,8 @@ impl LeakSizeDetector {
                 // holds: taken again at one operating point, it would not be the
                 // average over all of them the thresholds were learned against.)
                 self.reacquire_after_s = self.invalid_until_s;
+                self.blind_causes
+                    .hold(BlindCause::Restart, self.reacquire_after_s + crate::REACQUIRE_S);
             }
         }
         if e.flags & FLAG_SKIPPED != 0 {
@@ -174,9 +182,11 @@ impl LeakSizeDetector {
         // states to drift on the others: no evidence until it has been back for a while.
         if e.residual.iter().any(|r| r.is_nan()) {
             self.invalid_until_s = self.invalid_until_s.max(recover);
+            self.blind_causes.hold(BlindCause::ChannelLeftOut, recover);
         }
         if e.nis.is_finite() && e.nis > self.cfg.nis_gate {
             self.invalid_until_s = self.invalid_until_s.max(recover);
+            self.blind_causes.hold(BlindCause::Nis, recover);
         }
         if e.nis.is_finite() {
             let nis = e.nis.min(1e6);
@@ -189,6 +199,7 @@ impl LeakSizeDetector {
             };
             if self.cfg.nis_ratio_gate > 0.0 && self.nis_avg > self.cfg.nis_ratio_gate * self.nis_healthy {
                 self.invalid_until_s = self.invalid_until_s.max(e.t_s);
+                self.blind_causes.hold(BlindCause::Nis, e.t_s);
             }
         }
         // The command's reversal rate is tracked only for the command-rate gate (off by default).
@@ -213,11 +224,16 @@ impl LeakSizeDetector {
                 // The leak estimates wander while the model cannot follow the input and
                 // relax slowly afterwards: take the baseline again once it is over.
                 self.reacquire_after_s = self.invalid_until_s;
+                self.blind_causes.hold(
+                    BlindCause::CommandRate,
+                    self.reacquire_after_s + crate::REACQUIRE_S,
+                );
             }
         }
         if self.awaiting_convergence {
             if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {
                 self.invalid_until_s = self.invalid_until_s.max(recover);
+                self.blind_causes.hold(BlindCause::Restart, recover);
             } else {
                 self.awaiting_convergence = false;
             }

@@ -292,3 +292,41 @@ fn a_suspect_frozen_position_holds_back_an_internal_leak_only() {
     let external = [0.3, 0.0, 0.0];
     assert!((10.0..10.3).contains(&at(first_raised_with_frozen_position(external, 12.0))));
 }
+
+#[test]
+fn the_seconds_without_evidence_are_charged_to_their_causes() {
+    // 20 s healthy, commissioned: an excursion of p1 to tank at 5-6 s, a NIS
+    // burst at 10 s, a re-anchoring at 14 s
+    let cfg = commissioned_run_config(0.03);
+    let (recovery_s, excursion_recovery_s) = (cfg.recovery_s, cfg.excursion_recovery_s);
+    let mut det = LeakSizeDetector::new(cfg);
+    for i in 0..20_000 {
+        let t = i as f64 * 1e-3;
+        let mut e = estimate(t, [0.0; 3]);
+        if (5.0..6.0).contains(&t) {
+            e.measured[1] = 0.0;
+        }
+        if i == 10_000 {
+            e.nis = 1e5;
+        }
+        if i == 14_000 {
+            e.flags = filter::FLAG_REANCHORED;
+        }
+        det.on_estimate(&e, &mut None);
+    }
+    let b = det.blind_by_cause();
+    let near = |a: f64, b: f64| (a - b).abs() < 0.01;
+    assert!(near(b.excursion_s, 1.0 + excursion_recovery_s), "{b:?}");
+    assert!(near(b.nis_s, recovery_s), "{b:?}");
+    assert!(near(b.reanchored_s, recovery_s), "{b:?}");
+    assert!(
+        near(b.total_s(), det.blind_s()),
+        "{b:?} against {}",
+        det.blind_s()
+    );
+    assert_eq!(
+        b.restart_s + b.sensor_named_s + b.channel_left_out_s,
+        0.0,
+        "{b:?}"
+    );
+}

@@ -255,6 +255,10 @@ impl ReplayReport<'_> {
             format!("{:.1}", lf.oil_outside_range_s),
             lf.first_oil_outside_range_s,
         );
+        h += "</table>\n<table><tr><th>seconds without evidence, by cause</th><th>s</th></tr>\n";
+        for (what, seconds) in w.blind_by_cause.named() {
+            h += &format!("<tr><td>{what}</td>{}</tr>\n", num(&format!("{seconds:.1}")));
+        }
         h += "</table>\n";
         if let Some(phrase) = cfg.commissioning.as_ref().and_then(|c| c.not_watched()) {
             let mut sentence = phrase.to_string();
