@@ -51,7 +51,7 @@ pub use event::offset_event;
 pub use floors::least_pressure_offset_pa;
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
-pub use rival::{EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S};
+pub use rival::{EPISODE_RIVAL_NOW_SHARE, EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S};
 
 use fit::{
     channel_of, is_drift, is_position, is_span, leak_directions, swing_of, without_reverse_internal,
@@ -259,6 +259,10 @@ pub struct OffsetWatch {
     leak_named: bool,
     /// Whether the window's offset vetoes leak evidence, held while it drifts.
     window_veto: VetoHold,
+    /// The last sample's rises in (w1, w2), L/min, and each hypothesis'
+    /// response then, as fitted (the reverse internal part left out).
+    last_rise: [f64; 2],
+    last_response: [[f64; 2]; HYPOTHESES],
 }
 
 impl OffsetWatch {
@@ -300,6 +304,8 @@ impl Default for OffsetWatch {
             baseline_step: 0.0,
             leak_named: false,
             window_veto: VetoHold::default(),
+            last_rise: [0.0; 2],
+            last_response: [[0.0; 2]; HYPOTHESES],
         }
     }
 }
@@ -492,6 +498,8 @@ impl OffsetWatch {
         }
         let rise3 = rise;
         let rise = without_reverse_internal([rise3[0], rise3[1]], factors, &mut hypotheses);
+        self.last_rise = rise;
+        self.last_response = hypotheses;
         let response = &hypotheses;
         // (the samples come at one period: the decay is computed once per period)
         if dt_s != self.keep_for.0 {

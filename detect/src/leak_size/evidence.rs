@@ -174,7 +174,8 @@ impl LeakSizeDetector {
         // Rises an offset on a transducer explains better than any leak are no leak
         // evidence; nor are those that a drifting transducer past its tolerance
         // explains as well as a leak does.
-        // No new leak is raised on an episode a growing misreading fits nearly as well.
+        // No new leak is raised on an episode a growing misreading fits at least as
+        // well, while it explains the rises now.
         let offset_like = misreading
             || self.offsets.vetoes()
             || self.offsets.rivals_leak(e.t_s)

@@ -2,7 +2,7 @@
 //! well holds the leak back; one that fits them nearly as well is said in the
 //! leak's event, so the operator is told which transducer to check.
 
-use super::fit::{channel_of, is_position, is_span};
+use super::fit::{channel_of, is_drift, is_position, is_span};
 use super::{OffsetWatch, OFFSET_CHANNEL_NAMES};
 
 /// How long an episode must have lasted before its misreading holds back a
@@ -11,9 +11,16 @@ use super::{OffsetWatch, OFFSET_CHANNEL_NAMES};
 pub const EPISODE_RIVAL_WEIGHT_S: f64 = 3.0;
 
 /// The share (1) of what the best leak's fit leaves under which an
-/// episode's misreading holds back a new leak; it vetoes all leak evidence
-/// under [`super::OFFSET_FIT_RATIO`].
-pub const EPISODE_RIVAL_RATIO: f64 = 0.7;
+/// episode's misreading holds back a new leak: a new leak is raised only
+/// where it fits the episode's rises better than the misreading does. The
+/// misreading vetoes all leak evidence under [`super::OFFSET_FIT_RATIO`].
+pub const EPISODE_RIVAL_RATIO: f64 = 1.0;
+
+/// The share (1) of the last sample's rises that an episode's misreading, at
+/// its fitted size, may leave unexplained and still hold back a new leak. A
+/// leak that steps in while a misreading's episode lasts adds a rise the
+/// misreading does not make now: it is raised, however well the episode fits.
+pub const EPISODE_RIVAL_NOW_SHARE: f64 = 0.5;
 
 impl OffsetWatch {
     /// Whether, at `t_s` (s), the window's best misreading fits the rises at
@@ -30,18 +37,37 @@ impl OffsetWatch {
         self.window_offset_fits(1.0) && self.past_tolerance(h) && !self.faster_than_a_drift(h, t_s)
     }
 
-    /// Whether the present episode has lasted [`EPISODE_RIVAL_WEIGHT_S`] and
-    /// a misreading of p1 or p2 (its response as given, standing or
-    /// drifting) leaves less than [`EPISODE_RIVAL_RATIO`] of what the best
-    /// leak's fit leaves: then no new leak is raised on its rises.
+    /// Whether the present episode has lasted [`EPISODE_RIVAL_WEIGHT_S`], a
+    /// misreading of p1 or p2 (its response as given, standing or drifting)
+    /// fits its rises at least as well as the best leak
+    /// ([`EPISODE_RIVAL_RATIO`]), and at its fitted size it explains the last sample's rises
+    /// ([`EPISODE_RIVAL_NOW_SHARE`]): then no new leak is raised on them.
     /// A misreading that grows shows for seconds with the flow before its
     /// rises reach a threshold; a leak's onset starts an episode of its own
-    /// and is raised within its first seconds.
+    /// and is raised within its first seconds, and one that steps in during
+    /// a misreading's episode adds a rise the misreading does not make.
     pub fn rivals_new_leak(&self) -> bool {
         self.episode
             .as_ref()
             .is_some_and(|f| f.w >= EPISODE_RIVAL_WEIGHT_S)
             && self.episode_fits(EPISODE_RIVAL_RATIO)
+            && self.episode_explains_now()
+    }
+
+    /// Whether the episode's best misreading, at its fitted size, explains the
+    /// last sample's rises: what it leaves of them is under
+    /// [`EPISODE_RIVAL_NOW_SHARE`] of their size.
+    pub(super) fn episode_explains_now(&self) -> bool {
+        let share = EPISODE_RIVAL_NOW_SHARE;
+        let (Some(f), Some(best)) = (&self.episode, &self.episode_best) else {
+            return false;
+        };
+        let h = best.h;
+        let b = f.coefficient(h);
+        let r = self.last_response[if is_drift(h) { channel_of(h) } else { h }];
+        let rise = self.last_rise;
+        let left = (rise[0] - b * r[0]).powi(2) + (rise[1] - b * r[1]).powi(2);
+        left < share * share * (rise[0].powi(2) + rise[1].powi(2))
     }
 
     /// Whether the misreading of hypothesis `h` fitted over the window is at

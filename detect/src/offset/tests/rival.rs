@@ -115,6 +115,32 @@ fn a_misreading_grown_over_a_long_episode_holds_back_a_new_leak() {
 }
 
 #[test]
+fn a_leak_stepping_in_during_a_misreadings_episode_is_not_held_back() {
+    // p2 drifting low at 5 kPa/s (the episode above); at 20 s a steady ext1
+    // leak of 0.06 L/min steps in beside it
+    let run = |seconds: f64, ext1_lpm: f64| {
+        drive(seconds, 0.0, |t| {
+            let [d1, d2] = cycle_responses(t);
+            let (b, q) = (-0.005 * t, if t >= 20.0 { ext1_lpm } else { 0.0 });
+            ([b * d2[0] + q, b * d2[1], b * d2[2]], [d1, d2], [0.0; 2])
+        })
+        .0
+    };
+    for seconds in [20.1, 20.2, 20.3, 20.5] {
+        let w = run(seconds, 0.06);
+        // the episode, long and mostly the drift's, fits a misreading at
+        // least as well as a leak
+        assert!(w.episode.as_ref().is_some_and(|f| f.w >= EPISODE_RIVAL_WEIGHT_S));
+        assert!(w.episode_fits(EPISODE_RIVAL_RATIO), "{seconds} s");
+        // but at its fitted size the misreading leaves most of the rise
+        // now: the leak's, not held back
+        assert!(!w.rivals_new_leak(), "{seconds} s");
+        // the drift alone, at the same moment, explains its rise now
+        assert!(run(seconds, 0.0).rivals_new_leak(), "{seconds} s");
+    }
+}
+
+#[test]
 fn a_leak_ramping_in_as_the_flow_grows_is_not_held_back_in_its_first_seconds() {
     // the rod starts from rest at 20 s: p2's response grows over 2 s as the
     // flow does, and an ext2 leak ramps in over the same 2 s; its rises fit
