@@ -204,8 +204,13 @@ impl LeakSizeDetector {
 
     /// No leak evidence before `t_s` (s): a reading the filter took in was an outlier.
     pub fn hold_evidence_until(&mut self, t_s: f64) {
-        self.invalid_until_s = self.invalid_until_s.max(t_s);
-        self.blind_causes.hold(BlindCause::SuspectReading, t_s);
+        self.invalid_until(BlindCause::SuspectReading, t_s);
+    }
+
+    /// No evidence before `until_s` (s), for `cause`.
+    fn invalid_until(&mut self, cause: BlindCause, until_s: f64) {
+        self.invalid_until_s = self.invalid_until_s.max(until_s);
+        self.blind_causes.hold(cause, until_s);
     }
 
     /// Whether the position reading may be frozen on a moving rod (the

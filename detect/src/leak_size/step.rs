@@ -157,13 +157,12 @@ impl LeakSizeDetector {
         // the filter tracking: evidence goes on (the NIS gate still watches).
         let recover = e.t_s + self.cfg.recovery_s;
         if e.flags & (FLAG_SKIPPED | FLAG_REANCHORED | FLAG_RESET) != 0 {
-            self.invalid_until_s = self.invalid_until_s.max(recover);
             let cause = if e.flags & (FLAG_SKIPPED | FLAG_RESET) != 0 {
                 BlindCause::Restart
             } else {
                 BlindCause::Reanchored
             };
-            self.blind_causes.hold(cause, recover);
+            self.invalid_until(cause, recover);
             if e.flags & FLAG_RESET != 0 {
                 // The filter started again from its initial leak sizes: the baseline
                 // is taken again once it has settled. (After a gap the filter keeps
@@ -181,12 +180,10 @@ impl LeakSizeDetector {
         // A channel left out of the update (NaN or out of range) leaves the leak
         // states to drift on the others: no evidence until it has been back for a while.
         if e.residual.iter().any(|r| r.is_nan()) {
-            self.invalid_until_s = self.invalid_until_s.max(recover);
-            self.blind_causes.hold(BlindCause::ChannelLeftOut, recover);
+            self.invalid_until(BlindCause::ChannelLeftOut, recover);
         }
         if e.nis.is_finite() && e.nis > self.cfg.nis_gate {
-            self.invalid_until_s = self.invalid_until_s.max(recover);
-            self.blind_causes.hold(BlindCause::Nis, recover);
+            self.invalid_until(BlindCause::Nis, recover);
         }
         if e.nis.is_finite() {
             let nis = e.nis.min(1e6);
@@ -198,8 +195,7 @@ impl LeakSizeDetector {
                 nis
             };
             if self.cfg.nis_ratio_gate > 0.0 && self.nis_avg > self.cfg.nis_ratio_gate * self.nis_healthy {
-                self.invalid_until_s = self.invalid_until_s.max(e.t_s);
-                self.blind_causes.hold(BlindCause::Nis, e.t_s);
+                self.invalid_until(BlindCause::Nis, e.t_s);
             }
         }
         // The command's reversal rate is tracked only for the command-rate gate (off by default).
@@ -220,7 +216,7 @@ impl LeakSizeDetector {
             }
             self.reversals_per_s += (impulse - self.reversals_per_s * dt_s) / COMMAND_RATE_WINDOW_S;
             if 0.5 * self.reversals_per_s > self.cfg.max_command_hz {
-                self.invalid_until_s = self.invalid_until_s.max(e.t_s + 1.0);
+                self.invalid_until(BlindCause::CommandRate, e.t_s + 1.0);
                 // The leak estimates wander while the model cannot follow the input and
                 // relax slowly afterwards: take the baseline again once it is over.
                 self.reacquire_after_s = self.invalid_until_s;
@@ -232,8 +228,7 @@ impl LeakSizeDetector {
         }
         if self.awaiting_convergence {
             if e.flags & (FLAG_CONVERGING | FLAG_RESET) != 0 {
-                self.invalid_until_s = self.invalid_until_s.max(recover);
-                self.blind_causes.hold(BlindCause::Restart, recover);
+                self.invalid_until(BlindCause::Restart, recover);
             } else {
                 self.awaiting_convergence = false;
             }
