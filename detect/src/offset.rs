@@ -259,10 +259,11 @@ pub struct OffsetWatch {
     leak_named: bool,
     /// Whether the window's offset vetoes leak evidence, held while it drifts.
     window_veto: VetoHold,
-    /// The last sample's rises in (w1, w2), L/min, and each hypothesis'
-    /// response then, as fitted (the reverse internal part left out).
+    /// The last sample's rises in (w1, w2), L/min, and the episode's best
+    /// misreading's response then (per unit of its coefficient), as fitted
+    /// (the reverse internal part left out).
     last_rise: [f64; 2],
-    last_response: [[f64; 2]; HYPOTHESES],
+    episode_best_response: [f64; 2],
 }
 
 impl OffsetWatch {
@@ -305,7 +306,7 @@ impl Default for OffsetWatch {
             leak_named: false,
             window_veto: VetoHold::default(),
             last_rise: [0.0; 2],
-            last_response: [[0.0; 2]; HYPOTHESES],
+            episode_best_response: [0.0; 2],
         }
     }
 }
@@ -499,7 +500,6 @@ impl OffsetWatch {
         let rise3 = rise;
         let rise = without_reverse_internal([rise3[0], rise3[1]], factors, &mut hypotheses);
         self.last_rise = rise;
-        self.last_response = hypotheses;
         let response = &hypotheses;
         // (the samples come at one period: the decay is computed once per period)
         if dt_s != self.keep_for.0 {
@@ -525,6 +525,11 @@ impl OffsetWatch {
             .as_ref()
             .filter(|f| f.w >= EPISODE_MIN_S)
             .map(|f| f.best_offset(false, &self.directions));
+        if let Some(best) = &self.episode_best {
+            // (a drifting offset's response now is its channel's as given)
+            let h = best.h;
+            self.episode_best_response = response[if is_drift(h) { channel_of(h) } else { h }];
+        }
         let smallest = thresholds_lpm.iter().cloned().fold(f64::INFINITY, f64::min);
         self.smallest_threshold_lpm = smallest;
         let left = (self.window_best.left, self.window_best.leak_left);

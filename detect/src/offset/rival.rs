@@ -2,7 +2,7 @@
 //! well holds the leak back; one that fits them nearly as well is said in the
 //! leak's event, so the operator is told which transducer to check.
 
-use super::fit::{channel_of, is_drift, is_position, is_span};
+use super::fit::{channel_of, is_position, is_span};
 use super::{OffsetWatch, OFFSET_CHANNEL_NAMES};
 
 /// How long an episode must have lasted before its misreading holds back a
@@ -64,7 +64,7 @@ impl OffsetWatch {
         };
         let h = best.h;
         let b = f.coefficient(h);
-        let r = self.last_response[if is_drift(h) { channel_of(h) } else { h }];
+        let r = self.episode_best_response;
         let rise = self.last_rise;
         let left = (rise[0] - b * r[0]).powi(2) + (rise[1] - b * r[1]).powi(2);
         left < share * share * (rise[0].powi(2) + rise[1].powi(2))
