@@ -152,13 +152,7 @@ pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> 
     let tp_thesis = speed::chain_throughput_with_thesis(&samples, 5);
     let plant = speed::plant_model();
     let plant_samples = speed::recorded_samples_on(&plant, "lift", 60.0);
-    let tp_plant = speed::chain_throughput_on(
-        "the default chain on the plant model (single-rod lift, gravity, null leakage, supply sag)",
-        &plant,
-        &plant_samples,
-        5,
-        false,
-    );
+    let tp_plant = speed::plant_chain_throughput(&plant_samples, 5);
     outln!("\n| chain | samples | wall s | samples/s (one core) |\n|---|---|---|---|");
     for t in [&tp, &tp_thesis, &tp_plant] {
         outln!(

@@ -166,6 +166,30 @@ pub fn chain_throughput_with_thesis(samples: &[Sample], repeat: u32) -> Throughp
     )
 }
 
+/// The transducers' lag the plant chain's leak filter counts, s: about what
+/// commissioning reads on plant_dev's rigs.
+pub const PLANT_PRESSURE_LAG_S: f64 = 0.5e-3;
+
+/// [`chain_throughput`] on the plant model ([`plant_model`]) with its
+/// transducers' lag counted ([`PLANT_PRESSURE_LAG_S`]), as a commissioned
+/// plant rig runs.
+pub fn plant_chain_throughput(samples: &[Sample], repeat: u32) -> Throughput {
+    let set = ChainSettings {
+        model: plant_model(),
+        leak_filter: Tuning {
+            pressure_lag_s: [PLANT_PRESSURE_LAG_S; 2],
+            ..Tuning::sensor_derived()
+        },
+        ..ChainSettings::default()
+    };
+    chain_throughput_with(
+        "the default chain on the plant model (single-rod lift, gravity, null leakage, supply sag, transducer lag)",
+        &set,
+        samples,
+        repeat,
+    )
+}
+
 /// [`chain_throughput`] with `model` in both filters, labelled `chain`, with
 /// the thesis' baseline on or off (`thesis_baseline`).
 pub fn chain_throughput_on(
@@ -175,19 +199,29 @@ pub fn chain_throughput_on(
     repeat: u32,
     thesis_baseline: bool,
 ) -> Throughput {
+    let set = ChainSettings {
+        model: model.clone(),
+        classifier: ClassifierConfig {
+            thesis_baseline,
+            ..ClassifierConfig::default()
+        },
+        ..ChainSettings::default()
+    };
+    chain_throughput_with(chain, &set, samples, repeat)
+}
+
+/// Samples per second through the chain `set` makes, labelled `chain`.
+pub fn chain_throughput_with(
+    chain: &str,
+    set: &ChainSettings,
+    samples: &[Sample],
+    repeat: u32,
+) -> Throughput {
     let mut n = 0u64;
     let mut events = 0usize;
     let t0 = Instant::now();
     for _ in 0..repeat.max(1) {
-        let set = ChainSettings {
-            model: model.clone(),
-            classifier: ClassifierConfig {
-                thesis_baseline,
-                ..ClassifierConfig::default()
-            },
-            ..ChainSettings::default()
-        };
-        let Ok(mut chain) = Chain::new(&set) else { break };
+        let Ok(mut chain) = Chain::new(set) else { break };
         for s in samples {
             chain.step(s, |_| events += 1);
             n += 1;

@@ -108,6 +108,9 @@ pub struct Estimator {
     warm: Filter,
     mae: [MovingMae; 2],
     last_u_v: f64,
+    /// The last sample's pressure readings [p1, p2], Pa: a reading that
+    /// repeats it is not a lagging one (its lag is not counted).
+    last_pressures_pa: [f64; 2],
     started: bool,
     t0_s: f64,
     /// The leak sizes' standard deviations have fallen below [`CONVERGED_LEAK_SIGMA`] of their start (latched until a restart).
@@ -187,6 +190,7 @@ impl Estimator {
             filter,
             mae: [MovingMae::new(w), MovingMae::new(w)],
             last_u_v: 0.0,
+            last_pressures_pa: [f64::NAN; 2],
             started: false,
             t0_s: 0.0,
             leaks_converged: false,
@@ -228,6 +232,7 @@ impl Estimator {
                 usable: true,
                 gate_outliers: false,
                 jitter_s: 0.0,
+                pressure_lag_s: [0.0; 2],
             };
             let memory = StepMemory {
                 still_samples: &mut 0,
@@ -482,6 +487,16 @@ impl Estimator {
             if use_channel[1] { s.p1_pa } else { 0.0 },
             if use_channel[2] { s.p2_pa } else { 0.0 },
         );
+        // a repeated reading (a stuck or a quantised one) does not lag a moving pressure
+        let readings = [s.p1_pa, s.p2_pa];
+        let lag_s: [f64; 2] = std::array::from_fn(|k| {
+            if readings[k] == self.last_pressures_pa[k] {
+                0.0
+            } else {
+                self.tuning.pressure_lag_s[k]
+            }
+        });
+        self.last_pressures_pa = readings;
         let input = StepInput {
             t_s: s.t_s,
             u,
@@ -491,6 +506,7 @@ impl Estimator {
             gate_outliers: self.tuning.states >= LEAK_LAYOUT_STATES
                 && s.t_s - self.t0_s >= self.tuning.convergence_time_s,
             jitter_s: self.tuning.sample_jitter_s,
+            pressure_lag_s: lag_s,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,

@@ -99,6 +99,9 @@ pub(crate) struct StepInput {
     /// The DAQ's sample-time jitter the measurement noise counts, s (RMS; 0:
     /// none, R as tuned).
     pub(crate) jitter_s: f64,
+    /// The pressure transducers' lags (p1, p2) the NIS counts, s
+    /// ([`Tuning::pressure_lag_s`]; 0: none, as for a repeated reading).
+    pub(crate) pressure_lag_s: [f64; 2],
 }
 
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
@@ -154,6 +157,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         usable,
         gate_outliers,
         jitter_s,
+        pressure_lag_s,
     } = *input;
     let StepMemory {
         still_samples,
@@ -179,17 +183,35 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         f[(1, I_BULK)] -= from_v1;
         f[(2, I_BULK)] -= from_v2;
     }
-    if jitter_s > 0.0 {
-        // each reading is off by its rate times the jitter: the measured
-        // states' rates over this step, from the prediction
+    // the measured states' rates over this step, from the prediction
+    let rates = if jitter_s > 0.0 || pressure_lag_s != [0.0; 2] {
         let prior = e.state();
-        let rates = ProcessModel::MEASURED_STATES.map(|i| (x_pred[i] - prior[i]) / model.dt_s);
+        ProcessModel::MEASURED_STATES.map(|i| (x_pred[i] - prior[i]) / model.dt_s)
+    } else {
+        [0.0; 3]
+    };
+    if jitter_s > 0.0 {
+        // each reading is off by its rate times the jitter
         e.set_measurement_rates(rates, jitter_s);
     }
+    // A lagging transducer reads p − τ·ṗ: off by up to τ·ṗ, the part the
+    // estimate has not followed. The NIS counts it as noise, (τ·ṗ)² at the
+    // predicted rate on each pressure's variance. The gains and the outlier
+    // test do not: a spike in a fast move stays a spike.
+    let lag_var = [
+        0.0,
+        (pressure_lag_s[0] * rates[1]).powi(2),
+        (pressure_lag_s[1] * rates[2]).powi(2),
+    ];
     e.predict_lean::<A>(x_pred, &f)?;
     offset_response.predict(&f);
     let y_pred = model.read(e.state());
     if usable {
+        let lag_nis = if pressure_lag_s == [0.0; 2] {
+            None
+        } else {
+            Some(e.selected_nis(&(y - y_pred), ProcessModel::MEASURED_STATES, lag_var, use_channel)?)
+        };
         // The channels that update: less a lone outlier once the filter has converged.
         let mut updating = use_channel;
         let inn =
@@ -225,7 +247,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
             .filter(|&k| use_channel[k] && !updating[k])
             .map(|k| (inn.nu[k] / inn.sigma[k]).powi(2))
             .sum();
-        out.nis = inn.nis + left_out;
+        out.nis = lag_nis.unwrap_or(inn.nis + left_out);
     }
     let x = e.state();
     let sig = e.sigma();
@@ -242,3 +264,6 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     }
     Ok(guard.any())
 }
+
+#[cfg(test)]
+mod tests;

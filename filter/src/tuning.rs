@@ -69,6 +69,13 @@ schema::config_struct! {
         /// grows by (rate · jitter)² at the predicted rates. `commission`
         /// sets it from the recording (docs/identification.md).
         pub sample_jitter_s: f64 = 0.0 => ["s", num!("a time", 0.0, 0.001)],
+        /// The pressure transducers' first-order lags (p1, p2), s (0: none):
+        /// a transducer lagging by τ reads p − τ·ṗ. The filter's NIS counts
+        /// (τ·ṗ)², at the predicted rates, in each pressure's variance (not
+        /// for a reading that repeats the last one); its gains and its
+        /// outlier test do not. `commission` sets them from the recording
+        /// (docs/identification.md).
+        pub pressure_lag_s: [f64; 2] = [0.0; 2] => ["s", num!("lags", 0.0, 0.01)],
         /// P0 of the spool position, m².
         pub p0_x_sp_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
         /// P0 of each chamber pressure, Pa².

@@ -153,7 +153,8 @@ pub struct Identification {
     /// The pressure transducers' apparent first-order lag per channel (p1,
     /// p2), s: the measured pressure's change lags the flow balance's by τ·Δṗ.
     /// Apparent: it takes up whatever else delays a reading (the line's own
-    /// dynamics, DAQ timing). Reported, not put into the filters.
+    /// dynamics, DAQ timing). `commission` puts it into the leak filter's
+    /// NIS (`[leak_filter] pressure_lag_s`).
     pub pressure_lag_s: [Found; 2],
     /// The line resistance between the transducers (at the valve's manifold)
     /// and the chambers, Pa/(m³/s): the transducers read p1 + R·Q1 and

@@ -131,6 +131,16 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     if let Some(j) = id.sample_jitter_s.estimate() {
         out.leak_filter.sample_jitter_s = j.value;
     }
+    // and its NIS each transducer's lag, up to the longest the
+    // datasheet's response time allows
+    let lag_bound_s = cfg
+        .datasheet
+        .as_ref()
+        .and_then(|d| d.pressure_transducers.lag_bound_s())
+        .unwrap_or(identify::MAX_LAG_S);
+    for (lag, found) in out.leak_filter.pressure_lag_s.iter_mut().zip(&id.pressure_lag_s) {
+        *lag = found.estimate().map_or(0.0, |e| e.value.clamp(0.0, lag_bound_s));
+    }
     match found_mechanics {
         Ok(mech) => {
             force_balance(&mech, cfg, &mut said);

@@ -155,6 +155,38 @@ fn matches_the_covariance_form_on_a_linear_system() {
     }
 }
 
+/// The NIS of a selector measurement from the prior is νᵀ(H P Hᵀ + R + D)⁻¹ν
+/// of the covariance form, D the extra variances; with D = 0 it is the
+/// update's own NIS; a channel left out is left out of it.
+#[test]
+fn the_selected_nis_is_the_covariance_forms() {
+    let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
+    let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let q = SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3);
+    let r = SVector::<f64, 2>::new(1e-2, 4e-2);
+    let p0 = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
+    let scale = SVector::<f64, 3>::new(1.0, 10.0, 0.1);
+    let mut ekf = Ekf::<3, 2>::new(SVector::zeros(), &p0, &q, r, scale);
+    let mut rng = Rng::new(5);
+    for step in 0..50 {
+        ekf.predict(f * ekf.state(), &f).unwrap();
+        let y = SVector::<f64, 2>::new(rng.normal(), rng.normal());
+        let nu = y - h * ekf.state();
+        let extra = [0.0, 0.5 * (step % 3) as f64];
+        let c = h * ekf.covariance() * h.transpose()
+            + SMatrix::from_diagonal(&r)
+            + SMatrix::from_diagonal(&SVector::from(extra));
+        let want = nu.dot(&(c.try_inverse().unwrap() * nu));
+        let got = ekf.selected_nis(&nu, [0, 2], extra, [true, true]).unwrap();
+        assert!((got - want).abs() < 1e-9 * (1.0 + want), "{got} against {want}");
+        let alone = ekf.selected_nis(&nu, [0, 2], extra, [true, false]).unwrap();
+        assert!((alone - nu[0] * nu[0] / c[(0, 0)]).abs() < 1e-9 * (1.0 + alone));
+        let plain = ekf.selected_nis(&nu, [0, 2], [0.0; 2], [true, true]).unwrap();
+        let inn = ekf.update(&y, &(h * ekf.state()), &h, [true, true]).unwrap();
+        assert!((plain - inn.nis).abs() < 1e-9 * (1.0 + inn.nis));
+    }
+}
+
 /// The lean time update and the selector update give the reference's result
 /// (dense W·Wᵀ, dense H) to 1e-12 of each state's scale over a long run (a sparse 11-state Jacobian of the actuator's shape,
 /// three selector measurements, states spanning twenty orders of magnitude).

@@ -237,3 +237,29 @@ impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
         Ok(nis)
     }
 }
+
+impl<const N: usize, const M: usize, const W: usize> Ekf<N, M, W> {
+    /// The NIS of the innovation `nu` of measurements that read the states
+    /// `states` (H a selector), against the prior's innovation covariance
+    /// with `extra_var` added to its diagonal (measurement units squared),
+    /// over the channels `use_channel` flags (1). Called before the update.
+    pub fn selected_nis(
+        &self,
+        nu: &SVector<f64, M>,
+        states: [usize; M],
+        extra_var: [f64; M],
+        use_channel: [bool; M],
+    ) -> Result<f64, EkfError> {
+        let c = SMatrix::<f64, M, M>::from_fn(|i, j| {
+            let (si, sj) = (states[i], states[j]);
+            let cross: f64 = self.s[..N].iter().map(|col| col[si] * col[sj]).sum();
+            let c = self.x_scale[si] * self.x_scale[sj] * cross;
+            if i == j {
+                c + self.r[i] + extra_var[i]
+            } else {
+                c
+            }
+        });
+        innovation_statistics(&c, nu, use_channel).map(|(_, nis)| nis)
+    }
+}

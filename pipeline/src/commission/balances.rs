@@ -12,10 +12,15 @@ pub(super) fn lag_against_datasheet(e: &identify::Estimate, bound_s: Option<f64>
     match bound_s {
         None => String::new(),
         Some(b) if e.value > b + 2.0 * e.sigma => format!(
-            "; above the {:.2} ms the datasheet's response time allows: another delay is in it (the hose, the DAQ's timing)",
+            "; above the {:.2} ms the datasheet's response time allows: another delay is in it (the hose, \
+             the DAQ's timing); the NIS counts {:.2} ms",
+            b * 1e3,
             b * 1e3
         ),
-        Some(b) => format!("; within the {:.2} ms the datasheet's response time allows", b * 1e3),
+        Some(b) => format!(
+            "; within the {:.2} ms the datasheet's response time allows",
+            b * 1e3
+        ),
     }
 }
 
@@ -94,7 +99,8 @@ pub(super) fn flow_balance(
     for (channel, found) in ["p1", "p2"].iter().zip(&id.pressure_lag_s) {
         out.notes.push(match found {
             identify::Found::Identified(e) => format!(
-                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; reported, not put into the filters){}",
+                "  {channel} transducer lag: {:.3} ± {:.3} ms (apparent; the leak filter's NIS counts it, \
+                 [leak_filter] pressure_lag_s){}",
                 e.value * 1e3,
                 e.sigma * 1e3,
                 lag_against_datasheet(e, transducers.and_then(|t| t.lag_bound_s()))
