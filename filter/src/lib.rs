@@ -487,16 +487,7 @@ impl Estimator {
             if use_channel[1] { s.p1_pa } else { 0.0 },
             if use_channel[2] { s.p2_pa } else { 0.0 },
         );
-        // a repeated reading (a stuck or a quantised one) does not lag a moving pressure
-        let readings = [s.p1_pa, s.p2_pa];
-        let lag_s: [f64; 2] = std::array::from_fn(|k| {
-            if readings[k] == self.last_pressures_pa[k] {
-                0.0
-            } else {
-                self.tuning.pressure_lag_s[k]
-            }
-        });
-        self.last_pressures_pa = readings;
+        let lag_s = self.counted_lags(s);
         let input = StepInput {
             t_s: s.t_s,
             u,
@@ -561,20 +552,8 @@ impl Estimator {
                 self.counters.resets += 1;
             }
         }
-        if s.t_s - self.t0_s < self.tuning.convergence_time_s {
+        if self.converging(s.t_s, out) {
             flags |= FLAG_CONVERGING;
-        } else if !self.leaks_converged {
-            // The layouts with leak sizes (10 states and more) converge when the
-            // three sizes are known to [`CONVERGED_LEAK_SIGMA`] of their start
-            // (held sizes, without a random walk, have nothing to converge).
-            let limit = CONVERGED_LEAK_SIGMA * self.tuning.p0_leak_m6_s2.sqrt();
-            let leaks = I_QE1..(I_QI + 1).min(self.tuning.states as usize);
-            let worst = leaks.map(|i| out.sigma[i]).fold(0.0, f64::max);
-            if worst > limit && self.tuning.q_leak_m6_s2 > 0.0 {
-                flags |= FLAG_CONVERGING;
-            } else {
-                self.leaks_converged = true;
-            }
         }
         let (x_min_m, x_max_m) = (self.model.params.x_min_m, self.model.params.x_max_m);
         let x_m = out.state[3];
@@ -582,5 +561,41 @@ impl Estimator {
             flags |= FLAG_END_STOP;
         }
         out.flags |= flags;
+    }
+
+    /// The lags (p1, p2) the NIS counts for sample `s`, s: the tuning's, 0 for
+    /// a repeated reading (a stuck one does not lag a moving pressure).
+    fn counted_lags(&mut self, s: &Sample) -> [f64; 2] {
+        let readings = [s.p1_pa, s.p2_pa];
+        let lag_s = std::array::from_fn(|k| {
+            if readings[k] == self.last_pressures_pa[k] {
+                0.0
+            } else {
+                self.tuning.pressure_lag_s[k]
+            }
+        });
+        self.last_pressures_pa = readings;
+        lag_s
+    }
+
+    /// Whether the filter still converges at `t_s` (s), estimate `out`: within
+    /// `convergence_time_s` of its start; with leak sizes, until all three are
+    /// known to [`CONVERGED_LEAK_SIGMA`] of their start (held ones converge).
+    fn converging(&mut self, t_s: f64, out: &Estimate) -> bool {
+        if t_s - self.t0_s < self.tuning.convergence_time_s {
+            return true;
+        }
+        if self.leaks_converged {
+            return false;
+        }
+        let limit = CONVERGED_LEAK_SIGMA * self.tuning.p0_leak_m6_s2.sqrt();
+        let leaks = I_QE1..(I_QI + 1).min(self.tuning.states as usize);
+        let worst = leaks.map(|i| out.sigma[i]).fold(0.0, f64::max);
+        if worst > limit && self.tuning.q_leak_m6_s2 > 0.0 {
+            true
+        } else {
+            self.leaks_converged = true;
+            false
+        }
     }
 }
