@@ -224,16 +224,7 @@ impl Estimator {
             w.clone_from(f);
             let y = ProcessModel::measure(w.state());
             // (the result is thrown away with the copy)
-            let input = StepInput {
-                t_s: 0.0,
-                u,
-                y,
-                use_channel: [true; 3],
-                usable: true,
-                gate_outliers: false,
-                jitter_s: 0.0,
-                pressure_lag_s: [0.0; 2],
-            };
+            let input = StepInput::plain(u, y);
             let memory = StepMemory {
                 still_samples: &mut 0,
                 offset_response: &mut BiasResponse::default(),

@@ -104,6 +104,23 @@ pub(crate) struct StepInput {
     pub(crate) pressure_lag_s: [f64; 2],
 }
 
+impl StepInput {
+    /// A reading `y` under command `u` (V) at t = 0, every channel updating,
+    /// no outlier gate, no jitter or lag counted.
+    pub(crate) fn plain(u: f64, y: SVector<f64, 3>) -> Self {
+        Self {
+            t_s: 0.0,
+            u,
+            y,
+            use_channel: [true; 3],
+            usable: true,
+            gate_outliers: false,
+            jitter_s: 0.0,
+            pressure_lag_s: [0.0; 2],
+        }
+    }
+}
+
 /// One predict + update; fills `out`; returns whether the prediction was clamped.
 ///
 /// On an x86-64 processor with AVX2 and FMA the whole step (the model's too)

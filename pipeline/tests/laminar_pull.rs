@@ -2,32 +2,12 @@
 //! per unit of error in the model's laminar flows (docs/plant.md, "The null
 //! leakage's pull on θ").
 
-use std::fs::File;
-use std::io::BufWriter;
-use std::path::Path;
+mod common;
 
 use config::Config;
 use model::params::ActuatorParams;
 use model::scenario::Scenario;
-use model::sim::{SimSettings, Simulator};
-use model::{FaultSchedule, SensorParams};
-
-/// A 60 s press recording of the rig `rig`, written to `csv`.
-fn record(rig: &ActuatorParams, csv: &Path) {
-    let scenario = Scenario::by_name("press", 5, 60.0).expect("scenario");
-    let mut sim = Simulator::new(
-        rig.clone(),
-        SensorParams::plant(),
-        SimSettings::default(),
-        scenario,
-        FaultSchedule::default(),
-        5,
-    )
-    .expect("rig");
-    let samples = sim.run(60.0);
-    let mut w = BufWriter::new(File::create(csv).expect("csv"));
-    pipeline::simulate::write_csv(&mut w, &samples).expect("written");
-}
+use model::SensorParams;
 
 /// The pull measured on a recording of the press whose model (and rig)
 /// has null leakage `c_l` (m³/(s·Pa)).
@@ -38,7 +18,8 @@ fn pull(c_l: f64) -> Option<f64> {
     };
     let dir = scratch::ScratchDir::new("laminar-pull");
     let csv = dir.join("press.csv");
-    record(&rig, &csv);
+    let scenario = Scenario::by_name("press", 5, 60.0).expect("scenario");
+    common::record(&rig, SensorParams::plant(), scenario, 5, &csv);
     let cfg = Config {
         model: rig,
         sensors: SensorParams::plant(),

@@ -2,14 +2,12 @@
 //! the rod that the search corrects is taken into a refit of the mass and the
 //! friction, and the search is repeated until it adds no such effect.
 
-use std::fs::File;
-use std::io::BufWriter;
+mod common;
 
 use config::Config;
 use model::params::ActuatorParams;
 use model::scenario::Scenario;
-use model::sim::{SimSettings, Simulator};
-use model::{FaultSchedule, SensorParams};
+use model::SensorParams;
 use pipeline::calibration::{refits_mechanics, search_with_refit};
 
 /// The press rig on its press cycle (a workpiece of 2e6 N/m at 0.20 m), with
@@ -25,21 +23,9 @@ fn a_spring_the_search_corrects_is_refitted_into_the_mechanics() {
     let rig = ActuatorParams::press();
     let scenario = Scenario::by_name("press", 3, 60.0).expect("scenario");
     let workpiece = scenario.spring;
-    let mut sim = Simulator::new(
-        rig.clone(),
-        SensorParams::default(),
-        SimSettings::default(),
-        scenario,
-        FaultSchedule::default(),
-        7,
-    )
-    .expect("rig");
-    let samples = sim.run(60.0);
     let dir = scratch::ScratchDir::new("refit");
     let csv = dir.join("press.csv");
-    let mut w = BufWriter::new(File::create(&csv).expect("csv"));
-    pipeline::simulate::write_csv(&mut w, &samples).expect("written");
-    drop(w);
+    common::record(&rig, SensorParams::default(), scenario, 7, &csv);
 
     let mut cfg = Config {
         model: rig.clone(),

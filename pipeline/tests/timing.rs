@@ -3,14 +3,12 @@
 //! transducer's lag into its NIS, up to the longest lag the datasheet's
 //! response time allows (docs/identification.md).
 
-use std::fs::File;
-use std::io::BufWriter;
+mod common;
 
 use config::Config;
 use model::params::ActuatorParams;
 use model::scenario::Scenario;
-use model::sim::{SimSettings, Simulator};
-use model::{Datasheet, FaultSchedule, SensorParams};
+use model::{Datasheet, SensorParams};
 
 /// What `identify_rig` makes of a 60 s lift recording taken by `sensors`,
 /// with a model that knows the sensors but neither their jitter nor their
@@ -18,21 +16,9 @@ use model::{Datasheet, FaultSchedule, SensorParams};
 fn identified_on_lift(sensors: SensorParams, datasheet: Option<Datasheet>) -> Config {
     let rig = ActuatorParams::vertical_lift();
     let scenario = Scenario::by_name("lift", 3, 60.0).expect("scenario");
-    let mut sim = Simulator::new(
-        rig.clone(),
-        sensors,
-        SimSettings::default(),
-        scenario,
-        FaultSchedule::default(),
-        7,
-    )
-    .expect("rig");
-    let samples = sim.run(60.0);
     let dir = scratch::ScratchDir::new("timing");
     let csv = dir.join("lift.csv");
-    let mut w = BufWriter::new(File::create(&csv).expect("csv"));
-    pipeline::simulate::write_csv(&mut w, &samples).expect("written");
-    drop(w);
+    common::record(&rig, sensors, scenario, 7, &csv);
     let cfg = Config {
         model: rig,
         sensors: SensorParams {

@@ -21,14 +21,8 @@ fn step_once(
     let mut e = make_filter::<12, 12>(&tuning, model, Some(measured));
     let mut out = Estimate::empty(0.0, 12);
     let input = StepInput {
-        t_s: 0.0,
-        u,
-        y,
-        use_channel: [true; 3],
-        usable: true,
-        gate_outliers: false,
-        jitter_s: 0.0,
         pressure_lag_s: lag_s,
+        ..StepInput::plain(u, y)
     };
     let memory = StepMemory {
         still_samples: &mut 0,
