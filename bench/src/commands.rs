@@ -94,6 +94,7 @@ pub fn sim(seconds: f64, repeat: u32, out: Option<PathBuf>, force: bool) -> Resu
 /// EKF step time per layout (every step timed individually) and the in-process chain's throughput.
 pub fn ekf(steps: u64, out: Option<PathBuf>, force: bool) -> Result<(), String> {
     if let Some(dir) = &out {
+        out::dir(dir)?;
         out::check(&dir.join("ekf.json"), force, &[])?;
     }
     let samples = speed::recorded_samples(60.0);

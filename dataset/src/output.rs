@@ -48,8 +48,8 @@ fn check_not_input(meta: &std::fs::Metadata, inputs: &[&Path]) -> std::io::Resul
 }
 
 /// Checks, without opening anything, that [`create_file`] may write `path`: it is
-/// absent, or (with `overwrite`) an existing file that is neither a symbolic
-/// link nor one of `inputs`.
+/// absent in an existing directory, or (with `overwrite`) an existing file that
+/// is neither a symbolic link nor one of `inputs`.
 pub fn check_replaceable(path: &Path, overwrite: bool, inputs: &[&Path]) -> std::io::Result<()> {
     if let Ok(meta) = std::fs::symlink_metadata(path) {
         if meta.file_type().is_symlink() {
@@ -62,8 +62,22 @@ pub fn check_replaceable(path: &Path, overwrite: bool, inputs: &[&Path]) -> std:
                 "exists: not overwritten (use --force to replace it)",
             ));
         }
+        return Ok(());
     }
-    Ok(())
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            let what = if dir.exists() {
+                "is not a directory"
+            } else {
+                "does not exist"
+            };
+            Err(Error::new(
+                ErrorKind::NotFound,
+                format!("its folder {} {what} (create it first)", dir.display()),
+            ))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Opens `path` for writing, created or emptied, without following a symbolic

@@ -1,7 +1,7 @@
 //! Output files are created safely: no write through a symbolic link, no
 //! overwrite without `overwrite`, never over an input, errors reported.
 
-use dataset::output::{create_dir, create_file, write_file};
+use dataset::output::{check_replaceable, create_dir, create_file, write_file};
 use std::io::ErrorKind;
 
 /// A fresh folder for one test, removed when the test passes.
@@ -59,6 +59,31 @@ fn an_existing_file_is_kept_without_overwrite_and_replaced_with_it() {
     assert_eq!(std::fs::read_to_string(&p).unwrap(), "first, longer content");
     write_file(&p, b"second", true, &[]).unwrap();
     assert_eq!(std::fs::read_to_string(&p).unwrap(), "second");
+}
+
+/// A file in a folder that is not there is refused by the check a command
+/// makes before its work, naming the folder; nothing is created.
+#[test]
+fn an_output_in_a_missing_folder_is_refused_before_the_work() {
+    let d = tmpdir("missing");
+    let out = d.join("cal").join("rig.toml");
+    for overwrite in [false, true] {
+        let e = check_replaceable(&out, overwrite, &[]).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::NotFound);
+        let folder = d.join("cal");
+        assert!(
+            e.to_string()
+                .contains(&format!("its folder {} does not exist", folder.display())),
+            "{e}"
+        );
+    }
+    assert!(!d.join("cal").exists());
+    // a file where the folder should be
+    std::fs::write(d.join("cal"), "x").unwrap();
+    let e = check_replaceable(&out, false, &[]).unwrap_err();
+    assert!(e.to_string().contains("is not a directory"), "{e}");
+    // a bare file name is in the working directory, which is there
+    check_replaceable(std::path::Path::new("surely-absent-output.toml"), false, &[]).unwrap();
 }
 
 #[test]

@@ -108,6 +108,7 @@ pub fn run(
     .map_err(|e| e.to_string())?;
     // the report is refused with the other outputs, before any is written
     let report = out.join(calibrate_report::FILE_NAME);
+    out::dir(out)?;
     out::check(&report, force, &inputs)?;
     let files =
         calibrate::write_outputs(&cal, out, force, &inputs, &model_file).map_err(|e| e.to_string())?;
