@@ -123,17 +123,40 @@ fn the_column_cholesky_factors_or_refuses() {
     assert!(!cholesky_columns::<2, 2, Separate>(&mut cols));
 }
 
+/// A damped linear system of 3 states read on 2 (F, H, Q, R, P0, scale; SI).
+struct LinearSystem {
+    f: SMatrix<f64, 3, 3>,
+    h: SMatrix<f64, 2, 3>,
+    q: SVector<f64, 3>,
+    r: SVector<f64, 2>,
+    p0: SVector<f64, 3>,
+    scale: SVector<f64, 3>,
+}
+
+fn linear_system() -> LinearSystem {
+    LinearSystem {
+        f: SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95),
+        h: SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        q: SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3),
+        r: SVector::<f64, 2>::new(1e-2, 4e-2),
+        p0: SVector::<f64, 3>::new(1.0, 2.0, 3.0),
+        scale: SVector::<f64, 3>::new(1.0, 10.0, 0.1),
+    }
+}
+
 /// The square-root filter agrees with the textbook covariance-form EKF on a
 /// linear system.
 #[test]
 fn matches_the_covariance_form_on_a_linear_system() {
-    let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
-    let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-    let q = SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3);
-    let r = SVector::<f64, 2>::new(1e-2, 4e-2);
-    let p0 = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
+    let LinearSystem {
+        f,
+        h,
+        q,
+        r,
+        p0,
+        scale,
+    } = linear_system();
     let x0 = SVector::<f64, 3>::new(0.1, -0.2, 0.3);
-    let scale = SVector::<f64, 3>::new(1.0, 10.0, 0.1);
     let mut ekf = Ekf::<3, 2>::new(x0, &p0, &q, r, scale);
     let mut x = x0;
     let mut p = SMatrix::<f64, 3, 3>::from_diagonal(&p0);
@@ -160,12 +183,14 @@ fn matches_the_covariance_form_on_a_linear_system() {
 /// update's own NIS; a channel left out is left out of it.
 #[test]
 fn the_selected_nis_is_the_covariance_forms() {
-    let f = SMatrix::<f64, 3, 3>::new(1.0, 0.01, 0.0, 0.0, 1.0, 0.01, 0.0, -0.2, 0.95);
-    let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
-    let q = SVector::<f64, 3>::new(1e-6, 1e-4, 1e-3);
-    let r = SVector::<f64, 2>::new(1e-2, 4e-2);
-    let p0 = SVector::<f64, 3>::new(1.0, 2.0, 3.0);
-    let scale = SVector::<f64, 3>::new(1.0, 10.0, 0.1);
+    let LinearSystem {
+        f,
+        h,
+        q,
+        r,
+        p0,
+        scale,
+    } = linear_system();
     let mut ekf = Ekf::<3, 2>::new(SVector::zeros(), &p0, &q, r, scale);
     let mut rng = Rng::new(5);
     for step in 0..50 {
