@@ -238,6 +238,9 @@ pub struct OffsetWatch {
     directions: [[f64; 2]; 3],
     /// Least standing offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
     least_offset_mpa: f64,
+    /// Whether an offset on x is fitted: not where commissioning found its
+    /// response lost in the model's error ([`crate::Commissioning::least_offsets_named`] inf).
+    position_watched: bool,
     /// Least drifting offset named, MPa ([`DRIFT_LEAST_SHARE_OF_RANGE`] of the range).
     least_drift_mpa: f64,
     /// Time the window has been filled over, s (nothing is named before [`OFFSET_WINDOW_S`]).
@@ -271,9 +274,19 @@ impl OffsetWatch {
     pub fn new(full_scale_pa: f64) -> Self {
         OffsetWatch {
             least_offset_mpa: least_pressure_offset_pa(full_scale_pa, false) * 1e-6,
+            position_watched: true,
             least_drift_mpa: least_pressure_offset_pa(full_scale_pa, true) * 1e-6,
             ..OffsetWatch::default()
         }
+    }
+}
+
+impl OffsetWatch {
+    /// The watch without offsets on x: commissioning found their response
+    /// lost in the model's error, so a fit of one reads that error.
+    pub fn without_position(mut self) -> Self {
+        self.position_watched = false;
+        self
     }
 }
 
@@ -296,6 +309,7 @@ impl Default for OffsetWatch {
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
             least_offset_mpa: 0.0,
+            position_watched: true,
             least_drift_mpa: 0.0,
             watched_s: 0.0,
             smallest_threshold_lpm: f64::INFINITY,
@@ -508,7 +522,9 @@ impl OffsetWatch {
         let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
-        self.window_best = self.window.best_offset(true, &self.directions);
+        self.window_best = self
+            .window
+            .best_offset(true, self.position_watched, &self.directions);
         let high = (0..3).any(|k| rise3[k].abs() > EPISODE_LEVEL * thresholds_lpm[k]);
         if high {
             self.episode_high_s = t_s;
@@ -524,7 +540,7 @@ impl OffsetWatch {
             .episode
             .as_ref()
             .filter(|f| f.w >= EPISODE_MIN_S)
-            .map(|f| f.best_offset(false, &self.directions));
+            .map(|f| f.best_offset(false, false, &self.directions));
         if let Some(best) = &self.episode_best {
             // (a drifting offset's response now is its channel's as given)
             let h = best.h;

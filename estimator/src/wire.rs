@@ -97,6 +97,7 @@ impl EstimateWire for StageEstimate {
             offset_response_lpm_per_mpa: [f.offset_response_p1_lpm_per_mpa, f.offset_response_p2_lpm_per_mpa],
             span_response_lpm: [f.span_response_p1_lpm, f.span_response_p2_lpm],
             position_offset_response_lpm_per_mm: f.offset_response_x_lpm_per_mm,
+            delay_response_lpm_per_ms: [[f64::NAN; 3]; 2],
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,
@@ -125,6 +126,7 @@ impl EstimateWire for StageEstimate {
             offset_response_lpm_per_mpa: [[f64::NAN; 3]; 2],
             span_response_lpm: [[f64::NAN; 3]; 2],
             position_offset_response_lpm_per_mm: [f64::NAN; 3],
+            delay_response_lpm_per_ms: [[f64::NAN; 3]; 2],
             ..leak
         };
         StageEstimate {

@@ -11,6 +11,12 @@
 //! that moves with the pressure: its response follows the same recursion
 //! with e_c·p_c(t) in the update in place of e_c (p_c the reading).
 //!
+//! A transducer that lags by a delay d reads p_c(t − d) ≈ p_c − d·ṗ_c: an
+//! offset −d·ṗ_c that moves with the pressure's rate. Its response per second
+//! of delay follows the recursion with −ṗ_c (the step's predicted rate) in the
+//! update in place of e_c. The leak filter takes it off the leak sizes it
+//! publishes ([`BiasResponse::lag_imprint`]).
+//!
 //! The leak sizes' part of δ is the pattern a misreading leaves on them: it
 //! swings with the valve's flow (an offset moves the orifice's drop), while a
 //! leak's is steady. An offset on x moves the chambers' volumes the model
@@ -41,15 +47,19 @@ const M3_S_M_PER_LPM_MM: f64 = M3_S_PER_LPM * 1.0e3;
 
 /// The misreadings followed, as rows of δ: an offset of 1 Pa on p1 and on
 /// p2, then a span error of 1 (a reading of 2·p) on p1 and on p2, then an
-/// offset of 1 m on x.
-const ROWS: usize = 5;
+/// offset of 1 m on x, then a delay of 1 s on p1 and on p2.
+const ROWS: usize = 7;
 
 /// The row of δ for an offset on x.
 const POSITION_ROW: usize = 4;
 
+/// The rows of δ for a delay on p1 and on p2.
+const LAG_ROWS: [usize; 2] = [5, 6];
+
 /// δ for an offset of 1 Pa on p1 and on p2 (state units per Pa), for a
-/// span error of 1 on p1 and on p2 (state units), and for an offset of 1 m
-/// on x (state units per m); zero until the filter has stepped with leak sizes.
+/// span error of 1 on p1 and on p2 (state units), for an offset of 1 m
+/// on x (state units per m), and for a delay of 1 s on p1 and on p2 (state
+/// units per s); zero until the filter has stepped with leak sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiasResponse {
     delta: [[f64; MAX_LAYOUT_STATES]; ROWS],
@@ -67,6 +77,18 @@ impl BiasResponse {
     /// Forgets the past: an offset is measured from here on (a start or a re-anchoring).
     pub fn clear(&mut self) {
         *self = BiasResponse::default();
+    }
+
+    /// A re-anchoring: the offsets are measured from here on; a delay's
+    /// imprint on the slow states, which the filter keeps, stays (its part of
+    /// the fast states, set from the readings again, is zero).
+    pub fn reanchor(&mut self) {
+        let lags = LAG_ROWS.map(|row| self.delta[row]);
+        self.clear();
+        for (row, mut d) in LAG_ROWS.into_iter().zip(lags) {
+            d[..FIRST_RANDOM_WALK].fill(0.0);
+            self.delta[row] = d;
+        }
     }
 
     /// The time update, δ⁻ = F·δ⁺, with the step's Jacobian `f` (SI), whose
@@ -92,7 +114,9 @@ impl BiasResponse {
 
     /// The measurement update with the gain of the update `e` just made, over
     /// the channels `use_channel` of the measured states `states`, with the
-    /// readings `y` (SI; a span error's offset is g times its channel's).
+    /// readings `y` (SI; a span error's offset is g times its channel's) and
+    /// the measured states' predicted rates `rates` (SI per s; a delay's
+    /// offset is −d times its channel's).
     #[inline(always)]
     pub(crate) fn update<const N: usize, const W: usize>(
         &mut self,
@@ -100,6 +124,7 @@ impl BiasResponse {
         states: [usize; 3],
         use_channel: [bool; 3],
         y: &SVector<f64, 3>,
+        rates: [f64; 3],
     ) {
         if N <= I_QI {
             return;
@@ -115,11 +140,19 @@ impl BiasResponse {
         for (row, d) in self.delta.iter_mut().enumerate() {
             let c = if row == POSITION_ROW {
                 POSITION_CHANNEL
+            } else if row > POSITION_ROW {
+                OFFSET_CHANNELS[row - LAG_ROWS[0]]
             } else {
                 OFFSET_CHANNELS[row % 2]
             };
-            // the misreading's part of channel c's reading: 1 Pa, 1 m, or g·p_c
-            let misread = if row < 2 || row == POSITION_ROW { 1.0 } else { y[c] };
+            // the misreading's part of channel c's reading: 1 Pa, 1 m, g·p_c or −d·ṗ_c
+            let misread = if row > POSITION_ROW {
+                -rates[c]
+            } else if row < 2 || row == POSITION_ROW {
+                1.0
+            } else {
+                y[c]
+            };
             let before = *d;
             for (i, k) in gains.iter().enumerate() {
                 if use_channel[i] {
@@ -143,6 +176,21 @@ impl BiasResponse {
     /// sizes q_e1, q_e2, q_i, L/min (a span error g moves them g times as much).
     pub fn leak_sizes_lpm_per_span(&self) -> [[f64; 3]; 2] {
         [2, 3].map(|row| std::array::from_fn(|k| self.delta[row][I_QE1 + k] / M3_S_PER_LPM))
+    }
+
+    /// How a delay of 1 ms on p1 (row 0) and on p2 (row 1) moves the leak
+    /// sizes q_e1, q_e2, q_i, L/min per ms.
+    pub fn leak_sizes_lpm_per_ms_delay(&self) -> [[f64; 3]; 2] {
+        LAG_ROWS.map(|row| std::array::from_fn(|k| self.delta[row][I_QE1 + k] / M3_S_PER_LPM * 1.0e-3))
+    }
+
+    /// How a delay of `delay_s` on both pressure transducers moves the leak
+    /// sizes q_e1, q_e2, q_i, m³/s: what the leak filter takes off them.
+    #[inline(always)]
+    pub(crate) fn lag_imprint(&self, delay_s: f64) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            delay_s * (self.delta[LAG_ROWS[0]][I_QE1 + k] + self.delta[LAG_ROWS[1]][I_QE1 + k])
+        })
     }
 
     /// How an offset of 1 mm on x moves the leak sizes q_e1, q_e2, q_i, L/min per mm.
@@ -211,5 +259,30 @@ mod tests {
         f[(0, 0)] = 0.0;
         r.predict(&f);
         assert_eq!(r.delta[0][0].to_bits(), (-0.0f64).to_bits());
+    }
+
+    #[test]
+    fn a_reanchoring_keeps_the_delays_imprint_on_the_slow_states_only() {
+        let mut r = BiasResponse::default();
+        for (row, d) in r.delta.iter_mut().enumerate() {
+            for (i, v) in d.iter_mut().enumerate() {
+                *v = (row * 100 + i + 1) as f64;
+            }
+        }
+        let before = r;
+        r.reanchor();
+        for (row, d) in r.delta.iter().enumerate() {
+            for (i, v) in d.iter().enumerate() {
+                let kept = LAG_ROWS.contains(&row) && i >= FIRST_RANDOM_WALK;
+                let expected = if kept { before.delta[row][i] } else { 0.0 };
+                assert_eq!(*v, expected, "row {row}, state {i}");
+            }
+        }
+        // the imprint taken off the leak sizes is the kept rows' sum times the delay
+        let imprint = r.lag_imprint(2.0e-4);
+        for (k, v) in imprint.iter().enumerate() {
+            let sum = before.delta[LAG_ROWS[0]][I_QE1 + k] + before.delta[LAG_ROWS[1]][I_QE1 + k];
+            assert_eq!(*v, 2.0e-4 * sum);
+        }
     }
 }

@@ -65,6 +65,11 @@ pub struct Estimate {
     /// How an offset of 1 mm on x would have moved q_e1, q_e2, q_i by now,
     /// L/min per mm ([`bias`]); zero for the layouts without leak sizes.
     pub position_offset_response_lpm_per_mm: [f64; 3],
+    /// How a delay of 1 ms on p1 and on p2 would have moved q_e1, q_e2, q_i
+    /// by now, L/min per ms ([`bias`]); zero for the layouts without leak
+    /// sizes. The leak sizes in `state` have
+    /// [`Tuning::lag_correction_s`](crate::Tuning::lag_correction_s) times its sum taken off.
+    pub delay_response_lpm_per_ms: [[f64; 3]; 2],
 }
 
 impl Default for Estimate {
@@ -101,6 +106,7 @@ impl Estimate {
             offset_response_lpm_per_mpa: [[0.0; 3]; 2],
             span_response_lpm: [[0.0; 3]; 2],
             position_offset_response_lpm_per_mm: [0.0; 3],
+            delay_response_lpm_per_ms: [[0.0; 3]; 2],
         }
     }
 }

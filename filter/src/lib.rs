@@ -463,7 +463,7 @@ impl Estimator {
                 Filter::S12(e) => reanchor_filter::<12, 12>(e, tuning, &self.model, measured),
             }
             self.reanchor_pending = false;
-            self.offset_response.clear();
+            self.offset_response.reanchor();
             self.outliers.clear();
             self.track.clear();
             flags |= FLAG_REANCHORED;
@@ -489,6 +489,7 @@ impl Estimator {
                 && s.t_s - self.t0_s >= self.tuning.convergence_time_s,
             jitter_s: self.tuning.sample_jitter_s,
             pressure_lag_s: lag_s,
+            lag_correction_s: self.tuning.lag_correction_s,
         };
         let memory = StepMemory {
             still_samples: &mut self.still_samples,

@@ -2,7 +2,7 @@
 //! update on the measured channels), its start and its re-anchoring, for
 //! every layout's number of states.
 
-use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE};
+use model::process::{ProcessModel, FIRST_RANDOM_WALK, I_BULK, I_FE, I_QE1, I_QI};
 use nalgebra::{SMatrix, SVector};
 
 use crate::ekf::{self, Ekf, EkfError};
@@ -102,6 +102,9 @@ pub(crate) struct StepInput {
     /// The pressure transducers' lags (p1, p2) the NIS counts, s
     /// ([`Tuning::pressure_lag_s`]; 0: none, as for a repeated reading).
     pub(crate) pressure_lag_s: [f64; 2],
+    /// The transducers' delay whose imprint is taken off the published leak
+    /// sizes, s ([`Tuning::lag_correction_s`]; 0: none).
+    pub(crate) lag_correction_s: f64,
 }
 
 impl StepInput {
@@ -117,6 +120,7 @@ impl StepInput {
             gate_outliers: false,
             jitter_s: 0.0,
             pressure_lag_s: [0.0; 2],
+            lag_correction_s: 0.0,
         }
     }
 }
@@ -175,6 +179,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         gate_outliers,
         jitter_s,
         pressure_lag_s,
+        lag_correction_s,
     } = *input;
     let StepMemory {
         still_samples,
@@ -201,11 +206,9 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
         f[(2, I_BULK)] -= from_v2;
     }
     // the measured states' rates over this step, from the prediction
-    let rates = if jitter_s > 0.0 || pressure_lag_s != [0.0; 2] {
+    let rates = {
         let prior = e.state();
         ProcessModel::MEASURED_STATES.map(|i| (x_pred[i] - prior[i]) / model.dt_s)
-    } else {
-        [0.0; 3]
     };
     if jitter_s > 0.0 {
         // each reading is off by its rate times the jitter
@@ -243,7 +246,7 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
                 }
                 updating
             })?;
-        offset_response.update(e, ProcessModel::MEASURED_STATES, updating, y);
+        offset_response.update(e, ProcessModel::MEASURED_STATES, updating, y, rates);
         let mut x = *e.state();
         if model.keep_physical(&mut x).any() {
             e.set_state(x);
@@ -275,6 +278,13 @@ pub(crate) fn step_filter_body<const N: usize, const W: usize, A: ekf::MulAdd>(
     out.offset_response_lpm_per_mpa = offset_response.leak_sizes_lpm_per_mpa();
     out.span_response_lpm = offset_response.leak_sizes_lpm_per_span();
     out.position_offset_response_lpm_per_mm = offset_response.leak_sizes_lpm_per_mm();
+    out.delay_response_lpm_per_ms = offset_response.leak_sizes_lpm_per_ms_delay();
+    if lag_correction_s > 0.0 && N > I_QI {
+        // the leak sizes published are those of transducers without the delay
+        for (k, imprint) in offset_response.lag_imprint(lag_correction_s).iter().enumerate() {
+            out.state[I_QE1 + k] -= imprint;
+        }
+    }
     if N == 12 {
         out.bulk_scale = x[I_BULK];
         out.bulk_scale_sigma = sig[I_BULK];

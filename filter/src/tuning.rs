@@ -76,6 +76,13 @@ schema::config_struct! {
         /// outlier test do not. `commission` sets them from the recording
         /// (docs/identification.md).
         pub pressure_lag_s: [f64; 2] = [0.0; 2] => ["s", num!("lags", 0.0, 0.01)],
+        /// The pressure transducers' delay taken off the leak sizes, s (0:
+        /// none): a transducer delayed by d reads p − d·ṗ, which moves the
+        /// leak sizes by d times the filter's own response to it
+        /// ([`Estimate::delay_response_lpm_per_ms`](crate::Estimate::delay_response_lpm_per_ms)).
+        /// `commission` fits it to the leak sizes' swings on its recording
+        /// (docs/estimator.md).
+        pub lag_correction_s: f64 = 0.0 => ["s", num!("a time", 0.0, 0.01)],
         /// P0 of the spool position, m².
         pub p0_x_sp_m2: f64 = 1e4 => ["m²", num!("a number", 1e-30, 10000.0)],
         /// P0 of each chamber pressure, Pa².

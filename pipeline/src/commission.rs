@@ -26,12 +26,15 @@ use config::Config;
 pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learned, Param};
 
 mod balances;
+mod delay;
 mod misreading;
 mod reach;
 mod theta;
 #[cfg(test)]
 use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
+use delay::lag_bound_s;
+pub use delay::{DelayFit, DelayTaken};
 pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
 pub use theta::{laminar_pull, PROBE as LAMINAR_PROBE};
@@ -133,11 +136,7 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     }
     // and its NIS each transducer's lag, up to the longest the
     // datasheet's response time allows
-    let lag_bound_s = cfg
-        .datasheet
-        .as_ref()
-        .and_then(|d| d.pressure_transducers.lag_bound_s())
-        .unwrap_or(identify::MAX_LAG_S);
+    let lag_bound_s = lag_bound_s(cfg);
     for (lag, found) in out.leak_filter.pressure_lag_s.iter_mut().zip(&id.pressure_lag_s) {
         *lag = found.estimate().map_or(0.0, |e| e.value.clamp(0.0, lag_bound_s));
     }
@@ -268,11 +267,13 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
     let mut fit = FitTrace::default();
     let mut responses = ResponseTrace::default();
     let mut misreading = MisreadingFit::default();
+    let mut delay = DelayFit::default();
     replay_estimates(input, &at_reference, cfg.leak_filter.clone(), |e| {
         learner.on_estimate(e);
         fit.push(e);
         responses.push(e);
         misreading.push(e);
+        delay.push(e);
         theta.push(e);
     })?;
     let c = learner
@@ -288,6 +289,7 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
         set_by,
         responses,
         misreading,
+        delay,
     })
 }
 
@@ -308,6 +310,8 @@ pub struct LearnedTrace {
     pub responses: ResponseTrace,
     /// The sums that fit the transducers' misreading to the recording.
     pub misreading: MisreadingFit,
+    /// The sums that fit the transducers' delay to the leak sizes' swings.
+    pub delay: DelayFit,
 }
 
 /// The smallest misreading of each transducer the detector names with
@@ -336,10 +340,15 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     // the identified model is now the rig's; the datasheet it started from is not written again
     identified_cfg.datasheet = None;
     let mut pass = bias_then_learn(input, &identified_cfg)?;
+    let delay = delay::fit_delay(input, &mut identified_cfg, lag_bound_s(cfg), &mut pass)?;
+    delay.iter().for_each(|d| eprintln!("{}", d.line()));
     let misreading = match tolerance {
         Some(t) => fit_misreading(input, &identified_cfg, t, &mut pass)?,
         None => None,
     };
+    if let Some(d) = delay.as_ref().filter(|d| d.taken) {
+        delay::hold_over_uncertainty(input, &identified_cfg, d, tolerance, &mut pass)?;
+    }
     let Pass { mut cfg, bias, trace } = pass;
     if let Some(m) = &misreading {
         eprintln!("{}", m.line());
@@ -401,6 +410,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         identified,
         null_bias,
         misreading,
+        delay,
         learned,
         fit,
     };

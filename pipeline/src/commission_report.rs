@@ -328,6 +328,8 @@ pub struct CommissionRecord {
     pub null_bias: Option<(NullBias, f64)>,
     /// The transducers' misreading fitted, and whether it was taken.
     pub misreading: Option<crate::commission::MisreadingTaken>,
+    /// The transducers' delay fitted, and whether it was taken.
+    pub delay: Option<crate::commission::DelayTaken>,
     /// The healthy state and the thresholds.
     pub learned: Learned,
     /// The leak filter's fit to the recording.
@@ -385,6 +387,13 @@ impl CommissionRecord {
                     z * 1e-3
                 );
             }
+        }
+        if let Some(d) = self.delay.filter(|d| d.taken) {
+            extra += &format!(
+                "<tr><td>pressure transducers' delay taken off the leak sizes</td><td class=\"n\">{:.3}</td><td class=\"n\">–</td><td class=\"n\">0</td><td class=\"n\">{:+.3}</td><td>ms</td></tr>\n",
+                d.delay_s * 1e3,
+                d.delay_s * 1e3
+            );
         }
         h += &id.html(&extra);
         h += &self.learned_html(l);

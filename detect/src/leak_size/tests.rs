@@ -42,6 +42,7 @@ fn estimate(t_s: f64, q_lpm: [f64; 3]) -> Estimate {
         offset_response_lpm_per_mpa: [[0.0; 3]; 2],
         span_response_lpm: [[0.0; 3]; 2],
         position_offset_response_lpm_per_mm: [0.0; 3],
+        delay_response_lpm_per_ms: [[0.0; 3]; 2],
     }
 }
 

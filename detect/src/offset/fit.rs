@@ -242,7 +242,7 @@ impl Fit {
     /// leaves: the baseline has taken up the offset's steady part.
     /// A span error counts only where it leaves less than
     /// [`SPAN_FIT_RATIO`] of what the channel's offset in the same form
-    /// leaves. An offset on x counts only up to [`POSITION_MOST_OFFSET_MM`],
+    /// leaves. An offset on x counts only with `position` (x watched), up to [`POSITION_MOST_OFFSET_MM`],
     /// and where it leaves less than [`POSITION_FIT_RATIO`] of what the best
     /// misreading of p1 or p2 leaves.
     /// Without `all_forms`, the pressures' offsets' responses as given alone
@@ -253,7 +253,12 @@ impl Fit {
     /// leaves ([`BestOffset::leak_left`]; the leaks of kinds `directions`):
     /// a drift fits everything a standing offset fits, and as much more as
     /// its rate allows, so it is judged against a leak with a rate too.
-    pub(crate) fn best_offset(&self, all_forms: bool, directions: &[[f64; 2]; 3]) -> BestOffset {
+    pub(crate) fn best_offset(
+        &self,
+        all_forms: bool,
+        position: bool,
+        directions: &[[f64; 2]; 3],
+    ) -> BestOffset {
         let left: [f64; ALL_HYPOTHESES] = std::array::from_fn(|h| self.energy - self.explained_by_offset(h));
         let best = |range: std::ops::Range<usize>| {
             range
@@ -273,7 +278,7 @@ impl Fit {
         } else {
             pressure
         };
-        let position = if all_forms {
+        let position = if all_forms && position {
             best(FIRST_POSITION_HYPOTHESIS..HYPOTHESES)
         } else {
             (0, f64::INFINITY)

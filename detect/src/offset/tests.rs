@@ -308,11 +308,11 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
         fit.add((-0.01f64 / OFFSET_WINDOW_S).exp(), 0.01, rise, &h);
     }
     let fit::BestOffset { h: all, left, .. } =
-        fit.best_offset(true, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+        fit.best_offset(true, true, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(all, 4, "the span on p1 fits best");
     assert!(left < 1e-6 * fit.energy, "{left} of {}", fit.energy);
     let fit::BestOffset { h: given, left, .. } =
-        fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+        fit.best_offset(false, false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert!(given < 2 || is_drift(given), "hypothesis {given}");
     assert!(left > 0.1 * fit.energy, "{left} of {}", fit.energy);
 }
@@ -323,7 +323,16 @@ fn an_episode_is_judged_on_the_offsets_as_given_alone() {
 /// a steady ext2 leak of `steady_leak_lpm`; 60 s from a fixed baseline.
 /// Returns the first change.
 fn watch_position(b_mm: f64, scale: f64, steady_leak_lpm: f64) -> (OffsetWatch, Option<OffsetChange>) {
-    let mut watch = OffsetWatch::new(25e6);
+    watch_position_in(OffsetWatch::new(25e6), b_mm, scale, steady_leak_lpm)
+}
+
+/// [`watch_position`] through `watch`.
+fn watch_position_in(
+    mut watch: OffsetWatch,
+    b_mm: f64,
+    scale: f64,
+    steady_leak_lpm: f64,
+) -> (OffsetWatch, Option<OffsetChange>) {
     let (mut id, mut first) = (1, None);
     let factors = crate::NOMINAL_INTERNAL_FACTORS;
     for n in 0..6000 {
@@ -360,6 +369,15 @@ fn an_offset_on_x_is_named_in_mm() {
     // the same rises where the response is a tenth: 30 mm, past the
     // largest offset fitted on x (15 mm); neither named nor a veto
     let (watch, change) = watch_position(30.0, 0.1, 0.0);
+    assert_eq!(change, None);
+    assert!(!watch.vetoes());
+}
+
+#[test]
+fn an_offset_on_x_is_not_fitted_where_commissioning_said_x_is_not_watched() {
+    // the rises of 3 mm on x, named above; a watch without x names nothing
+    // and holds no leak back
+    let (watch, change) = watch_position_in(OffsetWatch::new(25e6).without_position(), 3.0, 1.0, 0.0);
     assert_eq!(change, None);
     assert!(!watch.vetoes());
 }
@@ -436,7 +454,7 @@ fn a_drifting_offset_is_fitted_with_its_rate() {
         |t| [0.05, -0.4 - 0.2 * (t / 1.3).sin()],
     );
     let fit::BestOffset { h, left, .. } =
-        fit.best_offset(false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
+        fit.best_offset(false, false, &leak_directions(crate::NOMINAL_INTERNAL_FACTORS));
     assert_eq!(h, FIRST_DRIFT_HYPOTHESIS, "the drifting offset on p1");
     assert_eq!(channel_of(h), 0);
     assert!(left < 1e-9 * fit.energy, "{left} of {}", fit.energy);
@@ -461,7 +479,7 @@ fn a_leaks_onset_is_no_drifting_offset() {
     let drift = FIRST_DRIFT_HYPOTHESIS;
     assert_eq!(fit.drift_rate_mpa_per_s(drift), -MOST_DRIFT_MPA_PER_S);
     let directions = leak_directions(crate::NOMINAL_INTERNAL_FACTORS);
-    let best = fit.best_offset(false, &directions);
+    let best = fit.best_offset(false, false, &directions);
     assert!(!fit.offset_fits_better(&best, OFFSET_FIT_RATIO));
 }
 
@@ -529,7 +547,7 @@ fn a_leak_opening_late_in_the_window_is_no_drifting_offset() {
         left < OFFSET_FIT_RATIO * fit.unexplained_by_leak(&directions),
         "{left}"
     );
-    let best = fit.best_offset(false, &directions);
+    let best = fit.best_offset(false, false, &directions);
     assert!(
         !fit.offset_fits_better(&best, OFFSET_FIT_RATIO),
         "hypothesis {}",

@@ -152,7 +152,7 @@ fn a_leak_ramping_in_as_the_flow_grows_is_not_held_back_in_its_first_seconds() {
     };
     let w = drive(21.8, 0.0, at).0;
     let f = w.episode.as_ref().expect("an episode");
-    let best = f.best_offset(false, &w.directions);
+    let best = f.best_offset(false, false, &w.directions);
     assert!(best.left < EPISODE_RIVAL_RATIO * best.leak_left, "{best:?}");
     // it is the leak's own episode, too short to hold it back
     assert!(f.w < EPISODE_RIVAL_WEIGHT_S);

@@ -1,0 +1,226 @@
+//! The pressure transducers' delay, fitted to the leak sizes' swings on the
+//! commissioning's recording.
+//!
+//! A transducer delayed by d reads p − d·ṗ. Where the pressures move fast
+//! (a press's stiff chambers) that misreading moves the leak sizes by d times
+//! the filter's own response to a delay
+//! ([`filter::Estimate::delay_response_lpm_per_ms`]): a swing with the duty
+//! cycle, not a leak's step. On a healthy recording the leaks are zero, so
+//! each size is a constant plus d times its response: d is the least-squares
+//! coefficient, one for both transducers. The identification's lag reading
+//! ([`identify::Identification::pressure_lag_s`]) fits the pressures' own
+//! rates and can trade against what else is fast; this fit reads d where it
+//! matters, on the leak sizes.
+
+use filter::{FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
+use model::process::I_QE1;
+
+use super::{bias_then_learn, energy, fit_misreading, Pass, MISREADING_LEAST_SHARE};
+use config::Config;
+use std::path::Path;
+
+/// The longest delay the healthy spreads hold over, as a share of the one
+/// fitted (1); the shortest is none. The fit is not sure enough to narrow
+/// the thresholds: it reads a pure delay, while a lag also damps a swing's
+/// fast part, so the delay that fits depends on the duty cycle, and it takes
+/// up what else swings like it. `bench instances`' press and lift: the
+/// commissioning's fit read 0.57-1.05 times the simulator's delay (median
+/// 0.85); plant_dev/differential's 0.75 ms for transducers lagging 0.5 ms.
+pub const DELAY_HELD_ABOVE: f64 = 1.2;
+
+/// Litres per minute in one m³/s.
+const LPM_PER_M3_S: f64 = 6.0e4;
+
+/// The longest lag the datasheet's response time allows `cfg`'s pressure
+/// transducers, s ([`identify::MAX_LAG_S`] without one).
+pub(super) fn lag_bound_s(cfg: &Config) -> f64 {
+    cfg.datasheet
+        .as_ref()
+        .and_then(|d| d.pressure_transducers.lag_bound_s())
+        .unwrap_or(identify::MAX_LAG_S)
+}
+
+/// The sums of the least-squares fit of each leak size (L/min) to a constant
+/// plus d times its delay response (L/min per ms), over the converged samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DelayFit {
+    /// Samples summed.
+    n: u64,
+    /// Per kind (ext1, ext2, int): Σr, Σq, Σr·q, Σr² (r the response summed over p1 and p2).
+    sums: [[f64; 4]; 3],
+}
+
+impl DelayFit {
+    /// Adds estimate `e` when the filter has converged on a full sample.
+    pub fn push(&mut self, e: &filter::Estimate) {
+        if e.flags & (FLAG_CONVERGING | FLAG_RESET | FLAG_SKIPPED) != 0 {
+            return;
+        }
+        let r: [f64; 3] =
+            std::array::from_fn(|k| e.delay_response_lpm_per_ms[0][k] + e.delay_response_lpm_per_ms[1][k]);
+        let q: [f64; 3] = std::array::from_fn(|k| e.state[I_QE1 + k] * LPM_PER_M3_S);
+        if r.iter().chain(&q).any(|v| !v.is_finite()) {
+            return;
+        }
+        self.n += 1;
+        for k in 0..3 {
+            let s = &mut self.sums[k];
+            s[0] += r[k];
+            s[1] += q[k];
+            s[2] += r[k] * q[k];
+            s[3] += r[k] * r[k];
+        }
+    }
+
+    /// The delay that fits the sizes' swings, s (`None` without samples or
+    /// without a response to fit); the sizes summed are those published, so
+    /// it adds to the delay already taken off them.
+    pub fn delay_s(&self) -> Option<f64> {
+        if self.n < 2 {
+            return None;
+        }
+        let n = self.n as f64;
+        let (mut rq, mut rr) = (0.0, 0.0);
+        for s in &self.sums {
+            rq += s[2] - s[0] * s[1] / n;
+            rr += s[3] - s[0] * s[0] / n;
+        }
+        (rr > 0.0).then(|| rq / rr * 1.0e-3)
+    }
+}
+
+/// Widens the healthy spreads of `pass` (learned from `identified` on
+/// `input`, with the delay `taken` off the sizes and the misreading `pass`
+/// took) to hold over the delay's uncertainty: each kind's spread (and its
+/// clear spread) becomes the largest of its own, of the commissioning's
+/// without the delay taken off (its misreading fitted within `tolerance` as
+/// it would be then), and of the one with the delay [`DELAY_HELD_ABOVE`]
+/// times longer (up to the datasheet's bound). So a threshold is at least
+/// what it is without the correction.
+pub(super) fn hold_over_uncertainty(
+    input: &Path,
+    identified: &Config,
+    taken: &DelayTaken,
+    tolerance: Option<identify::TransducerTolerance>,
+    pass: &mut Pass,
+) -> Result<(), String> {
+    let mut plain_cfg = identified.clone();
+    plain_cfg.leak_filter.lag_correction_s = 0.0;
+    let mut plain = bias_then_learn(input, &plain_cfg)?;
+    if let Some(t) = tolerance {
+        fit_misreading(input, &plain_cfg, t, &mut plain)?;
+    }
+    let mut longer_cfg = identified.clone();
+    longer_cfg.model.pressure_misreading_pa = pass.cfg.model.pressure_misreading_pa;
+    longer_cfg.leak_filter.lag_correction_s = (taken.delay_s * DELAY_HELD_ABOVE).min(taken.bound_s);
+    let longer = bias_then_learn(input, &longer_cfg)?;
+    for other in [plain.trace.commissioning, longer.trace.commissioning] {
+        let held = &mut pass.trace.commissioning;
+        for k in 0..3 {
+            held.spreads_lpm[k] = held.spreads_lpm[k].max(other.spreads_lpm[k]);
+            if held.clear_spreads_lpm[k].is_finite() && other.clear_spreads_lpm[k].is_finite() {
+                held.clear_spreads_lpm[k] = held.clear_spreads_lpm[k].max(other.clear_spreads_lpm[k]);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The delay fitted and whether it was taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DelayTaken {
+    /// The delay fitted, clamped to what the datasheet allows, s.
+    pub delay_s: f64,
+    /// The longest lag the datasheet allows, s.
+    pub bound_s: f64,
+    /// The healthy spreads before and with it taken off (ext1, ext2, int), L/min.
+    pub spreads_lpm: [[f64; 3]; 2],
+    /// Taken: the spreads' energy fell by [`MISREADING_LEAST_SHARE`] or more.
+    pub taken: bool,
+}
+
+impl DelayTaken {
+    /// The line commissioning prints.
+    pub fn line(&self) -> String {
+        let fall = 1.0 - energy(self.spreads_lpm[1]) / energy(self.spreads_lpm[0]).max(f64::MIN_POSITIVE);
+        let verdict = if self.taken {
+            "taken off the leak sizes".to_string()
+        } else {
+            format!("not taken (a fall under {:.0} %)", 100.0 * MISREADING_LEAST_SHARE)
+        };
+        format!(
+            "the pressure transducers' delay fitted to the leak sizes' swings: {:.3} ms; \
+             the healthy spreads' energy falls by {:.0} % with it: {verdict}",
+            self.delay_s * 1e3,
+            100.0 * fall
+        )
+    }
+}
+
+/// Fits the transducers' delay to the commissioning of `pass` (learned from
+/// `identified` on `input`), up to `bound_s`, and takes it off the leak sizes
+/// where the healthy spreads' energy falls by [`MISREADING_LEAST_SHARE`]:
+/// `identified` and `pass` then carry it, the spreads held over its
+/// uncertainty ([`hold_over_uncertainty`]). `None` when nothing fits (no
+/// response, or a delay of 0).
+pub(super) fn fit_delay(
+    input: &Path,
+    identified: &mut Config,
+    bound_s: f64,
+    pass: &mut Pass,
+) -> Result<Option<DelayTaken>, String> {
+    let Some(d) = pass.trace.delay.delay_s() else {
+        return Ok(None);
+    };
+    let delay_s = (identified.leak_filter.lag_correction_s + d).clamp(0.0, bound_s);
+    if delay_s <= 0.0 {
+        return Ok(None);
+    }
+    let mut trial_cfg = identified.clone();
+    trial_cfg.leak_filter.lag_correction_s = delay_s;
+    let trial = bias_then_learn(input, &trial_cfg)?;
+    let before = pass.trace.commissioning.spreads_lpm;
+    let after = trial.trace.commissioning.spreads_lpm;
+    let taken = energy(after) <= (1.0 - MISREADING_LEAST_SHARE) * energy(before);
+    if taken {
+        *identified = trial_cfg;
+        *pass = trial;
+    }
+    Ok(Some(DelayTaken {
+        delay_s,
+        bound_s,
+        spreads_lpm: [before, after],
+        taken,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fit_reads_the_delay_of_sizes_that_swing_with_their_response() {
+        // each size a constant of its own plus 0.3 ms times its response
+        // (L/min per ms), the responses swinging differently per kind
+        let mut fit = DelayFit::default();
+        let mut e = filter::Estimate::default();
+        for i in 0..1000 {
+            let t = i as f64 * 1e-3;
+            e.delay_response_lpm_per_ms = [[0.0; 3]; 2];
+            for k in 0..3 {
+                let r = (7.0 * t + k as f64).sin() * (k + 1) as f64;
+                // on p1 for ext1 and int, on p2 for ext2: the fit sums the two
+                e.delay_response_lpm_per_ms[k % 2][k] = r;
+                e.state[I_QE1 + k] = (0.05 * k as f64 + 0.3 * r) / LPM_PER_M3_S;
+            }
+            fit.push(&e);
+        }
+        let d = fit.delay_s().expect("a delay");
+        assert!((d - 0.3e-3).abs() < 1e-12, "read {d} s");
+        // an estimate still converging is not summed
+        let mut converging = DelayFit::default();
+        e.flags = FLAG_CONVERGING;
+        converging.push(&e);
+        assert_eq!(converging.delay_s(), None);
+    }
+}
