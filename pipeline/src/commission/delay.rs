@@ -160,9 +160,9 @@ impl DelayTaken {
 /// Fits the transducers' delay to the commissioning of `pass` (learned from
 /// `identified` on `input`), up to `bound_s`, and takes it off the leak sizes
 /// where the healthy spreads' energy falls by [`MISREADING_LEAST_SHARE`]:
-/// `identified` and `pass` then carry it, the spreads held over its
-/// uncertainty ([`hold_over_uncertainty`]). `None` when nothing fits (no
-/// response, or a delay of 0).
+/// `identified` and `pass` then carry it; [`hold_over_uncertainty`] holds
+/// the spreads over its uncertainty once the misreading is fitted. `None`
+/// when nothing fits (no response, or a delay of 0).
 pub(super) fn fit_delay(
     input: &Path,
     identified: &mut Config,
