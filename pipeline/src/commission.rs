@@ -35,6 +35,7 @@ use balances::lag_against_datasheet;
 use balances::{flow_balance, force_balance};
 use delay::lag_bound_s;
 pub use delay::{DelayFit, DelayTaken};
+use misreading::transducer_tolerance;
 pub use misreading::{Misreading, MisreadingFit, MisreadingTaken, MISREADING_LEAST_SHARE};
 pub use reach::{ResponseTrace, SensorReach};
 pub use theta::{laminar_pull, PROBE as LAMINAR_PROBE};
@@ -99,18 +100,6 @@ pub fn identify_on(input: &Path, cfg: &Config) -> Result<Found, String> {
         mechanics,
         null_leakage_tolerance,
     })
-}
-
-/// The pressure transducers' tolerances `cfg`'s sensors give (from its
-/// datasheet), `None` when neither is given.
-fn transducer_tolerance(cfg: &Config) -> Option<identify::TransducerTolerance> {
-    let s = &cfg.sensors;
-    (s.pressure_zero_offset_max_pa > 0.0 || s.pressure_span_error_max > 0.0).then_some(
-        identify::TransducerTolerance {
-            zero_offset_max_pa: s.pressure_zero_offset_max_pa,
-            span_error_max_fraction: s.pressure_span_error_max,
-        },
-    )
 }
 
 /// Identifies the valve's flow gains, null leakage and the oil's stiffness on

@@ -201,6 +201,18 @@ fn clamp_to_box(a: &Matrix2<f64>, b: &Vector2<f64>, z: [f64; 2], lo: [f64; 2], h
     best
 }
 
+/// The pressure transducers' tolerances `cfg`'s sensors give (from its
+/// datasheet), `None` when neither is given.
+pub(super) fn transducer_tolerance(cfg: &config::Config) -> Option<identify::TransducerTolerance> {
+    let s = &cfg.sensors;
+    (s.pressure_zero_offset_max_pa > 0.0 || s.pressure_span_error_max > 0.0).then_some(
+        identify::TransducerTolerance {
+            zero_offset_max_pa: s.pressure_zero_offset_max_pa,
+            span_error_max_fraction: s.pressure_span_error_max,
+        },
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
