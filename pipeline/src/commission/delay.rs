@@ -14,6 +14,7 @@
 
 use filter::{FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use model::process::I_QE1;
+use model::units::m3_s_to_lpm;
 
 use super::{bias_then_learn, energy, fit_misreading, Pass, MISREADING_LEAST_SHARE};
 use config::Config;
@@ -27,9 +28,6 @@ use std::path::Path;
 /// commissioning's fit read 0.57-1.05 times the simulator's delay (median
 /// 0.85); plant_dev/differential's 0.75 ms for transducers lagging 0.5 ms.
 pub const DELAY_HELD_ABOVE: f64 = 1.2;
-
-/// Litres per minute in one m³/s.
-const LPM_PER_M3_S: f64 = 6.0e4;
 
 /// The longest lag the datasheet's response time allows `cfg`'s pressure
 /// transducers, s ([`identify::MAX_LAG_S`] without one).
@@ -58,7 +56,7 @@ impl DelayFit {
         }
         let r: [f64; 3] =
             std::array::from_fn(|k| e.delay_response_lpm_per_ms[0][k] + e.delay_response_lpm_per_ms[1][k]);
-        let q: [f64; 3] = std::array::from_fn(|k| e.state[I_QE1 + k] * LPM_PER_M3_S);
+        let q: [f64; 3] = std::array::from_fn(|k| m3_s_to_lpm(e.state[I_QE1 + k]));
         if r.iter().chain(&q).any(|v| !v.is_finite()) {
             return;
         }
@@ -197,6 +195,7 @@ pub(super) fn fit_delay(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use model::units::lpm_to_m3_s;
 
     #[test]
     fn the_fit_reads_the_delay_of_sizes_that_swing_with_their_response() {
@@ -211,7 +210,7 @@ mod tests {
                 let r = (7.0 * t + k as f64).sin() * (k + 1) as f64;
                 // on p1 for ext1 and int, on p2 for ext2: the fit sums the two
                 e.delay_response_lpm_per_ms[k % 2][k] = r;
-                e.state[I_QE1 + k] = (0.05 * k as f64 + 0.3 * r) / LPM_PER_M3_S;
+                e.state[I_QE1 + k] = lpm_to_m3_s(0.05 * k as f64 + 0.3 * r);
             }
             fit.push(&e);
         }
