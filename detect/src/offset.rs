@@ -53,7 +53,10 @@ pub use floors::least_pressure_offset_pa;
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
 pub use limits::*;
-pub use rival::{EPISODE_RIVAL_NOW_SHARE, EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S};
+pub use rival::{
+    EPISODE_LEAK_RATIO, EPISODE_RIVAL_NOW_SHARE, EPISODE_RIVAL_RATIO, EPISODE_RIVAL_WEIGHT_S,
+    MISREADING_WIDENING,
+};
 
 use fit::{
     channel_of, is_drift, is_position, is_span, leak_directions, swing_of, without_reverse_internal,
@@ -265,6 +268,7 @@ impl OffsetWatch {
             standing: self.standing,
             least_offset_mpa: self.least_offset_mpa,
             least_drift_mpa: self.least_drift_mpa,
+            position_watched: self.position_watched,
             ..OffsetWatch::default()
         };
     }

@@ -3,6 +3,7 @@
 //! evidence of each leak kind ([`Evidence`]).
 
 use super::{BlindCause, LeakSizeDetector};
+use crate::offset::MISREADING_WIDENING;
 use crate::{misfits_with, EventKind, M3_S_PER_LPM, REACQUIRE_S};
 use filter::Estimate;
 
@@ -180,6 +181,9 @@ impl LeakSizeDetector {
             || self.offsets.vetoes()
             || self.offsets.rivals_leak(e.t_s)
             || (self.active.is_none() && self.offsets.rivals_new_leak());
+        // Where a misreading could make the rises as well as a new leak, a new
+        // leak's rise must pass a wider threshold.
+        let widened = self.active.is_none() && self.offsets.could_make_new_rises();
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
         let naming_thr = if self.offsets.could_explain() {
             thr
@@ -208,6 +212,7 @@ impl LeakSizeDetector {
             }
             let evidence = !invalid
                 && !offset_like
+                && !(widened && rise[k] < MISREADING_WIDENING * thr)
                 && !frozen_x
                 && physical
                 && (!blind || rise[k] > self.cfg.excursion_override * thr);

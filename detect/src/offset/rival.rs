@@ -22,6 +22,19 @@ pub const EPISODE_RIVAL_RATIO: f64 = 1.0;
 /// misreading does not make now: it is raised, however well the episode fits.
 pub const EPISODE_RIVAL_NOW_SHARE: f64 = 0.5;
 
+/// Where a misreading could make the rises as well as a new leak
+/// ([`OffsetWatch::could_make_new_rises`]), a new leak's rise must pass this
+/// multiple of its threshold (1). A transducer drifting low moves the leak
+/// sizes with the flow: its rises creep past a threshold for moments, long
+/// before its fit is clean enough to name it.
+pub const MISREADING_WIDENING: f64 = 1.5;
+
+/// A present episode whose best misreading's fit leaves more than this
+/// multiple of what its best leak's leaves (1) is a leak's own: its rises do
+/// not need [`MISREADING_WIDENING`]. The window may still fit a misreading
+/// there, from the healthy rises before the leak.
+pub const EPISODE_LEAK_RATIO: f64 = 2.0;
+
 impl OffsetWatch {
     /// Whether, at `t_s` (s), the window's best misreading fits the rises at
     /// least as well as the best leak does, with its part of them material,
@@ -35,6 +48,20 @@ impl OffsetWatch {
     pub fn rivals_leak(&self, t_s: f64) -> bool {
         let h = self.window_best.h;
         self.window_offset_fits(1.0) && self.past_tolerance(h) && !self.faster_than_a_drift(h, t_s)
+    }
+
+    /// Whether a misreading could make the rises as well as a new leak: the
+    /// window's could explain them ([`Self::could_explain`]), and the
+    /// present episode's best misreading leaves at most
+    /// [`EPISODE_LEAK_RATIO`] times what its best leak leaves (or no episode
+    /// is long enough to tell: 0.2 s of weight). A new leak's rise must
+    /// then pass [`MISREADING_WIDENING`] times its threshold.
+    pub fn could_make_new_rises(&self) -> bool {
+        let leaks_own_episode = match (&self.episode, &self.episode_best) {
+            (Some(f), Some(best)) => f.energy > 0.0 && best.left > EPISODE_LEAK_RATIO * best.leak_left,
+            _ => false,
+        };
+        self.could_explain() && !leaks_own_episode
     }
 
     /// Whether the present episode has lasted [`EPISODE_RIVAL_WEIGHT_S`], a

@@ -158,3 +158,21 @@ fn a_leak_ramping_in_as_the_flow_grows_is_not_held_back_in_its_first_seconds() {
     assert!(f.w < EPISODE_RIVAL_WEIGHT_S);
     assert!(!w.rivals_new_leak());
 }
+
+#[test]
+fn a_creeping_misreading_widens_a_new_leaks_threshold_and_a_leaks_own_episode_does_not() {
+    // p2 drifting low at 5 kPa/s for 20 s: the window could take its rises for
+    // a misreading, and its episode fits a leak no better
+    let w = offset_and_ext2_until(20.0, |t| -0.005 * t, |_| 0.0);
+    assert!(w.could_make_new_rises());
+    // p2 reading 40 kPa low since the start (within its tolerance; its rises
+    // stay under half the threshold: no episode), then a steady ext2 leak of
+    // 0.06 L/min from 20 s: for 2 s the window still fits the misreading, but
+    // the leak's own episode fits the leak far better
+    let step = |t: f64| if t >= 20.0 { 0.06 } else { 0.0 };
+    for seconds in [20.3, 20.5, 21.0, 22.0] {
+        let w = offset_and_ext2_until(seconds, |_| -0.04, step);
+        assert!(w.could_explain(), "{seconds} s");
+        assert!(!w.could_make_new_rises(), "{seconds} s");
+    }
+}
