@@ -210,9 +210,10 @@ impl LeakSizeDetector {
                 self.last_low_s[k] = e.t_s;
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
+            let under_widened = widened && rise[k] < MISREADING_WIDENING * thr;
             let evidence = !invalid
                 && !offset_like
-                && !(widened && rise[k] < MISREADING_WIDENING * thr)
+                && !under_widened
                 && !frozen_x
                 && physical
                 && (!blind || rise[k] > self.cfg.excursion_override * thr);
