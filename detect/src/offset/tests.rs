@@ -376,10 +376,14 @@ fn an_offset_on_x_is_named_in_mm() {
 #[test]
 fn an_offset_on_x_is_not_fitted_where_commissioning_said_x_is_not_watched() {
     // the rises of 3 mm on x, named above; a watch without x names nothing
-    // and holds no leak back
-    let (watch, change) = watch_position_in(OffsetWatch::new(25e6).without_position(), 3.0, 1.0, 0.0);
-    assert_eq!(change, None);
-    assert!(!watch.vetoes());
+    // and holds no leak back, also after a restart of the filter
+    let mut restarted = OffsetWatch::new(25e6).without_position();
+    restarted.restart();
+    for without_x in [OffsetWatch::new(25e6).without_position(), restarted] {
+        let (watch, change) = watch_position_in(without_x, 3.0, 1.0, 0.0);
+        assert_eq!(change, None);
+        assert!(!watch.vetoes());
+    }
 }
 
 #[test]
