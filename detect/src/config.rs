@@ -67,10 +67,16 @@ impl Commissioning {
         })
     }
 
+    /// Whether an offset on x is watched: not where commissioning found its
+    /// response lost in the model's error (`least_offsets_named` on x inf).
+    pub fn position_watched(&self) -> bool {
+        self.least_offsets_named[2] != f64::INFINITY
+    }
+
     /// What commissioning found the detector cannot watch on this rig, as a
     /// phrase (`None`: nothing, or not stated).
     pub fn not_watched(&self) -> Option<&'static str> {
-        (self.least_offsets_named[2] == f64::INFINITY)
+        (!self.position_watched())
             .then_some("an offset on x is not watched (commissioning found it moves the leak sizes too little on this rig)")
     }
 

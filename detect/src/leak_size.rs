@@ -155,10 +155,7 @@ impl LeakSizeDetector {
     /// A detector with settings `cfg`.
     pub fn new(cfg: ClassifierConfig) -> Self {
         let offsets = crate::offset::OffsetWatch::new(cfg.pressure_full_scale_pa);
-        let x_unwatched = cfg
-            .commissioning
-            .as_ref()
-            .is_some_and(|c| c.least_offsets_named[2] == f64::INFINITY);
+        let x_unwatched = cfg.commissioning.as_ref().is_some_and(|c| !c.position_watched());
         let offsets = if x_unwatched {
             offsets.without_position()
         } else {

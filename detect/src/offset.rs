@@ -175,7 +175,7 @@ pub struct OffsetWatch {
     /// Least standing offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
     least_offset_mpa: f64,
     /// Whether an offset on x is fitted: not where commissioning found its
-    /// response lost in the model's error ([`crate::Commissioning::least_offsets_named`] inf).
+    /// response lost in the model's error ([`crate::Commissioning::position_watched`]).
     position_watched: bool,
     /// Least drifting offset named, MPa ([`DRIFT_LEAST_SHARE_OF_RANGE`] of the range).
     least_drift_mpa: f64,
