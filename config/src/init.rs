@@ -179,8 +179,8 @@ fn oil_lines(oil: &OilSheet) -> Vec<Line> {
         ),
         (
             "viscosity_100c_mm2_s",
-            num(oil.viscosity_100c_mm2_s),
-            "at 100 °C, mm²/s (the oil's data sheet)",
+            oil.viscosity_100c_mm2_s.map(num).unwrap_or_default(),
+            "at 100 °C, mm²/s, where the oil's data sheet gives it (omit: an HLP 46's, known less well)",
         ),
         (
             "bulk_modulus_per_k",
@@ -328,6 +328,40 @@ mod tests {
             let again = toml::to_string(&cfg).expect("serialise");
             assert_eq!(Config::parse(&again).expect("reads back"), cfg);
         }
+    }
+
+    #[test]
+    fn the_oils_viscosity_at_100_c_is_left_out_until_its_data_sheet_gives_it() {
+        let text = template(&example(false));
+        assert!(text.contains("# viscosity_100c_mm2_s = ..."), "{text}");
+        let cfg = Config::parse(&text).expect("valid");
+        assert_eq!(cfg.model.oil_temperature.viscosity_100c_mm2_s, None);
+        assert_eq!(
+            cfg.model.oil_temperature.law_uncertainty(),
+            model::params::CATALOGUE_LAW_UNCERTAINTY
+        );
+        // given, it reaches the model's law; the uncertainty narrows once
+        // commissioning has measured how well it knows the null leakage
+        let text = text.replace("# viscosity_100c_mm2_s = ...", "viscosity_100c_mm2_s = 6.5");
+        let mut cfg = Config::parse(&text).expect("valid");
+        assert_eq!(cfg.datasheet.map(|d| d.oil.viscosity_100c_mm2_s), Some(Some(6.5)));
+        assert_eq!(cfg.model.oil_temperature.viscosity_100c_mm2_s, Some(6.5));
+        assert_eq!(
+            cfg.model.oil_temperature.law_uncertainty(),
+            model::params::CATALOGUE_LAW_UNCERTAINTY
+        );
+        cfg.model.oil_temperature.null_leakage_sigma_share = Some(0.1);
+        let again = Config::parse(&toml::to_string(&cfg).expect("serialise")).expect("reads back");
+        assert_eq!(again, cfg);
+        assert!(
+            (again.model.oil_temperature.law_uncertainty() - model::params::STATED_LAW_UNCERTAINTY - 0.1)
+                .abs()
+                < 1e-12
+        );
+        // thicker at 100 °C than at 40 °C is refused, by its name
+        let e = Config::parse(&text.replace("viscosity_100c_mm2_s = 6.5", "viscosity_100c_mm2_s = 50.0"))
+            .unwrap_err();
+        assert!(e.contains("viscosity_100c_mm2_s"), "{e}");
     }
 
     #[test]

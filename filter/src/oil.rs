@@ -45,12 +45,6 @@ pub const OIL_ESTIMATE_SPAN_K: f64 = 40.0;
 /// model's viscous terms are held at the range's edge.
 pub const OIL_RANGE_MARGIN_K: f64 = 5.0;
 
-/// Relative uncertainty of the laminar flows' change with temperature (1):
-/// Walther's law through a catalogue's two viscosities, against oils whose
-/// viscosity index lies 60 above or below the one the law assumes, and a
-/// reference temperature read off a tank's thermometer.
-pub const VISCOSITY_LAW_UNCERTAINTY: f64 = 0.4;
-
 /// Relative uncertainty of the bulk modulus' temperature slope k_β (1): the
 /// temperature read from θ is uncertain by this share of its distance from
 /// the reference.
@@ -58,12 +52,12 @@ pub const BULK_SLOPE_UNCERTAINTY: f64 = 0.2;
 
 /// The laminar flows' factor at oil temperature `temp_c` (°C) against the
 /// reference of `oil`, and its standard deviation (1, 1): the law's
-/// uncertainty ([`VISCOSITY_LAW_UNCERTAINTY`] of the change) and the
+/// uncertainty ([`OilTemperature::law_uncertainty`] of the change) and the
 /// temperature's (`sigma_t_k`, K, through the law's slope).
 pub fn laminar_factor_with_sigma(oil: &OilTemperature, temp_c: f64, sigma_t_k: f64) -> (f64, f64) {
     let f = oil.factors(temp_c).laminar_flow;
     let slope_per_k = 0.5 * (oil.factors(temp_c + 1.0).laminar_flow - oil.factors(temp_c - 1.0).laminar_flow);
-    let sigma = VISCOSITY_LAW_UNCERTAINTY * (f - 1.0).abs() + slope_per_k.abs() * sigma_t_k.max(0.0);
+    let sigma = oil.law_uncertainty() * (f - 1.0).abs() + slope_per_k.abs() * sigma_t_k.max(0.0);
     (f, sigma)
 }
 

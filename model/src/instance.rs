@@ -8,7 +8,7 @@
 use serde::Serialize;
 
 use crate::datasheet::{Datasheet, TransducerLocation};
-use crate::params::ActuatorParams;
+use crate::params::{ActuatorParams, DEFAULT_VISCOSITY_100C_MM2_S, STATED_VISCOSITY_100C_TOLERANCE};
 use crate::rng::Rng;
 use crate::sensors::SensorParams;
 
@@ -27,12 +27,14 @@ pub struct NominalRig {
 }
 
 impl NominalRig {
-    /// The double-rod press ([`Datasheet::press`], [`ActuatorParams::press`]).
+    /// The double-rod press ([`Datasheet::press`], [`ActuatorParams::press`]),
+    /// its oil's data sheet giving ν at 40 and 100 °C.
     pub fn press() -> Self {
-        let datasheet = Datasheet::press();
+        let mut datasheet = Datasheet::press();
+        datasheet.oil.viscosity_100c_mm2_s = Some(DEFAULT_VISCOSITY_100C_MM2_S);
         NominalRig {
             name: "press",
-            model: ActuatorParams::press(),
+            model: datasheet.model(&ActuatorParams::press()),
             sensors: datasheet.sensors(&SensorParams::default()),
             datasheet,
         }
@@ -40,10 +42,12 @@ impl NominalRig {
 
     /// The vertical single-rod lift ([`Datasheet::vertical_lift`]) as a
     /// catalogue gives it: its valve's null leakage at most 0.3 L/min at
-    /// 21 MPa, its transducers at the valve manifold.
+    /// 21 MPa, its transducers at the valve manifold, its oil's data sheet
+    /// giving ν at 40 and 100 °C.
     pub fn lift() -> Self {
         let mut datasheet = Datasheet::vertical_lift();
         datasheet.valve.null_leakage_l_min = 0.3;
+        datasheet.oil.viscosity_100c_mm2_s = Some(DEFAULT_VISCOSITY_100C_MM2_S);
         datasheet.pressure_transducers.location = TransducerLocation::Manifold;
         NominalRig {
             name: "lift",
@@ -157,7 +161,10 @@ impl Instance {
     /// each, dead volumes ±15 % each, the spool's bandwidth ±10 %, the mass
     /// ±8 %; and its installation: the transducers' lag 0.2-1 ms, offsets
     /// ±50 kPa and span errors ±0.5 % each, the line's resistance and the
-    /// pump's ripple ([`tolerance`]).
+    /// pump's ripple ([`tolerance`]); last, where the oil's data sheet gives
+    /// its ν at 100 °C, the batch's within
+    /// [`STATED_VISCOSITY_100C_TOLERANCE`] of it (the draws before are
+    /// those of an oil without it).
     pub fn draw(nominal: &NominalRig, seed: u64) -> Instance {
         use tolerance as tol;
         let mut d = Drawer {
@@ -253,6 +260,14 @@ impl Instance {
             tol::SUPPLY_RIPPLE_FRACTION,
         );
         let supply_ripple_hz = d.range("sim.supply_ripple_hz", "Hz", 0.0, tol::SUPPLY_RIPPLE_HZ);
+        if let Some(nu100) = n.oil_temperature.viscosity_100c_mm2_s {
+            rig.oil_temperature.viscosity_100c_mm2_s = Some(d.relative(
+                "model.oil_temperature.viscosity_100c_mm2_s",
+                "mm²/s",
+                nu100,
+                STATED_VISCOSITY_100C_TOLERANCE,
+            ));
+        }
         Instance {
             seed,
             rig,
@@ -284,7 +299,7 @@ mod tests {
             a.rig.validate().expect("a valid rig");
             a.sensors.validate().expect("valid sensors");
             let ports = usize::from(nominal.model.area_gradient_b_m2_per_m.is_some());
-            assert_eq!(a.describe().len(), 18 + ports, "{:#?}", a.describe());
+            assert_eq!(a.describe().len(), 19 + ports, "{:#?}", a.describe());
             for d in a.describe() {
                 assert!(d.low <= d.value && d.value <= d.high, "{d:?}");
             }
@@ -299,6 +314,10 @@ mod tests {
             assert!(a.sensors.pressure_offset_pa.iter().all(|o| o.abs() <= 50e3));
             assert!(a.sensors.pressure_gain_error.iter().all(|g| g.abs() <= 0.005));
             assert!((200.0..300.0).contains(&a.supply_ripple_hz));
+            // the oil's data sheet gives ν at 100 °C; the batch lies within ±7 % of it
+            let nu100 = a.rig.oil_temperature.viscosity_100c_mm2_s.expect("stated");
+            assert!((nu100 / 6.8 - 1.0).abs() <= 0.07, "{nu100}");
+            assert_eq!(nominal.datasheet.oil.viscosity_100c_mm2_s, Some(6.8));
             // what is not drawn stays nominal
             assert_eq!(a.rig.piston_area_m2, nominal.model.piston_area_m2);
             assert_eq!(a.rig.supply_pressure_pa, nominal.model.supply_pressure_pa);
@@ -310,6 +329,27 @@ mod tests {
                 assert_ne!(x.value, y.value, "{}", x.name);
             }
         }
+    }
+
+    #[test]
+    fn an_oil_without_its_viscosity_at_100_c_draws_the_same_rig_without_the_batch() {
+        // the batch's ν at 100 °C is drawn last: without it, every other draw is the same
+        let stated = NominalRig::press();
+        let mut unstated = NominalRig::press();
+        unstated.datasheet.oil.viscosity_100c_mm2_s = None;
+        unstated.model.oil_temperature.viscosity_100c_mm2_s = None;
+        let (a, b) = (Instance::draw(&stated, 3), Instance::draw(&unstated, 3));
+        assert_eq!(a.describe().len(), b.describe().len() + 1);
+        assert_eq!(&a.describe()[..b.describe().len()], b.describe());
+        assert_eq!(
+            a.describe().last().map(|d| d.name.as_str()),
+            Some("model.oil_temperature.viscosity_100c_mm2_s")
+        );
+        assert_eq!(b.rig.oil_temperature.viscosity_100c_mm2_s, None);
+        // the batch's ν at 100 °C is the instance's truth; the sheet keeps its own
+        let nu100 = a.rig.oil_temperature.viscosity_100c_mm2_s.expect("drawn");
+        assert_ne!(nu100, 6.8);
+        assert_eq!(stated.datasheet.oil.viscosity_100c_mm2_s, Some(6.8));
     }
 
     #[test]

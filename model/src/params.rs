@@ -16,7 +16,10 @@ mod oil;
 pub(crate) mod validate;
 
 pub use friction::{Friction, FrictionParams, FrictionPreset};
-pub use oil::{OilFactors, OilTemperature};
+pub use oil::{
+    OilFactors, OilTemperature, CATALOGUE_LAW_UNCERTAINTY, DEFAULT_VISCOSITY_100C_MM2_S,
+    STATED_LAW_UNCERTAINTY, STATED_VISCOSITY_100C_TOLERANCE,
+};
 pub use validate::InvalidParam;
 
 schema::config_struct! {

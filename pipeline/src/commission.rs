@@ -119,6 +119,8 @@ pub fn identify_rig_said(input: &Path, cfg: &Config) -> Result<(Config, Identifi
     flow_balance(&id, null_leakage_tolerance, cfg, &mut said);
     let mut out = cfg.clone();
     out.model = id.apply(&cfg.model);
+    out.model.oil_temperature.null_leakage_sigma_share =
+        balances::null_leakage_sigma_share(null_leakage_tolerance, out.model.valve_null_leakage_m3_s_pa);
     // the leak filter's measurement noise counts the DAQ's jitter read here
     if let Some(j) = id.sample_jitter_s.estimate() {
         out.leak_filter.sample_jitter_s = j.value;

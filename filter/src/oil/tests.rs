@@ -1,5 +1,6 @@
 //! Tests of the oil's temperature read from θ.
 use super::*;
+use model::params::{CATALOGUE_LAW_UNCERTAINTY, STATED_LAW_UNCERTAINTY};
 
 #[test]
 fn a_stiffness_13_percent_down_reads_as_30_k_above_the_reference() {
@@ -76,7 +77,18 @@ fn the_laminar_factor_is_sure_at_the_reference_and_less_so_away_from_it() {
     let (f, s) = laminar_factor_with_sigma(&oil, 55.0, 0.0);
     // ν(30)/ν(55) of an HLP 46 of VI 100 is about 3
     assert!((2.8..3.3).contains(&f), "{f}");
-    assert!((s - VISCOSITY_LAW_UNCERTAINTY * (f - 1.0)).abs() < 1e-12);
+    assert!((s - CATALOGUE_LAW_UNCERTAINTY * (f - 1.0)).abs() < 1e-12);
+    // an oil whose data sheet gives ν at 100 °C, a null leakage known to 6 %:
+    // the law's share narrows to 0.15 + 0.06
+    let stated = OilTemperature {
+        viscosity_100c_mm2_s: Some(6.8),
+        null_leakage_sigma_share: Some(0.06),
+        ..oil
+    };
+    let (f_stated, s_stated) = laminar_factor_with_sigma(&stated, 55.0, 0.0);
+    assert_eq!(f_stated, f);
+    assert!((s_stated - (STATED_LAW_UNCERTAINTY + 0.06) * (f - 1.0)).abs() < 1e-12);
+    assert!(s_stated < 0.6 * s);
     let (_, s2) = laminar_factor_with_sigma(&oil, 55.0, 2.0);
     // about 4 % a kelvin at 55 °C
     assert!((s2 - s) / f > 0.06 && (s2 - s) / f < 0.1, "{}", (s2 - s) / f);

@@ -78,9 +78,12 @@ schema::config_struct! {
         /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade). Default 46 (HLP 46).
         #[serde(default = "default_viscosity_40c")]
         pub viscosity_40c_mm2_s: f64 => ["mm²/s", num!("a kinematic viscosity", 1, 10000)],
-        /// Kinematic viscosity at 100 °C, mm²/s. Default 6.8 (an HLP 46 of viscosity index 100).
-        #[serde(default = "default_viscosity_100c")]
-        pub viscosity_100c_mm2_s: f64 => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
+        /// Kinematic viscosity at 100 °C, mm²/s, where the oil's data sheet
+        /// gives it. Absent: 6.8 (an HLP 46 of viscosity index 100), and the
+        /// oil's change with temperature is known less well
+        /// ([`crate::params::OilTemperature::law_uncertainty`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        pub viscosity_100c_mm2_s: Option<f64> => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
         /// Relative change of the bulk modulus per kelvin, 1/K. Default −0.0045 (mineral oil).
         #[serde(default = "default_bulk_modulus_per_k")]
         pub bulk_modulus_per_k: f64 => ["(1/K)", num!("a relative change per kelvin", -0.02, 0)],
@@ -101,7 +104,7 @@ impl OilSheet {
             density_kg_m3,
             bulk_modulus_pa,
             viscosity_40c_mm2_s: default_viscosity_40c(),
-            viscosity_100c_mm2_s: default_viscosity_100c(),
+            viscosity_100c_mm2_s: None,
             bulk_modulus_per_k: default_bulk_modulus_per_k(),
             operating_min_c: default_operating_min_c(),
             operating_max_c: default_operating_max_c(),
@@ -111,10 +114,6 @@ impl OilSheet {
 
 fn default_viscosity_40c() -> f64 {
     OilTemperature::default().viscosity_40c_mm2_s
-}
-
-fn default_viscosity_100c() -> f64 {
-    OilTemperature::default().viscosity_100c_mm2_s
 }
 
 fn default_bulk_modulus_per_k() -> f64 {

@@ -2,7 +2,7 @@
 
 use super::{CylinderKind, Datasheet};
 use crate::params::validate::check;
-use crate::params::InvalidParam;
+use crate::params::{InvalidParam, DEFAULT_VISCOSITY_100C_MM2_S};
 
 impl Datasheet {
     /// Checks every fact is finite and within its declared range, then the
@@ -52,10 +52,14 @@ impl Datasheet {
 
     /// Checks the oil's viscosities (mm²/s) and operating range (°C) against each other.
     fn validate_oil(&self) -> Result<(), InvalidParam> {
+        let nu100 = self
+            .oil
+            .viscosity_100c_mm2_s
+            .unwrap_or(DEFAULT_VISCOSITY_100C_MM2_S);
         check(
             "datasheet.oil.viscosity_100c_mm2_s",
-            self.oil.viscosity_100c_mm2_s,
-            self.oil.viscosity_100c_mm2_s < self.oil.viscosity_40c_mm2_s,
+            nu100,
+            nu100 < self.oil.viscosity_40c_mm2_s,
             "a viscosity below the one at 40 °C (oil thins as it warms)",
         )?;
         check(

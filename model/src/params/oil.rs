@@ -20,6 +20,30 @@ const MIN_BULK_FACTOR: f64 = 0.5;
 /// most of its grip however warm the oil.
 const MIN_DRY_FRICTION_FACTOR: f64 = 0.5;
 
+/// The kinematic viscosity at 100 °C taken where the oil's data sheet gives
+/// none, mm²/s: an HLP 46's of viscosity index 100.
+pub const DEFAULT_VISCOSITY_100C_MM2_S: f64 = 6.8;
+
+/// Relative uncertainty of the laminar flows' change with temperature where
+/// the oil's ν at 100 °C is not given, or the commissioning's null leakage's
+/// σ is not known (1): Walther's law through the catalogue's default slope,
+/// against oils whose viscosity index lies 60 above or below the one it
+/// assumes, a reference temperature read off a tank's thermometer, and the
+/// commissioning's null leakage off the rig's.
+pub const CATALOGUE_LAW_UNCERTAINTY: f64 = 0.4;
+
+/// The law's own share of the laminar flows' uncertainty where the oil's
+/// data sheet gives its ν at 40 and 100 °C (1): a batch's viscosity index
+/// within ±15 of the sheet's (its ν at 100 °C within
+/// [`STATED_VISCOSITY_100C_TOLERANCE`]) moves the change from 20 to 60 °C by
+/// up to 0.13 of itself. The commissioning's null leakage's σ adds to it
+/// ([`OilTemperature::law_uncertainty`]).
+pub const STATED_LAW_UNCERTAINTY: f64 = 0.15;
+
+/// How far a batch's ν at 100 °C lies from its data sheet's, ± fraction (1):
+/// a viscosity index within ±15 of the sheet's.
+pub const STATED_VISCOSITY_100C_TOLERANCE: f64 = 0.07;
+
 schema::config_struct! {
     /// The oil's temperature law, relative to the temperature the model's
     /// parameters hold at. It is used only when the samples carry the oil's
@@ -33,8 +57,12 @@ schema::config_struct! {
         pub reference_c: f64 = 40.0 => ["°C", num!("an oil temperature", -40, 150)],
         /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade: 46 for HLP 46).
         pub viscosity_40c_mm2_s: f64 = 46.0 => ["mm²/s", num!("a kinematic viscosity", 1, 10000)],
-        /// Kinematic viscosity at 100 °C, mm²/s (the oil's data sheet; 6.8 for an HLP 46 of viscosity index 100).
-        pub viscosity_100c_mm2_s: f64 = 6.8 => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
+        /// Kinematic viscosity at 100 °C, mm²/s, as the oil's data sheet gives
+        /// it. Absent: 6.8 (an HLP 46 of viscosity index 100,
+        /// [`DEFAULT_VISCOSITY_100C_MM2_S`]), and the law's change with
+        /// temperature is then known less well ([`OilTemperature::law_uncertainty`]).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub viscosity_100c_mm2_s: Option<f64> = None => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
         /// Relative change of the bulk modulus per kelvin, 1/K (mineral oil about −0.0045).
         pub bulk_modulus_per_k: f64 = -0.0045 => ["(1/K)", num!("a relative change per kelvin", -0.02, 0)],
         /// Relative change of the seals' static and Coulomb friction per kelvin,
@@ -55,6 +83,15 @@ schema::config_struct! {
         pub reference_stiffness: Option<f64> = None => [
             "times the model's bulk modulus",
             num!("a stiffness", 0.2, 2)
+        ],
+        /// The σ of the model's null leakage as a share of it (1): how far the
+        /// pressure transducers' tolerances move what commissioning identified
+        /// (`commission` sets it). Away from `reference_c` that error grows
+        /// with the laminar flows. Absent: not known.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub null_leakage_sigma_share: Option<f64> = None => [
+            "(1)",
+            num!("a share of the null leakage", 0, 1000)
         ],
         /// How far θ moves per unit of error in the model's laminar flows
         /// (the valve's null leakage, the linear leaks), 1 per unit of their
@@ -103,13 +140,30 @@ impl OilTemperature {
         (nu_mm2_s + WALTHER_OFFSET_MM2_S).log10().log10()
     }
 
+    /// The kinematic viscosity at 100 °C the law takes, mm²/s: the one
+    /// given, else [`DEFAULT_VISCOSITY_100C_MM2_S`].
+    pub fn viscosity_100c_or_default_mm2_s(&self) -> f64 {
+        self.viscosity_100c_mm2_s.unwrap_or(DEFAULT_VISCOSITY_100C_MM2_S)
+    }
+
+    /// Relative uncertainty of the model's laminar flows' change with
+    /// temperature (1): where ν at 100 °C is given and the commissioning's
+    /// null leakage's σ known, [`STATED_LAW_UNCERTAINTY`] plus that σ's
+    /// share; else [`CATALOGUE_LAW_UNCERTAINTY`].
+    pub fn law_uncertainty(&self) -> f64 {
+        match (self.viscosity_100c_mm2_s, self.null_leakage_sigma_share) {
+            (Some(_), Some(share)) if share.is_finite() => STATED_LAW_UNCERTAINTY + share.max(0.0),
+            _ => CATALOGUE_LAW_UNCERTAINTY,
+        }
+    }
+
     /// The kinematic viscosity at `temp_c` (°C), mm²/s: Walther's law
     /// log10 log10(ν + 0.7) = A − B·log10(T/K) through the 40 °C and 100 °C values.
     pub fn viscosity_mm2_s(&self, temp_c: f64) -> f64 {
         let (t40, t100) = ((40.0 + ZERO_C_K).log10(), (100.0 + ZERO_C_K).log10());
         let (w40, w100) = (
             Self::walther(self.viscosity_40c_mm2_s),
-            Self::walther(self.viscosity_100c_mm2_s),
+            Self::walther(self.viscosity_100c_or_default_mm2_s()),
         );
         let b = (w40 - w100) / (t100 - t40);
         let w = w40 - b * ((temp_c + ZERO_C_K).log10() - t40);
@@ -144,6 +198,38 @@ mod tests {
         assert!((19.0..21.5).contains(&nu60), "{nu60}");
         // monotone
         assert!(oil.viscosity_mm2_s(30.0) > 46.0 && oil.viscosity_mm2_s(55.0) < 46.0);
+    }
+
+    #[test]
+    fn the_laws_uncertainty_narrows_only_where_the_oil_and_the_null_leakage_are_known() {
+        let catalogue = OilTemperature::default();
+        assert_eq!(catalogue.law_uncertainty(), CATALOGUE_LAW_UNCERTAINTY);
+        // ν at 100 °C given, the commissioning's null leakage not yet known
+        let stated = OilTemperature {
+            viscosity_100c_mm2_s: Some(6.8),
+            ..catalogue
+        };
+        assert_eq!(stated.law_uncertainty(), CATALOGUE_LAW_UNCERTAINTY);
+        // known to 6 %: the law's 0.15 and the null leakage's 0.06
+        let known = OilTemperature {
+            null_leakage_sigma_share: Some(0.06),
+            ..stated
+        };
+        assert!((known.law_uncertainty() - 0.21).abs() < 1e-12);
+        // known to 34 %: wider than the catalogue's
+        let poorly = OilTemperature {
+            null_leakage_sigma_share: Some(0.34),
+            ..stated
+        };
+        assert!((poorly.law_uncertainty() - 0.49).abs() < 1e-12);
+        // a known null leakage without the oil's ν at 100 °C: the catalogue's
+        let unstated = OilTemperature {
+            null_leakage_sigma_share: Some(0.06),
+            ..catalogue
+        };
+        assert_eq!(unstated.law_uncertainty(), CATALOGUE_LAW_UNCERTAINTY);
+        // the default ν at 100 °C is the HLP 46's either way
+        assert_eq!(catalogue.viscosity_mm2_s(75.0), stated.viscosity_mm2_s(75.0));
     }
 
     #[test]

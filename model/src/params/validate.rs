@@ -92,8 +92,8 @@ impl ActuatorParams {
         )?;
         check(
             "oil_temperature.viscosity_100c_mm2_s",
-            oil.viscosity_100c_mm2_s,
-            oil.viscosity_100c_mm2_s < oil.viscosity_40c_mm2_s,
+            oil.viscosity_100c_or_default_mm2_s(),
+            oil.viscosity_100c_or_default_mm2_s() < oil.viscosity_40c_mm2_s,
             "a viscosity below the one at 40 °C (oil thins as it warms)",
         )?;
         check(

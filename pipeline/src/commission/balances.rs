@@ -240,3 +240,20 @@ fn null_leakage_tolerance(
         ),
     }
 }
+
+/// The largest share [`null_leakage_sigma_share`] gives (1): the range
+/// `[model.oil_temperature] null_leakage_sigma_share` takes.
+const MOST_NULL_LEAKAGE_SIGMA_SHARE: f64 = 1000.0;
+
+/// The σ the transducers' tolerances `tolerance` give the null leakage
+/// `null_leakage_m3_s_pa` (m³/(s·Pa)), as a share of it (1, at most
+/// [`MOST_NULL_LEAKAGE_SIGMA_SHARE`]); None without them or without a null
+/// leakage.
+pub(super) fn null_leakage_sigma_share(
+    tolerance: Option<identify::NullLeakageTolerance>,
+    null_leakage_m3_s_pa: f64,
+) -> Option<f64> {
+    let sigma = tolerance?.sigma_m3_s_pa;
+    (null_leakage_m3_s_pa > 0.0 && sigma.is_finite())
+        .then(|| (sigma.abs() / null_leakage_m3_s_pa).min(MOST_NULL_LEAKAGE_SIGMA_SHARE))
+}
