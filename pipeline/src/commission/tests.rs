@@ -52,3 +52,36 @@ fn a_lag_is_held_against_the_datasheets_response_time() {
     assert!(lag_against_datasheet(&lag(1.16e-3, 0.02e-3), bound).contains("within"));
     assert_eq!(lag_against_datasheet(&lag(1.643e-3, 0.016e-3), None), "");
 }
+
+/// The null leakage's σ share is the tolerances' σ over the identified null
+/// leakage, held to the field's range; none without tolerances or a null leakage.
+#[test]
+fn the_null_leakages_sigma_share_is_its_tolerances_sigma_over_it() {
+    let tol = |sigma_m3_s_pa: f64| {
+        Some(identify::NullLeakageTolerance {
+            sigma_m3_s_pa,
+            worst_m3_s_pa: 3.0 * sigma_m3_s_pa,
+        })
+    };
+    let share = balances::null_leakage_sigma_share(tol(0.34e-13), 1.0e-13).expect("a share");
+    assert!((share - 0.34).abs() < 1e-12, "{share}");
+    assert_eq!(balances::null_leakage_sigma_share(None, 1.0e-13), None);
+    assert_eq!(balances::null_leakage_sigma_share(tol(0.34e-13), 0.0), None);
+    assert_eq!(balances::null_leakage_sigma_share(tol(f64::NAN), 1.0e-13), None);
+    // a null leakage next to none: the share is held at the field's largest
+    assert_eq!(
+        balances::null_leakage_sigma_share(tol(1e-13), 1e-30),
+        Some(1000.0)
+    );
+    // a config that carries the largest reads back; one past it is refused by name
+    let mut cfg = config::Config::default();
+    cfg.model.oil_temperature.null_leakage_sigma_share = Some(1000.0);
+    let text = toml::to_string(&cfg).expect("serialise");
+    assert_eq!(config::Config::parse(&text).expect("in range"), cfg);
+    let e = config::Config::parse(&text.replace(
+        "null_leakage_sigma_share = 1000.0",
+        "null_leakage_sigma_share = 1001.0",
+    ))
+    .unwrap_err();
+    assert!(e.contains("null_leakage_sigma_share"), "{e}");
+}
