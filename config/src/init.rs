@@ -180,7 +180,7 @@ fn oil_lines(oil: &OilSheet) -> Vec<Line> {
         (
             "viscosity_100c_mm2_s",
             oil.viscosity_100c_mm2_s.map(num).unwrap_or_default(),
-            "at 100 °C, mm²/s, where the oil's data sheet gives it (omit: an HLP 46's, known less well)",
+            "at 100 °C, mm²/s, where the oil's data sheet gives it (omit: its grade's at viscosity index 100, known less well)",
         ),
         (
             "bulk_modulus_per_k",

@@ -8,7 +8,7 @@
 use serde::Serialize;
 
 use crate::datasheet::{Datasheet, TransducerLocation};
-use crate::params::{ActuatorParams, DEFAULT_VISCOSITY_100C_MM2_S, STATED_VISCOSITY_100C_TOLERANCE};
+use crate::params::{viscosity_100c_of_grade, ActuatorParams, STATED_VISCOSITY_100C_TOLERANCE};
 use crate::rng::Rng;
 use crate::sensors::SensorParams;
 
@@ -31,7 +31,7 @@ impl NominalRig {
     /// its oil's data sheet giving ν at 40 and 100 °C.
     pub fn press() -> Self {
         let mut datasheet = Datasheet::press();
-        datasheet.oil.viscosity_100c_mm2_s = Some(DEFAULT_VISCOSITY_100C_MM2_S);
+        datasheet.oil.viscosity_100c_mm2_s = Some(viscosity_100c_of_grade(datasheet.oil.viscosity_40c_mm2_s));
         NominalRig {
             name: "press",
             model: datasheet.model(&ActuatorParams::press()),
@@ -47,7 +47,7 @@ impl NominalRig {
     pub fn lift() -> Self {
         let mut datasheet = Datasheet::vertical_lift();
         datasheet.valve.null_leakage_l_min = 0.3;
-        datasheet.oil.viscosity_100c_mm2_s = Some(DEFAULT_VISCOSITY_100C_MM2_S);
+        datasheet.oil.viscosity_100c_mm2_s = Some(viscosity_100c_of_grade(datasheet.oil.viscosity_40c_mm2_s));
         datasheet.pressure_transducers.location = TransducerLocation::Manifold;
         NominalRig {
             name: "lift",

@@ -17,8 +17,8 @@ pub(crate) mod validate;
 
 pub use friction::{Friction, FrictionParams, FrictionPreset};
 pub use oil::{
-    OilFactors, OilTemperature, CATALOGUE_LAW_UNCERTAINTY, DEFAULT_VISCOSITY_100C_MM2_S,
-    STATED_LAW_UNCERTAINTY, STATED_VISCOSITY_100C_TOLERANCE,
+    viscosity_100c_of_grade, OilFactors, OilTemperature, CATALOGUE_LAW_UNCERTAINTY, STATED_LAW_UNCERTAINTY,
+    STATED_VISCOSITY_100C_TOLERANCE,
 };
 pub use validate::InvalidParam;
 

@@ -79,7 +79,7 @@ schema::config_struct! {
         #[serde(default = "default_viscosity_40c")]
         pub viscosity_40c_mm2_s: f64 => ["mm²/s", num!("a kinematic viscosity", 1, 10000)],
         /// Kinematic viscosity at 100 °C, mm²/s, where the oil's data sheet
-        /// gives it. Absent: 6.8 (an HLP 46 of viscosity index 100), and the
+        /// gives it. Absent: its grade's at viscosity index 100 (6.8 for an HLP 46), and the
         /// oil's change with temperature is known less well
         /// ([`crate::params::OilTemperature::law_uncertainty`]).
         #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -2,7 +2,7 @@
 
 use super::{CylinderKind, Datasheet};
 use crate::params::validate::check;
-use crate::params::{InvalidParam, DEFAULT_VISCOSITY_100C_MM2_S};
+use crate::params::{viscosity_100c_of_grade, InvalidParam};
 
 impl Datasheet {
     /// Checks every fact is finite and within its declared range, then the
@@ -55,7 +55,7 @@ impl Datasheet {
         let nu100 = self
             .oil
             .viscosity_100c_mm2_s
-            .unwrap_or(DEFAULT_VISCOSITY_100C_MM2_S);
+            .unwrap_or_else(|| viscosity_100c_of_grade(self.oil.viscosity_40c_mm2_s));
         check(
             "datasheet.oil.viscosity_100c_mm2_s",
             nu100,

@@ -20,9 +20,22 @@ const MIN_BULK_FACTOR: f64 = 0.5;
 /// most of its grip however warm the oil.
 const MIN_DRY_FRICTION_FACTOR: f64 = 0.5;
 
-/// The kinematic viscosity at 100 °C taken where the oil's data sheet gives
-/// none, mm²/s: an HLP 46's of viscosity index 100.
-pub const DEFAULT_VISCOSITY_100C_MM2_S: f64 = 6.8;
+/// An oil of viscosity index 100 of ISO grade VG 46: its kinematic
+/// viscosities at 40 and 100 °C, mm²/s (ISO 3448).
+const VI_100_VG_46_MM2_S: (f64, f64) = (46.0, 6.8);
+
+/// How the viscosity at 100 °C of oils of viscosity index 100 goes with
+/// their grade (the viscosity at 40 °C), as a power (1): VG 22, 32, 46, 68
+/// and 100 have 4.3, 5.4, 6.8, 8.6 and 11.1 mm²/s at 100 °C, within 2 % of it.
+const VI_100_GRADE_EXPONENT: f64 = 0.63;
+
+/// The kinematic viscosity at 100 °C of an oil of viscosity index 100 whose
+/// viscosity at 40 °C is `viscosity_40c_mm2_s`, mm²/s: what the law takes
+/// where the oil's data sheet gives none (6.8 for an HLP 46).
+pub fn viscosity_100c_of_grade(viscosity_40c_mm2_s: f64) -> f64 {
+    let (nu40, nu100) = VI_100_VG_46_MM2_S;
+    nu100 * (viscosity_40c_mm2_s / nu40).powf(VI_100_GRADE_EXPONENT)
+}
 
 /// Relative uncertainty of the laminar flows' change with temperature where
 /// the oil's ν at 100 °C is not given, or the commissioning's null leakage's
@@ -58,8 +71,8 @@ schema::config_struct! {
         /// Kinematic viscosity at 40 °C, mm²/s (the ISO VG grade: 46 for HLP 46).
         pub viscosity_40c_mm2_s: f64 = 46.0 => ["mm²/s", num!("a kinematic viscosity", 1, 10000)],
         /// Kinematic viscosity at 100 °C, mm²/s, as the oil's data sheet gives
-        /// it. Absent: 6.8 (an HLP 46 of viscosity index 100,
-        /// [`DEFAULT_VISCOSITY_100C_MM2_S`]), and the law's change with
+        /// it. Absent: an oil's of viscosity index 100 of its grade (6.8 for
+        /// an HLP 46, [`viscosity_100c_of_grade`]), and the law's change with
         /// temperature is then known less well ([`OilTemperature::law_uncertainty`]).
         #[serde(skip_serializing_if = "Option::is_none")]
         pub viscosity_100c_mm2_s: Option<f64> = None => ["mm²/s", num!("a kinematic viscosity", 0.5, 10000)],
@@ -141,9 +154,10 @@ impl OilTemperature {
     }
 
     /// The kinematic viscosity at 100 °C the law takes, mm²/s: the one
-    /// given, else [`DEFAULT_VISCOSITY_100C_MM2_S`].
+    /// given, else its grade's at viscosity index 100 ([`viscosity_100c_of_grade`]).
     pub fn viscosity_100c_or_default_mm2_s(&self) -> f64 {
-        self.viscosity_100c_mm2_s.unwrap_or(DEFAULT_VISCOSITY_100C_MM2_S)
+        self.viscosity_100c_mm2_s
+            .unwrap_or_else(|| viscosity_100c_of_grade(self.viscosity_40c_mm2_s))
     }
 
     /// Relative uncertainty of the model's laminar flows' change with
@@ -198,6 +212,21 @@ mod tests {
         assert!((19.0..21.5).contains(&nu60), "{nu60}");
         // monotone
         assert!(oil.viscosity_mm2_s(30.0) > 46.0 && oil.viscosity_mm2_s(55.0) < 46.0);
+    }
+
+    #[test]
+    fn an_oil_without_its_viscosity_at_100_c_takes_its_grades_at_viscosity_index_100() {
+        // ISO 3448 grades of VI 100 at 100 °C, mm²/s
+        for (nu40, nu100) in [(22.0, 4.3), (32.0, 5.4), (46.0, 6.8), (68.0, 8.6), (100.0, 11.1)] {
+            let got = viscosity_100c_of_grade(nu40);
+            assert!((got / nu100 - 1.0).abs() < 0.02, "VG {nu40}: {got}");
+        }
+        assert_eq!(viscosity_100c_of_grade(46.0), 6.8);
+        let vg32 = OilTemperature {
+            viscosity_40c_mm2_s: 32.0,
+            ..OilTemperature::default()
+        };
+        assert!((vg32.viscosity_mm2_s(100.0) - viscosity_100c_of_grade(32.0)).abs() < 1e-9);
     }
 
     #[test]
