@@ -183,9 +183,11 @@ impl LeakSizeDetector {
             || (self.active.is_none() && self.offsets.rivals_new_leak());
         // Where a misreading could make the rises as well as a new leak, a new
         // leak's rise must pass a wider threshold.
-        let widened = self.active.is_none() && self.offsets.could_make_new_rises();
+        // ([`crate::offset::OffsetWatch::could_make_new_rises`], its fit read once)
+        let could_explain = self.offsets.could_explain();
+        let widened = self.active.is_none() && could_explain && !self.offsets.leaks_own_episode();
         // Where an offset explains them as well as a leak, a kind is named against `thr`.
-        let naming_thr = if self.offsets.could_explain() {
+        let naming_thr = if could_explain {
             thr
         } else {
             self.floored(self.naming_thresholds_now())

@@ -57,11 +57,17 @@ impl OffsetWatch {
     /// is long enough to tell: 0.2 s of weight). A new leak's rise must
     /// then pass [`MISREADING_WIDENING`] times its threshold.
     pub fn could_make_new_rises(&self) -> bool {
-        let leaks_own_episode = match (&self.episode, &self.episode_best) {
+        self.could_explain() && !self.leaks_own_episode()
+    }
+
+    /// Whether the present episode fits a leak clearly better than any
+    /// misreading: its best misreading leaves more than [`EPISODE_LEAK_RATIO`]
+    /// times what its best leak leaves (false before it is 0.2 s of weight).
+    pub fn leaks_own_episode(&self) -> bool {
+        match (&self.episode, &self.episode_best) {
             (Some(f), Some(best)) => f.energy > 0.0 && best.left > EPISODE_LEAK_RATIO * best.leak_left,
             _ => false,
-        };
-        self.could_explain() && !leaks_own_episode
+        }
     }
 
     /// Whether the present episode has lasted [`EPISODE_RIVAL_WEIGHT_S`], a
