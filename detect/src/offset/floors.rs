@@ -77,13 +77,18 @@ impl OffsetWatch {
     /// hypothesis `h`, whose fit leaves `left` ((L/min)²·s), to be named, s:
     /// [`OFFSET_CONFIRM_S`] past its least ([`Self::least`]),
     /// [`OFFSET_CLEAN_CONFIRM_S`] past [`OFFSET_CLEAN_FLOOR_SHARE`] of it where
-    /// the fit is clean; None where it is too small to name.
+    /// the fit of a drifting pressure offset or an offset on x is clean; None
+    /// where it is too small to name. A standing pressure offset under its
+    /// least is not named however cleanly it fits: a sound transducer's
+    /// misreading is one (its zero and span tolerance at the working point,
+    /// which commissioning may not resolve), and a duty cycle unlike the
+    /// commissioning's shows it.
     pub(super) fn confirm_s(&self, h: usize, left: f64) -> Option<f64> {
         // (the least read once: a drift's takes its fitted rate)
         let (b, least) = (self.window.coefficient(h).abs(), self.least(h));
         if b > least {
             Some(OFFSET_CONFIRM_S)
-        } else if !is_span(h)
+        } else if (is_drift(h) || is_position(h))
             && left < OFFSET_CLEAN_UNEXPLAINED * self.window.energy
             && b > OFFSET_CLEAN_FLOOR_SHARE * least
         {

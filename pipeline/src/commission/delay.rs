@@ -29,6 +29,16 @@ use std::path::Path;
 /// 0.85); plant_dev/differential's 0.75 ms for transducers lagging 0.5 ms.
 pub const DELAY_HELD_ABOVE: f64 = 1.2;
 
+/// The shortest delay the healthy spreads hold over where the fit is sure
+/// ([`SURE_FIT_SHARE`]), as a share of the one fitted (1); none otherwise.
+/// A lag read as a delay reads shorter, never longer by half: `bench
+/// instances`' lift and press read 0.3-1.05 times the simulator's lag.
+pub const DELAY_HELD_BELOW_SURE: f64 = 0.5;
+
+/// The delay's fit is sure where taking it off the leak sizes takes at least
+/// this share of the healthy spreads' energy (1): the swings are the delay's.
+pub const SURE_FIT_SHARE: f64 = 0.9;
+
 /// The longest lag the datasheet's response time allows `cfg`'s pressure
 /// transducers, s ([`identify::MAX_LAG_S`] without one).
 pub(super) fn lag_bound_s(cfg: &Config) -> f64 {
@@ -92,9 +102,10 @@ impl DelayFit {
 /// took) to hold over the delay's uncertainty: each kind's spread (and its
 /// clear spread) becomes the largest of its own, of the commissioning's
 /// without the delay taken off (its misreading fitted within `tolerance` as
-/// it would be then), and of the one with the delay [`DELAY_HELD_ABOVE`]
+/// it would be then; with a sure fit, [`DELAY_HELD_BELOW_SURE`] of the
+/// delay taken off), and of the one with the delay [`DELAY_HELD_ABOVE`]
 /// times longer (up to the datasheet's bound). So a threshold is at least
-/// what it is without the correction.
+/// what it is with the shortest delay held.
 pub(super) fn hold_over_uncertainty(
     input: &Path,
     identified: &Config,
@@ -103,14 +114,14 @@ pub(super) fn hold_over_uncertainty(
     pass: &mut Pass,
 ) -> Result<(), String> {
     let mut plain_cfg = identified.clone();
-    plain_cfg.leak_filter.lag_correction_s = 0.0;
+    plain_cfg.leak_filter.lag_correction_s = taken.shortest_held_s();
     let mut plain = bias_then_learn(input, &plain_cfg)?;
     if let Some(t) = tolerance {
         fit_misreading(input, &plain_cfg, t, &mut plain)?;
     }
     let mut longer_cfg = identified.clone();
     longer_cfg.model.pressure_misreading_pa = pass.cfg.model.pressure_misreading_pa;
-    longer_cfg.leak_filter.lag_correction_s = (taken.delay_s * DELAY_HELD_ABOVE).min(taken.bound_s);
+    longer_cfg.leak_filter.lag_correction_s = taken.longest_held_s();
     let longer = bias_then_learn(input, &longer_cfg)?;
     for other in [plain.trace.commissioning, longer.trace.commissioning] {
         let held = &mut pass.trace.commissioning;
@@ -138,11 +149,37 @@ pub struct DelayTaken {
 }
 
 impl DelayTaken {
+    /// The share of the healthy spreads' energy taking the delay off takes (1).
+    pub fn energy_fall(&self) -> f64 {
+        1.0 - energy(self.spreads_lpm[1]) / energy(self.spreads_lpm[0]).max(f64::MIN_POSITIVE)
+    }
+
+    /// The shortest delay the healthy spreads hold over, s:
+    /// [`DELAY_HELD_BELOW_SURE`] of the one taken where its fit is sure
+    /// ([`SURE_FIT_SHARE`]), else none.
+    pub fn shortest_held_s(&self) -> f64 {
+        if self.taken && self.energy_fall() >= SURE_FIT_SHARE {
+            DELAY_HELD_BELOW_SURE * self.delay_s
+        } else {
+            0.0
+        }
+    }
+
+    /// The longest delay the healthy spreads hold over, s: [`DELAY_HELD_ABOVE`]
+    /// times the one taken, up to the datasheet's bound.
+    pub fn longest_held_s(&self) -> f64 {
+        (self.delay_s * DELAY_HELD_ABOVE).min(self.bound_s)
+    }
+
     /// The line commissioning prints.
     pub fn line(&self) -> String {
-        let fall = 1.0 - energy(self.spreads_lpm[1]) / energy(self.spreads_lpm[0]).max(f64::MIN_POSITIVE);
+        let fall = self.energy_fall();
         let verdict = if self.taken {
-            "taken off the leak sizes".to_string()
+            format!(
+                "taken off the leak sizes; the thresholds hold over {:.3}-{:.3} ms",
+                self.shortest_held_s() * 1e3,
+                self.longest_held_s() * 1e3
+            )
         } else {
             format!("not taken (a fall under {:.0} %)", 100.0 * MISREADING_LEAST_SHARE)
         };
@@ -196,6 +233,30 @@ pub(super) fn fit_delay(
 mod tests {
     use super::*;
     use model::units::lpm_to_m3_s;
+
+    #[test]
+    fn the_thresholds_hold_from_half_the_delay_only_where_its_fit_is_sure() {
+        let taken = |fall: f64, taken: bool| DelayTaken {
+            delay_s: 0.4e-3,
+            bound_s: 0.45e-3,
+            // the spreads' energy falls by `fall`: the second's is 1 − fall of the first's
+            spreads_lpm: [[0.1, 0.0, 0.0], [0.1 * (1.0 - fall).sqrt(), 0.0, 0.0]],
+            taken,
+        };
+        let sure = taken(0.95, true);
+        assert!((sure.energy_fall() - 0.95).abs() < 1e-12);
+        assert!((sure.shortest_held_s() - 0.2e-3).abs() < 1e-15);
+        // 1.2 times the delay, held to the datasheet's bound
+        assert!((sure.longest_held_s() - 0.45e-3).abs() < 1e-15);
+        assert!(
+            sure.line().contains("hold over 0.200-0.450 ms"),
+            "{}",
+            sure.line()
+        );
+        // short of a sure fit, or not taken: held from none
+        assert_eq!(taken(0.85, true).shortest_held_s(), 0.0);
+        assert_eq!(taken(0.95, false).shortest_held_s(), 0.0);
+    }
 
     #[test]
     fn the_fit_reads_the_delay_of_sizes_that_swing_with_their_response() {
