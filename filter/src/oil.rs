@@ -72,10 +72,24 @@ pub fn null_leakage_band(params: &ActuatorParams, temp_c: f64, sigma_t_k: f64) -
 }
 
 /// The temperature's σ once θ has settled, K, at `temp_c` (°C) for the oil
-/// law `oil`: k_β's share of the distance from the reference (θ's own σ is
-/// small beside it).
+/// law `oil`: k_β's share of the distance from the reference and θ's spread
+/// at one temperature ([`stiffness_spread_k`]; θ's own σ is small beside them).
 pub fn settled_sigma_k(oil: &OilTemperature, temp_c: f64) -> f64 {
-    BULK_SLOPE_UNCERTAINTY * (temp_c - oil.reference_c).abs()
+    (BULK_SLOPE_UNCERTAINTY * (temp_c - oil.reference_c).abs()).hypot(stiffness_spread_k(oil))
+}
+
+/// The temperature's σ from θ's spread at one temperature, K:
+/// `reference_stiffness_sigma_share` over |k_β| (0 where not stated, or
+/// where the bulk modulus does not follow the temperature).
+pub fn stiffness_spread_k(oil: &OilTemperature) -> f64 {
+    let share = oil
+        .reference_stiffness_sigma_share
+        .filter(|s| s.is_finite())
+        .unwrap_or(0.0);
+    if oil.bulk_modulus_per_k.abs() < MIN_BULK_PER_K {
+        return 0.0;
+    }
+    share / oil.bulk_modulus_per_k.abs()
 }
 
 /// The smallest |k_β| a temperature is inferred with, 1/K (below it θ says
@@ -272,8 +286,8 @@ impl OilFromStiffness {
     }
 
     /// One standard deviation of the temperature for θ's `theta_sigma` (1), K:
-    /// θ's own and k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
-    /// reference); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
+    /// θ's own, k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
+    /// reference) and θ's spread at one temperature ([`stiffness_spread_k`]); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
     pub fn sigma_k(&self, theta_sigma: f64) -> f64 {
         if !self.readable {
             // the temperature may be anywhere in the range θ is read in
@@ -293,12 +307,18 @@ impl OilFromStiffness {
         };
         let from_theta = theta_sigma / (self.theta_ref * self.bulk_per_k.abs()) + beyond;
         let from_slope = BULK_SLOPE_UNCERTAINTY * (self.applied_c - self.reference_c);
+        let from_spread = self.spread_k();
         let unsettled = if self.settled() {
             0.0
         } else {
             0.5 * OIL_ESTIMATE_SPAN_K
         };
-        from_theta.hypot(from_slope) + unsettled
+        from_theta.hypot(from_slope).hypot(from_spread) + unsettled
+    }
+
+    /// The temperature's σ from θ's spread at one temperature, K ([`stiffness_spread_k`]).
+    pub fn spread_k(&self) -> f64 {
+        stiffness_spread_k(&self.oil)
     }
 
     /// Takes θ (1) after a sample period `dt_s` (s); returns the temperature

@@ -270,12 +270,14 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
     let c = learner
         .finish(&cfg.classifier, MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
+    let theta_spread_share = theta.block_spread_share();
     let theta = theta.mean();
     let set_by = learner.thresholds_set_by_stretches(&cfg.classifier, &c);
     Ok(LearnedTrace {
         left_out_s: learner.left_out_s(&cfg.classifier),
         commissioning: c,
         theta,
+        theta_spread_share,
         fit,
         set_by,
         responses,
@@ -290,6 +292,8 @@ pub struct LearnedTrace {
     pub commissioning: detect::Commissioning,
     /// θ's mean on the recording (1).
     pub theta: Option<f64>,
+    /// θ's spread over its means of `filter::oil::OIL_STIFFNESS_TAU_S`, as a share of its mean (1).
+    pub theta_spread_share: Option<f64>,
     /// The leak filter's fit to the recording.
     pub fit: FitTrace,
     /// Per kind, the stretch that sets its threshold and the rest's threshold (L/min at p_s/2).
@@ -357,6 +361,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     let LearnedTrace {
         commissioning: mut c,
         theta,
+        theta_spread_share,
         fit,
         set_by,
         left_out_s,
@@ -364,6 +369,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         ..
     } = trace;
     cfg.model.oil_temperature.reference_stiffness = theta;
+    cfg.model.oil_temperature.reference_stiffness_sigma_share = theta.and(theta_spread_share);
     cfg.model.oil_temperature.stiffness_per_laminar_factor = match theta {
         Some(t) => laminar_pull(input, &cfg, t)?,
         None => None,

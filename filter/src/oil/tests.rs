@@ -23,6 +23,15 @@ fn a_stiffness_13_percent_down_reads_as_30_k_above_the_reference() {
     assert!(o.settled());
     // θ's σ of 0.0045 is 1 K; k_β's share of the 30 K is 6 K
     assert!((o.sigma_k(0.0045) - 1f64.hypot(0.2 * (o.applied_c() - 30.0))).abs() < 1e-9);
+    // θ spreading by 0.9 % at one temperature reads as 2 K more, at the reference too
+    let spread = OilTemperature {
+        reference_stiffness_sigma_share: Some(0.009),
+        ..oil
+    };
+    assert!((stiffness_spread_k(&spread) - 2.0).abs() < 1e-12);
+    assert!((settled_sigma_k(&spread, 30.0) - 2.0).abs() < 1e-12);
+    assert!((settled_sigma_k(&spread, 45.0) - 3f64.hypot(2.0)).abs() < 1e-12);
+    assert_eq!(settled_sigma_k(&oil, 30.0), 0.0);
     // a stiffness far below the law's range is held at the operating range's top (60 °C) and its margin
     for _ in 0..200_000 {
         o.observe(0.3, 1e-3);

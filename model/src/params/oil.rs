@@ -97,6 +97,17 @@ schema::config_struct! {
             "times the model's bulk modulus",
             num!("a stiffness", 0.2, 2)
         ],
+        /// θ's spread about `reference_stiffness` at one temperature, as a
+        /// share of it (1): the σ of its means over
+        /// `filter::oil::OIL_STIFFNESS_TAU_S` on the commissioning recording
+        /// (`commission` sets it). What else moves θ (the duty cycle, the
+        /// rod's stroke) reads as temperature: the temperature read from θ is
+        /// uncertain by this over |`bulk_modulus_per_k`|. Absent: none.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub reference_stiffness_sigma_share: Option<f64> = None => [
+            "(1)",
+            num!("a share of the stiffness", 0, 1)
+        ],
         /// The σ of the model's null leakage as a share of it (1): how far the
         /// pressure transducers' tolerances move what commissioning identified
         /// (`commission` sets it). Away from `reference_c` that error grows

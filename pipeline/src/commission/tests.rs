@@ -36,6 +36,55 @@ fn the_detectable_leaks_are_stated_over_the_operating_range() {
     assert!(line.contains("outside the operating range 10-50 °C"), "{line}");
 }
 
+/// θ's spread at one temperature widens the smallest detectable leak at
+/// the commissioning's temperature by the band a temperature that
+/// uncertain leaves.
+#[test]
+fn thetas_spread_widens_the_detectable_leaks_at_the_reference() {
+    let mut m = model::ActuatorParams {
+        valve_null_leakage_m3_s_pa: 1e-13,
+        ..model::ActuatorParams::default()
+    };
+    m.oil_temperature.reference_c = 40.0;
+    let thr = [0.03, 0.03, 0.04];
+    let offsets = [0.01, -0.01, 0.02];
+    let [_, (_, plain), _] = detectable_at(&m, thr, offsets);
+    assert_eq!(plain, thr);
+    // 0.9 % over k_β's 0.45 %/K: 2 K
+    m.oil_temperature.reference_stiffness_sigma_share = Some(0.009);
+    let [_, (t, spread), _] = detectable_at(&m, thr, offsets);
+    assert_eq!(t, 40.0);
+    let (sigma, band) = filter::oil::null_leakage_band(&m, 40.0, 2.0);
+    let widen = detect::oil_band_lpm(sigma, band, offsets);
+    for k in 0..3 {
+        assert!(widen[k] > 1e-3, "{widen:?}");
+        assert!((spread[k] - thr[k] - widen[k]).abs() < 1e-12, "{spread:?}");
+    }
+}
+
+/// θ's spread is read from its means over blocks of the reading's low-pass:
+/// blocks alternating by ±0.01 about 0.89; none from fewer than four.
+#[test]
+fn thetas_spread_is_its_block_means_standard_deviation_over_its_mean() {
+    let feed = |blocks: usize| {
+        let mut theta = theta::ThetaMean::default();
+        let mut e = filter::Estimate::default();
+        for i in 0..blocks * 10_000 {
+            e.t_s = i as f64 * 1e-3;
+            let block = (e.t_s / filter::oil::OIL_STIFFNESS_TAU_S).floor() as usize;
+            e.bulk_scale = if block % 2 == 0 { 0.88 } else { 0.90 };
+            theta.push(&e);
+        }
+        theta
+    };
+    let theta = feed(10);
+    assert!((theta.mean().expect("a mean") - 0.89).abs() < 1e-9);
+    let share = theta.block_spread_share().expect("a spread");
+    let expected = 0.01 * (10.0f64 / 9.0).sqrt() / 0.89;
+    assert!((share - expected).abs() < 1e-9, "{share} against {expected}");
+    assert_eq!(feed(3).block_spread_share(), None);
+}
+
 #[test]
 fn a_lag_is_held_against_the_datasheets_response_time() {
     let lag = |value: f64, sigma: f64| identify::Estimate { value, sigma };

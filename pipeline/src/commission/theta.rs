@@ -9,6 +9,7 @@
 use std::path::Path;
 
 use config::Config;
+use filter::oil::OIL_STIFFNESS_TAU_S;
 use model::LeakLaw;
 
 /// `cfg` with the model as the recording's oil has it: nothing read from θ
@@ -19,19 +20,50 @@ pub(super) fn nothing_read_from_theta(cfg: &Config) -> Config {
     at_reference
 }
 
-/// The leak filter's mean θ over the settled estimates of a replay (1).
+/// The leak filter's mean θ over the settled estimates of a replay (1), and
+/// the spread of its means over blocks of [`OIL_STIFFNESS_TAU_S`].
 #[derive(Debug, Default)]
 pub(super) struct ThetaMean {
     sum: f64,
     n: u64,
+    /// The block being summed: its index, θ's sum, samples, first and last time (s).
+    block: Option<(i64, f64, u64, f64, f64)>,
+    /// The full blocks' means: count, sum, sum of squares.
+    blocks: (u64, f64, f64),
 }
 
 impl ThetaMean {
     /// Takes θ of estimate `e` where it is finite and the filter settled.
     pub(super) fn push(&mut self, e: &filter::Estimate) {
-        if e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0 {
-            self.sum += e.bulk_scale;
-            self.n += 1;
+        if !(e.bulk_scale.is_finite() && e.flags & filter::FLAGS_UNSETTLED == 0) {
+            return;
+        }
+        self.sum += e.bulk_scale;
+        self.n += 1;
+        let index = (e.t_s / OIL_STIFFNESS_TAU_S).floor() as i64;
+        match &mut self.block {
+            Some((i, sum, n, _, last)) if *i == index => {
+                *sum += e.bulk_scale;
+                *n += 1;
+                *last = e.t_s;
+            }
+            _ => {
+                self.close_block();
+                self.block = Some((index, e.bulk_scale, 1, e.t_s, e.t_s));
+            }
+        }
+    }
+
+    /// Counts the block being summed where it covers half of
+    /// [`OIL_STIFFNESS_TAU_S`] or more.
+    fn close_block(&mut self) {
+        if let Some((_, sum, n, first, last)) = self.block.take() {
+            if last - first >= 0.5 * OIL_STIFFNESS_TAU_S {
+                let m = sum / n as f64;
+                self.blocks.0 += 1;
+                self.blocks.1 += m;
+                self.blocks.2 += m * m;
+            }
         }
     }
 
@@ -39,7 +71,31 @@ impl ThetaMean {
     pub(super) fn mean(&self) -> Option<f64> {
         (self.n > 0).then(|| self.sum / self.n as f64)
     }
+
+    /// The standard deviation of θ's means over blocks of
+    /// [`OIL_STIFFNESS_TAU_S`], as a share of its mean (1): what the
+    /// temperature read from θ cannot tell from the temperature. `None`
+    /// with fewer than [`LEAST_BLOCKS`] blocks.
+    pub(super) fn block_spread_share(&self) -> Option<f64> {
+        let mut all = ThetaMean {
+            block: self.block,
+            blocks: self.blocks,
+            ..ThetaMean::default()
+        };
+        all.close_block();
+        let (k, sum, sum2) = all.blocks;
+        if k < LEAST_BLOCKS {
+            return None;
+        }
+        let mean = sum / k as f64;
+        let var = (sum2 - sum * mean) / (k - 1) as f64;
+        (mean > 0.0).then(|| var.max(0.0).sqrt() / mean)
+    }
 }
+
+/// Fewest blocks of [`OIL_STIFFNESS_TAU_S`] θ's spread is read from: a
+/// 2-minute commissioning recording gives about 10.
+pub const LEAST_BLOCKS: u64 = 4;
 
 /// The laminar flows' factor of the second pass is 1 + this (1): about
 /// what 12 K of warming does to them near 40 °C.
@@ -89,8 +145,17 @@ pub(super) fn oil_reading_line(oil: &model::params::OilTemperature) -> Option<St
         "the leak filter's θ moves {:+.4} per unit of the laminar flows' factor (the valve's null leakage)",
         o.pull()
     );
+    let spread = match oil.reference_stiffness_sigma_share {
+        Some(share) => format!(
+            "; θ's {:.0}-s means spread by {:.2} % on this recording: the temperature read from it is uncertain by {:.1} K (σ)",
+            filter::oil::OIL_STIFFNESS_TAU_S,
+            100.0 * share,
+            o.spread_k()
+        ),
+        None => String::new(),
+    };
     Some(if o.readable() {
-        format!("oil temperature without temp_c: read from θ; {pull}, taken out of the reading")
+        format!("oil temperature without temp_c: read from θ; {pull}, taken out of the reading{spread}")
     } else {
         format!(
             "oil temperature without temp_c: not readable from θ on this rig: {pull}, which cancels more than {:.0} % of the stiffness' own change with temperature; the model stays at {:.1} °C and the thresholds widen for the whole operating range ({:.0}-{:.0} °C); a thermometer's temp_c lets it watch closer",
