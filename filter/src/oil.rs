@@ -287,7 +287,9 @@ impl OilFromStiffness {
 
     /// One standard deviation of the temperature for θ's `theta_sigma` (1), K:
     /// θ's own, k_β's ([`BULK_SLOPE_UNCERTAINTY`] of the distance from the
-    /// reference) and θ's spread at one temperature ([`stiffness_spread_k`]); half of [`OIL_ESTIMATE_SPAN_K`] more until [`Self::settled`].
+    /// reference) and θ's spread at one temperature ([`stiffness_spread_k`]),
+    /// in quadrature; half of [`OIL_ESTIMATE_SPAN_K`] more until
+    /// [`Self::settled`].
     pub fn sigma_k(&self, theta_sigma: f64) -> f64 {
         if !self.readable {
             // the temperature may be anywhere in the range θ is read in

@@ -270,14 +270,12 @@ pub fn learn_traced(input: &Path, cfg: &Config) -> Result<LearnedTrace, String> 
     let c = learner
         .finish(&cfg.classifier, MIN_HEALTHY_S, &input.display().to_string())
         .map_err(|e| format!("{}: cannot commission: {e}", input.display()))?;
-    let theta_spread_share = theta.block_spread_share();
-    let theta = theta.mean();
     let set_by = learner.thresholds_set_by_stretches(&cfg.classifier, &c);
     Ok(LearnedTrace {
         left_out_s: learner.left_out_s(&cfg.classifier),
         commissioning: c,
-        theta,
-        theta_spread_share,
+        theta: theta.mean(),
+        theta_spread_share: theta.block_spread_share(),
         fit,
         set_by,
         responses,

@@ -26,10 +26,23 @@ pub(super) fn nothing_read_from_theta(cfg: &Config) -> Config {
 pub(super) struct ThetaMean {
     sum: f64,
     n: u64,
-    /// The block being summed: its index, θ's sum, samples, first and last time (s).
-    block: Option<(i64, f64, u64, f64, f64)>,
+    /// The block being summed.
+    block: Option<Block>,
     /// The full blocks' means: count, sum, sum of squares.
     blocks: (u64, f64, f64),
+}
+
+/// θ summed over one block of [`OIL_STIFFNESS_TAU_S`].
+#[derive(Debug, Clone, Copy)]
+struct Block {
+    /// The block's index: its start over [`OIL_STIFFNESS_TAU_S`].
+    index: i64,
+    /// θ's sum (1) and the samples summed.
+    sum: f64,
+    n: u64,
+    /// The first and last settled sample's time, s.
+    first_s: f64,
+    last_s: f64,
 }
 
 impl ThetaMean {
@@ -42,14 +55,20 @@ impl ThetaMean {
         self.n += 1;
         let index = (e.t_s / OIL_STIFFNESS_TAU_S).floor() as i64;
         match &mut self.block {
-            Some((i, sum, n, _, last)) if *i == index => {
-                *sum += e.bulk_scale;
-                *n += 1;
-                *last = e.t_s;
+            Some(b) if b.index == index => {
+                b.sum += e.bulk_scale;
+                b.n += 1;
+                b.last_s = e.t_s;
             }
             _ => {
                 self.close_block();
-                self.block = Some((index, e.bulk_scale, 1, e.t_s, e.t_s));
+                self.block = Some(Block {
+                    index,
+                    sum: e.bulk_scale,
+                    n: 1,
+                    first_s: e.t_s,
+                    last_s: e.t_s,
+                });
             }
         }
     }
@@ -57,9 +76,9 @@ impl ThetaMean {
     /// Counts the block being summed where it covers half of
     /// [`OIL_STIFFNESS_TAU_S`] or more.
     fn close_block(&mut self) {
-        if let Some((_, sum, n, first, last)) = self.block.take() {
-            if last - first >= 0.5 * OIL_STIFFNESS_TAU_S {
-                let m = sum / n as f64;
+        if let Some(b) = self.block.take() {
+            if b.last_s - b.first_s >= 0.5 * OIL_STIFFNESS_TAU_S {
+                let m = b.sum / b.n as f64;
                 self.blocks.0 += 1;
                 self.blocks.1 += m;
                 self.blocks.2 += m * m;
