@@ -42,6 +42,18 @@ schema::config_struct! {
         /// it: inf, that channel is not watched; NaN, not stated.
         #[serde(default = "nan_per_kind")]
         pub least_offsets_named: [f64; 3],
+        /// The offset on p1 and on p2 the healthy rises fit over the
+        /// recording, in its swing about the baseline, kPa (measured minus
+        /// true; 0: none taken): the model's own error swinging with the flow
+        /// as a misreading does, which the offset watch takes off the rises
+        /// before it fits. `commission` sets it.
+        #[serde(default)]
+        pub healthy_offsets_kpa: [f64; 2],
+        /// The same as a span error on p1 and on p2, 1 (the channel reads
+        /// (1 + g)·p; 0: none taken), where a span error fits the healthy
+        /// rises better. `commission` sets it.
+        #[serde(default)]
+        pub healthy_span_errors: [f64; 2],
     }
 }
 
@@ -54,6 +66,11 @@ fn nominal_factors() -> [f64; 2] {
 }
 
 impl Commissioning {
+    /// The healthy rises' own misreading commissioning took, if any.
+    pub fn healthy_misreading(&self) -> Option<crate::offset::HealthyMisreading> {
+        crate::offset::HealthyMisreading::from_kept(self.healthy_offsets_kpa, self.healthy_span_errors)
+    }
+
     /// The spreads that set the thresholds a named leak must pass, L/min:
     /// [`Commissioning::clear_spreads_lpm`] where learned, else the spreads.
     pub fn naming_spreads_lpm(&self) -> [f64; 3] {

@@ -161,6 +161,8 @@ impl LeakSizeDetector {
         } else {
             offsets
         };
+        let offsets =
+            offsets.with_healthy_misreading(cfg.commissioning.as_ref().and_then(|c| c.healthy_misreading()));
         LeakSizeDetector {
             internal_factors: cfg
                 .commissioning
@@ -206,6 +208,19 @@ impl LeakSizeDetector {
             sensor_event: None,
             frozen_position: false,
         }
+    }
+
+    /// The detector learning the healthy rises' own misreading over all it
+    /// reads ([`LeakSizeDetector::healthy_misreading`]).
+    pub fn learning_healthy_misreading(mut self) -> Self {
+        self.offsets = self.offsets.learning_healthy_misreading();
+        self
+    }
+
+    /// The misreading the rises read so far fit best, in its swing form,
+    /// where it explains enough of them ([`crate::offset::OffsetWatch::healthy_misreading`]).
+    pub fn healthy_misreading(&self) -> Option<crate::offset::HealthyMisreading> {
+        self.offsets.healthy_misreading()
     }
 
     /// No leak evidence before `t_s` (s): a reading the filter took in was an outlier.

@@ -44,12 +44,15 @@
 mod event;
 mod fit;
 mod floors;
+mod healthy;
 mod hold;
 mod limits;
 mod rival;
 
 pub use event::offset_event;
 pub use floors::least_pressure_offset_pa;
+use healthy::HealthyPart;
+pub use healthy::{HealthyMisreading, HEALTHY_MISREADING_LEAST_SHARE};
 use hold::VetoHold;
 pub use hold::{OFFSET_HOLD_RATIO, OFFSET_HOLD_RISE, OFFSET_HOLD_TAU_S};
 pub use limits::*;
@@ -203,6 +206,8 @@ pub struct OffsetWatch {
     /// (the reverse internal part left out).
     last_rise: [f64; 2],
     episode_best_response: [f64; 2],
+    /// The healthy rises' own misreading, taken off them or learned from them.
+    healthy: HealthyPart,
 }
 
 impl OffsetWatch {
@@ -257,6 +262,7 @@ impl Default for OffsetWatch {
             window_veto: VetoHold::default(),
             last_rise: [0.0; 2],
             episode_best_response: [0.0; 2],
+            healthy: HealthyPart::default(),
         }
     }
 }
@@ -269,6 +275,7 @@ impl OffsetWatch {
             least_offset_mpa: self.least_offset_mpa,
             least_drift_mpa: self.least_drift_mpa,
             position_watched: self.position_watched,
+            healthy: std::mem::take(&mut self.healthy),
             ..OffsetWatch::default()
         };
     }
@@ -448,7 +455,8 @@ impl OffsetWatch {
                 hypotheses[swing_of(h)][k] = w[k] - *base;
             }
         }
-        let rise3 = rise;
+        let mut rise3 = rise;
+        self.healthy.take_off(&mut rise3, &hypotheses);
         let rise = without_reverse_internal([rise3[0], rise3[1]], factors, &mut hypotheses);
         self.last_rise = rise;
         let response = &hypotheses;
@@ -459,6 +467,7 @@ impl OffsetWatch {
         let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
+        self.healthy.learn(dt_s, rise, response);
         self.window_best = self
             .window
             .best_offset(true, self.position_watched, &self.directions);

@@ -144,6 +144,8 @@ fn the_start_note_says_when_x_is_not_watched() {
             source: "healthy.csv".into(),
             internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
             least_offsets_named: least,
+            healthy_offsets_kpa: [0.0; 2],
+            healthy_span_errors: [0.0; 2],
         }),
         ..ClassifierConfig::default()
     };

@@ -27,6 +27,7 @@ pub use crate::commission_report::{CommissionRecord, FitTrace, Identified, Learn
 
 mod balances;
 mod delay;
+mod healthy;
 mod misreading;
 mod reach;
 mod theta;
@@ -343,9 +344,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         delay::hold_over_uncertainty(input, &identified_cfg, d, tolerance, &mut pass)?;
     }
     let Pass { mut cfg, bias, trace } = pass;
-    if let Some(m) = &misreading {
-        eprintln!("{}", m.line());
-    }
+    misreading.iter().for_each(|m| eprintln!("{}", m.line()));
     if let Some(bias) = &bias {
         eprintln!(
             "spool null bias: {:+.2} µm (spread {:.2} µm over {:.0} s, leaks held at zero); the model's is now {:+.2} µm, held by the leak filter",
@@ -396,8 +395,11 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         sensor_reach: sensor_reach(&responses, &c, &cfg),
     };
     c.least_offsets_named = learned.sensor_reach.least_named();
-    for line in learned.lines() {
-        eprintln!("{line}");
+    learned.lines().iter().for_each(|line| eprintln!("{line}"));
+    cfg.classifier.commissioning = Some(c.clone());
+    if let Some(m) = healthy::healthy_misreading(input, &cfg)? {
+        eprintln!("{}", healthy::line(&m));
+        healthy::keep(&mut c, &m);
     }
     cfg.classifier.commissioning = Some(c);
     let record = CommissionRecord {
@@ -483,8 +485,7 @@ fn fit_misreading(
     Ok(outcome)
 }
 
-/// Σ of the squares of `spreads` (L/min²): what the misreading must lower to be taken
-/// ([`MISREADING_LEAST_SHARE`]).
+/// Σ of `spreads`² (L/min²): what a misreading must lower to be taken ([`MISREADING_LEAST_SHARE`]).
 fn energy(spreads: [f64; 3]) -> f64 {
     spreads.iter().map(|s| s * s).sum()
 }

@@ -395,6 +395,8 @@ impl CommissioningLearner {
             source: source.to_string(),
             internal_factors,
             least_offsets_named: [f64::NAN; 3],
+            healthy_offsets_kpa: [0.0; 2],
+            healthy_span_errors: [0.0; 2],
         })
     }
 }

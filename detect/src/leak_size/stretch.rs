@@ -125,6 +125,8 @@ mod tests {
             source: String::new(),
             internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
             least_offsets_named: [f64::NAN; 3],
+            healthy_offsets_kpa: [0.0; 2],
+            healthy_span_errors: [0.0; 2],
         };
         let (_, thr) = crate::thresholds(&cfg, c.spreads_lpm, c.crossings_per_s);
         let stretch = |share: f64, spread_without_lpm: f64| Stretch {

@@ -191,6 +191,8 @@ fn commissioned_run_config(ext1_naming_spread_lpm: f64) -> ClassifierConfig {
             source: "test".into(),
             internal_factors: crate::NOMINAL_INTERNAL_FACTORS,
             least_offsets_named: [f64::NAN; 3],
+            healthy_offsets_kpa: [0.0; 2],
+            healthy_span_errors: [0.0; 2],
         }),
         ..ClassifierConfig::default()
     }

@@ -5,6 +5,7 @@ use super::fit::{is_drift, FIRST_DRIFT_HYPOTHESIS};
 use super::*;
 
 mod floors;
+mod healthy;
 mod rival;
 
 /// What the filter gives the watch at one sample: the leak sizes' flows
@@ -52,9 +53,20 @@ fn drive_pausing(
     pause: (f64, f64),
     at: impl Fn(f64) -> Sample,
 ) -> (OffsetWatch, Option<(f64, OffsetChange)>) {
+    drive_watch(OffsetWatch::new(25e6), seconds, tau_s, leak_named, pause, at)
+}
+
+/// [`drive_pausing`] with the watch `watch` (25 MPa transducers).
+fn drive_watch(
+    mut watch: OffsetWatch,
+    seconds: f64,
+    tau_s: f64,
+    leak_named: bool,
+    pause: (f64, f64),
+    at: impl Fn(f64) -> Sample,
+) -> (OffsetWatch, Option<(f64, OffsetChange)>) {
     let dt = 0.01;
     let factors = crate::NOMINAL_INTERNAL_FACTORS;
-    let mut watch = OffsetWatch::new(25e6);
     let mut baseline = [0.0; 3];
     let mut first = None;
     let mut id = 1;
