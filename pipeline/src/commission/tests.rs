@@ -72,7 +72,7 @@ fn thetas_spread_is_its_block_means_standard_deviation_over_its_mean() {
         for i in 0..blocks * 10_000 {
             e.t_s = i as f64 * 1e-3;
             let block = (e.t_s / filter::oil::OIL_STIFFNESS_TAU_S).floor() as usize;
-            e.bulk_scale = if block % 2 == 0 { 0.88 } else { 0.90 };
+            e.bulk_scale = if block.is_multiple_of(2) { 0.88 } else { 0.90 };
             theta.push(&e);
         }
         theta
