@@ -155,6 +155,7 @@ impl Commissioning {
                 self.clear_spreads_lpm
             ));
         }
+        self.validate_healthy_misreading()?;
         let [r1, r2] = self.internal_factors;
         if r1 * r2 <= 0.0 || r1.abs() > 10.0 || r2.abs() > 10.0 {
             return Err(format!(
@@ -163,7 +164,39 @@ impl Commissioning {
         }
         Ok(())
     }
+
+    /// The kept healthy misreading: finite, within what a transducer's
+    /// misreading can be (±5000 kPa, ±0.5), and one at most (the watch
+    /// takes one off).
+    fn validate_healthy_misreading(&self) -> Result<(), String> {
+        let offsets = self.healthy_offsets_kpa;
+        let spans = self.healthy_span_errors;
+        if offsets.iter().any(|v| !(v.abs() <= HEALTHY_OFFSET_MAX_KPA)) {
+            return Err(format!(
+                "[classifier.commissioning] healthy_offsets_kpa = {offsets:?}: each finite and within ±{HEALTHY_OFFSET_MAX_KPA} kPa"
+            ));
+        }
+        if spans.iter().any(|v| !(v.abs() <= HEALTHY_SPAN_ERROR_MAX)) {
+            return Err(format!(
+                "[classifier.commissioning] healthy_span_errors = {spans:?}: each finite and within ±{HEALTHY_SPAN_ERROR_MAX}"
+            ));
+        }
+        let kept = offsets.iter().chain(&spans).filter(|v| **v != 0.0).count();
+        if kept > 1 {
+            return Err(format!(
+                "[classifier.commissioning] healthy_offsets_kpa = {offsets:?} and healthy_span_errors = {spans:?}: \
+                 one misreading at most is taken (the others 0)"
+            ));
+        }
+        Ok(())
+    }
 }
+
+/// Largest healthy offset `[classifier.commissioning]` may keep, kPa.
+const HEALTHY_OFFSET_MAX_KPA: f64 = 5000.0;
+
+/// Largest healthy span error `[classifier.commissioning]` may keep, 1.
+const HEALTHY_SPAN_ERROR_MAX: f64 = 0.5;
 
 schema::config_struct! {
     /// Settings of the detectors, `[classifier]` in the TOML config.

@@ -162,3 +162,41 @@ fn the_start_note_says_when_x_is_not_watched() {
     let err = Classifier::new(commissioned([250.0, 0.0, 3.0])).err().unwrap();
     assert!(err.contains("least_offsets_named holds 0"), "{err}");
 }
+
+/// A kept healthy misreading that is not finite, out of a transducer's
+/// range, or more than one, is refused naming the field; one is taken.
+#[test]
+fn a_kept_healthy_misreading_is_validated() {
+    let with = |offsets_kpa: [f64; 2], span_errors: [f64; 2]| {
+        let c = detect::Commissioning {
+            offsets_lpm: [0.0; 3],
+            spreads_lpm: [0.03; 3],
+            clear_spreads_lpm: [0.03; 3],
+            crossings_per_s: [1.0; 3],
+            healthy_s: 100.0,
+            nis_mean: 3.0,
+            source: "healthy.csv".into(),
+            internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
+            least_offsets_named: [f64::NAN; 3],
+            healthy_offsets_kpa: offsets_kpa,
+            healthy_span_errors: span_errors,
+        };
+        Classifier::new(ClassifierConfig {
+            commissioning: Some(c),
+            ..ClassifierConfig::default()
+        })
+        .err()
+    };
+    assert_eq!(with([0.0, 60.0], [0.0; 2]), None);
+    assert_eq!(with([0.0; 2], [-0.012, 0.0]), None);
+    for (offsets, spans, field) in [
+        ([f64::NAN, 0.0], [0.0; 2], "healthy_offsets_kpa"),
+        ([0.0, 9000.0], [0.0; 2], "healthy_offsets_kpa"),
+        ([0.0; 2], [0.0, f64::INFINITY], "healthy_span_errors"),
+        ([0.0; 2], [0.6, 0.0], "healthy_span_errors"),
+        ([40.0, 0.0], [0.0, 0.01], "one misreading at most"),
+    ] {
+        let err = with(offsets, spans).unwrap_or_default();
+        assert!(err.contains(field), "{offsets:?} {spans:?}: {err}");
+    }
+}
