@@ -99,6 +99,22 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
         .map(|v| format!("{:.3}", v.as_float().unwrap()))
         .collect();
     assert_eq!(row(&html, "healthy spread"), spreads);
+    // the healthy misreading: the terminal's line where the TOML keeps one, else said none
+    let kept = ["healthy_offsets_kpa", "healthy_span_errors"].iter().any(|f| {
+        c.get(*f)
+            .and_then(|v| v.as_array())
+            .is_some_and(|a| a.iter().any(|v| v.as_float() != Some(0.0)))
+    });
+    match err.lines().find(|l| l.starts_with("the healthy rises swing as")) {
+        Some(line) => {
+            assert!(kept, "printed but not kept: {line}");
+            assert!(html.contains(line), "{line}");
+        }
+        None => {
+            assert!(!kept, "kept but not printed: {c:?}");
+            assert!(html.contains("no healthy misreading taken"), "{html}");
+        }
+    }
     // the smallest detectable leaks per oil temperature
     for temp in ["20", "40", "60"] {
         let at = err.split(&format!("{temp} °C ")).nth(1).unwrap();

@@ -376,7 +376,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     }
     let (_, thr) = detect::thresholds(&cfg.classifier, c.spreads_lpm, c.crossings_per_s);
     let (_, naming) = detect::thresholds(&cfg.classifier, c.naming_spreads_lpm(), c.crossings_per_s);
-    let learned = Learned {
+    let mut learned = Learned {
         theta,
         reference_c: cfg.model.oil_temperature.reference_c,
         healthy_s: c.healthy_s,
@@ -393,12 +393,15 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         nis_mean: c.nis_mean,
         set_by,
         sensor_reach: sensor_reach(&responses, &c, &cfg),
+        healthy_misreading: None,
     };
     c.least_offsets_named = learned.sensor_reach.least_named();
     learned.lines().iter().for_each(|line| eprintln!("{line}"));
     cfg.classifier.commissioning = Some(c.clone());
     if let Some(m) = healthy::healthy_misreading(input, &cfg)? {
-        eprintln!("{}", healthy::line(&m));
+        let line = healthy::line(&m);
+        eprintln!("{line}");
+        learned.healthy_misreading = Some(line);
         healthy::keep(&mut c, &m);
     }
     cfg.classifier.commissioning = Some(c);

@@ -231,6 +231,9 @@ pub struct Learned {
     pub set_by: [Option<(detect::Stretch, f64)>; 3],
     /// The smallest misreading of each transducer named on a duty cycle like the recording's.
     pub sensor_reach: crate::commission::SensorReach,
+    /// The terminal's line of the healthy rises' own misreading, where one was
+    /// taken ([`detect::Commissioning::healthy_offsets_kpa`]).
+    pub healthy_misreading: Option<String>,
 }
 
 /// Three values as `a/b/c` with three decimals.
@@ -425,6 +428,10 @@ impl CommissionRecord {
         }
         h += "</table>\n";
         h += &format!("<p class=\"note\">{}</p>\n", esc(&l.sensor_reach.line()));
+        let healthy = l.healthy_misreading.as_deref().unwrap_or(
+            "no healthy misreading taken: no offset or span error on p1 or p2 explains a third of the healthy rises' energy",
+        );
+        h += &format!("<p class=\"note\">{}</p>\n", esc(healthy));
         if let Some(line) = l.left_out_line() {
             h += &format!("<p class=\"note\">{}</p>\n", esc(&line));
         }
