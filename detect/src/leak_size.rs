@@ -10,6 +10,7 @@ use filter::Estimate;
 mod blind;
 mod decide;
 mod evidence;
+mod flow_hold;
 mod healthy;
 mod step;
 mod stretch;
@@ -91,6 +92,8 @@ pub struct LeakSizeDetector {
     /// Mean of √(Δp/Δp_n) over `size_window_s` for ext1, ext2, int (real flow per nominal flow).
     flow_factor: [f64; 3],
     last_low_s: [f64; 3],
+    /// When the command last left its rest band: a rise that came with the flow waits.
+    flow_hold: flow_hold::FlowHold,
     /// While a leak's kind is pending: its rise of each hypothesis averaged over
     /// [`KIND_AVERAGE_S`] (the kind is read from the averaged mismatch), L/min.
     pending_rise_lpm: [f64; 3],
@@ -200,6 +203,7 @@ impl LeakSizeDetector {
             blind_causes: BlindCauses::default(),
             flow_factor: [f64::NAN; 3],
             last_low_s: [0.0; 3],
+            flow_hold: flow_hold::FlowHold::default(),
             pending_rise_lpm: [0.0; 3],
             strong_since_s: None,
             active: None,

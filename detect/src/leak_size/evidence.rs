@@ -206,6 +206,13 @@ impl LeakSizeDetector {
         // (a frozen position's pattern: no new leak while an internal leak leads)
         let frozen_x = self.frozen_position && self.active.is_none() && lead == 2;
         let mut strong = None;
+        // (a rise that came with the valve's flow after a rest waits for it to stop)
+        if !invalid {
+            let response = e
+                .offset_response_lpm_per_mpa
+                .map(|r| crate::signatures_with(r, self.internal_factors));
+            self.flow_hold.update(e.t_s, e.u_v, response, rise, thr);
+        }
         for k in 0..3 {
             let (thr, naming_thr) = (thr[k], naming_thr[k]);
             if rise[k] < 0.25 * thr {
@@ -213,9 +220,11 @@ impl LeakSizeDetector {
                 self.baseline_low_lpm[k] = self.baseline_lpm[k];
             }
             let under_widened = widened && rise[k] < MISREADING_WIDENING * thr;
+            let with_flow = self.active.is_none() && self.flow_hold.holds(k, e.t_s, rise[k]);
             let evidence = !invalid
                 && !offset_like
                 && !under_widened
+                && !with_flow
                 && !frozen_x
                 && physical
                 && (!blind || rise[k] > self.cfg.excursion_override * thr);
