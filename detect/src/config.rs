@@ -171,12 +171,18 @@ impl Commissioning {
     fn validate_healthy_misreading(&self) -> Result<(), String> {
         let offsets = self.healthy_offsets_kpa;
         let spans = self.healthy_span_errors;
-        if offsets.iter().any(|v| !(v.abs() <= HEALTHY_OFFSET_MAX_KPA)) {
+        if offsets
+            .iter()
+            .any(|v| v.is_nan() || v.abs() > HEALTHY_OFFSET_MAX_KPA)
+        {
             return Err(format!(
                 "[classifier.commissioning] healthy_offsets_kpa = {offsets:?}: each finite and within ±{HEALTHY_OFFSET_MAX_KPA} kPa"
             ));
         }
-        if spans.iter().any(|v| !(v.abs() <= HEALTHY_SPAN_ERROR_MAX)) {
+        if spans
+            .iter()
+            .any(|v| v.is_nan() || v.abs() > HEALTHY_SPAN_ERROR_MAX)
+        {
             return Err(format!(
                 "[classifier.commissioning] healthy_span_errors = {spans:?}: each finite and within ±{HEALTHY_SPAN_ERROR_MAX}"
             ));
