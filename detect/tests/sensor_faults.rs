@@ -128,25 +128,32 @@ fn a_healthy_run_raises_no_sensor_event() {
     assert!(leak_alarms(&events).is_empty(), "{:?}", leak_alarms(&events));
 }
 
+/// A commissioning learned from healthy.csv (spreads 0.03 L/min) stating
+/// `least` (kPa, kPa, mm) and keeping the healthy misreading `offsets_kpa` /
+/// `span_errors`.
+fn commissioning(least: [f64; 3], offsets_kpa: [f64; 2], span_errors: [f64; 2]) -> detect::Commissioning {
+    detect::Commissioning {
+        offsets_lpm: [0.0; 3],
+        spreads_lpm: [0.03; 3],
+        clear_spreads_lpm: [0.03; 3],
+        crossings_per_s: [1.0; 3],
+        healthy_s: 100.0,
+        nis_mean: 3.0,
+        source: "healthy.csv".into(),
+        internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
+        least_offsets_named: least,
+        healthy_offsets_kpa: offsets_kpa,
+        healthy_span_errors: span_errors,
+    }
+}
+
 /// A commissioning that found x not watched says so at start; one that
 /// names x from some mm, or an older one without the statement, does not;
 /// a statement that is not positive is refused, naming the field.
 #[test]
 fn the_start_note_says_when_x_is_not_watched() {
     let commissioned = |least: [f64; 3]| ClassifierConfig {
-        commissioning: Some(detect::Commissioning {
-            offsets_lpm: [0.0; 3],
-            spreads_lpm: [0.03; 3],
-            clear_spreads_lpm: [0.03; 3],
-            crossings_per_s: [1.0; 3],
-            healthy_s: 100.0,
-            nis_mean: 3.0,
-            source: "healthy.csv".into(),
-            internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
-            least_offsets_named: least,
-            healthy_offsets_kpa: [0.0; 2],
-            healthy_span_errors: [0.0; 2],
-        }),
+        commissioning: Some(commissioning(least, [0.0; 2], [0.0; 2])),
         ..ClassifierConfig::default()
     };
     let note = |least| Classifier::new(commissioned(least)).unwrap().start_note();
@@ -168,21 +175,8 @@ fn the_start_note_says_when_x_is_not_watched() {
 #[test]
 fn a_kept_healthy_misreading_is_validated() {
     let with = |offsets_kpa: [f64; 2], span_errors: [f64; 2]| {
-        let c = detect::Commissioning {
-            offsets_lpm: [0.0; 3],
-            spreads_lpm: [0.03; 3],
-            clear_spreads_lpm: [0.03; 3],
-            crossings_per_s: [1.0; 3],
-            healthy_s: 100.0,
-            nis_mean: 3.0,
-            source: "healthy.csv".into(),
-            internal_factors: detect::NOMINAL_INTERNAL_FACTORS,
-            least_offsets_named: [f64::NAN; 3],
-            healthy_offsets_kpa: offsets_kpa,
-            healthy_span_errors: span_errors,
-        };
         Classifier::new(ClassifierConfig {
-            commissioning: Some(c),
+            commissioning: Some(commissioning([f64::NAN; 3], offsets_kpa, span_errors)),
             ..ClassifierConfig::default()
         })
         .err()
