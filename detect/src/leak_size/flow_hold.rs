@@ -163,6 +163,17 @@ mod tests {
         assert_eq!(held(0.005, &[10.3, 11.0, 11.9, 12.1]), [true, true, true, false]);
     }
 
+    /// The hold after a rest until 1 s and a move from it (5 V), the
+    /// response to 1 MPa on p1 from 0.1 to 1.1 L/min per MPa and every rise
+    /// past half its threshold at 1.1 s.
+    fn moved_with_a_rise() -> FlowHold {
+        let mut hold = FlowHold::default();
+        hold.update(0.0, 0.0, on_p1(0.1), [0.0; 3], THR);
+        hold.update(1.0, 5.0, on_p1(0.1), [0.0; 3], THR);
+        hold.update(1.1, 5.0, on_p1(1.1), [0.1; 3], THR);
+        hold
+    }
+
     #[test]
     fn a_rise_already_half_a_threshold_when_the_move_began_is_not_held() {
         assert_eq!(held(0.016, &[10.3, 11.0]), [false, false]);
@@ -184,10 +195,7 @@ mod tests {
 
     #[test]
     fn a_rise_past_what_the_guarded_misreading_makes_is_not_held() {
-        let mut hold = FlowHold::default();
-        hold.update(0.0, 0.0, on_p1(0.1), [0.0; 3], THR);
-        hold.update(1.0, 5.0, on_p1(0.1), [0.0; 3], THR);
-        hold.update(1.1, 5.0, on_p1(1.1), [0.1; 3], THR);
+        let hold = moved_with_a_rise();
         // the response moved by 1 L/min per MPa: 0.5 MPa makes 0.5 L/min
         assert!(hold.holds(0, 1.5, 0.5));
         assert!(!hold.holds(0, 1.5, 0.51));
@@ -195,10 +203,7 @@ mod tests {
 
     #[test]
     fn a_rise_in_a_long_move_is_held_at_most_the_longest_hold() {
-        let mut hold = FlowHold::default();
-        hold.update(0.0, 0.0, on_p1(0.1), [0.0; 3], THR);
-        hold.update(1.0, 5.0, on_p1(0.1), [0.0; 3], THR);
-        hold.update(1.1, 5.0, on_p1(1.1), [0.1; 3], THR);
+        let hold = moved_with_a_rise();
         assert!(hold.holds(0, 5.9, 0.1));
         assert!(!hold.holds(0, 6.0, 0.1));
     }
