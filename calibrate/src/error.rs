@@ -43,6 +43,8 @@ pub enum CalibrateError {
         /// Its constant value, SI.
         value: f64,
     },
+    /// The recording's readings are not in SI units (pressures in bar, MPa or psi).
+    Units(String),
     /// The effect name is not in the library.
     UnknownEffect(String),
     /// The data does not excite the effect enough to fit it.
@@ -91,6 +93,7 @@ impl std::fmt::Display for CalibrateError {
                 "column `{column}` is flat ({value:.6e} throughout): a disconnected or broken channel; \
                  nothing can be identified from it"
             ),
+            CalibrateError::Units(m) => write!(f, "units: {m}"),
             CalibrateError::UnknownEffect(n) => write!(
                 f,
                 "unknown effect `{n}`: expected one of {}",

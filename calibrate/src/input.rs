@@ -131,6 +131,12 @@ pub(crate) fn setup(
     let used = &measured[first..end];
     let end = end - first;
     let seconds = end as f64 * dt;
+    // Pressures written in bar, MPa or psi read as a flat channel: said first.
+    let mut reach = dataset::PressureReach::default();
+    used.iter().for_each(|s| reach.add(s));
+    reach
+        .check(model.supply_pressure_pa)
+        .map_err(CalibrateError::Units)?;
     // A channel that never changes is a disconnected or broken transducer.
     for (name, get) in [
         ("p1", (|s: &Sample| s.p1_pa) as fn(&Sample) -> f64),

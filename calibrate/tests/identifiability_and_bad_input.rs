@@ -273,6 +273,29 @@ fn a_flat_pressure_channel_is_refused() {
 }
 
 #[test]
+fn pressures_written_in_bar_are_refused_naming_the_unit() {
+    let case = calibrate::suite::cases()
+        .into_iter()
+        .find(|c| c.name == "clean open-loop-sine")
+        .expect("case");
+    let data: Vec<Sample> = calibrate::suite::generate(&case)
+        .into_iter()
+        .map(|s| Sample {
+            p1_pa: s.p1_pa / 1e5,
+            p2_pa: s.p2_pa / 1e5,
+            ..s
+        })
+        .collect();
+    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused");
+    assert!(matches!(e, CalibrateError::Units(_)), "{e}");
+    // the thesis rig's 13.8 MPa supply: no pressure read passes 138 kPa
+    let m = e.to_string();
+    assert!(m.starts_with("units: p1 and p2 never read above "), "{m}");
+    assert!(m.contains("under 1 % of the supply pressure (13.8 MPa)"), "{m}");
+    assert!(m.contains("1 bar = 100000 Pa"), "{m}");
+}
+
+#[test]
 fn rows_missing_here_and_there_leave_the_rest_usable() {
     // a leak record with every 500th row dropped (what the reader does with
     // NaN rows): windows straddling a gap are left out, the leak is still

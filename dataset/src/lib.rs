@@ -31,10 +31,12 @@ pub mod output;
 pub mod parquet;
 mod reader;
 mod samples;
+mod units;
 
 pub use limits::{check_bad_fraction, Limits, DEFAULT_MAX_BAD_FRACTION};
 pub use reader::{open_text, CsvReader, FileSource, Row};
 pub use samples::{RowSource, SampleChecks, SampleRows};
+pub use units::{PressureReach, LEAST_PRESSURE_SHARE};
 
 /// Longest piece of input text a message quotes, in characters (longer text is cut, `…`).
 pub const SHOWN_MAX_CHARS: usize = 80;

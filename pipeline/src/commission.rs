@@ -16,7 +16,7 @@
 
 use std::path::Path;
 
-use dataset::{CsvReader, Limits, Row};
+use dataset::{CsvReader, Limits, PressureReach, Row};
 use detect::CommissioningLearner;
 use filter::Tuning;
 use model::process::I_BIAS;
@@ -42,28 +42,44 @@ pub use reach::{ResponseTrace, SensorReach};
 pub use theta::{laminar_pull, PROBE as LAMINAR_PROBE};
 use theta::{nothing_read_from_theta, oil_reading_line, ThetaMean};
 
-/// Reads `input` into the rows [`identify::identify`] takes.
+/// Reads `input` into the rows [`identify::identify`] takes: an error when
+/// no row is usable (naming the first reason) or when its pressures are not
+/// in Pa ([`dataset::PressureReach`]).
 fn read_rows(input: &Path, cfg: &Config) -> Result<Vec<identify::Row>, String> {
     let limits = Limits::for_model(&cfg.model, cfg.leak_filter.sample_period_s);
     let mut reader = CsvReader::open(input, limits).map_err(|e| e.to_string())?;
     let mut rows = Vec::new();
     let mut gap = false;
+    let mut reach = PressureReach::default();
+    let mut skipped = 0u64;
+    let mut first_skipped = None;
     while let Some(row) = reader.next_row() {
-        match row {
-            Row::Sample(sample) => rows.push(identify::Row {
-                sample,
-                after_gap: std::mem::take(&mut gap),
-            }),
+        let (sample, after_gap) = match row {
+            Row::Sample(sample) => (sample, std::mem::take(&mut gap)),
             Row::AfterGap(sample, _) => {
-                rows.push(identify::Row {
-                    sample,
-                    after_gap: true,
-                });
                 gap = false;
+                (sample, true)
             }
-            Row::Skipped(_) => gap = true,
-        }
+            Row::Skipped(issue) => {
+                skipped += 1;
+                first_skipped.get_or_insert(issue);
+                gap = true;
+                continue;
+            }
+        };
+        reach.add(&sample);
+        rows.push(identify::Row { sample, after_gap });
     }
+    if rows.is_empty() {
+        let first = first_skipped.map(|i| format!("; first: {i}")).unwrap_or_default();
+        return Err(format!(
+            "{}: no usable samples ({skipped} rows skipped{first})",
+            input.display()
+        ));
+    }
+    reach
+        .check(cfg.model.supply_pressure_pa)
+        .map_err(|e| format!("{}: {e}", input.display()))?;
     Ok(rows)
 }
 
