@@ -254,17 +254,23 @@ fn a_held_rod_is_said_not_to_excite_motion() {
     );
 }
 
-#[test]
-fn a_flat_pressure_channel_is_refused() {
+/// The calibration of the clean open-loop sine with every sample passed
+/// through `reading`: the error that refuses it.
+fn refused_reading(reading: fn(Sample) -> Sample) -> CalibrateError {
     let case = calibrate::suite::cases()
         .into_iter()
         .find(|c| c.name == "clean open-loop-sine")
         .expect("case");
     let data: Vec<Sample> = calibrate::suite::generate(&case)
         .into_iter()
-        .map(|s| Sample { p2_pa: 6.9e6, ..s })
+        .map(reading)
         .collect();
-    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused");
+    run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused")
+}
+
+#[test]
+fn a_flat_pressure_channel_is_refused() {
+    let e = refused_reading(|s| Sample { p2_pa: 6.9e6, ..s });
     assert!(
         matches!(e, CalibrateError::FlatChannel { column: "p2", .. }),
         "{e}"
@@ -274,19 +280,11 @@ fn a_flat_pressure_channel_is_refused() {
 
 #[test]
 fn pressures_written_in_bar_are_refused_naming_the_unit() {
-    let case = calibrate::suite::cases()
-        .into_iter()
-        .find(|c| c.name == "clean open-loop-sine")
-        .expect("case");
-    let data: Vec<Sample> = calibrate::suite::generate(&case)
-        .into_iter()
-        .map(|s| Sample {
-            p1_pa: s.p1_pa / 1e5,
-            p2_pa: s.p2_pa / 1e5,
-            ..s
-        })
-        .collect();
-    let e = run(&data, &nominal_model(), &CalibrateOptions::default()).expect_err("refused");
+    let e = refused_reading(|s| Sample {
+        p1_pa: s.p1_pa / 1e5,
+        p2_pa: s.p2_pa / 1e5,
+        ..s
+    });
     assert!(matches!(e, CalibrateError::Units(_)), "{e}");
     // the thesis rig's 13.8 MPa supply: no pressure read passes 138 kPa
     let m = e.to_string();

@@ -32,16 +32,22 @@ fn lift_written_as(unit: fn(Sample) -> Sample) -> (scratch::ScratchDir, std::pat
     (dir, csv, cfg)
 }
 
+/// Why commissioning refuses the lift recording written through `unit`, and the file.
+fn refused(unit: fn(Sample) -> Sample) -> (String, std::path::PathBuf) {
+    let (_dir, csv, cfg) = lift_written_as(unit);
+    let e = pipeline::commission::identify_rig(&csv, &cfg)
+        .err()
+        .expect("refused");
+    (e, csv)
+}
+
 #[test]
 fn a_recording_with_its_pressures_in_bar_is_refused_naming_the_unit() {
-    let (_dir, csv, cfg) = lift_written_as(|s| Sample {
+    let (e, csv) = refused(|s| Sample {
         p1_pa: s.p1_pa / 1e5,
         p2_pa: s.p2_pa / 1e5,
         ..s
     });
-    let e = pipeline::commission::identify_rig(&csv, &cfg)
-        .err()
-        .expect("refused");
     assert!(
         e.starts_with(&format!("{}: p1 and p2 never read above ", csv.display())),
         "{e}"
@@ -53,13 +59,10 @@ fn a_recording_with_its_pressures_in_bar_is_refused_naming_the_unit() {
 
 #[test]
 fn a_recording_with_its_positions_in_mm_is_refused_naming_the_first_row() {
-    let (_dir, csv, cfg) = lift_written_as(|s| Sample {
+    let (e, csv) = refused(|s| Sample {
         x_m: s.x_m * 1e3,
         ..s
     });
-    let e = pipeline::commission::identify_rig(&csv, &cfg)
-        .err()
-        .expect("refused");
     assert!(
         e.starts_with(&format!("{}: no usable samples (", csv.display())),
         "{e}"
@@ -74,5 +77,9 @@ fn a_recording_with_its_positions_in_mm_is_refused_naming_the_first_row() {
 fn the_same_recording_in_si_is_identified() {
     let (_dir, csv, cfg) = lift_written_as(|s| s);
     let id = pipeline::commission::identify_rig(&csv, &cfg).expect("identified");
-    assert!(id.model.supply_pressure_pa > 0.0);
+    let (a, b) = (id.model.area_gradient_m2_per_m, cfg.model.area_gradient_m2_per_m);
+    assert!(
+        (a / b - 1.0).abs() < 0.05,
+        "area gradient {a} identified, {b} simulated"
+    );
 }
