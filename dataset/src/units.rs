@@ -21,7 +21,12 @@ pub struct PressureReach {
 impl PressureReach {
     /// Takes one sample's p1 and p2 (Pa); non-finite readings are passed over.
     pub fn add(&mut self, s: &Sample) {
-        for p in [s.p1_pa, s.p2_pa] {
+        self.add_pressures(s.p1_pa, s.p2_pa);
+    }
+
+    /// Takes one sample's readings `p1_pa` and `p2_pa` (Pa); non-finite ones are passed over.
+    pub fn add_pressures(&mut self, p1_pa: f64, p2_pa: f64) {
+        for p in [p1_pa, p2_pa] {
             if p.is_finite() && p.abs() > self.max_abs_pa {
                 self.max_abs_pa = p.abs();
             }

@@ -383,8 +383,10 @@ fn run_rows(
     let mut write_err: Option<String> = None;
     let every = req.estimates_every.max(1);
     let mut rows_written = 0u64;
+    let mut reach = dataset::PressureReach::default();
     let mut sink = |s: &StageEstimate, summary: &mut Summary| {
         summary.samples += 1;
+        reach.add_pressures(s.leak.measured[1], s.leak.measured[2]);
         last_t = s.leak.t_s;
         if first_t.is_nan() {
             first_t = s.leak.t_s;
@@ -434,6 +436,10 @@ fn run_rows(
         }
     }
     summary.refused = refusal(&summary, req);
+    // (said first: every other warning follows from it)
+    if let Err(e) = reach.check(cfg.model.supply_pressure_pa) {
+        summary.issues.insert(0, e);
+    }
     summary.estimates = EstimatesOut {
         format: req.estimates.name().into(),
         file: req.estimates.file_name().map(str::to_string),

@@ -237,3 +237,39 @@ fn a_one_sample_pressure_spike_is_reported_not_taken_as_a_leak() {
     let o = replay(&input, &d.join("clean"), &[]);
     assert!(!String::from_utf8_lossy(&o.stderr).contains("far outside"));
 }
+
+#[test]
+fn pressures_written_in_bar_are_said_first_and_kept_in_the_summary() {
+    let d = tmpdir("bar");
+    let input = simulate(&d, "closed-loop-sine", "12", "ext1:0.5lpm@100s");
+    let text = std::fs::read_to_string(&input).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    for line in lines.iter_mut().skip(1) {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        for c in [3, 4] {
+            let pa: f64 = cells[c].parse().unwrap();
+            cells[c] = (pa / 1e5).to_string();
+        }
+        *line = cells.join(",");
+    }
+    let bar = d.join("bar.csv");
+    std::fs::write(&bar, lines.join("\n") + "\n").unwrap();
+    let out = d.join("out");
+    let o = replay(&bar, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(ran(&o), "{err}");
+    let summary = json(&out.join("summary.json"));
+    let first = summary["issues"][0].as_str().unwrap_or_default().to_string();
+    // the thesis rig's 13.8 MPa supply
+    assert!(first.starts_with("p1 and p2 never read above "), "{summary:#}");
+    assert!(
+        first.contains("under 1 % of the supply pressure (13.8 MPa)"),
+        "{first}"
+    );
+    assert!(err.contains(&format!("warning: {first}")), "{err}");
+    // the same recording in Pa says nothing of the kind
+    let o = replay(&input, &d.join("out_pa"), &[]);
+    assert!(ran(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("never read above"), "{err}");
+}
