@@ -35,9 +35,7 @@ fn lift_written_as(unit: fn(Sample) -> Sample) -> (scratch::ScratchDir, std::pat
 /// Why commissioning refuses the lift recording written through `unit`, and the file.
 fn refused(unit: fn(Sample) -> Sample) -> (String, std::path::PathBuf) {
     let (_dir, csv, cfg) = lift_written_as(unit);
-    let e = pipeline::commission::identify_rig(&csv, &cfg)
-        .err()
-        .expect("refused");
+    let e = pipeline::commission::identify_rig(&csv, &cfg).expect_err("refused");
     (e, csv)
 }
 
