@@ -95,9 +95,11 @@ use crate::{Acquired, Source};
 
 mod rate;
 mod sequence;
+mod units;
 
 use rate::RateMeter;
 use sequence::Tracked;
+pub use units::UNITS_AFTER_S;
 
 /// The SI sample of a datagram: channels scaled by `scaling`, time as sent,
 /// absent optional channels NaN; the position reference and leak flow are absent.
@@ -294,6 +296,10 @@ pub struct UdpSource {
     rate: RateMeter,
     /// The rate error while there is one (made once per error, not per datagram).
     rate_error: Option<String>,
+    /// The largest pressure passed on, until the units are checked.
+    reach: dataset::PressureReach,
+    /// Whether the units were checked ([`UNITS_AFTER_S`]).
+    units_checked: bool,
     end: Option<UdpEnd>,
 }
 
@@ -332,6 +338,8 @@ impl UdpSource {
             consecutive_late: 0,
             rate: RateMeter::new(),
             rate_error: None,
+            reach: dataset::PressureReach::default(),
+            units_checked: false,
             end: None,
         })
     }
@@ -437,6 +445,7 @@ impl UdpSource {
             return None;
         }
         self.counts.samples += 1;
+        self.check_units(&s);
         if d.is_end_of_stream() {
             self.end = Some(UdpEnd::LastSample);
         }

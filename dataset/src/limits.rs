@@ -83,6 +83,12 @@ impl Limits {
         }
     }
 
+    /// The supply pressure these limits were made from, Pa (the highest
+    /// accepted pressure over [`model::params::PRESSURE_MAX_PER_SUPPLY`]).
+    pub fn supply_pa(&self) -> f64 {
+        self.max_pressure_pa / model::params::PRESSURE_MAX_PER_SUPPLY
+    }
+
     /// The default actuator's ranges with supply pressure `supply_pa` (pressures
     /// in [−0.02 p_s, 1.5 p_s], Pa), 1 kHz.
     pub fn for_supply(supply_pa: f64) -> Limits {

@@ -367,6 +367,11 @@ fn pressures_slightly_below_zero_within_2_percent_of_supply_are_usable() {
     let l = Limits::default();
     assert_eq!((l.min_pressure_pa, l.max_pressure_pa), (-276_000.0, 20.7e6));
     assert_eq!(Limits::for_supply(21.0e6).min_pressure_pa, -420_000.0);
+    // and the supply they were made from reads back
+    assert_eq!(
+        (l.supply_pa(), Limits::for_supply(21.0e6).supply_pa()),
+        (13.8e6, 21.0e6)
+    );
     let text = format!(
         "{HEADER}\n{}\n{}\n{}\n",
         row(0, &[(3, "-276000")]),

@@ -250,6 +250,45 @@ fn the_senders_injected_faults_are_counted_by_the_acquisition() {
     assert!(stderr.contains("duplicated datagram seq 88"), "{stderr}");
     assert!(stderr.contains("late datagram seq 82"), "{stderr}");
     assert!(stderr.contains("bad magic"), "{stderr}");
+    // pressures in Pa: nothing said of their units
+    assert!(!stderr.contains("never read above"), "{stderr}");
+}
+
+/// A stream whose pressures come in bar (a `[udp]` scaling left at 1 for a
+/// PLC that sends bar) is said once, after its first 2 s, naming the scaling.
+#[test]
+fn a_stream_in_bar_is_said_once_naming_the_scaling() {
+    if !python_with("sys") {
+        return;
+    }
+    let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let d = tmpdir("bar");
+    let csv = d.join("bar.csv");
+    let mut text = String::from("t,u,x,p1,p2\n");
+    for i in 0..3000 {
+        let t = i as f64 * 1e-3;
+        text.push_str(&format!("{t},0.5,0.3,69.0,34.0\n"));
+    }
+    std::fs::write(&csv, text).unwrap();
+    let port = free_port();
+    let log = d.join("acquisition.log");
+    let acq = Command::new(BIN)
+        .args(["stage", "acquisition", "--rig", "udp-bar", "--udp"])
+        .arg(format!("127.0.0.1:{port}"))
+        .env("LEAKWATCH_IOX_PREFIX", format!("udpb{}", std::process::id()))
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    wait_for_line(&log, "waiting for datagrams");
+    send(&csv, port, &["--rate-hz", "20000"]);
+    let o = acq.wait_with_output().unwrap();
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert!(o.status.success(), "{stderr}");
+    // the built-in rig's 13.8 MPa supply; 2000 samples at 1 kHz
+    let said = "udp: warning: p1 and p2 never read above 69.00 Pa in 2000 samples, under 1 % of the supply \
+                pressure (13.8 MPa)";
+    assert_eq!(stderr.matches(said).count(), 1, "{stderr}");
+    assert!(stderr.contains("check [udp]'s scaling"), "{stderr}");
 }
 
 /// A bad `--source` is refused with the reason before any stage starts: no

@@ -213,6 +213,11 @@ pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 /// negative; see [`ActuatorParams::measured_pressure_range_pa`].
 pub const PRESSURE_NEGATIVE_MARGIN: f64 = 0.02;
 
+/// The highest a measured chamber pressure may read, as a multiple of the
+/// supply pressure p_s (dimensionless): 1.5, 20.7 MPa at the default 13.8 MPa;
+/// see [`ActuatorParams::measured_pressure_range_pa`].
+pub const PRESSURE_MAX_PER_SUPPLY: f64 = 1.5;
+
 impl ActuatorParams {
     /// These parameters at oil temperature `temp_c` (°C), from `base` (the
     /// parameters at the law's reference temperature): the bulk modulus, the
@@ -331,7 +336,7 @@ impl ActuatorParams {
     }
 
     /// The range a measured chamber pressure may take, Pa (gauge), both ends
-    /// inclusive: [−[`PRESSURE_NEGATIVE_MARGIN`]·p_s, 1.5·p_s]
+    /// inclusive: [−[`PRESSURE_NEGATIVE_MARGIN`]·p_s, [`PRESSURE_MAX_PER_SUPPLY`]·p_s]
     /// ([−0.276, 20.7] MPa by default). CSV rows, UDP frames and the estimator's
     /// samples outside it are unusable. Pressures below 0 within the margin
     /// (sensor noise near tank pressure) are used as measured; the filters'
@@ -339,7 +344,7 @@ impl ActuatorParams {
     pub fn measured_pressure_range_pa(&self) -> (f64, f64) {
         (
             -PRESSURE_NEGATIVE_MARGIN * self.supply_pressure_pa,
-            1.5 * self.supply_pressure_pa,
+            PRESSURE_MAX_PER_SUPPLY * self.supply_pressure_pa,
         )
     }
 
