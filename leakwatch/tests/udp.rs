@@ -178,6 +178,35 @@ fn a_leak_run_streamed_over_udp_gives_the_events_of_replay() {
     assert_eq!(live, replay, "live over UDP:\n{live:#}\nreplay:\n{replay:#}");
 }
 
+/// A 3 s CSV in `dir` at 1 kHz: the rod held at 0.3 m under 0.5 V, p1 and p2
+/// at `p1` and `p2` as written (Pa, unless a test writes another unit).
+fn steady_stream(dir: &Path, p1: f64, p2: f64) -> PathBuf {
+    let csv = dir.join("steady.csv");
+    let mut text = String::from("t,u,x,p1,p2\n");
+    for i in 0..3000 {
+        let t = i as f64 * 1e-3;
+        text.push_str(&format!("{t},0.5,0.3,{p1:?},{p2:?}\n"));
+    }
+    std::fs::write(&csv, text).unwrap();
+    csv
+}
+
+/// An acquisition stage of rig `rig` on a free loopback UDP port, its stderr
+/// into `dir`/acquisition.log, once it waits for datagrams: (port, log, process).
+fn acquisition_on_udp(dir: &Path, rig: &str) -> (u16, PathBuf, std::process::Child) {
+    let port = free_port();
+    let log = dir.join("acquisition.log");
+    let acq = Command::new(BIN)
+        .args(["stage", "acquisition", "--rig", rig, "--udp"])
+        .arg(format!("127.0.0.1:{port}"))
+        .env("LEAKWATCH_IOX_PREFIX", format!("{rig}{}", std::process::id()))
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    wait_for_line(&log, "waiting for datagrams");
+    (port, log, acq)
+}
+
 /// The sender's injected faults (dropped, duplicated, swapped, malformed
 /// datagrams) are what the acquisition counts: lost = dropped + swapped
 /// (a swapped datagram leaves a gap, then arrives late), late = swapped.
@@ -188,23 +217,8 @@ fn the_senders_injected_faults_are_counted_by_the_acquisition() {
     }
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let d = tmpdir("faults");
-    let csv = d.join("short.csv");
-    let mut text = String::from("t,u,x,p1,p2\n");
-    for i in 0..3000 {
-        let t = i as f64 * 1e-3;
-        text.push_str(&format!("{t},0.5,0.3,6900000.0,3400000.0\n"));
-    }
-    std::fs::write(&csv, text).unwrap();
-    let port = free_port();
-    let log = d.join("acquisition.log");
-    let acq = Command::new(BIN)
-        .args(["stage", "acquisition", "--rig", "udp-faults", "--udp"])
-        .arg(format!("127.0.0.1:{port}"))
-        .env("LEAKWATCH_IOX_PREFIX", format!("udpf{}", std::process::id()))
-        .stderr(std::fs::File::create(&log).unwrap())
-        .spawn()
-        .unwrap();
-    wait_for_line(&log, "waiting for datagrams");
+    let csv = steady_stream(&d, 6_900_000.0, 3_400_000.0);
+    let (port, log, acq) = acquisition_on_udp(&d, "udp-faults");
     let sent = send(
         &csv,
         port,
@@ -263,23 +277,8 @@ fn a_stream_in_bar_is_said_once_naming_the_scaling() {
     }
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let d = tmpdir("bar");
-    let csv = d.join("bar.csv");
-    let mut text = String::from("t,u,x,p1,p2\n");
-    for i in 0..3000 {
-        let t = i as f64 * 1e-3;
-        text.push_str(&format!("{t},0.5,0.3,69.0,34.0\n"));
-    }
-    std::fs::write(&csv, text).unwrap();
-    let port = free_port();
-    let log = d.join("acquisition.log");
-    let acq = Command::new(BIN)
-        .args(["stage", "acquisition", "--rig", "udp-bar", "--udp"])
-        .arg(format!("127.0.0.1:{port}"))
-        .env("LEAKWATCH_IOX_PREFIX", format!("udpb{}", std::process::id()))
-        .stderr(std::fs::File::create(&log).unwrap())
-        .spawn()
-        .unwrap();
-    wait_for_line(&log, "waiting for datagrams");
+    let csv = steady_stream(&d, 69.0, 34.0);
+    let (port, log, acq) = acquisition_on_udp(&d, "udp-bar");
     send(&csv, port, &["--rate-hz", "20000"]);
     let o = acq.wait_with_output().unwrap();
     let stderr = std::fs::read_to_string(&log).unwrap();
