@@ -1,7 +1,7 @@
 //! `commission`'s HTML record beside its TOML, and a replay on the rig it
 //! commissioned.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::common::html::{row, screenshot, self_contained};
 use crate::common::{leakwatch, stderr, tmpdir};
@@ -60,6 +60,20 @@ fn commissioned(name: &str) -> Commissioned {
         html,
         err,
     }
+}
+
+/// `replay` of `input` with `config` into `out`; its terminal.
+fn replay(input: &Path, config: &Path, out: &Path) -> String {
+    let o = leakwatch(&[
+        "replay",
+        input.to_str().unwrap(),
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    stderr(&o)
 }
 
 /// `commission` writes rig.html beside rig.toml: the thresholds, offsets,
@@ -193,15 +207,7 @@ fn a_replay_on_the_commissioned_rig_states_its_record() {
     // a replay with the commissioned config states the commissioning's thresholds
     // and smallest detectable leaks in its report
     let replayed = d.join("replayed");
-    let o = leakwatch(&[
-        "replay",
-        healthy.to_str().unwrap(),
-        "--config",
-        toml_path.to_str().unwrap(),
-        "--out",
-        replayed.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    replay(&healthy, &toml_path, &replayed);
     let report = std::fs::read_to_string(replayed.join("report.html")).unwrap();
     assert!(report.contains("Replay of healthy.csv on the rig of rig.toml"));
     for name in [
@@ -248,20 +254,8 @@ fn a_replay_on_the_commissioned_rig_states_its_record() {
     )
     .unwrap();
     let unwatched = d.join("unwatched");
-    let o = leakwatch(&[
-        "replay",
-        healthy.to_str().unwrap(),
-        "--config",
-        plant.to_str().unwrap(),
-        "--out",
-        unwatched.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("; an offset on x is not watched"),
-        "{}",
-        stderr(&o)
-    );
+    let said = replay(&healthy, &plant, &unwatched);
+    assert!(said.contains("; an offset on x is not watched"), "{said}");
     let report = std::fs::read_to_string(unwatched.join("report.html")).unwrap();
     assert!(report.contains("<b>An offset on x is not watched (commissioning found"));
 }
