@@ -62,6 +62,16 @@ fn commissioned(name: &str) -> Commissioned {
     }
 }
 
+/// A TOML array of numbers as the record prints them (3 decimals).
+fn three_decimals(array: &toml::Value) -> Vec<String> {
+    array
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| format!("{:.3}", v.as_float().unwrap()))
+        .collect()
+}
+
 /// `replay` of `input` with `config` into `out`; its terminal.
 fn replay(input: &Path, config: &Path, out: &Path) -> String {
     let o = leakwatch(&[
@@ -113,23 +123,13 @@ fn the_commissioning_record_holds_the_terminals_and_the_tomls_numbers() {
     // the offsets: the TOML's values, the terminal's and the report's
     let t: toml::Table = toml::from_str(&std::fs::read_to_string(&toml_path).unwrap()).unwrap();
     let c = &t["classifier"]["commissioning"];
-    let offsets: Vec<String> = c["offsets_lpm"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| format!("{:.3}", v.as_float().unwrap()))
-        .collect();
+    let offsets = three_decimals(&c["offsets_lpm"]);
     assert_eq!(row(&html, "healthy offset"), offsets);
     assert!(
         err.contains(&format!("offsets ext1/ext2/int {} L/min", offsets.join("/"))),
         "{err}"
     );
-    let spreads: Vec<String> = c["spreads_lpm"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| format!("{:.3}", v.as_float().unwrap()))
-        .collect();
+    let spreads = three_decimals(&c["spreads_lpm"]);
     assert_eq!(row(&html, "healthy spread"), spreads);
     // the healthy misreading: the terminal's line where the TOML keeps one, else said none
     let kept = ["healthy_offsets_kpa", "healthy_span_errors"].iter().any(|f| {
