@@ -288,10 +288,11 @@ impl OffsetWatch {
     }
 
     /// Whether a leak of a named kind stands, as of the next
-    /// [`OffsetWatch::on_rise`]: then an offset on p1 or p2 is named only where
-    /// it could have grown at a transducer's drift ([`MOST_DRIFT_MPA_PER_S`])
-    /// since its part of the rises began to grow. One that appeared in
-    /// seconds, with the leak's onset, is the leak.
+    /// [`OffsetWatch::on_rise`]: then an offset is named only where it could
+    /// have grown at a transducer's drift ([`MOST_DRIFT_MPA_PER_S`] on p1 or
+    /// p2, [`MOST_POSITION_DRIFT_MM_PER_S`] on x) since its part of the rises
+    /// began to grow. One that appeared in seconds, with the leak's onset, is
+    /// the leak.
     pub fn leak_named(&mut self, named: bool) {
         self.leak_named = named;
     }
@@ -346,9 +347,17 @@ impl OffsetWatch {
 
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]) and
     /// the offset of hypothesis `h` grew faster than a drift
-    /// ([`Self::faster_than_a_drift`]).
+    /// ([`Self::faster_than_a_drift`]; on x, faster than
+    /// [`MOST_POSITION_DRIFT_MM_PER_S`]).
     fn grew_past_a_drift(&self, h: usize, t_s: f64) -> bool {
-        self.leak_named && self.faster_than_a_drift(h, t_s)
+        if !self.leak_named {
+            return false;
+        }
+        if is_position(h) {
+            let grew_s = t_s - self.low_since_s[channel_of(h)];
+            return self.window.coefficient(h).abs() > MOST_POSITION_DRIFT_MM_PER_S * grew_s;
+        }
+        self.faster_than_a_drift(h, t_s)
     }
 
     /// Whether the pressure offset of hypothesis `h` fitted over the window is

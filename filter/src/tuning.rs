@@ -157,8 +157,8 @@ impl Tuning {
             q_bias_m2: 1e-20,
             p0_bias_m2: 1e-11,
             // θ starts at the model's stiffness, ±20 % (a rig's oil is 0-30 % softer
-            // than the data sheet's), and may wander by 0.03 %/√s at 1 kHz (temperature, air).
-            q_bulk_scale: 1e-10,
+            // than the data sheet's), and may wander by 0.055 %/√s at 1 kHz (temperature, air).
+            q_bulk_scale: 3e-10,
             p0_bulk_scale: 0.04,
             divergence_reset_m: 0.02,
             // The leak sizes converge within 0.2 s of a start (a leak present at start included).

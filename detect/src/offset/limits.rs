@@ -62,6 +62,10 @@ pub const POSITION_FIT_RATIO: f64 = 0.5;
 /// minute: twice the fastest a failing transducer is tested at). A leak that
 /// opens over seconds moves the sizes as an offset growing far faster would.
 pub const MOST_DRIFT_MPA_PER_S: f64 = 0.01;
+/// Fastest drift of the position transducer's zero, mm/s (4 mm a minute:
+/// twice the fastest a failing transducer is tested at). Once a leak is
+/// named, an offset on x that grew faster is the leak's imprint.
+pub const MOST_POSITION_DRIFT_MM_PER_S: f64 = 4.0 / 60.0;
 /// Largest offset on x fitted, mm: a transducer's zero drifts by a few mm at
 /// most. Where the filter's response to an offset on x is small, model error
 /// alone fits offsets of tens of mm.

@@ -14,17 +14,31 @@ fn watch_position(b_mm: f64, scale: f64, steady_leak_lpm: f64) -> (OffsetWatch, 
 
 /// [`watch_position`] through `watch`.
 fn watch_position_in(
-    mut watch: OffsetWatch,
+    watch: OffsetWatch,
     b_mm: f64,
+    scale: f64,
+    steady_leak_lpm: f64,
+) -> (OffsetWatch, Option<OffsetChange>) {
+    watch_growing_position(watch, |_| b_mm, 60.0, false, scale, steady_leak_lpm)
+}
+
+/// [`watch_position`] with the offset `b_mm(t)` (t in s) over `seconds`, a
+/// leak of a named kind standing throughout where `leak_named`.
+fn watch_growing_position(
+    mut watch: OffsetWatch,
+    b_mm: impl Fn(f64) -> f64,
+    seconds: f64,
+    leak_named: bool,
     scale: f64,
     steady_leak_lpm: f64,
 ) -> (OffsetWatch, Option<OffsetChange>) {
     let (mut id, mut first) = (1, None);
     let factors = crate::NOMINAL_INTERNAL_FACTORS;
-    for n in 0..6000 {
+    for n in 0..(seconds * 100.0) as usize {
         let t = n as f64 * 0.01;
         let swing = (std::f64::consts::PI * t / 2.0).sin().abs().powi(2);
         let xi = [0.009 * (1.0 + swing), -0.012 * (1.0 + 0.5 * swing), 0.001].map(|v| scale * v);
+        let b_mm = b_mm(t);
         let q = [b_mm * xi[0], b_mm * xi[1] + steady_leak_lpm, b_mm * xi[2]];
         let rise = crate::signatures_with(q, factors);
         let response = MisreadingResponse {
@@ -32,6 +46,7 @@ fn watch_position_in(
             span_lpm: [[-0.4, 0.0, 0.0], [0.0, -0.3, 0.1]],
             position_lpm_per_mm: xi,
         };
+        watch.leak_named(leak_named);
         let change = watch.on_rise(t, 0.01, rise, &response, [8.0, 3.0], factors, [0.05; 3], &mut id);
         first = first.or(change);
     }
@@ -57,6 +72,28 @@ fn an_offset_on_x_is_named_in_mm() {
     let (watch, change) = watch_position(30.0, 0.1, 0.0);
     assert_eq!(change, None);
     assert!(!watch.vetoes());
+}
+
+#[test]
+fn beside_a_named_leak_only_an_offset_on_x_grown_at_a_drift_is_named() {
+    // 3 mm from 5 s on, at once: named alone, not while a leak is named (it
+    // would have grown at 4 mm a minute for 45 s)
+    let step = |t: f64| if t >= 5.0 { 3.0 } else { 0.0 };
+    let watch = || OffsetWatch::new(25e6);
+    let alone = watch_growing_position(watch(), step, 40.0, false, 1.0, 0.0).1;
+    assert!(
+        matches!(alone, Some(OffsetChange::Raised(s)) if s.channel == 2),
+        "{alone:?}"
+    );
+    assert_eq!(watch_growing_position(watch(), step, 40.0, true, 1.0, 0.0).1, None);
+    // the same offset reached at 2 mm a minute is named beside the leak
+    let drift = |t: f64| 2.0 / 60.0 * (t - 5.0).clamp(0.0, 90.0);
+    let beside = watch_growing_position(watch(), drift, 150.0, true, 1.0, 0.0).1;
+    let Some(OffsetChange::Raised(s)) = beside else {
+        panic!("a drift of x beside a leak not named: {beside:?}");
+    };
+    assert_eq!(OFFSET_CHANNEL_NAMES[s.channel], "x", "{s:?}");
+    assert!(s.offset_mm > 1.0 && s.offset_mm < 3.1, "{s:?}");
 }
 
 #[test]
