@@ -85,7 +85,10 @@ fn beside_a_named_leak_only_an_offset_on_x_grown_at_a_drift_is_named() {
         matches!(alone, Some(OffsetChange::Raised(s)) if s.channel == 2),
         "{alone:?}"
     );
-    assert_eq!(watch_growing_position(watch(), step, 40.0, true, 1.0, 0.0).1, None);
+    assert_eq!(
+        watch_growing_position(watch(), step, 40.0, true, 1.0, 0.0).1,
+        None
+    );
     // the same offset reached at 2 mm a minute is named beside the leak
     let drift = |t: f64| 2.0 / 60.0 * (t - 5.0).clamp(0.0, 90.0);
     let beside = watch_growing_position(watch(), drift, 150.0, true, 1.0, 0.0).1;
