@@ -346,28 +346,31 @@ impl OffsetWatch {
     }
 
     /// Whether a leak of a named kind stands ([`OffsetWatch::leak_named`]) and
-    /// the offset of hypothesis `h` grew faster than a drift
-    /// ([`Self::faster_than_a_drift`]; on x, faster than
-    /// [`MOST_POSITION_DRIFT_MM_PER_S`]).
+    /// the misreading of hypothesis `h` grew faster than a drift
+    /// ([`Self::grew_faster_than_a_drift`]).
     fn grew_past_a_drift(&self, h: usize, t_s: f64) -> bool {
-        if !self.leak_named {
-            return false;
-        }
-        if is_position(h) {
-            let grew_s = t_s - self.low_since_s[channel_of(h)];
-            return self.window.coefficient(h).abs() > MOST_POSITION_DRIFT_MM_PER_S * grew_s;
-        }
-        self.faster_than_a_drift(h, t_s)
+        self.leak_named && self.grew_faster_than_a_drift(h, t_s)
     }
 
-    /// Whether the pressure offset of hypothesis `h` fitted over the window is
-    /// larger than [`MOST_DRIFT_MPA_PER_S`] could have made it since its
-    /// channel's part of the rises began to grow, at `t_s` (s). False on x.
+    /// Whether the pressure offset of hypothesis `h` grew faster than a drift
+    /// ([`Self::grew_faster_than_a_drift`]). False on x: a misreading of x
+    /// holds a leak back through the window's fit alone.
     fn faster_than_a_drift(&self, h: usize, t_s: f64) -> bool {
+        !is_position(h) && self.grew_faster_than_a_drift(h, t_s)
+    }
+
+    /// Whether the misreading of hypothesis `h` fitted over the window is
+    /// larger than its channel's fastest drift could have made it since its
+    /// part of the rises began to grow, at `t_s` (s): the pressure offset
+    /// against [`MOST_DRIFT_MPA_PER_S`], the offset on x against
+    /// [`MOST_POSITION_DRIFT_MM_PER_S`].
+    fn grew_faster_than_a_drift(&self, h: usize, t_s: f64) -> bool {
+        let grew_s = t_s - self.low_since_s[channel_of(h)];
         if is_position(h) {
-            return false;
+            self.window.coefficient(h).abs() > MOST_POSITION_DRIFT_MM_PER_S * grew_s
+        } else {
+            self.pressure_offset_mpa(h).abs() > MOST_DRIFT_MPA_PER_S * grew_s
         }
-        self.pressure_offset_mpa(h).abs() > MOST_DRIFT_MPA_PER_S * (t_s - self.low_since_s[channel_of(h)])
     }
 
     /// Since when the misreading of hypothesis `h` has read off, at `t_s` (s):
