@@ -52,6 +52,12 @@ pub struct LeakSizeDetector {
     /// ([`filter::Estimate::laminar_factor_sigma`]) on the model's null leakage
     /// and on the healthy offsets, which the commissioning learned at its temperature.
     oil_band_lpm: [f64; 3],
+    /// The part of [`Self::oil_band_lpm`] the offset watch's thresholds take,
+    /// L/min: the band as it was while θ read the oil inside its operating
+    /// range ([`filter::FLAG_OIL_PAST_RANGE`] unset). A transducer's fault
+    /// that pulls θ past the range widens the band there; it does not raise
+    /// the level its own misreading is named at.
+    watch_band_lpm: [f64; 3],
     /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
     baseline_lpm: [f64; 3],
     /// The baseline when each rise was last low (before a possible onset), L/min.
@@ -183,6 +189,7 @@ impl LeakSizeDetector {
             naming_threshold_lpm: [f64::NAN; 3],
             naming_spread_lpm: [f64::NAN; 3],
             oil_band_lpm: [0.0; 3],
+            watch_band_lpm: [0.0; 3],
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
             last_t_s: f64::NAN,

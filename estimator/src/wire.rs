@@ -22,6 +22,7 @@ const _: () = {
     assert!(filter::FLAG_AFTER_GAP == estimate_flags::AFTER_GAP);
     assert!(filter::FLAG_END_STOP == estimate_flags::END_STOP);
     assert!(filter::FLAG_REANCHORED == estimate_flags::REANCHORED);
+    assert!(filter::FLAG_OIL_PAST_RANGE == estimate_flags::OIL_PAST_RANGE);
     assert!(FLAGS_ALL & estimate_flags::END_OF_STREAM == 0);
     assert!(MAX_STATES == frames::MAX_STATES);
 };

@@ -24,6 +24,10 @@ pub const FLAG_END_STOP: u32 = 1 << 6;
 /// set with [`FLAG_AFTER_GAP`], which a bridged gap carries alone), or after it
 /// lost track ([`crate::track`]).
 pub const FLAG_REANCHORED: u32 = 1 << 7;
+/// Flag bit: θ reads the oil past its operating range by more than
+/// [`crate::oil::OIL_RANGE_MARGIN_K`]; the model is held at the range's edge and
+/// the temperature's σ grows by the distance ([`crate::oil::OilFromStiffness::past_range_k`]).
+pub const FLAG_OIL_PAST_RANGE: u32 = 1 << 8;
 /// The flag bits of an estimate that is not yet a settled one: reset,
 /// unused or still converging (what averages over a recording leave out).
 pub const FLAGS_UNSETTLED: u32 = FLAG_CONVERGING | FLAG_SKIPPED | FLAG_RESET;
@@ -34,7 +38,8 @@ pub const FLAGS_ALL: u32 = FLAG_RESET
     | FLAG_CONVERGING
     | FLAG_AFTER_GAP
     | FLAG_END_STOP
-    | FLAG_REANCHORED;
+    | FLAG_REANCHORED
+    | FLAG_OIL_PAST_RANGE;
 /// Distance from either end of the stroke within which an estimate carries
 /// [`FLAG_END_STOP`], m (an encoder count or two, plus the bounce of a stop).
 pub const END_STOP_MARGIN_M: f64 = 2e-3;

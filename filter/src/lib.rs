@@ -31,7 +31,7 @@ pub use ekf::{Ekf, EkfError, Innovation};
 pub use estimate::Estimate;
 pub use flags::{
     END_STOP_MARGIN_M, FLAGS_ALL, FLAGS_UNSETTLED, FLAG_AFTER_GAP, FLAG_CLAMPED, FLAG_CONVERGING,
-    FLAG_END_STOP, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED,
+    FLAG_END_STOP, FLAG_OIL_PAST_RANGE, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED,
 };
 pub use mae::MovingMae;
 pub use oil::{oil_stiffness_line, OilFromStiffness};

@@ -24,7 +24,7 @@
 use model::params::OilTemperature;
 use model::ActuatorParams;
 
-use crate::{Estimate, Estimator, FLAGS_UNSETTLED, FLAG_CONVERGING, OIL_TEMP_STEP_K};
+use crate::{Estimate, Estimator, FLAGS_UNSETTLED, FLAG_CONVERGING, FLAG_OIL_PAST_RANGE, OIL_TEMP_STEP_K};
 
 /// Time constant of the low-pass on θ that the temperature is read from, s:
 /// the oil warms over minutes, θ jitters over a duty cycle's strokes.
@@ -42,7 +42,8 @@ pub const OIL_ESTIMATE_SPAN_K: f64 = 40.0;
 /// (`operating_min_c`..`operating_max_c` of the oil law) widened by this much,
 /// K: the oil does not leave its operating range, so a θ that says it did says
 /// something else (a pressure transducer reading off, air). Beyond it, the
-/// model's viscous terms are held at the range's edge.
+/// model's viscous terms are held at the range's edge, and the temperature's σ
+/// grows by how far past it θ reads ([`OilFromStiffness::past_range_k`]).
 pub const OIL_RANGE_MARGIN_K: f64 = 5.0;
 
 /// Relative uncertainty of the bulk modulus' temperature slope k_β (1): the
@@ -139,6 +140,9 @@ pub struct OilFromStiffness {
     oil: OilTemperature,
     /// L at the temperature the model is at (1).
     laminar_applied: f64,
+    /// How far past `lowest_c`..`highest_c` θ read the oil when the model
+    /// last moved, K ([`Self::past_range_k`]).
+    past_applied_k: f64,
 }
 
 impl OilFromStiffness {
@@ -168,6 +172,7 @@ impl OilFromStiffness {
             stiffness_less_pull: [0.0; TABLE_POINTS],
             oil: *oil,
             laminar_applied: 1.0,
+            past_applied_k: 0.0,
         };
         if pull != 0.0 {
             o.tabulate();
@@ -275,6 +280,26 @@ impl OilFromStiffness {
         self.table_c(first + i - 1) + w * (self.table_c(first + i) - self.table_c(first + i - 1))
     }
 
+    /// How far past the range it is read in (`lowest_c`..`highest_c`) θ's
+    /// low-pass says the oil is, K: θ read at the stiffness' own slope, without
+    /// the laminar flows' pull (a few % of the stiffness' change there). The
+    /// model is held at the range's edge, so its null leakage is uncertain by
+    /// that much more ([`Self::sigma_k`]). 0 inside the range, or where θ
+    /// does not tell the temperature.
+    pub fn past_range_k(&self) -> f64 {
+        if !self.readable {
+            return 0.0;
+        }
+        let t = self.reference_c + (self.theta_mean / self.theta_ref - 1.0) / self.bulk_per_k;
+        (t - self.highest_c).max(self.lowest_c - t).max(0.0)
+    }
+
+    /// How far past the range θ read the oil when the model last moved, K:
+    /// what [`Self::sigma_k`] adds to θ's part (0 inside the range).
+    pub fn past_applied_k(&self) -> f64 {
+        self.past_applied_k
+    }
+
     /// The temperature the model is at, °C.
     pub fn applied_c(&self) -> f64 {
         self.applied_c
@@ -307,7 +332,8 @@ impl OilFromStiffness {
         } else {
             0.0
         };
-        let from_theta = theta_sigma / (self.theta_ref * self.bulk_per_k.abs()) + beyond;
+        let from_theta =
+            theta_sigma / (self.theta_ref * self.bulk_per_k.abs()) + beyond + self.past_applied_k;
         let from_slope = BULK_SLOPE_UNCERTAINTY * (self.applied_c - self.reference_c);
         let from_spread = self.spread_k();
         let unsettled = if self.settled() {
@@ -324,8 +350,9 @@ impl OilFromStiffness {
     }
 
     /// Takes θ (1) after a sample period `dt_s` (s); returns the temperature
-    /// to set the model to (°C) when it moved by [`OIL_ESTIMATE_STEP_K`], or
-    /// when the estimate has just [`Self::settled`].
+    /// to set the model to (°C) when it moved by [`OIL_ESTIMATE_STEP_K`], when
+    /// the reading past the range ([`Self::past_range_k`]) moved by as much,
+    /// or when the estimate has just [`Self::settled`].
     pub fn observe(&mut self, theta: f64, dt_s: f64) -> Option<f64> {
         if !theta.is_finite() {
             return None;
@@ -335,10 +362,15 @@ impl OilFromStiffness {
         let weight = (dt_s / OIL_STIFFNESS_TAU_S.min(self.observed_s)).min(1.0);
         self.theta_mean += weight * (theta - self.theta_mean);
         let t = self.temperature_c();
-        if (t - self.applied_c).abs() < OIL_ESTIMATE_STEP_K && was_settled == self.settled() {
+        let past_k = self.past_range_k();
+        if (t - self.applied_c).abs() < OIL_ESTIMATE_STEP_K
+            && (past_k - self.past_applied_k).abs() < OIL_ESTIMATE_STEP_K
+            && was_settled == self.settled()
+        {
             return None;
         }
         self.applied_c = t;
+        self.past_applied_k = past_k;
         if self.pull != 0.0 {
             // (once a move of the model, not a sample)
             self.laminar_applied = self.oil.factors(t).laminar_flow;
@@ -397,6 +429,9 @@ impl Estimator {
         };
         let (applied_c, sigma_t_k) = (oil.applied_c(), oil.sigma_k(e.bulk_scale_sigma));
         let settled = oil.settled();
+        if oil.past_applied_k() > 0.0 {
+            e.flags |= FLAG_OIL_PAST_RANGE;
+        }
         if let Some(t) = moved {
             self.model
                 .params

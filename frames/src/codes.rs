@@ -30,6 +30,9 @@ pub mod estimate_flags {
     /// Samples were missing just before this one, more than the filter bridges: it
     /// restarted its fast states from this sample (set with [`AFTER_GAP`]).
     pub const REANCHORED: u32 = 1 << 7;
+    /// The leak filter reads the oil's temperature past its operating range
+    /// (from the oil's stiffness): its model is held at the range's edge.
+    pub const OIL_PAST_RANGE: u32 = 1 << 8;
 }
 
 /// Values of [`LeakEventFrame::kind`](crate::LeakEventFrame::kind).

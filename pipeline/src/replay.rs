@@ -266,7 +266,8 @@ impl Acc {
     }
     /// Counts the time from the previous estimate to `e` (at most 0.1 s across
     /// a gap) when `e`'s oil temperature is outside the operating range by
-    /// more than its σ.
+    /// more than its σ, or is held at the range's margin
+    /// ([`filter::oil::OIL_RANGE_MARGIN_K`]: θ reads it there or beyond).
     fn count_outside(&mut self, e: &filter::Estimate) {
         let sigma = if e.oil_temp_sigma_k.is_finite() {
             e.oil_temp_sigma_k
@@ -274,7 +275,9 @@ impl Acc {
             0.0
         };
         let (lo, hi) = self.operating_c;
-        if e.oil_temp_c + sigma >= lo && e.oil_temp_c - sigma <= hi {
+        let held = filter::oil::OIL_RANGE_MARGIN_K - filter::oil::OIL_ESTIMATE_STEP_K;
+        let at_margin = e.oil_temp_c >= hi + held || e.oil_temp_c <= lo - held;
+        if e.oil_temp_c + sigma >= lo && e.oil_temp_c - sigma <= hi && !at_margin {
             return;
         }
         if self.first_outside_s.is_nan() {

@@ -170,7 +170,8 @@ impl LeakSizeDetector {
         // against `naming_thr` (learned where that kind's test could alarm).
         let thr = self.floored(self.thresholds_now());
         if !invalid {
-            self.watch_offsets(e, dt_s, rise, thr);
+            let watch_thr = self.floored(self.watch_thresholds_now());
+            self.watch_offsets(e, dt_s, rise, watch_thr);
         }
         // Rises an offset on a transducer explains better than any leak are no leak
         // evidence; nor are those that a drifting transducer past its tolerance

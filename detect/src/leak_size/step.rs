@@ -5,7 +5,7 @@
 use super::{BlindCause, LeakSizeDetector};
 use crate::track::Arming;
 use crate::{EventKind, LeakEvent, COMMAND_RATE_WINDOW_S, COMMAND_REVERSAL_BAND_V, NIS_RATIO_WINDOW_S};
-use filter::{Estimate, FLAG_CONVERGING, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED};
+use filter::{Estimate, FLAG_CONVERGING, FLAG_OIL_PAST_RANGE, FLAG_REANCHORED, FLAG_RESET, FLAG_SKIPPED};
 
 impl LeakSizeDetector {
     /// The thresholds in force, L/min at p_s/2: the commissioning's (or the
@@ -21,15 +21,26 @@ impl LeakSizeDetector {
         std::array::from_fn(|k| self.naming_threshold_lpm[k] + self.oil_band_lpm[k])
     }
 
+    /// The thresholds the offset watch judges the rises against, L/min at
+    /// p_s/2: the commissioning's (or the refined ones) widened by the oil's
+    /// band as it was inside the operating range (`watch_band_lpm`).
+    pub(super) fn watch_thresholds_now(&self) -> [f64; 3] {
+        std::array::from_fn(|k| self.threshold_lpm[k] + self.watch_band_lpm[k])
+    }
+
     /// Takes the laminar flows' uncertainty of estimate `e` into
     /// [`Self::thresholds_now`]: the model's null leakage (its band) and the
-    /// healthy offsets, each as uncertain as the laminar factor.
+    /// healthy offsets, each as uncertain as the laminar factor. The offset
+    /// watch's band follows it only while θ reads the oil inside its range.
     fn widen_for_the_oil(&mut self, e: &Estimate) {
         self.oil_band_lpm = crate::oil_band_lpm(
             e.laminar_factor_sigma,
             e.null_leakage_band_lpm,
             self.offsets_lpm(),
         );
+        if e.flags & FLAG_OIL_PAST_RANGE == 0 {
+            self.watch_band_lpm = self.oil_band_lpm;
+        }
     }
 
     /// Reads one estimate; pushes any event into `out` (at most one per call).

@@ -333,3 +333,34 @@ fn the_seconds_without_evidence_are_charged_to_their_causes() {
         "{b:?}"
     );
 }
+
+/// The offset watch's thresholds take the oil's band as it was inside the
+/// operating range: while the estimates say θ reads past it
+/// (`FLAG_OIL_PAST_RANGE`), the leak thresholds widen with the band and the
+/// watch's stay; back inside, both follow the band again.
+#[test]
+fn the_offset_watch_keeps_the_oil_band_it_had_inside_the_range() {
+    let mut det = LeakSizeDetector::new(commissioned_run_config(0.03));
+    let feed = |det: &mut LeakSizeDetector, from_s: f64, band_lpm: f64, flags: u32| {
+        for i in 0..1000 {
+            let mut e = estimate(from_s + i as f64 * 1e-3, [0.0; 3]);
+            (e.null_leakage_band_lpm, e.flags) = (band_lpm, flags);
+            det.on_estimate(&e, &mut None);
+        }
+    };
+    // what each threshold stands above the commissioning's (or refined) one, L/min
+    let widening = |det: &LeakSizeDetector, t: [f64; 3]| -> [f64; 3] {
+        assert!(t.iter().all(|v| v.is_finite()), "{t:?}");
+        std::array::from_fn(|k| t[k] - det.threshold_lpm[k])
+    };
+    let near = |a: [f64; 3], b: f64| a.iter().all(|v| (v - b).abs() < 1e-12);
+    feed(&mut det, 0.0, 0.02, 0);
+    assert!(near(widening(&det, det.thresholds_now()), 0.02));
+    assert!(near(widening(&det, det.watch_thresholds_now()), 0.02));
+    feed(&mut det, 1.0, 0.08, filter::FLAG_OIL_PAST_RANGE);
+    assert!(near(widening(&det, det.thresholds_now()), 0.08));
+    assert!(near(widening(&det, det.watch_thresholds_now()), 0.02));
+    feed(&mut det, 2.0, 0.05, 0);
+    assert!(near(widening(&det, det.thresholds_now()), 0.05));
+    assert!(near(widening(&det, det.watch_thresholds_now()), 0.05));
+}

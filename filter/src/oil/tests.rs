@@ -216,3 +216,48 @@ fn the_oil_stiffness_line_names_theta_the_modulus_and_a_soft_rig() {
     );
     assert!(soft.contains("leakwatch calibrate"), "{soft}");
 }
+
+#[test]
+fn a_stiffness_read_past_the_range_widens_the_temperatures_sigma_by_the_distance() {
+    let oil = OilTemperature {
+        reference_c: 30.0,
+        ..OilTemperature::default()
+    };
+    let mut o = OilFromStiffness::new(&oil, 1.0).expect("k_β −0.0045");
+    // θ says 30 K above the reference: inside the range, nothing past it
+    let at_60 = 1.0 - 0.0045 * 30.0;
+    for _ in 0..200_000 {
+        o.observe(at_60, 1e-3);
+    }
+    assert_eq!(o.past_range_k(), 0.0);
+    let inside = o.sigma_k(0.0);
+    // θ says 50 K above (80 °C): the model is held at 65 °C, 15 K short
+    let at_80 = 1.0 - 0.0045 * 50.0;
+    let mut moved = None;
+    for _ in 0..200_000 {
+        moved = o.observe(at_80, 1e-3).or(moved);
+    }
+    assert!((o.applied_c() - (60.0 + OIL_RANGE_MARGIN_K)).abs() < OIL_ESTIMATE_STEP_K);
+    assert!((o.past_range_k() - 15.0).abs() < 1e-6, "{}", o.past_range_k());
+    // what σ_T took, and what flags the estimates (FLAG_OIL_PAST_RANGE)
+    assert!(
+        (o.past_applied_k() - 15.0).abs() < OIL_ESTIMATE_STEP_K,
+        "{}",
+        o.past_applied_k()
+    );
+    assert!(moved.is_some());
+    // the σ of θ's own (0) and the slope's 20 % of 35 K, with the 15 K past added to θ's part
+    let slope = 0.2 * (o.applied_c() - 30.0);
+    assert!(
+        (o.sigma_k(0.0) - 15f64.hypot(slope)).abs() < OIL_ESTIMATE_STEP_K,
+        "{} {inside}",
+        o.sigma_k(0.0)
+    );
+    // back inside: nothing past
+    for _ in 0..200_000 {
+        o.observe(at_60, 1e-3);
+    }
+    assert_eq!(o.past_range_k(), 0.0);
+    assert_eq!(o.past_applied_k(), 0.0);
+    assert!((o.sigma_k(0.0) - inside).abs() < 0.2 * OIL_ESTIMATE_STEP_K);
+}
