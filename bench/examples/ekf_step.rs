@@ -11,16 +11,20 @@ fn main() {
     // `profile chain [REPS]`: the default chain (the leak filter and the
     // classifier) REPS times (default once) over 60 s, untimed (for
     // `valgrind --tool=callgrind` or `perf record`); `profile chain-thesis
-    // [REPS]`: the same with the thesis' baseline.
+    // [REPS]`: the same with the thesis' baseline; `profile plant [REPS]`: the
+    // default chain on the plant model, as `bench ekf`'s plant row runs it.
     let profile = std::env::args().nth(1).as_deref() == Some("profile");
     let chain = std::env::args().nth(2);
-    if profile && matches!(chain.as_deref(), Some("chain" | "chain-thesis")) {
-        let samples = recorded_samples(60.0);
+    if profile && matches!(chain.as_deref(), Some("chain" | "chain-thesis" | "plant")) {
         let reps = std::env::args().nth(3).and_then(|a| a.parse().ok()).unwrap_or(1);
-        let tp = if chain.as_deref() == Some("chain") {
-            chain_throughput(&samples, reps)
-        } else {
-            chain_throughput_with_thesis(&samples, reps)
+        let tp = match chain.as_deref() {
+            Some("chain") => chain_throughput(&recorded_samples(60.0), reps),
+            Some("plant") => {
+                let plant = bench::speed::plant_model();
+                let samples = bench::speed::recorded_samples_on(&plant, "lift", 60.0);
+                bench::speed::plant_chain_throughput(&samples, reps)
+            }
+            _ => chain_throughput_with_thesis(&recorded_samples(60.0), reps),
         };
         println!("{}", tp.samples);
         return;

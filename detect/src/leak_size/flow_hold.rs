@@ -9,8 +9,12 @@
 //! So a rise that was under half its threshold when the command left its
 //! rest band and passed half of it within [`WITH_FLOW_S`] after, and that a
 //! misreading of [`GUARD_MPA`] could have made, is held until the command
-//! has rested for [`SETTLE_S`], for at most [`HOLD_MAX_S`]. A leak that
-//! opens later in a move is not held.
+//! has rested for [`SETTLE_S`], for at most [`HOLD_MAX_S`]. A step to a far
+//! larger opening within the move shows a misreading as leaving the rest
+//! does: a rise that passes half its threshold while the response to a
+//! misreading has grown [`FLOW_GROWTH`]-fold within [`WITH_FLOW_S`] came with
+//! the flow too. A leak that opens later in a move, with the flow steady,
+//! is not held.
 
 /// The misreading guarded against, MPa: twice the least drifting offset
 /// named on a 25 MPa transducer (2 % of its range). The filter's linear
@@ -44,7 +48,8 @@ pub(super) struct FlowHold {
     /// command left the rest band (and has not passed half of it since).
     low_at_move: [bool; 3],
     /// Per kind, whether its rise passed half its threshold within
-    /// [`WITH_FLOW_S`] after the command left the rest band.
+    /// [`WITH_FLOW_S`] after the command left the rest band, or while the
+    /// response had grown [`FLOW_GROWTH`]-fold within [`WITH_FLOW_S`].
     came_with_flow: [bool; 3],
     /// The rises' response to 1 MPa on p1 and on p2 when the command left
     /// the rest band, per kind, L/min per MPa.
@@ -52,6 +57,27 @@ pub(super) struct FlowHold {
     /// Per kind, the most the response to 1 MPa on p1 or on p2 has moved
     /// from `response_at_move` since, L/min per MPa.
     peak_reach_lpm_per_mpa: [f64; 3],
+    /// The smallest response (the largest over kinds and channels) in each of
+    /// the last blocks of [`BLOCK_S`], L/min per MPa (a ring).
+    block_least: [f64; BLOCKS],
+    /// The block `block_least`'s newest entry belongs to (t over [`BLOCK_S`]).
+    block_index: i64,
+}
+
+/// A rise that passes half its threshold while the response to a misreading
+/// has grown this much (1) within [`WITH_FLOW_S`] came with the flow too:
+/// a step to a far larger opening shows a misreading as leaving the rest does.
+pub const FLOW_GROWTH: f64 = 2.0;
+
+/// The blocks the response's recent least is kept in, s.
+const BLOCK_S: f64 = 0.05;
+
+/// Blocks of [`BLOCK_S`] covering [`WITH_FLOW_S`] and the block being filled.
+const BLOCKS: usize = 11;
+
+/// The largest response to 1 MPa on p1 or p2 over the kinds, L/min per MPa.
+fn largest(response: &[[f64; 3]; 2]) -> f64 {
+    response.iter().flatten().fold(0.0, |a, r| a.max(r.abs()))
 }
 
 impl Default for FlowHold {
@@ -63,6 +89,8 @@ impl Default for FlowHold {
             came_with_flow: [false; 3],
             response_at_move: [[0.0; 3]; 2],
             peak_reach_lpm_per_mpa: [0.0; 3],
+            block_least: [f64::INFINITY; BLOCKS],
+            block_index: i64::MIN,
         }
     }
 }
@@ -92,10 +120,13 @@ impl FlowHold {
             }
             _ => {}
         }
+        let now = largest(&response);
+        self.keep_least(t_s, now);
+        let grew = now >= FLOW_GROWTH * self.block_least.iter().fold(f64::INFINITY, |a, b| a.min(*b));
         for k in 0..3 {
             if self.low_at_move[k] && rise_lpm[k] >= 0.5 * thresholds_lpm[k] {
                 self.low_at_move[k] = false;
-                self.came_with_flow[k] = t_s - self.left_rest_s <= WITH_FLOW_S;
+                self.came_with_flow[k] = t_s - self.left_rest_s <= WITH_FLOW_S || grew;
             }
         }
         for (r, r0) in response.iter().zip(&self.response_at_move) {
@@ -108,9 +139,29 @@ impl FlowHold {
         }
     }
 
+    /// Keeps `response` (L/min per MPa) at `t_s` (s) in the ring of the blocks' least.
+    fn keep_least(&mut self, t_s: f64, response: f64) {
+        let index = (t_s / BLOCK_S).floor() as i64;
+        if index != self.block_index {
+            let fresh = if self.block_index == i64::MIN {
+                BLOCKS as i64
+            } else {
+                (index - self.block_index).clamp(0, BLOCKS as i64)
+            };
+            for n in 1..=fresh {
+                self.block_least[(self.block_index.wrapping_add(n)).rem_euclid(BLOCKS as i64) as usize] =
+                    f64::INFINITY;
+            }
+            self.block_index = index;
+        }
+        let slot = &mut self.block_least[index.rem_euclid(BLOCKS as i64) as usize];
+        *slot = slot.min(response);
+    }
+
     /// Whether kind `k`'s rise of `rise_lpm` (L/min) is held at `t_s` (s):
     /// it came with the flow (low when the command left its rest band, past
-    /// half its threshold within [`WITH_FLOW_S`] after), a misreading of
+    /// half its threshold within [`WITH_FLOW_S`] after, or as the response
+    /// grew [`FLOW_GROWTH`]-fold), a misreading of
     /// [`GUARD_MPA`] could have moved it that far since (at the most its
     /// response moved), the
     /// command has not rested [`SETTLE_S`] since, and it left the band
@@ -191,6 +242,48 @@ mod tests {
             !hold.holds(0, 1.7, 0.04),
             "ext1 passed it 0.6 s in: a leak opening mid-move"
         );
+    }
+
+    #[test]
+    fn a_rise_that_comes_with_a_step_to_a_larger_opening_is_held() {
+        // thesis rig, sensor-fault seed 2, inst_011 (a p1 drift 22 kPa off):
+        // the command left its rest at 4.5 V, stepped to 10 V 0.7 s later,
+        // and the response to 1 MPa grew from 0.28 to 1.2 L/min per MPa
+        let mut hold = FlowHold::default();
+        let mut t = 0.0;
+        while t < 2.0 {
+            let moving = t >= 1.0;
+            let response = if t < 1.7 { 0.28 } else { 1.2 };
+            let rise = if t < 1.75 { 0.005 } else { 0.03 };
+            hold.update(
+                t,
+                if moving { 4.5 } else { 0.0 },
+                on_p1(response),
+                [rise, 0.0, 0.0],
+                THR,
+            );
+            t += 1e-3;
+        }
+        assert!(
+            hold.holds(0, 2.0, 0.03),
+            "passed half 0.05 s after the step, 0.75 s into the move"
+        );
+        // the same rise with the response as the move began: a leak opening mid-move
+        let mut hold = FlowHold::default();
+        let mut t = 0.0;
+        while t < 2.0 {
+            let rise = if t < 1.75 { 0.005 } else { 0.03 };
+            let response = if t < 1.02 { 0.05 } else { 0.28 };
+            hold.update(
+                t,
+                if t >= 1.0 { 4.5 } else { 0.0 },
+                on_p1(response),
+                [rise, 0.0, 0.0],
+                THR,
+            );
+            t += 1e-3;
+        }
+        assert!(!hold.holds(0, 2.0, 0.03));
     }
 
     #[test]
