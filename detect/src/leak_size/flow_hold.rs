@@ -90,7 +90,7 @@ impl Default for FlowHold {
             response_at_move: [[0.0; 3]; 2],
             peak_reach_lpm_per_mpa: [0.0; 3],
             block_least: [f64::INFINITY; BLOCKS],
-            block_index: i64::MIN,
+            block_index: 0,
         }
     }
 }
@@ -122,11 +122,10 @@ impl FlowHold {
         }
         let now = largest(&response);
         self.keep_least(t_s, now);
-        let grew = now >= FLOW_GROWTH * self.block_least.iter().fold(f64::INFINITY, |a, b| a.min(*b));
         for k in 0..3 {
             if self.low_at_move[k] && rise_lpm[k] >= 0.5 * thresholds_lpm[k] {
                 self.low_at_move[k] = false;
-                self.came_with_flow[k] = t_s - self.left_rest_s <= WITH_FLOW_S || grew;
+                self.came_with_flow[k] = t_s - self.left_rest_s <= WITH_FLOW_S || self.grew_to(now);
             }
         }
         for (r, r0) in response.iter().zip(&self.response_at_move) {
@@ -142,20 +141,19 @@ impl FlowHold {
     /// Keeps `response` (L/min per MPa) at `t_s` (s) in the ring of the blocks' least.
     fn keep_least(&mut self, t_s: f64, response: f64) {
         let index = (t_s / BLOCK_S).floor() as i64;
-        if index != self.block_index {
-            let fresh = if self.block_index == i64::MIN {
-                BLOCKS as i64
-            } else {
-                (index - self.block_index).clamp(0, BLOCKS as i64)
-            };
-            for n in 1..=fresh {
-                self.block_least[(self.block_index.wrapping_add(n)).rem_euclid(BLOCKS as i64) as usize] =
-                    f64::INFINITY;
-            }
-            self.block_index = index;
+        // the blocks passed since the last sample start empty
+        for n in self.block_index + 1..=index.min(self.block_index + BLOCKS as i64) {
+            self.block_least[n.rem_euclid(BLOCKS as i64) as usize] = f64::INFINITY;
         }
+        self.block_index = self.block_index.max(index);
         let slot = &mut self.block_least[index.rem_euclid(BLOCKS as i64) as usize];
         *slot = slot.min(response);
+    }
+
+    /// Whether the response `now` (L/min per MPa) is [`FLOW_GROWTH`] times
+    /// its least over the last [`WITH_FLOW_S`] or more.
+    fn grew_to(&self, now: f64) -> bool {
+        now >= FLOW_GROWTH * self.block_least.iter().fold(f64::INFINITY, |a, b| a.min(*b))
     }
 
     /// Whether kind `k`'s rise of `rise_lpm` (L/min) is held at `t_s` (s):
