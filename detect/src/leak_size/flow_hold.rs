@@ -141,11 +141,16 @@ impl FlowHold {
     /// Keeps `response` (L/min per MPa) at `t_s` (s) in the ring of the blocks' least.
     fn keep_least(&mut self, t_s: f64, response: f64) {
         let index = (t_s / BLOCK_S).floor() as i64;
+        if index < self.block_index {
+            // the time went back (a stream restarted): the ring starts again
+            self.block_least = [f64::INFINITY; BLOCKS];
+            self.block_index = index;
+        }
         // the blocks passed since the last sample start empty
         for n in self.block_index + 1..=index.min(self.block_index + BLOCKS as i64) {
             self.block_least[n.rem_euclid(BLOCKS as i64) as usize] = f64::INFINITY;
         }
-        self.block_index = self.block_index.max(index);
+        self.block_index = index;
         let slot = &mut self.block_least[index.rem_euclid(BLOCKS as i64) as usize];
         *slot = slot.min(response);
     }
@@ -297,6 +302,17 @@ mod tests {
         let hold = moved_with_a_rise();
         assert!(hold.holds(0, 5.9, 0.1));
         assert!(!hold.holds(0, 6.0, 0.1));
+    }
+
+    #[test]
+    fn after_the_time_goes_back_the_least_is_read_from_the_new_samples_only() {
+        let mut hold = FlowHold::default();
+        hold.update(100.0, 0.0, on_p1(0.1), [0.0; 3], THR);
+        assert!(hold.grew_to(0.2), "0.2 is twice the least, 0.1");
+        // a stream restarted at 5 s with a response of 1.0
+        hold.update(5.0, 0.0, on_p1(1.0), [0.0; 3], THR);
+        assert!(!hold.grew_to(0.2), "the least is 1.0 now");
+        assert!(hold.grew_to(2.0));
     }
 
     #[test]
