@@ -357,9 +357,43 @@ fn read_json(path: &Path) -> Result<Option<serde_json::Value>, String> {
         .map_err(|e| format!("{}: not JSON: {e}", path.display()))
 }
 
+/// The truth of a plant-style folder's rig, scored against `model`: an
+/// in-repo instance's `instance.toml` (`bench instances`) at its recording's
+/// oil temperature, else plant_dev's `truth_rig.json`; with neither, none.
+fn truth_of(dir: &Path, model: &model::ActuatorParams) -> Result<crate::identification::Truth, String> {
+    let recording = read_json(&dir.join("commission_cold.truth.json"))?;
+    let instance = dir.join("instance.toml");
+    if !instance.is_file() {
+        let rig = read_json(&dir.join("truth_rig.json"))?;
+        return Ok(crate::identification::Truth::from_plant(
+            model,
+            rig.as_ref(),
+            recording.as_ref(),
+        ));
+    }
+    let drawn = config::Config::load(&instance)?;
+    // (a commissioning recording's oil holds one temperature)
+    let oil = |key: &str| {
+        recording
+            .as_ref()
+            .and_then(|r| r.get("oil_temperature")?.get(key)?.as_f64())
+    };
+    let temp_c = match (oil("start_c"), oil("end_c")) {
+        (Some(a), Some(b)) if a == b => a,
+        _ => f64::NAN,
+    };
+    Ok(crate::identification::Truth::from_instance(
+        model,
+        drawn.rig.as_ref().unwrap_or(&drawn.model),
+        &drawn.sensors,
+        drawn.sim.sample_period_s,
+        temp_c,
+    ))
+}
+
 /// The identification of a plant-style folder's rig on its commissioning
 /// recording (config: `--config`, else its `datasheet.toml`), scored against its
-/// `truth_rig.json` and `commission_cold.truth.json` where present.
+/// truth where it has one ([`truth_of`]).
 pub(crate) fn identification_data(
     dir: &Path,
     recording: &Path,
@@ -379,8 +413,7 @@ pub(crate) fn identification_data(
     let found = pipeline::commission::identify_on(recording, &cfg)?;
     let (id, mech) = (found.rig, found.mechanics);
     let wall_s = t0.elapsed().as_secs_f64();
-    let rig = read_json(&dir.join("truth_rig.json"))?;
-    let rec = read_json(&dir.join("commission_cold.truth.json"))?;
+    let truth = truth_of(dir, &cfg.model)?;
     let score = crate::identification::score(
         &cfg.model,
         cfg.datasheet
@@ -388,8 +421,7 @@ pub(crate) fn identification_data(
             .and_then(|d| d.pressure_transducers.lag_bound_s()),
         &id,
         mech.as_ref().ok(),
-        rig.as_ref(),
-        rec.as_ref(),
+        &truth,
     );
     let md = format!(
         "{}

@@ -389,7 +389,8 @@ pub(crate) enum BenchCommand {
     /// instance.toml (the drawn rig, for the simulator), commission_cold.csv (each duty cycle in turn
     /// at 20, 30 or 50 °C), and run_NNN/measured.csv + truth.json: healthy runs on each duty cycle
     /// and a leak run of 0.1, 0.25 and 0.5 L/min of each kind, under oil warming or cooling across
-    /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one.
+    /// 20-60 °C. `bench detection --data OUT/inst_NNN` scores one; `bench calibration --data
+    /// OUT/inst_NNN` scores its identification against the draw.
     Instances(bench::commands::instances::InstancesRequest),
     /// The seeded detection suite (docs/detection/README.md), both detectors side by side.
     Detection(bench::commands::DetectionBenchArgs),

@@ -142,5 +142,55 @@ fn instances_of_both_rigs_are_written_as_folders_that_bench_detection_scores() {
         let r = json(&scored.join("detection.json"));
         let rows = r["runs"].as_array().map_or(0, Vec::len);
         assert_eq!(rows, 12, "{r:#}");
+        scores_the_identification_against_the_draw(&inst, t0);
     }
+}
+
+/// `bench calibration --data` on an instance folder scores the identification
+/// against the drawn rig at the commissioning's oil temperature `t0_c` (°C).
+fn scores_the_identification_against_the_draw(inst: &Path, t0_c: f64) {
+    let o = leakwatch(&[
+        "bench",
+        "calibration",
+        "--data",
+        inst.to_str().unwrap_or_default(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+    let param = |name: &str| -> serde_json::Value {
+        r["params"]
+            .as_array()
+            .and_then(|a| {
+                a.iter()
+                    .find(|p| p["name"].as_str().unwrap_or_default().starts_with(name))
+            })
+            .cloned()
+            .unwrap_or_else(|| panic!("no {name}: {r:#}"))
+    };
+    let value = |p: &serde_json::Value, k: &str| p[k].as_f64().unwrap_or(f64::NAN);
+    let commission = json(&inst.join("commission_cold.truth.json"));
+    // the datasheet's Cd, spool gain and density are the instance's: the
+    // drawn area gradient is the truth as it stands (mm²/mm)
+    let (_, _, _, gradient) = drawn(&commission, "model.area_gradient_m2_per_m");
+    let flow = param("port A area gradient");
+    assert!((value(&flow, "truth") - 1e3 * gradient).abs() < 1e-9, "{flow:#}");
+    assert!(value(&flow, "error_pct").abs() < 2.0, "{flow:#}");
+    // the oil's law moves the drawn bulk modulus (at 40 °C) by −0.45 %/K
+    let (_, _, _, beta) = drawn(&commission, "model.bulk_modulus_pa");
+    let stiffness = param("effective bulk modulus");
+    let at_t0 = 1e-6 * beta * (1.0 - 0.0045 * (t0_c - 40.0));
+    assert!(
+        (value(&stiffness, "truth") / at_t0 - 1.0).abs() < 1e-9,
+        "{stiffness:#}"
+    );
+    assert!(value(&stiffness, "error_pct").abs() < 20.0, "{stiffness:#}");
+    // and the dry friction by −0.4 %/K
+    let (_, _, _, slip) = drawn(&commission, "model.friction.slip_n");
+    let coulomb = param("Coulomb friction");
+    let at_t0 = slip * (1.0 - 0.004 * (t0_c - 40.0));
+    assert!(
+        (value(&coulomb, "truth") / at_t0 - 1.0).abs() < 1e-9,
+        "{coulomb:#}"
+    );
 }
