@@ -43,12 +43,13 @@ pub struct Truth {
 }
 
 /// A number at `path` (keys) in a JSON value.
-pub(super) fn num(v: &Value, path: &[&str]) -> Option<f64> {
+fn num(v: &Value, path: &[&str]) -> Option<f64> {
     path.iter().try_fold(v, |v, k| v.get(k))?.as_f64()
 }
 
-/// Cd·k_sp/√ρ of `model`, (m³/s)/(m²·V·√Pa)·…: the factor that turns an
-/// area gradient into a flow gain.
+/// Cd·k_sp/√ρ from a discharge coefficient `cd` (1), a spool gain
+/// `spool_gain_m_per_v` (m/V) and an oil density `density_kg_m3` (kg/m³): the
+/// factor (SI) that turns a port's area gradient into its flow gain.
 fn gain_factor(cd: f64, spool_gain_m_per_v: f64, density_kg_m3: f64) -> f64 {
     cd * spool_gain_m_per_v / density_kg_m3.sqrt()
 }
