@@ -174,6 +174,19 @@ impl SensorParams {
         )
     }
 
+    /// How late the simulated transducers' lag leaves a reading sampled every
+    /// `sample_period_s` (s), s: the simulator steps it once a sample
+    /// ([`crate::Simulator`]), so a lag τ delays by T·(1 − a)/a, a = 1 − e^(−T/τ)
+    /// (0 without a lag).
+    pub fn pressure_lag_delay_s(&self, sample_period_s: f64) -> f64 {
+        let tau = self.pressure_lag_s;
+        if tau <= 0.0 {
+            return 0.0;
+        }
+        let a = -(-sample_period_s / tau).exp_m1();
+        sample_period_s * (1.0 - a) / a
+    }
+
     /// Whether any installation effect (offset, span error, lag, line) is set.
     pub fn has_installation_effects(&self) -> bool {
         self.pressure_offset_pa != [0.0; 2]

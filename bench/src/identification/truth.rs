@@ -26,7 +26,9 @@ pub struct Truth {
     pub supply_sag_pa_per_m3_s: Option<f64>,
     /// The spool's natural frequency, rad/s.
     pub spool_natural_freq_rad_s: Option<f64>,
-    /// Each pressure transducer's lag (time constant), s.
+    /// Each pressure transducer's lag as identification reads it, s:
+    /// plant_dev's time constant; an in-repo instance's delay of its
+    /// once-a-sample lag ([`model::SensorParams::pressure_lag_delay_s`]).
     pub pressure_lag_s: [Option<f64>; 2],
     /// The DAQ's sample-time jitter (RMS), s.
     pub sample_jitter_s: Option<f64>,
@@ -52,16 +54,6 @@ fn num(v: &Value, path: &[&str]) -> Option<f64> {
 /// factor (SI) that turns a port's area gradient into its flow gain.
 fn gain_factor(cd: f64, spool_gain_m_per_v: f64, density_kg_m3: f64) -> f64 {
     cd * spool_gain_m_per_v / density_kg_m3.sqrt()
-}
-
-/// How late a first-order lag of time constant `tau_s` updated once every
-/// `period_s` leaves a reading, s: T·(1 − a)/a, a = 1 − e^(−T/τ) (0: no lag).
-fn sampled_lag_delay_s(tau_s: f64, period_s: f64) -> f64 {
-    if tau_s <= 0.0 {
-        return 0.0;
-    }
-    let a = -(-period_s / tau_s).exp_m1();
-    period_s * (1.0 - a) / a
 }
 
 impl Truth {
@@ -174,7 +166,7 @@ impl Truth {
             null_leakage_m3_s_pa: at_temp(at.valve_null_leakage_m3_s_pa),
             supply_sag_pa_per_m3_s: Some(rig.supply_sag_pa_per_m3_s),
             spool_natural_freq_rad_s: Some(rig.spool_natural_freq_rad_s),
-            pressure_lag_s: [Some(sampled_lag_delay_s(sensors.pressure_lag_s, sample_period_s)); 2],
+            pressure_lag_s: [Some(sensors.pressure_lag_delay_s(sample_period_s)); 2],
             sample_jitter_s: Some(sensors.sample_jitter_s),
             mass_kg: Some(rig.mass_kg),
             coulomb_n: at_temp(friction.slip_n),
