@@ -386,7 +386,6 @@ fn truth_of(dir: &Path, model: &model::ActuatorParams) -> Result<crate::identifi
         model,
         drawn.rig.as_ref().unwrap_or(&drawn.model),
         &drawn.sensors,
-        drawn.sim.sample_period_s,
         temp_c,
     ))
 }

@@ -206,27 +206,31 @@ fn a_position_offset_moves_the_leak_sizes_as_its_response_predicts() {
     );
 }
 
-/// A first-order lag with time constant `tau_s` updated once a sample of
-/// period `dt_s`, as the simulator lags a transducer: the reading follows the
-/// value by a share a = 1 − e^(−dt/τ) of the gap each sample, which delays it
-/// by dt·(1 − a)/a. The lag and that delay, s.
+/// A first-order lag τ·ẏ = p − y with time constant `tau_s`, as the
+/// simulator lags a transducer: solved exactly for a value linear between
+/// samples of period `dt_s`. It delays a ramp by τ. The lag and that delay, s.
 fn lag(tau_s: f64, dt_s: f64) -> (impl FnMut(f64) -> f64, f64) {
-    let a = 1.0 - (-dt_s / tau_s).exp();
-    let mut read = f64::NAN;
+    let e = (-dt_s / tau_s).exp();
+    let (mut read, mut was) = (f64::NAN, f64::NAN);
     let lagged = move |p: f64| {
-        read = if read.is_nan() { p } else { read + a * (p - read) };
+        if read.is_nan() {
+            (read, was) = (p, p);
+        }
+        let slope = (p - was) / dt_s;
+        read = p - tau_s * slope + (read - was + tau_s * slope) * e;
+        was = p;
         read
     };
-    (lagged, dt_s * (1.0 - a) / a)
+    (lagged, tau_s)
 }
 
 #[test]
 fn a_delayed_pressure_moves_the_leak_sizes_as_its_response_predicts() {
-    // A 0.5 ms lag (a delay of 0.16 ms at 1 kHz) on p1, then on p2. The
-    // response's shape holds: one coefficient on it leaves 1.3 % (p1) and
-    // 0.07 % (p2) of the change's energy. The coefficient reads 1.45 and 1.22
-    // times the delay: the lag damps the fast part of a swing as well as
-    // delaying it, which a delay's first-order response leaves out.
+    // A 0.5 ms lag on p1, then on p2. The response's shape holds: one
+    // coefficient on it leaves 2.5 % (p1) and 0.2 % (p2) of the change's
+    // energy. The coefficient reads 1.37 and 1.12 times τ: the lag damps the
+    // fast part of a swing as well as delaying it, which a delay's
+    // first-order response leaves out.
     let samples = recording();
     for ch in [1, 2] {
         let (lagged, delay_s) = lag(5e-4, 1e-3);
@@ -244,7 +248,7 @@ fn a_delayed_pressure_moves_the_leak_sizes_as_its_response_predicts() {
 #[test]
 fn the_delay_taken_off_leaves_the_leak_sizes_of_readings_without_it() {
     // Both transducers lagging 0.5 ms; the filter told the delay takes its
-    // imprint off the sizes it publishes (Tuning::lag_correction_s): 3.3 % of
+    // imprint off the sizes it publishes (Tuning::lag_correction_s): 3.5 % of
     // the imprint's energy is left.
     let samples = recording();
     let lagged_run = |correction_s: f64| {

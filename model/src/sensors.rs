@@ -43,8 +43,7 @@ schema::config_struct! {
         /// The largest span error of each pressure transducer, as a fraction of
         /// the reading (the datasheet's; 0.005: 0.5 %; 0: not given).
         pub pressure_span_error_max: f64 = 0.0 => ["", num!("a fraction", 0, 0.5)],
-        /// Time constant of both transducers' first-order lag, s (0: none), applied
-        /// to the pressures at the sample rate.
+        /// Time constant of both transducers' first-order lag, s (0: none).
         pub pressure_lag_s: f64 = 0.0 => ["s", num!("a time constant", 0, 1)],
         /// Laminar resistance of the line between the valve manifold, where the
         /// transducers sit, and each chamber, Pa/(m³/s) (0: transducers at the
@@ -172,19 +171,6 @@ impl SensorParams {
             0.0,
             self.pressure_full_scale_pa,
         )
-    }
-
-    /// How late the simulated transducers' lag leaves a reading sampled every
-    /// `sample_period_s` (s), s: the simulator steps it once a sample
-    /// ([`crate::Simulator`]), so a lag τ delays by T·(1 − a)/a, a = 1 − e^(−T/τ)
-    /// (0 without a lag).
-    pub fn pressure_lag_delay_s(&self, sample_period_s: f64) -> f64 {
-        let tau = self.pressure_lag_s;
-        if tau <= 0.0 {
-            return 0.0;
-        }
-        let a = -(-sample_period_s / tau).exp_m1();
-        sample_period_s * (1.0 - a) / a
     }
 
     /// Whether any installation effect (offset, span error, lag, line) is set.

@@ -121,6 +121,8 @@ pub struct Simulator {
     truth: Truth,
     /// The lagging transducers' readings before noise, Pa (set at the first sample).
     lagged: Option<[f64; 2]>,
+    /// The pressures at the transducers at the last sample, Pa (the lag's input).
+    lag_input: Option<[f64; 2]>,
     /// The rig at its oil law's reference temperature (with a warm-up only).
     rig_at_reference: Option<ActuatorParams>,
     /// The noise seed.
@@ -179,6 +181,7 @@ impl Simulator {
             state,
             k: 0,
             lagged: None,
+            lag_input: None,
             rig_at_reference,
             seed,
             sensor_faults: None,
@@ -369,8 +372,8 @@ impl Simulator {
 
     /// The pressures at the transducers, Pa: at the valve manifold the chambers'
     /// plus the line's drop (R·Q1 into chamber 1, −R·Q2 out of chamber 2), through
-    /// the transducers' first-order lag (stepped at the sample rate from the first
-    /// sample's pressures).
+    /// the transducers' first-order lag τ·ẏ = p − y, solved exactly for a
+    /// pressure linear between samples (from the first sample's pressures).
     fn at_transducers(&mut self, s: &State) -> [f64; 2] {
         let r = self.sensors.line_resistance_pa_s_per_m3;
         let mut p = [s[1], s[2]];
@@ -383,11 +386,15 @@ impl Simulator {
         if tau <= 0.0 {
             return p;
         }
-        let a = 1.0 - (-self.settings.sample_period_s / tau).exp();
+        let period = self.settings.sample_period_s;
+        let e = (-period / tau).exp();
+        let before = *self.lag_input.get_or_insert(p);
         let lagged = self.lagged.get_or_insert(p);
-        for (l, now) in lagged.iter_mut().zip(p) {
-            *l += a * (now - *l);
+        for ((l, now), was) in lagged.iter_mut().zip(p).zip(before) {
+            let slope = (now - was) / period;
+            *l = now - tau * slope + (*l - was + tau * slope) * e;
         }
+        self.lag_input = Some(p);
         *lagged
     }
 

@@ -26,9 +26,7 @@ pub struct Truth {
     pub supply_sag_pa_per_m3_s: Option<f64>,
     /// The spool's natural frequency, rad/s.
     pub spool_natural_freq_rad_s: Option<f64>,
-    /// Each pressure transducer's lag as identification reads it, s:
-    /// plant_dev's time constant; an in-repo instance's delay of its
-    /// once-a-sample lag ([`model::SensorParams::pressure_lag_delay_s`]).
+    /// Each pressure transducer's lag (its time constant), s.
     pub pressure_lag_s: [Option<f64>; 2],
     /// The DAQ's sample-time jitter (RMS), s.
     pub sample_jitter_s: Option<f64>,
@@ -123,18 +121,14 @@ impl Truth {
 
     /// The truth of an in-repo instance: the drawn rig `rig` and its
     /// sensors `sensors` (its `instance.toml`, at the oil law's reference
-    /// temperature), sampled every `sample_period_s` (s), at the recording's
+    /// temperature), at the recording's
     /// oil temperature `temp_c` (°C; NaN: not constant, the
     /// temperature-dependent values absent), scored against `model`'s Cd,
     /// spool gain and density.
-    ///
-    /// The simulator updates a transducer's lag τ once a sample: the reading
-    /// is late by T·(1 − a)/a, a = 1 − e^(−T/τ), the delay identification reads.
     pub fn from_instance(
         model: &ActuatorParams,
         rig: &ActuatorParams,
         sensors: &model::SensorParams,
-        sample_period_s: f64,
         temp_c: f64,
     ) -> Truth {
         let known = temp_c.is_finite();
@@ -166,7 +160,7 @@ impl Truth {
             null_leakage_m3_s_pa: at_temp(at.valve_null_leakage_m3_s_pa),
             supply_sag_pa_per_m3_s: Some(rig.supply_sag_pa_per_m3_s),
             spool_natural_freq_rad_s: Some(rig.spool_natural_freq_rad_s),
-            pressure_lag_s: [Some(sensors.pressure_lag_delay_s(sample_period_s)); 2],
+            pressure_lag_s: [Some(sensors.pressure_lag_s); 2],
             sample_jitter_s: Some(sensors.sample_jitter_s),
             mass_kg: Some(rig.mass_kg),
             coulomb_n: at_temp(friction.slip_n),
@@ -200,7 +194,7 @@ mod tests {
             pressure_lag_s: 4e-4,
             ..model::SensorParams::default()
         };
-        let t = Truth::from_instance(&rig, &rig, &sensors, 1e-3, rig.oil_temperature.reference_c);
+        let t = Truth::from_instance(&rig, &rig, &sensors, rig.oil_temperature.reference_c);
         let f = rig.friction.extend();
         assert_eq!(t.area_gradient_a_m2_per_m, Some(rig.area_gradient_m2_per_m));
         assert_eq!(t.bulk_modulus_pa, Some(rig.bulk_modulus_pa));
@@ -208,11 +202,7 @@ mod tests {
         assert_eq!(t.coulomb_n, Some(f.slip_n));
         assert_eq!(t.viscous_n_s_per_m, Some(f.viscous_n_s_per_m));
         assert_eq!(t.mass_kg, Some(rig.mass_kg));
-        // a 0.4 ms lag updated each ms: the reading is 0.0896 ms late
-        let late = 1e-3 * (-2.5f64).exp() / (1.0 - (-2.5f64).exp());
-        for lag in t.pressure_lag_s {
-            assert!((lag.unwrap_or(f64::NAN) / late - 1.0).abs() < 1e-12, "{lag:?}");
-        }
+        assert_eq!(t.pressure_lag_s, [Some(4e-4); 2]);
     }
 
     #[test]
@@ -220,7 +210,7 @@ mod tests {
         let rig = drawn_rig();
         let sensors = model::SensorParams::default();
         let warm = rig.oil_temperature.reference_c + 10.0;
-        let t = Truth::from_instance(&rig, &rig, &sensors, 1e-3, warm);
+        let t = Truth::from_instance(&rig, &rig, &sensors, warm);
         let f = rig.oil_temperature.factors(warm);
         let bulk = t.bulk_modulus_pa.unwrap_or(f64::NAN);
         assert!(
@@ -238,7 +228,7 @@ mod tests {
             "{null}"
         );
         // an oil that moved during the recording: no temperature's truth
-        let moving = Truth::from_instance(&rig, &rig, &sensors, 1e-3, f64::NAN);
+        let moving = Truth::from_instance(&rig, &rig, &sensors, f64::NAN);
         assert_eq!(moving.bulk_modulus_pa, None);
         assert_eq!(moving.coulomb_n, None);
         assert_eq!(moving.mass_kg, Some(rig.mass_kg));
@@ -249,7 +239,7 @@ mod tests {
         let rig = drawn_rig();
         let mut model = rig.clone();
         model.discharge_coefficient = 0.8 * rig.discharge_coefficient;
-        let t = Truth::from_instance(&model, &rig, &model::SensorParams::default(), 1e-3, f64::NAN);
+        let t = Truth::from_instance(&model, &rig, &model::SensorParams::default(), f64::NAN);
         // the same flow through a valve of the model's Cd needs a wider port
         let w = t.area_gradient_a_m2_per_m.unwrap_or(f64::NAN);
         assert!(
