@@ -1,13 +1,22 @@
 //! The windows' weighted least squares: the fit over chosen columns, and
 //! each chamber's RMS error.
+//!
+//! The transducers' lag columns are made of measured rates, whose noise
+//! would bias a plain least squares toward no lag (errors in variables).
+//! Their instruments, the same columns with rates read from other samples
+//! (±3 in place of the five-point stencil's ±1 and ±2), carry the same
+//! signal and an independent noise: the fit solves the instrumental
+//! variables' equations Zᵀ·A·θ = Zᵀ·y, Z being A with the lag columns
+//! replaced by their instruments (Z = A without lag columns).
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{Rows, UNKNOWNS};
+use super::{Rows, LAG1, LAG2, UNKNOWNS};
 
 /// Weighted least squares over the columns `cols` with the other unknowns
-/// fixed at `fixed`: (solution over all unknowns, their standard deviations, RMS
-/// residual per chamber in m³ per window).
+/// fixed at `fixed`, the lag columns by their instruments (module docs):
+/// (solution over all unknowns, their standard deviations, RMS residual per
+/// chamber in m³ per window).
 pub(super) fn solve(
     rows: &Rows,
     cols: &[Vec<usize>],
@@ -20,12 +29,22 @@ pub(super) fn solve(
         return None;
     }
     let mut a = DMatrix::<f64>::zeros(m, k);
+    let mut z_mat = DMatrix::<f64>::zeros(m, k);
     let mut y = DVector::<f64>::zeros(m);
     let free: Vec<usize> = cols.iter().flatten().copied().collect();
-    let chambers = [(&rows.x1, &rows.y1, weights[0]), (&rows.x2, &rows.y2, weights[1])];
+    let chambers = [
+        (&rows.x1, &rows.y1, weights[0], 0),
+        (&rows.x2, &rows.y2, weights[1], 1),
+    ];
     let mut r = 0;
-    for (xs, ys, w) in chambers {
-        for (x, yv) in xs.iter().zip(ys.iter()) {
+    for (xs, ys, w, ch) in chambers {
+        for (j, (x, yv)) in xs.iter().zip(ys.iter()).enumerate() {
+            // the row's instruments: its chamber's lag column from other samples
+            let mut z = *x;
+            z[[LAG1, LAG2][ch]] = rows.z_lag[j][ch];
+            for (c, group) in cols.iter().enumerate() {
+                z_mat[(r, c)] = w * group.iter().map(|&u| z[u]).sum::<f64>();
+            }
             let mut known = 0.0;
             for (u, fx) in fixed.iter().enumerate() {
                 if !free.contains(&u) {
@@ -52,10 +71,12 @@ pub(super) fn solve(
         .collect();
     for (c, s) in scale.iter().enumerate() {
         a.column_mut(c).scale_mut(1.0 / s);
+        z_mat.column_mut(c).scale_mut(1.0 / s);
     }
-    let ata = a.transpose() * &a;
-    let inv = ata.clone().try_inverse()?;
-    let sol = &inv * (a.transpose() * &y);
+    // θ = (ZᵀA)⁻¹·Zᵀy; its covariance σ²·(ZᵀA)⁻¹·ZᵀZ·(ZᵀA)⁻ᵀ
+    let zta_inv = (z_mat.transpose() * &a).try_inverse()?;
+    let sol = &zta_inv * (z_mat.transpose() * &y);
+    let inv = &zta_inv * (z_mat.transpose() * &z_mat) * zta_inv.transpose();
     let resid = &y - &a * &sol;
     let dof = (m - k) as f64;
     let var = resid.norm_squared() / dof;
