@@ -24,16 +24,19 @@ use std::path::Path;
 /// fitted (1); the shortest is none. The fit is not sure enough to narrow
 /// the thresholds: it reads a pure delay, while a lag also damps a swing's
 /// fast part, so the delay that fits depends on the duty cycle, and it takes
-/// up what else swings like it. `bench instances`' press and lift: the
-/// commissioning's fit read 0.57-1.05 times the simulator's delay (median
-/// 0.85); plant_dev/differential's 0.75 ms for transducers lagging 0.5 ms.
+/// up what else swings like it. `bench instances`' seed 1: the
+/// commissioning's fit read 0.51-1.15 times the transducers' lag on the
+/// press (median 0.97), 0.24-1.01 on the lift (median 0.90);
+/// plant_dev/differential's 0.75 ms for transducers lagging 0.60-0.66 ms.
 pub const DELAY_HELD_ABOVE: f64 = 1.2;
 
 /// The shortest delay the healthy spreads hold over where the fit is sure
 /// ([`SURE_FIT_SHARE`]), as a share of the one fitted (1); none otherwise.
-/// A lag read as a delay reads shorter, never longer by half: `bench
-/// instances`' lift and press read 0.23-1.05 times the simulator's lag.
-pub const DELAY_HELD_BELOW_SURE: f64 = 0.5;
+/// A sure fit reads the delay of the recording's duty cycles, which the
+/// watch runs too. `bench instances`' seed 1 (lags of 0.2-1 ms): held from
+/// 0.8 of it in place of half, the lift found 51 of its 60 leaks of 0.1
+/// L/min (35), the press 48 (47); no false alarm in 24.6 healthy hours.
+pub const DELAY_HELD_BELOW_SURE: f64 = 0.8;
 
 /// The delay's fit is sure where taking it off the leak sizes takes at least
 /// this share of the healthy spreads' energy (1): the swings are the
@@ -275,7 +278,7 @@ mod tests {
     use model::units::lpm_to_m3_s;
 
     #[test]
-    fn the_thresholds_hold_from_half_the_delay_only_where_its_fit_is_sure() {
+    fn the_thresholds_hold_from_most_of_the_delay_only_where_its_fit_is_sure() {
         let taken = |fall: f64, taken: bool| DelayTaken {
             delay_s: 0.4e-3,
             bound_s: 0.45e-3,
@@ -286,16 +289,16 @@ mod tests {
         };
         let sure = taken(0.95, true);
         assert!((sure.energy_fall() - 0.95).abs() < 1e-12);
-        assert!((sure.shortest_held_s() - 0.2e-3).abs() < 1e-15);
+        assert!((sure.shortest_held_s() - 0.32e-3).abs() < 1e-15);
         // 1.2 times the delay, held to the datasheet's bound
         assert!((sure.longest_held_s() - 0.45e-3).abs() < 1e-15);
         assert!(
-            sure.line().contains("hold over 0.200-0.450 ms"),
+            sure.line().contains("hold over 0.320-0.450 ms"),
             "{}",
             sure.line()
         );
         // a fall of 85 % is sure; short of a sure fit, or not taken: held from none
-        assert!((taken(0.85, true).shortest_held_s() - 0.2e-3).abs() < 1e-15);
+        assert!((taken(0.85, true).shortest_held_s() - 0.32e-3).abs() < 1e-15);
         assert_eq!(taken(0.75, true).shortest_held_s(), 0.0);
         assert_eq!(taken(0.95, false).shortest_held_s(), 0.0);
         // the time left out halved: sure, whatever the spreads do
@@ -303,7 +306,7 @@ mod tests {
             left_out_s: [66.0, 0.0],
             ..taken(-3.0, true)
         };
-        assert!((follows.shortest_held_s() - 0.2e-3).abs() < 1e-15);
+        assert!((follows.shortest_held_s() - 0.32e-3).abs() < 1e-15);
     }
 
     #[test]
