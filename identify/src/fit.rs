@@ -84,34 +84,9 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
     let (mut acc1, mut acc2) = ([0.0; UNKNOWNS], [0.0; UNKNOWNS]);
     let (mut rhs1, mut rhs2, mut dx, mut n) = (0.0, 0.0, 0.0, 0usize);
     let (mut v1_sum, mut v2_sum) = (0.0, 0.0);
-    // Measured rates for the DAQ jitter's floor, per s: central differences
-    // over ±2 samples (0 at the ends).
-    let rate = |k: usize, f: fn(&Sample) -> f64| -> f64 {
-        if k < 2 || k + 2 >= rows.len() {
-            return 0.0;
-        }
-        (f(&rows[k + 2].sample) - f(&rows[k - 2].sample)) / (4.0 * dt_s)
-    };
-    // A transducer lagging by τ reads y, p = y + τ·ẏ: a window's true pressure
-    // change is the measured one plus τ·(ẏ at its end − ẏ at its start).
-    // The lag's regressor: the reading's rate at a window's end by the
-    // five-point stencil (its gain is 0.95 at a press's 180 Hz mode, where
-    // ±2 samples read 0.34 of it). Its instrument: the rate over ±3 samples,
-    // whose noise is not the regressor's (module docs of `solve`).
-    let rate_x = |k: usize, f: fn(&Sample) -> f64| -> f64 {
-        if k < 2 || k + 2 >= rows.len() {
-            return 0.0;
-        }
-        let y = |j: usize| f(&rows[j].sample);
-        (8.0 * (y(k + 1) - y(k - 1)) - (y(k + 2) - y(k - 2))) / (12.0 * dt_s)
-    };
-    let rate_z = |k: usize, f: fn(&Sample) -> f64| -> f64 {
-        if k < 3 || k + 3 >= rows.len() {
-            return 0.0;
-        }
-        (f(&rows[k + 3].sample) - f(&rows[k - 3].sample)) / (6.0 * dt_s)
-    };
-    let (mut px1_first, mut px2_first, mut pz1_first, mut pz2_first) = (0.0, 0.0, 0.0, 0.0);
+    // Measured rates for the DAQ jitter's floor, per s.
+    let rate = |k: usize, f: fn(&Sample) -> f64| central_rate(rows, k, 2, dt_s, f);
+    let mut first = 0;
     let (mut pd1_first, mut pd2_first, mut xd_first) = (0.0, 0.0, 0.0);
     // The valve's flows over the previous interval, m³/s (for the line drop's rate).
     let mut q_prev: Option<[f64; 2]> = None;
@@ -158,10 +133,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
             pd1_first = rate(k, |s| s.p1_pa);
             pd2_first = rate(k, |s| s.p2_pa);
             xd_first = rate(k, |s| s.x_m);
-            px1_first = rate_x(k, |s| s.p1_pa);
-            px2_first = rate_x(k, |s| s.p2_pa);
-            pz1_first = rate_z(k, |s| s.p1_pa);
-            pz2_first = rate_z(k, |s| s.p2_pa);
+            first = k;
         }
         let nl = null_leakage_flows(&unit_cl, x_sp_mean, p1, p2);
         let qs = orifice_flows(&sagged, x_sp_mean, p1, p2);
@@ -193,12 +165,12 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
         v2_sum += v2;
         n += 1;
         if n == WINDOW_SAMPLES {
-            acc1[LAG1] -= v1 * (rate_x(k + 1, |s| s.p1_pa) - px1_first) / p.bulk_modulus_pa;
-            acc2[LAG2] += v2 * (rate_x(k + 1, |s| s.p2_pa) - px2_first) / p.bulk_modulus_pa;
-            out.z_lag.push([
-                -v1 * (rate_z(k + 1, |s| s.p1_pa) - pz1_first) / p.bulk_modulus_pa,
-                v2 * (rate_z(k + 1, |s| s.p2_pa) - pz2_first) / p.bulk_modulus_pa,
-            ]);
+            let (lag1, z1) = lag_rate_changes(rows, first, k + 1, dt_s, |s| s.p1_pa);
+            let (lag2, z2) = lag_rate_changes(rows, first, k + 1, dt_s, |s| s.p2_pa);
+            acc1[LAG1] -= v1 * lag1 / p.bulk_modulus_pa;
+            acc2[LAG2] += v2 * lag2 / p.bulk_modulus_pa;
+            out.z_lag
+                .push([-v1 * z1 / p.bulk_modulus_pa, v2 * z2 / p.bulk_modulus_pa]);
             out.x1.push(acc1);
             out.y1.push(a1 * dx + rhs1);
             out.x2.push(acc2);
@@ -224,6 +196,39 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
         }
     }
     out
+}
+
+/// The rate of `f` at sample `k` by the central difference over ±`h`
+/// samples of period `dt_s` (s), per s (0 at the ends).
+fn central_rate(rows: &[Row], k: usize, h: usize, dt_s: f64, f: fn(&Sample) -> f64) -> f64 {
+    if k < h || k + h >= rows.len() {
+        return 0.0;
+    }
+    (f(&rows[k + h].sample) - f(&rows[k - h].sample)) / (2.0 * h as f64 * dt_s)
+}
+
+/// The change of a reading's rate (`f`, per s) from sample `first` to
+/// `last`, for the transducer's lag column, and its instrument.
+///
+/// A transducer lagging by τ reads y, p = y + τ·ẏ: a window's true pressure
+/// change is the measured one plus τ·(ẏ at its end − ẏ at its start). The
+/// regressor's rate is the five-point stencil's (its gain is 0.95 at a
+/// press's 180 Hz mode, where ±2 samples read 0.34 of it); the
+/// instrument's, the central difference over ±3 samples, whose noise is not
+/// the regressor's (module docs of `solve`).
+fn lag_rate_changes(rows: &[Row], first: usize, last: usize, dt_s: f64, f: fn(&Sample) -> f64) -> (f64, f64) {
+    let five_point = |k: usize| {
+        if k < 2 || k + 2 >= rows.len() {
+            return 0.0;
+        }
+        let y = |j: usize| f(&rows[j].sample);
+        (8.0 * (y(k + 1) - y(k - 1)) - (y(k + 2) - y(k - 2))) / (12.0 * dt_s)
+    };
+    let instrument = |k: usize| central_rate(rows, k, 3, dt_s, f);
+    (
+        five_point(last) - five_point(first),
+        instrument(last) - instrument(first),
+    )
 }
 
 /// One linearised fit of [`crate::identify`] around the model `p`, with the

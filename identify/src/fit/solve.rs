@@ -4,8 +4,8 @@
 //! The transducers' lag columns are made of measured rates, whose noise
 //! would bias a plain least squares toward no lag (errors in variables).
 //! Their instruments, the same columns with rates read from other samples
-//! (±3 in place of the five-point stencil's ±1 and ±2), carry the same
-//! signal and an independent noise: the fit solves the instrumental
+//! (±3 in place of the five-point stencil's ±1 and ±2), follow the same
+//! rates with an independent noise: the fit solves the instrumental
 //! variables' equations Zᵀ·A·θ = Zᵀ·y, Z being A with the lag columns
 //! replaced by their instruments (Z = A without lag columns).
 
