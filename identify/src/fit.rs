@@ -39,6 +39,7 @@ const SAG_STEP: f64 = 1.0e8;
 const LINE_STEP: f64 = 1.0e8;
 
 /// The least-squares rows: per window, chamber 1 and chamber 2.
+#[derive(Default)]
 struct Rows {
     x1: Vec<[f64; UNKNOWNS]>,
     y1: Vec<f64>,
@@ -72,15 +73,7 @@ fn build_rows(p: &ActuatorParams, dt_s: f64, rows: &[Row], noise: SensorNoise, j
     // the spool once more, with its natural frequency SPOOL_W_STEP higher
     let (mut x_spw, mut v_spw) = (x_sp, v_sp);
     let wnw = wn * (1.0 + SPOOL_W_STEP);
-    let mut out = Rows {
-        x1: Vec::new(),
-        y1: Vec::new(),
-        x2: Vec::new(),
-        y2: Vec::new(),
-        z_lag: Vec::new(),
-        moving: 0,
-        floor2: [0.0; 2],
-    };
+    let mut out = Rows::default();
     let (mut acc1, mut acc2) = ([0.0; UNKNOWNS], [0.0; UNKNOWNS]);
     let (mut rhs1, mut rhs2, mut dx, mut n) = (0.0, 0.0, 0.0, 0usize);
     let (mut v1_sum, mut v2_sum) = (0.0, 0.0);

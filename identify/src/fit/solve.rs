@@ -136,15 +136,7 @@ mod tests {
     /// its own instrument.
     fn lag_coefficients() -> (f64, f64) {
         let mut rng = Rng::new(7);
-        let mut rows = Rows {
-            x1: Vec::new(),
-            y1: Vec::new(),
-            x2: Vec::new(),
-            y2: Vec::new(),
-            z_lag: Vec::new(),
-            moving: 0,
-            floor2: [0.0; 2],
-        };
+        let mut rows = Rows::default();
         for _ in 0..20_000 {
             let (a, s) = (1.0 + rng.normal(), rng.normal());
             let mut x = [0.0; UNKNOWNS];
