@@ -1,7 +1,7 @@
 //! The classifier process decides on the estimate frames it receives. Those
-//! carry all the detector reads (the oil's band, the offset response), so a
-//! run's events are a replay's: a drifting transducer is named, and no leak
-//! raised, through the wire as in one process.
+//! carry all the detector reads (the oil's band, the offset and delay
+//! responses), so a run's events are a replay's: a drifting transducer is
+//! named, and no leak raised, through the wire as in one process.
 
 use detect::{Classifier, ClassifierConfig, EventKind, LeakEvent, Phase};
 use estimator::wire::EstimateWire;
@@ -28,6 +28,12 @@ fn both_ways() -> (Vec<LeakEvent>, Vec<LeakEvent>) {
         let e = stage.on_sample(&sim.step());
         in_process.on_stage(&e, |ev| a.push(ev));
         let received = StageEstimate::from_frame(&e.to_frame(), 0);
+        // the delay's response, which widens a commissioned detector's thresholds, goes over too
+        assert_eq!(
+            received.leak.delay_response_lpm_per_ms, e.leak.delay_response_lpm_per_ms,
+            "at {} s",
+            e.leak.t_s
+        );
         over_wire.on_stage(&received, |ev| b.push(ev));
     }
     (a, b)

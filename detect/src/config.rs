@@ -54,6 +54,20 @@ schema::config_struct! {
         /// rises better. `commission` sets it.
         #[serde(default)]
         pub healthy_span_errors: [f64; 2],
+        /// How uncertain the transducers' delay taken off the leak sizes is,
+        /// s: the identification's lag and the delay commissioning took
+        /// disagree by this much (0: not stated). The thresholds widen by it
+        /// times the leak sizes' response to a delay
+        /// ([`filter::Estimate::delay_response_lpm_per_ms`]). `commission` sets it.
+        #[serde(default)]
+        pub delay_uncertainty_s: f64 => ["s"],
+        /// The response to a delay on both transducers each kind's size
+        /// (ext1, ext2, int) stayed within on the recording, L/min per ms
+        /// (99 % of its samples): its spreads saw the delay's uncertainty up
+        /// to it, so the thresholds widen by the uncertainty times what a
+        /// response has beyond it. `commission` sets it.
+        #[serde(default)]
+        pub delay_response_reach_lpm_per_ms: [f64; 3],
     }
 }
 

@@ -58,6 +58,14 @@ pub struct LeakSizeDetector {
     /// that pulls θ past the range widens the band there; it does not raise
     /// the level its own misreading is named at.
     watch_band_lpm: [f64; 3],
+    /// What the transducers' delay adds to each threshold now, L/min: its
+    /// uncertainty ([`crate::Commissioning::delay_uncertainty_s`]) times the
+    /// leak sizes' response to a delay ([`crate::delay_band_lpm`]).
+    delay_band_lpm: [f64; 3],
+    /// The commissioning's [`crate::Commissioning::delay_uncertainty_s`] in ms (0: none).
+    delay_uncertainty_ms: f64,
+    /// The commissioning's [`crate::Commissioning::delay_response_reach_lpm_per_ms`].
+    delay_response_reach_lpm_per_ms: [f64; 3],
     /// Healthy baseline of each hypothesis' size that the rise is measured from, L/min.
     baseline_lpm: [f64; 3],
     /// The baseline when each rise was last low (before a possible onset), L/min.
@@ -172,6 +180,15 @@ impl LeakSizeDetector {
         };
         let offsets =
             offsets.with_healthy_misreading(cfg.commissioning.as_ref().and_then(|c| c.healthy_misreading()));
+        let delay_uncertainty_ms = cfg
+            .commissioning
+            .as_ref()
+            .map_or(0.0, |c| 1e3 * c.delay_uncertainty_s)
+            .max(0.0);
+        let delay_response_reach_lpm_per_ms = cfg
+            .commissioning
+            .as_ref()
+            .map_or([0.0; 3], |c| c.delay_response_reach_lpm_per_ms);
         LeakSizeDetector {
             internal_factors: cfg
                 .commissioning
@@ -190,6 +207,9 @@ impl LeakSizeDetector {
             naming_spread_lpm: [f64::NAN; 3],
             oil_band_lpm: [0.0; 3],
             watch_band_lpm: [0.0; 3],
+            delay_band_lpm: [0.0; 3],
+            delay_uncertainty_ms,
+            delay_response_reach_lpm_per_ms,
             baseline_lpm: [f64::NAN; 3],
             baseline_low_lpm: [f64::NAN; 3],
             last_t_s: f64::NAN,
@@ -284,6 +304,14 @@ impl LeakSizeDetector {
     /// smallest leak named ([`crate::Commissioning::clear_spreads_lpm`]).
     pub fn thresholds_lpm(&self) -> [f64; 3] {
         self.naming_threshold_lpm
+    }
+
+    /// The thresholds that name each kind in force on the last estimate read,
+    /// L/min at the nominal drop (NaN before arming): [`Self::thresholds_lpm`]
+    /// widened by what the oil's temperature and the transducers' delay left
+    /// uncertain on it.
+    pub fn thresholds_in_force_lpm(&self) -> [f64; 3] {
+        self.past_the_delay(self.naming_thresholds_now())
     }
 
     /// The thresholds in healthy spreads (from the requested false-alarm rate; NaN before arming).

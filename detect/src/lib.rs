@@ -175,3 +175,30 @@ pub fn oil_band_lpm(
     let band = finite_or_zero(null_leakage_band_lpm);
     std::array::from_fn(|k| band + sigma * finite_or_zero(offsets_lpm[k]))
 }
+
+/// What the transducers' delay adds to each leak kind's threshold (ext1, ext2,
+/// int), L/min at p_s/2: its uncertainty `delay_uncertainty_ms` (ms) times
+/// what each kind's response to a delay on both transducers
+/// (`delay_response_lpm_per_ms`, L/min per ms on p1 and on p2, as
+/// [`filter::Estimate::delay_response_lpm_per_ms`]; in the kinds' signatures
+/// with `factors`, [`signatures_with`]) has beyond `reach_lpm_per_ms` (L/min
+/// per ms, the response the commissioning's spreads saw). Non-finite
+/// responses count as 0.
+pub fn delay_band_lpm(
+    delay_uncertainty_ms: f64,
+    delay_response_lpm_per_ms: [[f64; 3]; 2],
+    factors: [f64; 2],
+    reach_lpm_per_ms: [f64; 3],
+) -> [f64; 3] {
+    let [on_p1, on_p2] = delay_response_lpm_per_ms;
+    let both: [f64; 3] = std::array::from_fn(|k| {
+        let r = on_p1[k] + on_p2[k];
+        if r.is_finite() {
+            r
+        } else {
+            0.0
+        }
+    });
+    let signature = signatures_with(both, factors);
+    std::array::from_fn(|k| delay_uncertainty_ms * (signature[k].abs() - reach_lpm_per_ms[k]).max(0.0))
+}

@@ -144,6 +144,8 @@ fn commissioning(least: [f64; 3], offsets_kpa: [f64; 2], span_errors: [f64; 2]) 
         least_offsets_named: least,
         healthy_offsets_kpa: offsets_kpa,
         healthy_span_errors: span_errors,
+        delay_uncertainty_s: 0.0,
+        delay_response_reach_lpm_per_ms: [0.0; 3],
     }
 }
 

@@ -78,6 +78,7 @@ impl EstimateWire for StageEstimate {
         ] = l.offset_response_lpm_per_mpa;
         [out.span_response_p1_lpm, out.span_response_p2_lpm] = l.span_response_lpm;
         out.offset_response_x_lpm_per_mm = l.position_offset_response_lpm_per_mm;
+        [out.delay_response_p1_lpm_per_ms, out.delay_response_p2_lpm_per_ms] = l.delay_response_lpm_per_ms;
     }
 
     fn from_frame(f: &EstimateFrame, missing_before: u64) -> StageEstimate {
@@ -98,7 +99,7 @@ impl EstimateWire for StageEstimate {
             offset_response_lpm_per_mpa: [f.offset_response_p1_lpm_per_mpa, f.offset_response_p2_lpm_per_mpa],
             span_response_lpm: [f.span_response_p1_lpm, f.span_response_p2_lpm],
             position_offset_response_lpm_per_mm: f.offset_response_x_lpm_per_mm,
-            delay_response_lpm_per_ms: [[f64::NAN; 3]; 2],
+            delay_response_lpm_per_ms: [f.delay_response_p1_lpm_per_ms, f.delay_response_p2_lpm_per_ms],
             residual: f.residual,
             innovation: f.innovation,
             innovation_sigma: f.innovation_sigma,

@@ -83,11 +83,13 @@ class EstimateFrame(ctypes.Structure):
         ("span_response_p1_lpm", ctypes.c_double * 3),
         ("span_response_p2_lpm", ctypes.c_double * 3),
         ("offset_response_x_lpm_per_mm", ctypes.c_double * 3),
+        ("delay_response_p1_lpm_per_ms", ctypes.c_double * 3),
+        ("delay_response_p2_lpm_per_ms", ctypes.c_double * 3),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "leakwatch.EstimateFrame.v5"
+        return "leakwatch.EstimateFrame.v6"
 
 
 KINDS = {1: "ext1", 2: "ext2", 3: "int", 10: "estimator-reset", 11: "sensor-stuck",

@@ -15,7 +15,7 @@ pub const THESIS_STATES: usize = 7;
 /// The estimator's output for one sensor frame (1 kHz).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, ZeroCopySend)]
-#[type_name("leakwatch.EstimateFrame.v5")]
+#[type_name("leakwatch.EstimateFrame.v6")]
 pub struct EstimateFrame {
     /// Sequence number of the sensor frame this estimate is for.
     pub seq: u64,
@@ -96,6 +96,12 @@ pub struct EstimateFrame {
     /// The leak sizes' response to a constant offset on x, L/min per mm:
     /// ext1, ext2, int.
     pub offset_response_x_lpm_per_mm: [f64; 3],
+    /// The leak sizes' response to a delay of 1 ms on p1, L/min per ms:
+    /// ext1, ext2, int.
+    pub delay_response_p1_lpm_per_ms: [f64; 3],
+    /// The leak sizes' response to a delay of 1 ms on p2, L/min per ms:
+    /// ext1, ext2, int.
+    pub delay_response_p2_lpm_per_ms: [f64; 3],
 }
 
 impl_sequenced_frame!(EstimateFrame, Topic::Estimates, estimate_flags::END_OF_STREAM);
@@ -138,6 +144,8 @@ impl Default for EstimateFrame {
             span_response_p1_lpm: [f64::NAN; 3],
             span_response_p2_lpm: [f64::NAN; 3],
             offset_response_x_lpm_per_mm: [f64::NAN; 3],
+            delay_response_p1_lpm_per_ms: [f64::NAN; 3],
+            delay_response_p2_lpm_per_ms: [f64::NAN; 3],
         }
     }
 }

@@ -23,7 +23,8 @@ macro_rules! frame_fields {
             th_flags, _pad, th_state, th_residual, th_innovation, th_mae_pa, th_nis, bulk_scale,
             bulk_scale_sigma, oil_temp_c, oil_temp_sigma_k, laminar_factor_sigma,
             null_leakage_band_lpm, offset_response_p1_lpm_per_mpa, offset_response_p2_lpm_per_mpa,
-            span_response_p1_lpm, span_response_p2_lpm, offset_response_x_lpm_per_mm
+            span_response_p1_lpm, span_response_p2_lpm, offset_response_x_lpm_per_mm,
+            delay_response_p1_lpm_per_ms, delay_response_p2_lpm_per_ms
         ]}
     };
     (LeakEventFrame, $m:ident!($($args:tt)*)) => {

@@ -89,7 +89,7 @@ use impl_sequenced_frame;
 
 // Compile-time layout checks (the offsets are checked in tests/layout.rs).
 const _: () = assert!(core::mem::size_of::<SensorFrame>() == 104);
-const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 656);
+const _: () = assert!(core::mem::size_of::<EstimateFrame>() == 704);
 const _: () = assert!(core::mem::size_of::<LeakEventFrame>() == 520);
 const _: () = assert!(core::mem::size_of::<HealthFrame>() == 104);
 const _: () = assert!(core::mem::size_of::<StatsFrame>() == 112);

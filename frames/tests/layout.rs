@@ -7,7 +7,7 @@ use iceoryx2::prelude::ZeroCopySend;
 #[test]
 fn sizes_and_alignment() {
     assert_eq!(size_of::<SensorFrame>(), 104);
-    assert_eq!(size_of::<EstimateFrame>(), 656);
+    assert_eq!(size_of::<EstimateFrame>(), 704);
     assert_eq!(size_of::<LeakEventFrame>(), 520);
     assert_eq!(size_of::<HealthFrame>(), 104);
     assert_eq!(size_of::<StatsFrame>(), 112);
@@ -35,7 +35,7 @@ fn field_offsets_match_the_readme_table() {
         e,
         [
             0, 8, 16, 24, 32, 40, 44, 48, 136, 224, 248, 272, 296, 320, 328, 336, 352, 356, 360, 416, 440,
-            464, 480, 488, 496, 504, 512, 520, 528, 536, 560, 584, 608, 632
+            464, 480, 488, 496, 504, 512, 520, 528, 536, 560, 584, 608, 632, 656, 680
         ]
     );
     let l = frame_fields!(LeakEventFrame, offsets!(LeakEventFrame));
@@ -53,7 +53,7 @@ fn field_offsets_match_the_readme_table() {
 fn type_names_are_versioned() {
     unsafe {
         assert_eq!(SensorFrame::type_name(), "leakwatch.SensorFrame.v2");
-        assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v5");
+        assert_eq!(EstimateFrame::type_name(), "leakwatch.EstimateFrame.v6");
         assert_eq!(LeakEventFrame::type_name(), "leakwatch.LeakEventFrame.v3");
         assert_eq!(HealthFrame::type_name(), "leakwatch.HealthFrame.v2");
         assert_eq!(StatsFrame::type_name(), "leakwatch.StatsFrame.v1");

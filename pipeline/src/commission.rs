@@ -313,6 +313,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         set_by,
         left_out_s,
         responses,
+        delay: delay_fit,
         ..
     } = trace;
     cfg.model.oil_temperature.reference_stiffness = theta;
@@ -346,6 +347,12 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         healthy_misreading: None,
     };
     c.least_offsets_named = learned.sensor_reach.least_named();
+    c.delay_uncertainty_s =
+        delay::uncertainty_s(cfg.leak_filter.lag_correction_s, cfg.leak_filter.pressure_lag_s);
+    c.delay_response_reach_lpm_per_ms = delay_fit.reach_lpm_per_ms(c.internal_factors);
+    if let Some(line) = delay::uncertainty_line(c.delay_uncertainty_s, cfg.leak_filter.pressure_lag_s) {
+        eprintln!("{line}");
+    }
     learned.lines().iter().for_each(|line| eprintln!("{line}"));
     cfg.classifier.commissioning = Some(c.clone());
     if let Some(m) = healthy::healthy_misreading(input, &cfg)? {

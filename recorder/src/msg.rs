@@ -444,6 +444,8 @@ impl Message for EstimateFrame {
         span_response_p1_lpm: f64s_added,
         span_response_p2_lpm: f64s_added,
         offset_response_x_lpm_per_mm: f64s_added,
+        delay_response_p1_lpm_per_ms: f64s_added,
+        delay_response_p2_lpm_per_ms: f64s_added,
     });
 }
 

@@ -308,7 +308,9 @@ record!(
         offset_response_p2_lpm_per_mpa,
         span_response_p1_lpm,
         span_response_p2_lpm,
-        offset_response_x_lpm_per_mm
+        offset_response_x_lpm_per_mm,
+        delay_response_p1_lpm_per_ms,
+        delay_response_p2_lpm_per_ms
     ]
 );
 record!(

@@ -75,7 +75,7 @@ fn the_cdr_body_of_the_1_khz_frames_is_their_wire_layout() {
     );
     let e = estimate();
     e.to_cdr(&mut buf);
-    assert_eq!(buf.len(), 4 + 656);
+    assert_eq!(buf.len(), 4 + 704);
     let mut wire = bits(&e);
     wire[356..360].fill(0); // _pad: CDR alignment padding, zero
     assert_eq!(buf[4..], wire[..]);

@@ -170,6 +170,8 @@ fn expected_estimate(x: &EstimateFrame) -> Value {
         "span_response_p1_lpm": fs(&LEAK_FLOWS, &x.span_response_p1_lpm),
         "span_response_p2_lpm": fs(&LEAK_FLOWS, &x.span_response_p2_lpm),
         "offset_response_x_lpm_per_mm": fs(&LEAK_FLOWS, &x.offset_response_x_lpm_per_mm),
+        "delay_response_p1_lpm_per_ms": fs(&LEAK_FLOWS, &x.delay_response_p1_lpm_per_ms),
+        "delay_response_p2_lpm_per_ms": fs(&LEAK_FLOWS, &x.delay_response_p2_lpm_per_ms),
     })
 }
 
@@ -267,6 +269,7 @@ fn write_log(path: &Path) {
             offset_response_p1_lpm_per_mpa: [0.1, -0.2, 0.3],
             span_response_p2_lpm: [1.5, -2.5, 0.5],
             offset_response_x_lpm_per_mm: [0.25, -0.5, 0.125],
+            delay_response_p2_lpm_per_ms: [0.75, -0.0625, 2.0],
             ..EstimateFrame::default()
         };
         for k in 0..11 {

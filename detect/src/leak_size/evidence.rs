@@ -168,7 +168,7 @@ impl LeakSizeDetector {
         }
         // Any rise is judged against `thr`; a kind named by its explained rise
         // against `naming_thr` (learned where that kind's test could alarm).
-        let thr = self.floored(self.thresholds_now());
+        let thr = self.past_the_delay(self.floored(self.thresholds_now()));
         if !invalid {
             let watch_thr = self.floored(self.watch_thresholds_now());
             self.watch_offsets(e, dt_s, rise, watch_thr);
@@ -191,7 +191,7 @@ impl LeakSizeDetector {
         let naming_thr = if could_explain {
             thr
         } else {
-            self.floored(self.naming_thresholds_now())
+            self.past_the_delay(self.floored(self.naming_thresholds_now()))
         };
         let score: [f64; 3] = std::array::from_fn(|k| (rise[k] - misfit[k]) / naming_thr[k]);
         // What the baseline has absorbed since the warm-up, judged against `slow_leak_lpm`.

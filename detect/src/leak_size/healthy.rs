@@ -397,6 +397,8 @@ impl CommissioningLearner {
             least_offsets_named: [f64::NAN; 3],
             healthy_offsets_kpa: [0.0; 2],
             healthy_span_errors: [0.0; 2],
+            delay_uncertainty_s: 0.0,
+            delay_response_reach_lpm_per_ms: [0.0; 3],
         })
     }
 }

@@ -14,6 +14,15 @@ impl LeakSizeDetector {
         std::array::from_fn(|k| self.threshold_lpm[k] + self.oil_band_lpm[k])
     }
 
+    /// `thresholds` (L/min at p_s/2) widened by what the transducers' delay
+    /// leaves uncertain now: the level a rise must pass to raise or name a
+    /// leak. Only there: the tolerance of the pattern test, the baseline's
+    /// hold and the clearing keep [`Self::thresholds_now`] (a drifting
+    /// transducer's pattern stays one no leak can make).
+    pub(super) fn past_the_delay(&self, thresholds: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|k| thresholds[k] + self.delay_band_lpm[k])
+    }
+
     /// The thresholds a named leak must pass in force, L/min at p_s/2: the
     /// naming test's ([`Commissioning::clear_spreads_lpm`](crate::Commissioning::clear_spreads_lpm)),
     /// widened like [`Self::thresholds_now`].
@@ -32,7 +41,9 @@ impl LeakSizeDetector {
     /// [`Self::thresholds_now`]: the model's null leakage (its band) and the
     /// healthy offsets, each as uncertain as the laminar factor. The offset
     /// watch's band follows it only while θ reads the oil inside its range.
-    fn widen_for_the_oil(&mut self, e: &Estimate) {
+    /// And the transducers' delay's: its uncertainty times the sizes' response
+    /// to it (the offset watch's thresholds do not take it).
+    fn widen_for_the_model(&mut self, e: &Estimate) {
         self.oil_band_lpm = crate::oil_band_lpm(
             e.laminar_factor_sigma,
             e.null_leakage_band_lpm,
@@ -41,6 +52,14 @@ impl LeakSizeDetector {
         if e.flags & FLAG_OIL_PAST_RANGE == 0 {
             self.watch_band_lpm = self.oil_band_lpm;
         }
+        if self.delay_uncertainty_ms > 0.0 {
+            self.delay_band_lpm = crate::delay_band_lpm(
+                self.delay_uncertainty_ms,
+                e.delay_response_lpm_per_ms,
+                self.internal_factors,
+                self.delay_response_reach_lpm_per_ms,
+            );
+        }
     }
 
     /// Reads one estimate; pushes any event into `out` (at most one per call).
@@ -48,7 +67,7 @@ impl LeakSizeDetector {
         if e.n_states < 10 {
             return;
         }
-        self.widen_for_the_oil(e);
+        self.widen_for_the_model(e);
         let dt_s = if self.last_t_s.is_finite() {
             (e.t_s - self.last_t_s).clamp(0.0, 1.0)
         } else {

@@ -127,6 +127,8 @@ mod tests {
             least_offsets_named: [f64::NAN; 3],
             healthy_offsets_kpa: [0.0; 2],
             healthy_span_errors: [0.0; 2],
+            delay_uncertainty_s: 0.0,
+            delay_response_reach_lpm_per_ms: [0.0; 3],
         };
         let (_, thr) = crate::thresholds(&cfg, c.spreads_lpm, c.crossings_per_s);
         let stretch = |share: f64, spread_without_lpm: f64| Stretch {

@@ -193,6 +193,8 @@ fn commissioned_run_config(ext1_naming_spread_lpm: f64) -> ClassifierConfig {
             least_offsets_named: [f64::NAN; 3],
             healthy_offsets_kpa: [0.0; 2],
             healthy_span_errors: [0.0; 2],
+            delay_uncertainty_s: 0.0,
+            delay_response_reach_lpm_per_ms: [0.0; 3],
         }),
         ..ClassifierConfig::default()
     }
@@ -363,4 +365,56 @@ fn the_offset_watch_keeps_the_oil_band_it_had_inside_the_range() {
     feed(&mut det, 2.0, 0.05, 0);
     assert!(near(widening(&det, det.thresholds_now()), 0.05));
     assert!(near(widening(&det, det.watch_thresholds_now()), 0.05));
+}
+
+/// The events of 20 s commissioned with a delay uncertain by
+/// `delay_uncertainty_s` (s): from 10 s the sizes' response to a delay swings
+/// up to 0.96 L/min per ms (a limit cycle in a stroke; on q_e1, over p1 and
+/// p2), and the sizes carry a delay taken off 0.25 ms too long (its imprint),
+/// plus a leak `q_lpm` from 15 s.
+fn delay_imprint_run(delay_uncertainty_s: f64, q_lpm: [f64; 3]) -> Vec<LeakEvent> {
+    let mut cfg = commissioned_run_config(0.03);
+    if let Some(c) = cfg.commissioning.as_mut() {
+        c.delay_uncertainty_s = delay_uncertainty_s;
+    }
+    let mut det = LeakSizeDetector::new(cfg);
+    let mut events = Vec::new();
+    for i in 0..20_000 {
+        let t = i as f64 * 1e-3;
+        let swing = 0.6 * ((t - 10.0) / 2.0).clamp(0.0, 1.0);
+        let response = [[swing, 0.0, 0.0], [0.6 * swing, 0.0, 0.0]];
+        let imprint = 0.25 * (response[0][0] + response[1][0]);
+        let leak = if t >= 15.0 { q_lpm } else { [0.0; 3] };
+        let mut e = estimate(t, [leak[0] + imprint, leak[1], leak[2]]);
+        e.delay_response_lpm_per_ms = response;
+        let mut out = None;
+        det.on_estimate(&e, &mut out);
+        events.extend(out);
+    }
+    events
+}
+
+/// A delay taken off the sizes that is off by its uncertainty raises nothing
+/// where the response to it swings up; the same swing with no uncertainty
+/// stated raises a leak, and a leak past the widened thresholds is raised.
+#[test]
+fn the_thresholds_widen_by_the_delays_uncertainty_times_the_response() {
+    let response = [[0.6, 0.0, 0.0], [0.36, 0.0, 0.0]];
+    let band = crate::delay_band_lpm(0.25, response, crate::NOMINAL_INTERNAL_FACTORS, [0.0; 3]);
+    // ext1's own signature takes the whole imprint, 0.25 ms × 0.96 L/min per ms
+    assert!((band[0] - 0.24).abs() < 1e-12, "{band:?}");
+    assert!(band.iter().all(|b| b.is_finite() && *b >= 0.0), "{band:?}");
+    // the commissioning saw 0.16 of it: what lies beyond widens
+    let beyond = crate::delay_band_lpm(0.25, response, crate::NOMINAL_INTERNAL_FACTORS, [0.16, 0.0, 0.0]);
+    assert!((beyond[0] - 0.2).abs() < 1e-12, "{beyond:?}");
+    // a response within the reach widens nothing
+    let within = crate::delay_band_lpm(0.25, response, crate::NOMINAL_INTERNAL_FACTORS, [5.0; 3]);
+    assert_eq!(within, [0.0; 3]);
+    let bare = delay_imprint_run(0.0, [0.0; 3]);
+    assert!(bare.first().is_some_and(|e| e.t_detect_s < 15.0), "{bare:#?}");
+    let held = delay_imprint_run(0.25e-3, [0.0; 3]);
+    assert!(held.is_empty(), "{held:#?}");
+    let leak = delay_imprint_run(0.25e-3, [0.0, 0.6, 0.0]);
+    let raised = leak.first().expect("the leak raised");
+    assert!((15.0..16.0).contains(&raised.t_detect_s), "{leak:#?}");
 }

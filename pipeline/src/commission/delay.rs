@@ -61,14 +61,22 @@ pub(super) fn lag_bound_s(cfg: &Config) -> f64 {
 }
 
 /// The sums of the least-squares fit of each leak size (L/min) to a constant
-/// plus d times its delay response (L/min per ms), over the converged samples.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// plus d times its delay response (L/min per ms), over the converged samples,
+/// and those responses.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct DelayFit {
     /// Samples summed.
     n: u64,
     /// Per kind (ext1, ext2, int): Σr, Σq, Σr·q, Σr² (r the response summed over p1 and p2).
     sums: [[f64; 4]; 3],
+    /// Each converged sample's response (q_e1, q_e2, q_i), L/min per ms.
+    responses: Vec<[f64; 3]>,
 }
+
+/// The share of the commissioning's samples whose response to a delay the
+/// reach ([`DelayFit::reach_lpm_per_ms`]) holds (1): its spreads, and so the
+/// thresholds, saw responses up to it.
+pub const RESPONSE_REACH_SHARE: f64 = 0.99;
 
 impl DelayFit {
     /// Adds estimate `e` when the filter has converged on a full sample.
@@ -83,6 +91,7 @@ impl DelayFit {
             return;
         }
         self.n += 1;
+        self.responses.push(r);
         for k in 0..3 {
             let s = &mut self.sums[k];
             s[0] += r[k];
@@ -90,6 +99,24 @@ impl DelayFit {
             s[2] += r[k] * q[k];
             s[3] += r[k] * r[k];
         }
+    }
+
+    /// The response to a delay each kind's size (ext1, ext2, int, in the
+    /// signatures with `factors`: [`detect::signatures_with`]) stayed within
+    /// on [`RESPONSE_REACH_SHARE`] of the samples, L/min per ms (0 without samples).
+    pub fn reach_lpm_per_ms(&self, factors: [f64; 2]) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let mut v: Vec<f64> = self
+                .responses
+                .iter()
+                .map(|r| detect::signatures_with(*r, factors)[k].abs())
+                .collect();
+            if v.is_empty() {
+                return 0.0;
+            }
+            let i = ((RESPONSE_REACH_SHARE * v.len() as f64) as usize).min(v.len() - 1);
+            *v.select_nth_unstable_by(i, f64::total_cmp).1
+        })
     }
 
     /// The delay that fits the sizes' swings, s (`None` without samples or
@@ -272,6 +299,36 @@ pub(super) fn fit_delay(
     }))
 }
 
+/// How uncertain the delay taken off the leak sizes (`lag_correction_s`, s;
+/// 0: none taken) is, s: how far it lies from the identification's lag
+/// (`pressure_lag_s`, s, the mean of p1's and p2's), the other reading of
+/// the same delay. 0 where the identification read no lag. The fit here
+/// reads the delay on the commissioning's duty cycle and takes up what
+/// else swings like it; the identification reads it on the pressures' own
+/// rates. A limit cycle the recording lacks (a press's 125 Hz oscillation
+/// in a slow stroke, `bench instances`' seed-2 inst_016) moves the sizes by
+/// that difference times their response to a delay.
+pub fn uncertainty_s(lag_correction_s: f64, pressure_lag_s: [f64; 2]) -> f64 {
+    let lag_s = 0.5 * (pressure_lag_s[0] + pressure_lag_s[1]);
+    if !(lag_s.is_finite() && lag_s > 0.0 && lag_correction_s.is_finite()) {
+        return 0.0;
+    }
+    (lag_correction_s - lag_s).abs()
+}
+
+/// The line commissioning prints on the delay's uncertainty `uncertainty_s`
+/// (s) with the identification's lags `pressure_lag_s` (s); `None` without one.
+pub fn uncertainty_line(uncertainty_s: f64, pressure_lag_s: [f64; 2]) -> Option<String> {
+    (uncertainty_s > 0.0).then(|| {
+        format!(
+            "the transducers' delay is uncertain by {:.3} ms (the identification's lag {:.3} ms): \
+             the thresholds widen by it times the leak sizes' response to a delay",
+            uncertainty_s * 1e3,
+            0.5e3 * (pressure_lag_s[0] + pressure_lag_s[1])
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,6 +364,24 @@ mod tests {
             ..taken(-3.0, true)
         };
         assert!((follows.shortest_held_s() - 0.32e-3).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_delay_is_as_uncertain_as_its_two_readings_disagree() {
+        // the fit's 0.865 ms against lags of 0.649 and 0.647 ms
+        let u = uncertainty_s(0.865e-3, [0.649e-3, 0.647e-3]);
+        assert!((u - 0.217e-3).abs() < 1e-12, "{u}");
+        // none taken: as uncertain as the lag read
+        assert!((uncertainty_s(0.0, [0.3e-3, 0.5e-3]) - 0.4e-3).abs() < 1e-12);
+        // no lag read, or a delay that is no number: not stated
+        assert_eq!(uncertainty_s(0.865e-3, [0.0; 2]), 0.0);
+        assert_eq!(uncertainty_s(f64::NAN, [0.6e-3; 2]), 0.0);
+        let line = uncertainty_line(u, [0.649e-3, 0.647e-3]).expect("a line");
+        assert!(
+            line.contains("uncertain by 0.217 ms") && line.contains("lag 0.648 ms"),
+            "{line}"
+        );
+        assert_eq!(uncertainty_line(0.0, [0.0; 2]), None);
     }
 
     #[test]

@@ -58,11 +58,9 @@ impl DetectorTrace {
             return Ok(());
         }
         let r = det.rise_lpm(e);
-        // the thresholds in force: those learned, widened by the oil's band of
-        // this estimate (as the detector widens them on every estimate)
-        let band = detect::oil_band_lpm(e.laminar_factor_sigma, e.null_leakage_band_lpm, det.offsets_lpm());
-        let learned = det.thresholds_lpm();
-        let th: [f64; 3] = std::array::from_fn(|k| learned[k] + band[k]);
+        // the thresholds in force: those learned, widened as the detector
+        // widened them on this estimate
+        let th = det.thresholds_in_force_lpm();
         writeln!(
             self.out,
             "{},{},{},{},{},{},{},{}",
