@@ -290,9 +290,6 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         Some(t) => fit_misreading(input, &identified_cfg, t, &mut pass)?,
         None => None,
     };
-    if let Some(d) = delay.as_ref().filter(|d| d.taken) {
-        delay::hold_over_uncertainty(input, &identified_cfg, d, tolerance, &mut pass)?;
-    }
     let Pass { mut cfg, bias, trace } = pass;
     misreading.iter().for_each(|m| eprintln!("{}", m.line()));
     if let Some(bias) = &bias {
@@ -345,14 +342,17 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         set_by,
         sensor_reach: sensor_reach(&responses, &c, &cfg),
         healthy_misreading: None,
+        delay_uncertainty: None,
     };
     c.least_offsets_named = learned.sensor_reach.least_named();
     c.delay_uncertainty_s =
         delay::uncertainty_s(cfg.leak_filter.lag_correction_s, cfg.leak_filter.pressure_lag_s);
-    c.delay_response_reach_lpm_per_ms = delay_fit.reach_lpm_per_ms(c.internal_factors);
-    if let Some(line) = delay::uncertainty_line(c.delay_uncertainty_s, cfg.leak_filter.pressure_lag_s) {
-        eprintln!("{line}");
-    }
+    c.delay_response_reach_lpm_per_ms = delay::response_seen_lpm_per_ms(
+        cfg.leak_filter.lag_correction_s,
+        delay_fit.reach_lpm_per_ms(c.internal_factors),
+    );
+    learned.delay_uncertainty =
+        delay::uncertainty_line(c.delay_uncertainty_s, cfg.leak_filter.pressure_lag_s);
     learned.lines().iter().for_each(|line| eprintln!("{line}"));
     cfg.classifier.commissioning = Some(c.clone());
     if let Some(m) = healthy::healthy_misreading(input, &cfg)? {

@@ -234,6 +234,9 @@ pub struct Learned {
     /// The terminal's line of the healthy rises' own misreading, where one was
     /// taken ([`detect::Commissioning::healthy_offsets_kpa`]).
     pub healthy_misreading: Option<String>,
+    /// The terminal's line of how uncertain the transducers' delay taken
+    /// off the leak sizes is ([`detect::Commissioning::delay_uncertainty_s`]), where it is.
+    pub delay_uncertainty: Option<String>,
 }
 
 /// Three values as `a/b/c` with three decimals.
@@ -244,7 +247,7 @@ fn three(v: [f64; 3]) -> String {
 impl Learned {
     /// The terminal's lines, in order.
     pub fn lines(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut out: Vec<String> = self.delay_uncertainty.iter().cloned().collect();
         if let Some(theta) = self.theta {
             out.push(format!(
                 "oil stiffness on this recording: {theta:.3} of the model's bulk modulus, at {:.1} °C: \
@@ -428,6 +431,9 @@ impl CommissionRecord {
         }
         h += "</table>\n";
         h += &format!("<p class=\"note\">{}</p>\n", esc(&l.sensor_reach.line()));
+        if let Some(line) = &l.delay_uncertainty {
+            h += &format!("<p class=\"note\">{}</p>\n", esc(line));
+        }
         let healthy = l.healthy_misreading.as_deref().unwrap_or(
             "no healthy misreading taken: no offset or span error on p1 or p2 explains a third of the healthy rises' energy",
         );

@@ -16,32 +16,17 @@ use filter::{FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use model::process::I_QE1;
 use model::units::m3_s_to_lpm;
 
-use super::{bias_then_learn, energy, fit_misreading, Pass, MISREADING_LEAST_SHARE};
+use super::{bias_then_learn, energy, Pass, MISREADING_LEAST_SHARE};
 use config::Config;
 use std::path::Path;
 
-/// The longest delay the healthy spreads hold over, as a share of the one
-/// fitted (1); the shortest is none. The fit is not sure enough to narrow
-/// the thresholds: it reads a pure delay, while a lag also damps a swing's
-/// fast part, so the delay that fits depends on the duty cycle, and it takes
-/// up what else swings like it. `bench instances`' seed 1: the
-/// commissioning's fit read 0.51-1.15 times the transducers' lag on the
-/// press (median 0.97), 0.24-1.01 on the lift (median 0.90);
-/// plant_dev/differential's 0.75 ms for transducers lagging 0.60-0.66 ms.
-pub const DELAY_HELD_ABOVE: f64 = 1.2;
-
-/// The shortest delay the healthy spreads hold over where the fit is sure
-/// ([`SURE_FIT_SHARE`]), as a share of the one fitted (1); none otherwise.
-/// A sure fit reads the delay of the recording's duty cycles, which the
-/// watch runs too. `bench instances`' seed 1 (lags of 0.2-1 ms): held from
-/// 0.8 of it in place of half, the lift found 51 of its 60 leaks of 0.1
-/// L/min (35), the press 48 (47); no false alarm in 24.6 healthy hours.
-pub const DELAY_HELD_BELOW_SURE: f64 = 0.8;
-
-/// The delay's fit is sure where taking it off the leak sizes takes at least
-/// this share of the healthy spreads' energy (1): the swings are the
-/// delay's. Short of it the fit may have taken up what else swings like it.
-pub const SURE_FIT_SHARE: f64 = 0.8;
+/// The least uncertainty of a delay taken, as a share of it (1): the fit
+/// reads a pure delay, while a lag also damps a swing's fast part, so the
+/// delay that fits depends on the duty cycle, and the fit takes up what else
+/// swings like it. `bench instances`' seed 1: the commissioning's fit read
+/// 0.51-1.15 times the transducers' lag on the press (median 0.97), 0.24-1.01
+/// on the lift (median 0.90).
+pub const DELAY_UNCERTAIN_SHARE: f64 = 0.2;
 
 /// The time left out as a pattern no leak can make, s, past which a delay
 /// that halves it is taken whatever the spreads do: the spreads of a pass
@@ -136,44 +121,6 @@ impl DelayFit {
     }
 }
 
-/// Widens the healthy spreads of `pass` (learned from `identified` on
-/// `input`, with the delay `taken` off the sizes and the misreading `pass`
-/// took) to hold over the delay's uncertainty: each kind's spread (and its
-/// clear spread) becomes the largest of its own, of the commissioning's
-/// without the delay taken off (its misreading fitted within `tolerance` as
-/// it would be then; with a sure fit, [`DELAY_HELD_BELOW_SURE`] of the
-/// delay taken off), and of the one with the delay [`DELAY_HELD_ABOVE`]
-/// times longer (up to the datasheet's bound). So a threshold is at least
-/// what it is with the shortest delay held.
-pub(super) fn hold_over_uncertainty(
-    input: &Path,
-    identified: &Config,
-    taken: &DelayTaken,
-    tolerance: Option<identify::TransducerTolerance>,
-    pass: &mut Pass,
-) -> Result<(), String> {
-    let mut plain_cfg = identified.clone();
-    plain_cfg.leak_filter.lag_correction_s = taken.shortest_held_s();
-    let mut plain = bias_then_learn(input, &plain_cfg)?;
-    if let Some(t) = tolerance {
-        fit_misreading(input, &plain_cfg, t, &mut plain)?;
-    }
-    let mut longer_cfg = identified.clone();
-    longer_cfg.model.pressure_misreading_pa = pass.cfg.model.pressure_misreading_pa;
-    longer_cfg.leak_filter.lag_correction_s = taken.longest_held_s();
-    let longer = bias_then_learn(input, &longer_cfg)?;
-    for other in [plain.trace.commissioning, longer.trace.commissioning] {
-        let held = &mut pass.trace.commissioning;
-        for k in 0..3 {
-            held.spreads_lpm[k] = held.spreads_lpm[k].max(other.spreads_lpm[k]);
-            if held.clear_spreads_lpm[k].is_finite() && other.clear_spreads_lpm[k].is_finite() {
-                held.clear_spreads_lpm[k] = held.clear_spreads_lpm[k].max(other.clear_spreads_lpm[k]);
-            }
-        }
-    }
-    Ok(())
-}
-
 /// The delay fitted and whether it was taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DelayTaken {
@@ -196,33 +143,11 @@ impl DelayTaken {
         1.0 - energy(self.spreads_lpm[1]) / energy(self.spreads_lpm[0]).max(f64::MIN_POSITIVE)
     }
 
-    /// The shortest delay the healthy spreads hold over, s:
-    /// [`DELAY_HELD_BELOW_SURE`] of the one taken where its fit is sure
-    /// ([`SURE_FIT_SHARE`], or the time left out halved: a pass without it
-    /// does not follow the rig), else none.
-    pub fn shortest_held_s(&self) -> f64 {
-        if self.taken && (self.energy_fall() >= SURE_FIT_SHARE || follows_more(self.left_out_s)) {
-            DELAY_HELD_BELOW_SURE * self.delay_s
-        } else {
-            0.0
-        }
-    }
-
-    /// The longest delay the healthy spreads hold over, s: [`DELAY_HELD_ABOVE`]
-    /// times the one taken, up to the datasheet's bound.
-    pub fn longest_held_s(&self) -> f64 {
-        (self.delay_s * DELAY_HELD_ABOVE).min(self.bound_s)
-    }
-
     /// The line commissioning prints.
     pub fn line(&self) -> String {
         let fall = self.energy_fall();
         let verdict = if self.taken {
-            format!(
-                "taken off the leak sizes; the thresholds hold over {:.3}-{:.3} ms",
-                self.shortest_held_s() * 1e3,
-                self.longest_held_s() * 1e3
-            )
+            "taken off the leak sizes".to_string()
         } else {
             format!("not taken (a fall under {:.0} %)", 100.0 * MISREADING_LEAST_SHARE)
         };
@@ -263,9 +188,8 @@ fn follows_more(left_out_s: [f64; 2]) -> bool {
 /// where the healthy spreads' energy falls by [`MISREADING_LEAST_SHARE`], or
 /// where the time left out as no leak's pattern, [`LEFT_OUT_LEAST_S`] or
 /// more, halves:
-/// `identified` and `pass` then carry it; [`hold_over_uncertainty`] holds
-/// the spreads over its uncertainty once the misreading is fitted. `None`
-/// when nothing fits (no response, or a delay of 0).
+/// `identified` and `pass` then carry it. `None` when nothing fits (no
+/// response, or a delay of 0).
 pub(super) fn fit_delay(
     input: &Path,
     identified: &mut Config,
@@ -301,19 +225,39 @@ pub(super) fn fit_delay(
 
 /// How uncertain the delay taken off the leak sizes (`lag_correction_s`, s;
 /// 0: none taken) is, s: how far it lies from the identification's lag
-/// (`pressure_lag_s`, s, the mean of p1's and p2's), the other reading of
-/// the same delay. 0 where the identification read no lag. The fit here
-/// reads the delay on the commissioning's duty cycle and takes up what
-/// else swings like it; the identification reads it on the pressures' own
-/// rates. A limit cycle the recording lacks (a press's 125 Hz oscillation
-/// in a slow stroke, `bench instances`' seed-2 inst_016) moves the sizes by
-/// that difference times their response to a delay.
+/// (`pressure_lag_s`, s, the mean of p1's and p2's; not counted where none
+/// was read), and at least [`DELAY_UNCERTAIN_SHARE`] of it. The fit here
+/// reads the delay on the commissioning's duty cycle and takes up what else
+/// swings like it; the identification reads it on the pressures' own rates.
+/// A limit cycle the recording lacks (a press's 125 Hz oscillation in a
+/// slow stroke, `bench instances`' seed-2 inst_016) moves the sizes by the
+/// delay's error times their response to a delay.
 pub fn uncertainty_s(lag_correction_s: f64, pressure_lag_s: [f64; 2]) -> f64 {
-    let lag_s = 0.5 * (pressure_lag_s[0] + pressure_lag_s[1]);
-    if !(lag_s.is_finite() && lag_s > 0.0 && lag_correction_s.is_finite()) {
+    if !lag_correction_s.is_finite() {
         return 0.0;
     }
-    (lag_correction_s - lag_s).abs()
+    let taken_s = lag_correction_s.max(0.0);
+    let lag_s = 0.5 * (pressure_lag_s[0] + pressure_lag_s[1]);
+    let apart_s = if lag_s.is_finite() && lag_s > 0.0 {
+        (taken_s - lag_s).abs()
+    } else {
+        0.0
+    };
+    apart_s.max(DELAY_UNCERTAIN_SHARE * taken_s)
+}
+
+/// The response to a delay (L/min per ms, per kind) the commissioning's
+/// spreads saw its uncertainty at, for a delay `lag_correction_s` (s) taken
+/// off and the recording's `reach_lpm_per_ms` ([`DelayFit::reach_lpm_per_ms`]):
+/// none where a delay is taken (the fit chose it to make those spreads
+/// least, so they understate a delay that is off), the recording's reach
+/// where none is (its spreads carry the lag's whole imprint there).
+pub fn response_seen_lpm_per_ms(lag_correction_s: f64, reach_lpm_per_ms: [f64; 3]) -> [f64; 3] {
+    if lag_correction_s > 0.0 {
+        [0.0; 3]
+    } else {
+        reach_lpm_per_ms
+    }
 }
 
 /// The line commissioning prints on the delay's uncertainty `uncertainty_s`
@@ -322,7 +266,7 @@ pub fn uncertainty_line(uncertainty_s: f64, pressure_lag_s: [f64; 2]) -> Option<
     (uncertainty_s > 0.0).then(|| {
         format!(
             "the transducers' delay is uncertain by {:.3} ms (the identification's lag {:.3} ms): \
-             the thresholds widen by it times the leak sizes' response to a delay",
+             a leak's rise must pass its threshold and that times the leak sizes' response to a delay",
             uncertainty_s * 1e3,
             0.5e3 * (pressure_lag_s[0] + pressure_lag_s[1])
         )
@@ -335,7 +279,7 @@ mod tests {
     use model::units::lpm_to_m3_s;
 
     #[test]
-    fn the_thresholds_hold_from_most_of_the_delay_only_where_its_fit_is_sure() {
+    fn the_line_says_whether_the_delay_is_taken() {
         let taken = |fall: f64, taken: bool| DelayTaken {
             delay_s: 0.4e-3,
             bound_s: 0.45e-3,
@@ -346,24 +290,33 @@ mod tests {
         };
         let sure = taken(0.95, true);
         assert!((sure.energy_fall() - 0.95).abs() < 1e-12);
-        assert!((sure.shortest_held_s() - 0.32e-3).abs() < 1e-15);
-        // 1.2 times the delay, held to the datasheet's bound
-        assert!((sure.longest_held_s() - 0.45e-3).abs() < 1e-15);
         assert!(
-            sure.line().contains("hold over 0.320-0.450 ms"),
+            sure.line()
+                .contains("0.400 ms; the healthy spreads' energy falls by 95 % with it: taken"),
             "{}",
             sure.line()
         );
-        // a fall of 85 % is sure; short of a sure fit, or not taken: held from none
-        assert!((taken(0.85, true).shortest_held_s() - 0.32e-3).abs() < 1e-15);
-        assert_eq!(taken(0.75, true).shortest_held_s(), 0.0);
-        assert_eq!(taken(0.95, false).shortest_held_s(), 0.0);
-        // the time left out halved: sure, whatever the spreads do
+        assert!(taken(0.2, false)
+            .line()
+            .ends_with("not taken (a fall under 33 %)"));
         let follows = DelayTaken {
             left_out_s: [66.0, 0.0],
             ..taken(-3.0, true)
         };
-        assert!((follows.shortest_held_s() - 0.32e-3).abs() < 1e-15);
+        assert!(
+            follows
+                .line()
+                .contains("left out as no leak's pattern 66.0 -> 0.0 s"),
+            "{}",
+            follows.line()
+        );
+    }
+
+    #[test]
+    fn the_response_seen_is_none_where_a_delay_is_taken() {
+        let reach = [0.1, 0.2, 0.3];
+        assert_eq!(response_seen_lpm_per_ms(0.4e-3, reach), [0.0; 3]);
+        assert_eq!(response_seen_lpm_per_ms(0.0, reach), reach);
     }
 
     #[test]
@@ -373,8 +326,11 @@ mod tests {
         assert!((u - 0.217e-3).abs() < 1e-12, "{u}");
         // none taken: as uncertain as the lag read
         assert!((uncertainty_s(0.0, [0.3e-3, 0.5e-3]) - 0.4e-3).abs() < 1e-12);
-        // no lag read, or a delay that is no number: not stated
-        assert_eq!(uncertainty_s(0.865e-3, [0.0; 2]), 0.0);
+        // readings that agree, or no lag read: a fifth of the delay taken
+        assert!((uncertainty_s(0.5e-3, [0.49e-3, 0.51e-3]) - 0.1e-3).abs() < 1e-12);
+        assert!((uncertainty_s(0.865e-3, [0.0; 2]) - 0.173e-3).abs() < 1e-12);
+        // nothing taken and no lag read, or a delay that is no number: none
+        assert_eq!(uncertainty_s(0.0, [0.0; 2]), 0.0);
         assert_eq!(uncertainty_s(f64::NAN, [0.6e-3; 2]), 0.0);
         let line = uncertainty_line(u, [0.649e-3, 0.647e-3]).expect("a line");
         assert!(
