@@ -290,6 +290,9 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
         Some(t) => fit_misreading(input, &identified_cfg, t, &mut pass)?,
         None => None,
     };
+    if let Some(d) = delay.as_ref().filter(|d| d.taken && !d.sure()) {
+        delay::hold_over_unsure_fit(input, &identified_cfg, d, tolerance, &mut pass)?;
+    }
     let Pass { mut cfg, bias, trace } = pass;
     misreading.iter().for_each(|m| eprintln!("{}", m.line()));
     if let Some(bias) = &bias {
@@ -348,7 +351,7 @@ pub fn commission_recorded(input: &Path, cfg: &Config) -> Result<(Config, Commis
     c.delay_uncertainty_s =
         delay::uncertainty_s(cfg.leak_filter.lag_correction_s, cfg.leak_filter.pressure_lag_s);
     c.delay_response_reach_lpm_per_ms = delay::response_seen_lpm_per_ms(
-        cfg.leak_filter.lag_correction_s,
+        delay.as_ref().is_some_and(|d| d.sure()),
         delay_fit.reach_lpm_per_ms(c.internal_factors),
     );
     learned.delay_uncertainty =

@@ -16,7 +16,7 @@ use filter::{FLAG_CONVERGING, FLAG_RESET, FLAG_SKIPPED};
 use model::process::I_QE1;
 use model::units::m3_s_to_lpm;
 
-use super::{bias_then_learn, energy, Pass, MISREADING_LEAST_SHARE};
+use super::{bias_then_learn, energy, fit_misreading, Pass, MISREADING_LEAST_SHARE};
 use config::Config;
 use std::path::Path;
 
@@ -27,6 +27,17 @@ use std::path::Path;
 /// 0.51-1.15 times the transducers' lag on the press (median 0.97), 0.24-1.01
 /// on the lift (median 0.90).
 pub const DELAY_UNCERTAIN_SHARE: f64 = 0.2;
+
+/// The delay's fit is sure where taking it off the leak sizes takes at least
+/// this share of the healthy spreads' energy (1), or halves the time left
+/// out ([`LEFT_OUT_LEAST_S`]): the swings are the delay's. Short of it the
+/// fit may have taken up what else swings like it, and the healthy spreads
+/// hold over no delay to [`DELAY_HELD_ABOVE`] times it.
+pub const SURE_FIT_SHARE: f64 = 0.8;
+
+/// The longest delay the healthy spreads of a fit that is not sure hold
+/// over, as a share of the one taken (1); the shortest is none.
+pub const DELAY_HELD_ABOVE: f64 = 1.2;
 
 /// The time left out as a pattern no leak can make, s, past which a delay
 /// that halves it is taken whatever the spreads do: the spreads of a pass
@@ -121,6 +132,42 @@ impl DelayFit {
     }
 }
 
+/// Widens the healthy spreads of `pass` (learned from `identified` on
+/// `input`, with the delay `taken` off the sizes and the misreading `pass`
+/// took) to hold over a fit that is not sure ([`DelayTaken::sure`]): each
+/// kind's spread (and its clear spread) becomes the largest of its own, of
+/// the commissioning's without the delay taken off (its misreading fitted
+/// within `tolerance` as it would be then), and of the one with the delay
+/// [`DELAY_HELD_ABOVE`] times longer (up to the datasheet's bound).
+pub(super) fn hold_over_unsure_fit(
+    input: &Path,
+    identified: &Config,
+    taken: &DelayTaken,
+    tolerance: Option<identify::TransducerTolerance>,
+    pass: &mut Pass,
+) -> Result<(), String> {
+    let mut plain_cfg = identified.clone();
+    plain_cfg.leak_filter.lag_correction_s = 0.0;
+    let mut plain = bias_then_learn(input, &plain_cfg)?;
+    if let Some(t) = tolerance {
+        fit_misreading(input, &plain_cfg, t, &mut plain)?;
+    }
+    let mut longer_cfg = identified.clone();
+    longer_cfg.model.pressure_misreading_pa = pass.cfg.model.pressure_misreading_pa;
+    longer_cfg.leak_filter.lag_correction_s = taken.longest_held_s();
+    let longer = bias_then_learn(input, &longer_cfg)?;
+    for other in [plain.trace.commissioning, longer.trace.commissioning] {
+        let held = &mut pass.trace.commissioning;
+        for k in 0..3 {
+            held.spreads_lpm[k] = held.spreads_lpm[k].max(other.spreads_lpm[k]);
+            if held.clear_spreads_lpm[k].is_finite() && other.clear_spreads_lpm[k].is_finite() {
+                held.clear_spreads_lpm[k] = held.clear_spreads_lpm[k].max(other.clear_spreads_lpm[k]);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The delay fitted and whether it was taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DelayTaken {
@@ -143,11 +190,29 @@ impl DelayTaken {
         1.0 - energy(self.spreads_lpm[1]) / energy(self.spreads_lpm[0]).max(f64::MIN_POSITIVE)
     }
 
+    /// Whether the fit is sure ([`SURE_FIT_SHARE`], or the time left out
+    /// halved: a pass without it does not follow the rig).
+    pub fn sure(&self) -> bool {
+        self.taken && (self.energy_fall() >= SURE_FIT_SHARE || follows_more(self.left_out_s))
+    }
+
+    /// The longest delay the healthy spreads of a fit that is not sure hold
+    /// over, s: [`DELAY_HELD_ABOVE`] times the one taken, up to the datasheet's bound.
+    pub fn longest_held_s(&self) -> f64 {
+        (self.delay_s * DELAY_HELD_ABOVE).min(self.bound_s)
+    }
+
     /// The line commissioning prints.
     pub fn line(&self) -> String {
         let fall = self.energy_fall();
-        let verdict = if self.taken {
-            "taken off the leak sizes".to_string()
+        let verdict = if self.sure() {
+            "taken off the leak sizes, a sure fit".to_string()
+        } else if self.taken {
+            format!(
+                "taken off the leak sizes; not a sure fit (a fall under {:.0} %): the thresholds hold over 0-{:.3} ms",
+                100.0 * SURE_FIT_SHARE,
+                self.longest_held_s() * 1e3
+            )
         } else {
             format!("not taken (a fall under {:.0} %)", 100.0 * MISREADING_LEAST_SHARE)
         };
@@ -247,13 +312,13 @@ pub fn uncertainty_s(lag_correction_s: f64, pressure_lag_s: [f64; 2]) -> f64 {
 }
 
 /// The response to a delay (L/min per ms, per kind) the commissioning's
-/// spreads saw its uncertainty at, for a delay `lag_correction_s` (s) taken
-/// off and the recording's `reach_lpm_per_ms` ([`DelayFit::reach_lpm_per_ms`]):
-/// none where a delay is taken (the fit chose it to make those spreads
-/// least, so they understate a delay that is off), the recording's reach
-/// where none is (its spreads carry the lag's whole imprint there).
-pub fn response_seen_lpm_per_ms(lag_correction_s: f64, reach_lpm_per_ms: [f64; 3]) -> [f64; 3] {
-    if lag_correction_s > 0.0 {
+/// spreads saw its uncertainty at, for a delay `sure_fit` taken or not and
+/// the recording's `reach_lpm_per_ms` ([`DelayFit::reach_lpm_per_ms`]): none
+/// after a sure fit (it chose the delay to make those spreads least, so they
+/// understate a delay that is off), the recording's reach otherwise (its
+/// spreads hold over the delay's range, or carry the lag's whole imprint).
+pub fn response_seen_lpm_per_ms(sure_fit: bool, reach_lpm_per_ms: [f64; 3]) -> [f64; 3] {
+    if sure_fit {
         [0.0; 3]
     } else {
         reach_lpm_per_ms
@@ -279,7 +344,7 @@ mod tests {
     use model::units::lpm_to_m3_s;
 
     #[test]
-    fn the_line_says_whether_the_delay_is_taken() {
+    fn the_line_says_whether_the_delay_is_taken_and_its_fit_sure() {
         let taken = |fall: f64, taken: bool| DelayTaken {
             delay_s: 0.4e-3,
             bound_s: 0.45e-3,
@@ -290,19 +355,31 @@ mod tests {
         };
         let sure = taken(0.95, true);
         assert!((sure.energy_fall() - 0.95).abs() < 1e-12);
+        assert!(sure.sure());
         assert!(
-            sure.line()
-                .contains("0.400 ms; the healthy spreads' energy falls by 95 % with it: taken"),
+            sure.line().contains("0.400 ms; the healthy spreads' energy falls by 95 % with it: taken off the leak sizes, a sure fit"),
             "{}",
             sure.line()
+        );
+        // a fall of 75 %: taken, not sure, held up to 1.2 times it (the datasheet's bound)
+        let unsure = taken(0.75, true);
+        assert!(!unsure.sure());
+        assert!((unsure.longest_held_s() - 0.45e-3).abs() < 1e-15);
+        assert!(
+            unsure.line().ends_with("the thresholds hold over 0-0.450 ms"),
+            "{}",
+            unsure.line()
         );
         assert!(taken(0.2, false)
             .line()
             .ends_with("not taken (a fall under 33 %)"));
+        assert!(!taken(0.95, false).sure());
+        // the time left out halved: sure, whatever the spreads do
         let follows = DelayTaken {
             left_out_s: [66.0, 0.0],
             ..taken(-3.0, true)
         };
+        assert!(follows.sure());
         assert!(
             follows
                 .line()
@@ -313,10 +390,10 @@ mod tests {
     }
 
     #[test]
-    fn the_response_seen_is_none_where_a_delay_is_taken() {
+    fn the_response_seen_is_none_after_a_sure_fit() {
         let reach = [0.1, 0.2, 0.3];
-        assert_eq!(response_seen_lpm_per_ms(0.4e-3, reach), [0.0; 3]);
-        assert_eq!(response_seen_lpm_per_ms(0.0, reach), reach);
+        assert_eq!(response_seen_lpm_per_ms(true, reach), [0.0; 3]);
+        assert_eq!(response_seen_lpm_per_ms(false, reach), reach);
     }
 
     #[test]
