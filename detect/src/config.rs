@@ -55,17 +55,18 @@ schema::config_struct! {
         #[serde(default)]
         pub healthy_span_errors: [f64; 2],
         /// How uncertain the transducers' delay taken off the leak sizes is,
-        /// s: the identification's lag and the delay commissioning took
-        /// disagree by this much (0: not stated). The thresholds widen by it
-        /// times the leak sizes' response to a delay
-        /// ([`filter::Estimate::delay_response_lpm_per_ms`]). `commission` sets it.
+        /// s: how far it lies from the identification's lag, and at least a
+        /// fifth of it (0: not stated). The levels a rise must pass to raise
+        /// or name a leak widen by it times the leak sizes' response to a
+        /// delay ([`filter::Estimate::delay_response_lpm_per_ms`]).
+        /// `commission` sets it.
         #[serde(default)]
         pub delay_uncertainty_s: f64 => ["s"],
-        /// The response to a delay on both transducers each kind's size
-        /// (ext1, ext2, int) stayed within on the recording, L/min per ms
-        /// (99 % of its samples): its spreads saw the delay's uncertainty up
-        /// to it, so the thresholds widen by the uncertainty times what a
-        /// response has beyond it. `commission` sets it.
+        /// The response to a delay on both transducers (per kind: ext1, ext2,
+        /// int; L/min per ms) the healthy spreads saw the delay's uncertainty
+        /// at: only what a response has beyond it widens the levels. 0 after
+        /// a sure fit of the delay; otherwise the response 99 % of the
+        /// recording's samples stay within. `commission` sets it.
         #[serde(default)]
         pub delay_response_reach_lpm_per_ms: [f64; 3],
     }

@@ -42,7 +42,7 @@ impl LeakSizeDetector {
     /// healthy offsets, each as uncertain as the laminar factor. The offset
     /// watch's band follows it only while θ reads the oil inside its range.
     /// And the transducers' delay's: its uncertainty times the sizes' response
-    /// to it (the offset watch's thresholds do not take it).
+    /// to it beyond what the commissioning saw ([`Self::past_the_delay`]).
     fn widen_for_the_model(&mut self, e: &Estimate) {
         self.oil_band_lpm = crate::oil_band_lpm(
             e.laminar_factor_sigma,
