@@ -302,13 +302,19 @@ pub fn uncertainty_s(lag_correction_s: f64, pressure_lag_s: [f64; 2]) -> f64 {
         return 0.0;
     }
     let taken_s = lag_correction_s.max(0.0);
-    let lag_s = 0.5 * (pressure_lag_s[0] + pressure_lag_s[1]);
+    let lag_s = mean_lag_s(pressure_lag_s);
     let apart_s = if lag_s.is_finite() && lag_s > 0.0 {
         (taken_s - lag_s).abs()
     } else {
         0.0
     };
     apart_s.max(DELAY_UNCERTAIN_SHARE * taken_s)
+}
+
+/// The mean of p1's and p2's lag `pressure_lag_s` (s): the identification's
+/// one reading of the delay.
+fn mean_lag_s(pressure_lag_s: [f64; 2]) -> f64 {
+    0.5 * (pressure_lag_s[0] + pressure_lag_s[1])
 }
 
 /// The response to a delay (L/min per ms, per kind) the commissioning's
@@ -333,7 +339,7 @@ pub fn uncertainty_line(uncertainty_s: f64, pressure_lag_s: [f64; 2]) -> Option<
             "the transducers' delay is uncertain by {:.3} ms (the identification's lag {:.3} ms): \
              a leak's rise must pass its threshold and that times the leak sizes' response to a delay",
             uncertainty_s * 1e3,
-            0.5e3 * (pressure_lag_s[0] + pressure_lag_s[1])
+            mean_lag_s(pressure_lag_s) * 1e3
         )
     })
 }
