@@ -450,14 +450,16 @@ impl Estimator {
 
 /// The line that reports the oil's stiffness the leak filter estimated: θ (a
 /// multiple of the model's bulk modulus `model_bulk_modulus_pa`, Pa) ± `sigma`;
-/// below 0.9 it says what a soft rig usually means. `None` without an estimate.
+/// below 0.9 it says what a soft rig usually means, and that a pressure
+/// transducer reading off pulls θ down too. `None` without an estimate.
 pub fn oil_stiffness_line(theta: f64, sigma: f64, model_bulk_modulus_pa: f64) -> Option<String> {
     if !theta.is_finite() {
         return None;
     }
     let hint = if theta < 0.9 {
         ": softer than the model's, as with entrained air or long hoses (`leakwatch calibrate` on a \
-         healthy recording names it and puts it into the model)"
+         healthy recording names it and puts it into the model), or a pressure transducer that reads off \
+         (the filter takes part of its misreading into the stiffness)"
     } else {
         ""
     };

@@ -263,8 +263,15 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
         eprintln!(
             "warning: the oil was outside the operating range {lo:.0}-{hi:.0} °C ([model.oil_temperature]) \
              for {:.1} s from t = {:.3} s: the smallest detectable leaks commissioning stated hold inside \
-             it; beyond it the thresholds keep widening, so a leak is raised later or not at all",
-            s.leak_filter.oil_outside_range_s, s.leak_filter.first_oil_outside_range_s
+             it; beyond it the thresholds keep widening, so a leak is raised later or not at all{}",
+            s.leak_filter.oil_outside_range_s,
+            s.leak_filter.first_oil_outside_range_s,
+            if s.leak_filter.oil_temp_from_stiffness {
+                "; read from the oil's stiffness, the temperature moves with a leak or a pressure transducer \
+                 reading off as well (a thermometer's temp_c tells them apart)"
+            } else {
+                ""
+            }
         );
     }
     if let Some(line) = filter::oil_stiffness_line(

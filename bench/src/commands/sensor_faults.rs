@@ -134,6 +134,11 @@ pub struct SensorFaultsArgs {
     /// (inst_NNN/KIND.csv), to replay a run with `leakwatch replay`.
     #[arg(long)]
     pub keep: bool,
+    /// The recordings carry the oil's temperature (a `temp_c` column), the
+    /// commissioning's as well: the model follows a thermometer instead of
+    /// the temperature read from the oil's stiffness.
+    #[arg(long, conflicts_with = "data")]
+    pub temp_c: bool,
 }
 
 impl SensorFaultsArgs {
@@ -269,7 +274,7 @@ fn instances_request(args: &SensorFaultsArgs) -> InstancesRequest {
         hours_healthy: 0.0,
         run_seconds: args.seconds,
         commission_seconds: 120.0,
-        temp_c: false,
+        temp_c: args.temp_c,
         threads: None,
         commissioning_only: false,
     }
@@ -372,7 +377,7 @@ fn watch_run(
         start_c: rng.uniform_in(lo, hi),
         end_c: rng.uniform_in(lo, hi),
         time_constant_s: rng.uniform_in(instances::RUN_TEMP_TAU_S.0, instances::RUN_TEMP_TAU_S.1),
-        measured: false,
+        measured: args.temp_c,
     };
     let sim_cfg = match &w.instance {
         Some(inst) => instances::instance_config(inst, Some(oil)),
@@ -475,6 +480,11 @@ fn check(args: &SensorFaultsArgs) -> Result<(), String> {
     if args.instances == 0 {
         return Err("--instances 0: nothing to run".into());
     }
+    if args.temp_c && args.rig_name() == "thesis" {
+        return Err(
+            "--temp-c: the thesis rig's runs have no oil course to measure (--rig press or lift)".into(),
+        );
+    }
     if args.seconds.is_nan() || args.seconds < ONSET_S.1 + 30.0 {
         return Err(format!(
             "--seconds {}: expected at least {} s (onsets are drawn up to {} s)",
@@ -526,6 +536,7 @@ pub fn command(args: &SensorFaultsArgs, force: bool) -> Result<(), String> {
         "instances": args.instances,
         "seed": args.seed,
         "seconds": args.seconds,
+        "temp_c": args.temp_c,
     });
     report(args, force, set, &runs, t0)
 }

@@ -215,6 +215,7 @@ fn the_oil_stiffness_line_names_theta_the_modulus_and_a_soft_rig() {
         "{soft}"
     );
     assert!(soft.contains("leakwatch calibrate"), "{soft}");
+    assert!(soft.ends_with("or a pressure transducer that reads off (the filter takes part of its misreading into the stiffness)"), "{soft}");
 }
 
 #[test]

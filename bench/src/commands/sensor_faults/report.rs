@@ -272,11 +272,12 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
             args.seed
         ),
         None => format!(
-            "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s",
+            "# Sensor faults on the {} rig: {} instances, seed {}, runs of {} s{}",
             args.rig_name(),
             args.instances,
             args.seed,
-            args.seconds
+            args.seconds,
+            if args.temp_c { ", with temp_c" } else { "" }
         ),
     };
     let mut s = format!(

@@ -258,6 +258,7 @@ fn one_thesis_instance_is_commissioned_watched_and_scored() {
         out: dir.to_path_buf(),
         threads: Some(2),
         keep: true,
+        temp_c: false,
     };
     command(&args, false).expect("the bench runs");
     // --keep: the commissioned config parses and holds the learned state; every run's recording is there
@@ -334,6 +335,7 @@ fn a_folders_healthy_recordings_carry_the_drawn_faults() {
         out: out.to_path_buf(),
         threads: Some(2),
         keep: true,
+        temp_c: false,
     };
     command(&args, false).expect("the bench runs");
     let text = std::fs::read_to_string(out.join("sensor_faults.json")).expect("the report");
@@ -388,4 +390,27 @@ fn a_folders_healthy_recordings_carry_the_drawn_faults() {
         md.contains("| stuck | 2 |") && !md.contains("| leak 0.25 L/min |"),
         "{md}"
     );
+}
+
+/// The thesis rig's runs have no oil course: `--temp-c` is refused there,
+/// before anything is written.
+#[test]
+fn a_thermometer_is_refused_on_the_thesis_rig() {
+    let dir = scratch::ScratchDir::new("sensor-faults-temp");
+    let out = dir.join("out");
+    let args = SensorFaultsArgs {
+        rig: Some("thesis".into()),
+        data: None,
+        config: None,
+        instances: 1,
+        seed: 1,
+        seconds: 360.0,
+        out: out.clone(),
+        threads: Some(1),
+        keep: false,
+        temp_c: true,
+    };
+    let err = command(&args, false).expect_err("refused");
+    assert!(err.contains("--temp-c") && err.contains("thesis"), "{err}");
+    assert!(!out.exists(), "nothing written");
 }
