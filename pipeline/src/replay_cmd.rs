@@ -247,32 +247,8 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
             s.leak_filter.nis_outliers, cfg_nis_gate, s.leak_filter.first_nis_outlier_s, cfg_recovery_s
         );
     }
-    let (cold, warm) = s.leak_filter.oil_temp_range_c;
-    if cold.is_finite() {
-        if s.leak_filter.oil_temp_from_stiffness {
-            eprintln!(
-                "oil temperature: {cold:.1} to {warm:.1} °C, read from the oil's stiffness (no temp_c): \
-                 the null leakage and the viscous friction followed it"
-            );
-        } else {
-            eprintln!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it");
-        }
-    }
-    if s.leak_filter.oil_outside_range_s > 0.0 {
-        let (lo, hi) = s.leak_filter.oil_operating_range_c;
-        eprintln!(
-            "warning: the oil was outside the operating range {lo:.0}-{hi:.0} °C ([model.oil_temperature]) \
-             for {:.1} s from t = {:.3} s: the smallest detectable leaks commissioning stated hold inside \
-             it; beyond it the thresholds keep widening, so a leak is raised later or not at all{}",
-            s.leak_filter.oil_outside_range_s,
-            s.leak_filter.first_oil_outside_range_s,
-            if s.leak_filter.oil_temp_from_stiffness {
-                "; read from the oil's stiffness, the temperature moves with a leak or a pressure transducer \
-                 reading off as well (a thermometer's temp_c tells them apart)"
-            } else {
-                ""
-            }
-        );
+    for line in oil_lines(&s.leak_filter) {
+        eprintln!("{line}");
     }
     if let Some(line) = filter::oil_stiffness_line(
         s.leak_filter.bulk_scale,
@@ -341,6 +317,40 @@ pub fn run(args: ReplayArgs, force: bool) -> Result<(), String> {
 /// Writes the replay's report `path` from its summary `s` (its events those
 /// of events.json), the configuration of `settings` and the folder `out`;
 /// never over `input` or the config file.
+/// The lines a replay prints about the oil's temperature from the leak
+/// filter's summary `f`: the range the model followed and how it knew it, and
+/// a warning when the oil was outside its operating range.
+fn oil_lines(f: &replay::ResidualRms) -> Vec<String> {
+    let mut lines = Vec::new();
+    let (cold, warm) = f.oil_temp_range_c;
+    if cold.is_finite() {
+        lines.push(if f.oil_temp_from_stiffness {
+            format!(
+                "oil temperature: {cold:.1} to {warm:.1} °C, read from the oil's stiffness (no temp_c): \
+                 the null leakage and the viscous friction followed it"
+            )
+        } else {
+            format!("oil temperature: {cold:.1} to {warm:.1} °C (temp_c): the model followed it")
+        });
+    }
+    if f.oil_outside_range_s > 0.0 {
+        let (lo, hi) = f.oil_operating_range_c;
+        let read_from_theta = if f.oil_temp_from_stiffness {
+            "; read from the oil's stiffness, the temperature moves with a leak or a pressure transducer \
+             reading off as well (a thermometer's temp_c tells them apart)"
+        } else {
+            ""
+        };
+        lines.push(format!(
+            "warning: the oil was outside the operating range {lo:.0}-{hi:.0} °C ([model.oil_temperature]) \
+             for {:.1} s from t = {:.3} s: the smallest detectable leaks commissioning stated hold inside \
+             it; beyond it the thresholds keep widening, so a leak is raised later or not at all{read_from_theta}",
+            f.oil_outside_range_s, f.first_oil_outside_range_s
+        ));
+    }
+    lines
+}
+
 fn write_report(
     path: &Path,
     s: &replay::Summary,
@@ -357,4 +367,47 @@ fn write_report(
     let mut inputs = vec![input, Path::new(&s.input)];
     inputs.extend(settings.config.as_deref());
     crate::out::write(path, report.html()?.as_bytes(), settings.force, &inputs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The warning says that a reading from θ moves with a leak or a
+    /// misreading only where the temperature was read from θ.
+    #[test]
+    fn the_oil_lines_say_how_the_temperature_was_known() {
+        let mut f = replay::ResidualRms {
+            oil_temp_range_c: (31.0, 64.5),
+            oil_temp_from_stiffness: true,
+            oil_operating_range_c: (20.0, 60.0),
+            oil_outside_range_s: 12.5,
+            first_oil_outside_range_s: 100.25,
+            ..Default::default()
+        };
+        let read = oil_lines(&f);
+        assert_eq!(read.len(), 2, "{read:?}");
+        assert!(read[0].starts_with("oil temperature: 31.0 to 64.5 °C, read from the oil's stiffness"));
+        assert!(read[1].starts_with("warning: the oil was outside the operating range 20-60 °C"));
+        assert!(read[1].contains("for 12.5 s from t = 100.250 s"), "{}", read[1]);
+        assert!(
+            read[1].ends_with("(a thermometer's temp_c tells them apart)"),
+            "{}",
+            read[1]
+        );
+        f.oil_temp_from_stiffness = false;
+        let measured = oil_lines(&f);
+        assert_eq!(
+            measured[0],
+            "oil temperature: 31.0 to 64.5 °C (temp_c): the model followed it"
+        );
+        assert!(
+            measured[1].ends_with("so a leak is raised later or not at all"),
+            "{}",
+            measured[1]
+        );
+        f.oil_outside_range_s = 0.0;
+        f.oil_temp_range_c = (f64::NAN, f64::NAN);
+        assert!(oil_lines(&f).is_empty());
+    }
 }
