@@ -101,12 +101,14 @@ impl DelayFit {
     /// signatures with `factors`: [`detect::signatures_with`]) stayed within
     /// on [`RESPONSE_REACH_SHARE`] of the samples, L/min per ms (0 without samples).
     pub fn reach_lpm_per_ms(&self, factors: [f64; 2]) -> [f64; 3] {
+        // (each response in the signatures once, not once per kind)
+        let signatures: Vec<[f64; 3]> = self
+            .responses
+            .iter()
+            .map(|r| detect::signatures_with(*r, factors))
+            .collect();
         std::array::from_fn(|k| {
-            let mut v: Vec<f64> = self
-                .responses
-                .iter()
-                .map(|r| detect::signatures_with(*r, factors)[k].abs())
-                .collect();
+            let mut v: Vec<f64> = signatures.iter().map(|s| s[k].abs()).collect();
             if v.is_empty() {
                 return 0.0;
             }
@@ -393,6 +395,30 @@ mod tests {
             "{}",
             follows.line()
         );
+    }
+
+    #[test]
+    fn the_reach_is_the_response_99_percent_of_the_samples_stay_within() {
+        let factors = detect::NOMINAL_INTERNAL_FACTORS;
+        // 200 samples with responses 1..=200 on ext1 and half of it, reversed, on ext2
+        let fit = DelayFit {
+            responses: (1..=200)
+                .map(|i| [i as f64, -0.5 * (201 - i) as f64, 0.0])
+                .collect(),
+            ..DelayFit::default()
+        };
+        let want: [f64; 3] = std::array::from_fn(|k| {
+            let mut v: Vec<f64> = fit
+                .responses
+                .iter()
+                .map(|r| detect::signatures_with(*r, factors)[k].abs())
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v[198]
+        });
+        assert_eq!(fit.reach_lpm_per_ms(factors), want);
+        assert!(want[0] > 0.0 && want[1] > 0.0, "{want:?}");
+        assert_eq!(DelayFit::default().reach_lpm_per_ms(factors), [0.0; 3]);
     }
 
     #[test]
