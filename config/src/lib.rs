@@ -206,11 +206,13 @@ impl Config {
     }
 
     /// Sets the detector's rig facts from where they are written: the supply
-    /// pressure from `[model]`, the transducers' full scale and the position
-    /// reading's noise in counts from `[sensors]`.
+    /// pressure from `[model]`, the transducers' full scale, zero and span
+    /// tolerances and the position reading's noise in counts from `[sensors]`.
     pub fn derive_rig_facts(&mut self) {
         self.classifier.supply_pressure_pa = self.model.supply_pressure_pa;
         self.classifier.pressure_full_scale_pa = self.sensors.pressure_full_scale_pa;
+        self.classifier.pressure_zero_offset_max_pa = self.sensors.pressure_zero_offset_max_pa;
+        self.classifier.pressure_span_error_max = self.sensors.pressure_span_error_max;
         self.classifier.position_noise_counts =
             self.sensors.position_noise_m / self.sensors.encoder_resolution_m;
     }

@@ -456,6 +456,8 @@ fn the_schema_declares_every_setting_of_the_default_config_and_nothing_else() {
         [
             "supply_pressure_pa",
             "pressure_full_scale_pa",
+            "pressure_zero_offset_max_pa",
+            "pressure_span_error_max",
             "position_noise_counts"
         ]
     );

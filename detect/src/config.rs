@@ -357,6 +357,19 @@ schema::config_struct! {
         /// (not read from or written to a config file).
         #[serde(skip)]
         pub pressure_full_scale_pa: f64 = 20.7e6 => ["Pa", num!("a number", 100000.0, 1000000000.0)],
+        /// The pressure transducers' largest zero offset, Pa (the datasheet's; 0:
+        /// not given): a rig fact, not a setting, set by the config loader from
+        /// `[sensors] pressure_zero_offset_max_pa` (not read from or written to a
+        /// config file). A standing offset is named from what a sound transducer
+        /// may read off, where that is under the range's share.
+        #[serde(skip)]
+        pub pressure_zero_offset_max_pa: f64 = 0.0 => ["Pa", num!("an offset", 0.0, 10000000.0)],
+        /// The pressure transducers' largest span error, a fraction of the reading
+        /// (the datasheet's; 0: not given): a rig fact, set by the config loader
+        /// from `[sensors] pressure_span_error_max` (not read from or written to a
+        /// config file).
+        #[serde(skip)]
+        pub pressure_span_error_max: f64 = 0.0 => ["", num!("a fraction", 0.0, 0.5)],
         /// Noise of the position reading over one count of it (standard
         /// deviation, counts): a rig fact, not a setting, set by the config loader
         /// from `[sensors] position_noise_m / encoder_resolution_m` (not read from

@@ -171,7 +171,8 @@ pub(crate) fn leak_sizes_lpm(e: &Estimate) -> [f64; 3] {
 impl LeakSizeDetector {
     /// A detector with settings `cfg`.
     pub fn new(cfg: ClassifierConfig) -> Self {
-        let offsets = crate::offset::OffsetWatch::new(cfg.pressure_full_scale_pa);
+        let offsets = crate::offset::OffsetWatch::new(cfg.pressure_full_scale_pa)
+            .with_transducer_tolerance(cfg.pressure_zero_offset_max_pa, cfg.pressure_span_error_max);
         let x_unwatched = cfg.commissioning.as_ref().is_some_and(|c| !c.position_watched());
         let offsets = if x_unwatched {
             offsets.without_position()

@@ -177,6 +177,9 @@ pub struct OffsetWatch {
     directions: [[f64; 2]; 3],
     /// Least standing offset named, MPa ([`OFFSET_LEAST_SHARE_OF_RANGE`] of the range).
     least_offset_mpa: f64,
+    /// What a sound transducer may read off at the pressures read: a standing
+    /// offset's least named where it is smaller.
+    sound: floors::SoundTransducer,
     /// Whether an offset on x is fitted: not where commissioning found its
     /// response lost in the model's error ([`crate::Commissioning::position_watched`]).
     position_watched: bool,
@@ -250,6 +253,7 @@ impl Default for OffsetWatch {
             standing: None,
             directions: leak_directions(crate::NOMINAL_INTERNAL_FACTORS),
             least_offset_mpa: 0.0,
+            sound: floors::SoundTransducer::default(),
             position_watched: true,
             least_drift_mpa: 0.0,
             watched_s: 0.0,
@@ -273,6 +277,7 @@ impl OffsetWatch {
         *self = OffsetWatch {
             standing: self.standing,
             least_offset_mpa: self.least_offset_mpa,
+            sound: self.sound.forgotten(),
             least_drift_mpa: self.least_drift_mpa,
             position_watched: self.position_watched,
             healthy: std::mem::take(&mut self.healthy),
@@ -479,6 +484,7 @@ impl OffsetWatch {
         let keep = self.keep_for.1;
         self.watched_s += dt_s;
         self.window.add(keep, dt_s, rise, response);
+        self.sound.add(keep, dt_s, self.reading_mpa);
         self.healthy.learn(dt_s, rise, response);
         self.window_best = self
             .window

@@ -268,6 +268,11 @@ pub fn sensor_reach(responses: &ResponseTrace, c: &detect::Commissioning, cfg: &
         thr,
         cfg.classifier.pressure_full_scale_pa,
     )
+    .with_sound_transducer(
+        responses.mean_reading_pa(),
+        cfg.sensors.pressure_zero_offset_max_pa,
+        cfg.sensors.pressure_span_error_max,
+    )
 }
 
 /// Identifies the rig ([`identify_rig`]), the null bias (layouts with a bias state, 11 and 12), then

@@ -400,7 +400,16 @@ fn watch_run(
     let (mut sim, seconds) = simulate::build_with_sensor_faults(&sim_cfg, &req, &sensor_specs)?;
     let samples = sim.run(seconds);
     let misreading = sensor.map_or(Misreading::NONE, |f| {
-        Misreading::of(&f, &samples, w.rig.classifier.pressure_full_scale_pa).stated_by(f.channel, &w.reach)
+        Misreading::of(
+            &f,
+            &samples,
+            w.rig.classifier.pressure_full_scale_pa,
+            [
+                w.rig.classifier.pressure_zero_offset_max_pa,
+                w.rig.classifier.pressure_span_error_max,
+            ],
+        )
+        .stated_by(f.channel, &w.reach)
     });
     if args.keep {
         keep_recording(args, index, kind, &samples)?;

@@ -2,7 +2,10 @@
 //! standing offset from [`OFFSET_LEAST_SHARE_OF_RANGE`](super::OFFSET_LEAST_SHARE_OF_RANGE),
 //! one that drifts fast from [`DRIFT_LEAST_SHARE_OF_RANGE`](super::DRIFT_LEAST_SHARE_OF_RANGE),
 //! and an offset on p1 or p2 told from the other pressure channel
-//! ([`CHANNEL_FIT_RATIO`]).
+//! ([`CHANNEL_FIT_RATIO`]). Where the datasheet gives the transducers' zero
+//! and span tolerances, a standing offset is named from the smaller of its
+//! share of the range and what a sound transducer may read off at the
+//! pressures read ([`SoundTransducer`]).
 
 use super::fit::{channel_of, is_drift, is_position, is_span};
 use super::{
@@ -23,10 +26,82 @@ pub fn least_pressure_offset_pa(full_scale_pa: f64, drifting: bool) -> f64 {
     share * full_scale_pa
 }
 
+/// What a sound pressure transducer may read off at the pressures it has
+/// read: the datasheet's largest zero offset plus its largest span error
+/// times each channel's mean reading over the window ([`OFFSET_WINDOW_S`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct SoundTransducer {
+    /// The datasheet's largest zero offset, MPa (0, with no span error: not given).
+    zero_offset_max_mpa: f64,
+    /// The datasheet's largest span error, as a fraction of the reading (1).
+    span_error_max: f64,
+    /// Per channel (p1, p2): Σ weight·|reading| over the window, MPa·s.
+    reading_sums_mpa_s: [f64; 2],
+    /// Σ weight over the window, s.
+    weight_s: f64,
+}
+
+impl SoundTransducer {
+    /// Whether the datasheet gives a tolerance.
+    fn given(&self) -> bool {
+        self.zero_offset_max_mpa > 0.0 || self.span_error_max > 0.0
+    }
+
+    /// Takes the readings `reading_mpa` (MPa; 0 where not read) held for
+    /// `dt_s` (s), the window's older sums kept at `keep` (1).
+    pub(super) fn add(&mut self, keep: f64, dt_s: f64, reading_mpa: [f64; 2]) {
+        if !self.given() {
+            return;
+        }
+        for (sum, p) in self.reading_sums_mpa_s.iter_mut().zip(reading_mpa) {
+            *sum = keep * *sum + dt_s * p.abs();
+        }
+        self.weight_s = keep * self.weight_s + dt_s;
+    }
+
+    /// The largest misreading of a sound transducer on channel `c` (0 p1, 1
+    /// p2) at its mean reading over the window, MPa; infinite where the
+    /// datasheet gives no tolerance or nothing has been read.
+    pub(super) fn largest_misreading_mpa(&self, c: usize) -> f64 {
+        if !self.given() || self.weight_s <= 0.0 {
+            return f64::INFINITY;
+        }
+        let mean_mpa = self.reading_sums_mpa_s[c] / self.weight_s;
+        self.zero_offset_max_mpa + self.span_error_max * mean_mpa
+    }
+
+    /// The same tolerance, its readings forgotten (the filter restarted).
+    pub(super) fn forgotten(&self) -> Self {
+        SoundTransducer {
+            zero_offset_max_mpa: self.zero_offset_max_mpa,
+            span_error_max: self.span_error_max,
+            ..SoundTransducer::default()
+        }
+    }
+}
+
 impl OffsetWatch {
+    /// The watch for transducers whose datasheet gives their largest zero
+    /// offset `zero_offset_max_pa` (Pa) and span error `span_error_max` (a
+    /// fraction of the reading; both 0: not given). A standing offset on p1 or
+    /// p2 is then named from the smaller of its share of the range and what a
+    /// sound transducer may read off at the pressures read: a span error where
+    /// the pressure barely moves fits as an offset, and a small one is named
+    /// where the chamber's pressure is low.
+    pub fn with_transducer_tolerance(mut self, zero_offset_max_pa: f64, span_error_max: f64) -> Self {
+        let valid = |v: f64| if v.is_finite() && v > 0.0 { v } else { 0.0 };
+        self.sound = SoundTransducer {
+            zero_offset_max_mpa: valid(zero_offset_max_pa) * 1e-6,
+            span_error_max: valid(span_error_max),
+            ..SoundTransducer::default()
+        };
+        self
+    }
+
     /// The least misreading named of hypothesis `h`: [`SPAN_LEAST_ERROR`]
     /// for a span error, [`POSITION_LEAST_OFFSET_MM`] on x, the least
-    /// drifting or standing pressure offset (MPa) for an offset.
+    /// drifting or standing pressure offset (MPa) for an offset (a standing
+    /// one's at most what a sound transducer may read off, [`SoundTransducer`]).
     pub(super) fn least(&self, h: usize) -> f64 {
         if is_span(h) {
             SPAN_LEAST_ERROR
@@ -36,6 +111,7 @@ impl OffsetWatch {
             self.least_drift_mpa
         } else {
             self.least_offset_mpa
+                .min(self.sound.largest_misreading_mpa(channel_of(h)))
         }
     }
 
@@ -48,8 +124,9 @@ impl OffsetWatch {
     }
 
     /// The least misreading of hypothesis `h` that rivals a leak: on p1 or p2
-    /// the least standing offset named (MPa), a sound transducer reads
-    /// within it; a span error or an offset on x from
+    /// [`OFFSET_LEAST_SHARE_OF_RANGE`] of the range (MPa), a sound transducer
+    /// reads within it (not what it may read at the pressures read: a leak's
+    /// rises fit a small offset often); a span error or an offset on x from
     /// [`OFFSET_CLEAN_FLOOR_SHARE`] of the least named.
     pub(super) fn tolerance(&self, h: usize) -> f64 {
         if is_span(h) || is_position(h) {

@@ -38,8 +38,8 @@ pub const EPISODE_LEAK_RATIO: f64 = 2.0;
 impl OffsetWatch {
     /// Whether, at `t_s` (s), the window's best misreading fits the rises at
     /// least as well as the best leak does, with its part of them material,
-    /// is past a sound transducer's tolerance (on p1 or p2 the least standing
-    /// offset named, [`super::OFFSET_LEAST_SHARE_OF_RANGE`]), and could
+    /// is past a sound transducer's tolerance (on p1 or p2
+    /// [`super::OFFSET_LEAST_SHARE_OF_RANGE`] of the range), and could
     /// have grown at a transducer's drift since its part began to grow
     /// ([`super::MOST_DRIFT_MPA_PER_S`]): then the rises are no leak evidence.
     /// A leak is raised only where it fits better than every misreading a

@@ -26,6 +26,8 @@ pub struct ResponseTrace {
     responses: Vec<[[f64; 3]; 3]>,
     /// Estimates seen.
     seen: u64,
+    /// Σ of the p1 and p2 readings of the kept estimates, Pa.
+    reading_sums_pa: [f64; 2],
 }
 
 impl ResponseTrace {
@@ -43,10 +45,21 @@ impl ResponseTrace {
             e.offset_response_lpm_per_mpa[1],
             e.position_offset_response_lpm_per_mm,
         ];
-        if r.iter().flatten().all(|v| v.is_finite()) && e.t_s.is_finite() {
+        let reading = [e.measured[1], e.measured[2]];
+        if r.iter().flatten().chain(&reading).all(|v| v.is_finite()) && e.t_s.is_finite() {
             self.t_s.push(e.t_s);
             self.responses.push(r);
+            for (sum, p) in self.reading_sums_pa.iter_mut().zip(reading) {
+                *sum += p.abs();
+            }
         }
+    }
+
+    /// The mean p1 and p2 readings of the kept estimates, Pa (NaN: none kept).
+    pub fn mean_reading_pa(&self) -> [f64; 2] {
+        let n = self.t_s.len() as f64;
+        self.reading_sums_pa
+            .map(|sum| if n > 0.0 { sum / n } else { f64::NAN })
     }
 
     /// The median over the recording of each response's swing about its
@@ -121,6 +134,11 @@ pub struct SensorReach {
     /// The least standing offset on a pressure transducer named, kPa
     /// ([`OFFSET_LEAST_SHARE_OF_RANGE`] of its range).
     pub pressure_least_kpa: f64,
+    /// What a sound p1 and p2 may read off at the recording's mean reading,
+    /// kPa: the datasheet's zero offset plus its span error times the reading
+    /// (infinite where the datasheet gives neither). A standing offset is
+    /// named from it where it is under `pressure_least_kpa`.
+    pub pressure_sound_kpa: [f64; 2],
     /// The least drifting offset on a pressure transducer named, kPa
     /// ([`detect::offset::DRIFT_LEAST_SHARE_OF_RANGE`] of its range).
     pub pressure_least_drifting_kpa: f64,
@@ -143,6 +161,7 @@ impl SensorReach {
         SensorReach {
             pressure_shown_kpa: [shown(typical_rms[0]) * 1e3, shown(typical_rms[1]) * 1e3],
             pressure_least_kpa: least_pressure_offset_pa(full_scale_pa, false) * 1e-3,
+            pressure_sound_kpa: [f64::INFINITY; 2],
             pressure_least_drifting_kpa: least_pressure_offset_pa(full_scale_pa, true) * 1e-3,
             position_shown_mm: shown(typical_rms[2]),
             position_response_lpm_per_mm: typical_rms[2],
@@ -150,9 +169,39 @@ impl SensorReach {
         }
     }
 
+    /// The reach with what a sound transducer may read off at the recording's
+    /// mean readings `mean_reading_pa` (Pa), for a datasheet's largest zero
+    /// offset `zero_offset_max_pa` (Pa) and span error `span_error_max` (a
+    /// fraction of the reading; both 0: not given).
+    pub fn with_sound_transducer(
+        mut self,
+        mean_reading_pa: [f64; 2],
+        zero_offset_max_pa: f64,
+        span_error_max: f64,
+    ) -> SensorReach {
+        if zero_offset_max_pa > 0.0 || span_error_max > 0.0 {
+            self.pressure_sound_kpa = mean_reading_pa.map(|p| {
+                let bound = (zero_offset_max_pa + span_error_max * p.abs()) * 1e-3;
+                if bound.is_finite() {
+                    bound
+                } else {
+                    f64::INFINITY
+                }
+            });
+        }
+        self
+    }
+
+    /// The least standing offset named on p1 and on p2, kPa: the range's
+    /// share, or what a sound transducer may read off where that is smaller.
+    pub fn pressure_least_standing_kpa(&self) -> [f64; 2] {
+        self.pressure_sound_kpa.map(|s| s.min(self.pressure_least_kpa))
+    }
+
     /// The smallest offset named on p1 and on p2, kPa (infinite: none is).
     pub fn pressure_named_kpa(&self) -> [f64; 2] {
-        self.pressure_shown_kpa.map(|s| s.max(self.pressure_least_kpa))
+        let least = self.pressure_least_standing_kpa();
+        [0, 1].map(|c| self.pressure_shown_kpa[c].max(least[c]))
     }
 
     /// The smallest offset named on x, mm; `None` where x is not watched: an
@@ -194,13 +243,24 @@ impl SensorReach {
                 self.position_response_lpm_per_mm, self.position_shown_mm, POSITION_MOST_OFFSET_MM
             ),
         };
+        let range = format!(
+            "{:.0} kPa ({} % of the range)",
+            self.pressure_least_kpa,
+            OFFSET_LEAST_SHARE_OF_RANGE * 100.0
+        );
+        let least = if self.pressure_sound_kpa.iter().any(|s| s.is_finite()) {
+            format!(
+                "the smaller of {range} and what a sound transducer may read off at the recording's mean reading, {:.0}/{:.0} kPa",
+                self.pressure_sound_kpa[0], self.pressure_sound_kpa[1]
+            )
+        } else {
+            range
+        };
         format!(
-            "transducer offsets named on a duty cycle like this recording's: {}, {} (the least named is {:.0} kPa, \
-             {} % of the range, {:.0} kPa for a drifting one; the leak sizes show {:.0}/{:.0} kPa); {position}",
+            "transducer offsets named on a duty cycle like this recording's: {}, {} (the least named is {least}; \
+             {:.0} kPa for a drifting one; the leak sizes show {:.0}/{:.0} kPa); {position}",
             pressure(0),
             pressure(1),
-            self.pressure_least_kpa,
-            OFFSET_LEAST_SHARE_OF_RANGE * 100.0,
             self.pressure_least_drifting_kpa,
             self.pressure_shown_kpa[0],
             self.pressure_shown_kpa[1],
@@ -240,6 +300,17 @@ mod tests {
             "{line}"
         );
         assert!(weak.line().contains("p2 not watched") && weak.line().contains("x from 1.0 mm"));
+        // a datasheet's 50 kPa and 0.5 %: at 8 MPa a sound transducer reads
+        // up to 90 kPa off, at 20 MPa 150 kPa (past the range's share)
+        let sound = plant.with_sound_transducer([8e6, 20e6], 50e3, 0.005);
+        let named = sound.pressure_named_kpa();
+        assert!(
+            (named[0] - 90.0).abs() < 1e-9 && (named[1] - 180.0).abs() < 1e-9,
+            "{named:?}"
+        );
+        assert!((sound.pressure_least_standing_kpa()[1] - 125.0).abs() < 1e-9);
+        assert!(sound.line().contains("p1 from 90 kPa") && sound.line().contains("90/150 kPa"));
+        assert_eq!(plant.with_sound_transducer([8e6, 20e6], 0.0, 0.0), plant);
     }
 
     /// A response that swings steadily (RMS 0.3 over every window) about

@@ -117,7 +117,15 @@ impl RecordedRig {
             super::keep_recording(args, index, kind, &samples)?;
         }
         let misreading = sensor.map_or(Misreading::NONE, |f| {
-            let m = Misreading::of(&f, &samples, self.rig.classifier.pressure_full_scale_pa);
+            let m = Misreading::of(
+                &f,
+                &samples,
+                self.rig.classifier.pressure_full_scale_pa,
+                [
+                    self.rig.classifier.pressure_zero_offset_max_pa,
+                    self.rig.classifier.pressure_span_error_max,
+                ],
+            );
             match &self.reach {
                 Some(reach) => m.stated_by(f.channel, reach),
                 None => m,

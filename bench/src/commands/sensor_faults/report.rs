@@ -23,7 +23,9 @@ pub struct Misreading {
     /// The least misreading the detector names on that channel, in the same
     /// unit: [`detect::offset::OFFSET_LEAST_SHARE_OF_RANGE`] of the pressure
     /// transducer's range ([`detect::offset::DRIFT_LEAST_SHARE_OF_RANGE`]
-    /// for a drift), or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
+    /// for a drift; for a span error, what a sound transducer may read off at
+    /// the channel's mean reading where the datasheet gives it and that is
+    /// smaller), or [`detect::offset::POSITION_LEAST_OFFSET_MM`].
     pub least_named: f64,
     /// The least misreading commissioning said the detector names on that
     /// channel, on a duty cycle like its recording's, in the same unit
@@ -41,11 +43,13 @@ impl Misreading {
     };
 
     /// The misreading of `fault` over the run `samples` (the faulty readings), on
-    /// pressure transducers of range `full_scale_pa` (Pa).
-    pub fn of(fault: &SensorFault, samples: &[Sample], full_scale_pa: f64) -> Misreading {
+    /// pressure transducers of range `full_scale_pa` (Pa) whose datasheet gives
+    /// their largest zero offset `sound[0]` (Pa) and span error `sound[1]` (a
+    /// fraction of the reading; both 0: not given).
+    pub fn of(fault: &SensorFault, samples: &[Sample], full_scale_pa: f64, sound: [f64; 2]) -> Misreading {
         let end_s = samples.last().map_or(f64::NAN, |s| s.t_s);
         let pressure = fault.channel.is_pressure();
-        let (si_per_unit, least_named) = if pressure {
+        let (si_per_unit, mut least_named) = if pressure {
             let drifting = matches!(fault.kind, SensorFaultKind::Drift { .. });
             (
                 1e3,
@@ -73,6 +77,10 @@ impl Misreading {
                     .fold((0.0, 0.0), |(sum, n), p| (sum + p, n + 1.0));
                 // (NaN where no reading came after the ramp)
                 let mean = sum / n;
+                let pressure_mean = (mean / (1.0 + gain_error)).abs();
+                if sound.iter().any(|v| *v > 0.0) && pressure_mean.is_finite() {
+                    least_named = least_named.min((sound[0] + sound[1] * pressure_mean) * 1e-3);
+                }
                 (gain_error / (1.0 + gain_error) * mean).abs()
             }
             _ => f64::NAN,

@@ -153,10 +153,10 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
         rate_si_per_s: -3e3,
         max_abs_si,
     };
-    let m = Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6);
+    let m = Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6, [0.0; 2]);
     assert!((m.size - 240.0).abs() < 1e-6 && m.least_named == 250.0, "{m:?}");
     assert!(!m.past_least_named());
-    let m = Misreading::of(&fault(Channel::P2, drift(2e5)), &run, 25e6);
+    let m = Misreading::of(&fault(Channel::P2, drift(2e5)), &run, 25e6, [0.0; 2]);
     assert!((m.size - 200.0).abs() < 1e-6, "{m:?}");
     // a span error of +2 % grown over 30 s: p1 reads 5 MPa, so 2/102 of it;
     // named from 0.5 % of the range (75 kPa of 15 MPa)
@@ -164,20 +164,31 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
         gain_error: 0.02,
         ramp_s: 30.0,
     };
-    let m = Misreading::of(&fault(Channel::P1, span), &run, 25e6);
+    let m = Misreading::of(&fault(Channel::P1, span), &run, 25e6, [0.0; 2]);
     assert!((m.size - 5e3 * 0.02 / 1.02).abs() < 1e-9, "{m:?}");
-    let m = Misreading::of(&fault(Channel::P2, span), &run, 15e6);
+    let m = Misreading::of(&fault(Channel::P2, span), &run, 15e6, [0.0; 2]);
     assert!(
         (m.size - 1e4 * 0.02 / 1.02).abs() < 1e-9 && (m.least_named - 75.0).abs() < 1e-9,
         "{m:?}"
     );
     assert!(m.past_least_named());
+    // with a datasheet's 50 kPa and 0.5 %: p2 reads 10 MPa, 9.8 MPa with the
+    // span error taken off, where a sound transducer reads up to 99 kPa off:
+    // under 0.5 % of 25 MPa (125 kPa), over 0.5 % of 15 MPa
+    let sound = [50e3, 0.005];
+    let m = Misreading::of(&fault(Channel::P2, span), &run, 25e6, sound);
+    assert!(
+        (m.least_named - (50.0 + 0.005 * 1e4 / 1.02)).abs() < 1e-6,
+        "{m:?}"
+    );
+    let m = Misreading::of(&fault(Channel::P2, span), &run, 15e6, sound);
+    assert!((m.least_named - 75.0).abs() < 1e-9, "{m:?}");
     // x drifting at 1.5 mm/min for 80 s: 2 mm, past the least named 1 mm
     let x = SensorFaultKind::Drift {
         rate_si_per_s: 1.5e-3 / 60.0,
         max_abs_si: f64::INFINITY,
     };
-    let m = Misreading::of(&fault(Channel::X, x), &run, 25e6);
+    let m = Misreading::of(&fault(Channel::X, x), &run, 25e6, [0.0; 2]);
     assert!((m.size - 2.0).abs() < 1e-9 && m.least_named == 1.0, "{m:?}");
     // against what commissioning stated: on a plant rig whose x moves the
     // leak sizes by 0.0004 L/min per mm, x is not watched (past 22.5 mm);
@@ -190,10 +201,11 @@ fn a_faults_misreading_is_its_offset_at_the_end_or_its_span_at_the_mean_reading(
     let thesis = pipeline::commission::SensorReach::new([0.5, 0.05, 0.01], [0.05, 0.03, 0.04], 25e6);
     let stated = m.stated_by(Channel::X, &thesis);
     assert!(stated.stated == 1.0 && stated.past_stated() && !stated.said_not_watched());
-    let drift = Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6).stated_by(Channel::P2, &plant);
+    let drift =
+        Misreading::of(&fault(Channel::P2, drift(5e5)), &run, 25e6, [0.0; 2]).stated_by(Channel::P2, &plant);
     assert!(drift.stated == 250.0 && !drift.past_stated(), "{drift:?}");
     // a stuck transducer has no size to compare
-    let m = Misreading::of(&fault(Channel::P1, SensorFaultKind::Stuck), &run, 25e6);
+    let m = Misreading::of(&fault(Channel::P1, SensorFaultKind::Stuck), &run, 25e6, [0.0; 2]);
     assert!(m.size.is_nan() && !m.past_least_named());
 }
 

@@ -60,3 +60,37 @@ fn a_drift_is_named_from_the_drifting_floor_only_where_it_moves_fast() {
     assert_eq!(s.channel, 1, "{s:?}");
     assert!((125.0..200.0).contains(&named_s), "named at {named_s} s: {s:?}");
 }
+
+/// Feeds `seconds` of rises that a standing offset of `b_mpa` on p2 makes,
+/// p2 reading `p2_mpa` throughout, to a watch whose datasheet gives its
+/// transducers' largest zero offset (50 kPa) and span error (0.5 %) where
+/// `tolerance`; returns the first change.
+fn watch_p2_reading(b_mpa: f64, p2_mpa: f64, tolerance: bool) -> Option<OffsetChange> {
+    let watch = if tolerance {
+        OffsetWatch::new(25e6).with_transducer_tolerance(50e3, 0.005)
+    } else {
+        OffsetWatch::new(25e6)
+    };
+    let (_, first) = drive_watch(watch, 30.0, 0.0, false, (f64::INFINITY, 0.0), |t| {
+        let r = cycle_responses(t);
+        (r[1].map(|d| b_mpa * d), r, [10.0, p2_mpa])
+    });
+    first.map(|(_, change)| change)
+}
+
+#[test]
+fn a_standing_offset_is_named_past_what_a_sound_transducer_reads_at_its_pressure() {
+    // at 8 MPa a sound transducer reads at most 50 kPa + 0.5 % of 8 MPa = 90 kPa off
+    let Some(OffsetChange::Raised(s)) = watch_p2_reading(-0.1, 8.0, true) else {
+        panic!("100 kPa at 8 MPa not named");
+    };
+    assert_eq!(s.channel, 1, "{s:?}");
+    assert!((s.offset_mpa + 0.1).abs() < 0.01, "{s:?}");
+    // 80 kPa is within it; 100 kPa is within the range's share (125 kPa)
+    // where the datasheet gives no tolerance
+    assert_eq!(watch_p2_reading(-0.08, 8.0, true), None);
+    assert_eq!(watch_p2_reading(-0.1, 8.0, false), None);
+    // at 24 MPa the tolerance (170 kPa) passes the range's share: 100 kPa is
+    // not named (nor as a span error: 0.42 %)
+    assert_eq!(watch_p2_reading(-0.1, 24.0, true), None);
+}
