@@ -333,7 +333,9 @@ pub fn markdown(args: &SensorFaultsArgs, sums: &[KindSummary]) -> String {
           faulty channel says it began to read off, against the fault's onset. A leak alarm standing at the end was neither \
           cleared nor withdrawn when the transducer was named. A misreading past the least named: \
           a pressure offset (a drift's at the run's end, a span error's at the channel's mean reading) \
-          of at least 0.5 % of the transducer's range (1 % for a drift), an offset on x of at least 1 mm. \
+          of at least 0.5 % of the transducer's range (1 % for a drift; for a span error, what a sound \
+          transducer may read off at the channel's mean reading where the datasheet gives it and that is smaller), \
+          an offset on x of at least 1 mm. \
           What commissioning stated: the least offset it said it names on the channel, on a duty cycle like \
           its recording's (at least the least named); \
           not watched: it said an offset on x shows only past the largest fitted.\n";
