@@ -337,11 +337,19 @@ pub fn response_seen_lpm_per_ms(sure_fit: bool, reach_lpm_per_ms: [f64; 3]) -> [
 /// (s) with the identification's lags `pressure_lag_s` (s); `None` without one.
 pub fn uncertainty_line(uncertainty_s: f64, pressure_lag_s: [f64; 2]) -> Option<String> {
     (uncertainty_s > 0.0).then(|| {
+        let lag_s = mean_lag_s(pressure_lag_s);
+        let read = if lag_s > 0.0 {
+            format!("the identification's lag {:.3} ms", lag_s * 1e3)
+        } else {
+            format!(
+                "no lag identified: {:.0} % of the delay taken",
+                DELAY_UNCERTAIN_SHARE * 100.0
+            )
+        };
         format!(
-            "the transducers' delay is uncertain by {:.3} ms (the identification's lag {:.3} ms): \
+            "the transducers' delay is uncertain by {:.3} ms ({read}): \
              a leak's rise must pass its threshold and that times the leak sizes' response to a delay",
             uncertainty_s * 1e3,
-            mean_lag_s(pressure_lag_s) * 1e3
         )
     })
 }
@@ -447,6 +455,11 @@ mod tests {
             "{line}"
         );
         assert_eq!(uncertainty_line(0.0, [0.0; 2]), None);
+        let line = uncertainty_line(0.173e-3, [0.0; 2]).expect("a line");
+        assert!(
+            line.contains("uncertain by 0.173 ms (no lag identified: 20 % of the delay taken)"),
+            "{line}"
+        );
     }
 
     #[test]

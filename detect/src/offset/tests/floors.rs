@@ -61,7 +61,7 @@ fn a_drift_is_named_from_the_drifting_floor_only_where_it_moves_fast() {
     assert!((125.0..200.0).contains(&named_s), "named at {named_s} s: {s:?}");
 }
 
-/// Feeds `seconds` of rises that a standing offset of `b_mpa` on p2 makes,
+/// Feeds 30 s of rises that a standing offset of `b_mpa` on p2 makes,
 /// p2 reading `p2_mpa` throughout, to a watch whose datasheet gives its
 /// transducers' largest zero offset (50 kPa) and span error (0.5 %) where
 /// `tolerance`; returns the first change.
