@@ -38,10 +38,14 @@ schema::config_struct! {
         /// Span errors of the p1 and p2 transducers, relative (0.005: reads 0.5 % high).
         pub pressure_gain_error: [f64; 2] = [0.0; 2] => ["", num!("span errors", -0.5, 0.5)],
         /// The largest zero offset of each pressure transducer, Pa (the datasheet's;
-        /// 0: not given): `commission` holds the misreading it fits within it.
+        /// 0: not given): `commission` holds the misreading it fits within it, and
+        /// the detector names a standing offset past what a sound transducer may
+        /// read off (this plus the span error times the reading) where that is
+        /// under 0.5 % of the range.
         pub pressure_zero_offset_max_pa: f64 = 0.0 => ["Pa", num!("an offset", 0, 1e7)],
         /// The largest span error of each pressure transducer, as a fraction of
-        /// the reading (the datasheet's; 0.005: 0.5 %; 0: not given).
+        /// the reading (the datasheet's; 0.005: 0.5 %; 0: not given): with the zero
+        /// offset, what a sound transducer may read off.
         pub pressure_span_error_max: f64 = 0.0 => ["", num!("a fraction", 0, 0.5)],
         /// Time constant of both transducers' first-order lag, s (0: none).
         pub pressure_lag_s: f64 = 0.0 => ["s", num!("a time constant", 0, 1)],
