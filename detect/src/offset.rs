@@ -50,7 +50,7 @@ mod limits;
 mod rival;
 
 pub use event::offset_event;
-pub use floors::least_pressure_offset_pa;
+pub use floors::{least_pressure_offset_pa, sound_transducer_misreading};
 use healthy::HealthyPart;
 pub use healthy::{HealthyMisreading, HEALTHY_MISREADING_LEAST_SHARE};
 use hold::VetoHold;

@@ -26,6 +26,19 @@ pub fn least_pressure_offset_pa(full_scale_pa: f64, drifting: bool) -> f64 {
     share * full_scale_pa
 }
 
+/// What a sound pressure transducer may read off at `reading`: its
+/// datasheet's largest zero offset `zero_offset_max` plus its largest span
+/// error `span_error_max` (a fraction) times |reading|, in the unit of
+/// `zero_offset_max` and `reading`; infinite where the datasheet gives
+/// neither (both 0).
+pub fn sound_transducer_misreading(zero_offset_max: f64, span_error_max: f64, reading: f64) -> f64 {
+    if zero_offset_max > 0.0 || span_error_max > 0.0 {
+        zero_offset_max + span_error_max * reading.abs()
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// What a sound pressure transducer may read off at the pressures it has
 /// read: the datasheet's largest zero offset plus its largest span error
 /// times each channel's mean reading over the window ([`OFFSET_WINDOW_S`]).
@@ -44,7 +57,7 @@ pub(super) struct SoundTransducer {
 impl SoundTransducer {
     /// Whether the datasheet gives a tolerance.
     fn given(&self) -> bool {
-        self.zero_offset_max_mpa > 0.0 || self.span_error_max > 0.0
+        sound_transducer_misreading(self.zero_offset_max_mpa, self.span_error_max, 0.0).is_finite()
     }
 
     /// Takes the readings `reading_mpa` (MPa; 0 where not read) held for
@@ -63,11 +76,11 @@ impl SoundTransducer {
     /// p2) at its mean reading over the window, MPa; infinite where the
     /// datasheet gives no tolerance or nothing has been read.
     pub(super) fn largest_misreading_mpa(&self, c: usize) -> f64 {
-        if !self.given() || self.weight_s <= 0.0 {
+        if self.weight_s <= 0.0 {
             return f64::INFINITY;
         }
         let mean_mpa = self.reading_sums_mpa_s[c] / self.weight_s;
-        self.zero_offset_max_mpa + self.span_error_max * mean_mpa
+        sound_transducer_misreading(self.zero_offset_max_mpa, self.span_error_max, mean_mpa)
     }
 
     /// The same tolerance, its readings forgotten (the filter restarted).

@@ -146,7 +146,11 @@ impl MisreadingFit {
             return None;
         }
         let bound_pa: [f64; 2] = std::array::from_fn(|i| {
-            zero_offset_max_pa + span_error_max * (self.sum_p_pa[i] / self.n_p).abs()
+            detect::offset::sound_transducer_misreading(
+                zero_offset_max_pa,
+                span_error_max,
+                self.sum_p_pa[i] / self.n_p,
+            )
         });
         if bound_pa.iter().any(|b| !(b.is_finite() && *b > 0.0)) {
             return None;

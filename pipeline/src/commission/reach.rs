@@ -11,8 +11,8 @@
 //! steady part, so the part that counts is the response's swing about it.
 
 use detect::offset::{
-    least_pressure_offset_pa, OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE, OFFSET_WINDOW_S,
-    POSITION_LEAST_OFFSET_MM, POSITION_MOST_OFFSET_MM,
+    least_pressure_offset_pa, sound_transducer_misreading, OFFSET_LEAST_SHARE_OF_RANGE, OFFSET_NAMED_SHARE,
+    OFFSET_WINDOW_S, POSITION_LEAST_OFFSET_MM, POSITION_MOST_OFFSET_MM,
 };
 
 /// The leak filter's responses to a misreading over a recording, every
@@ -179,16 +179,15 @@ impl SensorReach {
         zero_offset_max_pa: f64,
         span_error_max: f64,
     ) -> SensorReach {
-        if zero_offset_max_pa > 0.0 || span_error_max > 0.0 {
-            self.pressure_sound_kpa = mean_reading_pa.map(|p| {
-                let bound = (zero_offset_max_pa + span_error_max * p.abs()) * 1e-3;
-                if bound.is_finite() {
-                    bound
-                } else {
-                    f64::INFINITY
-                }
-            });
-        }
+        self.pressure_sound_kpa = mean_reading_pa.map(|p| {
+            let bound = sound_transducer_misreading(zero_offset_max_pa, span_error_max, p) * 1e-3;
+            // (NaN where no reading was kept)
+            if bound.is_nan() {
+                f64::INFINITY
+            } else {
+                bound
+            }
+        });
         self
     }
 

@@ -78,8 +78,10 @@ impl Misreading {
                 // (NaN where no reading came after the ramp)
                 let mean = sum / n;
                 let pressure_mean = (mean / (1.0 + gain_error)).abs();
-                if sound.iter().any(|v| *v > 0.0) && pressure_mean.is_finite() {
-                    least_named = least_named.min((sound[0] + sound[1] * pressure_mean) * 1e-3);
+                if pressure_mean.is_finite() {
+                    let bound_pa =
+                        detect::offset::sound_transducer_misreading(sound[0], sound[1], pressure_mean);
+                    least_named = least_named.min(bound_pa * 1e-3);
                 }
                 (gain_error / (1.0 + gain_error) * mean).abs()
             }

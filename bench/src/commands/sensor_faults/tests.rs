@@ -254,6 +254,23 @@ fn the_drawn_faults_are_in_the_stated_ranges_and_their_specs_parse_back() {
     }
 }
 
+/// One instance of the built-in rig, seed 1, runs of 360 s on one thread,
+/// into `out`: nothing kept, no thermometer.
+fn one_thesis_instance(out: std::path::PathBuf) -> SensorFaultsArgs {
+    SensorFaultsArgs {
+        rig: Some("thesis".into()),
+        data: None,
+        config: None,
+        instances: 1,
+        seed: 1,
+        seconds: 360.0,
+        out,
+        threads: Some(1),
+        keep: false,
+        temp_c: false,
+    }
+}
+
 /// The whole command on one instance of the built-in rig with short runs: the
 /// report is written, every run kind is there, a stuck transducer is named on
 /// its channel, the leak is named as itself and the healthy twin stays quiet.
@@ -261,16 +278,11 @@ fn the_drawn_faults_are_in_the_stated_ranges_and_their_specs_parse_back() {
 fn one_thesis_instance_is_commissioned_watched_and_scored() {
     let dir = scratch::ScratchDir::new("sensor-faults");
     let args = SensorFaultsArgs {
-        rig: Some("thesis".into()),
-        data: None,
-        config: None,
-        instances: 1,
         seed: 3,
         seconds: 75.0,
-        out: dir.to_path_buf(),
         threads: Some(2),
         keep: true,
-        temp_c: false,
+        ..one_thesis_instance(dir.to_path_buf())
     };
     command(&args, false).expect("the bench runs");
     // --keep: the commissioned config parses and holds the learned state; every run's recording is there
@@ -411,16 +423,8 @@ fn a_thermometer_is_refused_on_the_thesis_rig() {
     let dir = scratch::ScratchDir::new("sensor-faults-temp");
     let out = dir.join("out");
     let args = SensorFaultsArgs {
-        rig: Some("thesis".into()),
-        data: None,
-        config: None,
-        instances: 1,
-        seed: 1,
-        seconds: 360.0,
-        out: out.clone(),
-        threads: Some(1),
-        keep: false,
         temp_c: true,
+        ..one_thesis_instance(out.clone())
     };
     let err = command(&args, false).expect_err("refused");
     assert!(err.contains("--temp-c") && err.contains("thesis"), "{err}");

@@ -94,3 +94,10 @@ fn a_standing_offset_is_named_past_what_a_sound_transducer_reads_at_its_pressure
     // not named (nor as a span error: 0.42 %)
     assert_eq!(watch_p2_reading(-0.1, 24.0, true), None);
 }
+
+#[test]
+fn a_sound_transducer_reads_off_by_its_zero_and_its_span_times_the_reading() {
+    assert_eq!(sound_transducer_misreading(50e3, 0.005, -8e6), 90e3);
+    assert!((sound_transducer_misreading(0.05, 0.005, 20.0) - 0.15).abs() < 1e-15);
+    assert_eq!(sound_transducer_misreading(0.0, 0.0, 8e6), f64::INFINITY);
+}
