@@ -338,8 +338,9 @@ schema::config_struct! {
         pub kind_confirm_s: f64 = 1.5 => ["s", num!("a number", 0.0, 1000000.0)],
         /// A rise past this many times its threshold for `confirm_s` raises a leak with
         /// its kind pending even while no kind explains the mismatch clearly yet
-        /// (a leak that first shows on both chambers); 0 turns it off.
-        pub pending_factor: f64 = 2.0 => ["(times the threshold)", num!("a number", 0.0, 1000000.0)],
+        /// (a leak that first shows on both chambers, as one opening over seconds
+        /// on a single-rod lift does); 0 turns it off.
+        pub pending_factor: f64 = 1.5 => ["(times the threshold)", num!("a number", 0.0, 1000000.0)],
         /// Shortest time between two `updated` events of one leak, s.
         pub update_interval_s: f64 = 1.0 => ["s", num!("a number", 0.0, 1000000.0)],
         /// Thesis detector: threshold as a multiple of the largest healthy MAE.

@@ -1,7 +1,8 @@
 //! The leak-size detector on a synthetic estimate stream: a leak raised with
 //! its kind pending is not named while a transducer is named reading off, and
 //! is withdrawn when the transducer began reading off before it; a
-//! commissioning's naming thresholds.
+//! commissioning's naming thresholds; a leak on both chambers raised with its
+//! kind pending past `pending_factor` times its thresholds.
 
 use super::*;
 use crate::offset::StandingOffset;
@@ -417,4 +418,26 @@ fn the_thresholds_widen_by_the_delays_uncertainty_times_the_response() {
     let leak = delay_imprint_run(0.25e-3, [0.0, 0.6, 0.0]);
     let raised = leak.first().expect("the leak raised");
     assert!((15.0..16.0).contains(&raised.t_detect_s), "{leak:#?}");
+}
+
+#[test]
+fn a_leak_on_both_chambers_is_raised_pending_past_one_and_a_half_thresholds() {
+    // both chambers lose alike from 10 s: no kind explains it clearly, so it
+    // is raised only past `pending_factor` (1.5) times the thresholds on all rises
+    let (det, _) = commissioned_detector_run(0.03, [0.0; 3]);
+    let thresholds = det.thresholds_lpm();
+    let both_at = |share: f64| {
+        commissioned_run(0.03, [share * thresholds[0], share * thresholds[1], 0.0])
+            .into_iter()
+            .filter(|e| e.phase == Phase::Raised)
+            .map(|e| (e.kind, e.t_detect_s))
+            .collect::<Vec<_>>()
+    };
+    let raised = both_at(1.75);
+    assert!(
+        matches!(raised.first(), Some((EventKind::Leak, t)) if (10.0..10.5).contains(t)),
+        "{raised:?} (thresholds {thresholds:?} L/min)"
+    );
+    let below = both_at(1.3);
+    assert!(below.is_empty(), "{below:?} (thresholds {thresholds:?} L/min)");
 }
