@@ -124,6 +124,10 @@ pub(crate) struct Fit {
     /// Σw·τ (s²), Σw·τ² (s³) and Σw·τ·rise (L/min·s²) over the samples'
     /// ages τ ≤ 0: a growing leak's fit.
     pub(crate) age: (f64, f64, [f64; 2]),
+    /// The energy each hypothesis' misreading explains ([`ALL_HYPOTHESES`]),
+    /// (L/min)²·s, as of the last sample added: every reader of a sample
+    /// asks for it, so it is fitted once.
+    explained: [f64; ALL_HYPOTHESES],
 }
 
 /// The misreading that explains most ([`Fit::best_offset`]) and what the
@@ -168,6 +172,7 @@ impl Fit {
         for k in 0..2 {
             self.rise[k] = keep * self.rise[k] + dt_s * rise[k];
         }
+        self.explained = std::array::from_fn(|h| self.fit_explained(h));
     }
 
     /// The coefficient of hypothesis `c` that fits best: an offset in MPa (in
@@ -185,6 +190,11 @@ impl Fit {
 
     /// The energy the misreading of hypothesis `c` explains, (L/min)²·s.
     pub(crate) fn explained_by_offset(&self, c: usize) -> f64 {
+        self.explained[c]
+    }
+
+    /// [`Self::explained_by_offset`] fitted from the sums.
+    fn fit_explained(&self, c: usize) -> f64 {
         if is_drift(c) {
             self.drift_fit(c - FIRST_DRIFT_HYPOTHESIS).1
         } else {
