@@ -123,6 +123,9 @@ pub struct DataSummary {
     /// Size class (nominal L/min) and the fraction detected, right kind at the first alarm,
     /// median delay s, median and p95 of |size error| relative to the real flow (last size).
     pub by_size: Vec<SizeRow>,
+    /// The same figures over every leak of [`FROM_SIZE_LPM`] and more, where
+    /// the runs have more than one such size (its `size_nominal_lpm` the least).
+    pub from_quarter_lpm: Option<SizeRow>,
     /// False alarms in total.
     pub false_alarms: u32,
     /// Sensor events in the clean time, in total (no run has a sensor fault).
@@ -391,51 +394,17 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
                 .iter()
                 .filter(|r| r.truth.kind != "none" && r.truth.size_nominal_lpm == size)
                 .collect();
-            let n = these.len();
-            let mut delays: Vec<f64> = these.iter().filter(|o| o.detected).map(|o| o.delay_s).collect();
-            let mut named: Vec<f64> = these
-                .iter()
-                .map(|o| o.delay_named_s)
-                .filter(|d| d.is_finite())
-                .collect();
-            let mut after: Vec<f64> = these
-                .iter()
-                .filter(|o| o.detected)
-                .map(|o| o.delay_after_detectable_s)
-                .filter(|d| d.is_finite())
-                .collect();
-            let err = |o: &&&DataOutcome, s: f64, at: usize| {
-                let truth = Some(o.true_flow_lpm[at])
-                    .filter(|q| *q > 0.0)
-                    .unwrap_or(o.truth.observed_flow_lpm);
-                (s - truth).abs() / truth
-            };
-            let right = |o: &&&DataOutcome| o.kind_first == o.truth.kind;
-            let mut e_first: Vec<f64> = these
-                .iter()
-                .filter(right)
-                .map(|o| err(&o, o.size_first_lpm, 0))
-                .collect();
-            let mut e_last: Vec<f64> = these
-                .iter()
-                .filter(|o| o.kind_final == o.truth.kind)
-                .map(|o| err(&o, o.size_final_lpm, 1))
-                .collect();
-            SizeRow {
-                size_nominal_lpm: size,
-                runs: n,
-                p_detect: these.iter().filter(|o| o.detected).count() as f64 / n as f64,
-                p_kind_first: these.iter().filter(right).count() as f64 / n as f64,
-                delay_median_s: quantile(&mut delays, 0.5),
-                delay_named_median_s: quantile(&mut named, 0.5),
-                delay_p95_s: quantile(&mut delays, 0.95),
-                delay_after_detectable_median_s: quantile(&mut after, 0.5),
-                size_error_first_median: quantile(&mut e_first, 0.5),
-                size_error_median: quantile(&mut e_last, 0.5),
-                size_error_p95: quantile(&mut e_last, 0.95),
-            }
+            size_row(size, &these)
         })
         .collect();
+    // (the class the plant rigs' acceptance reads: every leak of 0.25 L/min and
+    // more, where there is more than one such size)
+    let from_quarter: Vec<&DataOutcome> = runs
+        .iter()
+        .filter(|r| r.truth.kind != "none" && r.truth.size_nominal_lpm >= FROM_SIZE_LPM)
+        .collect();
+    let from_quarter_lpm = (sizes.iter().filter(|s| **s >= FROM_SIZE_LPM).count() > 1)
+        .then(|| size_row(FROM_SIZE_LPM, &from_quarter));
     let false_alarms = runs.iter().map(|r| r.false_alarms).sum();
     let sensor_events = runs.iter().map(|r| r.sensor_events).sum();
     let clean_hours = runs.iter().map(|r| r.clean_s).sum::<f64>() / 3600.0;
@@ -445,6 +414,7 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
     }
     DataSummary {
         by_size,
+        from_quarter_lpm,
         false_alarms,
         sensor_events,
         clean_hours,
@@ -452,6 +422,57 @@ pub fn summarise_data(runs: Vec<DataOutcome>, wall_s: f64) -> DataSummary {
         blind_by_cause,
         runs,
         wall_s,
+    }
+}
+
+/// The least nominal size of the summary's row over every larger leak
+/// ([`DataSummary::from_quarter_lpm`]), L/min.
+pub const FROM_SIZE_LPM: f64 = 0.25;
+
+/// The figures of the runs `these`, under the nominal size `size` (L/min).
+fn size_row(size: f64, these: &[&DataOutcome]) -> SizeRow {
+    let n = these.len();
+    let mut delays: Vec<f64> = these.iter().filter(|o| o.detected).map(|o| o.delay_s).collect();
+    let mut named: Vec<f64> = these
+        .iter()
+        .map(|o| o.delay_named_s)
+        .filter(|d| d.is_finite())
+        .collect();
+    let mut after: Vec<f64> = these
+        .iter()
+        .filter(|o| o.detected)
+        .map(|o| o.delay_after_detectable_s)
+        .filter(|d| d.is_finite())
+        .collect();
+    let err = |o: &&&DataOutcome, s: f64, at: usize| {
+        let truth = Some(o.true_flow_lpm[at])
+            .filter(|q| *q > 0.0)
+            .unwrap_or(o.truth.observed_flow_lpm);
+        (s - truth).abs() / truth
+    };
+    let right = |o: &&&DataOutcome| o.kind_first == o.truth.kind;
+    let mut e_first: Vec<f64> = these
+        .iter()
+        .filter(right)
+        .map(|o| err(&o, o.size_first_lpm, 0))
+        .collect();
+    let mut e_last: Vec<f64> = these
+        .iter()
+        .filter(|o| o.kind_final == o.truth.kind)
+        .map(|o| err(&o, o.size_final_lpm, 1))
+        .collect();
+    SizeRow {
+        size_nominal_lpm: size,
+        runs: n,
+        p_detect: these.iter().filter(|o| o.detected).count() as f64 / n as f64,
+        p_kind_first: these.iter().filter(right).count() as f64 / n as f64,
+        delay_median_s: quantile(&mut delays, 0.5),
+        delay_named_median_s: quantile(&mut named, 0.5),
+        delay_p95_s: quantile(&mut delays, 0.95),
+        delay_after_detectable_median_s: quantile(&mut after, 0.5),
+        size_error_first_median: quantile(&mut e_first, 0.5),
+        size_error_median: quantile(&mut e_last, 0.5),
+        size_error_p95: quantile(&mut e_last, 0.95),
     }
 }
 
@@ -511,10 +532,15 @@ pub fn data_markdown(r: &DataSummary) -> String {
     s.push_str(
         "\n| nominal L/min | runs | detected | right kind first named | delay median s | delay p95 s | delay after detectable, median s | kind named after, median s | size error at first alarm (median) | size error median | size error p95 |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    for c in &r.by_size {
+    let rows = r.by_size.iter().map(|c| (c.size_nominal_lpm.to_string(), c));
+    let from = r
+        .from_quarter_lpm
+        .iter()
+        .map(|c| (format!("≥ {}", c.size_nominal_lpm), c));
+    for (size, c) in rows.chain(from) {
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            c.size_nominal_lpm,
+            size,
             c.runs,
             pct(c.p_detect),
             pct(c.p_kind_first),

@@ -119,4 +119,60 @@ fn a_run_is_scored_at_its_first_alarm_and_its_first_named_kind() {
     let s = summarise_data(vec![o], 0.0);
     let e = s.by_size[0].size_error_median;
     assert!((e - 0.6).abs() < 1e-5, "{e}");
+    assert!(
+        s.from_quarter_lpm.is_none(),
+        "one size: no row over the larger ones"
+    );
+}
+
+#[test]
+fn leaks_of_a_quarter_litre_and_more_are_summed_in_one_row() {
+    // 0.1 L/min found at 3 s; 0.25 at 1 s; 0.5 at 0.2 s and 0.4 s; one 0.5
+    // run never found: the row over 0.25 L/min and more holds the last four
+    let run = |size: f64, alarm_s: Option<f64>| {
+        let events = alarm_s
+            .map(|t| raised(EventKind::Ext1, 1, 20.0 + t, size))
+            .into_iter()
+            .collect();
+        let truth = Truth {
+            size_nominal_lpm: size,
+            observed_flow_lpm: size,
+            ramp_s: 0.0,
+            ..truth("ext1")
+        };
+        let file = FileRun {
+            events,
+            sensor_raised_s: vec![],
+            samples: 60_000,
+            t_end_s: 60.0,
+            thresholds_lpm: [0.04; 3],
+            thresholds_sigma: [5.0; 3],
+            blind_s: 0.0,
+            blind_by_cause: detect::BlindSeconds::default(),
+            t_detectable_s: [20.0, 20.0],
+            floors_lpm: [0.04, 0.06],
+            size_window_s: 2.0,
+            true_flows: None,
+        };
+        score_run(truth, &file)
+    };
+    let s = summarise_data(
+        vec![
+            run(0.1, Some(3.0)),
+            run(0.25, Some(1.0)),
+            run(0.5, Some(0.2)),
+            run(0.5, Some(0.4)),
+            run(0.5, None),
+        ],
+        0.0,
+    );
+    let row = s
+        .from_quarter_lpm
+        .as_ref()
+        .expect("two sizes of 0.25 L/min and more");
+    assert_eq!((row.size_nominal_lpm, row.runs), (0.25, 4));
+    assert!((row.p_detect - 0.75).abs() < 1e-12, "{}", row.p_detect);
+    // the median of 0.2, 0.4 and 1.0 s
+    assert!((row.delay_median_s - 0.4).abs() < 1e-9, "{}", row.delay_median_s);
+    assert!(data_markdown(&s).contains("| ≥ 0.25 | 4 | 75 % | 75 % | 0.40 |"));
 }
