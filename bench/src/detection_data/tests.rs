@@ -33,29 +33,39 @@ fn truth(kind: &str) -> Truth {
     }
 }
 
-#[test]
-fn a_run_is_scored_at_its_first_alarm_and_its_first_named_kind() {
-    // A false alarm at 10 s; the leak raised with its kind pending at 21.0 s,
-    // named ext1 at 22.5 s; the real flow reached 0.04 L/min at 20.64 s and
-    // 0.06 L/min at 20.96 s.
-    let run = FileRun {
-        events: vec![
-            raised(EventKind::Ext2, 1, 10.0, 0.1),
-            raised(EventKind::Leak, 2, 21.0, 0.12),
-            raised(EventKind::Ext1, 2, 22.5, 0.2),
-        ],
-        // one sensor event before the onset, one after
-        sensor_raised_s: vec![5.0, 30.0],
+/// A 60 s run at 1 kHz with the events `events`, no sensor event, thresholds
+/// of 0.04 L/min, the flow past both floors at the onset (20 s).
+fn file_run(events: Vec<LeakEvent>) -> FileRun {
+    FileRun {
+        events,
+        sensor_raised_s: vec![],
         samples: 60_000,
         t_end_s: 60.0,
         thresholds_lpm: [0.04; 3],
         thresholds_sigma: [5.0; 3],
         blind_s: 0.0,
         blind_by_cause: detect::BlindSeconds::default(),
-        t_detectable_s: [20.64, 20.96],
+        t_detectable_s: [20.0, 20.0],
         floors_lpm: [0.04, 0.06],
         size_window_s: 2.0,
         true_flows: None,
+    }
+}
+
+#[test]
+fn a_run_is_scored_at_its_first_alarm_and_its_first_named_kind() {
+    // A false alarm at 10 s; the leak raised with its kind pending at 21.0 s,
+    // named ext1 at 22.5 s; the real flow reached 0.04 L/min at 20.64 s and
+    // 0.06 L/min at 20.96 s.
+    let run = FileRun {
+        // one sensor event before the onset, one after
+        sensor_raised_s: vec![5.0, 30.0],
+        t_detectable_s: [20.64, 20.96],
+        ..file_run(vec![
+            raised(EventKind::Ext2, 1, 10.0, 0.1),
+            raised(EventKind::Leak, 2, 21.0, 0.12),
+            raised(EventKind::Ext1, 2, 22.5, 0.2),
+        ])
     };
     let o = score_run(truth("ext1"), &run);
     assert!(o.detected);
@@ -140,21 +150,7 @@ fn leaks_of_a_quarter_litre_and_more_are_summed_in_one_row() {
             ramp_s: 0.0,
             ..truth("ext1")
         };
-        let file = FileRun {
-            events,
-            sensor_raised_s: vec![],
-            samples: 60_000,
-            t_end_s: 60.0,
-            thresholds_lpm: [0.04; 3],
-            thresholds_sigma: [5.0; 3],
-            blind_s: 0.0,
-            blind_by_cause: detect::BlindSeconds::default(),
-            t_detectable_s: [20.0, 20.0],
-            floors_lpm: [0.04, 0.06],
-            size_window_s: 2.0,
-            true_flows: None,
-        };
-        score_run(truth, &file)
+        score_run(truth, &file_run(events))
     };
     let s = summarise_data(
         vec![
