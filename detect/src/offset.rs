@@ -133,6 +133,11 @@ pub struct StandingOffset {
     /// else when the channel's part of the rises was last low; no earlier
     /// than the first sample the watch read.
     pub since_s: f64,
+    /// How many times as much of the rises the best misreading of the other
+    /// pressure channel leaves unexplained, when it was named (1): near 1,
+    /// the two channels' misreadings fit alike (on a double-rod press, both
+    /// reading high). NaN on x.
+    pub other_channel_left_ratio: f64,
     /// Event id of its `sensor-offset` event.
     pub event_id: u64,
 }
@@ -562,6 +567,11 @@ impl OffsetWatch {
                             self.window.drift_rate_mpa_per_s(h)
                         },
                         since_s: self.since_s(h, t_s),
+                        other_channel_left_ratio: if is_position(h) {
+                            f64::NAN
+                        } else {
+                            self.window.other_pressure_channel_left(c) / left
+                        },
                         event_id: *next_id,
                     };
                     *next_id += 1;

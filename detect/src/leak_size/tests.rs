@@ -82,6 +82,7 @@ fn pending_run(ext1_from_20_s: bool, offset: P2Offset) -> Vec<LeakEvent> {
                 drift_mpa_per_s: 0.0,
                 span_error: f64::NAN,
                 since_s,
+                other_channel_left_ratio: 4.0,
                 event_id: 99,
             };
             match offset {

@@ -51,10 +51,21 @@ pub fn offset_event(change: OffsetChange, t_s: f64, detector: &str) -> LeakEvent
             } else {
                 String::new()
             };
+            // (the pressure transducer the fit ranks second: where the named one
+            // reads true, the one to check)
+            let other = match s.channel {
+                0 | 1 if s.other_channel_left_ratio.is_finite() => format!(
+                    ". A misreading of {o} leaves {r:.1} times as much of the rises unexplained: if {name} \
+                     reads true, check {o}",
+                    o = OFFSET_CHANNEL_NAMES[1 - s.channel],
+                    r = s.other_channel_left_ratio
+                ),
+                _ => String::new(),
+            };
             format!(
                 "{name} reads {reading}, fitted over {OFFSET_WINDOW_S:.0} s){since}: the leak sizes move with \
                  the valve's flow as a misreading of {name} makes them, not as a leak does; no leak decision \
-                 while it stands"
+                 while it stands{other}"
             )
         }
     };

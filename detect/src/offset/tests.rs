@@ -490,6 +490,13 @@ fn a_named_offset_says_since_when_it_has_read_off() {
     assert!((s.since_s - 12.0).abs() < 3.0, "{s:?}");
     let detail = offset_event(OffsetChange::Raised(s), 60.0, "leak-size").detail;
     assert!(detail.contains(&format!("since {:.1} s", s.since_s)), "{detail}");
+    // the other pressure channel, ranked second: its fit leaves more
+    assert!(s.other_channel_left_ratio > 2.0, "{s:?}");
+    let second = format!(
+        "A misreading of p1 leaves {:.1} times as much of the rises unexplained: if p2 reads true, check p1",
+        s.other_channel_left_ratio
+    );
+    assert!(detail.contains(&second), "{detail}");
     // an offset standing from the first sample: since the first sample read
     let Some(OffsetChange::Raised(s)) = offset_on_p2_beside_a_leak(60.0, false, |_| -0.5) else {
         panic!("the standing offset not named");
