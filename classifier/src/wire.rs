@@ -240,4 +240,26 @@ mod tests {
         );
         assert!(kept.len() > frames::DETAIL_LEN - 64, "{}", kept.len());
     }
+
+    /// The widest `sensor-offset` detail (a drifting offset of 10 MPa at the
+    /// fastest drift fitted, since a day of running, the other channel's fit
+    /// 999.9 times worse) crosses the wire whole.
+    #[test]
+    fn the_widest_offset_detail_crosses_the_wire_whole() {
+        let s = detect::offset::StandingOffset {
+            channel: 1,
+            offset_mpa: -9.999,
+            offset_mm: f64::NAN,
+            span_error: f64::NAN,
+            drift_mpa_per_s: -detect::offset::MOST_DRIFT_MPA_PER_S,
+            since_s: 86_399.9,
+            other_channel_left_ratio: 999.9,
+            event_id: 1,
+        };
+        let ev = detect::offset::offset_event(detect::offset::OffsetChange::Raised(s), 1.0, "leak-size");
+        assert!(ev.detail.contains("if p2 reads true, check p1"), "{}", ev.detail);
+        assert_eq!(ev.detail.len(), 326, "{}", ev.detail);
+        let back = LeakEvent::from_frame(&ev.to_frame(0, 0, 0)).expect("known codes");
+        assert_eq!(back.detail, ev.detail);
+    }
 }

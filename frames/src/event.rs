@@ -10,9 +10,9 @@ pub const DETECTOR_NAME_LEN: usize = 16;
 /// Length of [`LeakEventFrame::channel`], bytes.
 pub const CHANNEL_NAME_LEN: usize = 8;
 /// Length of [`LeakEventFrame::detail`], bytes (UTF-8): room for the longest
-/// detail the classifier writes (280 bytes: a slowly growing leak, every number
-/// at its widest; a test in classifier/src/wire.rs); a longer text is cut at a
-/// word boundary and ends in `…` (see [`detail_bytes`]).
+/// details the classifier writes (a slowly growing leak's 280 bytes, a drifting
+/// offset's 326, every number at its widest; tests in classifier/src/wire.rs);
+/// a longer text is cut at a word boundary and ends in `…` (see [`detail_bytes`]).
 pub const DETAIL_LEN: usize = 384;
 
 /// A leak or fault event from the classifier (raised, updated, cleared).
