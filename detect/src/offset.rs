@@ -136,7 +136,7 @@ pub struct StandingOffset {
     /// How many times as much of the rises the best misreading of the other
     /// pressure channel leaves unexplained, when it was named (1): near 1,
     /// the two channels' misreadings fit alike (on a double-rod press, both
-    /// reading high). NaN on x.
+    /// reading high); infinite where this one's fit leaves nothing. NaN on x.
     pub other_channel_left_ratio: f64,
     /// Event id of its `sensor-offset` event.
     pub event_id: u64,
@@ -569,8 +569,10 @@ impl OffsetWatch {
                         since_s: self.since_s(h, t_s),
                         other_channel_left_ratio: if is_position(h) {
                             f64::NAN
-                        } else {
+                        } else if left > 0.0 {
                             self.window.other_pressure_channel_left(c) / left
+                        } else {
+                            f64::INFINITY
                         },
                         event_id: *next_id,
                     };
