@@ -521,13 +521,14 @@ impl OffsetWatch {
         let material = self.window_offset_material() && self.window.energy > 0.0;
         self.window_veto.update(left, material, self.watched_s, dt_s);
         let level = OFFSET_NAMED_SHARE * smallest;
-        for c in 0..OFFSET_CHANNEL_NAMES.len() {
-            if self.window.channel_explained_rms_lpm(c) < 0.1 * smallest {
+        let explained_rms = self.window.channels_explained_rms_lpm();
+        for (c, rms) in explained_rms.iter().enumerate() {
+            if *rms < 0.1 * smallest {
                 self.low_since_s[c] = t_s;
             }
         }
         if let Some(s) = self.standing {
-            if self.window.channel_explained_rms_lpm(s.channel) < 0.5 * level {
+            if explained_rms[s.channel] < 0.5 * level {
                 let since = *self.fading_since_s.get_or_insert(self.watched_s);
                 if self.watched_s - since >= OFFSET_CLEAR_S {
                     self.standing = None;

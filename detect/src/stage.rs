@@ -333,9 +333,11 @@ impl Classifier {
 
     fn check_sensors(&mut self, e: &Estimate, emit: &mut impl FnMut(LeakEvent)) {
         let x_noisy = self.cfg.position_noise_counts >= X_NOISY_COUNTS;
-        for c in 0..3 {
+        // (the watches are read out once and written back once: each channel's
+        // checks call the detector's methods, which borrow it whole)
+        let mut channels = self.channels;
+        for (c, w) in channels.iter_mut().enumerate() {
             let v = e.measured[c];
-            let mut w = self.channels[c];
             if v.is_finite() {
                 w.dead = 0;
                 w.same = if v == w.last { w.same + 1 } else { 0 };
@@ -364,12 +366,12 @@ impl Classifier {
             // The rod may legitimately rest (stiction, a stop): a repeated position from
             // a sensor without noise is stuck only while the pressures say the rod
             // moves ([`X_STUCK_NIS_RATIO`]); a noisy one's is stuck ([`X_NOISY_COUNTS`]).
-            let may_be_stuck = c > 0 || x_noisy || self.x_repeat_misfits(&w, X_STUCK_NIS_RATIO);
+            let may_be_stuck = c > 0 || x_noisy || self.x_repeat_misfits(w, X_STUCK_NIS_RATIO);
             if c == 0 {
                 w.repeat_suspect = w.same > 0
                     && (w.repeat_suspect
                         || (w.same >= X_SUSPECT_SAMPLES
-                            && (x_noisy || self.x_repeat_misfits(&w, X_SUSPECT_NIS_RATIO))));
+                            && (x_noisy || self.x_repeat_misfits(w, X_SUSPECT_NIS_RATIO))));
                 self.leak_size.suspect_frozen_position(w.repeat_suspect);
             }
             let now = if w.dead >= self.cfg.dead_samples {
@@ -398,10 +400,10 @@ impl Classifier {
                 0.0
             };
             w.last_t_s = e.t_s;
-            self.check_spikes(c, &mut w, e.t_s, dt_s, v, emit);
+            self.check_spikes(c, w, e.t_s, dt_s, v, emit);
             match (now, w.raised) {
                 (Some(k), None) => {
-                    let detail = self.fault_detail(k, c, &w, x_noisy);
+                    let detail = self.fault_detail(k, c, w, x_noisy);
                     let since_s = if k == EventKind::SensorStuck {
                         w.last_since_s
                     } else {
@@ -432,7 +434,7 @@ impl Classifier {
                 }
                 _ => {}
             }
-            self.channels[c] = w;
         }
+        self.channels = channels;
     }
 }

@@ -352,15 +352,17 @@ impl Fit {
         (self.explained_by_offset(c).max(0.0) / self.w.max(1e-12)).sqrt()
     }
 
-    /// RMS of the rises that a misreading of channel `c` explains in any form, L/min.
-    pub(crate) fn channel_explained_rms_lpm(&self, c: usize) -> f64 {
-        // (the largest energy's RMS: the square root and the division keep
-        // the order, so one root gives the largest RMS exactly)
-        let most = (0..ALL_HYPOTHESES)
-            .filter(|&h| channel_of(h) == c)
-            .map(|h| self.explained_by_offset(h).max(0.0))
-            .fold(0.0, f64::max);
-        (most / self.w.max(1e-12)).sqrt()
+    /// RMS of the rises that a misreading of each channel (p1, p2, x)
+    /// explains in any form, L/min.
+    pub(crate) fn channels_explained_rms_lpm(&self) -> [f64; 3] {
+        // (each channel's largest energy's RMS: the square root and the
+        // division keep the order, so one root gives the largest RMS exactly)
+        let mut most = [0.0f64; 3];
+        for h in 0..ALL_HYPOTHESES {
+            let c = channel_of(h);
+            most[c] = most[c].max(self.explained_by_offset(h).max(0.0));
+        }
+        most.map(|m| (m / self.w.max(1e-12)).sqrt())
     }
 }
 
